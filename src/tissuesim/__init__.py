@@ -1,0 +1,51 @@
+"""tissuesim: soft-tissue simulation with finite elements and meshless frames.
+
+The names users need most are re-exported here; each lives in one module (see docs/design.md).
+"""
+
+from __future__ import annotations
+
+__version__ = "0.1.0"
+
+from tissuesim.errors import (
+    ConvergenceError,
+    InvertedElementError,
+    MaterialError,
+    MeshError,
+    SceneError,
+    TissueSimError,
+)
+from tissuesim.materials import (
+    CourseNeoHookean,
+    FixedCorotated,
+    LinearElastic,
+    NeoHookean,
+    StVenantKirchhoff,
+    make_material,
+)
+from tissuesim.mesh import Mesh, box, read_mesh, rectangle, select
+from tissuesim.simulation import Simulation
+from tissuesim.solve.newton import NewtonOptions
+
+__all__ = [
+    "__version__",
+    "ConvergenceError",
+    "CourseNeoHookean",
+    "FixedCorotated",
+    "InvertedElementError",
+    "LinearElastic",
+    "MaterialError",
+    "Mesh",
+    "MeshError",
+    "NeoHookean",
+    "NewtonOptions",
+    "SceneError",
+    "Simulation",
+    "StVenantKirchhoff",
+    "TissueSimError",
+    "box",
+    "make_material",
+    "read_mesh",
+    "rectangle",
+    "select",
+]

@@ -1,0 +1,98 @@
+"""Dead loads: gravity, body forces and Neumann tractions as nodal forces f, energy -f . x.
+
+Tractions h (force per unit rest length in 2D, per unit rest area in 3D) are given at the
+vertices of boundary facets and interpolated linearly, so (notes, eq. 6b)
+    f^a = sum_b (int_facet N^a N^b) h^b,  int N^a N^b = A (1 + delta_ab) / (d (d + 1))
+for a facet of measure A with d vertices. Body forces b (force per unit rest volume) are
+integrated the same way over the elements with the unit-density consistent mass matrix.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+from tissuesim.energies.accumulator import Accumulator
+from tissuesim.mesh.boundary import facet_measures
+
+__all__ = ["ExternalForce", "Gravity", "BodyForce", "Traction", "traction_nodal_forces", "as_field"]
+
+
+@dataclass(frozen=True, eq=False)
+class ExternalForce:
+    """Potential of a dead load: E(x) = -f . x, gradient -f, no Hessian."""
+
+    force: np.ndarray  # (n_dofs,) N
+
+    def accumulate(self, x: np.ndarray, acc: Accumulator) -> None:
+        acc.add_value("external", -float(self.force @ x))
+        if acc.order >= 1:
+            acc.gradient -= self.force
+
+
+def traction_nodal_forces(
+    points: np.ndarray, facets: np.ndarray, traction_at_vertices: np.ndarray
+) -> np.ndarray:
+    """Nodal forces (n, d) of a traction given per facet vertex (k, d, d) [facet, vertex, comp]."""
+    n, d = points.shape
+    area = facet_measures(points, facets)  # (k,)
+    ref = (np.ones((d, d)) + np.eye(d)) / (d * (d + 1))
+    local = area[:, None, None] * np.einsum("ab,kbi->kai", ref, traction_at_vertices)
+    out = np.zeros((n, d))
+    for i in range(d):  # d components, not a loop over facets
+        out[:, i] = np.bincount(facets.ravel(), weights=local[:, :, i].ravel(), minlength=n)
+    return out
+
+
+ForceField = Callable[[np.ndarray, float], np.ndarray]
+
+
+def as_field(value) -> ForceField:
+    """A constant vector or a callable (X (k, d), t) -> (k, d) as a callable."""
+    if callable(value):
+        return value
+    v = np.asarray(value, dtype=float)
+
+    def field(X: np.ndarray, t: float) -> np.ndarray:
+        return np.broadcast_to(v, X.shape)
+
+    return field
+
+
+@dataclass(frozen=True, eq=False)
+class Gravity:
+    """Weight rho g per unit volume: nodal forces are the lumped masses times g (exact for P1)."""
+
+    acceleration: np.ndarray  # (d,) m/s^2
+
+    def nodal_forces(self, model, t: float) -> np.ndarray:
+        d = model.mesh.dim
+        return model.mass.lumped.reshape(-1, d) * np.asarray(self.acceleration, dtype=float)
+
+
+@dataclass(frozen=True, eq=False)
+class BodyForce:
+    """Force per unit rest volume b(X, t), interpolated from the vertices (notes, eq. 9)."""
+
+    force_density: ForceField
+
+    def nodal_forces(self, model, t: float) -> np.ndarray:
+        b = np.asarray(self.force_density(model.mesh.points, t), dtype=float)
+        b = np.broadcast_to(b, model.mesh.points.shape).ravel()
+        return model.unit_mass().dot(b).reshape(model.mesh.points.shape)
+
+
+@dataclass(frozen=True, eq=False)
+class Traction:
+    """Neumann traction h(X, t) (N/m in 2D, Pa in 3D) on boundary facets (k, d)."""
+
+    facets: np.ndarray
+    traction: ForceField
+
+    def nodal_forces(self, model, t: float) -> np.ndarray:
+        X = model.mesh.points[self.facets]  # (k, d, d) [facet, vertex, coord]
+        h = np.asarray(self.traction(X.reshape(-1, X.shape[-1]), t), dtype=float)
+        h = np.broadcast_to(h, (X.shape[0] * X.shape[1], X.shape[2])).reshape(X.shape)
+        return traction_nodal_forces(model.mesh.points, self.facets, h)

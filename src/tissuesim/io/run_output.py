@@ -1,0 +1,122 @@
+"""Running a Simulation with output: VTU series + PVD, summary.json, progress bar, pictures.
+
+summary.json is rewritten atomically after every step, so a run stopped at any point (a crash,
+a ConvergenceError, Ctrl-C) leaves a valid summary whose "status" says how it ended, and every
+frame listed in the .pvd exists and is complete.
+"""
+
+from __future__ import annotations
+
+import sys
+from dataclasses import asdict
+from pathlib import Path
+
+import numpy as np
+
+from tissuesim.errors import ConvergenceError
+from tissuesim.io.atomic import write_json_atomic
+
+__all__ = ["RunOutput"]
+
+
+class RunOutput:
+    def __init__(self, sim, directory, *, every=1, render=True, metadata=None):
+        if every < 1:
+            raise ValueError(f"every must be >= 1, not {every}")
+        self.sim = sim
+        self.directory = None if directory is None else Path(directory)
+        self.every = every
+        self.render = render
+        self.metadata = dict(metadata or {})
+        self.frames: list[tuple[float, np.ndarray, np.ndarray]] = []
+        self.series = None
+        self.status = "running"
+        self.error = None
+
+    def _write_frame(self) -> None:
+        sim = self.sim
+        fields = sim.cell_fields()
+        if self.series is not None:
+            self.series.write(
+                sim.time,
+                sim.positions,
+                point_data={"displacement": sim.displacement, "velocity": sim.velocity},
+                cell_data={"J": fields["J"], "energy_density": fields["energy_density"]},
+            )
+        self.frames.append((sim.time, sim.positions.copy(), fields["J"].copy()))
+
+    def _summary(self) -> dict:
+        from tissuesim import __version__
+        from tissuesim.mesh.io import describe_mesh
+
+        steps = [asdict(r) for r in self.sim.history]
+        iters = [r.newton_iterations for r in self.sim.history]
+        return {
+            "tissuesim_version": __version__,
+            "status": self.status,
+            "error": self.error,
+            **self.metadata,
+            "mesh": describe_mesh(self.sim.mesh),
+            "simulation": self.sim.describe(),
+            "totals": {
+                "steps": len(steps),
+                "newton_iterations": int(sum(iters)),
+                "max_newton_iterations_per_step": int(max(iters, default=0)),
+                "min_J": float(min((r.min_J for r in self.sim.history), default=np.nan)),
+                "wall_time_s": float(sum(r.wall_time_s for r in self.sim.history)),
+            },
+            "steps": steps,
+        }
+
+    def _write_summary(self) -> None:
+        if self.directory is not None:
+            write_json_atomic(self.directory / "summary.json", self._summary())
+
+    def run(self, steps: int, progress: bool = True):
+        from tqdm import tqdm
+
+        from tissuesim.io.vtu_series import VTUSeriesWriter
+
+        if steps < 0:
+            raise ValueError(f"steps must be >= 0, not {steps}")
+        if self.directory is not None:
+            self.directory.mkdir(parents=True, exist_ok=True)
+            self.series = VTUSeriesWriter(self.directory, self.sim.mesh)
+        self._write_frame()
+        bar = tqdm(total=steps, disable=not progress, file=sys.stderr, unit="step")
+        try:
+            for k in range(steps):
+                record = self.sim.step()
+                if (k + 1) % self.every == 0 or k + 1 == steps:
+                    self._write_frame()
+                self._write_summary()
+                bar.set_postfix(t=f"{record.time:.4g}", newton=record.newton_iterations,
+                                minJ=f"{record.min_J:.3g}")
+                bar.update(1)
+            self.status = "completed"
+        except ConvergenceError as exc:
+            self.status, self.error = "failed", str(exc)
+            raise
+        except KeyboardInterrupt:
+            self.status, self.error = "interrupted", "KeyboardInterrupt"
+            raise
+        finally:
+            bar.close()
+            self._write_summary()
+            if self.directory is not None and self.render and len(self.frames) > 0:
+                self._render()
+        return self.sim.history
+
+    def _render(self) -> None:
+        from tissuesim.render import render_animation, render_frame
+
+        mesh = self.sim.mesh
+        if mesh.dim == 3 and mesh.n_cells > 200_000:
+            return  # matplotlib 3D is too slow there; use ParaView on the VTU series
+        t, x, J = self.frames[-1]
+        render_frame(mesh, x, J, self.directory / "final.png", title=f"t = {t:.4g} s", label="J")
+        if len(self.frames) > 1:
+            lo = min(float(f[2].min()) for f in self.frames)
+            hi = max(float(f[2].max()) for f in self.frames)
+            render_animation(mesh, self.frames, self.directory / "run.gif", label="J",
+                             vmin=min(lo, 0.999), vmax=max(hi, 1.001))

@@ -1,0 +1,133 @@
+"""A crash-safe time series for ParaView: one ``.vtu`` per frame plus a ``.pvd`` index.
+
+Each frame file and the index are written atomically (temporary file, fsync, ``os.replace``), and
+the index is rewritten after every frame, so a hard kill at any moment leaves a readable series
+holding every frame completed so far.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import re
+from collections.abc import Mapping
+from pathlib import Path
+from xml.sax.saxutils import quoteattr
+
+import numpy as np
+
+from tissuesim.io.atomic import atomic_output, write_text_atomic
+from tissuesim.mesh.mesh import Mesh
+
+__all__ = ["VTUSeriesWriter"]
+
+_CELL_TYPE = {2: "triangle", 3: "tetra"}
+
+
+def _prepare(
+    data: Mapping[str, np.ndarray], count: int, dim: int, kind: str
+) -> dict[str, np.ndarray]:
+    """Check each (count, ...) array; pad 2D vectors (count, 2) to (count, 3); flatten tensors."""
+    out: dict[str, np.ndarray] = {}
+    for key, value in data.items():
+        arr = np.asarray(value)
+        if arr.ndim == 0 or arr.shape[0] != count:
+            raise ValueError(
+                f"{kind} {key!r} has shape {arr.shape}; it needs one row per "
+                f"{'point' if kind == 'point_data' else 'cell'} ({count}, ...)"
+            )
+        if arr.dtype == bool:
+            arr = arr.astype(np.uint8)
+        if dim == 2 and arr.ndim == 2 and arr.shape[1] == 2:
+            arr = np.concatenate([arr, np.zeros((count, 1), dtype=arr.dtype)], axis=1)
+        elif arr.ndim > 2:
+            arr = arr.reshape(count, -1)
+        out[str(key)] = np.ascontiguousarray(arr)
+    return out
+
+
+class VTUSeriesWriter:
+    """Write frames ``{name}_{index:05d}.vtu`` and the index ``{name}.pvd`` into ``directory``.
+
+    mesh: the rest mesh; its cells (m, d + 1) are written as "triangle" (d = 2) or "tetra" (d = 3).
+
+    Opening a directory that already holds a series of the same ``name`` starts afresh: the old
+    ``{name}.pvd`` and every ``{name}_NNNNN.vtu`` are deleted at construction (series with other
+    names are left alone), so the index never mixes frames of two runs.
+    """
+
+    def __init__(self, directory: str | os.PathLike[str], mesh: Mesh, name: str = "frame") -> None:
+        if mesh.dim not in _CELL_TYPE:
+            raise ValueError(f"VTUSeriesWriter supports 2D and 3D meshes, got dim {mesh.dim}")
+        if not name or os.sep in name or "/" in name:
+            raise ValueError(f"series name {name!r} must be a non-empty file name stem")
+        self.directory = Path(directory)
+        self.mesh = mesh
+        self.name = name
+        self._frames: list[tuple[float, Path]] = []
+        self.directory.mkdir(parents=True, exist_ok=True)
+        pattern = re.compile(rf"{re.escape(name)}_\d{{5,}}\.vtu")
+        (self.directory / f"{name}.pvd").unlink(missing_ok=True)  # index first: never dangling
+        for old in self.directory.iterdir():
+            if pattern.fullmatch(old.name):
+                old.unlink()
+        self._cells = [(_CELL_TYPE[mesh.dim], np.asarray(mesh.cells, dtype=np.int64))]
+
+    @property
+    def frames(self) -> list[tuple[float, Path]]:
+        """(time, path of the .vtu) for every frame written so far, in order."""
+        return list(self._frames)
+
+    @property
+    def pvd_path(self) -> Path:
+        return self.directory / f"{self.name}.pvd"
+
+    def write(
+        self,
+        time: float,
+        positions: np.ndarray,
+        point_data: Mapping[str, np.ndarray] | None = None,
+        cell_data: Mapping[str, np.ndarray] | None = None,
+    ) -> Path:
+        """Write one frame and rewrite the index; return the frame's path.
+
+        positions: (n, d) current vertex positions (written as 3D points, z = 0 in 2D).
+        point_data: name -> (n,) or (n, k) arrays; 2D vectors (n, 2) are padded to (n, 3) so
+            ParaView shows them as vectors; (n, a, b) tensors are flattened to (n, a * b).
+        cell_data: name -> (m,) or (m, k) arrays, treated the same way.
+        """
+        import meshio
+
+        mesh = self.mesh
+        time = float(time)
+        if not math.isfinite(time):
+            raise ValueError(f"frame time must be finite, got {time}")
+        x = np.asarray(positions, dtype=np.float64)
+        if x.shape != (mesh.n_points, mesh.dim):
+            raise ValueError(
+                f"positions have shape {x.shape}; expected ({mesh.n_points}, {mesh.dim})"
+            )
+        if mesh.dim == 2:
+            x = np.concatenate([x, np.zeros((mesh.n_points, 1))], axis=1)
+        pdata = _prepare(point_data or {}, mesh.n_points, mesh.dim, "point_data")
+        cdata = _prepare(cell_data or {}, mesh.n_cells, mesh.dim, "cell_data")
+        out = meshio.Mesh(
+            x, self._cells, point_data=pdata, cell_data={k: [v] for k, v in cdata.items()}
+        )
+        path = self.directory / f"{self.name}_{len(self._frames):05d}.vtu"
+        with atomic_output(path) as tmp:
+            meshio.write(tmp, out, file_format="vtu")
+        self._frames.append((time, path))
+        write_text_atomic(self.pvd_path, self._pvd_text())
+        return path
+
+    def _pvd_text(self) -> str:
+        rows = "".join(
+            f'    <DataSet timestep="{t!r}" part="0" file={quoteattr(p.name)}/>\n'
+            for t, p in self._frames
+        )
+        return (
+            '<?xml version="1.0"?>\n'
+            '<VTKFile type="Collection" version="0.1" byte_order="LittleEndian">\n'
+            f"  <Collection>\n{rows}  </Collection>\n</VTKFile>\n"
+        )

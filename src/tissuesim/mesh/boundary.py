@@ -1,0 +1,90 @@
+"""Boundary facets of simplicial meshes, with their measures and outward normals.
+
+A facet is an edge (2 vertex ids) of a triangle mesh or a triangle (3 vertex ids) of a tetrahedral
+mesh. Boundary facets are oriented so that their normal points out of the domain: in 2D the edge
+a -> b has normal (dy, -dx); in 3D the triangle (a, b, c) has normal (b - a) x (c - a).
+Lengths are in the units of the points, areas in those units squared.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = ["boundary_facets", "facet_measures", "facet_normals"]
+
+# Local vertex ids of the facets of a positively oriented simplex, each oriented outward.
+_LOCAL_FACETS = {
+    2: np.array([[0, 1], [1, 2], [2, 0]]),
+    3: np.array([[1, 2, 3], [0, 3, 2], [0, 1, 3], [0, 2, 1]]),
+}
+
+
+def all_facets(cells: np.ndarray) -> np.ndarray:
+    """Every facet of every cell, outward for its cell: (m, d+1, d) for cells (m, d+1)."""
+    cells = np.asarray(cells)
+    d = cells.shape[1] - 1
+    if d not in _LOCAL_FACETS:
+        raise ValueError(f"cells must have 3 (triangles) or 4 (tetrahedra) columns, got {d + 1}")
+    return cells[:, _LOCAL_FACETS[d]]
+
+
+def facet_table(cells: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Unique facets of ``cells`` (m, d+1).
+
+    Returns (facets, first, inverse, counts): facets (m*(d+1), d) every cell facet in cell order
+    (outward for its cell), first (u,) index into facets of one occurrence of each unique facet,
+    inverse (m*(d+1),) unique id of each facet, counts (u,) how many cells share each.
+    """
+    facets = all_facets(cells).reshape(-1, np.asarray(cells).shape[1] - 1)
+    keys = np.sort(facets, axis=1)
+    _, first, inverse, counts = np.unique(
+        keys, axis=0, return_index=True, return_inverse=True, return_counts=True
+    )
+    return facets, first, inverse.reshape(-1), counts
+
+
+def boundary_facets(cells: np.ndarray) -> np.ndarray:
+    """Facets (k, d) int64 that belong to exactly one of the positively oriented ``cells`` (m, d+1).
+
+    Oriented outward (see the module docstring), in the order of the cells they belong to.
+    """
+    facets, first, _, counts = facet_table(cells)
+    return np.ascontiguousarray(facets[np.sort(first[counts == 1])], dtype=np.int64)
+
+
+def match_facets(table: np.ndarray, queries: np.ndarray) -> np.ndarray:
+    """First row of ``table`` (t, d) with the vertex set of each query (q, d), else -1: (q,)."""
+    table = np.sort(np.asarray(table, dtype=np.int64).reshape(-1, np.shape(queries)[-1]), axis=1)
+    queries = np.sort(np.asarray(queries, dtype=np.int64), axis=1)
+    _, inverse = np.unique(np.concatenate([table, queries]), axis=0, return_inverse=True)
+    inverse = inverse.reshape(-1)
+    row = np.full(inverse.max(initial=-1) + 1, -1, dtype=np.int64)
+    row[inverse[: len(table)][::-1]] = np.arange(len(table))[::-1]  # first match wins
+    return row[inverse[len(table) :]]
+
+
+def _facet_vectors(points: np.ndarray, facets: np.ndarray) -> np.ndarray:
+    """Unnormalised normals (k, d): (dy, -dx) in 2D, (b - a) x (c - a) in 3D."""
+    points = np.asarray(points, dtype=np.float64)
+    facets = np.asarray(facets, dtype=np.int64)
+    d = points.shape[1]
+    if facets.ndim != 2 or facets.shape[1] != d:
+        raise ValueError(f"facets must have shape (k, {d}) for {d}D points, got {facets.shape}")
+    x = points[facets]
+    if d == 2:
+        e = x[:, 1] - x[:, 0]
+        return np.stack([e[:, 1], -e[:, 0]], axis=1)
+    return np.cross(x[:, 1] - x[:, 0], x[:, 2] - x[:, 0])
+
+
+def facet_measures(points: np.ndarray, facets: np.ndarray) -> np.ndarray:
+    """Lengths (2D) or areas (3D) of ``facets`` (k, d) of ``points`` (n, d): (k,) float64."""
+    n = _facet_vectors(points, facets)
+    length = np.linalg.norm(n, axis=1)
+    return length if n.shape[1] == 2 else 0.5 * length
+
+
+def facet_normals(points: np.ndarray, facets: np.ndarray) -> np.ndarray:
+    """Unit normals (k, d) of ``facets`` (k, d); outward for facets from ``boundary_facets``."""
+    n = _facet_vectors(points, facets)
+    return n / np.linalg.norm(n, axis=1, keepdims=True)

@@ -1,0 +1,187 @@
+"""Validation of raw mesh arrays: every Mesh tissuesim builds goes through ``validate_mesh``."""
+
+from __future__ import annotations
+
+import warnings
+from collections.abc import Mapping
+
+import numpy as np
+
+from tissuesim.errors import MeshError
+from tissuesim.mesh.boundary import boundary_facets, facet_table, match_facets
+from tissuesim.mesh.mesh import Mesh
+
+__all__ = ["validate_mesh", "signed_volumes", "edge_lengths"]
+
+_KIND = {2: "triangles", 3: "tetrahedra"}
+
+
+def signed_volumes(points: np.ndarray, cells: np.ndarray) -> np.ndarray:
+    """Signed areas (2D) or volumes (3D) of ``cells`` (m, d+1) of ``points`` (n, d): (m,) float64.
+
+    det[x1 - x0, ..., xd - x0] / d!; positive for positively oriented (counter-clockwise) cells.
+    """
+    x = np.asarray(points, dtype=np.float64)[np.asarray(cells)]
+    d = x.shape[2]
+    return np.linalg.det(x[:, 1:] - x[:, :1]) / (2.0 if d == 2 else 6.0)
+
+
+def edge_lengths(points: np.ndarray, cells: np.ndarray) -> np.ndarray:
+    """Lengths (m, d(d+1)/2) of the edges of each of ``cells`` (m, d+1)."""
+    x = np.asarray(points, dtype=np.float64)[np.asarray(cells)]
+    i, j = np.triu_indices(x.shape[1], k=1)
+    return np.linalg.norm(x[:, j] - x[:, i], axis=2)
+
+
+def _first(mask: np.ndarray) -> int:
+    return int(np.flatnonzero(mask)[0])
+
+
+def _index_array(values, source: str, what: str, shape_hint: str) -> np.ndarray:
+    try:
+        a = np.asarray(values)
+    except (TypeError, ValueError) as exc:
+        raise MeshError(f"{source}: {what} must be an integer array {shape_hint}: {exc}") from exc
+    if a.size == 0:
+        return a.astype(np.int64)
+    if not np.issubdtype(a.dtype, np.integer):
+        if not np.issubdtype(a.dtype, np.floating) or not np.all(np.round(a) == a):
+            raise MeshError(
+                f"{source}: {what} must hold integer indices {shape_hint}, got {a.dtype}"
+            )
+    return np.array(a, dtype=np.int64)
+
+
+def validate_mesh(
+    points,
+    cells,
+    *,
+    source: str,
+    point_sets: Mapping[str, np.ndarray] | None = None,
+    facet_sets: Mapping[str, np.ndarray] | None = None,
+    cell_sets: Mapping[str, np.ndarray] | None = None,
+) -> Mesh:
+    """Check raw arrays and build a Mesh; raises MeshError naming ``source`` and the bad element.
+
+    points: (n, d) coordinates, d = 2 or 3, finite. cells: (m, d+1) 0-based vertex indices.
+    point_sets: name -> (k,) vertex ids. facet_sets: name -> (k, d) boundary facets (reoriented
+    outward). cell_sets: name -> (k,) cell ids. Negatively oriented cells are fixed by swapping
+    their last two vertices (with a UserWarning); unreferenced vertices only warn.
+    """
+    try:
+        pts = np.array(points, dtype=np.float64)
+    except (TypeError, ValueError) as exc:
+        raise MeshError(f"{source}: points are not an (n, d) array of numbers: {exc}") from exc
+    if pts.ndim != 2 or pts.shape[1] not in (2, 3):
+        raise MeshError(
+            f"{source}: points have shape {pts.shape}; expected (n, 2) or (n, 3) coordinates"
+        )
+    n, d = pts.shape
+    finite = np.isfinite(pts).all(axis=1)
+    if not finite.all():
+        i = _first(~finite)
+        raise MeshError(
+            f"{source}: vertex {i} has non-finite coordinates {pts[i].tolist()} "
+            f"({int((~finite).sum())} such vertices); fix or remove them in the mesh file"
+        )
+    c = _index_array(cells, source, "cells", f"(m, {d + 1})")
+    if c.ndim != 2 or c.shape[1] != d + 1:
+        raise MeshError(
+            f"{source}: cells have shape {c.shape}; {d}D points need (m, {d + 1}) cells "
+            f"({_KIND[d]}, one row of {d + 1} vertex indices per element)"
+        )
+    m = c.shape[0]
+    if m == 0:
+        raise MeshError(f"{source}: the mesh has no cells; it needs at least one of the {_KIND[d]}")
+
+    bad = (c < 0) | (c >= n)
+    if bad.any():
+        e = _first(bad.any(axis=1))
+        v = int(c[e, _first(bad[e])])
+        raise MeshError(
+            f"{source}: element {e} refers to vertex {v}, but vertex indices run from 0 to {n - 1} "
+            f"({int(bad.any(axis=1).sum())} elements affected); indices must be 0-based and "
+            f"every vertex must be listed in the points"
+        )
+    s = np.sort(c, axis=1)
+    repeated = (s[:, 1:] == s[:, :-1]).any(axis=1)
+    if repeated.any():
+        e = _first(repeated)
+        raise MeshError(
+            f"{source}: element {e} repeats a vertex {c[e].tolist()} "
+            f"({int(repeated.sum())} such elements); remove these collapsed elements"
+        )
+
+    vol = signed_volumes(pts, c)
+    h = edge_lengths(pts, c).mean(axis=1)
+    degenerate = np.abs(vol) <= 1e-12 * h**d
+    if degenerate.any():
+        e = _first(degenerate)
+        raise MeshError(
+            f"{source}: element {e} with vertices {c[e].tolist()} is degenerate "
+            f"({'area' if d == 2 else 'volume'} {vol[e]:.3g}, mean edge {h[e]:.3g}; "
+            f"{int(degenerate.sum())} such elements); its vertices are "
+            f"{'collinear' if d == 2 else 'coplanar'}: remesh or remove these elements"
+        )
+    flipped = np.flatnonzero(vol < 0)
+    if flipped.size:
+        c[flipped, -2:] = c[flipped, -1:-3:-1]
+        warnings.warn(
+            f"{source}: reoriented {flipped.size} negatively oriented element(s) by swapping their "
+            f"last two vertices (first: {flipped[:5].tolist()})",
+            UserWarning,
+            stacklevel=2,
+        )
+    used = np.bincount(c.ravel(), minlength=n) > 0
+    if not used.all():
+        warnings.warn(
+            f"{source}: {int((~used).sum())} vertices belong to no element "
+            f"(first: {np.flatnonzero(~used)[:5].tolist()}); they get no stiffness or mass",
+            UserWarning,
+            stacklevel=2,
+        )
+    facets, first, inverse, counts = facet_table(c)
+    if (counts > 2).any():
+        u = _first(counts > 2)
+        owners = (np.flatnonzero(inverse == u) // (d + 1)).tolist()
+        raise MeshError(
+            f"{source}: facet {np.sort(facets[first[u]]).tolist()} is shared by elements {owners}; "
+            f"a facet belongs to at most 2 elements: remove duplicate or overlapping elements"
+        )
+
+    psets = {}
+    for name, v in (point_sets or {}).items():
+        a = _index_array(v, source, f"point set {name!r}", "(k,)").reshape(-1)
+        if ((a < 0) | (a >= n)).any():
+            raise MeshError(f"{source}: point set {name!r} has vertex ids outside 0..{n - 1}")
+        psets[str(name)] = np.unique(a)
+    csets = {}
+    for name, v in (cell_sets or {}).items():
+        a = _index_array(v, source, f"cell set {name!r}", "(k,)").reshape(-1)
+        if ((a < 0) | (a >= m)).any():
+            raise MeshError(f"{source}: cell set {name!r} has cell ids outside 0..{m - 1}")
+        csets[str(name)] = np.unique(a)
+    fsets = {}
+    boundary = boundary_facets(c) if facet_sets else None
+    for name, v in (facet_sets or {}).items():
+        a = _index_array(v, source, f"facet set {name!r}", f"(k, {d})")
+        if a.size == 0:
+            a = a.reshape(0, d)
+        if a.ndim != 2 or a.shape[1] != d:
+            raise MeshError(f"{source}: facet set {name!r} has shape {a.shape}; expected (k, {d})")
+        row = match_facets(boundary, a)
+        if (row < 0).any():
+            k = _first(row < 0)
+            raise MeshError(
+                f"{source}: facet set {name!r} row {k} {a[k].tolist()} is not a boundary facet "
+                f"of the mesh; facet sets must list boundary {'edges' if d == 2 else 'triangles'}"
+            )
+        fsets[str(name)] = boundary[np.unique(row)]
+    return Mesh(
+        points=np.ascontiguousarray(pts),
+        cells=np.ascontiguousarray(c),
+        point_sets=psets,
+        facet_sets=fsets,
+        cell_sets=csets,
+        source=source,
+    )

@@ -1,0 +1,266 @@
+"""Read and write mesh files through meshio, and summarise a Mesh.
+
+read_mesh takes linear tetrahedra (3D) or triangles (2D) and turns tags into named sets: meshio
+cell sets and gmsh physical groups ("gmsh:physical" with names from $PhysicalNames). Tagged facets
+(lines in 2D, triangles in 3D) become facet sets, tagged volume cells cell sets, tagged lower-
+dimensional cells (vertices, edges in 3D) point sets. Everything is then checked by validate_mesh.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import io
+import os
+import warnings
+from collections import defaultdict
+
+import numpy as np
+
+from tissuesim.errors import MeshError
+from tissuesim.mesh.boundary import all_facets, facet_measures, facet_table, match_facets
+from tissuesim.mesh.checks import edge_lengths, signed_volumes, validate_mesh
+from tissuesim.mesh.mesh import Mesh
+from tissuesim.mesh.select import _boundary
+
+__all__ = ["read_mesh", "write_mesh", "describe_mesh"]
+
+_VOLUME = {3: "tetra", 2: "triangle"}
+_FACET = {3: "triangle", 2: "line"}
+_CELL_DIM = {"vertex": 0, "line": 1, "triangle": 2, "tetra": 3}
+
+
+def _block_dim(block) -> int:
+    return int(getattr(block, "dim", _CELL_DIM.get(block.type, -1)))
+
+
+def _load(path: str):
+    """meshio.read, turning every failure (meshio may even call sys.exit) into MeshError."""
+    import meshio
+
+    captured = io.StringIO()
+    try:
+        with contextlib.redirect_stdout(captured), contextlib.redirect_stderr(captured):
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                return meshio.read(path)
+    except (Exception, SystemExit) as exc:
+        said = " ".join(captured.getvalue().split())
+        if not isinstance(exc, SystemExit):
+            said = f"{said}; " * bool(said) + " ".join(f"{type(exc).__name__}: {exc}".split())
+        raise MeshError(
+            f"{path}: meshio could not read this mesh file ({said or 'no reason given'}); check "
+            f"that the file is complete and that its extension matches its format"
+        ) from exc
+
+
+def _choose_cells(path: str, m) -> tuple[np.ndarray, int, str]:
+    """(points (n, d), d, volume cell type) for a meshio mesh, or MeshError."""
+    found = defaultdict(int)
+    for b in m.cells:
+        found[b.type] += len(b.data)
+    listing = ", ".join(f"{k} ({v})" for k, v in found.items()) or "none"
+    points = np.asarray(m.points, dtype=np.float64)
+    if found.get("tetra"):
+        d = 3
+    elif found.get("triangle"):
+        d = 2
+    else:
+        raise MeshError(
+            f"{path}: no linear tetrahedra or triangles; cell types found: {listing}. "
+            f"tissuesim needs linear 'tetra' (3D) or 'triangle' (2D) elements: re-export with "
+            f"element order 1 and simplices only"
+        )
+    others = sorted({b.type for b in m.cells if b.type != _VOLUME[d] and _block_dim(b) >= d})
+    if others:
+        raise MeshError(
+            f"{path}: mixes {_VOLUME[d]} with other elements of dimension >= {d} ({others}); "
+            f"cell types found: {listing}. Remesh with {_VOLUME[d]} only"
+        )
+    if d == 3 and points.shape[1] != 3:
+        raise MeshError(f"{path}: tetrahedra need 3D points, got points of shape {points.shape}")
+    if d == 2 and points.shape[1] == 3:
+        z = points[:, 2]
+        scale = float(np.linalg.norm(np.ptp(points, axis=0))) or 1.0
+        if np.ptp(z) > 1e-9 * scale:
+            raise MeshError(
+                f"{path}: surface mesh (triangles in 3D, z from {z.min():.6g} to {z.max():.6g}) "
+                f"and no tetrahedra; a volume mesh (tetrahedra) is needed: tetrahedralise the "
+                f"surface (e.g. gmsh -3), or give a 2D mesh with constant z"
+            )
+        points = points[:, :2]
+    return points, d, _VOLUME[d]
+
+
+def _tagged_sets(m, d: int, vtype: str):
+    """Point, facet and cell sets from meshio cell sets and gmsh physical tags."""
+    offsets, start = [], 0
+    for b in m.cells:
+        offsets.append(start)
+        start += len(b.data) if b.type == vtype else 0
+    names = {}
+    for name, value in (m.field_data or {}).items():
+        v = np.asarray(value).reshape(-1)
+        if v.size >= 2:
+            names[(int(v[1]), int(v[0]))] = str(name)
+    point_sets, facet_sets, cell_sets = defaultdict(list), defaultdict(list), defaultdict(list)
+
+    def add(block_index: int, name: str, rows: np.ndarray) -> None:
+        b = m.cells[block_index]
+        if b.type == vtype:
+            cell_sets[name].append(offsets[block_index] + rows)
+        elif b.type == _FACET[d]:
+            facet_sets[name].append(np.asarray(b.data)[rows])
+        elif _block_dim(b) < d - 1 or b.type == "vertex":
+            point_sets[name].append(np.asarray(b.data)[rows].reshape(-1))
+
+    for name, per_block in (m.cell_sets or {}).items():
+        if name.startswith("gmsh:"):
+            continue
+        for i, rows in enumerate(per_block):
+            if rows is not None and len(rows):
+                add(i, name, np.asarray(rows, dtype=np.int64))
+    for i, tags in enumerate((m.cell_data or {}).get("gmsh:physical", [])):
+        tags = np.asarray(tags).reshape(-1)
+        for t in np.unique(tags[tags != 0]):
+            name = names.get((_block_dim(m.cells[i]), int(t)), f"tag_{int(t)}")
+            add(i, name, np.flatnonzero(tags == t))
+    return point_sets, facet_sets, cell_sets
+
+
+def read_mesh(path: str | os.PathLike[str]) -> Mesh:
+    """Read a linear tetrahedral (3D) or triangle (2D) mesh file; points in the file's units.
+
+    Any format meshio reads (.vtu, .msh gmsh 2.2/4.1, .mesh medit, .xdmf, ...). Raises MeshError
+    naming the file for a missing, unreadable, surface-only or non-simplex mesh.
+    """
+    path = os.fspath(path)
+    if not os.path.exists(path):
+        raise MeshError(f"{path}: no such mesh file; check the path (cwd is {os.getcwd()})")
+    if os.path.isdir(path):
+        raise MeshError(f"{path}: is a directory, not a mesh file")
+    m = _load(path)
+    points, d, vtype = _choose_cells(path, m)
+    cells = np.concatenate([np.asarray(b.data) for b in m.cells if b.type == vtype])
+    psets, fsets, csets = _tagged_sets(m, d, vtype)
+    point_sets = {k: np.concatenate(v) for k, v in psets.items()}
+    for name, v in (m.point_sets or {}).items():
+        point_sets[name] = np.concatenate([point_sets.get(name, []), np.asarray(v).reshape(-1)])
+    facet_sets = {k: np.concatenate(v).astype(np.int64) for k, v in fsets.items()}
+    if facet_sets:
+        facets, first, inverse, counts = facet_table(cells)
+        boundary = facets[first[counts == 1]]
+        for name in list(facet_sets):
+            on = match_facets(boundary, facet_sets[name]) >= 0
+            if not on.all():
+                warnings.warn(
+                    f"{path}: facet set {name!r}: dropped {int((~on).sum())} of {on.size} facets "
+                    f"that are not on the boundary of the mesh",
+                    UserWarning,
+                    stacklevel=2,
+                )
+                facet_sets[name] = facet_sets[name][on]
+                if not on.any():
+                    del facet_sets[name]
+    cell_sets = {k: np.concatenate(v) for k, v in csets.items()}
+    return validate_mesh(
+        points,
+        cells,
+        source=path,
+        point_sets=point_sets,
+        facet_sets=facet_sets,
+        cell_sets=cell_sets,
+    )
+
+
+def write_mesh(mesh: Mesh, path: str | os.PathLike[str], file_format: str | None = None) -> None:
+    """Write ``mesh`` with meshio (format from the extension unless ``file_format`` is given).
+
+    Points and cells are always written (2D points padded with z = 0). Named sets are written only
+    for gmsh 2.2 (the default for ".msh"): facet, cell and point sets as physical groups (a point
+    set with the name of a facet or cell set is left out, since gmsh names must be unique).
+    """
+    import meshio
+
+    path = os.fspath(path)
+    d = mesh.dim
+    points = np.column_stack([mesh.points, np.zeros(mesh.n_points)]) if d == 2 else mesh.points
+    if file_format is None and path.lower().endswith(".msh"):
+        file_format = "gmsh22"
+    blocks = [(_VOLUME[d], mesh.cells)]
+    kwargs = {}
+    if file_format == "gmsh22":
+        volume_tags = np.zeros(mesh.n_cells, dtype=np.int32)
+        physical, field_data, tag = [], {}, 0
+        for name, facets in mesh.facet_sets.items():
+            tag += 1
+            blocks.append((_FACET[d], np.asarray(facets)))
+            physical.append(np.full(len(facets), tag, dtype=np.int32))
+            field_data[name] = np.array([tag, d - 1])
+        for name, ids in mesh.point_sets.items():
+            if name in mesh.facet_sets or name in mesh.cell_sets:
+                continue  # gmsh names are unique; vertices_tagged(name) still finds the vertices
+            tag += 1
+            blocks.append(("vertex", np.asarray(ids).reshape(-1, 1)))
+            physical.append(np.full(len(ids), tag, dtype=np.int32))
+            field_data[name] = np.array([tag, 0])
+        for name, ids in mesh.cell_sets.items():
+            tag += 1
+            if (volume_tags[ids] != 0).any() or name in mesh.facet_sets:
+                warnings.warn(
+                    f"{path}: cell set {name!r} overlaps another set or shares its name with a "
+                    f"facet set; not written",
+                    UserWarning,
+                    stacklevel=2,
+                )
+                continue
+            volume_tags[ids] = tag
+            field_data[name] = np.array([tag, d])
+        physical = [volume_tags, *physical]
+        kwargs = {
+            "cell_data": {"gmsh:physical": physical, "gmsh:geometrical": physical},
+            "field_data": field_data,
+        }
+    try:
+        meshio.Mesh(points, blocks, **kwargs).write(path, file_format=file_format)
+    except Exception as exc:
+        raise MeshError(f"{path}: meshio could not write the mesh: {exc}") from exc
+
+
+def describe_mesh(mesh: Mesh) -> dict:
+    """Summary of ``mesh`` as a dict of plain Python values (lengths in the mesh's units).
+
+    quality is the radius ratio d * inradius / circumradius of each element: 1 for the regular
+    simplex, tending to 0 as an element degenerates; quality_min is the worst element's.
+    """
+    p, c, d = mesh.points, mesh.cells, mesh.dim
+    vol = signed_volumes(p, c)
+    edges = edge_lengths(p, c)
+    faces = all_facets(c)
+    surface = facet_measures(p, faces.reshape(-1, d)).reshape(len(c), d + 1).sum(axis=1)
+    inradius = d * vol / surface
+    x = p[c]
+    e = x[:, 1:] - x[:, :1]  # (m, d, d)
+    centre = np.linalg.solve(2.0 * e, (e**2).sum(axis=2)[..., None])[..., 0]
+    quality = d * inradius / np.linalg.norm(centre, axis=1)
+    lo, hi = p.min(axis=0), p.max(axis=0)
+    return {
+        "source": mesh.source,
+        "dim": d,
+        "n_points": mesh.n_points,
+        "n_cells": mesh.n_cells,
+        "n_boundary_facets": int(len(_boundary(mesh))),
+        "bounding_box": (lo.tolist(), hi.tolist()),
+        "total_volume": float(vol.sum()),
+        "measure_min": float(vol.min()),
+        "measure_max": float(vol.max()),
+        "measure_mean": float(vol.mean()),
+        "edge_min": float(edges.min()),
+        "edge_max": float(edges.max()),
+        "quality_measure": "radius ratio d * inradius / circumradius (1 = regular simplex)",
+        "quality_min": float(quality.min()),
+        "quality_mean": float(quality.mean()),
+        "worst_cell": int(np.argmin(quality)),
+        "point_sets": {k: int(len(v)) for k, v in mesh.point_sets.items()},
+        "facet_sets": {k: int(len(v)) for k, v in mesh.facet_sets.items()},
+        "cell_sets": {k: int(len(v)) for k, v in mesh.cell_sets.items()},
+    }

@@ -1,0 +1,101 @@
+"""A Model: mesh, kinematics, material, mass, loads and conditions, set up once.
+
+Everything constant across Newton iterations and time steps is built here: shape gradients,
+the CSR sparsity pattern with its scatter maps, the mass matrix, the elimination index sets.
+``evaluate`` sums the energies at a point; the time integrators add inertia and call Newton.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from functools import cached_property
+
+import numpy as np
+
+from tissuesim.assembly.pattern import SparsityPattern
+from tissuesim.constraints.dirichlet import DirichletCondition, Elimination, PrescribedDofs
+from tissuesim.energies.accumulator import Accumulator
+from tissuesim.energies.elastic import ElasticEnergy
+from tissuesim.energies.mass import MassKind, MassMatrix
+from tissuesim.kinematics.p1 import P1Kinematics
+from tissuesim.materials.base import Material
+from tissuesim.mesh.mesh import Mesh
+
+__all__ = ["Model"]
+
+
+@dataclass(eq=False)
+class Model:
+    mesh: Mesh
+    material: Material
+    density: np.ndarray  # (m,) kg/m^3 (kg/m^2 per unit thickness in 2D)
+    mass_kind: MassKind = "consistent"
+    loads: list = field(default_factory=list)
+    conditions: Sequence[DirichletCondition] = ()
+
+    def __post_init__(self) -> None:
+        self.density = np.broadcast_to(
+            np.asarray(self.density, dtype=float), (self.mesh.n_cells,)
+        ).copy()
+        if not np.all(np.isfinite(self.density)) or np.any(self.density <= 0):
+            bad = int(np.flatnonzero(~(self.density > 0))[0])
+            raise ValueError(
+                f"density must be finite and > 0; element {bad} has {self.density[bad]}"
+            )
+        self.kinematics = P1Kinematics.from_mesh(self.mesh)
+        self.pattern = SparsityPattern.from_stencils(
+            self.kinematics.n_dofs, [self.kinematics.stencil]
+        )
+        self.elastic = ElasticEnergy(self.kinematics, self.material, stencil_id=0)
+        self.mass = MassMatrix.build(self.kinematics, self.density, self.pattern, self.mass_kind)
+        self.set_conditions(self.conditions)
+
+    def set_conditions(self, conditions: Sequence[DirichletCondition]) -> None:
+        self.conditions = tuple(conditions)
+        self.prescribed = PrescribedDofs.build(self.conditions, self.mesh.points)
+        self.elimination = Elimination.build(self.pattern, self.prescribed.dofs)
+
+    @property
+    def n_dofs(self) -> int:
+        return self.kinematics.n_dofs
+
+    @cached_property
+    def length_scale(self) -> float:
+        """Bounding-box diagonal of the rest mesh (m)."""
+        p = self.mesh.points
+        return float(np.linalg.norm(p.max(axis=0) - p.min(axis=0)))
+
+    @cached_property
+    def force_scale(self) -> float:
+        """A model force, mu * volume / length (N), for absolute tolerances."""
+        return float(self.material.mu * self.kinematics.weights.sum() / self.length_scale)
+
+    def unit_mass(self) -> MassMatrix:
+        """Consistent mass matrix of unit density (integrates vertex fields against N^a)."""
+        if not hasattr(self, "_unit_mass"):
+            self._unit_mass = MassMatrix.build(
+                self.kinematics, np.ones(self.mesh.n_cells), self.pattern, "consistent"
+            )
+        return self._unit_mass
+
+    def external_force(self, t: float) -> np.ndarray:
+        """Sum of dead loads at time t, flat (n_dofs,) in N."""
+        f = np.zeros((self.mesh.n_points, self.mesh.dim))
+        for load in self.loads:
+            f += load.nodal_forces(self, t)
+        return f.ravel()
+
+    def new_accumulator(self, order: int, project: bool = False) -> Accumulator:
+        return Accumulator(self.pattern, order, project)
+
+    def evaluate(self, x: np.ndarray, order: int, project: bool, energies=()) -> Accumulator:
+        """Elastic energy plus ``energies`` (inertia, loads, ...) at x."""
+        acc = self.new_accumulator(order, project)
+        self.elastic.accumulate(x, acc)
+        for energy in energies:
+            energy.accumulate(x, acc)
+        return acc
+
+    def rest_positions(self) -> np.ndarray:
+        return self.mesh.points.ravel().copy()

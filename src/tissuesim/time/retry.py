@@ -1,0 +1,37 @@
+"""Advancing one time step, splitting it into halves when Newton fails (as FEBio does).
+
+A failed step of length h is retried as two steps of h/2, recursively, down to
+h / 2**max_halvings; if that still fails, ConvergenceError says when, why, and what to try.
+"""
+
+from __future__ import annotations
+
+from tissuesim.errors import ConvergenceError
+from tissuesim.time.state import State, StepOutcome
+
+__all__ = ["advance"]
+
+
+def advance(step_fn, model, state: State, h: float, solver, options, max_halvings: int):
+    """Advance by h; returns (new State, list of NewtonResult, number of substeps)."""
+    records, substeps = [], 0
+
+    def attempt(s: State, dt: float, level: int) -> State:
+        nonlocal substeps
+        outcome: StepOutcome = step_fn(model, s, dt, solver, options)
+        records.extend(outcome.newton)
+        if outcome.converged:
+            substeps += 1
+            return outcome.state
+        if level >= max_halvings:
+            raise ConvergenceError(
+                f"the step from t = {s.time:.6g} s with time_step {dt:.3g} s did not converge "
+                f"after {max_halvings} halvings: {outcome.reason}. Try a smaller time_step, more "
+                "newton.max_iterations, or a material defined for inverted elements "
+                "(course_neo_hookean)."
+            )
+        mid = attempt(s, dt / 2, level + 1)
+        return attempt(mid, dt / 2, level + 1)
+
+    new_state = attempt(state, h, 0)
+    return new_state, records, substeps
