@@ -102,8 +102,9 @@ def main(argv: list[str] | None = None) -> int:
 
     try:
         if args.command == "run":
-            return _run(_resolve_scene(args.scene), args.out, args.steps, not args.no_render,
-                        args.quiet)
+            return _run(
+                _resolve_scene(args.scene), args.out, args.steps, not args.no_render, args.quiet
+            )
         if args.command == "demo":
             return _run(example_path(DEMO), args.out, args.steps, True, args.quiet)
         if args.command == "info":

@@ -1,10 +1,10 @@
 """Simulation: the thin object users script. It builds a Model, steps it, and writes output.
 
-    sim = Simulation(mesh, CourseNeoHookean(youngs_modulus=1e3, poisson_ratio=0.3),
-                     density=1.0, integrator="backward_euler", time_step=0.02)
-    sim.add_dirichlet(select.vertices_on_plane(mesh, axis=0, value=-1.0))
-    sim.add_gravity([0.0, -9.81])
-    sim.run(steps=100, output="out")
+sim = Simulation(mesh, CourseNeoHookean(youngs_modulus=1e3, poisson_ratio=0.3),
+                 density=1.0, integrator="backward_euler", time_step=0.02)
+sim.add_dirichlet(select.vertices_on_plane(mesh, axis=0, value=-1.0))
+sim.add_gravity([0.0, -9.81])
+sim.run(steps=100, output="out")
 """
 
 from __future__ import annotations
@@ -88,6 +88,8 @@ class Simulation:
             raise ValueError(f"integrator must be one of {sorted(INTEGRATORS)}, not {integrator!r}")
         if not (np.isfinite(time_step) and time_step > 0):
             raise ValueError(f"time_step must be > 0 seconds, not {time_step!r}")
+        if integrator == "symplectic_euler":
+            mass = "lumped"  # the explicit update inverts the mass: it must be diagonal
         self.model = Model(mesh, material, density, mass)
         self.integrator = integrator
         self.time_step = float(time_step)
@@ -253,5 +255,8 @@ class Simulation:
             "n_dofs": self.model.n_dofs,
             "prescribed_dofs": int(self.model.prescribed.dofs.size),
             "newton": asdict(self.newton),
-            "linear_solver": {"name": getattr(self._solver, "name", None), "reason": self.solver_reason},
+            "linear_solver": {
+                "name": getattr(self._solver, "name", None),
+                "reason": self.solver_reason,
+            },
         }

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from tissuesim.errors import MeshError
-from tissuesim.mesh import box, describe_mesh, read_mesh, rectangle, write_mesh
+from tissuesim.mesh import box, describe_mesh, read_mesh, rectangle, validate_mesh, write_mesh
 
 GMSH41 = """$MeshFormat
 4.1 0 8
@@ -109,11 +109,12 @@ def test_missing_file(tmp_path):
         read_mesh(tmp_path / "nothere.msh")
 
 
-def test_garbage_file(tmp_path):
+def test_garbage_file(tmp_path, capsys):
     path = tmp_path / "garbage.msh"
     path.write_text("this is not a mesh\n1 2 3\n")
     with pytest.raises(MeshError, match="garbage.msh: meshio could not read"):
-        read_mesh(path)
+        read_mesh(path)  # meshio calls sys.exit here; it must not escape
+    assert capsys.readouterr() == ("", "")
 
 
 @pytest.mark.parametrize("name", ["cut.msh", "cut.vtu"])
@@ -170,3 +171,39 @@ def test_describe_right_triangles():
     # right isosceles triangle: r = (2 - sqrt2)/2 h, R = sqrt2/2 h, quality 2r/R = 2(sqrt2 - 1)
     assert info["quality_min"] == pytest.approx(2 * (math.sqrt(2) - 1))
     assert info["total_volume"] == pytest.approx(1.0)
+
+
+def test_gmsh_round_trip_keeps_cell_and_point_sets(tmp_path):
+    base = box(divisions=(1, 1, 2))
+    mesh = validate_mesh(
+        base.points,
+        base.cells,
+        source="b",
+        point_sets={"corner": [0]},
+        facet_sets={"bottom": base.facet_sets["zmin"]},
+        cell_sets={"lower": np.arange(6), "upper": np.arange(6, 12)},
+    )
+    write_mesh(mesh, tmp_path / "sets.msh")
+    back = read_mesh(tmp_path / "sets.msh")
+    np.testing.assert_array_equal(back.point_sets["corner"], [0])
+    np.testing.assert_array_equal(back.facet_sets["bottom"], mesh.facet_sets["bottom"])
+    np.testing.assert_array_equal(back.cell_sets["upper"], np.arange(6, 12))
+
+
+def test_interior_tagged_facets_dropped_with_warning(tmp_path):
+    p = np.array([[0.0, 0], [1, 0], [1, 1], [0, 1]])
+    cells = [("line", np.array([[0, 2], [3, 0]])), ("triangle", np.array([[0, 1, 2], [0, 2, 3]]))]
+    tags = [np.array([1, 2]), np.array([3, 3])]
+    m = meshio.Mesh(p, cells, cell_data={"gmsh:physical": tags, "gmsh:geometrical": tags})
+    m.write(tmp_path / "diag.msh", file_format="gmsh22")
+    with pytest.warns(UserWarning, match="'tag_1': dropped 1 of 1 facets"):
+        mesh = read_mesh(tmp_path / "diag.msh")
+    assert "tag_1" not in mesh.facet_sets and len(mesh.facet_sets["tag_2"]) == 1
+
+
+def test_mixed_elements_rejected(tmp_path):
+    p = np.array([[0.0, 0], [1, 0], [1, 1], [0, 1], [2, 0], [2, 1]])
+    cells = [("triangle", np.array([[0, 1, 2], [0, 2, 3]])), ("quad", np.array([[1, 4, 5, 2]]))]
+    meshio.Mesh(p, cells).write(tmp_path / "mixed.vtu")
+    with pytest.raises(MeshError, match=r"mixed.vtu: mixes triangle .*\['quad'\]"):
+        read_mesh(tmp_path / "mixed.vtu")

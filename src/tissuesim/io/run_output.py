@@ -90,8 +90,11 @@ class RunOutput:
                 if (k + 1) % self.every == 0 or k + 1 == steps:
                     self._write_frame()
                 self._write_summary()
-                bar.set_postfix(t=f"{record.time:.4g}", newton=record.newton_iterations,
-                                minJ=f"{record.min_J:.3g}")
+                bar.set_postfix(
+                    t=f"{record.time:.4g}",
+                    newton=record.newton_iterations,
+                    minJ=f"{record.min_J:.3g}",
+                )
                 bar.update(1)
             self.status = "completed"
         except ConvergenceError as exc:
@@ -118,5 +121,11 @@ class RunOutput:
         if len(self.frames) > 1:
             lo = min(float(f[2].min()) for f in self.frames)
             hi = max(float(f[2].max()) for f in self.frames)
-            render_animation(mesh, self.frames, self.directory / "run.gif", label="J",
-                             vmin=min(lo, 0.999), vmax=max(hi, 1.001))
+            render_animation(
+                mesh,
+                self.frames,
+                self.directory / "run.gif",
+                label="J",
+                vmin=min(lo, 0.999),
+                vmax=max(hi, 1.001),
+            )

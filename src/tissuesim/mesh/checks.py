@@ -8,7 +8,7 @@ from collections.abc import Mapping
 import numpy as np
 
 from tissuesim.errors import MeshError
-from tissuesim.mesh.boundary import boundary_facets, facet_table, match_facets
+from tissuesim.mesh.boundary import boundary_from_table, facet_table, match_facets
 from tissuesim.mesh.mesh import Mesh
 
 __all__ = ["validate_mesh", "signed_volumes", "edge_lengths"]
@@ -30,7 +30,8 @@ def edge_lengths(points: np.ndarray, cells: np.ndarray) -> np.ndarray:
     """Lengths (m, d(d+1)/2) of the edges of each of ``cells`` (m, d+1)."""
     x = np.asarray(points, dtype=np.float64)[np.asarray(cells)]
     i, j = np.triu_indices(x.shape[1], k=1)
-    return np.linalg.norm(x[:, j] - x[:, i], axis=2)
+    e = x[:, j] - x[:, i]
+    return np.sqrt(np.einsum("mki,mki->mk", e, e))
 
 
 def _first(mask: np.ndarray) -> int:
@@ -140,7 +141,8 @@ def validate_mesh(
             UserWarning,
             stacklevel=2,
         )
-    facets, first, inverse, counts = facet_table(c)
+    table = facet_table(c)
+    facets, first, inverse, counts = table
     if (counts > 2).any():
         u = _first(counts > 2)
         owners = (np.flatnonzero(inverse == u) // (d + 1)).tolist()
@@ -162,7 +164,7 @@ def validate_mesh(
             raise MeshError(f"{source}: cell set {name!r} has cell ids outside 0..{m - 1}")
         csets[str(name)] = np.unique(a)
     fsets = {}
-    boundary = boundary_facets(c) if facet_sets else None
+    boundary = boundary_from_table(*table) if facet_sets else None
     for name, v in (facet_sets or {}).items():
         a = _index_array(v, source, f"facet set {name!r}", f"(k, {d})")
         if a.size == 0:

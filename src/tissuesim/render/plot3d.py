@@ -44,9 +44,11 @@ def boundary_faces(cells: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     cells = np.asarray(cells, dtype=np.int64)
     local = np.array([[1, 2, 3], [0, 3, 2], [0, 1, 3], [0, 2, 1]])
     faces = cells[:, local].reshape(-1, 3)
-    _, inverse, counts = np.unique(
-        np.sort(faces, axis=1), axis=0, return_inverse=True, return_counts=True
-    )
+    key = np.sort(faces, axis=1)
+    n = int(cells.max()) + 1 if cells.size else 1
+    if n < 2_000_000:  # one int64 per face: much faster than np.unique(axis=0)
+        key = (key[:, 0] * n + key[:, 1]) * n + key[:, 2]
+    _, inverse, counts = np.unique(key, axis=0, return_inverse=True, return_counts=True)
     once = counts[inverse.ravel()] == 1
     return faces[once], np.repeat(np.arange(len(cells)), 4)[once]
 
@@ -92,11 +94,13 @@ def _setup_3d(mesh, all_positions, label, cmap, norm, rest_outline, elev, azim, 
     many = len(faces) > 5000
     coll = Poly3DCollection(
         np.asarray(all_positions[0])[faces],
-        edgecolors="face" if many else (0.0, 0.0, 0.0, 0.3),
+        edgecolors=(0.0, 0.0, 0.0, 0.3),
         linewidths=0.1 if many else 0.3,
         zorder=1,
     )
     ax.add_collection3d(coll)
+    if many:  # edges in the face colour hide seams; needs the axes, so after adding
+        coll.set_edgecolor("face")
     if rest_outline:
         segs = rest[_feature_edges(rest, boundary_faces(mesh.cells)[0])]
         ax.add_collection3d(

@@ -103,8 +103,9 @@ def load_scene(path: str | Path) -> Scene:
     return build_scene(data, base_dir=path.parent, source=str(path), name=path.stem)
 
 
-def build_scene(data: dict, *, base_dir: Path = Path("."), source: str = "<scene>",
-                name: str = "scene") -> Scene:
+def build_scene(
+    data: dict, *, base_dir: Path = Path("."), source: str = "<scene>", name: str = "scene"
+) -> Scene:
     """Build a Scene from parsed TOML ``data``; errors name ``source`` and the table."""
     try:
         return _build(data, Path(base_dir), source, name)
@@ -209,7 +210,7 @@ def _select(mesh, kind: str, selector, where: str) -> np.ndarray:
             f"{where}: {kind} must be a table with one selector out of "
             f"{sorted(SELECTORS[kind])}, e.g. {{ on_plane = {{ axis = 0, value = 0.0 }} }}"
         )
-    (how, args), = selector.items()
+    ((how, args),) = selector.items()
     _unknown([how], SELECTORS[kind], f"{where} {kind}")
     prefix = "vertices" if kind == "vertices" else "facets"
     if how == "tagged":

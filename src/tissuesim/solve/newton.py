@@ -208,7 +208,10 @@ def _line_search(evaluate, x, value, slope, dx, options):
     noise = 1e-12 * max(abs(value), 1e-300)  # round-off of Phi near the solution
     for _ in range(options.max_line_search):
         trial = evaluate(x + alpha * dx, 1, False)
-        if np.isfinite(trial.value) and trial.value <= value + options.armijo * alpha * slope + noise:
+        if (
+            np.isfinite(trial.value)
+            and trial.value <= value + options.armijo * alpha * slope + noise
+        ):
             return alpha, trial
         alpha *= 0.5
     return None
