@@ -240,7 +240,7 @@ class Simulation:
         metadata: dict | None = None,
     ) -> list[StepRecord]:
         """Run ``steps`` time steps; with ``output``, write a VTU series, summary.json and
-        (if ``render``) a PNG of the final frame and a GIF of the run. See ``tissuesim.io.run_output``."""
+        (if ``render``) a PNG of the final frame and a GIF of the run (``io.run_output``)."""
         from tissuesim.io.run_output import RunOutput
 
         writer = RunOutput(self, output, every=every, render=render, metadata=metadata)

@@ -120,7 +120,8 @@ def compile_vector(items: Sequence, dim: int, where: str) -> Callable:
     """f(X (k, d), t) -> (k, d) from ``dim`` expressions or numbers."""
     if isinstance(items, (str, int, float)) or len(items) != dim:
         raise SceneError(
-            f"{where}: expected a list of {dim} numbers or expressions (one per axis), got {items!r}"
+            f"{where}: expected a list of {dim} numbers or expressions (one per axis), "
+            f"got {items!r}"
         )
     parts = [compile_expression(item, f"{where}[{i}]") for i, item in enumerate(items)]
 

@@ -128,7 +128,7 @@ def minimize(
             break
         system = {}  # the assembled (eliminated) system at x, built at most once per kind
 
-        def attempt(project: bool, s: float):
+        def attempt(project: bool, s: float, x=x, system=system):
             if project not in system:
                 acc = evaluate(x, 2, project)
                 elimination.apply(acc.hessian, acc.gradient)
