@@ -80,18 +80,28 @@ def _run(scene_path: Path, out: str | None, steps: int | None, render: bool, qui
     return 0
 
 
+def _steps(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        value = -1
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"must be an integer >= 0, not {text!r}")
+    return value
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="tissuesim", description=__doc__)
     sub = parser.add_subparsers(dest="command", required=True)
     p_run = sub.add_parser("run", help="run a TOML scene file (or a shipped example by name)")
     p_run.add_argument("scene")
     p_run.add_argument("--out", help="output directory (default out/<scene name>)")
-    p_run.add_argument("--steps", type=int, help="number of time steps (overrides [run] steps)")
+    p_run.add_argument("--steps", type=_steps, help="number of time steps (overrides [run] steps)")
     p_run.add_argument("--no-render", action="store_true", help="skip the PNG and GIF")
     p_run.add_argument("--quiet", action="store_true", help="no progress bar")
     p_demo = sub.add_parser("demo", help=f"run the course's example problem ({DEMO})")
     p_demo.add_argument("--out", default="out/demo")
-    p_demo.add_argument("--steps", type=int)
+    p_demo.add_argument("--steps", type=_steps)
     p_demo.add_argument("--quiet", action="store_true")
     p_info = sub.add_parser("info", help="describe a mesh file and check it")
     p_info.add_argument("mesh")

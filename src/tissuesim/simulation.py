@@ -9,6 +9,7 @@ sim.run(steps=100, output="out")
 
 from __future__ import annotations
 
+import numbers
 import time as wallclock
 from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass, field
@@ -86,8 +87,17 @@ class Simulation:
     ) -> None:
         if integrator not in INTEGRATORS:
             raise ValueError(f"integrator must be one of {sorted(INTEGRATORS)}, not {integrator!r}")
-        if not (np.isfinite(time_step) and time_step > 0):
+        if not (
+            isinstance(time_step, numbers.Real)
+            and not isinstance(time_step, bool)
+            and np.isfinite(time_step)
+            and time_step > 0
+        ):
             raise ValueError(f"time_step must be > 0 seconds, not {time_step!r}")
+        if not (isinstance(max_step_halvings, numbers.Integral) and max_step_halvings >= 0):
+            raise ValueError(
+                f"max_step_halvings must be an integer >= 0, not {max_step_halvings!r}"
+            )
         if integrator == "symplectic_euler":
             mass = "lumped"  # the explicit update inverts the mass: it must be diagonal
         self.model = Model(mesh, material, density, mass)
@@ -101,6 +111,8 @@ class Simulation:
         self._solver = None
         self.solver_reason = ""
         self.history: list[StepRecord] = []
+        if integrator != "symplectic_euler":
+            self._linear_solver()  # an unknown or unavailable linear_solver fails here, not later
 
     # -- set-up -------------------------------------------------------------------------------
     @property
@@ -127,7 +139,18 @@ class Simulation:
         if displacement is None:
             displacement = np.zeros(self.mesh.dim)
         g = displacement if callable(displacement) else constant_displacement(displacement)
-        comps = None if components is None else tuple(int(c) for c in components)
+        try:
+            comps = None if components is None else tuple(int(c) for c in components)
+        except (TypeError, ValueError):
+            raise ValueError(
+                "add_dirichlet: components must be a sequence of axes, e.g. (0,), "
+                f"not {components!r}"
+            ) from None
+        if comps is not None and (not comps or min(comps) < 0 or max(comps) >= self.mesh.dim):
+            raise ValueError(
+                f"add_dirichlet: components must be axes in 0..{self.mesh.dim - 1}, "
+                f"not {components!r}"
+            )
         self._conditions.append(DirichletCondition(vertices, g, comps))
         self.model.set_conditions(self._conditions)
         self._solver = None

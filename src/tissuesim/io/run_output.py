@@ -103,6 +103,9 @@ class RunOutput:
         except KeyboardInterrupt:
             self.status, self.error = "interrupted", "KeyboardInterrupt"
             raise
+        except Exception as exc:  # any other crash: the summary must not still say "running"
+            self.status, self.error = "failed", f"{type(exc).__name__}: {exc}"
+            raise
         finally:
             bar.close()
             self._write_summary()

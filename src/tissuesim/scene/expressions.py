@@ -27,6 +27,10 @@ FUNCTIONS: dict[str, Callable] = {
 }
 FUNCTIONS["min"] = np.minimum
 FUNCTIONS["max"] = np.maximum
+# Number of arguments each function takes. Extra positional arguments are refused: for a ufunc
+# the next one is ``out``, which would write into x, y or z (the caller's rest positions).
+ARITY = {name: getattr(fn, "nin", None) for name, fn in FUNCTIONS.items()}
+ARITY.update(where=3, clip=3)
 CONSTANTS = {"pi": np.pi, "e": np.e}
 VARIABLES = ("x", "y", "z", "t")
 _ALLOWED = (
@@ -74,6 +78,11 @@ def compile_expression(text: str | float | int, where: str) -> Callable:
         tree = ast.parse(text.strip(), mode="eval")
     except SyntaxError as exc:
         raise SceneError(f"{where}: cannot parse expression {text!r}: {exc.msg}") from None
+    except (RecursionError, MemoryError):
+        raise SceneError(
+            f"{where}: expression {text[:40]!r}... is too long or too deeply nested"
+        ) from None
+    called = {id(n.func) for n in ast.walk(tree) if isinstance(n, ast.Call)}
     for node in ast.walk(tree):
         if not isinstance(node, _ALLOWED):
             raise SceneError(
@@ -83,35 +92,56 @@ def compile_expression(text: str | float | int, where: str) -> Callable:
             )
         if isinstance(node, ast.Constant) and not isinstance(node.value, (int, float)):
             raise SceneError(f"{where}: only numeric constants are allowed in {text!r}")
-        if isinstance(node, ast.Call) and not (
-            isinstance(node.func, ast.Name) and node.func.id in FUNCTIONS and not node.keywords
-        ):
-            name = getattr(node.func, "id", ast.unparse(node.func))
+        if isinstance(node, ast.Compare) and len(node.ops) > 1:
             raise SceneError(
-                f"{where}: unknown function {name!r} in {text!r}; "
-                f"allowed: {', '.join(sorted(FUNCTIONS))}"
+                f"{where}: chained comparison in {text!r}; write e.g. (0 < x) * (x < 1)"
             )
+        if isinstance(node, ast.Call):
+            if not (isinstance(node.func, ast.Name) and node.func.id in FUNCTIONS):
+                name = getattr(node.func, "id", ast.unparse(node.func))
+                raise SceneError(
+                    f"{where}: unknown function {name!r} in {text!r}; "
+                    f"allowed: {', '.join(sorted(FUNCTIONS))}"
+                )
+            name = node.func.id
+            if node.keywords:
+                raise SceneError(
+                    f"{where}: keyword argument {node.keywords[0].arg!r} of {name}() is not "
+                    f"allowed in {text!r}; pass arguments by position"
+                )
+            if len(node.args) != ARITY[name]:
+                raise SceneError(
+                    f"{where}: {name}() takes {ARITY[name]} argument(s), got {len(node.args)} "
+                    f"in {text!r}"
+                )
         if isinstance(node, ast.Name) and node.id not in (*VARIABLES, *CONSTANTS, *FUNCTIONS):
             raise SceneError(
                 f"{where}: unknown name {node.id!r} in {text!r}; variables are x, y, z, t "
                 "and constants pi, e"
             )
+        if isinstance(node, ast.Name) and node.id in FUNCTIONS and id(node) not in called:
+            raise SceneError(
+                f"{where}: {node.id!r} is a function: call it, e.g. {node.id}(x), in {text!r}"
+            )
     # Integer literals become floats so that "9**9**9" overflows at once instead of running
     # Python's unbounded integer power.
-    tree = ast.fix_missing_locations(_FloatLiterals().visit(tree))
-    code = compile(tree, f"<{where}>", "eval")
+    try:
+        tree = ast.fix_missing_locations(_FloatLiterals().visit(tree))
+        code = compile(tree, f"<{where}>", "eval")
+    except (RecursionError, MemoryError):
+        raise SceneError(f"{where}: expression {text[:40]!r}... is too deeply nested") from None
 
     def f(X: np.ndarray, t: float) -> np.ndarray:
-        X = np.asarray(X, dtype=float)
+        X = np.array(X, dtype=float)  # a copy: nothing here may write into the caller's array
         names = {**CONSTANTS, **FUNCTIONS, "t": float(t)}
         for i, v in enumerate(VARIABLES[:3]):
             names[v] = X[:, i] if i < X.shape[1] else np.zeros(X.shape[0])
         try:
             with np.errstate(all="ignore"):
                 out = eval(code, {"__builtins__": {}}, names)  # checked tree, restricted names
+            return np.broadcast_to(np.asarray(out, dtype=float), (X.shape[0],))
         except (ArithmeticError, ValueError, TypeError) as exc:
             raise SceneError(f"{where}: evaluating {text!r} failed: {exc}") from None
-        return np.broadcast_to(np.asarray(out, dtype=float), (X.shape[0],))
 
     return f
 

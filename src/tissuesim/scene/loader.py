@@ -22,7 +22,9 @@ valid key; every error names the file and the table.
 from __future__ import annotations
 
 import difflib
+import inspect
 import tomllib
+from contextlib import contextmanager
 from dataclasses import dataclass, field, fields
 from pathlib import Path
 from typing import Any
@@ -80,6 +82,17 @@ def _unknown(keys, valid, where: str) -> None:
             raise SceneError(f"{where}: unknown key {key!r}; {hint}")
 
 
+@contextmanager
+def _context(where: str):
+    """Re-raise library errors (bad values found by the API) as SceneErrors naming ``where``."""
+    try:
+        yield
+    except SceneError:
+        raise
+    except (TissueSimError, ValueError, TypeError) as exc:
+        raise SceneError(f"{where}: {exc}") from exc
+
+
 def _table(data: dict, key: str, where: str, array: bool = False):
     value = data.get(key, [] if array else {})
     if array:
@@ -123,19 +136,24 @@ def _build(data: dict, base_dir: Path, source: str, name: str) -> Scene:
     from tissuesim.solve.newton import NewtonOptions
 
     _unknown(data, SCENE_KEYS, f"{source}: top level")
-    mesh = _mesh(_table(data, "mesh", source), base_dir, f"{source} [mesh]")
+    with _context(f"{source} [mesh]"):
+        mesh = _mesh(_table(data, "mesh", source), base_dir, f"{source} [mesh]")
     d = mesh.dim
 
     material_table = dict(_table(data, "material", source))
     if "model" not in material_table:
         raise SceneError(f"{source} [material]: missing key 'model' (e.g. 'course_neo_hookean')")
-    material = make_material(material_table.pop("model"), **material_table)
+    with _context(f"{source} [material]"):
+        material = make_material(material_table.pop("model"), **material_table)
 
     newton_table = _table(data, "newton", source)
     _unknown(newton_table, {f.name for f in fields(NewtonOptions)}, f"{source} [newton]")
+    with _context(f"{source} [newton]"):
+        newton = NewtonOptions(**newton_table)
     sim_table = _table(data, "simulation", source)
     _unknown(sim_table, SIMULATION_KEYS, f"{source} [simulation]")
-    sim = Simulation(mesh, material, newton=NewtonOptions(**newton_table), **sim_table)
+    with _context(f"{source} [simulation]"):
+        sim = Simulation(mesh, material, newton=newton, **sim_table)
 
     for i, item in enumerate(_table(data, "dirichlet", source, array=True)):
         where = f"{source} [[dirichlet]] #{i + 1}"
@@ -145,7 +163,11 @@ def _build(data: dict, base_dir: Path, source: str, name: str) -> Scene:
         vertices = _select(mesh, "vertices", item["vertices"], where)
         disp = item.get("displacement")
         g = None if disp is None else compile_vector(disp, d, f"{where} displacement")
-        sim.add_dirichlet(vertices, g, item.get("components"))
+        components = item.get("components")
+        if components is not None and not isinstance(components, list):
+            raise SceneError(f"{where}: components must be a list of axes, e.g. [0]")
+        with _context(where):
+            sim.add_dirichlet(vertices, g, components)
     for i, item in enumerate(_table(data, "traction", source, array=True)):
         where = f"{source} [[traction]] #{i + 1}"
         _unknown(item, SCENE_KEYS["traction"], where)
@@ -153,15 +175,20 @@ def _build(data: dict, base_dir: Path, source: str, name: str) -> Scene:
             if key not in item:
                 raise SceneError(f"{where}: missing key {key!r}")
         facets = _select(mesh, "facets", item["facets"], where)
-        sim.add_traction(facets, _field(item["traction"], d, f"{where} traction"))
+        with _context(where):
+            sim.add_traction(facets, _field(item["traction"], d, f"{where} traction"))
     gravity = _table(data, "gravity", source)
     if gravity:
         _unknown(gravity, SCENE_KEYS["gravity"], f"{source} [gravity]")
-        sim.add_gravity(gravity["acceleration"])
+        with _context(f"{source} [gravity]"):
+            sim.add_gravity(gravity["acceleration"])
     for i, item in enumerate(_table(data, "body_force", source, array=True)):
         where = f"{source} [[body_force]] #{i + 1}"
         _unknown(item, SCENE_KEYS["body_force"], where)
-        sim.add_body_force(_field(item["force_density"], d, f"{where} force_density"))
+        if "force_density" not in item:
+            raise SceneError(f"{where}: missing key 'force_density'")
+        with _context(where):
+            sim.add_body_force(_field(item["force_density"], d, f"{where} force_density"))
     initial = _table(data, "initial", source)
     _unknown(initial, SCENE_KEYS["initial"], f"{source} [initial]")
     if "velocity" in initial:
@@ -169,6 +196,13 @@ def _build(data: dict, base_dir: Path, source: str, name: str) -> Scene:
         sim.set_velocity(v(mesh.points, sim.time))
     run = _table(data, "run", source)
     _unknown(run, RUN_KEYS, f"{source} [run]")
+    for key, ok, want in (
+        ("steps", lambda v: type(v) is int and v >= 0, "an integer >= 0"),
+        ("every", lambda v: type(v) is int and v >= 1, "an integer >= 1"),
+        ("render", lambda v: isinstance(v, bool), "true or false"),
+    ):
+        if key in run and not ok(run[key]):
+            raise SceneError(f"{source} [run]: {key} must be {want}, not {run[key]!r}")
     return Scene(sim, name, source, dict(run))
 
 
@@ -213,13 +247,16 @@ def _select(mesh, kind: str, selector, where: str) -> np.ndarray:
     ((how, args),) = selector.items()
     _unknown([how], SELECTORS[kind], f"{where} {kind}")
     prefix = "vertices" if kind == "vertices" else "facets"
-    if how == "tagged":
-        return getattr(select, f"{prefix}_tagged")(mesh, args)
-    if how == "boundary":
-        if args is not True:
-            raise SceneError(f"{where}: write {kind} = {{ boundary = true }}")
-        fn = select.boundary_vertices if kind == "vertices" else select.all_boundary_facets
-        return fn(mesh)
-    if not isinstance(args, dict):
-        raise SceneError(f"{where}: {how} takes a table of arguments")
-    return getattr(select, f"{prefix}_{how}")(mesh, **args)
+    with _context(f"{where} {kind} {how}"):
+        if how == "tagged":
+            return getattr(select, f"{prefix}_tagged")(mesh, args)
+        if how == "boundary":
+            if args is not True:
+                raise SceneError(f"{where}: write {kind} = {{ boundary = true }}")
+            fn = select.boundary_vertices if kind == "vertices" else select.all_boundary_facets
+            return fn(mesh)
+        if not isinstance(args, dict):
+            raise SceneError(f"{where}: {how} takes a table of arguments")
+        fn = getattr(select, f"{prefix}_{how}")
+        _unknown(args, list(inspect.signature(fn).parameters)[1:], f"{where} {kind} {how}")
+        return fn(mesh, **args)

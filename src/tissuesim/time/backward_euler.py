@@ -22,12 +22,20 @@ __all__ = ["backward_euler_step"]
 def backward_euler_step(model, state: State, h: float, solver, options) -> StepOutcome:
     t1 = state.time + h
     x_pred = state.x + h * state.v
-    x0 = x_pred.copy()
-    x0[model.prescribed.dofs] = model.prescribed.positions(t1)
     energies = (Inertia(model.mass, x_pred, h), ExternalForce(model.external_force(t1)))
 
     def evaluate(x: np.ndarray, order: int, project: bool):
         return model.evaluate(x, order, project, energies)
+
+    # Start Newton from the better (lower Phi) of the inertial prediction and the last
+    # positions: in violent phases (folding) x_pred can invert many elements at once.
+    prescribed = model.prescribed.positions(t1)
+    starts = []
+    for guess in (x_pred, state.x):
+        x0 = guess.copy()
+        x0[model.prescribed.dofs] = prescribed
+        starts.append((evaluate(x0, 0, False).value, len(starts), x0))
+    x0 = min(starts, key=lambda s: (np.nan_to_num(s[0], nan=np.inf), s[1]))[2]
 
     x1, record = minimize(
         evaluate,
