@@ -1,0 +1,25 @@
+"""The benchmark suite runs (quick mode) and writes its table and JSON; no timing is asserted."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+def test_benchmark_quick_mode_writes_results(tmp_path):
+    result = subprocess.run(
+        [sys.executable, str(ROOT / "benchmarks/run.py"), "--quick", "--out", str(tmp_path)],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+    assert result.returncode == 0, result.stderr
+    data = json.loads((tmp_path / "results.json").read_text())
+    assert {r["dim"] for r in data["rows"]} == {2, 3}
+    for row in data["rows"]:
+        assert row["iteration_s"] > 0 and row["linear_solve_s"] > 0
+    assert "iteration / solve" in (tmp_path / "results.md").read_text()
