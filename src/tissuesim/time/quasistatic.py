@@ -4,10 +4,8 @@ against rigid motions by its prescribed DOFs."""
 
 from __future__ import annotations
 
-import numpy as np
-
 from tissuesim.energies.loads import ExternalForce
-from tissuesim.solve.newton import minimize
+from tissuesim.time.implicit import solve_implicit_step
 from tissuesim.time.state import State, StepOutcome
 
 __all__ = ["quasistatic_step", "check_supported"]
@@ -26,23 +24,5 @@ def check_supported(model) -> None:
 
 
 def quasistatic_step(model, state: State, h: float, solver, options) -> StepOutcome:
-    t1 = state.time + h
-    x0 = state.x.copy()
-    x0[model.prescribed.dofs] = model.prescribed.positions(t1)
-    energies = (ExternalForce(model.external_force(t1)),)
-
-    def evaluate(x: np.ndarray, order: int, project: bool):
-        return model.evaluate(x, order, project, energies)
-
-    x1, record = minimize(
-        evaluate,
-        x0,
-        model.elimination,
-        solver,
-        options,
-        force_scale=model.force_scale,
-        length_scale=model.length_scale,
-    )
-    if not record.converged:
-        return StepOutcome(None, False, [record], record.reason)
-    return StepOutcome(State(t1, x1, (x1 - state.x) / h), True, [record])
+    energies = (ExternalForce(model.external_force(state.time + h)),)
+    return solve_implicit_step(model, state, h, energies, (state.x,), solver, options)
