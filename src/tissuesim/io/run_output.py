@@ -15,6 +15,7 @@ import numpy as np
 
 from tissuesim.errors import ConvergenceError
 from tissuesim.io.atomic import write_json_atomic
+from tissuesim.mesh.io import describe_mesh
 
 __all__ = ["RunOutput"]
 
@@ -31,6 +32,9 @@ class RunOutput:
         self.frames: list[tuple[float, np.ndarray, np.ndarray]] = []
         self.series = None
         self.status = "running"
+        # once per run: it costs about a second at 1e5 elements, and the summary is
+        # rewritten after every step
+        self.mesh_description = describe_mesh(sim.mesh)
         self.error = None
 
     def _write_frame(self) -> None:
@@ -47,7 +51,6 @@ class RunOutput:
 
     def _summary(self) -> dict:
         from tissuesim import __version__
-        from tissuesim.mesh.io import describe_mesh
 
         steps = [asdict(r) for r in self.sim.history]
         iters = [r.newton_iterations for r in self.sim.history]
@@ -56,7 +59,7 @@ class RunOutput:
             "status": self.status,
             "error": self.error,
             **self.metadata,
-            "mesh": describe_mesh(self.sim.mesh),
+            "mesh": self.mesh_description,
             "simulation": self.sim.describe(),
             "totals": {
                 "steps": len(steps),
