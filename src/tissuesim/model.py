@@ -14,6 +14,7 @@ from functools import cached_property
 import numpy as np
 
 from tissuesim.assembly.pattern import SparsityPattern
+from tissuesim.backend import resolve_backend
 from tissuesim.constraints.dirichlet import DirichletCondition, Elimination, PrescribedDofs
 from tissuesim.energies.accumulator import Accumulator
 from tissuesim.energies.elastic import ElasticEnergy
@@ -33,6 +34,7 @@ class Model:
     mass_kind: MassKind = "consistent"
     loads: list = field(default_factory=list)
     conditions: Sequence[DirichletCondition] = ()
+    backend: str = "auto"  # "auto", "numba" or "numpy" (see backend.py)
 
     def __post_init__(self) -> None:
         self.density = np.broadcast_to(
@@ -47,7 +49,10 @@ class Model:
         self.pattern = SparsityPattern.from_stencils(
             self.kinematics.n_dofs, [self.kinematics.stencil]
         )
-        self.elastic = ElasticEnergy(self.kinematics, self.material, stencil_id=0)
+        self.backend, self.backend_reason = resolve_backend(self.backend)
+        self.elastic = ElasticEnergy(
+            self.kinematics, self.material, stencil_id=0, backend=self.backend
+        )
         self.mass = MassMatrix.build(self.kinematics, self.density, self.pattern, self.mass_kind)
         self.set_conditions(self.conditions)
 

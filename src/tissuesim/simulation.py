@@ -70,6 +70,7 @@ class Simulation:
     mass: "consistent" or "lumped" (symplectic Euler always uses the lumped mass).
     newton: NewtonOptions (tolerances, hessian_projection, linear_solver).
     max_step_halvings: how often a failing step is split in two before giving up.
+    backend: "auto", "numba" or "numpy": who assembles the elastic energy (``backend.py``).
     """
 
     def __init__(
@@ -84,6 +85,7 @@ class Simulation:
         newton: NewtonOptions | None = None,
         max_step_halvings: int = 6,
         start_time: float = 0.0,
+        backend: str = "auto",
     ) -> None:
         if integrator not in INTEGRATORS:
             raise ValueError(f"integrator must be one of {sorted(INTEGRATORS)}, not {integrator!r}")
@@ -100,7 +102,7 @@ class Simulation:
             )
         if integrator == "symplectic_euler":
             mass = "lumped"  # the explicit update inverts the mass: it must be diagonal
-        self.model = Model(mesh, material, density, mass)
+        self.model = Model(mesh, material, density, mass, backend=backend)
         self.integrator = integrator
         self.time_step = float(time_step)
         self.newton = newton or NewtonOptions()
@@ -281,5 +283,10 @@ class Simulation:
             "linear_solver": {
                 "name": getattr(self._solver, "name", None),
                 "reason": self.solver_reason,
+            },
+            "backend": {
+                "name": self.model.backend,
+                "reason": self.model.backend_reason,
+                "fused_elastic": self.model.elastic.fused,
             },
         }

@@ -8,6 +8,7 @@ import pytest
 import scipy.sparse as sp
 
 from tissuesim.assembly.pattern import SparsityPattern
+from tissuesim.backend import numba_available
 from tissuesim.energies.mass import Inertia
 from tissuesim.materials import MATERIALS
 from tissuesim.model import Model
@@ -27,10 +28,19 @@ def fd_gradient(f, x, eps=1e-6):
     return g
 
 
+BACKENDS = [
+    "numpy",
+    pytest.param(
+        "numba", marks=pytest.mark.skipif(not numba_available(), reason="numba not installed")
+    ),
+]
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
 @pytest.mark.parametrize("name", sorted(MATERIALS))
-def test_gradient_and_hessian_match_finite_differences(small_mesh, name):
+def test_gradient_and_hessian_match_finite_differences(small_mesh, name, backend):
     material = MATERIALS[name](youngs_modulus=1000.0, poisson_ratio=0.3)
-    model = Model(small_mesh, material, density=2.0)
+    model = Model(small_mesh, material, density=2.0, backend=backend)
     x = perturbed_positions(small_mesh, 0.1)
     x_pred = x + 0.01
     energies = (Inertia(model.mass, x_pred, 0.05),)

@@ -4,11 +4,14 @@ Gradient and Hessian by the chain rule through the kinematics' dF/dx (constant f
     dE/dx = sum_q w_q (dF/dx)^T P,    d2E/dx2 = sum_q w_q (dF/dx)^T (dP/dF) (dF/dx).
 With ``project`` the tangent dP/dF is clamped to positive semi-definite per point, which makes
 every local Hessian PSD (w B^T A B with A PSD).
+
+Two implementations (``backend.py``): the batched NumPy one below, and the fused Numba loop of
+``assembly/fused_p1.py`` for the laws that have a point kernel; both compute the same sums.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -26,8 +29,32 @@ class ElasticEnergy:
     kinematics: P1Kinematics
     material: Material
     stencil_id: int = 0
+    backend: str = "numpy"  # "numba" or "numpy", resolved (see backend.py)
+    _law: int = field(init=False, default=-1)  # point-kernel id when the fused path applies
+
+    def __post_init__(self) -> None:
+        if self.backend == "numba":
+            from tissuesim.materials.point_kernels import LAW_IDS
+
+            law = LAW_IDS.get(getattr(self.material, "name", ""), -1)
+            registered = _registered_class(self.material)
+            # a subclass that overrides evaluate() must not be replaced by the stock kernel
+            if (
+                law >= 0
+                and registered is not None
+                and (type(self.material).evaluate is registered.evaluate)
+            ):
+                object.__setattr__(self, "_law", law)
+
+    @property
+    def fused(self) -> bool:
+        """True when order-0/1/2 evaluations without projection run the Numba loop."""
+        return self._law >= 0
 
     def accumulate(self, x: np.ndarray, acc: Accumulator) -> None:
+        if self._law >= 0 and not acc.project:
+            self._accumulate_fused(x, acc)
+            return
         F = self.kinematics.deformation_gradients(x)
         try:
             response = self.material.evaluate(F, min(acc.order, 2))
@@ -50,8 +77,33 @@ class ElasticEnergy:
                 acc.hessian, self.stencil_id, self.kinematics.tangent_to_hessian(A)
             )
 
+    def _accumulate_fused(self, x: np.ndarray, acc: Accumulator) -> None:
+        from tissuesim.assembly.fused_p1 import assemble_p1
+
+        K, empty = self.kinematics, np.empty(0)
+        energy, bad = assemble_p1(
+            self._law,
+            float(self.material.mu),
+            float(self.material.lam),
+            np.ascontiguousarray(x, dtype=float).ravel(),
+            K.mesh.cells,
+            K.grads,
+            K.weights,
+            min(acc.order, 2),
+            acc.pattern.scatters[self.stencil_id],
+            acc.gradient if acc.order >= 1 else empty,
+            acc.hessian if acc.order >= 2 else empty,
+        )
+        acc.add_value("elastic", float(np.inf) if bad >= 0 else float(energy))
+
     def cell_fields(self, x: np.ndarray) -> dict[str, np.ndarray]:
         """Per-element J and energy density psi (J/m^3) at positions x."""
         F = self.kinematics.deformation_gradients(x)
         psi = self.material.evaluate(F, 0).energy
         return {"J": np.linalg.det(F), "energy_density": psi}
+
+
+def _registered_class(material: Material):
+    from tissuesim.materials.registry import MATERIALS
+
+    return MATERIALS.get(getattr(material, "name", ""))

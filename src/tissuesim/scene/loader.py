@@ -44,7 +44,15 @@ MESH_KEYS = {
     "divisions": "generator: cells per axis",
     "pattern": "rectangle: triangle pattern",
 }
-SIMULATION_KEYS = ("density", "integrator", "time_step", "mass", "max_step_halvings", "start_time")
+SIMULATION_KEYS = (
+    "density",
+    "integrator",
+    "time_step",
+    "mass",
+    "max_step_halvings",
+    "start_time",
+    "backend",
+)
 RUN_KEYS = ("steps", "every", "render")
 SELECTORS = {
     "vertices": {"on_plane", "in_box", "tagged", "boundary"},
