@@ -216,7 +216,7 @@ class Simulation:
     def _linear_solver(self):
         if self._solver is None:
             self._solver, self.solver_reason = make_linear_solver(
-                self.newton.linear_solver, self.model.n_dofs, self.mesh.dim
+                self.newton.linear_solver, self.model.n_dofs, self.mesh.dim, self.mesh.points
             )
         return self._solver
 

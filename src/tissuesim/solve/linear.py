@@ -1,21 +1,30 @@
 """Sparse linear solvers for the Newton system H dx = -g, with reusable analysis.
 
 The matrix pattern never changes within a model (see ``assembly.pattern``), so a solver analyses
-it once and then only refactorises numbers:
+it once and then only refactorises numbers. Every ``factorize`` must get a matrix of the same
+pattern as the first one.
 
+- ``pardiso``: Intel MKL PARDISO through pypardiso's library loader (``tissuesim[fast]``, pip
+  wheels only). Cholesky mode (mtype 2) on the upper triangle; analysis (phase 11) once, numeric
+  factorisation (22) and solve (33) per iteration. The fastest direct solver in 2D here.
 - ``cholmod``: CHOLMOD via scikit-sparse (optional extra ``tissuesim[cholmod]``, which needs
   Debian's ``libsuitesparse-dev``). Symbolic analysis once, ``cholesky_inplace`` per iteration.
-  Raises ``NotPositiveDefiniteError`` on an indefinite matrix, which the Newton solver uses to
-  switch to a projected Hessian.
 - ``splu``: SciPy's SuperLU, always available. SciPy exposes no reusable symbolic factorisation,
   so we reuse its fill-reducing column ordering (computed on the first matrix) instead.
-- ``cg``: conjugate gradients preconditioned by Jacobi, or by smoothed-aggregation AMG
-  (``preconditioner="amg"``, optional extra ``tissuesim[amg]``).
+- ``cg`` / ``amg``: conjugate gradients preconditioned by Jacobi, or by smoothed-aggregation AMG
+  (``tissuesim[amg]``) built with the rigid-body modes of the mesh as near-null space (6x fewer
+  CG iterations in 3D elasticity than without) and a *lagged* hierarchy: it is rebuilt only
+  when CG needs more than ``rebuild_growth`` times the iterations it needed right after the last
+  rebuild, so its setup is paid about once per few Newton iterations or time steps.
+
+Every direct solver raises ``NotPositiveDefiniteError`` on an indefinite matrix, which the Newton
+solver uses to shift the Hessian (CG raises it when it does not converge).
 """
 
 from __future__ import annotations
 
 import importlib.util
+import weakref
 from dataclasses import dataclass
 
 import numpy as np
@@ -25,14 +34,20 @@ import scipy.sparse.linalg as spla
 __all__ = [
     "LinearSolver",
     "NotPositiveDefiniteError",
+    "PardisoSolver",
     "CholmodSolver",
     "SuperLUSolver",
     "CGSolver",
     "make_linear_solver",
+    "rigid_body_modes",
     "LINEAR_SOLVERS",
 ]
 
-LINEAR_SOLVERS = ("auto", "cholmod", "splu", "cg", "amg")
+LINEAR_SOLVERS = ("auto", "pardiso", "cholmod", "splu", "cg", "amg")
+
+#: 3D systems above this many DOFs go to AMG-CG under "auto" (benchmarks/solvers.py: AMG with a
+#: lagged hierarchy overtakes CHOLMOD and PARDISO between 2e4 and 6e4 DOFs on this machine).
+AMG_MIN_DOFS_3D = 30_000
 
 
 class NotPositiveDefiniteError(RuntimeError):
@@ -55,6 +70,90 @@ def has_cholmod() -> bool:
 
 def has_pyamg() -> bool:
     return importlib.util.find_spec("pyamg") is not None
+
+
+def has_pardiso() -> bool:
+    return importlib.util.find_spec("pypardiso") is not None
+
+
+class PardisoSolver(LinearSolver):
+    """MKL PARDISO, real symmetric positive definite mode, with explicit phases."""
+
+    name = "pardiso"
+    _MTYPE = 2  # real SPD: Cholesky; error -4 on a non-positive pivot (indefinite matrix)
+
+    def __init__(self) -> None:
+        import ctypes
+
+        import pypardiso  # locates mkl_rt; we call PARDISO ourselves to control the phases
+
+        self._ct = ctypes
+        self._pardiso = pypardiso.PyPardisoSolver().libmkl.pardiso
+        i32 = ctypes.POINTER(ctypes.c_int32)
+        self._pardiso.argtypes = [ctypes.POINTER(ctypes.c_int64), i32, i32, i32, i32, i32,
+                                  ctypes.c_void_p, i32, i32, i32, i32, i32, i32,
+                                  ctypes.c_void_p, ctypes.c_void_p, i32]  # fmt: skip
+        self._pardiso.restype = None
+        self._pt = np.zeros(64, dtype=np.int64)  # PARDISO's internal handle
+        self._iparm = np.zeros(64, dtype=np.int32)
+        self._iparm[[0, 1, 9, 34]] = (1, 2, 13, 1)  # own iparm; METIS; pivot eps 1e-13; 0-based
+        self._upper: np.ndarray | None = None
+        self._finalizer = None
+
+    def _call(self, phase: int, a: np.ndarray, b: np.ndarray, x: np.ndarray) -> int:
+        ct, i32 = self._ct, self._ct.c_int32
+        error = i32(0)
+        self._pardiso(
+            self._pt.ctypes.data_as(ct.POINTER(ct.c_int64)),
+            ct.byref(i32(1)), ct.byref(i32(1)), ct.byref(i32(self._MTYPE)),
+            ct.byref(i32(phase)), ct.byref(i32(self._n)), a.ctypes.data,
+            self._ia.ctypes.data_as(ct.POINTER(i32)), self._ja.ctypes.data_as(ct.POINTER(i32)),
+            self._perm.ctypes.data_as(ct.POINTER(i32)), ct.byref(i32(1)),
+            self._iparm.ctypes.data_as(ct.POINTER(i32)), ct.byref(i32(0)),
+            b.ctypes.data, x.ctypes.data, ct.byref(error),
+        )  # fmt: skip
+        return int(error.value)
+
+    def factorize(self, A: sp.csr_matrix) -> None:
+        if self._upper is None:  # analysis, once: the upper triangle of the fixed pattern
+            A = A if A.has_sorted_indices else A.sorted_indices()
+            rows = np.repeat(np.arange(A.shape[0]), np.diff(A.indptr))
+            self._upper = np.flatnonzero(A.indices >= rows)
+            upper_rows = rows[self._upper]
+            self._n = A.shape[0]
+            counts = np.bincount(upper_rows, minlength=self._n)
+            self._ia = np.concatenate([[0], np.cumsum(counts)]).astype(np.int32)
+            self._ja = A.indices[self._upper].astype(np.int32)
+            self._perm = np.zeros(self._n, dtype=np.int32)
+            self._a = np.ascontiguousarray(A.data[self._upper])
+            dummy = np.zeros(self._n)
+            if self._call(11, self._a, dummy, dummy.copy()) != 0:
+                raise RuntimeError("PARDISO analysis failed")
+            self._finalizer = weakref.finalize(self, _pardiso_release, self)
+        self._a = np.ascontiguousarray(A.data[self._upper])
+        dummy = np.zeros(self._n)
+        error = self._call(22, self._a, dummy, dummy.copy())
+        if error == -4:
+            raise NotPositiveDefiniteError("PARDISO: zero or negative pivot (matrix not SPD)")
+        if error != 0:
+            raise RuntimeError(f"PARDISO numeric factorisation failed (error {error})")
+
+    def solve(self, b: np.ndarray) -> np.ndarray:
+        b = np.ascontiguousarray(b, dtype=float)
+        x = np.zeros_like(b)
+        error = self._call(33, self._a, b, x)
+        if error != 0:
+            raise RuntimeError(f"PARDISO solve failed (error {error})")
+        return x
+
+
+def _pardiso_release(solver: PardisoSolver) -> None:
+    """Phase -1: free PARDISO's internal memory (it is not Python-managed)."""
+    dummy = np.zeros(1)
+    try:
+        solver._call(-1, dummy, dummy, dummy.copy())
+    except Exception:  # interpreter shutdown: the library may already be gone
+        pass
 
 
 class CholmodSolver(LinearSolver):
@@ -107,28 +206,63 @@ class SuperLUSolver(LinearSolver):
         return x
 
 
+def rigid_body_modes(points: np.ndarray) -> np.ndarray:
+    """Translations and infinitesimal rotations of ``points`` (n, d) as DOF vectors (n*d, k):
+    the near-null space of elasticity, which smoothed-aggregation AMG needs to coarsen well."""
+    n, d = points.shape
+    c = points - points.mean(axis=0)
+    if d == 2:
+        B = np.zeros((n, 2, 3))
+        B[:, 0, 0] = B[:, 1, 1] = 1.0
+        B[:, 0, 2], B[:, 1, 2] = -c[:, 1], c[:, 0]
+        return B.reshape(2 * n, 3)
+    B = np.zeros((n, 3, 6))
+    B[:, 0, 0] = B[:, 1, 1] = B[:, 2, 2] = 1.0
+    for k, (i, j) in enumerate(((0, 1), (1, 2), (2, 0))):  # rotation in the (i, j) plane
+        B[:, i, 3 + k], B[:, j, 3 + k] = -c[:, j], c[:, i]
+    return B.reshape(3 * n, 6)
+
+
 @dataclass
 class CGStats:
-    iterations: int = 0
+    iterations: int = 0  # CG iterations, all solves
+    solves: int = 0
+    setups: int = 0  # AMG hierarchies built
 
 
 class CGSolver(LinearSolver):
-    """Preconditioned CG to a relative residual ``rtol``; Jacobi or AMG preconditioner."""
+    """Preconditioned CG to a relative residual ``rtol``; Jacobi or AMG preconditioner.
 
-    def __init__(self, preconditioner: str = "jacobi", rtol: float = 1e-8, maxiter: int = 5000):
+    points: rest positions (n, d), for the AMG's rigid-body near-null space (optional).
+    rebuild_growth: the AMG hierarchy is kept across factorisations until a solve needs more
+    than this factor times the iterations of the first solve after the last rebuild; 1.0 or less
+    rebuilds it every time.
+    """
+
+    def __init__(
+        self,
+        preconditioner: str = "jacobi",
+        rtol: float = 1e-8,
+        maxiter: int = 5000,
+        points: np.ndarray | None = None,
+        rebuild_growth: float = 2.0,
+    ):
         self.preconditioner = preconditioner
         self.name = f"cg+{preconditioner}"
         self.rtol = rtol
         self.maxiter = maxiter
         self.stats = CGStats()
+        self._B = rigid_body_modes(points) if points is not None else None
+        self.rebuild_growth = rebuild_growth
+        self._M = None
+        self._reference_iterations: int | None = None  # iterations right after a rebuild
 
     def factorize(self, A: sp.csr_matrix) -> None:
         self._A = A
         if self.preconditioner == "amg":
-            import pyamg
-
-            ml = pyamg.smoothed_aggregation_solver(A, symmetry="symmetric", coarse_solver="splu")
-            self._M = ml.aspreconditioner(cycle="V")
+            lagged = self._M is not None and self.rebuild_growth > 1.0
+            if not lagged:
+                self._build_amg()
         else:
             diag = A.diagonal()
             if np.any(diag <= 0):
@@ -136,7 +270,18 @@ class CGSolver(LinearSolver):
             inv = 1.0 / diag
             self._M = spla.LinearOperator(A.shape, matvec=lambda v: inv * v, dtype=float)
 
-    def solve(self, b: np.ndarray) -> np.ndarray:
+    def _build_amg(self) -> None:
+        import pyamg
+
+        # coarse_solver="splu": pyamg's default ("pinv") forms a dense pseudo-inverse (seconds)
+        ml = pyamg.smoothed_aggregation_solver(
+            self._A, B=self._B, symmetry="symmetric", coarse_solver="splu"
+        )
+        self._M = ml.aspreconditioner(cycle="V")
+        self._reference_iterations = None
+        self.stats.setups += 1
+
+    def _cg(self, b: np.ndarray) -> tuple[np.ndarray, int, int]:
         count = [0]
 
         def callback(_):
@@ -145,16 +290,40 @@ class CGSolver(LinearSolver):
         x, info = spla.cg(
             self._A, b, rtol=self.rtol, maxiter=self.maxiter, M=self._M, callback=callback
         )
-        self.stats.iterations += count[0]
+        return x, info, count[0]
+
+    def solve(self, b: np.ndarray) -> np.ndarray:
+        x, info, its = self._cg(b)
+        if self.preconditioner == "amg":
+            ref = self._reference_iterations
+            stale = ref is not None and (info != 0 or its > self.rebuild_growth * max(ref, 5))
+            if stale:  # the lagged hierarchy no longer fits this matrix: rebuild, solve again
+                self.stats.iterations += its
+                self._build_amg()
+                x, info, its = self._cg(b)
+            if self._reference_iterations is None:
+                self._reference_iterations = its
+        self.stats.iterations += its
+        self.stats.solves += 1
         if info != 0 or not np.all(np.isfinite(x)):
             raise NotPositiveDefiniteError(f"CG did not converge (info={info})")
         return x
 
 
-def make_linear_solver(name: str, n_dofs: int, dim: int) -> tuple[LinearSolver, str]:
-    """Build the solver called ``name`` (see ``LINEAR_SOLVERS``); returns (solver, reason)."""
+def make_linear_solver(
+    name: str, n_dofs: int, dim: int, points: np.ndarray | None = None
+) -> tuple[LinearSolver, str]:
+    """Build the solver called ``name`` (see ``LINEAR_SOLVERS``); returns (solver, reason).
+
+    points: rest positions (n, d), used by AMG for the rigid-body near-null space."""
     if name not in LINEAR_SOLVERS:
         raise ValueError(f"linear_solver must be one of {LINEAR_SOLVERS}, not {name!r}")
+    if name == "pardiso":
+        if not has_pardiso():
+            raise ValueError(
+                "linear_solver 'pardiso' needs pypardiso: pip install 'tissuesim[fast]'"
+            )
+        return PardisoSolver(), "requested"
     if name == "cholmod":
         if not has_cholmod():
             raise ValueError(
@@ -169,13 +338,20 @@ def make_linear_solver(name: str, n_dofs: int, dim: int) -> tuple[LinearSolver, 
     if name == "amg":
         if not has_pyamg():
             raise ValueError("linear_solver 'amg' needs pyamg: pip install 'tissuesim[amg]'")
-        return CGSolver("amg"), "requested"
-    # auto: direct solvers win in 2D and for small 3D; AMG-CG for large 3D (FIELD-NOTES).
-    large_3d = dim == 3 and n_dofs > 60_000
+        return CGSolver("amg", points=points), "requested"
+    # auto (benchmarks/solvers.py): AMG-CG for large 3D; else a direct solver, PARDISO first in
+    # 2D (fastest factorisation) and CHOLMOD first in 3D (PARDISO's 3D factorisation is slower).
+    large_3d = dim == 3 and n_dofs > AMG_MIN_DOFS_3D
     if large_3d and has_pyamg():
-        return CGSolver("amg"), f"auto: 3D with {n_dofs} DOFs > 60000, pyamg available"
-    if has_cholmod():
-        return CholmodSolver(), f"auto: scikit-sparse (CHOLMOD) available, {n_dofs} DOFs"
+        return CGSolver("amg", points=points), (
+            f"auto: 3D with {n_dofs} DOFs > {AMG_MIN_DOFS_3D}, pyamg available"
+        )
+    direct = [("pardiso", has_pardiso, PardisoSolver), ("cholmod", has_cholmod, CholmodSolver)]
+    if dim == 3:
+        direct.reverse()
+    for label, available, cls in direct:
+        if available():
+            return cls(), f"auto: {label} available, {dim}D with {n_dofs} DOFs"
     if large_3d:
-        return CGSolver("jacobi"), f"auto: 3D with {n_dofs} DOFs > 60000, no pyamg"
-    return SuperLUSolver(), f"auto: no scikit-sparse, SciPy SuperLU for {n_dofs} DOFs"
+        return CGSolver("jacobi"), f"auto: 3D with {n_dofs} DOFs > {AMG_MIN_DOFS_3D}, no pyamg"
+    return SuperLUSolver(), f"auto: no pypardiso or scikit-sparse, SciPy SuperLU for {n_dofs} DOFs"

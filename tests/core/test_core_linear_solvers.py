@@ -1,0 +1,158 @@
+"""Every linear solver on the same Newton matrices: accuracy, indefinite matrices, reuse of the
+analysis across refactorisations, the AMG's rigid-body modes and lagged hierarchy, and the
+automatic choice."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import scipy.sparse as sp
+
+from tissuesim.constraints.dirichlet import DirichletCondition
+from tissuesim.materials import NeoHookean
+from tissuesim.mesh import box, rectangle, select
+from tissuesim.model import Model
+from tissuesim.solve import linear
+from tissuesim.solve.linear import (
+    CGSolver,
+    NotPositiveDefiniteError,
+    make_linear_solver,
+    rigid_body_modes,
+)
+
+AVAILABLE = {
+    "pardiso": linear.has_pardiso(),
+    "cholmod": linear.has_cholmod(),
+    "splu": True,
+    "cg": True,
+    "amg": linear.has_pyamg(),
+}
+SOLVERS = [
+    pytest.param(n, marks=pytest.mark.skipif(not ok, reason=f"{n} not installed"))
+    for n, ok in AVAILABLE.items()
+]
+
+
+def newton_system(dim, n, stretch=0.02, seed=0):
+    mesh = (
+        rectangle(lower=(0, 0), upper=(1, 1), divisions=(n, n))
+        if dim == 2
+        else box(lower=(0, 0, 0), upper=(1, 1, 1), divisions=(n, n, n))
+    )
+    model = Model(mesh, NeoHookean(youngs_modulus=1e3, poisson_ratio=0.3), 1.0)
+    left = select.vertices_on_plane(mesh, 0, 0.0)
+    model.set_conditions([DirichletCondition(left, lambda X, t: np.zeros_like(X))])
+    rng = np.random.default_rng(seed)
+    x = mesh.points * (1 + stretch) + 1e-3 * rng.standard_normal(mesh.points.shape)
+    x[left] = mesh.points[left]
+    acc = model.evaluate(x.ravel(), 2, False)
+    model.elimination.apply(acc.hessian, acc.gradient)
+    return mesh, model, acc
+
+
+@pytest.mark.parametrize("name", SOLVERS)
+@pytest.mark.parametrize("dim", [2, 3])
+def test_solver_solves_newton_system_and_reuses_analysis(name, dim):
+    mesh, model, acc = newton_system(dim, 10 if dim == 2 else 4)
+    solver, reason = make_linear_solver(name, model.n_dofs, dim, mesh.points)
+    assert reason == "requested"
+    A = model.pattern.matrix(acc.hessian)
+    for scale in (1.0, 1.3):  # a second factorisation of new values on the same pattern
+        data = acc.hessian * scale
+        A = model.pattern.matrix(data)
+        solver.factorize(A)
+        b = -acc.gradient
+        x = solver.solve(b)
+        assert np.linalg.norm(A @ x - b) <= 1e-7 * np.linalg.norm(b)
+
+
+@pytest.mark.parametrize(
+    "name",
+    [p for p in SOLVERS if p.values[0] in ("pardiso", "cholmod")],
+)
+def test_direct_solvers_refuse_indefinite_matrices(name):
+    _, model, acc = newton_system(2, 6)
+    solver, _ = make_linear_solver(name, model.n_dofs, 2)
+    solver.factorize(model.pattern.matrix(acc.hessian))  # SPD: fine
+    data = acc.hessian.copy()
+    data[model.pattern.diagonal[7]] = -abs(data[model.pattern.diagonal[7]]) * 10
+    with pytest.raises(NotPositiveDefiniteError):
+        solver.factorize(model.pattern.matrix(data))
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+def test_rigid_body_modes_span_the_null_space_at_rest(dim):
+    mesh = rectangle(divisions=(4, 3)) if dim == 2 else box(divisions=(2, 2, 2))
+    model = Model(mesh, NeoHookean(youngs_modulus=1e3, poisson_ratio=0.3), 1.0)
+    K = model.pattern.matrix(model.evaluate(mesh.points.ravel(), 2, False).hessian)
+    B = rigid_body_modes(mesh.points)
+    assert B.shape == (mesh.n_points * dim, 3 if dim == 2 else 6)
+    assert np.linalg.matrix_rank(B) == B.shape[1]
+    assert np.abs(K @ B).max() < 1e-10 * abs(K).max()
+
+
+@pytest.mark.skipif(not linear.has_pyamg(), reason="pyamg not installed")
+def test_amg_hierarchy_is_lagged_and_rebuilt_when_stale():
+    mesh, model, acc = newton_system(3, 5)
+    solver = CGSolver("amg", points=mesh.points, rebuild_growth=2.0)
+    b = -acc.gradient
+    for scale in (1.0, 1.01, 0.99):  # nearly the same matrix: one hierarchy serves all
+        solver.factorize(model.pattern.matrix(acc.hessian * scale))
+        solver.solve(b)
+    assert solver.stats.setups == 1 and solver.stats.solves == 3
+    # a very different SPD matrix, D A D with D jumping by 1e3 across the body, makes the
+    # old hierarchy stale
+    D = np.where(np.repeat(mesh.points[:, 0], 3) > 0.5, 1e3, 1.0)
+    rows = np.repeat(np.arange(model.pattern.n), np.diff(model.pattern.indptr))
+    A = model.pattern.matrix(acc.hessian * D[rows] * D[model.pattern.indices])
+    solver.factorize(A)
+    x = solver.solve(b)
+    assert np.linalg.norm(A @ x - b) <= 1e-7 * np.linalg.norm(b)
+    assert solver.stats.setups == 2
+    always = CGSolver("amg", points=mesh.points, rebuild_growth=1.0)
+    for _ in range(2):
+        always.factorize(model.pattern.matrix(acc.hessian))
+        always.solve(b)
+    assert always.stats.setups == 2
+
+
+@pytest.mark.skipif(not linear.has_pyamg(), reason="pyamg not installed")
+def test_rigid_body_modes_cut_amg_iterations():
+    mesh, model, acc = newton_system(3, 6)
+    A, b = model.pattern.matrix(acc.hessian), -acc.gradient
+    counts = []
+    for points in (None, mesh.points):
+        solver = CGSolver("amg", points=points)
+        solver.factorize(A)
+        solver.solve(b)
+        counts.append(solver.stats.iterations)
+    assert counts[1] < 0.6 * counts[0]
+
+
+def test_automatic_choice_and_its_reason(monkeypatch):
+    for flag in ("has_pardiso", "has_cholmod", "has_pyamg"):
+        monkeypatch.setattr(linear, flag, lambda: False)
+    solver, reason = make_linear_solver("auto", 1000, 2)
+    assert solver.name == "splu" and "SuperLU" in reason
+    solver, reason = make_linear_solver("auto", 10**6, 3)
+    assert solver.name == "cg+jacobi" and "no pyamg" in reason
+    monkeypatch.setattr(linear, "has_pyamg", lambda: True)
+    solver, reason = make_linear_solver("auto", 10**6, 3, np.zeros((10**6 // 3, 3)))
+    assert solver.name == "cg+amg" and "pyamg" in reason
+    with pytest.raises(ValueError, match="linear_solver must be one of"):
+        make_linear_solver("umfpack", 10, 2)
+    with pytest.raises(ValueError, match=r"tissuesim\[fast\]"):
+        make_linear_solver("pardiso", 10, 2)
+    with pytest.raises(ValueError, match="libsuitesparse-dev"):
+        make_linear_solver("cholmod", 10, 2)
+
+
+def test_superlu_matches_dense_solve():
+    _, model, acc = newton_system(2, 5)
+    A = model.pattern.matrix(acc.hessian)
+    solver, _ = make_linear_solver("splu", model.n_dofs, 2)
+    solver.factorize(A)
+    solver.factorize(A)  # second time: reuses the ordering
+    x = solver.solve(-acc.gradient)
+    np.testing.assert_allclose(x, np.linalg.solve(A.toarray(), -acc.gradient), rtol=1e-8)
+    assert sp.issparse(A)
