@@ -22,4 +22,8 @@ def test_benchmark_quick_mode_writes_results(tmp_path):
     assert {r["dim"] for r in data["rows"]} == {2, 3}
     for row in data["rows"]:
         assert row["iteration_s"] > 0 and row["linear_solve_s"] > 0
-    assert "iteration / solve" in (tmp_path / "results.md").read_text()
+        assert row["best_solve_s"] > 0 and row["solves"]
+        assert all(s["residual"] < 1e-6 for s in row["solves"])  # every solver really solved
+    assert {e["dim"] for e in data["explicit"]} == {2, 3}
+    assert all(e["vertex_updates_per_s"] > 0 for e in data["explicit"])
+    assert "iteration / best solve" in (tmp_path / "results.md").read_text()
