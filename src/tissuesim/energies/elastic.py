@@ -96,6 +96,10 @@ class ElasticEnergy:
         )
         acc.add_value("elastic", float(np.inf) if bad >= 0 else float(energy))
 
+    def jacobians(self, x: np.ndarray) -> np.ndarray:
+        """Per-element J = det F at positions x, (m,)."""
+        return np.linalg.det(self.kinematics.deformation_gradients(x))
+
     def cell_fields(self, x: np.ndarray) -> dict[str, np.ndarray]:
         """Per-element J and energy density psi (J/m^3) at positions x."""
         F = self.kinematics.deformation_gradients(x)
