@@ -54,8 +54,8 @@ def _median_time(fn, repeat: int):
     return float(np.median(times)), out
 
 
-def _problem(dim: int, n: int, backend: str = "auto"):
-    """Structured mesh, Neo-Hookean model clamped at x = 0, a deformed state and an end load."""
+def _problem(dim: int, n: int, backend: str = "auto", material: str = "neo_hookean"):
+    """Structured mesh, a model clamped at x = 0, a deformed state and an end load."""
     import numpy as np
 
     import tissuesim as ts
@@ -68,9 +68,9 @@ def _problem(dim: int, n: int, backend: str = "auto"):
         mesh = ts.rectangle(lower=(0, 0), upper=(1, 1), divisions=(n, n))
     else:
         mesh = ts.box(lower=(0, 0, 0), upper=(1, 1, 1), divisions=(n, n, n))
-    material = ts.NeoHookean(youngs_modulus=E, poisson_ratio=NU)
+    law = ts.make_material(material, youngs_modulus=E, poisson_ratio=NU)
     start = time.perf_counter()
-    model = Model(mesh, material, DENSITY, backend=backend)
+    model = Model(mesh, law, DENSITY, backend=backend)
     left = select.vertices_on_plane(mesh, 0, 0.0)
     model.set_conditions([DirichletCondition(left, lambda X, t: np.zeros_like(X))])
     setup = time.perf_counter() - start
@@ -83,20 +83,33 @@ def _problem(dim: int, n: int, backend: str = "auto"):
     return mesh, model, u, ExternalForce(f.ravel()), setup
 
 
-def worker_iteration(dim: int, n: int, backend: str, solver_name: str, repeat: int) -> dict:
-    """Phases of one Newton iteration and the whole iteration as ``minimize`` runs it."""
+def worker_iteration(
+    dim: int,
+    n: int,
+    backend: str,
+    solver_name: str,
+    repeat: int,
+    material: str = "neo_hookean",
+    time_step: float | None = None,
+) -> dict:
+    """Phases of one Newton iteration and the whole iteration as ``minimize`` runs it.
+    time_step: None for a quasistatic iteration, else Backward Euler's (inertia added)."""
     import numpy as np
 
+    from tissuesim.energies.mass import Inertia
     from tissuesim.solve.linear import make_linear_solver
     from tissuesim.solve.newton import NewtonOptions, minimize
 
     base_rss = _rss_mb("VmRSS")
-    mesh, model, u, load, setup = _problem(dim, n, backend)
+    mesh, model, u, load, setup = _problem(dim, n, backend, material)
     x = (mesh.points + u).ravel()
     t: dict[str, float] = {}
+    energies = (load,)
+    if time_step is not None:  # Backward Euler from rest at the undeformed state
+        energies += (Inertia(model.mass, mesh.points.ravel().copy(), time_step),)
 
     def evaluate(y, order, project):
-        return model.evaluate(y, order, project, (load,))
+        return model.evaluate(y, order, project, energies)
 
     evaluate(x, 2, False)  # JIT load / compile outside the timings
     t["assembly"], acc = _median_time(lambda: evaluate(x, 2, False), repeat)
@@ -143,6 +156,8 @@ def worker_iteration(dim: int, n: int, backend: str, solver_name: str, repeat: i
         "dofs": model.n_dofs,
         "nnz": model.pattern.nnz,
         "backend": model.backend,
+        "material": material,
+        "scheme": "quasistatic" if time_step is None else f"backward_euler h={time_step:g}",
         "setup_s": setup,
         **{f"{k}_s": v for k, v in t.items()},
         "line_search_trials": trials,
@@ -285,9 +300,13 @@ def spawn(kind: str, **kwargs) -> dict:
     return json.loads(proc.stdout.strip().splitlines()[-1])
 
 
-def candidate_solvers(dim: int, dofs: int, max_direct_dofs_3d: int) -> list[str]:
+def candidate_solvers(
+    dim: int, dofs: int, max_direct_dofs_3d: int, requested: list[str] | None = None
+) -> list[str]:
     from tissuesim.solve import linear
 
+    if requested:
+        return requested
     names = []
     if linear.has_pardiso() and (dim == 2 or dofs <= max_direct_dofs_3d):
         names.append("pardiso")
@@ -314,10 +333,11 @@ def markdown(result: dict) -> str:
         f"Machine: {result['machine']}, Python {result['python']}, one thread for BLAS, "
         f"OpenMP, MKL and Numba. Command: `{result['command']}`",
         "",
-        "Newton iteration, seconds (median). `assembly` is energy + gradient + Hessian into the "
-        "CSR pattern (with the numba backend, kernels and scatter are one fused loop; the NumPy "
-        "path's split is in the last two columns). `best solve` is the fastest available solver "
-        "alone on the same matrix, timed in its own process.",
+        f"Newton iteration ({result['rows'][0].get('material', '')}, "
+        f"{result['rows'][0].get('scheme', '')}), seconds (median). `assembly` is energy + "
+        "gradient + Hessian into the CSR pattern (with the numba backend, kernels and scatter "
+        "are one fused loop; the NumPy path's split is in the last two columns). `best solve` "
+        "is the fastest available solver alone on the same matrix, timed in its own process.",
         "",
         "| dim | elements | DOFs | backend | assembly | elimination | linear solve (solver) | "
         "line search | other | iteration | best solve (solver) | iteration / best solve | "
@@ -404,6 +424,10 @@ def main() -> None:
     parser.add_argument("--sizes3d", type=int, nargs="*", default=[12, 26, 36, 44])
     parser.add_argument("--backend", default="auto", help="auto, numba or numpy")
     parser.add_argument("--solver", default="auto", help="the Newton iteration's linear solver")
+    parser.add_argument("--material", default="neo_hookean",
+                        help="law of the iteration table (peers: neo_hookean)")  # fmt: skip
+    parser.add_argument("--time-step", type=float, default=None,
+                        help="Backward Euler step (s); default: quasistatic")  # fmt: skip
     parser.add_argument("--repeat", type=int, default=3)
     parser.add_argument("--peers", action="store_true", help="also time FElupe and scikit-fem")
     parser.add_argument("--peer-solve-max-elements", type=int, default=200_000,
@@ -411,6 +435,8 @@ def main() -> None:
     parser.add_argument("--max-direct-dofs-3d", type=int, default=160_000,
                         help="3D direct solvers are timed only up to this many DOFs")  # fmt: skip
     parser.add_argument("--explicit-steps", type=int, default=20)
+    parser.add_argument("--solvers", nargs="*", default=None,
+                        help="solvers timed alone (default: every fast one installed)")  # fmt: skip
     parser.add_argument("--out", default="benchmarks/results")
     parser.add_argument("--worker", nargs=2, help=argparse.SUPPRESS)
     args = parser.parse_args()
@@ -427,8 +453,9 @@ def main() -> None:
     rows, peer_rows, explicit, scaling = [], [], [], []
     for dim, sizes in ((2, args.sizes2d), (3, args.sizes3d)):
         for n in sizes:
-            row = spawn("iteration", dim=dim, n=n, backend=args.backend,
-                        solver_name=args.solver, repeat=args.repeat)  # fmt: skip
+            row = spawn("iteration", dim=dim, n=n, backend=args.backend, solver_name=args.solver,
+                        repeat=args.repeat, material=args.material,
+                        time_step=args.time_step)  # fmt: skip
             row.setdefault("dim", dim)
             rows.append(row)
             if "error" in row:
@@ -436,7 +463,7 @@ def main() -> None:
                 continue
             row["solves"] = [
                 spawn("solve", dim=dim, n=n, solver_name=s, repeat=args.repeat)
-                for s in candidate_solvers(dim, row["dofs"], args.max_direct_dofs_3d)
+                for s in candidate_solvers(dim, row["dofs"], args.max_direct_dofs_3d, args.solvers)
             ]
             ok = [s for s in row["solves"] if "error" not in s]
             best = min(ok, key=lambda s: s["per_iteration_s"])
