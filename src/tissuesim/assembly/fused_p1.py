@@ -25,7 +25,7 @@ from numba import njit
 
 from tissuesim.materials.point_kernels import evaluate_point
 
-__all__ = ["assemble_p1"]
+__all__ = ["assemble_p1", "element_jacobians"]
 
 
 def assemble_p1(law, mu, lam, x, cells, grads, weights, order, scatter, gradient, hessian):
@@ -114,3 +114,28 @@ def _assemble(d, law, mu, lam, x, cells, grads, weights, order, scatter, gradien
                         if c != r:
                             hessian[row[c * nloc + r]] += s
     return energy, -1
+
+
+@njit(cache=True)
+def element_jacobians(x, cells, grads):
+    """J = det F of every element at positions x (n*d,), (m,): the per-step min J check."""
+    m, nv = cells.shape
+    d = grads.shape[2]
+    out = np.empty(m)
+    F = np.empty((d, d))
+    for e in range(m):
+        for i in range(d):
+            for j in range(d):
+                s = 0.0
+                for a in range(nv):
+                    s += x[cells[e, a] * d + i] * grads[e, a, j]
+                F[i, j] = s
+        if d == 2:
+            out[e] = F[0, 0] * F[1, 1] - F[0, 1] * F[1, 0]
+        else:
+            out[e] = (
+                F[0, 0] * (F[1, 1] * F[2, 2] - F[1, 2] * F[2, 1])
+                - F[0, 1] * (F[1, 0] * F[2, 2] - F[1, 2] * F[2, 0])
+                + F[0, 2] * (F[1, 0] * F[2, 1] - F[1, 1] * F[2, 0])
+            )
+    return out

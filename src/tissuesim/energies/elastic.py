@@ -18,6 +18,7 @@ import numpy as np
 from tissuesim.energies.accumulator import Accumulator
 from tissuesim.errors import InvertedElementError
 from tissuesim.kinematics.p1 import P1Kinematics
+from tissuesim.materials._common import det
 from tissuesim.materials.base import Material
 from tissuesim.materials.psd import project_tangent_psd
 
@@ -98,13 +99,19 @@ class ElasticEnergy:
 
     def jacobians(self, x: np.ndarray) -> np.ndarray:
         """Per-element J = det F at positions x, (m,)."""
-        return np.linalg.det(self.kinematics.deformation_gradients(x))
+        if self.backend == "numba":
+            from tissuesim.assembly.fused_p1 import element_jacobians
+
+            K = self.kinematics
+            x = np.ascontiguousarray(x, dtype=float).ravel()
+            return element_jacobians(x, K.mesh.cells, K.grads)
+        return det(self.kinematics.deformation_gradients(x))
 
     def cell_fields(self, x: np.ndarray) -> dict[str, np.ndarray]:
         """Per-element J and energy density psi (J/m^3) at positions x."""
         F = self.kinematics.deformation_gradients(x)
         psi = self.material.evaluate(F, 0).energy
-        return {"J": np.linalg.det(F), "energy_density": psi}
+        return {"J": det(F), "energy_density": psi}
 
 
 def _registered_class(material: Material):

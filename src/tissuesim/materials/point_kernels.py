@@ -84,7 +84,7 @@ def _add_identity(c, A):
             A[i, j, i, j] += c
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def neo_hookean_point(F, mu, lam, order, P, A, W):
     d = F.shape[0]
     J = _det(F)
@@ -118,7 +118,7 @@ def neo_hookean_point(F, mu, lam, order, P, A, W):
     return psi
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def course_neo_hookean_point(F, mu, lam, order, P, A, W):
     d = F.shape[0]
     x = _det(F) - 1.0
@@ -150,7 +150,7 @@ def course_neo_hookean_point(F, mu, lam, order, P, A, W):
     return psi
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def stvk_point(F, mu, lam, order, P, A, W):
     d = F.shape[0]
     E = W[0]
@@ -198,7 +198,7 @@ def stvk_point(F, mu, lam, order, P, A, W):
     return psi
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def linear_point(F, mu, lam, order, P, A, W):
     d = F.shape[0]
     tr = 0.0
