@@ -1,7 +1,7 @@
 """Which implementation assembles the elastic energy: fused Numba loops or batched NumPy.
 
     "numba": ``assembly/fused_p1.py``, one compiled loop per element (optional extra
-             ``tissuesim[fast]``); 3-8x faster, compiled once and cached on disk.
+             ``tissuesim[fast]``); 12-17x faster (docs/performance.md), compiled once, cached.
     "numpy": ``kinematics/p1.py`` + ``material.evaluate`` batched over all elements; always
              available, and the reference the Numba path is tested against.
     "auto":  numba when it is installed, else numpy.
