@@ -118,3 +118,14 @@ def test_backend_resolution(monkeypatch):
     monkeypatch.setattr("tissuesim.backend.numba_available", lambda: False)
     with pytest.raises(ValueError, match=r"tissuesim\[fast\]"):
         resolve_backend("numba")
+
+
+@needs_numba
+def test_fused_jacobians_equal_numpy_determinants(mesh):
+    material = NeoHookean(youngs_modulus=1000.0, poisson_ratio=0.3)
+    fused = Model(mesh, material, 1.0, backend="numba")
+    x = deformed(mesh, 0.05, seed=2)
+    F = fused.kinematics.deformation_gradients(x)
+    np.testing.assert_allclose(fused.elastic.jacobians(x), np.linalg.det(F), rtol=1e-12)
+    reference = Model(mesh, material, 1.0, backend="numpy")
+    np.testing.assert_allclose(reference.elastic.jacobians(x), np.linalg.det(F), rtol=1e-12)

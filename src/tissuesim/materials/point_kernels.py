@@ -76,6 +76,17 @@ def _add_det_hessian(F, c, A):
 
 
 @njit(cache=True, inline="always")
+def _frobenius_sq(F):
+    """|F|^2 = F : F."""
+    d = F.shape[0]
+    sq = 0.0
+    for i in range(d):
+        for j in range(d):
+            sq += F[i, j] * F[i, j]
+    return sq
+
+
+@njit(cache=True, inline="always")
 def _add_identity(c, A):
     """A[i, j, k, l] += c delta_ik delta_jl."""
     d = A.shape[0]
@@ -91,10 +102,7 @@ def neo_hookean_point(F, mu, lam, order, P, A, W):
     if not J > 0.0:
         return np.inf
     lnJ = math.log(J)
-    sq = 0.0
-    for i in range(d):
-        for j in range(d):
-            sq += F[i, j] * F[i, j]
+    sq = _frobenius_sq(F)
     psi = 0.5 * mu * (sq - d) - mu * lnJ + 0.5 * lam * lnJ * lnJ
     if order == 0:
         return psi
@@ -123,10 +131,7 @@ def course_neo_hookean_point(F, mu, lam, order, P, A, W):
     d = F.shape[0]
     x = _det(F) - 1.0
     r = x - x * x / 2.0 + x * x * x / 3.0
-    sq = 0.0
-    for i in range(d):
-        for j in range(d):
-            sq += F[i, j] * F[i, j]
+    sq = _frobenius_sq(F)
     psi = 0.5 * mu * (sq - d) - mu * r + 0.5 * lam * r * r
     if order == 0:
         return psi

@@ -132,7 +132,8 @@ class PardisoSolver(LinearSolver):
             if self._call(11, self._a, dummy, dummy.copy()) != 0:
                 raise RuntimeError("PARDISO analysis failed")
             self._finalizer = weakref.finalize(self, _pardiso_release, self)
-        self._a = np.ascontiguousarray(A.data[self._upper])
+        else:
+            self._a = np.ascontiguousarray(A.data[self._upper])
         dummy = np.zeros(self._n)
         error = self._call(22, self._a, dummy, dummy.copy())
         if error == -4:
