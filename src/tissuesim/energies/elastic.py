@@ -17,7 +17,7 @@ import numpy as np
 
 from tissuesim.energies.accumulator import Accumulator
 from tissuesim.errors import InvertedElementError
-from tissuesim.kinematics.p1 import P1Kinematics
+from tissuesim.kinematics.nodal import NodalKinematics
 from tissuesim.materials._common import det
 from tissuesim.materials.base import Material
 from tissuesim.materials.psd import project_tangent_psd
@@ -27,7 +27,7 @@ __all__ = ["ElasticEnergy"]
 
 @dataclass(frozen=True, eq=False)
 class ElasticEnergy:
-    kinematics: P1Kinematics
+    kinematics: NodalKinematics
     material: Material
     stencil_id: int = 0
     backend: str = "numpy"  # "numba" or "numpy", resolved (see backend.py)
@@ -87,7 +87,7 @@ class ElasticEnergy:
             float(self.material.mu),
             float(self.material.lam),
             np.ascontiguousarray(x, dtype=float).ravel(),
-            K.mesh.cells,
+            K.cells,
             K.grads,
             K.weights,
             min(acc.order, 2),
@@ -104,7 +104,7 @@ class ElasticEnergy:
 
             K = self.kinematics
             x = np.ascontiguousarray(x, dtype=float).ravel()
-            return element_jacobians(x, K.mesh.cells, K.grads)
+            return element_jacobians(x, K.cells, K.grads)
         return det(self.kinematics.deformation_gradients(x))
 
     def cell_fields(self, x: np.ndarray) -> dict[str, np.ndarray]:

@@ -21,6 +21,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from tissuesim.kinematics.nodal import NodalKinematics
 from tissuesim.mesh.mesh import Mesh
 
 __all__ = ["P1Kinematics", "shape_gradients"]
@@ -40,58 +41,25 @@ def shape_gradients(points: np.ndarray, cells: np.ndarray) -> tuple[np.ndarray, 
 
 
 @dataclass(frozen=True, eq=False)
-class P1Kinematics:
+class P1Kinematics(NodalKinematics):
     """Deformation gradients of a P1 mesh; one integration point per element.
 
+    cells:   the mesh's (m, d+1) elements.
     stencil: (m, (d+1)*d) global DOFs of each element, in local order (a, k).
     weights: (m,) rest areas / volumes (integration weights).
     grads:   (m, d+1, d) shape gradients dN^a/dX.
     """
 
-    mesh: Mesh
-    stencil: np.ndarray
-    weights: np.ndarray
-    grads: np.ndarray
+    mesh: Mesh | None = None
 
     @classmethod
     def from_mesh(cls, mesh: Mesh) -> P1Kinematics:
-        d = mesh.dim
         grads, measure = shape_gradients(mesh.points, mesh.cells)
-        stencil = (mesh.cells[:, :, None] * d + np.arange(d)).reshape(mesh.n_cells, -1)
-        return cls(mesh=mesh, stencil=stencil, weights=measure, grads=grads)
-
-    @property
-    def dim(self) -> int:
-        return self.mesh.dim
-
-    @property
-    def n_dofs(self) -> int:
-        return self.mesh.n_points * self.mesh.dim
-
-    @property
-    def constant_jacobian(self) -> bool:
-        return True
-
-    def deformation_gradients(self, x: np.ndarray) -> np.ndarray:
-        """F (m, d, d) from positions x, flat (n*d,) or (n, d)."""
-        xe = x.reshape(-1, self.dim)[self.mesh.cells]  # (m, d+1, d)
-        return np.matmul(np.swapaxes(xe, 1, 2), self.grads)  # F_ij = sum_a x^a_i dN^a_j
-
-    def stress_to_gradient(self, P: np.ndarray) -> np.ndarray:
-        """Local gradient (m, (d+1)*d) of sum_e w_e psi_e: w dN^a_j P_ij, given P (m, d, d)."""
-        g = np.matmul(self.grads, np.swapaxes(P, 1, 2))  # (m, d+1, d): [a, i] = sum_j dN^a_j P_ij
-        return (g * self.weights[:, None, None]).reshape(P.shape[0], -1)
-
-    def tangent_to_hessian(self, A: np.ndarray) -> np.ndarray:
-        """Local Hessian (m, nloc, nloc) from dP/dF A (m, d, d, d, d).
-
-        H[(a,i),(b,k)] = w sum_{j,l} A[i,j,k,l] dN^a_j dN^b_l.
-        """
-        m, d = A.shape[0], self.dim
-        G = self.grads  # (m, d+1, d)
-        # contract j with dN^a, then l with dN^b; batched matmuls, no Python loop over elements
-        T = np.matmul(G[:, None, :, :], A.reshape(m, d, d, d * d))  # (m, i, a, (k,l))
-        T = T.reshape(m, d, d + 1, d, d)  # [m, i, a, k, l]
-        H = np.matmul(T, np.swapaxes(G, 1, 2)[:, None, None, :, :])  # (m, i, a, k, b)
-        H = H.transpose(0, 2, 1, 4, 3).reshape(m, (d + 1) * d, (d + 1) * d)
-        return H * self.weights[:, None, None]
+        return cls(
+            cells=mesh.cells,
+            stencil=cls.dof_stencil(mesh.cells, mesh.dim),
+            weights=measure,
+            grads=grads,
+            n_nodes=mesh.n_points,
+            mesh=mesh,
+        )

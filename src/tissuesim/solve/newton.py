@@ -91,6 +91,11 @@ class NewtonResult:
 
 
 Evaluate = Callable[[np.ndarray, int, bool], Accumulator]
+Retract = Callable[[np.ndarray, np.ndarray], np.ndarray]
+
+
+def _add(x: np.ndarray, dx: np.ndarray) -> np.ndarray:
+    return x + dx
 
 
 def minimize(
@@ -102,17 +107,23 @@ def minimize(
     *,
     force_scale: float,
     length_scale: float,
+    retract: Retract | None = None,
 ) -> tuple[np.ndarray, NewtonResult]:
     """Minimise Phi from x0 (prescribed DOFs already at their values) over the free DOFs.
 
     evaluate(x, order, project) -> Accumulator with value / gradient / Hessian data.
+    retract(x, dx) -> the point reached from x by the step dx: x + dx (the default) for vector
+    DOFs; frame rotations are updated multiplicatively, R <- exp(dtheta^) R, so the
+    configuration x and the step dx (a tangent vector) may even differ in size. The gradient and
+    Hessian from ``evaluate`` are then with respect to dx at 0.
     Returns the final x and the record. x0 must give a finite Phi.
     """
     result = NewtonResult()
+    retract = retract or _add
     x = x0.copy()
-    free = np.ones(x.size, dtype=bool)
-    free[elimination.dofs] = False
     current = evaluate(x, 1, False)
+    free = np.ones(current.gradient.size, dtype=bool)
+    free[elimination.dofs] = False
     if not np.isfinite(current.value):
         result.reason = "the starting point has infinite energy (an inverted element?)"
         return x, result
@@ -133,7 +144,9 @@ def minimize(
                 acc = evaluate(x, 2, project)
                 elimination.apply(acc.hessian, acc.gradient)
                 system[project] = acc
-            return _try_direction(evaluate, x, system[project], solver, options, project, s)
+            return _try_direction(
+                evaluate, x, system[project], solver, options, project, s, retract
+            )
 
         if options.hessian_projection == "always":
             accepted = attempt(True, 0.0)
@@ -152,7 +165,7 @@ def minimize(
             result.reason = "no descent step found (line search failed)"
             break
         project, dx, alpha, new = accepted
-        x = x + alpha * dx
+        x = retract(x, alpha * dx)
         current = new
         result.iterations = iteration + 1
         result.projected.append(project)
@@ -177,7 +190,7 @@ def minimize(
     return x, result
 
 
-def _try_direction(evaluate, x, acc, solver, options, project, shift):
+def _try_direction(evaluate, x, acc, solver, options, project, shift, retract):
     """Solve (H + shift diag|H|) dx = -g for an eliminated system ``acc`` and line-search.
 
     Returns (project, dx, alpha, accumulator at the new point) or None when the matrix is not
@@ -196,18 +209,18 @@ def _try_direction(evaluate, x, acc, solver, options, project, shift):
     slope = float(g @ dx)
     if not np.all(np.isfinite(dx)) or slope >= -1e-14 * np.linalg.norm(g) * np.linalg.norm(dx):
         return None  # not a descent direction: the (shifted) Hessian was indefinite
-    step = _line_search(evaluate, x, acc.value, slope, dx, options)
+    step = _line_search(evaluate, x, acc.value, slope, dx, options, retract)
     if step is None:
         return None
     return (project, dx, *step)
 
 
-def _line_search(evaluate, x, value, slope, dx, options):
+def _line_search(evaluate, x, value, slope, dx, options, retract):
     """Backtracking: the largest alpha in 1, 1/2, ... with Armijo decrease and finite Phi."""
     alpha = 1.0
     noise = 1e-12 * max(abs(value), 1e-300)  # round-off of Phi near the solution
     for _ in range(options.max_line_search):
-        trial = evaluate(x + alpha * dx, 1, False)
+        trial = evaluate(retract(x, alpha * dx), 1, False)
         if (
             np.isfinite(trial.value)
             and trial.value <= value + options.armijo * alpha * slope + noise
