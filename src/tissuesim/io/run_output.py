@@ -3,13 +3,20 @@
 summary.json is rewritten atomically after every step, so a run stopped at any point (a crash,
 a ConvergenceError, Ctrl-C) leaves a valid summary whose "status" says how it ended, and every
 frame listed in the .pvd exists and is complete.
+
+``RunOutput`` owns the run loop, the summary and the status handling; what depends on the kind
+of body is in four hooks a subclass overrides (``frames.output.FrameRunOutput`` does):
+``_describe_body`` (once, stored under the summary key ``body_key``), ``_open_series``,
+``_write_frame`` (series and in-memory frames for pictures) and ``_render``.
 """
 
 from __future__ import annotations
 
+import os
 import sys
 from dataclasses import asdict
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -21,7 +28,20 @@ __all__ = ["RunOutput"]
 
 
 class RunOutput:
-    def __init__(self, sim, directory, *, every=1, render=True, metadata=None):
+    """Runs a Simulation's steps and writes its output into ``directory`` (None: nothing)."""
+
+    #: summary.json key of ``_describe_body()``
+    body_key = "mesh"
+
+    def __init__(
+        self,
+        sim: Any,
+        directory: str | os.PathLike[str] | None,
+        *,
+        every: int = 1,
+        render: bool = True,
+        metadata: dict | None = None,
+    ) -> None:
         if every < 1:
             raise ValueError(f"every must be >= 1, not {every}")
         self.sim = sim
@@ -29,13 +49,27 @@ class RunOutput:
         self.every = every
         self.render = render
         self.metadata = dict(metadata or {})
-        self.frames: list[tuple[float, np.ndarray, np.ndarray]] = []
+        self.frames: list[tuple[Any, ...]] = []  # what _render draws, one entry per frame
         self.series = None
         self.status = "running"
         # once per run: it costs about a second at 1e5 elements, and the summary is
         # rewritten after every step
-        self.mesh_description = describe_mesh(sim.mesh)
+        self.body_description = self._describe_body()
         self.error = None
+
+    @property
+    def mesh_description(self) -> dict:
+        """The FEM name of ``body_description``, kept for existing callers."""
+        return self.body_description
+
+    # -- hooks: what depends on the kind of body ------------------------------------------
+    def _describe_body(self) -> dict:
+        return describe_mesh(self.sim.mesh)
+
+    def _open_series(self) -> None:
+        from tissuesim.io.vtu_series import VTUSeriesWriter
+
+        self.series = VTUSeriesWriter(self.directory, self.sim.mesh)
 
     def _write_frame(self) -> None:
         sim = self.sim
@@ -59,7 +93,7 @@ class RunOutput:
             "status": self.status,
             "error": self.error,
             **self.metadata,
-            "mesh": self.mesh_description,
+            self.body_key: self.body_description,
             "simulation": self.sim.describe(),
             "totals": {
                 "steps": len(steps),
@@ -75,16 +109,16 @@ class RunOutput:
         if self.directory is not None:
             write_json_atomic(self.directory / "summary.json", self._summary())
 
-    def run(self, steps: int, progress: bool = True):
+    def run(self, steps: int, progress: bool = True) -> list:
+        """Step ``steps`` times, writing every ``every``-th frame, the last, and the summary;
+        return the simulation's history. The summary's status records how the run ended."""
         from tqdm import tqdm
-
-        from tissuesim.io.vtu_series import VTUSeriesWriter
 
         if steps < 0:
             raise ValueError(f"steps must be >= 0, not {steps}")
         if self.directory is not None:
             self.directory.mkdir(parents=True, exist_ok=True)
-            self.series = VTUSeriesWriter(self.directory, self.sim.mesh)
+            self._open_series()
         self._write_frame()
         bar = tqdm(total=steps, disable=not progress, file=sys.stderr, unit="step")
         try:

@@ -19,9 +19,59 @@ import numpy as np
 from tissuesim.io.atomic import atomic_output, write_text_atomic
 from tissuesim.mesh.mesh import Mesh
 
-__all__ = ["VTUSeriesWriter"]
+__all__ = ["VTUSeriesWriter", "remove_series"]
 
 _CELL_TYPE = {2: "triangle", 3: "tetra"}
+# vertices per cell of the meshio cell types accepted with ``cells=``
+_NODES_PER_CELL = {
+    "vertex": 1,
+    "line": 2,
+    "triangle": 3,
+    "quad": 4,
+    "tetra": 4,
+    "pyramid": 5,
+    "wedge": 6,
+    "hexahedron": 8,
+}
+
+
+def remove_series(directory: str | os.PathLike[str], name: str) -> None:
+    """Delete ``{name}.pvd`` and every ``{name}_NNNNN.vtu`` in ``directory`` (index first).
+
+    The index goes first so that a crash half way never leaves it listing a deleted frame; also
+    used to clear a series a new run will not write, so it cannot be mistaken for this run's.
+    """
+    directory = Path(directory)
+    (directory / f"{name}.pvd").unlink(missing_ok=True)
+    if not directory.is_dir():
+        return
+    pattern = re.compile(rf"{re.escape(name)}_\d{{5,}}\.vtu")
+    for old in directory.iterdir():
+        if pattern.fullmatch(old.name):
+            old.unlink()
+
+
+def _cell_block(cells: tuple[str, np.ndarray], n_points: int) -> tuple[str, np.ndarray]:
+    """Check a (cell_type, ids (m, k)) block against meshio's vertex count and n_points."""
+    try:
+        cell_type, ids = cells
+    except (TypeError, ValueError):
+        raise ValueError("cells must be a pair (cell_type, ids (m, k))") from None
+    if cell_type not in _NODES_PER_CELL:
+        raise ValueError(f"cell type {cell_type!r} is not one of {sorted(_NODES_PER_CELL)}")
+    ids = np.asarray(ids)
+    k = _NODES_PER_CELL[cell_type]
+    if ids.ndim != 2 or ids.shape[1] != k or not np.issubdtype(ids.dtype, np.integer):
+        raise ValueError(
+            f"{cell_type} cells need integer ids of shape (m, {k}), got {ids.dtype} {ids.shape}"
+        )
+    if n_points < 1:
+        raise ValueError(f"n_points must be >= 1, got {n_points}")
+    if ids.size and (ids.min() < 0 or ids.max() >= n_points):
+        raise ValueError(
+            f"cell vertex ids must lie in [0, {n_points - 1}], got {ids.min()}..{ids.max()}"
+        )
+    return str(cell_type), np.ascontiguousarray(ids, dtype=np.int64)
 
 
 def _prepare(
@@ -50,28 +100,49 @@ class VTUSeriesWriter:
     """Write frames ``{name}_{index:05d}.vtu`` and the index ``{name}.pvd`` into ``directory``.
 
     mesh: the rest mesh; its cells (m, d + 1) are written as "triangle" (d = 2) or "tetra" (d = 3).
+    Without a mesh, give ``cells=(cell_type, ids (m, k))`` and ``n_points``: any meshio cell block
+    in 3D, e.g. ("vertex", (k, 1)) for a point cloud or ("triangle", (m, 3)) for a surface, so
+    meshless bodies use the same crash-safe series as meshes.
 
     Opening a directory that already holds a series of the same ``name`` starts afresh: the old
     ``{name}.pvd`` and every ``{name}_NNNNN.vtu`` are deleted at construction (series with other
     names are left alone), so the index never mixes frames of two runs.
     """
 
-    def __init__(self, directory: str | os.PathLike[str], mesh: Mesh, name: str = "frame") -> None:
-        if mesh.dim not in _CELL_TYPE:
-            raise ValueError(f"VTUSeriesWriter supports 2D and 3D meshes, got dim {mesh.dim}")
+    def __init__(
+        self,
+        directory: str | os.PathLike[str],
+        mesh: Mesh | None = None,
+        name: str = "frame",
+        *,
+        cells: tuple[str, np.ndarray] | None = None,
+        n_points: int | None = None,
+    ) -> None:
+        if (mesh is None) == (cells is None):
+            raise ValueError("VTUSeriesWriter needs either a mesh or cells=(cell_type, ids)")
+        if mesh is not None:
+            if n_points is not None:
+                raise ValueError("n_points is taken from the mesh; give it only with cells=")
+            if mesh.dim not in _CELL_TYPE:
+                raise ValueError(f"VTUSeriesWriter supports 2D and 3D meshes, got dim {mesh.dim}")
+            block = (_CELL_TYPE[mesh.dim], np.asarray(mesh.cells, dtype=np.int64))
+            self.dim, self.n_points = mesh.dim, mesh.n_points
+        else:
+            if n_points is None:
+                raise ValueError("VTUSeriesWriter with cells= needs n_points")
+            block = _cell_block(cells, int(n_points))
+            self.dim, self.n_points = 3, int(n_points)
         if not name or os.sep in name or "/" in name:
             raise ValueError(f"series name {name!r} must be a non-empty file name stem")
         self.directory = Path(directory)
         self.mesh = mesh
         self.name = name
+        self.cell_type = block[0]
+        self.n_cells = int(block[1].shape[0])
         self._frames: list[tuple[float, Path]] = []
         self.directory.mkdir(parents=True, exist_ok=True)
-        pattern = re.compile(rf"{re.escape(name)}_\d{{5,}}\.vtu")
-        (self.directory / f"{name}.pvd").unlink(missing_ok=True)  # index first: never dangling
-        for old in self.directory.iterdir():
-            if pattern.fullmatch(old.name):
-                old.unlink()
-        self._cells = [(_CELL_TYPE[mesh.dim], np.asarray(mesh.cells, dtype=np.int64))]
+        remove_series(self.directory, name)
+        self._cells = [block]
 
     @property
     def frames(self) -> list[tuple[float, Path]]:
@@ -91,26 +162,25 @@ class VTUSeriesWriter:
     ) -> Path:
         """Write one frame and rewrite the index; return the frame's path.
 
-        positions: (n, d) current vertex positions (written as 3D points, z = 0 in 2D).
+        positions: (n, d) current vertex positions (written as 3D points, z = 0 in 2D; d = 3
+            for a writer made with ``cells=``).
         point_data: name -> (n,) or (n, k) arrays; 2D vectors (n, 2) are padded to (n, 3) so
             ParaView shows them as vectors; (n, a, b) tensors are flattened to (n, a * b).
         cell_data: name -> (m,) or (m, k) arrays, treated the same way.
         """
         import meshio
 
-        mesh = self.mesh
+        n, dim = self.n_points, self.dim
         time = float(time)
         if not math.isfinite(time):
             raise ValueError(f"frame time must be finite, got {time}")
         x = np.asarray(positions, dtype=np.float64)
-        if x.shape != (mesh.n_points, mesh.dim):
-            raise ValueError(
-                f"positions have shape {x.shape}; expected ({mesh.n_points}, {mesh.dim})"
-            )
-        if mesh.dim == 2:
-            x = np.concatenate([x, np.zeros((mesh.n_points, 1))], axis=1)
-        pdata = _prepare(point_data or {}, mesh.n_points, mesh.dim, "point_data")
-        cdata = _prepare(cell_data or {}, mesh.n_cells, mesh.dim, "cell_data")
+        if x.shape != (n, dim):
+            raise ValueError(f"positions have shape {x.shape}; expected ({n}, {dim})")
+        if dim == 2:
+            x = np.concatenate([x, np.zeros((n, 1))], axis=1)
+        pdata = _prepare(point_data or {}, n, dim, "point_data")
+        cdata = _prepare(cell_data or {}, self.n_cells, dim, "cell_data")
         out = meshio.Mesh(
             x, self._cells, point_data=pdata, cell_data={k: [v] for k, v in cdata.items()}
         )

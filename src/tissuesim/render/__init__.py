@@ -1,7 +1,8 @@
 """Pictures with matplotlib (Agg, no display): PNG frames and animated GIFs of 2D and 3D meshes.
 
 ``render_frame`` / ``render_animation`` pick the 2D (triangles) or 3D (tetrahedra) renderer
-from ``mesh.dim``; keyword arguments are passed through.
+from ``mesh.dim``; keyword arguments are passed through. ``render_points_png`` /
+``render_points_gif`` draw meshless bodies (an embedded surface or a point cloud).
 """
 
 from __future__ import annotations
@@ -16,6 +17,7 @@ import numpy as np
 from tissuesim.mesh.mesh import Mesh
 from tissuesim.render.plot2d import Frame, render_frame_png, render_gif
 from tissuesim.render.plot3d import render_frame_png_3d, render_gif_3d
+from tissuesim.render.points3d import render_points_gif, render_points_png
 
 __all__ = [
     "render_animation",
@@ -24,6 +26,8 @@ __all__ = [
     "render_frame_png_3d",
     "render_gif",
     "render_gif_3d",
+    "render_points_gif",
+    "render_points_png",
 ]
 
 

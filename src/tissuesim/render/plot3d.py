@@ -82,18 +82,19 @@ def _face_colours(x: np.ndarray, faces: np.ndarray, vals: np.ndarray, cmap, norm
     return rgba
 
 
-def _setup_3d(mesh, all_positions, label, cmap, norm, rest_outline, elev, azim, faces):
-    from matplotlib.cm import ScalarMappable
-    from matplotlib.ticker import MaxNLocator
-    from mpl_toolkits.mplot3d.art3d import Line3DCollection, Poly3DCollection
-
-    rest = np.asarray(mesh.points, dtype=float)
-    lo, hi = _bounds([*all_positions, rest] if rest_outline else list(all_positions), pad=0.02)
+def _figure_3d():
+    """(fig, 3D axes) drawing artists by zorder, so outlines and markers stay on top."""
     fig = _new_figure((7.5, 6.0))
-    ax = fig.add_subplot(projection="3d", computed_zorder=False)  # outline above the surface
-    many = len(faces) > 5000
+    return fig, fig.add_subplot(projection="3d", computed_zorder=False)
+
+
+def _surface_collection(ax, verts: np.ndarray):
+    """Poly3DCollection of triangles verts (k, 3, 3) added to ax; face colours set later."""
+    from mpl_toolkits.mplot3d.art3d import Poly3DCollection
+
+    many = len(verts) > 5000
     coll = Poly3DCollection(
-        np.asarray(all_positions[0])[faces],
+        verts,
         edgecolors=(0.0, 0.0, 0.0, 0.3),
         linewidths=0.1 if many else 0.3,
         zorder=1,
@@ -101,11 +102,24 @@ def _setup_3d(mesh, all_positions, label, cmap, norm, rest_outline, elev, azim, 
     ax.add_collection3d(coll)
     if many:  # edges in the face colour hide seams; needs the axes, so after adding
         coll.set_edgecolor("face")
-    if rest_outline:
-        segs = rest[_feature_edges(rest, boundary_faces(mesh.cells)[0])]
-        ax.add_collection3d(
-            Line3DCollection(segs, colors="0.4", linewidths=0.8, linestyles="--", zorder=2)
-        )
+    return coll
+
+
+def _rest_outline(ax, points: np.ndarray, faces: np.ndarray) -> None:
+    """Dashed grey feature edges of the rest surface (points (n, 3), faces (k, 3))."""
+    from mpl_toolkits.mplot3d.art3d import Line3DCollection
+
+    segs = points[_feature_edges(points, faces)]
+    ax.add_collection3d(
+        Line3DCollection(segs, colors="0.4", linewidths=0.8, linestyles="--", zorder=2)
+    )
+
+
+def _finish_axes_3d(fig, ax, lo, hi, label, cmap, norm, elev, azim) -> None:
+    """Fixed limits lo..hi with equal scaling, ticks, view, axis labels and the colour bar."""
+    from matplotlib.cm import ScalarMappable
+    from matplotlib.ticker import MaxNLocator
+
     ax.set_xlim(lo[0], hi[0])
     ax.set_ylim(lo[1], hi[1])
     ax.set_zlim(lo[2], hi[2])
@@ -118,6 +132,16 @@ def _setup_3d(mesh, all_positions, label, cmap, norm, rest_outline, elev, azim, 
     ax.set_ylabel("y")
     ax.set_zlabel("z")
     fig.colorbar(ScalarMappable(norm=norm, cmap=cmap), ax=ax, label=label, shrink=0.7, pad=0.08)
+
+
+def _setup_3d(mesh, all_positions, label, cmap, norm, rest_outline, elev, azim, faces):
+    rest = np.asarray(mesh.points, dtype=float)
+    lo, hi = _bounds([*all_positions, rest] if rest_outline else list(all_positions), pad=0.02)
+    fig, ax = _figure_3d()
+    coll = _surface_collection(ax, np.asarray(all_positions[0])[faces])
+    if rest_outline:
+        _rest_outline(ax, rest, boundary_faces(mesh.cells)[0])
+    _finish_axes_3d(fig, ax, lo, hi, label, cmap, norm, elev, azim)
     return fig, ax, coll
 
 
