@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import re
 import subprocess
 import sys
@@ -31,7 +32,7 @@ def test_quick_start_has_exactly_two_commands():
 
 
 def test_python_example_runs(tmp_path):
-    (code,) = blocks("python")
+    code = blocks("python")[0]
     result = subprocess.run(
         [sys.executable, "-c", code], cwd=tmp_path, capture_output=True, text=True, timeout=300
     )
@@ -39,6 +40,24 @@ def test_python_example_runs(tmp_path):
     t, iterations, min_J = map(float, result.stdout.split())
     assert abs(t - 20 * 2 * np.pi / 200) < 1e-9 and iterations >= 1 and 0 < min_J < 2
     assert (tmp_path / "out/python_example/frame.pvd").is_file()
+
+
+def test_frames_python_example_runs(tmp_path):
+    """The README's frame-based example, shortened to 3 steps (the code is otherwise as shown)."""
+    code = blocks("python")[1]
+    assert "steps=50" in code
+    result = subprocess.run(
+        [sys.executable, "-c", code.replace("steps=50", "steps=3")],
+        cwd=tmp_path,
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+    assert result.returncode == 0, result.stderr
+    out = tmp_path / "out/frames"
+    for name in ("surface.pvd", "frames.pvd", "integration_points.pvd", "final.png", "run.gif"):
+        assert (out / name).is_file(), name
+    assert json.loads((out / "summary.json").read_text())["status"] == "completed"
 
 
 def test_toml_example_is_the_shipped_beam_scene():

@@ -37,6 +37,16 @@ def _resolve_scene(scene: str) -> Path:
     )
 
 
+def _body(sim) -> str:
+    """What the body is made of, for the run banner: a mesh, or frames (which have none)."""
+    mesh = getattr(sim, "mesh", None)
+    if mesh is None:
+        m = sim.model
+        return f"{m.n_frames} {m.frame_type.name} frames, {m.samples.n} integration points"
+    kind = "triangles" if mesh.dim == 2 else "tetrahedra"
+    return f"{mesh.n_points} vertices, {mesh.n_cells} {kind}"
+
+
 def _run(scene_path: Path, out: str | None, steps: int | None, render: bool, quiet: bool) -> int:
     from tissuesim.scene.loader import load_scene
 
@@ -50,10 +60,8 @@ def _run(scene_path: Path, out: str | None, steps: int | None, render: bool, qui
     directory = Path(out) if out else Path("out") / scene.name
     sim = scene.simulation
     if not quiet:
-        m = sim.mesh
         print(
-            f"tissuesim: {scene.name}: {m.n_points} vertices, {m.n_cells} "
-            f"{'triangles' if m.dim == 2 else 'tetrahedra'}, {sim.integrator}, "
+            f"tissuesim: {scene.name}: {_body(sim)}, {sim.integrator}, "
             f"time_step {sim.time_step:g} s, {run['steps']} steps -> {directory}/",
             file=sys.stderr,
         )

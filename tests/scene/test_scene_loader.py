@@ -11,6 +11,7 @@ import pytest
 import tissuesim as ts
 from tissuesim.cli import example_path, list_examples
 from tissuesim.errors import SceneError
+from tissuesim.frames.simulation import FrameSimulation
 from tissuesim.mesh import select, write_mesh
 from tissuesim.scene.loader import load_scene
 
@@ -63,8 +64,12 @@ def test_examples_are_listed():
 def test_each_example_builds(name):
     scene = load_scene(example_path(name))
     assert scene.name == name
-    assert isinstance(scene.simulation, ts.Simulation)
-    assert scene.simulation.model.prescribed.dofs.size > 0
+    sim = scene.simulation
+    if isinstance(sim, FrameSimulation):
+        assert sim.model.prescribed_frames.size > 0
+    else:
+        assert isinstance(sim, ts.Simulation)
+        assert sim.model.prescribed.dofs.size > 0
     assert scene.run["steps"] > 0
 
 

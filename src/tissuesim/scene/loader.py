@@ -17,6 +17,10 @@ Vertex and facet sets are selector tables, e.g. ``{ on_plane = { axis = 0, value
 naming a function of ``tissuesim.mesh.select``. Vectors may hold numbers or expressions in
 x, y, z, t (``tissuesim.scene.expressions``). Unknown keys are errors that suggest the nearest
 valid key; every error names the file and the table.
+
+A scene with a ``[frames]`` table is a meshless frame-based body instead (FrameSimulation): its
+tables are read by ``tissuesim.scene.frames``, which shares [material], [simulation], [newton],
+[gravity] and [run] with this module.
 """
 
 from __future__ import annotations
@@ -70,11 +74,14 @@ SCENE_KEYS = {
     "initial": {"velocity"},
     "run": set(RUN_KEYS),
 }
+# Tables of frame scenes ([frames], tissuesim.scene.frames) that mean nothing for a [mesh] body.
+FRAME_ONLY_KEYS = ("region", "fixed_frames", "prescribed_frames", "springs", "point_forces")
 
 
 @dataclass
 class Scene:
-    """A scene ready to run: the Simulation and the arguments of its ``run``."""
+    """A scene ready to run: the Simulation (or FrameSimulation) and the arguments of its
+    ``run``."""
 
     simulation: Any
     name: str
@@ -139,25 +146,27 @@ def build_scene(
 
 
 def _build(data: dict, base_dir: Path, source: str, name: str) -> Scene:
-    from tissuesim.materials import make_material
     from tissuesim.simulation import Simulation
-    from tissuesim.solve.newton import NewtonOptions
 
-    _unknown(data, SCENE_KEYS, f"{source}: top level")
+    if "frames" in data:
+        from tissuesim.scene.frames import build_frame_scene
+
+        return build_frame_scene(data, base_dir, source, name)
+    frame_only = [key for key in data if key in FRAME_ONLY_KEYS]
+    if frame_only:
+        raise SceneError(
+            f"{source}: [{frame_only[0]}] belongs to meshless frame bodies: add a [frames] "
+            f"table (and a [region]) to make this a frame scene, or use the [mesh] tables "
+            f"{sorted(SCENE_KEYS)}"
+        )
+    # "frames" is valid too (handled above): a misspelt [frame] then suggests it
+    _unknown(data, [*SCENE_KEYS, "frames"], f"{source}: top level")
     with _context(f"{source} [mesh]"):
         mesh = _mesh(_table(data, "mesh", source), base_dir, f"{source} [mesh]")
     d = mesh.dim
 
-    material_table = dict(_table(data, "material", source))
-    if "model" not in material_table:
-        raise SceneError(f"{source} [material]: missing key 'model' (e.g. 'course_neo_hookean')")
-    with _context(f"{source} [material]"):
-        material = make_material(material_table.pop("model"), **material_table)
-
-    newton_table = _table(data, "newton", source)
-    _unknown(newton_table, {f.name for f in fields(NewtonOptions)}, f"{source} [newton]")
-    with _context(f"{source} [newton]"):
-        newton = NewtonOptions(**newton_table)
+    material = _material(data, source)
+    newton = _newton(data, source)
     sim_table = _table(data, "simulation", source)
     _unknown(sim_table, SIMULATION_KEYS, f"{source} [simulation]")
     with _context(f"{source} [simulation]"):
@@ -202,6 +211,32 @@ def _build(data: dict, base_dir: Path, source: str, name: str) -> Scene:
     if "velocity" in initial:
         v = compile_vector(initial["velocity"], d, f"{source} [initial] velocity")
         sim.set_velocity(v(mesh.points, sim.time))
+    return Scene(sim, name, source, _run_table(data, source))
+
+
+def _material(data: dict, source: str):
+    """[material]: make_material(model, **parameters); shared by mesh and frame scenes."""
+    from tissuesim.materials import make_material
+
+    material_table = dict(_table(data, "material", source))
+    if "model" not in material_table:
+        raise SceneError(f"{source} [material]: missing key 'model' (e.g. 'course_neo_hookean')")
+    with _context(f"{source} [material]"):
+        return make_material(material_table.pop("model"), **material_table)
+
+
+def _newton(data: dict, source: str):
+    """[newton]: NewtonOptions(**table), unknown options suggest the nearest field."""
+    from tissuesim.solve.newton import NewtonOptions
+
+    newton_table = _table(data, "newton", source)
+    _unknown(newton_table, {f.name for f in fields(NewtonOptions)}, f"{source} [newton]")
+    with _context(f"{source} [newton]"):
+        return NewtonOptions(**newton_table)
+
+
+def _run_table(data: dict, source: str) -> dict[str, Any]:
+    """[run]: the arguments of ``run`` (steps, every, render), checked before anything runs."""
     run = _table(data, "run", source)
     _unknown(run, RUN_KEYS, f"{source} [run]")
     for key, ok, want in (
@@ -211,7 +246,7 @@ def _build(data: dict, base_dir: Path, source: str, name: str) -> Scene:
     ):
         if key in run and not ok(run[key]):
             raise SceneError(f"{source} [run]: {key} must be {want}, not {run[key]!r}")
-    return Scene(sim, name, source, dict(run))
+    return dict(run)
 
 
 def _field(value, d: int, where: str):

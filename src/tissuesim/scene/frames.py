@@ -1,0 +1,505 @@
+"""Frame scenes: a ``[frames]`` table makes a scene a meshless frame-based body (FrameSimulation).
+
+``tissuesim.scene.loader`` sends every scene with a ``[frames]`` table here. The tables map onto
+the Python API of ``tissuesim.frames`` the way [mesh] scenes map onto Simulation's:
+
+    [frames]               frame origins from grid_frames(lower, upper, counts) (grid = {...}),
+                           farthest_point_frames(integration points, count) (count = N) or
+                           positions = [[x, y, z], ...]; type, shape, radius, radius_factor and
+                           min_frames are FrameSimulation's frame_type, shape, radius, ...
+    [region]               the integration points: exactly one of box = {lower, upper},
+                           ellipsoid = {center, semi_axes}, surface = "closed.stl",
+                           mesh = "tets.msh" (files relative to the scene file), with spacing
+                           (and subsamples for ellipsoid / surface); display = true (default)
+                           embeds the body's surface, which output files and pictures show
+    [material] [simulation] [newton] [gravity] [run]      as for [mesh] scenes
+    [[fixed_frames]]       fix_frames(frames)
+    [[prescribed_frames]]  prescribe_frames(frames, motion): displacement and rotation vector
+                           (rad), expressions of t and of the frame's rest position x, y, z
+    [[springs]]            add_spring(points, stiffness, target): target expressions of t and
+                           of each point's rest position x, y, z (default: rest positions)
+    [[point_forces]]       add_point_forces(points, force): force (N per point), numbers or
+                           expressions of t, x, y, z
+    [initial]              set_velocity(velocity, angular)
+
+Frame selectors pick frames by their rest origins: ``{ on_plane = { axis, value } }``,
+``{ in_box = { lower, upper } }`` (optional tolerance, default 1e-6 times the body's
+bounding-box diagonal, as ``tissuesim.mesh.select`` does for mesh vertices) or
+``{ indices = [0, 1] }``. Points (springs, point forces) are a list ``[[x, y, z], ...]`` or
+display-surface vertices picked by ``{ surface_on_plane = {...} }`` or
+``{ surface_in_box = {...} }`` (same arguments).
+Errors are SceneErrors naming the file, the table (``[[fixed_frames]] #2``) and the key.
+"""
+
+from __future__ import annotations
+
+import numbers
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from tissuesim.errors import SceneError
+from tissuesim.scene.expressions import compile_vector
+from tissuesim.scene.loader import (
+    RUN_KEYS,
+    SIMULATION_KEYS,
+    Scene,
+    _context,
+    _material,
+    _newton,
+    _run_table,
+    _table,
+    _unknown,
+)
+
+__all__ = ["build_frame_scene", "FRAME_SCENE_KEYS"]
+
+FRAMES_KEYS = {
+    "type": "rigid (6 DOF per frame) or affine (12 DOF)",
+    "shape": "wendland (compact support) or shepard (global)",
+    "grid": "{ lower, upper, counts }: frames on a regular grid",
+    "count": "N frames by farthest-point sampling of the integration points",
+    "positions": "[[x, y, z], ...]: explicit frame origins",
+    "radius": "support radius of every frame (default: automatic)",
+    "radius_factor": "scales the automatic radii",
+    "min_frames": "frames each integration point must see",
+}
+PLACEMENTS = ("grid", "count", "positions")
+REGION_KEYS = ("box", "ellipsoid", "surface", "mesh", "spacing", "subsamples", "display")
+REGIONS = {
+    "box": "box = { lower = [x, y, z], upper = [x, y, z] }",
+    "ellipsoid": "ellipsoid = { center = [x, y, z], semi_axes = [a, b, c] }",
+    "surface": "surface = 'organ.stl' (a closed triangle surface)",
+    "mesh": "mesh = 'organ.msh' (a tetrahedral mesh)",
+}
+FRAME_SCENE_KEYS: dict[str, Any] = {
+    "frames": set(FRAMES_KEYS),
+    "region": set(REGION_KEYS),
+    "material": None,  # checked by make_material
+    "simulation": set(SIMULATION_KEYS),
+    "newton": None,  # checked against NewtonOptions
+    "gravity": {"acceleration"},
+    "fixed_frames": {"frames"},
+    "prescribed_frames": {"frames", "displacement", "rotation"},
+    "springs": {"points", "stiffness", "target"},
+    "point_forces": {"points", "force"},
+    "initial": {"velocity", "angular"},
+    "run": set(RUN_KEYS),
+}
+# Tables of [mesh] scenes, and what a frame scene writes instead.
+MESH_ONLY = {
+    "dirichlet": "clamp or move frames with [[fixed_frames]] / [[prescribed_frames]]",
+    "traction": "load display-surface points with [[point_forces]]",
+    "body_force": "use [gravity] or [[point_forces]]",
+}
+FRAME_SELECTORS = ("on_plane", "in_box", "indices")
+POINT_SELECTORS = ("surface_on_plane", "surface_in_box")
+SELECTOR_ARGS = {
+    "on_plane": ("axis", "value", "tolerance"),
+    "in_box": ("lower", "upper", "tolerance"),
+}
+_AXES = "xyz"
+
+
+def build_frame_scene(data: dict, base_dir: Path, source: str, name: str) -> Scene:
+    """Build a Scene whose simulation is a FrameSimulation from parsed TOML ``data``."""
+    from tissuesim.frames.simulation import FrameSimulation
+
+    if "mesh" in data:
+        raise SceneError(
+            f"{source}: the scene has both [mesh] (a finite-element body) and [frames] (a "
+            f"meshless frame body); choose one. To sample a frame body from a mesh file, drop "
+            f"[mesh] and write [region] mesh = 'file.msh'"
+        )
+    for key, instead in MESH_ONLY.items():
+        if key in data:
+            raise SceneError(
+                f"{source}: [[{key}]] is for [mesh] scenes; in a [frames] scene {instead}"
+            )
+    _unknown(data, FRAME_SCENE_KEYS, f"{source}: top level")
+    frames_table = _table(data, "frames", source)
+    _unknown(frames_table, FRAMES_KEYS, f"{source} [frames]")
+    if "region" not in data:
+        raise SceneError(
+            f"{source}: [frames] needs a [region] table saying where the body is, e.g. "
+            f"[region] box = {{ lower = [0, 0, 0], upper = [1, 1, 1] }}, spacing = 0.1 "
+            f"(or ellipsoid, surface, mesh)"
+        )
+    region_where = f"{source} [region]"
+    samples, surface = _region(_table(data, "region", source), base_dir, region_where)
+    positions = _frame_positions(frames_table, samples, f"{source} [frames]")
+
+    material = _material(data, source)
+    newton = _newton(data, source)
+    sim_where = f"{source} [simulation]"
+    sim_table = _table(data, "simulation", source)
+    _unknown(sim_table, SIMULATION_KEYS, sim_where)
+    _check_simulation(sim_table, samples, sim_where)
+    options = {
+        ("frame_type" if key == "type" else key): frames_table[key]
+        for key in ("type", "shape", "radius", "radius_factor", "min_frames")
+        if key in frames_table
+    }
+    with _context(f"{source} [frames]"):
+        sim = FrameSimulation(positions, samples, material, newton=newton, **options, **sim_table)
+    if surface is not None:
+        with _context(f"{region_where} display"):
+            sim.embed_surface(surface)
+    scale = _scale(samples.points, positions, surface)
+
+    gravity = _table(data, "gravity", source)
+    if gravity:
+        where = f"{source} [gravity]"
+        _unknown(gravity, FRAME_SCENE_KEYS["gravity"], where)
+        with _context(where):
+            sim.add_gravity(_vector3(gravity["acceleration"], f"{where} acceleration"))
+    for i, item in enumerate(_table(data, "fixed_frames", source, array=True)):
+        where = f"{source} [[fixed_frames]] #{i + 1}"
+        _unknown(item, FRAME_SCENE_KEYS["fixed_frames"], where)
+        frames = _select_frames(sim, _required(item, "frames", where), scale, where)
+        with _context(where):
+            sim.fix_frames(frames)
+    for i, item in enumerate(_table(data, "prescribed_frames", source, array=True)):
+        where = f"{source} [[prescribed_frames]] #{i + 1}"
+        _unknown(item, FRAME_SCENE_KEYS["prescribed_frames"], where)
+        frames = _select_frames(sim, _required(item, "frames", where), scale, where)
+        if "displacement" not in item and "rotation" not in item:
+            raise SceneError(
+                f"{where}: give displacement = [...] and/or rotation = [...] (expressions of "
+                f"t); to hold frames at rest use [[fixed_frames]]"
+            )
+        with _context(where):
+            sim.prescribe_frames(frames, _motion(item, sim.rest_frames[frames], where))
+    for i, item in enumerate(_table(data, "springs", source, array=True)):
+        where = f"{source} [[springs]] #{i + 1}"
+        _unknown(item, FRAME_SCENE_KEYS["springs"], where)
+        points = _points(sim, _required(item, "points", where), scale, where)
+        stiffness = _stiffness(_required(item, "stiffness", where), len(points), where)
+        target = None
+        if "target" in item:
+            f = compile_vector(item["target"], 3, f"{where} target")
+            target = _of_time(f, points)
+        with _context(where):
+            sim.add_spring(points, stiffness, target)
+    for i, item in enumerate(_table(data, "point_forces", source, array=True)):
+        where = f"{source} [[point_forces]] #{i + 1}"
+        _unknown(item, FRAME_SCENE_KEYS["point_forces"], where)
+        points = _points(sim, _required(item, "points", where), scale, where)
+        force = _required(item, "force", where)
+        if isinstance(force, list) and all(_is_number(v) for v in force):
+            force = _vector3(force, f"{where} force")
+        else:
+            force = _of_time(compile_vector(force, 3, f"{where} force"), points)
+        with _context(where):
+            sim.add_point_forces(points, force)
+    initial = _table(data, "initial", source)
+    where = f"{source} [initial]"
+    _unknown(initial, FRAME_SCENE_KEYS["initial"], where)
+    if initial:
+        linear = _vector3(initial.get("velocity", [0, 0, 0]), f"{where} velocity")
+        angular = _vector3(initial.get("angular", [0, 0, 0]), f"{where} angular")
+        with _context(where):
+            sim.set_velocity(linear, angular)
+    return Scene(sim, name, source, _run_table(data, source))
+
+
+# -- values -------------------------------------------------------------------------------------
+
+
+def _is_number(value) -> bool:
+    return isinstance(value, numbers.Real) and not isinstance(value, bool)
+
+
+def _required(table: dict, key: str, where: str):
+    if key not in table:
+        raise SceneError(f"{where}: missing key {key!r}")
+    return table[key]
+
+
+def _vector3(value, where: str) -> np.ndarray:
+    """Three finite numbers (a TOML array), e.g. an acceleration or a corner."""
+    if not (isinstance(value, list) and len(value) == 3 and all(_is_number(v) for v in value)):
+        raise SceneError(f"{where}: expected 3 numbers [x, y, z], got {value!r}")
+    v = np.asarray(value, dtype=float)
+    if not np.all(np.isfinite(v)):
+        raise SceneError(f"{where}: expected 3 finite numbers, got {value!r}")
+    return v
+
+
+def _point_list(value, where: str) -> np.ndarray:
+    """A non-empty list of [x, y, z] points as a (k, 3) array."""
+    ok = isinstance(value, list) and value and all(isinstance(p, list) for p in value)
+    if not ok:
+        raise SceneError(f"{where}: expected a list of points [[x, y, z], ...], got {value!r}")
+    return np.array([_vector3(p, f"{where}[{i}]") for i, p in enumerate(value)])
+
+
+def _of_time(f, points: np.ndarray):
+    """t -> f(points, t): an expression vector evaluated at fixed rest points."""
+    points = np.array(points, dtype=float)
+
+    def at(t: float) -> np.ndarray:
+        return f(points, t)
+
+    return at
+
+
+def _motion(item: dict, rest: np.ndarray, where: str):
+    """motion(t) -> (displacement (k, 3), rotation vector (k, 3)) of prescribed frames."""
+    zero = [0.0, 0.0, 0.0]
+    u = compile_vector(item.get("displacement", zero), 3, f"{where} displacement")
+    r = compile_vector(item.get("rotation", zero), 3, f"{where} rotation")
+    rest = np.array(rest, dtype=float)
+
+    def motion(t: float) -> tuple[np.ndarray, np.ndarray]:
+        return u(rest, t), r(rest, t)
+
+    return motion
+
+
+def _stiffness(value, k: int, where: str) -> float | np.ndarray:
+    if _is_number(value):
+        values = np.array([float(value)])
+    elif isinstance(value, list) and len(value) == k and all(_is_number(v) for v in value):
+        values = np.asarray(value, dtype=float)
+    else:
+        raise SceneError(
+            f"{where}: stiffness must be a number (N/m per point) or a list of {k} numbers, "
+            f"one per point, got {value!r}"
+        )
+    if not np.all(np.isfinite(values) & (values > 0)):
+        raise SceneError(f"{where}: stiffness must be finite and > 0 (N/m), got {value!r}")
+    return float(values[0]) if _is_number(value) else values
+
+
+def _check_simulation(table: dict, samples, where: str) -> None:
+    """[simulation] values a frame body refuses, caught here so the error names this table
+    (FrameSimulation checks them too, but among the [frames] options)."""
+    from tissuesim.backend import resolve_backend
+    from tissuesim.frames.simulation import FRAME_INTEGRATORS
+
+    integrator = table.get("integrator", "backward_euler")
+    if integrator not in FRAME_INTEGRATORS:
+        hint = ""
+        if integrator == "symplectic_euler":
+            hint = " (a frame body's symplectic Euler is called 'explicit')"
+        raise SceneError(
+            f"{where}: integrator {integrator!r} is not available for frame bodies; valid: "
+            f"{sorted(FRAME_INTEGRATORS)}{hint}"
+        )
+    step = table.get("time_step", 0.01)
+    if not (_is_number(step) and np.isfinite(step) and step > 0):
+        raise SceneError(f"{where}: time_step must be a number > 0 (seconds), not {step!r}")
+    halvings = table.get("max_step_halvings", 6)
+    if not (isinstance(halvings, int) and not isinstance(halvings, bool) and halvings >= 0):
+        raise SceneError(f"{where}: max_step_halvings must be an integer >= 0, not {halvings!r}")
+    start = table.get("start_time", 0.0)
+    if not (_is_number(start) and np.isfinite(start)):
+        raise SceneError(f"{where}: start_time must be a finite number (s), not {start!r}")
+    if table.get("mass", "full") not in ("full", "lumped"):
+        raise SceneError(f"{where}: mass must be 'full' or 'lumped', not {table['mass']!r}")
+    with _context(where):
+        samples.masses(table.get("density", 1.0))
+        resolve_backend(table.get("backend", "auto"))
+
+
+# -- region and frames ---------------------------------------------------------------------------
+
+
+def _region(table: dict, base_dir: Path, where: str):
+    """(integration points, display surface or None) from [region]."""
+    from tissuesim.frames import sampling
+    from tissuesim.mesh import read_mesh
+
+    _unknown(table, REGION_KEYS, where)
+    kinds = [k for k in REGIONS if k in table]
+    if len(kinds) != 1:
+        choices = "; ".join(REGIONS.values())
+        got = f"got {kinds}" if kinds else "got none"
+        raise SceneError(f"{where}: give exactly one of {choices} ({got})")
+    (kind,) = kinds
+    spacing = table.get("spacing")
+    if spacing is None and kind != "mesh":
+        raise SceneError(
+            f"{where}: missing key 'spacing' (distance between integration points, e.g. 0.1)"
+        )
+    display = table.get("display", True)
+    if not isinstance(display, bool):
+        raise SceneError(f"{where}: display must be true or false, not {display!r}")
+    extra = {}
+    if "subsamples" in table:
+        if kind not in ("ellipsoid", "surface"):
+            raise SceneError(f"{where}: subsamples applies to ellipsoid and surface, not {kind}")
+        extra["subsamples"] = table["subsamples"]
+    spec = table[kind]
+    here = f"{where} {kind}"
+    if kind in ("box", "ellipsoid"):
+        keys = ("lower", "upper") if kind == "box" else ("center", "semi_axes")
+        if not isinstance(spec, dict):
+            raise SceneError(f"{where}: write {REGIONS[kind]}")
+        _unknown(spec, keys, here)
+        a, b = (_vector3(_required(spec, key, here), f"{here} {key}") for key in keys)
+        with _context(here):
+            if kind == "box":
+                samples = sampling.sample_box(a, b, spacing)
+                divisions = tuple(int(n) for n in np.maximum(1, np.round((b - a) / spacing)))
+                surface = sampling.box_surface(a, b, divisions) if display else None
+            else:
+                samples = sampling.sample_ellipsoid(a, b, spacing, **extra)
+                surface = sampling.ellipsoid_surface(a, b) if display else None
+        return samples, surface
+    if not isinstance(spec, str):
+        raise SceneError(f"{where}: write {REGIONS[kind]}, a path relative to the scene file")
+    path = Path(spec) if Path(spec).is_absolute() else base_dir / spec
+    with _context(here):
+        if kind == "surface":
+            closed = sampling.read_surface(path)
+            samples = sampling.sample_surface(closed, spacing, **extra)
+            return samples, closed if display else None
+        mesh = read_mesh(path)
+        samples = sampling.sample_mesh(mesh, spacing)
+        return samples, sampling.surface_from_mesh(mesh) if display else None
+
+
+def _frame_positions(table: dict, samples, where: str) -> np.ndarray:
+    """Rest frame origins (n, 3) from exactly one of grid, count, positions."""
+    from tissuesim.frames.placement import farthest_point_frames, grid_frames
+
+    given = [k for k in PLACEMENTS if k in table]
+    if len(given) != 1:
+        raise SceneError(
+            f"{where}: give exactly one of grid = {{ lower, upper, counts }}, count = N "
+            f"(farthest-point sampling of the integration points) or positions = "
+            f"[[x, y, z], ...] (got {given or 'none'})"
+        )
+    (how,) = given
+    value = table[how]
+    if how == "grid":
+        here = f"{where} grid"
+        if not isinstance(value, dict):
+            raise SceneError(
+                f"{where}: write grid = {{ lower = [...], upper = [...], counts = [...] }}"
+            )
+        _unknown(value, ("lower", "upper", "counts"), here)
+        lower = _vector3(_required(value, "lower", here), f"{here} lower")
+        upper = _vector3(_required(value, "upper", here), f"{here} upper")
+        counts = _required(value, "counts", here)
+        ok = isinstance(counts, list) and len(counts) == 3
+        if not (ok and all(isinstance(c, int) and not isinstance(c, bool) for c in counts)):
+            raise SceneError(f"{here}: counts must be 3 integers >= 1, got {counts!r}")
+        with _context(here):
+            return grid_frames(lower, upper, counts)
+    if how == "count":
+        if not (isinstance(value, int) and not isinstance(value, bool) and value >= 1):
+            raise SceneError(f"{where}: count must be an integer >= 1, got {value!r}")
+        if value > samples.n:
+            raise SceneError(
+                f"{where}: count = {value} frames but the region has only {samples.n} "
+                f"integration points; use fewer frames or a smaller [region] spacing"
+            )
+        return farthest_point_frames(samples.points, value)
+    return _point_list(value, f"{where} positions")
+
+
+# -- selectors ------------------------------------------------------------------------------------
+
+
+def _scale(*arrays) -> float:
+    """Bounding-box diagonal of the body (integration points, frames, display surface)."""
+    pts = np.concatenate([getattr(a, "points", a) for a in arrays if a is not None])
+    return float(np.linalg.norm(np.ptp(pts, axis=0)))
+
+
+def _bbox(points: np.ndarray) -> str:
+    lo, hi = points.min(axis=0), points.max(axis=0)
+    return " x ".join(f"[{a:.6g}, {b:.6g}]" for a, b in zip(lo, hi, strict=True))
+
+
+def _match(points: np.ndarray, how: str, args, scale: float, where: str) -> tuple[np.ndarray, str]:
+    """Mask of ``points`` on a plane / in a box (tissuesim.mesh.select's rules) and its text."""
+    if not isinstance(args, dict):
+        raise SceneError(
+            f"{where}: {how} takes a table of arguments "
+            f"{{ {', '.join(f'{a} = ...' for a in SELECTOR_ARGS[how][:2])} }}"
+        )
+    _unknown(args, SELECTOR_ARGS[how], where)
+    tol = args.get("tolerance")
+    if tol is None:
+        tol = 1e-6 * scale
+    elif not (_is_number(tol) and tol >= 0):
+        raise SceneError(f"{where}: tolerance must be a number >= 0, not {tol!r}")
+    if how == "on_plane":
+        axis = _required(args, "axis", where)
+        if not (isinstance(axis, int) and not isinstance(axis, bool) and 0 <= axis <= 2):
+            raise SceneError(f"{where}: axis must be 0, 1 or 2 (x, y or z), not {axis!r}")
+        value = _required(args, "value", where)
+        if not _is_number(value):
+            raise SceneError(f"{where}: value must be a number, not {value!r}")
+        mask = np.abs(points[:, axis] - value) <= tol
+        return mask, f"on the plane {_AXES[axis]} = {value} (tolerance {tol:.3g})"
+    lo = _vector3(_required(args, "lower", where), f"{where} lower")
+    hi = _vector3(_required(args, "upper", where), f"{where} upper")
+    mask = ((points >= lo - tol) & (points <= hi + tol)).all(axis=1)
+    return mask, f"in the box {lo.tolist()} to {hi.tolist()} (tolerance {tol:.3g})"
+
+
+def _one_selector(selector, kinds: tuple[str, ...], key: str, example: str, where: str):
+    if not isinstance(selector, dict) or len(selector) != 1:
+        raise SceneError(
+            f"{where}: {key} must be a table with one selector out of {list(kinds)}, "
+            f"e.g. {key} = {example}"
+        )
+    ((how, args),) = selector.items()
+    _unknown([how], kinds, f"{where} {key}")
+    return how, args
+
+
+def _select_frames(sim, selector, scale: float, where: str) -> np.ndarray:
+    """Sorted frame indices picked by on_plane / in_box (rest origins) or indices."""
+    how, args = _one_selector(
+        selector, FRAME_SELECTORS, "frames", "{ on_plane = { axis = 2, value = 0.0 } }", where
+    )
+    X = sim.rest_frames
+    here = f"{where} frames {how}"
+    if how == "indices":
+        n = len(X)
+        ok = isinstance(args, list) and args
+        if not (ok and all(isinstance(i, int) and not isinstance(i, bool) for i in args)):
+            raise SceneError(f"{here}: expected a list of frame indices, e.g. [0, 1], got {args!r}")
+        bad = [i for i in args if not 0 <= i < n]
+        if bad:
+            raise SceneError(f"{here}: frame indices must be in 0..{n - 1}, got {bad}")
+        return np.unique(np.asarray(args, dtype=np.int64))
+    mask, text = _match(X, how, args, scale, here)
+    if not mask.any():
+        raise SceneError(
+            f"{here}: no frames {text}; the {len(X)} frames' rest origins span {_bbox(X)}"
+        )
+    return np.flatnonzero(mask)
+
+
+def _points(sim, spec, scale: float, where: str) -> np.ndarray:
+    """(k, 3) rest points: an explicit list, or display-surface vertices picked by a selector."""
+    if isinstance(spec, list):
+        return _point_list(spec, f"{where} points")
+    how, args = _one_selector(
+        spec,
+        POINT_SELECTORS,
+        "points",
+        "[[x, y, z], ...] or { surface_on_plane = { axis = 2, value = 2.0 } }",
+        where,
+    )
+    here = f"{where} points {how}"
+    if sim.surface is None:
+        raise SceneError(
+            f"{here}: selects display-surface vertices but the body has no display surface; "
+            f"set display = true in [region], or list the points as [[x, y, z], ...]"
+        )
+    P = sim.surface.points
+    mask, text = _match(P, how.removeprefix("surface_"), args, scale, here)
+    if not mask.any():
+        raise SceneError(
+            f"{here}: no display-surface vertices {text}; the surface spans {_bbox(P)}"
+        )
+    return P[mask]
