@@ -236,3 +236,11 @@ def test_errors_name_the_problem():
         sim.fix_frames([99])
     with pytest.raises(ValueError, match="frame mass must be"):
         FrameModel(FRAMES, SAMPLES, material, mass_kind="diagonal")
+
+
+def test_critical_time_step_counts_springs():
+    material = make_material("stvk", youngs_modulus=1e3, poisson_ratio=0.3)
+    sim = FrameSimulation(FRAMES, SAMPLES, material, density=10.0, integrator="explicit")
+    free = sim.critical_time_step()
+    sim.add_spring(SAMPLES.points[:5], 1e6)
+    assert sim.critical_time_step() < 0.5 * free

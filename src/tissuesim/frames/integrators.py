@@ -119,15 +119,16 @@ def frame_explicit_step(model, state: State, h: float, solver=None, options=None
             False,
             [],
             f"explicit step blew up; time_step {h:g} s exceeds the stability limit "
-            f"(estimate {frame_critical_time_step(model):.3g} s)",
+            f"(estimate {frame_critical_time_step(model, z, t0):.3g} s)",
         )
     return StepOutcome(State(t1, z1, v1), True, [])
 
 
-def frame_critical_time_step(model, z: np.ndarray | None = None) -> float:
-    """2 / omega_max of K_q v = omega^2 M_q v at z (rest by default), free DOFs only."""
+def frame_critical_time_step(model, z: np.ndarray | None = None, t: float = 0.0) -> float:
+    """2 / omega_max of K_q v = omega^2 M_q v at z (rest by default), springs included, free
+    DOFs only."""
     z = model.rest_config() if z is None else z
-    acc = model.evaluate(z, 2, False)
+    acc = model.evaluate(z, 2, False, model.spring_energies(t))
     free = np.ones(model.n_dofs, dtype=bool)
     free[model.prescribed_dofs] = False
     K = model.assembly.q_pattern.matrix(acc.hessian)[free][:, free]

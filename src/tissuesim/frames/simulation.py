@@ -279,7 +279,7 @@ class FrameSimulation:
 
     def critical_time_step(self) -> float:
         """Explicit stability limit 2 / omega_max at the current configuration (s)."""
-        return frame_critical_time_step(self.model, self.state.x)
+        return frame_critical_time_step(self.model, self.state.x, self.time)
 
     # -- stepping -----------------------------------------------------------------------------
     def _linear_solver(self):
