@@ -201,9 +201,16 @@ def _hz(lam: float) -> float:
     return float(np.sqrt(lam) / (2 * np.pi))
 
 
-def fem_modal(nd: int) -> dict:
-    from sksparse.cholmod import cholesky
+def _factor(A: sp.csc_matrix):
+    """A solve with A: CHOLMOD when scikit-sparse is installed, else SciPy's SuperLU."""
+    try:
+        from sksparse.cholmod import cholesky
+    except ImportError:
+        return spla.splu(A).solve
+    return cholesky(A)
 
+
+def fem_modal(nd: int) -> dict:
     sim, tip = fem_simulation(nd, 0.0)
     model = sim.model
     x = sim.state.x
@@ -214,7 +221,7 @@ def fem_modal(nd: int) -> dict:
     free[model.prescribed.dofs] = False
     Kf = K[free][:, free].tocsc()
     Mf = M[free][:, free].tocsc()
-    factor = cholesky(Kf)
+    factor = _factor(Kf)
     op = spla.LinearOperator(Kf.shape, matvec=factor, dtype=float)
     vals, vecs = spla.eigsh(Kf, k=6, M=Mf, sigma=0.0, which="LM", OPinv=op)
     full = np.zeros((model.n_dofs, vecs.shape[1]))
