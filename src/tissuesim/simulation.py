@@ -9,7 +9,6 @@ sim.run(steps=100, output="out")
 
 from __future__ import annotations
 
-import numbers
 import time as wallclock
 from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass, field
@@ -28,7 +27,7 @@ from tissuesim.solve.linear import make_linear_solver
 from tissuesim.solve.newton import NewtonOptions
 from tissuesim.time.backward_euler import backward_euler_step
 from tissuesim.time.quasistatic import check_supported, quasistatic_step
-from tissuesim.time.retry import advance
+from tissuesim.time.retry import advance, validate_stepping
 from tissuesim.time.state import State
 from tissuesim.time.symplectic_euler import symplectic_euler_step
 
@@ -58,6 +57,25 @@ class StepRecord:
     wall_time_s: float
     linear_solver: str = ""
     extra: dict[str, Any] = field(default_factory=dict)
+
+    @classmethod
+    def build(
+        cls, step: int, time: float, records, substeps: int, start: float, solver, **fields
+    ) -> StepRecord:
+        """The record of a converged step from its Newton records; ``start`` is the
+        perf_counter value when the step began; ``fields``: energies, min_J, extra."""
+        return cls(
+            step=step,
+            time=time,
+            converged=True,
+            substeps=substeps,
+            newton_iterations=sum(r.iterations for r in records),
+            projected_iterations=sum(sum(r.projected) for r in records),
+            residual_norms=[r.gradient_norms for r in records],
+            wall_time_s=wallclock.perf_counter() - start,
+            linear_solver=getattr(solver, "name", "none"),
+            **fields,
+        )
 
 
 class Simulation:
@@ -89,17 +107,7 @@ class Simulation:
     ) -> None:
         if integrator not in INTEGRATORS:
             raise ValueError(f"integrator must be one of {sorted(INTEGRATORS)}, not {integrator!r}")
-        if not (
-            isinstance(time_step, numbers.Real)
-            and not isinstance(time_step, bool)
-            and np.isfinite(time_step)
-            and time_step > 0
-        ):
-            raise ValueError(f"time_step must be > 0 seconds, not {time_step!r}")
-        if not (isinstance(max_step_halvings, numbers.Integral) and max_step_halvings >= 0):
-            raise ValueError(
-                f"max_step_halvings must be an integer >= 0, not {max_step_halvings!r}"
-            )
+        time_step, max_step_halvings = validate_stepping(time_step, max_step_halvings)
         if integrator == "symplectic_euler":
             mass = "lumped"  # the explicit update inverts the mass: it must be diagonal
         self.model = Model(mesh, material, density, mass, backend=backend)
@@ -242,18 +250,15 @@ class Simulation:
             self.max_step_halvings,
         )
         self.state = new_state
-        record = StepRecord(
-            step=len(self.history) + 1,
-            time=self.time,
-            converged=True,
-            substeps=substeps,
-            newton_iterations=sum(r.iterations for r in records),
-            projected_iterations=sum(sum(r.projected) for r in records),
-            residual_norms=[r.gradient_norms for r in records],
+        record = StepRecord.build(
+            len(self.history) + 1,
+            self.time,
+            records,
+            substeps,
+            start,
+            solver,
             energies=self.energies(),
             min_J=float(self.model.elastic.jacobians(self.state.x).min()),
-            wall_time_s=wallclock.perf_counter() - start,
-            linear_solver=getattr(solver, "name", "none"),
         )
         self.history.append(record)
         return record

@@ -55,6 +55,34 @@ class SparsityPattern:
         diagonal = inverse[start : start + n]
         return cls(n, indptr, indices.astype(np.int32), diagonal, tuple(scatters))
 
+    @classmethod
+    def from_entries(cls, n: int, rows: np.ndarray, cols: np.ndarray) -> SparsityPattern:
+        """The pattern of the given entries (plus the diagonal), with no stencil scatters:
+        for systems assembled from other patterns through ``positions``."""
+        diag = np.arange(n, dtype=np.int64)
+        key = np.concatenate([np.asarray(rows, np.int64) * n + cols, diag * n + diag])
+        unique = np.unique(key)
+        counts = np.bincount(unique // n, minlength=n)
+        indptr = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
+        indices = (unique % n).astype(np.int32)
+        diagonal = np.searchsorted(unique, diag * n + diag)
+        return cls(n, indptr, indices, diagonal, ())
+
+    def keys(self) -> np.ndarray:
+        """row * n + col of every stored entry, ascending (CSR order, sorted columns)."""
+        rows = np.repeat(np.arange(self.n, dtype=np.int64), np.diff(self.indptr))
+        return rows * self.n + self.indices
+
+    def positions(self, rows, cols, keys: np.ndarray | None = None) -> np.ndarray:
+        """Positions in the data array of entries (rows, cols), any shape; ValueError if one
+        is not stored. ``keys``: a cached ``self.keys()``."""
+        keys = self.keys() if keys is None else keys
+        wanted = np.asarray(rows, dtype=np.int64) * self.n + cols
+        pos = np.minimum(np.searchsorted(keys, wanted), keys.size - 1)
+        if not np.array_equal(keys[pos], wanted):
+            raise ValueError("internal: an entry lies outside the sparsity pattern")
+        return pos
+
     def matrix(self, data: np.ndarray) -> sp.csr_matrix:
         """A CSR matrix over this pattern sharing ``data`` (no copy)."""
         return sp.csr_matrix((data, self.indices, self.indptr), shape=(self.n, self.n))

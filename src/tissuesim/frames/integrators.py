@@ -28,6 +28,7 @@ import scipy.sparse.linalg as spla
 from tissuesim.energies.loads import ExternalForce
 from tissuesim.energies.mass import Inertia
 from tissuesim.solve.newton import minimize
+from tissuesim.time.implicit import choose_start
 from tissuesim.time.state import State, StepOutcome
 
 __all__ = [
@@ -44,12 +45,7 @@ def _solve(model, state: State, h: float, energies, candidates, solver, options)
     def evaluate(z: np.ndarray, order: int, project: bool):
         return model.evaluate(z, order, project, energies)
 
-    starts = []
-    for guess in candidates:
-        z0 = model.apply_prescribed(guess, t1)
-        value = evaluate(z0, 0, False).value if len(candidates) > 1 else 0.0
-        starts.append((np.nan_to_num(value, nan=np.inf), len(starts), z0))
-    z0 = min(starts, key=lambda s: (s[0], s[1]))[2]
+    z0 = choose_start(evaluate, candidates, lambda z: model.apply_prescribed(z, t1))
     z1, record = minimize(
         evaluate,
         z0,

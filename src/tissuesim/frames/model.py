@@ -34,7 +34,7 @@ from tissuesim.frames.frame_types import FrameType, frame_type
 from tissuesim.frames.kinematics import embedding_matrix, frame_kinematics
 from tissuesim.frames.rotations import exp_map
 from tissuesim.frames.sampling import IntegrationPoints
-from tissuesim.frames.shape_functions import ShapeFunctions, shape_functions
+from tissuesim.frames.shape_functions import PairFilter, ShapeFunctions, shape_functions
 from tissuesim.frames.tangent_assembly import TangentAssembly, gather
 from tissuesim.materials.base import Material
 
@@ -130,6 +130,8 @@ class FrameModel:
     mass_kind: FrameMassKind = "full"
     backend: str = "auto"
     loads: list = field(default_factory=list)
+    keep_pair: PairFilter | None = None  # drops (point, frame) pairs: cuts (coupling/cutting.py)
+    allow_orphans: bool = False  # frames reaching no point are held, not an error (after cuts)
 
     def __post_init__(self) -> None:
         X = np.asarray(self.frame_positions, dtype=float)
@@ -155,10 +157,13 @@ class FrameModel:
             radius_factor=self.radius_factor,
             min_frames=self.min_frames,
             what="integration point",
+            keep_pair=self.keep_pair,
         )
         reached = np.zeros(n, dtype=bool)
         reached[self.shapes.frames[self.shapes.weights > 0]] = True
-        if not reached.all():
+        # orphans: no mass and no stiffness; held where they are (eliminated from Newton)
+        self.orphan_frames = np.flatnonzero(~reached) if self.allow_orphans else np.zeros(0, int)
+        if not reached.all() and not self.allow_orphans:
             i = int(np.flatnonzero(~reached)[0])
             raise ValueError(
                 f"frame {i} at {X[i].round(6).tolist()} reaches no integration point "
@@ -173,6 +178,7 @@ class FrameModel:
         )
         self.backend, self.backend_reason = resolve_backend(self.backend)
         self.springs: list[AttachmentSpring] = []
+        self.attachments: list[AttachmentSpring] = []  # to other bodies (coupling/system.py)
         self.prescribed: list[PrescribedFrames] = []
         self._build()
 
@@ -187,7 +193,9 @@ class FrameModel:
         return self.n_frames * self.frame_type.tangent_size
 
     def _build(self) -> None:
-        stencils = [self.shapes.frames] + [s.embedding.shape.frames for s in self.springs]
+        stencils = [self.shapes.frames] + [
+            s.embedding.shape.frames for s in self.springs + self.attachments
+        ]
         self.assembly = TangentAssembly.build(self.frame_type, self.n_frames, stencils)
         self.elastic = ElasticEnergy(self.kinematics, self.material, 0, self.backend)
         E, m = self.point_map.matrix, self.masses
@@ -200,17 +208,16 @@ class FrameModel:
         self.mass = MassMatrix(
             self.mass_kind, self.assembly.z_pattern, data, np.asarray(Mz.sum(axis=1)).ravel()
         )
-        self._spring_hessians = [
-            gather(
-                self.assembly.z_pattern,
-                sp.kron(
-                    s.embedding.matrix.T @ sp.diags(s.stiffness) @ s.embedding.matrix,
-                    sp.identity(3),
-                ),
-            )
-            for s in self.springs
-        ]
+        self._spring_hessians = [self._spring_hessian(s) for s in self.springs]
+        self.attachment_hessians = [self._spring_hessian(s) for s in self.attachments]
         self.elimination = Elimination.build(self.assembly.q_pattern, self.prescribed_dofs)
+
+    def _spring_hessian(self, spring: AttachmentSpring) -> np.ndarray:
+        """Constant z Hessian data of 1/2 k |E z - target|^2: E^T diag(k) E (x) I_3."""
+        E = spring.embedding.matrix
+        return gather(
+            self.assembly.z_pattern, sp.kron(E.T @ sp.diags(spring.stiffness) @ E, sp.identity(3))
+        )
 
     def _lumped_nodes(self) -> sp.csr_matrix:
         sf, d = (
@@ -227,19 +234,38 @@ class FrameModel:
         n = 4 * self.n_frames
         return sp.csr_matrix((blocks.ravel(), (rows, cols)), shape=(n, n))
 
-    def embed(self, points: np.ndarray, what: str = "embedded point") -> Embedding:
-        """Carry rest points (k, 3) with the frames (same kernel and radii as the body)."""
+    def embed(
+        self,
+        points: np.ndarray,
+        what: str = "embedded point",
+        keep_pair: PairFilter | None = None,
+        min_frames: int = 1,
+    ) -> Embedding:
+        """Carry rest points (k, 3) with the frames (same kernel and radii as the body);
+        ``keep_pair`` drops (point, frame) pairs (cuts)."""
         P = np.asarray(points, dtype=float)
         if P.ndim != 2 or P.shape[1] != 3:
             raise ValueError(f"{what}s must be a (k, 3) array, not shape {P.shape}")
         radius = None if self.shape == "shepard" else self.shapes.radii
         sf = shape_functions(
-            self.frame_positions, P, kind=self.shape, radius=radius, min_frames=1, what=what
+            self.frame_positions,
+            P,
+            kind=self.shape,
+            radius=radius,
+            min_frames=min_frames,
+            what=what,
+            keep_pair=keep_pair,
         )
         return Embedding(P, sf, embedding_matrix(self.frame_positions, P, sf))
 
     def add_spring(self, spring: AttachmentSpring) -> None:
         self.springs.append(spring)
+        self._build()
+
+    def set_attachments(self, attachments: list[AttachmentSpring]) -> None:
+        """Springs whose targets are points of other bodies, evaluated by the coupled system:
+        their stencils enter the pattern and their constant Hessians ``attachment_hessians``."""
+        self.attachments = list(attachments)
         self._build()
 
     def set_prescribed(self, prescribed: list[PrescribedFrames]) -> None:
@@ -248,9 +274,9 @@ class FrameModel:
 
     @property
     def prescribed_frames(self) -> np.ndarray:
-        if not self.prescribed:
-            return np.zeros(0, dtype=np.int64)
-        return np.concatenate([p.frames for p in self.prescribed]).astype(np.int64)
+        """Frames Newton does not move: prescribed ones and orphans (held where they are)."""
+        held = [p.frames for p in self.prescribed] + [self.orphan_frames]
+        return np.unique(np.concatenate(held).astype(np.int64))
 
     @property
     def prescribed_dofs(self) -> np.ndarray:

@@ -19,15 +19,19 @@ With grad S = sum_j grad phi_j the gradient is grad w_i = grad phi_i / S - phi_i
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Literal, get_args
 
 import numpy as np
 from scipy.spatial import cKDTree
 
-__all__ = ["ShapeKind", "ShapeFunctions", "auto_radii", "shape_functions"]
+__all__ = ["ShapeKind", "ShapeFunctions", "PairFilter", "auto_radii", "shape_functions"]
 
 ShapeKind = Literal["wendland", "shepard"]
+#: keep_pair(point indices (m,), frame indices (m,)) -> (m,) bool: False drops the pair before
+#: normalisation (a cut: the frame no longer acts on that point).
+PairFilter = Callable[[np.ndarray, np.ndarray], np.ndarray]
 _KINDS: tuple[str, ...] = get_args(ShapeKind)
 
 # relative to the frames' bounding-box diagonal: closer frames count as one place
@@ -191,7 +195,7 @@ def _normalise(
 
 
 def _wendland(
-    frames: np.ndarray, points: np.ndarray, radii: np.ndarray
+    frames: np.ndarray, points: np.ndarray, radii: np.ndarray, keep_pair: PairFilter | None = None
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Pairs (point, frame, w, grad w) with phi > 0, grouped by point and sorted by frame."""
     q, d = points.shape
@@ -208,6 +212,8 @@ def _wendland(
     r = radii[fr]
     s = np.sqrt(np.einsum("mi,mi->m", diff, diff)) / r
     keep = s < 1.0
+    if keep_pair is not None:
+        keep &= np.asarray(keep_pair(pt, fr), dtype=bool)
     pt, fr, diff, r, s = pt[keep], fr[keep], diff[keep], r[keep], s[keep]
     order = np.lexsort((fr, pt))
     pt, fr, diff, r, s = pt[order], fr[order], diff[order], r[order], s[order]
@@ -262,6 +268,7 @@ def shape_functions(
     min_frames: int = 1,
     what: str = "integration point",
     radii_from: np.ndarray | None = None,
+    keep_pair: PairFilter | None = None,
 ) -> ShapeFunctions:
     """Frame weights and their rest-space gradients at ``points`` (q, d), frames at (n, d).
 
@@ -271,6 +278,8 @@ def shape_functions(
     min_frames: every point must be reached by at least this many frames (a point reached by
     fewer has a degenerate or too rigid blend), else ValueError naming the first such point.
     what: the noun for a point in error messages.
+    keep_pair: drops (point, frame) pairs before the Shepard normalisation, so the remaining
+    weights still sum to 1 (used by cutting: no frame acts across a cut).
     """
     if kind not in _KINDS:
         raise ValueError(
@@ -306,12 +315,18 @@ def shape_functions(
         diff = pts[:, None, :] - frames[None, :, :]  # (q, n, d)
         phi = 1.0 / (np.einsum("qni,qni->qn", diff, diff) + eps * eps)
         gphi = -2.0 * (phi * phi)[..., None] * diff
+        count = np.full(q, n, dtype=np.int64)
+        if keep_pair is not None:
+            pq, pf = (a.ravel() for a in np.meshgrid(np.arange(q), np.arange(n), indexing="ij"))
+            kept = np.asarray(keep_pair(pq, pf), dtype=bool).reshape(q, n)
+            phi, gphi, count = phi * kept, gphi * kept[..., None], kept.sum(axis=1)
+            _report_unreached(frames, pts, np.full(n, np.inf), count, min_frames, what)
         w, g = _normalise(phi, gphi, phi.sum(axis=1)[:, None], gphi.sum(axis=1)[:, None, :])
         return ShapeFunctions(
             frames=np.broadcast_to(np.arange(n, dtype=np.int64), (q, n)).copy(),
             weights=w,
             gradients=g,
-            count=np.full(q, n, dtype=np.int64),
+            count=count,
             radii=np.full(n, np.inf),
             kind=kind,
         )
@@ -326,7 +341,7 @@ def shape_functions(
     else:
         radii = _radii(radius, n)
 
-    pt, fr, w, g = _wendland(frames, pts, radii)
+    pt, fr, w, g = _wendland(frames, pts, radii, keep_pair)
     count = np.bincount(pt, minlength=q).astype(np.int64)
     _report_unreached(frames, pts, radii, count, min_frames, what)
 

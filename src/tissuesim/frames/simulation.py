@@ -12,7 +12,6 @@ sim.run(steps=100, output="out")
 
 from __future__ import annotations
 
-import numbers
 import time as wallclock
 from collections.abc import Callable, Sequence
 from dataclasses import asdict
@@ -41,7 +40,7 @@ from tissuesim.materials.base import Material
 from tissuesim.simulation import StepRecord
 from tissuesim.solve.linear import make_linear_solver
 from tissuesim.solve.newton import NewtonOptions
-from tissuesim.time.retry import advance
+from tissuesim.time.retry import advance, validate_stepping
 from tissuesim.time.state import State
 
 __all__ = ["FrameSimulation", "FRAME_INTEGRATORS"]
@@ -91,17 +90,7 @@ class FrameSimulation:
             raise ValueError(
                 f"integrator must be one of {sorted(FRAME_INTEGRATORS)}, not {integrator!r}"
             )
-        if not (
-            isinstance(time_step, numbers.Real)
-            and not isinstance(time_step, bool)
-            and np.isfinite(time_step)
-            and time_step > 0
-        ):
-            raise ValueError(f"time_step must be > 0 seconds, not {time_step!r}")
-        if not (isinstance(max_step_halvings, numbers.Integral) and max_step_halvings >= 0):
-            raise ValueError(
-                f"max_step_halvings must be an integer >= 0, not {max_step_halvings!r}"
-            )
+        time_step, max_step_halvings = validate_stepping(time_step, max_step_halvings)
         self.model = FrameModel(
             frames,
             samples,
@@ -307,18 +296,15 @@ class FrameSimulation:
             self.max_step_halvings,
         )
         self.state = new_state
-        record = StepRecord(
-            step=len(self.history) + 1,
-            time=self.time,
-            converged=True,
-            substeps=substeps,
-            newton_iterations=sum(r.iterations for r in records),
-            projected_iterations=sum(sum(r.projected) for r in records),
-            residual_norms=[r.gradient_norms for r in records],
+        record = StepRecord.build(
+            len(self.history) + 1,
+            self.time,
+            records,
+            substeps,
+            start,
+            solver,
             energies=self.energies(),
             min_J=float(self.point_fields()["J"].min()),
-            wall_time_s=wallclock.perf_counter() - start,
-            linear_solver=getattr(solver, "name", "none"),
         )
         self.history.append(record)
         return record

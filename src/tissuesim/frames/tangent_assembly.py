@@ -23,24 +23,10 @@ from tissuesim.frames.frame_types import CONFIG_SIZE, FrameType
 __all__ = ["TangentAssembly", "gather"]
 
 
-def _keys(pattern: SparsityPattern) -> np.ndarray:
-    rows = np.repeat(np.arange(pattern.n, dtype=np.int64), np.diff(pattern.indptr))
-    return rows * pattern.n + pattern.indices  # ascending: CSR rows, sorted columns
-
-
-def _positions(pattern: SparsityPattern, keys: np.ndarray, rows, cols) -> np.ndarray:
-    wanted = np.asarray(rows, dtype=np.int64) * pattern.n + cols
-    pos = np.searchsorted(keys, wanted)
-    pos = np.minimum(pos, keys.size - 1)
-    if not np.array_equal(keys[pos], wanted):
-        raise ValueError("internal: an entry lies outside the sparsity pattern")
-    return pos
-
-
 def gather(pattern: SparsityPattern, matrix: sp.spmatrix) -> np.ndarray:
     """Data array over ``pattern`` of a sparse matrix whose entries all lie on the pattern."""
     coo = sp.coo_matrix(matrix)
-    pos = _positions(pattern, _keys(pattern), coo.row, coo.col)
+    pos = pattern.positions(coo.row, coo.col)
     return np.bincount(pos, weights=coo.data, minlength=pattern.nnz)
 
 
@@ -69,17 +55,17 @@ class TangentAssembly:
         z_pattern = block_pattern(n_frames, CONFIG_SIZE, frame_stencils)
         t = frame_type.tangent_size
         q_pattern = z_pattern if t == CONFIG_SIZE else block_pattern(n_frames, t, frame_stencils)
-        zk = _keys(z_pattern)
+        zk = z_pattern.keys()
         rows, cols = zk // z_pattern.n, zk % z_pattern.n
         first = (rows % CONFIG_SIZE == 0) & (cols % CONFIG_SIZE == 0)
         pairs = np.stack([rows[first], cols[first]], axis=1) // CONFIG_SIZE
         a = np.arange(CONFIG_SIZE)
         I, J = pairs[:, 0, None, None], pairs[:, 1, None, None]
-        z_index = _positions(
-            z_pattern, zk, I * CONFIG_SIZE + a[:, None], J * CONFIG_SIZE + a[None, :]
+        z_index = z_pattern.positions(
+            I * CONFIG_SIZE + a[:, None], J * CONFIG_SIZE + a[None, :], keys=zk
         )
         b = np.arange(t)
-        q_index = _positions(q_pattern, _keys(q_pattern), I * t + b[:, None], J * t + b[None, :])
+        q_index = q_pattern.positions(I * t + b[:, None], J * t + b[None, :])
         diagonal_blocks = np.flatnonzero(pairs[:, 0] == pairs[:, 1])
         diagonal_blocks = diagonal_blocks[np.argsort(pairs[diagonal_blocks, 0])]
         return cls(frame_type, z_pattern, q_pattern, pairs, z_index, q_index, diagonal_blocks)

@@ -8,7 +8,7 @@ import numpy as np
 from tissuesim.solve.newton import minimize
 from tissuesim.time.state import State, StepOutcome
 
-__all__ = ["solve_implicit_step"]
+__all__ = ["solve_implicit_step", "choose_start"]
 
 
 def solve_implicit_step(model, state: State, h: float, energies, x0_candidates, solver, options):
@@ -22,13 +22,13 @@ def solve_implicit_step(model, state: State, h: float, energies, x0_candidates, 
         return model.evaluate(x, order, project, energies)
 
     prescribed = model.prescribed.positions(t1)
-    starts = []
-    for guess in x0_candidates:
+
+    def with_prescribed(guess: np.ndarray) -> np.ndarray:
         x0 = guess.copy()
         x0[model.prescribed.dofs] = prescribed
-        value = evaluate(x0, 0, False).value if len(x0_candidates) > 1 else 0.0
-        starts.append((np.nan_to_num(value, nan=np.inf), len(starts), x0))
-    x0 = min(starts, key=lambda s: (s[0], s[1]))[2]
+        return x0
+
+    x0 = choose_start(evaluate, x0_candidates, with_prescribed)
     x1, record = minimize(
         evaluate,
         x0,
@@ -41,3 +41,14 @@ def solve_implicit_step(model, state: State, h: float, energies, x0_candidates, 
     if not record.converged:
         return StepOutcome(None, False, [record], record.reason)
     return StepOutcome(State(t1, x1, (x1 - state.x) / h), True, [record])
+
+
+def choose_start(evaluate, candidates, apply_prescribed) -> np.ndarray:
+    """The candidate (with prescribed values applied) of lowest energy; ties and NaN: the
+    first. One candidate is returned without evaluating it."""
+    starts = []
+    for guess in candidates:
+        x0 = apply_prescribed(guess)
+        value = evaluate(x0, 0, False).value if len(candidates) > 1 else 0.0
+        starts.append((np.nan_to_num(value, nan=np.inf), len(starts), x0))
+    return min(starts, key=lambda s: (s[0], s[1]))[2]

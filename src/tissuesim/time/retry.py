@@ -6,10 +6,14 @@ h / 2**max_halvings; if that still fails, ConvergenceError says when, why, and w
 
 from __future__ import annotations
 
+import numbers
+
+import numpy as np
+
 from tissuesim.errors import ConvergenceError
 from tissuesim.time.state import State, StepOutcome
 
-__all__ = ["advance"]
+__all__ = ["advance", "validate_stepping"]
 
 
 def advance(step_fn, model, state: State, h: float, solver, options, max_halvings: int):
@@ -35,3 +39,17 @@ def advance(step_fn, model, state: State, h: float, solver, options, max_halving
 
     new_state = attempt(state, h, 0)
     return new_state, records, substeps
+
+
+def validate_stepping(time_step, max_step_halvings) -> tuple[float, int]:
+    """Checked (time_step > 0 s, max_step_halvings >= 0) for every simulation object."""
+    if not (
+        isinstance(time_step, numbers.Real)
+        and not isinstance(time_step, bool)
+        and np.isfinite(time_step)
+        and time_step > 0
+    ):
+        raise ValueError(f"time_step must be > 0 seconds, not {time_step!r}")
+    if not (isinstance(max_step_halvings, numbers.Integral) and max_step_halvings >= 0):
+        raise ValueError(f"max_step_halvings must be an integer >= 0, not {max_step_halvings!r}")
+    return float(time_step), int(max_step_halvings)

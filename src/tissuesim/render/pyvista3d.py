@@ -1,0 +1,644 @@
+"""Off-screen 3D pictures of coupled scenes with PyVista (VTK): a PNG of one moment, a GIF of a run.
+
+A scene (``Frame3D``) holds organs as triangle surfaces (``SurfaceLayer``), connective tissue as
+points (``PointLayer``, e.g. integration points coloured by strain) and cut surfaces (triangle
+soups, drawn semi-transparent red). Organs are smooth-shaded in their colour (or coloured by
+their ``scalars``), without edges; points are rendered as small spheres; the title is written at
+the top, a legend names the layers (upper right) and one vertical colour bar per scalar name
+sits below it, in a right-hand column the camera keeps the scene clear of.
+
+Without a ``Camera``, the view is fixed from the scene's bounds: from above the front right
+(azimuth -55 degrees, elevation 22 degrees, as the matplotlib renderers), z up, the bounding box
+fitted into the free part of the window with a small margin. ``GifWriter`` fits that view once,
+to the first frame's bounds enlarged by ``_GIF_PAD`` of their size on every side (or takes the
+``camera`` given), so motion shows as motion rather than as a re-centred picture.
+
+PyVista is an optional dependency (``pip install 'tissuesim[pyvista]'``), imported only when a
+picture is made. Rendering is off-screen (``pyvista.OFF_SCREEN``); PNG and GIF files are written
+with Pillow through ``tissuesim.io.atomic``, so a crash never leaves half a file.
+
+Shapes: SurfaceLayer points (n, 3), triangles (m, 3) ids into points, scalars (n,); PointLayer
+points (q, 3), scalars (q,); each cut (m, 3, 3) triangle corners.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from tissuesim.io.atomic import atomic_output
+
+__all__ = ["Camera", "Frame3D", "GifWriter", "PointLayer", "SurfaceLayer", "render_frame_png"]
+
+_MISSING = "3D pictures of coupled scenes need PyVista: pip install 'tissuesim[pyvista]'"
+
+_ELEV, _AZIM = 22.0, -55.0  # default view direction in degrees, as plot3d / points3d
+_VIEW_ANGLE = 30.0  # VTK's default vertical view angle in degrees
+_PNG_PAD = 0.04  # PNG: bounds enlarged by this fraction of their largest size on every side
+_GIF_PAD = 0.15  # GIF: bounds of the first frame enlarged by this fraction on every side
+# free part of the window for the scene, in normalised window coordinates (x0, y0, x1, y1):
+# the right-hand column holds the legend and colour bars, the top strip the title
+_SCENE_BOX = (0.02, 0.03, 0.80, 0.90)
+_BAR_COLUMN = (0.83, 0.06, 0.98, 0.62)  # colour bars (x0, y0, x1, y1)
+_CUT_COLOUR = "#e0201b"
+_POINT_COLOUR = "#404040"  # points without scalars
+_BACKGROUND = "white"
+
+
+def _import_pyvista():
+    """The pyvista module, set to render off-screen; a clear ImportError when it is missing."""
+    try:
+        import pyvista as pv
+    except ImportError as exc:
+        raise ImportError(_MISSING) from exc
+    pv.OFF_SCREEN = True
+    return pv
+
+
+def _frozen_array(a: Any, dtype, what: str) -> np.ndarray:
+    try:
+        x = np.array(a, dtype=dtype)  # a copy: later changes to the caller's array do not leak in
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"{what} must be a numeric array: {exc}") from exc
+    x.flags.writeable = False
+    return x
+
+
+# ---- scene data ---------------------------------------------------------------------------
+
+
+@dataclass(frozen=True, eq=False)
+class SurfaceLayer:
+    """An organ's triangle surface: points (n, 3), triangles (m, 3) ids into points.
+
+    Drawn smooth-shaded in ``color`` (any colour name or hex string VTK knows) with
+    ``opacity``; with ``scalars`` (n,) it is coloured by them instead (viridis, one colour bar
+    titled ``name``). Arrays are copied and made read-only.
+    """
+
+    name: str
+    points: np.ndarray
+    triangles: np.ndarray
+    color: str = "lightgrey"
+    opacity: float = 1.0
+    scalars: np.ndarray | None = None
+
+    def __post_init__(self) -> None:
+        x = _frozen_array(self.points, float, f"surface {self.name!r} points")
+        tri = _frozen_array(self.triangles, np.int64, f"surface {self.name!r} triangles")
+        if x.ndim != 2 or x.shape[1] != 3:
+            raise ValueError(f"surface {self.name!r} points have shape {x.shape}; expected (n, 3)")
+        if tri.size == 0:
+            tri = np.zeros((0, 3), dtype=np.int64)
+        if tri.ndim != 2 or tri.shape[1] != 3:
+            raise ValueError(
+                f"surface {self.name!r} triangles have shape {tri.shape}; expected (m, 3)"
+            )
+        if len(tri) and (tri.min() < 0 or tri.max() >= len(x)):
+            raise ValueError(f"surface {self.name!r} triangles must be ids in [0, {len(x)})")
+        if not 0.0 <= float(self.opacity) <= 1.0:
+            raise ValueError(f"surface {self.name!r} opacity must be in [0, 1], got {self.opacity}")
+        object.__setattr__(self, "points", x)
+        object.__setattr__(self, "triangles", tri)
+        object.__setattr__(self, "opacity", float(self.opacity))
+        if self.scalars is not None:
+            s = _frozen_array(self.scalars, float, f"surface {self.name!r} scalars")
+            if s.shape != (len(x),):
+                raise ValueError(
+                    f"surface {self.name!r} scalars have shape {s.shape}; expected ({len(x)},)"
+                )
+            object.__setattr__(self, "scalars", s)
+
+
+@dataclass(frozen=True, eq=False)
+class PointLayer:
+    """Points (q, 3), e.g. a tissue's integration points, coloured by ``scalars`` (q,).
+
+    ``scalar_name`` titles the colour bar (layers sharing it share one bar and one colour
+    range); ``clim`` (lo, hi) fixes the colour range, else it is the data's range (in a GIF: the
+    range of every frame added so far). Without scalars the points are dark grey.
+    ``point_size`` is in pixels. q may be 0. Arrays are copied and made read-only.
+    """
+
+    name: str
+    points: np.ndarray
+    scalars: np.ndarray | None = None
+    scalar_name: str = ""
+    cmap: str = "viridis"
+    clim: tuple[float, float] | None = None
+    point_size: float = 7.0
+
+    def __post_init__(self) -> None:
+        x = _frozen_array(self.points, float, f"point layer {self.name!r} points")
+        if x.size == 0:
+            x = _frozen_array(np.zeros((0, 3)), float, "points")
+        if x.ndim != 2 or x.shape[1] != 3:
+            raise ValueError(f"point layer {self.name!r} points have shape {x.shape}; (q, 3)")
+        object.__setattr__(self, "points", x)
+        if self.scalars is not None:
+            s = _frozen_array(self.scalars, float, f"point layer {self.name!r} scalars")
+            if s.shape != (len(x),):
+                raise ValueError(
+                    f"point layer {self.name!r} scalars have shape {s.shape}; expected ({len(x)},)"
+                )
+            object.__setattr__(self, "scalars", s)
+        if self.clim is not None:
+            lo, hi = (float(c) for c in self.clim)
+            if not (math.isfinite(lo) and math.isfinite(hi) and lo <= hi):
+                raise ValueError(f"point layer {self.name!r} clim must be finite lo <= hi")
+            object.__setattr__(self, "clim", (lo, hi))
+        if not float(self.point_size) > 0:
+            raise ValueError(f"point layer {self.name!r} point_size must be > 0")
+        object.__setattr__(self, "point_size", float(self.point_size))
+
+    @property
+    def bar_title(self) -> str:
+        return self.scalar_name or self.name
+
+
+@dataclass(frozen=True, eq=False)
+class Frame3D:
+    """One moment of a coupled scene: organ surfaces, point layers, cuts and a title.
+
+    ``cuts`` is a sequence of (m, 3, 3) arrays of triangle corners (a single (m, 3, 3) array is
+    taken as one cut); any of the three sequences may be empty. Stored as tuples.
+    """
+
+    surfaces: Sequence[SurfaceLayer] = ()
+    points: Sequence[PointLayer] = ()
+    cuts: Sequence[np.ndarray] = ()
+    title: str = ""
+
+    def __post_init__(self) -> None:
+        for what, items, kind in (
+            ("surfaces", self.surfaces, SurfaceLayer),
+            ("points", self.points, PointLayer),
+        ):
+            bad = [type(s).__name__ for s in items if not isinstance(s, kind)]
+            if bad:
+                raise TypeError(f"Frame3D.{what} must hold {kind.__name__}s, got {bad[0]}")
+        cuts = self.cuts
+        if isinstance(cuts, np.ndarray) and cuts.ndim == 3:
+            cuts = [cuts]
+        arrays = []
+        for i, c in enumerate(cuts):
+            a = _frozen_array(c, float, f"cut {i}")
+            if a.size == 0:
+                continue
+            if a.ndim != 3 or a.shape[1:] != (3, 3):
+                raise ValueError(f"cut {i} has shape {a.shape}; expected (m, 3, 3)")
+            arrays.append(a)
+        object.__setattr__(self, "surfaces", tuple(self.surfaces))
+        object.__setattr__(self, "points", tuple(self.points))
+        object.__setattr__(self, "cuts", tuple(arrays))
+        object.__setattr__(self, "title", str(self.title))
+
+    def bounds(self) -> tuple[np.ndarray, np.ndarray] | None:
+        """(lo (3,), hi (3,)) over every finite point of the scene, or None if it is empty."""
+        arrays = [s.points for s in self.surfaces] + [p.points for p in self.points]
+        arrays += [c.reshape(-1, 3) for c in self.cuts]
+        pts = np.concatenate([a for a in arrays if len(a)] or [np.zeros((0, 3))])
+        pts = pts[np.isfinite(pts).all(axis=1)]
+        if not len(pts):
+            return None
+        return pts.min(axis=0), pts.max(axis=0)
+
+
+@dataclass(frozen=True)
+class Camera:
+    """A fixed view: camera position, the point it looks at, and the up direction (world)."""
+
+    position: tuple[float, float, float]
+    focal_point: tuple[float, float, float]
+    view_up: tuple[float, float, float]
+
+    def __post_init__(self) -> None:
+        for name in ("position", "focal_point", "view_up"):
+            v = tuple(float(c) for c in getattr(self, name))
+            if len(v) != 3 or not all(math.isfinite(c) for c in v):
+                raise ValueError(f"Camera.{name} must be 3 finite numbers, got {v}")
+            object.__setattr__(self, name, v)
+
+
+# ---- camera ---------------------------------------------------------------------------------
+
+
+def _fit_camera(points: np.ndarray, window_size: tuple[int, int], pad: float) -> Camera:
+    """Default view of ``points`` (k, 3) scaled about their bounding box's centre by 1 + 2 pad.
+
+    The points are fitted (perspective, VTK's 30 degree view angle) into ``_SCENE_BOX`` of the
+    window and centred in it; the camera is shifted sideways for that, so the view direction
+    stays the default one.
+    """
+    pts = np.asarray(points, dtype=float).reshape(-1, 3)
+    pts = pts[np.isfinite(pts).all(axis=1)]
+    if not len(pts):
+        pts = np.array([[0.0, 0.0, 0.0], [1.0, 1.0, 1.0]])
+    lo, hi = pts.min(axis=0), pts.max(axis=0)
+    centre = 0.5 * (lo + hi)
+    big = float((hi - lo).max())
+    if big <= 0.0:  # a single point: show a box of size about 1 (or |point|) around it
+        big = max(1.0, float(np.abs(centre).max()))
+        pts = centre + 0.5 * big * np.array([[-1.0, -1.0, -1.0], [1.0, 1.0, 1.0]])
+    if len(pts) > 20_000:  # plenty for the framing
+        pts = pts[np.linspace(0, len(pts) - 1, 20_000).astype(np.int64)]
+    rel = (pts - centre) * (1.0 + 2.0 * pad)
+
+    e, a = np.radians(_ELEV), np.radians(_AZIM)
+    back = np.array([np.cos(e) * np.cos(a), np.cos(e) * np.sin(a), np.sin(e)])  # to the camera
+    right = np.cross(-back, [0.0, 0.0, 1.0])
+    right /= np.linalg.norm(right)
+    up = np.cross(right, -back)
+
+    w, h = window_size
+    tan_v = math.tan(math.radians(_VIEW_ANGLE) / 2)
+    tan_h = tan_v * w / h
+    x0, y0, x1, y1 = _SCENE_BOX
+    # the scene box in normalised device coordinates [-1, 1]: its half sizes and centre
+    sx, sy = x1 - x0, y1 - y0
+    cx, cy = x0 + x1 - 1.0, y0 + y1 - 1.0
+    xr, yu, zb = rel @ right, rel @ up, rel @ back
+    ox = oy = 0.0  # sideways offset of the focal point, centring the picture of the points
+    for _ in range(3):
+        # a point at depth zb (towards the camera) fits if |xr - ox| <= (dist - zb) tan_h sx
+        dist = float(
+            np.max(np.maximum(np.abs(xr - ox) / (tan_h * sx), np.abs(yu - oy) / (tan_v * sy)) + zb)
+        )
+        px, py = (xr - ox) / (dist - zb), (yu - oy) / (dist - zb)
+        ox += 0.5 * (px.min() + px.max()) * dist
+        oy += 0.5 * (py.min() + py.max()) * dist
+    dist = float(
+        np.max(np.maximum(np.abs(xr - ox) / (tan_h * sx), np.abs(yu - oy) / (tan_v * sy)) + zb)
+    )
+    # shift the camera (and focal point) so the picture's centre lands at (cx, cy)
+    focal = centre + (ox - cx * dist * tan_h) * right + (oy - cy * dist * tan_v) * up
+    return Camera(tuple(focal + dist * back), tuple(focal), tuple(up))
+
+
+def _apply_camera(plotter, camera: Camera) -> None:
+    cam = plotter.camera
+    cam.position = camera.position
+    cam.focal_point = camera.focal_point
+    cam.up = camera.view_up
+    cam.view_angle = _VIEW_ANGLE
+    plotter.renderer.ResetCameraClippingRange()
+
+
+# ---- drawing --------------------------------------------------------------------------------
+
+
+def _new_plotter(pv, window_size: tuple[int, int]):
+    w, h = (int(s) for s in window_size)
+    if w < 16 or h < 16:
+        raise ValueError(f"window_size must be at least (16, 16), got {window_size}")
+    plotter = pv.Plotter(off_screen=True, window_size=(w, h), lighting="light_kit")
+    plotter.set_background(_BACKGROUND)
+    plotter.enable_anti_aliasing("ssaa")
+    return plotter
+
+
+def _union(a: tuple[float, float] | None, b: tuple[float, float] | None):
+    if a is None:
+        return b
+    if b is None:
+        return a
+    return min(a[0], b[0]), max(a[1], b[1])
+
+
+def _data_range(values: np.ndarray | None) -> tuple[float, float] | None:
+    if values is None:
+        return None
+    v = values[np.isfinite(values)]
+    return (float(v.min()), float(v.max())) if len(v) else None
+
+
+def _scalar_groups(frame: Frame3D) -> dict[str, dict[str, Any]]:
+    """Colour bars of a frame: title -> {cmap, given clim, data range}, in drawing order."""
+    groups: dict[str, dict[str, Any]] = {}
+    layers = [(s.name, "viridis", None, s.scalars) for s in frame.surfaces]
+    layers += [(p.bar_title, p.cmap, p.clim, p.scalars) for p in frame.points]
+    for title, cmap, clim, values in layers:
+        if values is None:
+            continue
+        g = groups.setdefault(title, {"cmap": cmap, "clim": None, "data": None})
+        if clim is not None:
+            g["clim"] = _union(g["clim"], clim)
+        else:
+            g["data"] = _union(g["data"], _data_range(values))
+    return groups
+
+
+def _clims(groups: dict[str, dict[str, Any]], seen: dict[str, tuple[float, float]] | None):
+    """title -> (lo, hi) colour range: given clims and data ranges (or ``seen`` ones) joined."""
+    out = {}
+    for title, g in groups.items():
+        data = seen.get(title, g["data"]) if seen is not None else g["data"]
+        lo, hi = _union(g["clim"], data) or (0.0, 1.0)
+        if hi <= lo:  # a constant field: a small range around it, so the colour map works
+            d = 0.5 * max(abs(lo) * 1e-3, 1e-12)
+            lo, hi = lo - d, hi + d
+        out[title] = (lo, hi)
+    return out
+
+
+def _font_sizes(window_size: tuple[int, int]) -> tuple[int, int]:
+    """(title, label) font sizes for the window, readable from 400 to 2000 pixels tall."""
+    scale = min(window_size[0] / 1024, window_size[1] / 768)
+    return max(9, round(16 * scale)), max(7, round(11 * scale))
+
+
+def _draw(pv, plotter, frame: Frame3D, clims: dict[str, tuple[float, float]], camera: Camera):
+    """Replace the plotter's scene by ``frame`` seen through ``camera``."""
+    for title in list(plotter.scalar_bars.keys()):
+        plotter.remove_scalar_bar(title, render=False)
+    plotter.remove_legend(render=False)
+    plotter.clear_actors()
+
+    title_size, label_size = _font_sizes(plotter.window_size)
+    mappers: dict[str, Any] = {}
+    legend: list[list[str]] = []
+    for s in frame.surfaces:
+        if not len(s.triangles):
+            continue
+        mesh = pv.PolyData.from_regular_faces(s.points, s.triangles)
+        style: dict[str, Any] = dict(
+            opacity=s.opacity,
+            smooth_shading=True,
+            show_edges=False,
+            ambient=0.15,
+            diffuse=0.8,
+            specular=0.25,
+            specular_power=20.0,
+            show_scalar_bar=False,
+        )
+        if s.scalars is None:
+            actor = plotter.add_mesh(mesh, color=s.color, **style)
+            legend.append([s.name, s.color])
+        else:
+            mesh.point_data[s.name] = s.scalars
+            actor = plotter.add_mesh(
+                mesh, scalars=s.name, cmap="viridis", clim=clims[s.name], **style
+            )
+            mappers.setdefault(s.name, actor.mapper)
+    for p in frame.points:
+        if not len(p.points):
+            continue
+        cloud = pv.PolyData(p.points)
+        style = dict(
+            style="points",
+            point_size=p.point_size,
+            render_points_as_spheres=True,
+            ambient=0.25,
+            show_scalar_bar=False,
+        )
+        if p.scalars is None:
+            plotter.add_mesh(cloud, color=_POINT_COLOUR, **style)
+            legend.append([p.name, _POINT_COLOUR])
+        else:
+            cloud.point_data[p.bar_title] = p.scalars
+            clim = clims[p.bar_title]
+            actor = plotter.add_mesh(cloud, scalars=p.bar_title, cmap=p.cmap, clim=clim, **style)
+            mappers.setdefault(p.bar_title, actor.mapper)
+            mid = actor.mapper.lookup_table.map_value(0.5 * (clim[0] + clim[1]))
+            legend.append([p.name, pv.Color(mid).hex_rgb])
+    if frame.cuts:
+        tris = np.concatenate(frame.cuts)
+        cut = pv.PolyData.from_regular_faces(
+            tris.reshape(-1, 3), np.arange(3 * len(tris)).reshape(-1, 3)
+        )
+        plotter.add_mesh(
+            cut,
+            color=_CUT_COLOUR,
+            opacity=0.55,
+            ambient=0.35,
+            diffuse=0.7,
+            show_edges=True,
+            edge_color="#7a0000",
+            line_width=0.8,
+        )
+        legend.append(["cut", _CUT_COLOUR])
+
+    # colour bars side by side in the right-hand column, legend above them
+    x0, y0, x1, y1 = _BAR_COLUMN
+    width = (x1 - x0) / max(1, len(mappers))
+    for i, (title, mapper) in enumerate(mappers.items()):
+        plotter.add_scalar_bar(
+            title=title,
+            mapper=mapper,
+            vertical=True,
+            position_x=x0 + i * width,
+            position_y=y0,
+            width=0.45 * width if len(mappers) > 1 else 0.35 * width,
+            height=y1 - y0,
+            n_labels=5,
+            fmt="%.3g",
+            color="black",
+            title_font_size=label_size + 1,
+            label_font_size=label_size,
+            unconstrained_font_size=True,
+        )
+    if legend:
+        n = len(legend)
+        plotter.add_legend(
+            labels=legend,
+            bcolor="white",
+            border=False,
+            size=(0.17, min(0.3, 0.045 * n + 0.01)),
+            loc="upper right",
+            face="rectangle",
+            background_opacity=0.0,
+        )
+    if frame.title:
+        plotter.add_text(
+            frame.title, position="upper_edge", font_size=title_size, color="black", render=False
+        )
+    _apply_camera(plotter, camera)
+
+
+def _screenshot(plotter) -> np.ndarray:
+    img = plotter.screenshot(return_img=True)
+    return np.ascontiguousarray(img[..., :3], dtype=np.uint8)
+
+
+# ---- PNG ------------------------------------------------------------------------------------
+
+
+def render_frame_png(
+    path: str | os.PathLike[str],
+    frame: Frame3D,
+    *,
+    window_size: tuple[int, int] = (1024, 768),
+    camera: Camera | None = None,
+) -> Camera:
+    """Render ``frame`` off-screen to a PNG of ``window_size`` (width, height) pixels.
+
+    Without ``camera`` the view is fitted to the scene's bounds (see the module docstring).
+    Returns the Camera used, so that other pictures (a ``GifWriter``) can keep the same view.
+    """
+    from PIL import Image
+
+    pv = _import_pyvista()
+    if not isinstance(frame, Frame3D):
+        raise TypeError(f"frame must be a Frame3D, got {type(frame).__name__}")
+    if camera is None:
+        camera = _fit_camera(frame.bounds(), window_size, _PNG_PAD)
+    plotter = _new_plotter(pv, window_size)
+    try:
+        _draw(pv, plotter, frame, _clims(_scalar_groups(frame), None), camera)
+        img = _screenshot(plotter)
+    finally:
+        plotter.close()
+    path = Path(path)
+    with atomic_output(path) as tmp:
+        Image.fromarray(img).save(tmp, format="PNG")
+    return camera
+
+
+# ---- GIF ------------------------------------------------------------------------------------
+
+
+class GifWriter:
+    """Collect frames of a run into an animated GIF (looping forever), written by ``close()``.
+
+    One off-screen plotter lives from the first ``add`` to ``close``; each added frame replaces
+    the scene, is screenshot and kept as a 256-colour image. The camera is fixed over the run
+    (``camera``, or fitted to the first frame's bounds enlarged by 15 % of their size on every
+    side). Point colour ranges are fixed where a layer gives ``clim``; otherwise a colour bar
+    covers every value added so far (it can only grow).
+
+    Frame budget: at most ``max_frames`` frames are kept. Frames are kept with a stride k
+    (a power of two, starting at 1): frame i is kept when i % k == 0; whenever the kept frames
+    would exceed ``max_frames``, k doubles and the kept frames that are not multiples of the
+    new k are dropped. So a long run ends up with every k-th frame, evenly spaced, and frames
+    that will not be kept are never rendered. The last frame added is always shown (rendered
+    by ``close()``, replacing the last kept one if the budget is full). As with any GIF writer,
+    pixel-identical consecutive frames are merged into one longer frame.
+
+    Use as a context manager (``with GifWriter(p) as gif: gif.add(f)``): on a normal exit the
+    GIF is written, after an exception nothing is written and the plotter is released.
+    """
+
+    def __init__(
+        self,
+        path: str | os.PathLike[str],
+        *,
+        window_size: tuple[int, int] = (800, 600),
+        fps: int = 8,
+        camera: Camera | None = None,
+        max_frames: int = 200,
+    ) -> None:
+        self._pv = _import_pyvista()
+        if fps < 1:
+            raise ValueError(f"fps must be >= 1, got {fps}")
+        if max_frames < 1:
+            raise ValueError(f"max_frames must be >= 1, got {max_frames}")
+        self.path = Path(path)
+        self.window_size = (int(window_size[0]), int(window_size[1]))
+        self.fps = int(fps)
+        self.max_frames = int(max_frames)
+        self._camera = camera
+        self._plotter = None
+        self._n_added = 0
+        self._stride = 1
+        self._kept: list[tuple[int, Any]] = []  # (index of the frame, palette image)
+        self._pending: Frame3D | None = None  # the last frame added, if it was not rendered
+        self._seen: dict[str, tuple[float, float]] = {}  # colour bar -> data range so far
+        self._closed = False
+
+    @property
+    def camera(self) -> Camera | None:
+        """The fixed camera (None until the first frame is added, unless one was given)."""
+        return self._camera
+
+    @property
+    def n_added(self) -> int:
+        """Frames added so far (kept or not)."""
+        return self._n_added
+
+    def add(self, frame: Frame3D) -> None:
+        """Add the next frame of the run (rendered now if it is one the budget keeps)."""
+        if self._closed:
+            raise RuntimeError("GifWriter is closed")
+        if not isinstance(frame, Frame3D):
+            raise TypeError(f"frame must be a Frame3D, got {type(frame).__name__}")
+        for title, g in _scalar_groups(frame).items():
+            if g["data"] is not None:
+                self._seen[title] = _union(self._seen.get(title), g["data"])
+        i = self._n_added
+        self._n_added += 1
+        if i % self._stride:
+            self._pending = frame
+            return
+        self._pending = None
+        self._kept.append((i, self._render(frame)))
+        if len(self._kept) > self.max_frames:
+            self._stride *= 2
+            self._kept = [(j, im) for j, im in self._kept if j % self._stride == 0]
+
+    def close(self) -> Path:
+        """Write the GIF (atomically) and release the plotter; returns the path.
+
+        Raises ValueError if no frame was added. Calling it again does nothing.
+        """
+        if self._closed:
+            return self.path
+        try:
+            if self._pending is not None:
+                last = (self._n_added - 1, self._render(self._pending))
+                if len(self._kept) < self.max_frames:
+                    self._kept.append(last)
+                else:
+                    self._kept[-1] = last
+                self._pending = None
+            if not self._kept:
+                raise ValueError("GifWriter needs at least one frame")
+            images = [im for _, im in self._kept]
+            with atomic_output(self.path) as tmp:
+                images[0].save(
+                    tmp,
+                    format="GIF",
+                    save_all=True,
+                    append_images=images[1:],
+                    duration=max(20, round(1000 / self.fps)),
+                    loop=0,
+                )
+        finally:
+            self._release()
+        return self.path
+
+    def _release(self) -> None:
+        self._closed = True
+        self._kept = []
+        self._pending = None
+        if self._plotter is not None:
+            self._plotter.close()
+            self._plotter = None
+
+    def __enter__(self) -> GifWriter:
+        return self
+
+    def __exit__(self, exc_type, exc, tb) -> None:
+        if exc_type is None:
+            self.close()
+        else:
+            self._release()
+
+    def _render(self, frame: Frame3D):
+        from PIL import Image
+
+        if self._plotter is None:
+            self._plotter = _new_plotter(self._pv, self.window_size)
+        if self._camera is None:
+            self._camera = _fit_camera(frame.bounds(), self.window_size, _GIF_PAD)
+        clims = _clims(_scalar_groups(frame), self._seen)
+        _draw(self._pv, self._plotter, frame, clims, self._camera)
+        img = Image.fromarray(_screenshot(self._plotter))
+        # each frame gets its own 256-colour palette; no dithering (it would make every frame
+        # differ everywhere and the file large)
+        return img.quantize(256, method=Image.Quantize.MEDIANCUT, dither=Image.Dither.NONE)

@@ -1,0 +1,106 @@
+"""Coupling energy and the coupled system: values, finite differences, structure."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from tests.coupling.conftest import make_scene
+
+
+def perturbed(system, rng, scale=0.03):
+    c = system.rest_config()
+    dq = scale * rng.standard_normal(system.n_dofs)
+    return system.retract(c, dq)
+
+
+def check_fd(system, c, rng, evaluate=None):
+    """Gradient and Hessian of phi(dq) = Phi(retract(c, dq)) at dq = 0 against differences of
+    the value (directional first differences; mixed second differences, Richardson)."""
+    evaluate = evaluate or (lambda x, order: system.evaluate(x, order))
+    acc = evaluate(c, 2)
+    H = system.pattern.matrix(acc.hessian).toarray()
+
+    def phi(dq):
+        return evaluate(system.retract(c, dq), 0).value
+
+    def second(a, b, eps):
+        return (
+            phi(eps * (a + b)) - phi(eps * (a - b)) - phi(eps * (b - a)) + phi(-eps * (a + b))
+        ) / (4 * eps * eps)
+
+    for _ in range(4):
+        a, b = rng.standard_normal((2, system.n_dofs))
+        eps = 1e-6
+        slope = (phi(eps * a) - phi(-eps * a)) / (2 * eps)
+        assert slope == pytest.approx(acc.gradient @ a, rel=1e-6)
+        fd = (4 * second(a, b, 1e-4) - second(a, b, 2e-4)) / 3
+        assert fd == pytest.approx(a @ H @ b, rel=1e-5)
+    np.testing.assert_allclose(H, H.T, atol=1e-12 * np.abs(H).max())
+
+
+@pytest.mark.parametrize("frame_kind", ["rigid", "affine"])
+def test_total_energy_matches_finite_differences(frame_kind):
+    rng = np.random.default_rng(1)
+    system = make_scene(frame_kind)
+    c = perturbed(system, rng)
+    check_fd(system, c, rng)
+
+
+def test_coupling_energy_alone_matches_finite_differences():
+    """The attachments' energy alone: the full system minus the same bodies without them."""
+    from tissuesim.coupling.system import CoupledSystem
+
+    rng = np.random.default_rng(2)
+    system = make_scene("rigid")
+    other = make_scene("rigid")  # independent bodies with the same geometry
+    bare = CoupledSystem(other.organs, other.organ_names, other.tissue, [])
+    c = perturbed(system, rng, 0.05)
+
+    def coupling_only(x, order):
+        full, bodies = system.evaluate(x, order), bare.evaluate(x, order)
+        full.value -= bodies.value
+        if order >= 1:
+            full.gradient = full.gradient - bodies.gradient
+        if order >= 2:
+            Hb = bare.pattern.matrix(bodies.hessian).tocoo()
+            full.hessian = full.hessian.copy()
+            full.hessian[system.pattern.positions(Hb.row, Hb.col)] -= Hb.data
+        return full
+
+    value = coupling_only(c, 0).value
+    assert value > 0
+    assert value == pytest.approx(system.evaluate(c, 0).terms["attachment"], rel=1e-8)
+    check_fd(system, c, rng, coupling_only)
+
+
+def test_coupling_is_zero_at_rest_and_for_rigid_motions():
+    system = make_scene("rigid")
+    c = system.rest_config()
+    acc = system.evaluate(c, 1)
+    assert acc.terms["attachment"] < 1e-20
+    assert np.abs(acc.gradient).max() < 1e-12
+    # translate everything: frames by their origins, organs by their vertices
+    d = np.zeros(system.n_dofs)
+    d[: system.tissue_config.start] = np.tile([0.1, -0.2, 0.3], system.tissue_config.start // 3)
+    t = system.tissue.frame_type.tangent_size
+    dq = d[system.tissue_tangent].reshape(-1, t)
+    dq[:, :3] = [0.1, -0.2, 0.3]
+    d[system.tissue_tangent] = dq.ravel()
+    moved = system.evaluate(system.retract(c, d), 1)
+    assert abs(moved.value) < 1e-12
+    assert np.abs(moved.gradient).max() < 1e-10
+
+
+def test_cross_blocks_present_and_needed():
+    """Dropping the organ-tissue cross blocks makes the Hessian disagree with the FD."""
+    rng = np.random.default_rng(3)
+    system = make_scene("rigid")
+    c = perturbed(system, rng)
+    acc = system.evaluate(c, 2)
+    full = system.pattern.matrix(acc.hessian).toarray()
+    o, t = slice(0, system.tissue_tangent.start), system.tissue_tangent
+    assert np.abs(full[o, t]).max() > 1.0
+    system.cross = []
+    without = system.pattern.matrix(system.evaluate(c, 2).hessian).toarray()
+    assert np.abs(without[o, t]).max() == 0.0
