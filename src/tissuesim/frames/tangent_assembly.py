@@ -32,8 +32,12 @@ def gather(pattern: SparsityPattern, matrix: sp.spmatrix) -> np.ndarray:
 
 def block_pattern(n_frames: int, size: int, frame_stencils: list[np.ndarray]) -> SparsityPattern:
     """Pattern with full size x size blocks between frames that share a stencil row."""
+    # every frame's own block is full, even for a frame no point reaches (an orphan after a
+    # cut), so that the block maps below find all its entries
+    own = np.arange(n_frames, dtype=np.int64)[:, None]
     dofs = [
-        (s[:, :, None] * size + np.arange(size)).reshape(s.shape[0], -1) for s in frame_stencils
+        (s[:, :, None] * size + np.arange(size)).reshape(s.shape[0], -1)
+        for s in [*frame_stencils, own]
     ]
     return SparsityPattern.from_stencils(n_frames * size, dofs)
 

@@ -43,33 +43,26 @@ def _dot(x: np.ndarray, y: np.ndarray) -> np.ndarray:
     return np.einsum("...i,...i->...", x, y)
 
 
-def _closest_on_segments(
-    p: np.ndarray, a: np.ndarray, b: np.ndarray
-) -> tuple[np.ndarray, np.ndarray]:
-    """Parameter t (n,) in [0, 1] and squared distance (n,) from p to segments a-b, paired."""
-    ab = b - a
-    length2 = _dot(ab, ab)
-    t = np.divide(_dot(p - a, ab), length2, out=np.zeros(len(p)), where=length2 > 0)
-    t = np.clip(t, 0.0, 1.0)
-    d = a + t[:, None] * ab - p
-    return t, _dot(d, d)
+def _edge_closest(apap, da, ee):
+    """(t, squared distance) to the segment a + t e, t in [0, 1], from d = p - a.
 
-
-def closest_on_triangles(
-    p: np.ndarray, a: np.ndarray, b: np.ndarray, c: np.ndarray
-) -> tuple[np.ndarray, np.ndarray]:
-    """Closest points of triangles (a, b, c) to points p, paired: all (n, 3).
-
-    Returns (barycentric (n, 3) >= 0 summing to 1, positions (n, 3) = bary @ (a, b, c)). The
-    Voronoi-region tests of Ericson, Real-Time Collision Detection 5.1.5, evaluated for every
-    pair and merged in his order of precedence. Degenerate (zero-area) triangles get the closest
-    point of their three edges instead, so they behave as the segment or point they are.
+    apap = d . d, da = d . e, ee = e . e (0 for a point); all (n,).
     """
-    ab, ac = b - a, c - a
-    ap, bp, cp = p - a, p - b, p - c
-    d1, d2 = _dot(ab, ap), _dot(ac, ap)
-    d3, d4 = _dot(ab, bp), _dot(ac, bp)
-    d5, d6 = _dot(ab, cp), _dot(ac, cp)
+    t = np.clip(np.divide(da, ee, out=np.zeros_like(da), where=ee > 0), 0.0, 1.0)
+    return t, apap - 2.0 * t * da + t * t * ee
+
+
+def _closest_vw(ap, ab, ac, bb, cc, bc, degenerate):
+    """Barycentric (v, w) of the closest point a + v ab + w ac of triangles to points.
+
+    ap = p - a, ab = b - a, ac = c - a: tuples of 3 component arrays (n,); bb = ab.ab,
+    cc = ac.ac, bc = ab.ac, degenerate (n,) bool: all paired. Ericson's Voronoi regions,
+    Real-Time Collision Detection 5.1.5, for every pair at once; degenerate triangles take the
+    nearest of their three edges instead, as the segment or point they are.
+    """
+    d1 = ab[0] * ap[0] + ab[1] * ap[1] + ab[2] * ap[2]
+    d2 = ac[0] * ap[0] + ac[1] * ap[1] + ac[2] * ap[2]
+    d3, d4, d5, d6 = d1 - bb, d2 - bc, d1 - bc, d2 - cc  # ab.bp, ac.bp, ab.cp, ac.cp
     va, vb, vc = d3 * d6 - d5 * d4, d5 * d2 - d1 * d6, d1 * d4 - d3 * d2
     with np.errstate(divide="ignore", invalid="ignore"):
         denom = va + vb + vc
@@ -88,28 +81,51 @@ def closest_on_triangles(
         v, w = np.where(region, 1.0, v), np.where(region, 0.0, w)
         region = (d1 <= 0) & (d2 <= 0)  # vertex a
         v, w = np.where(region, 0.0, v), np.where(region, 0.0, w)
-    bary = np.stack([1.0 - v - w, v, w], axis=-1)
-    n = np.cross(ab, ac)
-    longest = np.maximum(np.maximum(_dot(ab, ab), _dot(ac, ac)), _dot(c - b, c - b))
-    degenerate = _dot(n, n) <= (_DEGENERATE * longest) ** 2
-    degenerate |= ~np.isfinite(bary).all(axis=-1)
-    if degenerate.any():
-        k = np.flatnonzero(degenerate)
-        pk, corners = p[k], (a[k], b[k], c[k])
-        best_d2 = np.full(len(k), np.inf)
-        best = np.zeros((len(k), 3))
-        for i in range(3):  # the three edges (a loop over 3 edges, not over points)
-            j = (i + 1) % 3
-            t, d2 = _closest_on_segments(pk, corners[i], corners[j])
-            better = d2 < best_d2
-            row = np.zeros((len(k), 3))
-            row[:, i], row[:, j] = 1.0 - t, t
-            best[better], best_d2[better] = row[better], d2[better]
-        bary[k] = best
-    bary = np.clip(bary, 0.0, 1.0)
-    bary /= bary.sum(axis=-1, keepdims=True)
-    positions = bary[:, 0, None] * a + bary[:, 1, None] * b + bary[:, 2, None] * c
-    return bary, positions
+    bad = degenerate | ~(np.isfinite(v) & np.isfinite(w))
+    if bad.any():
+        k = np.flatnonzero(bad)
+        apap = ap[0][k] ** 2 + ap[1][k] ** 2 + ap[2][k] ** 2
+        bbk, cck, bck, d1k, d2k = bb[k], cc[k], bc[k], d1[k], d2[k]
+        t_ab, e_ab = _edge_closest(apap, d1k, bbk)
+        t_ac, e_ac = _edge_closest(apap, d2k, cck)
+        # edge b -> c from b: (p - b).(c - b) = d2 - bc - d1 + bb, |p - b|^2 = apap - 2 d1 + bb
+        t_bc, e_bc = _edge_closest(apap - 2 * d1k + bbk, d2k - bck - d1k + bbk, bbk + cck - 2 * bck)
+        vk, wk = t_ab, np.zeros(len(k))
+        use = e_ac < e_ab
+        vk, wk, best = np.where(use, 0.0, vk), np.where(use, t_ac, wk), np.minimum(e_ab, e_ac)
+        use = e_bc < best
+        vk, wk = np.where(use, 1.0 - t_bc, vk), np.where(use, t_bc, wk)
+        v, w = v.copy(), w.copy()
+        v[k], w[k] = vk, wk
+    v, w = np.clip(v, 0.0, 1.0), np.clip(w, 0.0, 1.0)
+    over = v + w > 1.0
+    s = np.where(over, v + w, 1.0)
+    return v / s, w / s
+
+
+def closest_on_triangles(
+    p: np.ndarray, a: np.ndarray, b: np.ndarray, c: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """Closest points of triangles (a, b, c) to points p, paired: all (n, 3).
+
+    Returns (barycentric (n, 3) >= 0 summing to 1, positions (n, 3) = bary @ (a, b, c)). The
+    Voronoi-region tests of Ericson, Real-Time Collision Detection 5.1.5, evaluated for every
+    pair and merged in his order of precedence. Degenerate (zero-area) triangles get the closest
+    point of their three edges instead, so they behave as the segment or point they are.
+    """
+    p, a, b, c = (np.asarray(x, dtype=np.float64) for x in (p, a, b, c))
+    ab, ac, ap = (b - a).T, (c - a).T, (p - a).T
+    bb, cc, bc = (ab * ab).sum(axis=0), (ac * ac).sum(axis=0), (ab * ac).sum(axis=0)
+    v, w = _closest_vw(tuple(ap), tuple(ab), tuple(ac), bb, cc, bc, _degenerate(ab, ac, bb, cc, bc))
+    bary = np.column_stack([np.maximum(1.0 - v - w, 0.0), v, w])
+    return bary, a + v[:, None] * (b - a) + w[:, None] * (c - a)
+
+
+def _degenerate(ab, ac, bb, cc, bc) -> np.ndarray:
+    """(n,) bool: |ab x ac| <= _DEGENERATE * (longest edge)^2, from (3, n) edge components."""
+    area2 = (np.cross(ab.T, ac.T) ** 2).sum(axis=1)
+    longest = np.maximum(np.maximum(bb, cc), bb + cc - 2.0 * bc)
+    return area2 <= (_DEGENERATE * longest) ** 2
 
 
 def _query(tree: cKDTree, x: np.ndarray, k: int, upper: float) -> tuple[np.ndarray, np.ndarray]:
@@ -136,7 +152,8 @@ def _points(func: str, points) -> np.ndarray:
 class TriangleSoup:
     """Closest-point queries against triangles (m, 3, 3) with a cKDTree over their centroids.
 
-    Triangles need not be connected or non-degenerate. Build once, query many times.
+    Triangles need not be connected or non-degenerate. Build once, query many times; the
+    per-triangle constants of the closest-point kernel are precomputed.
     """
 
     def __init__(self, triangles: np.ndarray) -> None:
@@ -144,73 +161,114 @@ class TriangleSoup:
         if tri.ndim != 3 or tri.shape[1:] != (3, 3) or len(tri) == 0:
             raise ValueError(f"triangles must have shape (m, 3, 3) with m >= 1, got {tri.shape}")
         self.triangles = tri
-        centroids = tri.mean(axis=1)
-        self.radius = float(np.sqrt(((tri - centroids[:, None]) ** 2).sum(axis=2).max()))
-        self.tree = cKDTree(centroids)
+        self.centroids = tri.mean(axis=1)
+        self.radii = np.sqrt(((tri - self.centroids[:, None]) ** 2).sum(axis=2).max(axis=1))
+        self.radius = float(self.radii.max())
+        self.tree = cKDTree(self.centroids)
+        self.a = np.ascontiguousarray(tri[:, 0].T)  # (3, m) components
+        self.ab = np.ascontiguousarray((tri[:, 1] - tri[:, 0]).T)
+        self.ac = np.ascontiguousarray((tri[:, 2] - tri[:, 0]).T)
+        self.bb = (self.ab**2).sum(axis=0)
+        self.cc = (self.ac**2).sum(axis=0)
+        self.bc = (self.ab * self.ac).sum(axis=0)
+        self.degenerate = _degenerate(self.ab, self.ac, self.bb, self.cc, self.bc)
 
     @property
     def m(self) -> int:
         return len(self.triangles)
 
+    def _pairs(self, x: np.ndarray, t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(v (n,), w (n,), distance (n,)) from points x (n, 3) to triangles t (n,), paired."""
+        ap = tuple(x[:, i] - self.a[i][t] for i in range(3))
+        ab = tuple(self.ab[i][t] for i in range(3))
+        ac = tuple(self.ac[i][t] for i in range(3))
+        v, w = _closest_vw(ap, ab, ac, self.bb[t], self.cc[t], self.bc[t], self.degenerate[t])
+        d2 = sum((v * ab[i] + w * ac[i] - ap[i]) ** 2 for i in range(3))
+        return v, w, np.sqrt(d2)
+
+    def _result(self, x: np.ndarray, t: np.ndarray, v: np.ndarray, w: np.ndarray):
+        """(barycentric (n, 3), positions (n, 3)) of the closest points a + v ab + w ac."""
+        bary = np.column_stack([np.maximum(1.0 - v - w, 0.0), v, w])
+        tri = self.triangles[t]
+        return bary, tri[:, 0] + v[:, None] * (tri[:, 1] - tri[:, 0]) + w[:, None] * (
+            tri[:, 2] - tri[:, 0]
+        )
+
     def closest(
-        self, points: np.ndarray, max_distance: float = np.inf
+        self, points: np.ndarray, max_distance: float = np.inf, with_points: bool = True
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """(triangle (q,), barycentric (q, 3), positions (q, 3), distance (q,)) per point.
 
-        Exact for points within ``max_distance``; farther ones may get triangle -1, NaN
-        barycentric and positions, and distance inf (their distance is > max_distance).
+        Exact for points within ``max_distance``; farther ones get triangle -1, NaN barycentric
+        and positions, and distance inf. A finite max_distance also ends the search early: only
+        triangles whose bounding sphere comes within it are candidates. with_points False
+        leaves barycentric and positions NaN (for distance-only queries).
         """
-        q, m = len(points), self.m
+        q = len(points)
         tri_id = np.full(q, -1, dtype=np.int64)
+        v_out, w_out = np.full(q, np.nan), np.full(q, np.nan)
+        dist = np.full(q, np.inf)
+        self._search(points, float(max_distance), tri_id, v_out, w_out, dist)
         bary = np.full((q, 3), np.nan)
         pos = np.full((q, 3), np.nan)
-        dist = np.full(q, np.inf)
-        # a triangle within max_distance has its centroid within max_distance + radius
-        upper = max_distance + self.radius if np.isfinite(max_distance) else np.inf
-        upper = upper * (1.0 + 1e-12) + 1e-300 if np.isfinite(upper) else np.inf
+        found = np.flatnonzero(tri_id >= 0)
+        if not with_points:  # distances only: skip the (q, 3) results
+            return tri_id, bary, pos, dist
+        bary[found], pos[found] = self._result(
+            points[found], tri_id[found], v_out[found], w_out[found]
+        )
+        return tri_id, bary, pos, dist
+
+    def _search(self, points, max_distance, tri_id, v_out, w_out, dist) -> None:
+        """Fill the outputs for the points within max_distance (all if inf); others untouched.
+
+        Rounds of k nearest centroids (k = 16, 64, ... up to m), evaluating only the new
+        candidates of each round. A point is settled when no untested triangle can be nearer
+        than its best (d_{k+1} - radius >= best), or, for a finite max_distance, when no untested
+        triangle can come within max_distance (d_{k+1} > max_distance + radius).
+        """
+        m = self.m
+        reach = (max_distance + self.radius) * (1.0 + 1e-12) + 1e-300
+        q = len(points)
+        best_d = np.full(q, np.inf)
+        best_t = np.full(q, -1, dtype=np.int64)
+        best_v, best_w = np.zeros(q), np.zeros(q)
         pending = np.arange(q)
-        k = min(_FIRST_CANDIDATES, m)
+        done_k, k = 0, min(_FIRST_CANDIDATES, m)
         while len(pending):
             last = k >= m
-            dd, ii = _query(self.tree, points[pending], k if last else k + 1, upper)
-            cand = ii[:, :k]
-            # untested triangles are at least this far away
-            bound = np.full(len(pending), np.inf) if last else dd[:, k] - self.radius
-            best_t = np.full(len(pending), -1, dtype=np.int64)
-            best_b = np.full((len(pending), 3), np.nan)
-            best_p = np.full((len(pending), 3), np.nan)
-            best_d = np.full(len(pending), np.inf)
-            rows = max(1, _PAIRS_PER_CHUNK // k)
+            dd, ii = _query(self.tree, points[pending], k if last else k + 1, reach)
+            rows = max(1, _PAIRS_PER_CHUNK // (k - done_k))
             for s in range(0, len(pending), rows):
-                c = cand[s : s + rows]
+                c = ii[s : s + rows, done_k:k]  # this round's new candidates
+                n = len(c)
                 r, j = np.nonzero(c < m)
+                t = c[r, j]
+                # beyond max_distance for sure: centroid farther than max_distance + own radius
+                keep = dd[s + r, done_k + j] - self.radii[t] <= max_distance * (1.0 + 1e-12)
+                r, j, t = r[keep], j[keep], t[keep]
                 if len(r) == 0:
                     continue
-                x = points[pending[s + r]]
-                tri = self.triangles[c[r, j]]
-                b, pt = closest_on_triangles(x, tri[:, 0], tri[:, 1], tri[:, 2])
-                d = np.full(c.shape, np.inf)
-                d[r, j] = np.sqrt(_dot(pt - x, pt - x))
-                bb, pp = np.zeros(c.shape + (3,)), np.zeros(c.shape + (3,))
-                bb[r, j], pp[r, j] = b, pt
-                win = np.argmin(d, axis=1)  # ties: the first (nearest centroid)
-                at = np.arange(len(c))
-                best_t[s : s + rows] = np.where(np.isfinite(d[at, win]), c[at, win], -1)
-                best_b[s : s + rows], best_p[s : s + rows] = bb[at, win], pp[at, win]
-                best_d[s : s + rows] = d[at, win]
-            exact = (best_d <= bound) | last
-            # unsettled points whose untested triangles are all beyond max_distance are too far
-            done = exact | (bound >= max_distance)
-            idx = pending[done & exact]
-            tri_id[idx], bary[idx], pos[idx], dist[idx] = (
-                best_t[done & exact],
-                best_b[done & exact],
-                best_p[done & exact],
-                best_d[done & exact],
-            )
-            pending = pending[~done]
-            k = min(k * _GROWTH, m)
-        return tri_id, bary, pos, dist
+                v, w, d = self._pairs(points[pending[s + r]], t)
+                dense = np.full(c.shape, np.inf)
+                dense[r, j] = d
+                win = np.argmin(dense, axis=1)  # ties: the nearest centroid
+                at = np.arange(n)
+                slot = np.full(c.shape, -1, dtype=np.int64)
+                slot[r, j] = np.arange(len(r))
+                better = np.flatnonzero(dense[at, win] < best_d[pending[s : s + n]])
+                k_ = slot[better, win[better]]
+                i_ = pending[s + better]
+                best_d[i_], best_t[i_], best_v[i_], best_w[i_] = d[k_], t[k_], v[k_], w[k_]
+            settled = np.full(len(pending), last)
+            if not last:
+                settled |= best_d[pending] <= dd[:, k] - self.radius
+                settled |= dd[:, k] > reach  # inf when missing
+            pending = pending[~settled]
+            done_k, k = k, min(k * _GROWTH, m)
+        found = np.flatnonzero(best_d <= max_distance)
+        tri_id[found], v_out[found], w_out[found] = best_t[found], best_v[found], best_w[found]
+        dist[found] = best_d[found]
 
 
 @dataclass(frozen=True, eq=False)
@@ -247,7 +305,7 @@ class MeshLocator:
             )
         self.mesh = mesh
         self._soup: TriangleSoup | None = None
-        self._tets: tuple[cKDTree, float, np.ndarray, np.ndarray] | None = None
+        self._tets: tuple[cKDTree, np.ndarray, np.ndarray, np.ndarray] | None = None
 
     def _boundary(self) -> TriangleSoup:
         if self._soup is None:
@@ -272,49 +330,53 @@ class MeshLocator:
     def distance(self, points: np.ndarray, max_distance: float = np.inf) -> np.ndarray:
         """Unsigned distance (q,) to the boundary; inf where it exceeds ``max_distance``."""
         p = _points("distance_to_boundary", points)
-        return self._boundary().closest(p, max_distance)[3]
+        return self._boundary().closest(p, max_distance, with_points=False)[3]
 
-    def _tet_index(self) -> tuple[cKDTree, float, np.ndarray, np.ndarray]:
+    def _tet_index(self) -> tuple[cKDTree, np.ndarray, np.ndarray, np.ndarray]:
+        """(tree of centroids, radii (n,), inverse edge matrices (n, 3, 3), first vertices)."""
         if self._tets is None:
             x = self.mesh.points[self.mesh.cells]  # (n, 4, 3)
             centroids = x.mean(axis=1)
-            radius = float(np.sqrt(((x - centroids[:, None]) ** 2).sum(axis=2).max()))
+            radii = np.sqrt(((x - centroids[:, None]) ** 2).sum(axis=2).max(axis=1))
             # rows of inv are the gradients of barycentric coordinates 1..3
             inv = np.linalg.inv(np.transpose(x[:, 1:] - x[:, :1], (0, 2, 1)))
-            self._tets = (cKDTree(centroids), radius, inv, np.ascontiguousarray(x[:, 0]))
+            self._tets = (cKDTree(centroids), radii, inv, np.ascontiguousarray(x[:, 0]))
         return self._tets
 
     def inside(self, points: np.ndarray) -> np.ndarray:
         """See ``inside_mesh``."""
         p = _points("inside_mesh", points)
-        tree, radius, inv, x0 = self._tet_index()
+        tree, radii, inv, x0 = self._tet_index()
         n = self.mesh.n_cells
         result = np.zeros(len(p), dtype=bool)
-        # a tetrahedron containing x has its centroid within radius of x
-        upper = radius * (1.0 + 1e-9)
+        # a tetrahedron containing x has its centroid within its radius of x
+        upper = float(radii.max()) * (1.0 + 1e-9)
         pending = np.arange(len(p))
-        k = min(8, n)
+        done_k, k = 0, min(8, n)
         while len(pending):
             last = k >= n
             dd, ii = _query(tree, p[pending], k if last else k + 1, upper)
-            cand = ii[:, :k]
             hit = np.zeros(len(pending), dtype=bool)
-            rows = max(1, _PAIRS_PER_CHUNK // k)
+            rows = max(1, _PAIRS_PER_CHUNK // (k - done_k))
             for s in range(0, len(pending), rows):
-                c = cand[s : s + rows]
+                c = ii[s : s + rows, done_k:k]  # this round's new candidates
                 r, j = np.nonzero(c < n)
+                t = c[r, j]
+                keep = dd[s + r, done_k + j] <= radii[t] * (1.0 + 1e-9)
+                r, t = r[keep], t[keep]
                 if len(r) == 0:
                     continue
-                t = c[r, j]
                 lam = np.einsum("kij,kj->ki", inv[t], p[pending[s + r]] - x0[t])
                 ok = (lam >= -_BARYCENTRIC_TOLERANCE).all(axis=1)
                 ok &= lam.sum(axis=1) <= 1.0 + _BARYCENTRIC_TOLERANCE
-                hit[s + np.unique(r[ok])] = True
+                hit[s + r[ok]] = True
             # settled: found, or every tetrahedron that could hold the point was tested
-            done = hit | last | ~np.isfinite(dd[:, -1])
+            settled = hit | last
+            if not last:
+                settled |= ~np.isfinite(dd[:, k])
             result[pending[hit]] = True
-            pending = pending[~done]
-            k = min(k * _GROWTH, n)
+            pending = pending[~settled]
+            done_k, k = k, min(k * _GROWTH, n)
         return result
 
 

@@ -44,8 +44,11 @@ _PNG_PAD = 0.04  # PNG: bounds enlarged by this fraction of their largest size o
 _GIF_PAD = 0.15  # GIF: bounds of the first frame enlarged by this fraction on every side
 # free part of the window for the scene, in normalised window coordinates (x0, y0, x1, y1):
 # the right-hand column holds the legend and colour bars, the top strip the title
-_SCENE_BOX = (0.02, 0.03, 0.80, 0.90)
-_BAR_COLUMN = (0.83, 0.06, 0.98, 0.62)  # colour bars (x0, y0, x1, y1)
+_SCENE_BOX = (0.03, 0.04, 0.80, 0.90)
+_COLUMN_X = 0.82  # left edge of the right-hand column: legend on top, colour bars, axes
+_BAR_BOX = (0.84, 0.20, 0.99, 0.62)  # colour bars (x0, y0, x1, y1)
+_AXES_BOX = (0.84, 0.0, 0.99, 0.16)  # the small x-y-z axes
+_LEGEND_TOP = 0.88  # top of the legend (normalised window height)
 _CUT_COLOUR = "#e0201b"
 _POINT_COLOUR = "#404040"  # points without scalars
 _BACKGROUND = "white"
@@ -199,15 +202,12 @@ class Frame3D:
         object.__setattr__(self, "cuts", tuple(arrays))
         object.__setattr__(self, "title", str(self.title))
 
-    def bounds(self) -> tuple[np.ndarray, np.ndarray] | None:
-        """(lo (3,), hi (3,)) over every finite point of the scene, or None if it is empty."""
-        arrays = [s.points for s in self.surfaces] + [p.points for p in self.points]
-        arrays += [c.reshape(-1, 3) for c in self.cuts]
-        pts = np.concatenate([a for a in arrays if len(a)] or [np.zeros((0, 3))])
-        pts = pts[np.isfinite(pts).all(axis=1)]
-        if not len(pts):
-            return None
-        return pts.min(axis=0), pts.max(axis=0)
+
+def _scene_points(frame: Frame3D) -> np.ndarray:
+    """(k, 3) every point of the scene: surface vertices, layer points, cut corners."""
+    arrays = [s.points for s in frame.surfaces] + [p.points for p in frame.points]
+    arrays += [c.reshape(-1, 3) for c in frame.cuts]
+    return np.concatenate([np.zeros((0, 3)), *arrays])
 
 
 @dataclass(frozen=True)
@@ -300,6 +300,7 @@ def _new_plotter(pv, window_size: tuple[int, int]):
     plotter = pv.Plotter(off_screen=True, window_size=(w, h), lighting="light_kit")
     plotter.set_background(_BACKGROUND)
     plotter.enable_anti_aliasing("ssaa")
+    plotter.add_axes(color="black", viewport=_AXES_BOX, line_width=2)
     return plotter
 
 
@@ -350,19 +351,18 @@ def _clims(groups: dict[str, dict[str, Any]], seen: dict[str, tuple[float, float
 def _font_sizes(window_size: tuple[int, int]) -> tuple[int, int]:
     """(title, label) font sizes for the window, readable from 400 to 2000 pixels tall."""
     scale = min(window_size[0] / 1024, window_size[1] / 768)
-    return max(9, round(16 * scale)), max(7, round(11 * scale))
+    return max(9, round(15 * scale)), max(7, round(12 * scale))
 
 
 def _draw(pv, plotter, frame: Frame3D, clims: dict[str, tuple[float, float]], camera: Camera):
     """Replace the plotter's scene by ``frame`` seen through ``camera``."""
     for title in list(plotter.scalar_bars.keys()):
         plotter.remove_scalar_bar(title, render=False)
-    plotter.remove_legend(render=False)
-    plotter.clear_actors()
+    plotter.clear_actors()  # surfaces, points, text and the legend's 2D actors
 
     title_size, label_size = _font_sizes(plotter.window_size)
     mappers: dict[str, Any] = {}
-    legend: list[list[str]] = []
+    legend: list[tuple[str, str]] = []
     for s in frame.surfaces:
         if not len(s.triangles):
             continue
@@ -379,7 +379,7 @@ def _draw(pv, plotter, frame: Frame3D, clims: dict[str, tuple[float, float]], ca
         )
         if s.scalars is None:
             actor = plotter.add_mesh(mesh, color=s.color, **style)
-            legend.append([s.name, s.color])
+            legend.append((s.name, s.color))
         else:
             mesh.point_data[s.name] = s.scalars
             actor = plotter.add_mesh(
@@ -399,14 +399,14 @@ def _draw(pv, plotter, frame: Frame3D, clims: dict[str, tuple[float, float]], ca
         )
         if p.scalars is None:
             plotter.add_mesh(cloud, color=_POINT_COLOUR, **style)
-            legend.append([p.name, _POINT_COLOUR])
+            legend.append((p.name, _POINT_COLOUR))
         else:
             cloud.point_data[p.bar_title] = p.scalars
             clim = clims[p.bar_title]
             actor = plotter.add_mesh(cloud, scalars=p.bar_title, cmap=p.cmap, clim=clim, **style)
             mappers.setdefault(p.bar_title, actor.mapper)
             mid = actor.mapper.lookup_table.map_value(0.5 * (clim[0] + clim[1]))
-            legend.append([p.name, pv.Color(mid).hex_rgb])
+            legend.append((p.name, pv.Color(mid).hex_rgb))
     if frame.cuts:
         tris = np.concatenate(frame.cuts)
         cut = pv.PolyData.from_regular_faces(
@@ -422,10 +422,10 @@ def _draw(pv, plotter, frame: Frame3D, clims: dict[str, tuple[float, float]], ca
             edge_color="#7a0000",
             line_width=0.8,
         )
-        legend.append(["cut", _CUT_COLOUR])
+        legend.append(("cut", _CUT_COLOUR))
 
     # colour bars side by side in the right-hand column, legend above them
-    x0, y0, x1, y1 = _BAR_COLUMN
+    x0, y0, x1, y1 = _BAR_BOX
     width = (x1 - x0) / max(1, len(mappers))
     for i, (title, mapper) in enumerate(mappers.items()):
         plotter.add_scalar_bar(
@@ -434,31 +434,57 @@ def _draw(pv, plotter, frame: Frame3D, clims: dict[str, tuple[float, float]], ca
             vertical=True,
             position_x=x0 + i * width,
             position_y=y0,
-            width=0.45 * width if len(mappers) > 1 else 0.35 * width,
+            width=min(0.05, 0.4 * width),
             height=y1 - y0,
             n_labels=5,
             fmt="%.3g",
             color="black",
-            title_font_size=label_size + 1,
+            title_font_size=label_size + 2,
             label_font_size=label_size,
             unconstrained_font_size=True,
         )
-    if legend:
-        n = len(legend)
-        plotter.add_legend(
-            labels=legend,
-            bcolor="white",
-            border=False,
-            size=(0.17, min(0.3, 0.045 * n + 0.01)),
-            loc="upper right",
-            face="rectangle",
-            background_opacity=0.0,
-        )
+    _add_legend(plotter, legend, label_size)
     if frame.title:
         plotter.add_text(
             frame.title, position="upper_edge", font_size=title_size, color="black", render=False
         )
     _apply_camera(plotter, camera)
+
+
+def _add_legend(plotter, entries: list[tuple[str, str]], font_size: int) -> None:
+    """Colour squares with black names, top of the right-hand column (pixel layout)."""
+    from vtkmodules.vtkCommonCore import vtkPoints
+    from vtkmodules.vtkCommonDataModel import vtkCellArray, vtkPolyData
+    from vtkmodules.vtkRenderingCore import vtkActor2D, vtkPolyDataMapper2D
+
+    pv = _import_pyvista()
+    w, h = plotter.window_size
+    box = round(0.9 * font_size)
+    step = round(1.75 * font_size)
+    x = _COLUMN_X * w
+    for k, (name, colour) in enumerate(entries):
+        y = _LEGEND_TOP * h - (k + 1) * step
+        pts = vtkPoints()
+        for px, py in ((x, y), (x + box, y), (x + box, y + box), (x, y + box)):
+            pts.InsertNextPoint(px, py, 0.0)
+        cells = vtkCellArray()
+        cells.InsertNextCell(4, [0, 1, 2, 3])
+        square = vtkPolyData()
+        square.SetPoints(pts)
+        square.SetPolys(cells)
+        mapper = vtkPolyDataMapper2D()
+        mapper.SetInputData(square)
+        actor = vtkActor2D()
+        actor.SetMapper(mapper)
+        actor.GetProperty().SetColor(pv.Color(colour).float_rgb)
+        plotter.add_actor(actor, reset_camera=False, render=False)
+        plotter.add_text(
+            name,
+            position=(x + box + 0.6 * font_size, y - 0.1 * font_size),
+            font_size=font_size,
+            color="black",
+            render=False,
+        )
 
 
 def _screenshot(plotter) -> np.ndarray:
@@ -487,7 +513,7 @@ def render_frame_png(
     if not isinstance(frame, Frame3D):
         raise TypeError(f"frame must be a Frame3D, got {type(frame).__name__}")
     if camera is None:
-        camera = _fit_camera(frame.bounds(), window_size, _PNG_PAD)
+        camera = _fit_camera(_scene_points(frame), window_size, _PNG_PAD)
     plotter = _new_plotter(pv, window_size)
     try:
         _draw(pv, plotter, frame, _clims(_scalar_groups(frame), None), camera)
@@ -635,7 +661,7 @@ class GifWriter:
         if self._plotter is None:
             self._plotter = _new_plotter(self._pv, self.window_size)
         if self._camera is None:
-            self._camera = _fit_camera(frame.bounds(), self.window_size, _GIF_PAD)
+            self._camera = _fit_camera(_scene_points(frame), self.window_size, _GIF_PAD)
         clims = _clims(_scalar_groups(frame), self._seen)
         _draw(self._pv, self._plotter, frame, clims, self._camera)
         img = Image.fromarray(_screenshot(self._plotter))

@@ -1,0 +1,179 @@
+"""Coupled organs + tissue: force balance, limits of tissue stiffness, cutting, tearing,
+Newton's convergence and errors."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from tissuesim.coupling.simulation import CoupledSimulation
+from tissuesim.materials import make_material
+from tissuesim.mesh import box
+
+GAP = 0.2
+
+
+def _inside(p):
+    return (p[:, 0] > 0) & (p[:, 0] < 1) & (p[:, 1] > 0) & (p[:, 1] < 1)
+
+
+def two_boxes(
+    integrator="quasistatic",
+    gravity=9.81,
+    tissue_E=300.0,
+    fix_lower=True,
+    time_step=0.25,
+    lift=0.1,
+    ramp=1.0,
+    peel=False,
+):
+    lower = box((0, 0, -0.5), (1, 1, 0), (3, 3, 2))
+    upper = box((0, 0, GAP), (1, 1, GAP + 0.5), (3, 3, 2))
+    mat = make_material("neo_hookean", youngs_modulus=1000.0, poisson_ratio=0.3)
+    sim = CoupledSimulation(
+        integrator=integrator,
+        time_step=time_step,
+        gravity=None if gravity is None else (0, 0, -gravity),
+    )
+    sim.add_organ("lower", lower, mat, density=10.0)
+    sim.add_organ("upper", upper, mat, density=10.0)
+    if fix_lower:
+        sim.fix("lower", lower.point_sets["zmin"])
+    held = upper.point_sets["zmax"]
+    if peel:  # hold only the end x < 0.35 of the top: the tissue near it strains most
+        held = held[upper.points[held, 0] < 0.35]
+    sim.grasp("upper", held, lambda t: (0, 0, lift * min(t / ramp, 1.0)))
+    sim.add_tissue(
+        make_material("stvk", youngs_modulus=tissue_E, poisson_ratio=0.3),
+        thickness=GAP,
+        spacing=0.1,
+        frames=8,
+        density=10.0,
+        region=_inside,
+    )
+    return sim
+
+
+def total_weight(sim, g=9.81):
+    organs = sum(m.mass.lumped.sum() / 3 for m in sim.system.organs)
+    tissue = sim.system.tissue.masses.sum() if sim.system.tissue is not None else 0.0
+    return (organs + tissue) * g
+
+
+def test_quasistatic_force_balance():
+    """Grasper + support reactions carry the total weight exactly at equilibrium."""
+    sim = two_boxes()
+    for _ in range(3):
+        record = sim.step()
+    f = record.extra["forces"]
+    total = np.add(f["grasper"], f["lower.support"])
+    W = total_weight(sim)
+    assert f["lower.support"][2] < 0.5 * W  # the stretched tissue lifts the lower organ
+    np.testing.assert_allclose(total, [0.0, 0.0, W], atol=1e-7 * W)
+    assert record.extra["attachment_gap"] < 0.01 * 0.1  # penalty gap << the lift
+
+
+def test_retraction_force_balances_support_without_gravity():
+    sim = two_boxes(gravity=None)
+    record = sim.step()
+    f = record.extra["forces"]
+    assert f["grasper"][2] > 1.0
+    np.testing.assert_allclose(f["grasper"], -np.asarray(f["lower.support"]), atol=1e-8)
+
+
+@pytest.mark.parametrize("tissue_E, follows", [(1e-3, False), (1e5, True)])
+def test_tissue_stiffness_limits(tissue_E, follows):
+    """Pull the upper organ up; the lower one is free (no support, no gravity). Near-zero
+    tissue stiffness: it stays (unconnected); large: it moves nearly with the upper one."""
+    sim = two_boxes(
+        "backward_euler", gravity=None, tissue_E=tissue_E, fix_lower=False, time_step=0.1
+    )
+    for _ in range(10):
+        sim.step()
+    up = sim.organ_positions("upper").mean(axis=0) - sim.system.organs[1].mesh.points.mean(0)
+    low = sim.organ_positions("lower").mean(axis=0) - sim.system.organs[0].mesh.points.mean(0)
+    assert up[2] == pytest.approx(0.1, rel=0.05)
+    ratio = low[2] / up[2]
+    if follows:
+        assert ratio > 0.9
+    else:
+        assert abs(ratio) < 0.01  # (1e-3 is within the Newton tolerance of a free body)
+
+
+def _blade(z):
+    def blade(t):
+        x = -0.2 + 1.4 * (t - 1.0)
+        return np.array([[x, -0.2, z], [x, 1.2, z]])
+
+    return blade
+
+
+@pytest.mark.parametrize("gravity", [9.81, None])
+def test_full_cut_leaves_only_weight(gravity):
+    """After cutting through the layer the grasper holds only its organ and the tissue left on
+    it (with gravity), or nothing (without)."""
+    sim = two_boxes(gravity=gravity)
+    zc = 0.5 * GAP + 0.05  # middle of the stretched layer (the lift is 0.1)
+    sim.add_cut(_blade(zc), 1.0, 2.0)
+    records = [sim.step() for _ in range(10)]
+    before = records[3].extra["forces"]["grasper"][2]
+    after = records[-1].extra["forces"]["grasper"]
+    cuts = [e for r in records for e in r.extra["events"] if e["kind"] == "cut"]
+    assert sum(e["severed_pairs"] for e in cuts) > 0
+    if gravity is None:
+        assert np.linalg.norm(after) < 1e-6 * before
+        return
+    # what hangs on the grasper: the upper organ and the tissue points above the cut
+    f = sim.tissue_fields()
+    tissue_above = sim.system.tissue.masses[f["positions"][:, 2] > zc].sum()
+    upper = sim.system.organs[1].mass.lumped.sum() / 3
+    expected = (upper + tissue_above) * gravity
+    assert after[2] == pytest.approx(expected, rel=1e-6)
+    assert before > 1.5 * expected
+
+
+def test_newton_converges_quadratically():
+    sim = two_boxes(gravity=9.81)
+    record = sim.step()
+    r = np.array(record.residual_norms[0])
+    assert r[-1] < 1e-8 * r[0]
+    # last ratios: log r_{k+1} / log r_k > 1.7 once in the fast phase
+    rel = r / r[0]
+    orders = np.log(rel[2:]) / np.log(rel[1:-1])
+    assert orders[-1] > 1.7
+
+
+def test_tearing_removes_overstretched_points_and_continues():
+    """Peel the upper organ at one end: the tissue there passes the threshold and tears, the
+    rest holds, and stepping goes on with the new topology."""
+    sim = two_boxes(gravity=None, lift=0.3, peel=True)
+    sim.set_tearing(0.3)
+    rest_x = sim._tissue.samples.points[:, 0]
+    records = [sim.step() for _ in range(4)]
+    torn = [e for r in records for e in r.extra["events"] if e["kind"] == "tear"]
+    assert torn, "nothing tore"
+    alive = sim.dissection.alive
+    assert 0 < alive.sum() < alive.size
+    assert rest_x[~alive].mean() < rest_x[alive].mean()  # it tore at the peeled end
+    assert all(r.converged for r in records)
+    f = sim.tissue_fields()
+    assert f["max_principal_strain"].max() < 1.0
+
+
+def test_errors_name_what_is_wrong():
+    sim = CoupledSimulation()
+    with pytest.raises(ValueError, match="add the organs"):
+        sim.add_tissue(make_material("stvk", youngs_modulus=1.0, poisson_ratio=0.3))
+    with pytest.raises(ValueError, match="unknown organ 'liver'"):
+        sim.fix("liver", [0])
+    sim.add_organ("a", box((0, 0, 0), (1, 1, 1), (1, 1, 1)), make_material("stvk", youngs_modulus=1.0, poisson_ratio=0.3))
+    with pytest.raises(ValueError, match="out of range"):
+        sim.fix("a", [100])
+    with pytest.raises(ValueError, match="taken"):
+        sim.add_organ("a", box(), make_material("stvk", youngs_modulus=1.0, poisson_ratio=0.3))
+    far = box((5, 5, 5), (6, 6, 6), (1, 1, 1))
+    sim.add_organ("b", far, make_material("stvk", youngs_modulus=1.0, poisson_ratio=0.3))
+    with pytest.raises(ValueError, match="touches no organ|layer is empty|empty"):
+        sim.add_tissue(make_material("stvk", youngs_modulus=1.0, poisson_ratio=0.3), thickness=0.1, spacing=0.05)
+    with pytest.raises(ValueError, match="call add_tissue first"):
+        sim.add_cut(_blade(0.1), 0.0, 1.0)
