@@ -103,6 +103,30 @@ class _Tissue:
     )
 
 
+def _facet_samples(
+    points: np.ndarray, facets: np.ndarray, spacing: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """Attachment points on triangles: each split into n^2 similar sub-triangles with edges
+    <= spacing, one point (with its area) at each sub-triangle's centroid."""
+    P = points[facets]  # (m, 3, 3)
+    edge = np.linalg.norm(P - np.roll(P, 1, axis=1), axis=2).max(axis=1)
+    area = facet_measures(points, facets)
+    out_p, out_a = [], []
+    for n in np.unique(np.maximum(1, np.ceil(edge / spacing)).astype(int)):
+        sel = np.ceil(edge / spacing).clip(min=1).astype(int) == n
+        # centroids of the n^2 sub-triangles in barycentric coordinates (up and down ones)
+        i, k = np.meshgrid(np.arange(n), np.arange(n), indexing="ij")
+        up = i + k <= n - 1
+        b_up = np.stack([i[up] + 1 / 3, k[up] + 1 / 3], axis=1) / n
+        down = i + k <= n - 2
+        b_down = np.stack([i[down] + 2 / 3, k[down] + 2 / 3], axis=1) / n
+        b = np.concatenate([b_up, b_down])  # (n^2, 2)
+        w = np.column_stack([1 - b.sum(axis=1), b])  # (n^2, 3)
+        out_p.append(np.einsum("sv,mvi->msi", w, P[sel]).reshape(-1, 3))
+        out_a.append(np.repeat(area[sel] / n**2, len(w)))
+    return np.concatenate(out_p), np.concatenate(out_a)
+
+
 def _vector(value) -> np.ndarray:
     v = np.asarray(value, dtype=float)
     if v.shape != (3,) or not np.all(np.isfinite(v)):
@@ -254,7 +278,8 @@ class CoupledSimulation:
         (n, 3) rest origins. frame_type "affine" (default) or "rigid": a layer between organs
         is stretched nearly uniformly, which affine frames represent exactly (patch test) and
         rigid frames blended by Shepard weights do not. It is attached to every organ on the boundary triangles within
-        ``attach_distance`` (default: spacing) of a tissue point, with a penalty of
+        ``attach_distance`` (default: 1.5 spacing) of a tissue point, at points no farther apart than
+        the spacing,, with a penalty of
         ``attachment_stiffness`` N/m per m^2 of contact (default 250 mu / spacing)."""
         self._editable("add_tissue")
         if self._tissue is not None:
@@ -281,7 +306,7 @@ class CoupledSimulation:
                 )
             frames = farthest_point_frames(samples.points, int(frames))
         frames = np.asarray(frames, dtype=float)
-        attach_distance = float(spacing if attach_distance is None else attach_distance)
+        attach_distance = float(1.5 * spacing if attach_distance is None else attach_distance)
         if attachment_stiffness is None:
             attachment_stiffness = ATTACHMENT_FACTOR * material.mu / spacing
         self._spacing = float(spacing)
@@ -302,9 +327,8 @@ class CoupledSimulation:
             facets = contact_facets(o.mesh, samples.points, attach_distance)
             if len(facets) == 0:
                 continue
-            centroids = o.mesh.points[facets].mean(axis=1)
-            where = closest_boundary_points(o.mesh, centroids)
-            area = facet_measures(o.mesh.points, facets)
+            points, area = _facet_samples(o.mesh.points, facets, spacing)
+            where = closest_boundary_points(o.mesh, points)
             tissue.contacts.append(
                 (j, where.positions, where.cells, where.barycentric, attachment_stiffness * area)
             )
@@ -680,7 +704,6 @@ class CoupledSimulation:
         return writer.run(steps, progress=progress)
 
     def describe(self) -> dict[str, Any]:
-        self._build()
         s = self.system
         out: dict[str, Any] = {
             "discretisation": "coupled",
@@ -704,8 +727,8 @@ class CoupledSimulation:
                 }
                 for o in self._organs.values()
             },
-            "n_dofs": s.n_dofs,
-            "prescribed_dofs": int(s.prescribed_dofs.size),
+            "n_dofs": None if s is None else s.n_dofs,
+            "prescribed_dofs": None if s is None else int(s.prescribed_dofs.size),
             "newton": asdict(self.newton),
             "linear_solver": {
                 "name": getattr(self._solver, "name", None),

@@ -127,11 +127,13 @@ class VTUSeriesWriter:
                 raise ValueError(f"VTUSeriesWriter supports 2D and 3D meshes, got dim {mesh.dim}")
             block = (_CELL_TYPE[mesh.dim], np.asarray(mesh.cells, dtype=np.int64))
             self.dim, self.n_points = mesh.dim, mesh.n_points
+            self._mesh_based = True
         else:
             if n_points is None:
                 raise ValueError("VTUSeriesWriter with cells= needs n_points")
             block = _cell_block(cells, int(n_points))
             self.dim, self.n_points = 3, int(n_points)
+            self._mesh_based = False
         if not name or os.sep in name or "/" in name:
             raise ValueError(f"series name {name!r} must be a non-empty file name stem")
         self.directory = Path(directory)
@@ -159,8 +161,12 @@ class VTUSeriesWriter:
         positions: np.ndarray,
         point_data: Mapping[str, np.ndarray] | None = None,
         cell_data: Mapping[str, np.ndarray] | None = None,
+        cells: tuple[str, np.ndarray] | None = None,
     ) -> Path:
         """Write one frame and rewrite the index; return the frame's path.
+
+        cells: this frame's own cell block (a surface that grows, a cloud that loses points),
+            with any number of positions (writers made with ``cells=`` only).
 
         positions: (n, d) current vertex positions (written as 3D points, z = 0 in 2D; d = 3
             for a writer made with ``cells=``).
@@ -171,6 +177,13 @@ class VTUSeriesWriter:
         import meshio
 
         n, dim = self.n_points, self.dim
+        blocks, n_cells = self._cells, self.n_cells
+        if cells is not None:
+            if self._mesh_based:
+                raise ValueError("per-frame cells= need a writer made with cells=")
+            n = int(np.asarray(positions).shape[0])
+            block = _cell_block(cells, max(n, 1))
+            blocks, n_cells = [block], int(block[1].shape[0])
         time = float(time)
         if not math.isfinite(time):
             raise ValueError(f"frame time must be finite, got {time}")
@@ -180,9 +193,9 @@ class VTUSeriesWriter:
         if dim == 2:
             x = np.concatenate([x, np.zeros((n, 1))], axis=1)
         pdata = _prepare(point_data or {}, n, dim, "point_data")
-        cdata = _prepare(cell_data or {}, self.n_cells, dim, "cell_data")
+        cdata = _prepare(cell_data or {}, n_cells, dim, "cell_data")
         out = meshio.Mesh(
-            x, self._cells, point_data=pdata, cell_data={k: [v] for k, v in cdata.items()}
+            x, blocks, point_data=pdata, cell_data={k: [v] for k, v in cdata.items()}
         )
         path = self.directory / f"{self.name}_{len(self._frames):05d}.vtu"
         with atomic_output(path) as tmp:

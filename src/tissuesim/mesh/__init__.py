@@ -7,7 +7,7 @@ Use ``from tissuesim.mesh import select`` for vertex and facet selections
 from tissuesim.mesh import select
 from tissuesim.mesh.boundary import boundary_facets, facet_measures, facet_normals
 from tissuesim.mesh.checks import signed_volumes, validate_mesh
-from tissuesim.mesh.generators import box, rectangle
+from tissuesim.mesh.generators import box, ellipsoid, rectangle
 from tissuesim.mesh.io import describe_mesh, read_mesh, write_mesh
 from tissuesim.mesh.mesh import Mesh
 
@@ -17,6 +17,7 @@ __all__ = [
     "signed_volumes",
     "rectangle",
     "box",
+    "ellipsoid",
     "boundary_facets",
     "facet_measures",
     "facet_normals",

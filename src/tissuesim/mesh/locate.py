@@ -244,8 +244,10 @@ class TriangleSoup:
                 n = len(c)
                 r, j = np.nonzero(c < m)
                 t = c[r, j]
-                # beyond max_distance for sure: centroid farther than max_distance + own radius
-                keep = dd[s + r, done_k + j] - self.radii[t] <= max_distance * (1.0 + 1e-12)
+                # skip triangles surely beyond max_distance or the best so far: their centroid
+                # is farther than that plus their own radius
+                limit = np.minimum(best_d[pending[s + r]], max_distance) * (1.0 + 1e-12)
+                keep = dd[s + r, done_k + j] - self.radii[t] <= limit
                 r, j, t = r[keep], j[keep], t[keep]
                 if len(r) == 0:
                     continue
