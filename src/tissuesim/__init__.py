@@ -7,6 +7,7 @@ from __future__ import annotations
 
 __version__ = "0.1.0"
 
+from tissuesim.coupling.simulation import CoupledSimulation
 from tissuesim.errors import (
     ConvergenceError,
     InvertedElementError,
@@ -23,13 +24,14 @@ from tissuesim.materials import (
     StVenantKirchhoff,
     make_material,
 )
-from tissuesim.mesh import Mesh, box, read_mesh, rectangle, select
+from tissuesim.mesh import Mesh, box, ellipsoid, read_mesh, rectangle, select
 from tissuesim.simulation import Simulation
 from tissuesim.solve.newton import NewtonOptions
 
 __all__ = [
     "__version__",
     "ConvergenceError",
+    "CoupledSimulation",
     "CourseNeoHookean",
     "FixedCorotated",
     "InvertedElementError",
@@ -44,6 +46,7 @@ __all__ = [
     "StVenantKirchhoff",
     "TissueSimError",
     "box",
+    "ellipsoid",
     "make_material",
     "read_mesh",
     "rectangle",

@@ -38,13 +38,29 @@ def _resolve_scene(scene: str) -> Path:
 
 
 def _body(sim) -> str:
-    """What the body is made of, for the run banner: a mesh, or frames (which have none)."""
+    """What the body is made of, for the run banner: a mesh, frames (which have none), or
+    organs joined by tissue (a coupled scene)."""
+    if hasattr(sim, "organ_names"):
+        return _coupled_body(sim)
     mesh = getattr(sim, "mesh", None)
     if mesh is None:
         m = sim.model
         return f"{m.n_frames} {m.frame_type.name} frames, {m.samples.n} integration points"
     kind = "triangles" if mesh.dim == 2 else "tetrahedra"
     return f"{mesh.n_points} vertices, {mesh.n_cells} {kind}"
+
+
+def _coupled_body(sim) -> str:
+    """Organs (vertices each), the tissue's integration points and frames, and the cuts."""
+    d = sim.describe()
+    organs = ", ".join(f"{name} {o['vertices']} vertices" for name, o in d["organs"].items())
+    n = len(d["organs"])
+    text = f"{n} organ{'s' * (n != 1)} ({organs})"
+    tissue = d.get("tissue")
+    if tissue is not None:
+        text += f", tissue {tissue['integration_points']} points / {tissue['frames']} frames"
+    cuts = len(d["cuts"])
+    return text + f", {cuts} cut{'s' * (cuts != 1)}"
 
 
 def _run(scene_path: Path, out: str | None, steps: int | None, render: bool, quiet: bool) -> int:

@@ -69,5 +69,6 @@ def make_scene(frame_kind="rigid", tissue_E=300.0, k_attach=200.0, gap=0.2):
 
 
 @pytest.fixture
-def scene():
-    return make_scene()
+def scene_factory():
+    """make_scene, for tests that build several scenes (no import of conftest needed)."""
+    return make_scene

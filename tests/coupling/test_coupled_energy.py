@@ -5,8 +5,6 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from tests.coupling.conftest import make_scene
-
 
 def perturbed(system, rng, scale=0.03):
     c = system.rest_config()
@@ -40,14 +38,16 @@ def check_fd(system, c, rng, evaluate=None):
 
 
 @pytest.mark.parametrize("frame_kind", ["rigid", "affine"])
-def test_total_energy_matches_finite_differences(frame_kind):
+def test_total_energy_matches_finite_differences(frame_kind, scene_factory):
+    make_scene = scene_factory
     rng = np.random.default_rng(1)
     system = make_scene(frame_kind)
     c = perturbed(system, rng)
     check_fd(system, c, rng)
 
 
-def test_coupling_energy_alone_matches_finite_differences():
+def test_coupling_energy_alone_matches_finite_differences(scene_factory):
+    make_scene = scene_factory
     """The attachments' energy alone: the full system minus the same bodies without them."""
     from tissuesim.coupling.system import CoupledSystem
 
@@ -74,7 +74,8 @@ def test_coupling_energy_alone_matches_finite_differences():
     check_fd(system, c, rng, coupling_only)
 
 
-def test_coupling_is_zero_at_rest_and_for_rigid_motions():
+def test_coupling_is_zero_at_rest_and_for_rigid_motions(scene_factory):
+    make_scene = scene_factory
     system = make_scene("rigid")
     c = system.rest_config()
     acc = system.evaluate(c, 1)
@@ -92,7 +93,8 @@ def test_coupling_is_zero_at_rest_and_for_rigid_motions():
     assert np.abs(moved.gradient).max() < 1e-10
 
 
-def test_cross_blocks_present_and_needed():
+def test_cross_blocks_present_and_needed(scene_factory):
+    make_scene = scene_factory
     """Dropping the organ-tissue cross blocks makes the Hessian disagree with the FD."""
     rng = np.random.default_rng(3)
     system = make_scene("rigid")

@@ -68,7 +68,7 @@ def test_segments_known_cases():
             [2.0, 0.5, 0.5],
             [1.01, 0.5, 1.0],
             [0.3, 0.6, 1.0],
-            [0.3, 0.6, 1e-9],
+            [0.3, 0.6, 1e-6],
             [1.0, 0.5, 1.0],
             [0.5, 0.5, -1.0],
             [0.8, 0.8, 0.0],
@@ -109,19 +109,26 @@ def test_point_triangle_distance_against_brute_force():
     rng = np.random.default_rng(1)
     tri = rng.uniform(0, 1, (150, 3, 3)) * [1.0, 1.0, 0.2]
     tri[:5, 1] = tri[:5, 0]  # degenerate ones count as their edges
+    tri[5:8, 2] = 0.5 * (tri[5:8, 0] + tri[5:8, 1])  # collinear
     p = rng.uniform(-0.5, 1.5, (500, 3))
     got = point_triangle_distance(p, tri)
-    # brute force: minimum over a fine barycentric sampling of each triangle, and the edges
-    s = np.linspace(0, 1, 41)
-    u, v = np.meshgrid(s, s)
-    keep = u + v <= 1
-    u, v = u[keep], v[keep]
-    samples = tri[:, 0, None] + u[:, None] * (tri[:, 1, None] - tri[:, 0, None])
-    samples = samples + v[:, None] * (tri[:, 2, None] - tri[:, 0, None])  # (m, s, 3)
-    samples = samples.reshape(-1, 3)
-    sampled = np.sqrt(((p[:, None] - samples[None]) ** 2).sum(-1)).min(axis=1)
-    assert (got <= sampled + 1e-12).all()
-    assert np.max(sampled - got) < 0.03  # sampling resolution 1/40 of a triangle
+    # brute force over all pairs: the projection onto the plane where it falls inside the
+    # triangle, else the nearest edge (the only candidates for degenerate triangles)
+    x, t = p[:, None, :], tri[None]
+    edges = np.full((len(p), len(tri)), np.inf)
+    inside = np.ones((len(p), len(tri)), dtype=bool)
+    n = np.cross(t[..., 1, :] - t[..., 0, :], t[..., 2, :] - t[..., 0, :])
+    n = n / np.maximum(np.linalg.norm(n, axis=-1, keepdims=True), 1e-300)
+    h = ((x - t[..., 0, :]) * n).sum(-1)
+    proj = x - h[..., None] * n
+    for j in range(3):  # the three edges
+        u, v = t[..., j, :], t[..., (j + 1) % 3, :]
+        e = v - u
+        s = np.clip(((x - u) * e).sum(-1) / np.maximum((e * e).sum(-1), 1e-300), 0, 1)
+        edges = np.minimum(edges, np.linalg.norm(u + s[..., None] * e - x, axis=-1))
+        inside &= (np.cross(e, proj - u) * n).sum(-1) > 0
+    expected = np.where(inside, np.abs(h), edges).min(axis=1)
+    np.testing.assert_allclose(got, expected, rtol=1e-12, atol=1e-14)
     # exact on a plane: points above the square
     q = np.array([[0.3, 0.4, 2.0], [2.0, 0.5, 0.0], [-1.0, -1.0, -1.0]])
     np.testing.assert_allclose(point_triangle_distance(q, SQUARE), [2.0, 1.0, np.sqrt(3.0)])

@@ -156,3 +156,12 @@ def test_errors_name_the_argument():
         inside_mesh(rectangle(), np.zeros((1, 3)))
     with pytest.raises(ValueError, match="mesh must be a tissuesim Mesh"):
         distance_to_boundary(np.zeros((4, 3)), np.zeros((1, 3)))
+    with pytest.raises(ValueError, match="max_distance must be a number >= 0"):
+        MeshLocator(BOX).distance(np.zeros((1, 3)), max_distance=-1.0)
+
+
+def test_empty_queries():
+    e = np.zeros((0, 3))
+    res = closest_boundary_points(BOX, e)
+    assert res.cells.shape == (0,) and res.barycentric.shape == (0, 4)
+    assert inside_mesh(BOX, e).shape == (0,) and distance_to_boundary(BOX, e).shape == (0,)

@@ -170,13 +170,24 @@ class Dissection:
         report["retired_frames"] = int(np.sum(near & self.frame_alive))
         self.frame_alive &= ~near
 
+        # only what reaches the cut's bounding box can touch it: test those alone
+        lo = triangles.reshape(-1, 3).min(axis=0) - half
+        hi = triangles.reshape(-1, 3).max(axis=0) + half
+
         def apply(alive: np.ndarray, severed: np.ndarray, pts: np.ndarray):
             ids = np.flatnonzero(alive)
-            gone = point_triangle_distance(pts[ids], triangles) < half if len(ids) else []
+            gone = np.zeros(len(ids), dtype=bool)
+            near = np.all((pts[ids] >= lo) & (pts[ids] <= hi), axis=1)
+            if near.any():
+                gone[near] = point_triangle_distance(pts[ids][near], triangles) < half
             alive[ids[gone]] = False
             ids = np.flatnonzero(alive)
             pt, fr = _candidates(frame_positions, pts[ids], radii)
-            hit = segments_hit_triangles(pts[ids][pt], frame_positions[fr], triangles)
+            a, b = pts[ids][pt], frame_positions[fr]
+            boxed = np.all((np.minimum(a, b) <= hi) & (np.maximum(a, b) >= lo), axis=1)
+            hit = np.zeros(len(pt), dtype=bool)
+            if boxed.any():
+                hit[boxed] = segments_hit_triangles(a[boxed], b[boxed], triangles)
             new = ids[pt[hit]] * self.n_frames + fr[hit]
             fresh = np.setdiff1d(new, severed)
             return np.union1d(severed, fresh), int(np.sum(gone)), int(fresh.size)

@@ -54,6 +54,9 @@ Motion = Callable[[float], np.ndarray]
 # modulus / sample spacing (about 100 E / spacing): stiff enough that the gap stays ~1% of the
 # tissue's own stretch, soft enough for a well-conditioned Hessian
 ATTACHMENT_FACTOR = 250.0
+# after a cut or tear, tissue points the new weights leave this compressed (or inverted) are
+# removed with the cut: their energy is infinite or near it
+MIN_J_AFTER_CUT = 0.05
 
 
 @dataclass(frozen=True, eq=False)
@@ -277,9 +280,9 @@ class CoupledSimulation:
         ``region`` if given) at ``spacing``; ``frames``: a count (farthest-point placement) or
         (n, 3) rest origins. frame_type "affine" (default) or "rigid": a layer between organs
         is stretched nearly uniformly, which affine frames represent exactly (patch test) and
-        rigid frames blended by Shepard weights do not. It is attached to every organ on the boundary triangles within
-        ``attach_distance`` (default: 1.5 spacing) of a tissue point, at points no farther apart than
-        the spacing,, with a penalty of
+        rigid frames blended by Shepard weights do not. It is attached to every organ on the
+        boundary triangles within ``attach_distance`` (default: 1.5 spacing) of a tissue point,
+        at points no farther apart than the spacing, with a penalty of
         ``attachment_stiffness`` N/m per m^2 of contact (default 250 mu / spacing)."""
         self._editable("add_tissue")
         if self._tissue is not None:
@@ -650,13 +653,31 @@ class CoupledSimulation:
             torn = f["ids"][f["max_principal_strain"] > self.tear_threshold]
             if torn.size:
                 events.append({"kind": "tear", "time": t1, **d.tear(torn)})
-        if not events:
-            return []
-        report = d.consolidate(
-            t.frames, t.samples.points, [c[1] for c in t.contacts], self._radii, t.shape
-        )
+        changed = any(
+            e.get(k, 0)
+            for e in events
+            for k in ("removed_points", "severed_pairs", "retired_frames", "removed_attachments")
+        ) or any(e["kind"] == "tear" for e in events)
+        if not changed:  # the blade is still outside the tissue: nothing to rebuild
+            return events
+        inverted = 0
+        for _ in range(10):
+            report = d.consolidate(
+                t.frames, t.samples.points, [c[1] for c in t.contacts], self._radii, t.shape
+            )
+            self._rebuild()
+            # renormalised weights change F at once; a point they leave inverted (at the lips
+            # of a cut) has no finite neo-Hookean energy: it is removed like the kerf
+            f = self.tissue_fields()
+            if not f:
+                break
+            bad = f["ids"][~((f["J"] > MIN_J_AFTER_CUT) & np.isfinite(f["energy_density"]))]
+            if not bad.size:
+                break
+            d.alive[bad] = False
+            inverted += int(bad.size)
         events[-1].update(report)
-        self._rebuild()
+        events[-1]["inverted_points_removed"] = inverted
         return events
 
     def _to_rest(self, w: np.ndarray) -> np.ndarray:

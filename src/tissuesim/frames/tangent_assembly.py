@@ -31,15 +31,29 @@ def gather(pattern: SparsityPattern, matrix: sp.spmatrix) -> np.ndarray:
 
 
 def block_pattern(n_frames: int, size: int, frame_stencils: list[np.ndarray]) -> SparsityPattern:
-    """Pattern with full size x size blocks between frames that share a stencil row."""
-    # every frame's own block is full, even for a frame no point reaches (an orphan after a
-    # cut), so that the block maps below find all its entries
-    own = np.arange(n_frames, dtype=np.int64)[:, None]
-    dofs = [
-        (s[:, :, None] * size + np.arange(size)).reshape(s.shape[0], -1)
-        for s in [*frame_stencils, own]
-    ]
-    return SparsityPattern.from_stencils(n_frames * size, dofs)
+    """Pattern with full size x size blocks between frames that share a stencil row.
+
+    Built from the (few) frame pairs, then expanded to blocks: no sort over every local entry.
+    Only the first stencil (the integration points', used by the elastic energy) gets a
+    scatter map; other energies add their constant Hessians through ``gather``.
+    Every frame's own block is present, even for a frame no point reaches (an orphan after a
+    cut), so that the block maps of ``TangentAssembly`` find all its entries."""
+    n = n_frames
+    keys = [np.arange(n, dtype=np.int64) * (n + 1)]
+    for s in frame_stencils:
+        s = np.asarray(s, dtype=np.int64)
+        keys.append((s[:, :, None] * n + s[:, None, :]).ravel())
+    pairs = np.unique(np.concatenate(keys))
+    a = np.arange(size)
+    rows = (pairs // n)[:, None, None] * size + a[:, None]
+    cols = (pairs % n)[:, None, None] * size + a[None, :]
+    rows, cols = np.broadcast_arrays(rows, cols)
+    pattern = SparsityPattern.from_entries(n * size, rows.ravel(), cols.ravel())
+    first = np.asarray(frame_stencils[0], dtype=np.int64)
+    dofs = (first[:, :, None] * size + a).reshape(first.shape[0], -1)  # (q, w)
+    w = dofs.shape[1]
+    scatter = pattern.positions(np.repeat(dofs, w, axis=1), np.tile(dofs, (1, w)))
+    return SparsityPattern(pattern.n, pattern.indptr, pattern.indices, pattern.diagonal, (scatter,))
 
 
 @dataclass(frozen=True, eq=False)

@@ -194,9 +194,7 @@ class VTUSeriesWriter:
             x = np.concatenate([x, np.zeros((n, 1))], axis=1)
         pdata = _prepare(point_data or {}, n, dim, "point_data")
         cdata = _prepare(cell_data or {}, n_cells, dim, "cell_data")
-        out = meshio.Mesh(
-            x, blocks, point_data=pdata, cell_data={k: [v] for k, v in cdata.items()}
-        )
+        out = meshio.Mesh(x, blocks, point_data=pdata, cell_data={k: [v] for k, v in cdata.items()})
         path = self.directory / f"{self.name}_{len(self._frames):05d}.vtu"
         with atomic_output(path) as tmp:
             meshio.write(tmp, out, file_format="vtu")

@@ -5,9 +5,12 @@ triangle (or tetrahedron) centroids: a point's k nearest centroids are tested, a
 accepted once no untested simplex can do better, which a bounding-sphere argument decides: an
 untested simplex has its centroid at least as far as the (k+1)-th nearest one, d_{k+1}, and
 every point of it lies within R (the largest centroid-to-vertex distance of all simplices) of
-its centroid. Points that are not settled are retried with 4 times as many candidates, up to
-all simplices. Typical surface queries settle with the first 16 candidates; points far from the
-surface (compared with the triangle size) need more rounds. Lengths are in the mesh's units.
+its centroid. Points that are not settled are retried with 4 times as many candidates (only
+the new ones are evaluated), up to all simplices. Typical queries near the surface settle with
+the first 16 candidates; points far from it (compared with the triangle size) need more rounds,
+up to brute force for points far outside a small mesh. Distance queries with a cap (``MeshLocator
+.distance(points, max_distance)``) stop as soon as nothing untested can come that close.
+Lengths are in the mesh's units.
 """
 
 from __future__ import annotations
@@ -23,6 +26,8 @@ from tissuesim.mesh.mesh import Mesh
 __all__ = [
     "ClosestPoints",
     "MeshLocator",
+    "TriangleSoup",
+    "closest_on_triangles",
     "closest_boundary_points",
     "inside_mesh",
     "distance_to_boundary",
@@ -37,10 +42,6 @@ _GROWTH = 4
 _BARYCENTRIC_TOLERANCE = 1e-10
 # A triangle is degenerate when |ab x ac| <= this * (longest edge)^2.
 _DEGENERATE = 1e-12
-
-
-def _dot(x: np.ndarray, y: np.ndarray) -> np.ndarray:
-    return np.einsum("...i,...i->...", x, y)
 
 
 def _edge_closest(apap, da, ee):
@@ -186,13 +187,10 @@ class TriangleSoup:
         d2 = sum((v * ab[i] + w * ac[i] - ap[i]) ** 2 for i in range(3))
         return v, w, np.sqrt(d2)
 
-    def _result(self, x: np.ndarray, t: np.ndarray, v: np.ndarray, w: np.ndarray):
+    def _result(self, t: np.ndarray, v: np.ndarray, w: np.ndarray):
         """(barycentric (n, 3), positions (n, 3)) of the closest points a + v ab + w ac."""
         bary = np.column_stack([np.maximum(1.0 - v - w, 0.0), v, w])
-        tri = self.triangles[t]
-        return bary, tri[:, 0] + v[:, None] * (tri[:, 1] - tri[:, 0]) + w[:, None] * (
-            tri[:, 2] - tri[:, 0]
-        )
+        return bary, np.einsum("nk,nki->ni", bary, self.triangles[t])
 
     def closest(
         self, points: np.ndarray, max_distance: float = np.inf, with_points: bool = True
@@ -214,9 +212,7 @@ class TriangleSoup:
         found = np.flatnonzero(tri_id >= 0)
         if not with_points:  # distances only: skip the (q, 3) results
             return tri_id, bary, pos, dist
-        bary[found], pos[found] = self._result(
-            points[found], tri_id[found], v_out[found], w_out[found]
-        )
+        bary[found], pos[found] = self._result(tri_id[found], v_out[found], w_out[found])
         return tri_id, bary, pos, dist
 
     def _search(self, points, max_distance, tri_id, v_out, w_out, dist) -> None:
@@ -294,7 +290,9 @@ class MeshLocator:
     """Search structures of one tetrahedral mesh, built once for repeated point queries.
 
     The module functions build one per call; keep a MeshLocator when querying the same mesh
-    (same rest positions) several times. Boundary triangles and tetrahedra are indexed lazily.
+    (same rest positions) several times. Boundary triangles and tetrahedra are indexed lazily;
+    after the first boundary query, ``facets`` (k, 3) holds the outward boundary triangles (as
+    ``boundary_facets``), ``facet_cell`` (k,) their tetrahedra.
     """
 
     def __init__(self, mesh: Mesh, func: str = "MeshLocator") -> None:
@@ -332,6 +330,11 @@ class MeshLocator:
     def distance(self, points: np.ndarray, max_distance: float = np.inf) -> np.ndarray:
         """Unsigned distance (q,) to the boundary; inf where it exceeds ``max_distance``."""
         p = _points("distance_to_boundary", points)
+        if not (isinstance(max_distance, int | float | np.floating) and max_distance >= 0):
+            raise ValueError(
+                f"distance_to_boundary: max_distance must be a number >= 0 (inf for no cap), "
+                f"got {max_distance!r}"
+            )
         return self._boundary().closest(p, max_distance, with_points=False)[3]
 
     def _tet_index(self) -> tuple[cKDTree, np.ndarray, np.ndarray, np.ndarray]:

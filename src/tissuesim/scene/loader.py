@@ -21,6 +21,12 @@ valid key; every error names the file and the table.
 A scene with a ``[frames]`` table is a meshless frame-based body instead (FrameSimulation): its
 tables are read by ``tissuesim.scene.frames``, which shares [material], [simulation], [newton],
 [gravity] and [run] with this module.
+
+A scene with ``[[organs]]`` tables is a coupled scene instead (CoupledSimulation: organs joined
+by connective tissue, with [[graspers]], [tissue], [[cuts]] and [tearing]): its tables are read
+by ``tissuesim.scene.coupled``, which shares [simulation], [newton], [gravity], [run], the
+material tables and the vertex selectors with this module. ``[[organs]]`` decides even when
+other tables are present (a [mesh] or [frames] table beside it is then an error).
 """
 
 from __future__ import annotations
@@ -76,12 +82,14 @@ SCENE_KEYS = {
 }
 # Tables of frame scenes ([frames], tissuesim.scene.frames) that mean nothing for a [mesh] body.
 FRAME_ONLY_KEYS = ("region", "fixed_frames", "prescribed_frames", "springs", "point_forces")
+# Tables of coupled scenes ([[organs]], tissuesim.scene.coupled) that mean nothing for one body.
+COUPLED_ONLY_KEYS = ("graspers", "tissue", "cuts", "tearing")
 
 
 @dataclass
 class Scene:
-    """A scene ready to run: the Simulation (or FrameSimulation) and the arguments of its
-    ``run``."""
+    """A scene ready to run: the Simulation (or FrameSimulation, or CoupledSimulation) and the
+    arguments of its ``run``."""
 
     simulation: Any
     name: str
@@ -148,6 +156,10 @@ def build_scene(
 def _build(data: dict, base_dir: Path, source: str, name: str) -> Scene:
     from tissuesim.simulation import Simulation
 
+    if "organs" in data:
+        from tissuesim.scene.coupled import build_coupled_scene
+
+        return build_coupled_scene(data, base_dir, source, name)
     if "frames" in data:
         from tissuesim.scene.frames import build_frame_scene
 
@@ -159,8 +171,16 @@ def _build(data: dict, base_dir: Path, source: str, name: str) -> Scene:
             f"table (and a [region]) to make this a frame scene, or use the [mesh] tables "
             f"{sorted(SCENE_KEYS)}"
         )
-    # "frames" is valid too (handled above): a misspelt [frame] then suggests it
-    _unknown(data, [*SCENE_KEYS, "frames"], f"{source}: top level")
+    coupled_only = [key for key in data if key in COUPLED_ONLY_KEYS]
+    if coupled_only:
+        raise SceneError(
+            f"{source}: [{coupled_only[0]}] belongs to coupled scenes (organs joined by "
+            f"connective tissue): give the organs as [[organs]] tables (name, mesh, material) "
+            f"instead of [mesh] and [material]"
+        )
+    # "frames" and "organs" are valid too (handled above): a misspelt [frame] or [[organ]]
+    # then suggests them
+    _unknown(data, [*SCENE_KEYS, "frames", "organs"], f"{source}: top level")
     with _context(f"{source} [mesh]"):
         mesh = _mesh(_table(data, "mesh", source), base_dir, f"{source} [mesh]")
     d = mesh.dim
@@ -214,14 +234,16 @@ def _build(data: dict, base_dir: Path, source: str, name: str) -> Scene:
     return Scene(sim, name, source, _run_table(data, source))
 
 
-def _material(data: dict, source: str):
-    """[material]: make_material(model, **parameters); shared by mesh and frame scenes."""
+def _material(data: dict, source: str, where: str | None = None):
+    """[material]: make_material(model, **parameters); shared by mesh and frame scenes, and by
+    the inline ``material = {...}`` tables of coupled scenes (``where`` names those)."""
     from tissuesim.materials import make_material
 
+    where = where or f"{source} [material]"
     material_table = dict(_table(data, "material", source))
     if "model" not in material_table:
-        raise SceneError(f"{source} [material]: missing key 'model' (e.g. 'course_neo_hookean')")
-    with _context(f"{source} [material]"):
+        raise SceneError(f"{where}: missing key 'model' (e.g. 'course_neo_hookean')")
+    with _context(where):
         return make_material(material_table.pop("model"), **material_table)
 
 

@@ -1,0 +1,477 @@
+"""Coupled scenes: ``[[organs]]`` tables make a scene a CoupledSimulation (organs joined by
+connective tissue, graspers, supports, cuts and tearing).
+
+``tissuesim.scene.loader`` sends every scene with an ``[[organs]]`` table here. Every key is an
+argument of the Python API of ``tissuesim.coupling.simulation.CoupledSimulation``:
+
+    [simulation]   CoupledSimulation(integrator, time_step, max_step_halvings, start_time,
+                   backend); integrator "backward_euler" (default) or "quasistatic"
+    [gravity]      CoupledSimulation(gravity=acceleration)
+    [newton]       NewtonOptions(...), as for [mesh] scenes
+    [[organs]]     add_organ(name, mesh, material, density, mass), and fix(name, vertices):
+                   mesh = { generator = "ellipsoid", center, radii, divisions }
+                        | { generator = "box", lower, upper, divisions }
+                        | { file = "organ.vtu" }  (read_mesh, relative to the scene file)
+                   material = { model = "neo_hookean", youngs_modulus, poisson_ratio }
+                   (make_material, as the [material] table of [mesh] scenes)
+                   fix = a vertex selector (optional): the organ's support
+    [[graspers]]   grasp(organ, vertices, displacement, stiffness, name): displacement is 3
+                   numbers or expressions of t (the grasper moves its vertices rigidly);
+                   without stiffness the motion is prescribed, with it (N/m per vertex) the
+                   vertices are pulled by springs
+    [tissue]       add_tissue(material, thickness, spacing, region, frames, density,
+                   frame_type, shape, radius_factor, attach_distance, attachment_stiffness):
+                   frames is a count or [[x, y, z], ...]; region = { where = "..." } limits
+                   the layer to rest points where the condition holds
+    [[cuts]]       add_cut(blade, start, end, kerf, name): blade is a polyline of >= 2 points
+                   [["x(t)", "y(t)", "z(t)"], ...], each coordinate a number or an expression
+                   of t
+    [tearing]      set_tearing(threshold)
+    [run]          run(steps, every, render), as for every scene
+
+Vertex selectors (fix, graspers' vertices) pick vertices of one organ's rest mesh: the
+selector tables of [mesh] scenes (``{ on_plane = { axis = 2, value = 0.0 } }``,
+``{ in_box = { lower, upper } }``, ``{ tagged = "zmin" }``, ``{ boundary = true }``) or
+``{ where = "z < -0.032" }``, a condition on the rest coordinates x, y, z written with the safe
+expressions of ``tissuesim.scene.expressions``: a vertex is selected where it is true
+(non-zero); combine conditions with ``*`` (and), e.g. ``"(z > 0.03) * (abs(x) < 0.01)"``.
+
+Errors are SceneErrors naming the file, the table (``organs[2].mesh``: the second
+``[[organs]]`` table, counting from 1 as the other scene errors do; ``[tissue] frames``) and
+the key, and saying how to fix it.
+"""
+
+from __future__ import annotations
+
+import ast
+import difflib
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from tissuesim.errors import SceneError
+from tissuesim.scene.expressions import compile_expression, compile_vector
+from tissuesim.scene.frames import _bbox, _is_number, _required, _vector3
+from tissuesim.scene.loader import (
+    RUN_KEYS,
+    SELECTORS,
+    Scene,
+    _context,
+    _material,
+    _newton,
+    _run_table,
+    _select,
+    _table,
+    _unknown,
+)
+
+__all__ = ["build_coupled_scene", "COUPLED_SCENE_KEYS"]
+
+COUPLED_SIMULATION_KEYS = ("integrator", "time_step", "max_step_halvings", "start_time", "backend")
+ORGAN_KEYS = ("name", "mesh", "material", "density", "mass", "fix")
+GRASPER_KEYS = ("organ", "name", "vertices", "displacement", "stiffness")
+TISSUE_KEYS = (
+    "material",
+    "thickness",
+    "spacing",
+    "region",
+    "frames",
+    "density",
+    "frame_type",
+    "shape",
+    "radius_factor",
+    "attach_distance",
+    "attachment_stiffness",
+)
+CUT_KEYS = ("blade", "start", "end", "kerf", "name")
+COUPLED_SCENE_KEYS: dict[str, Any] = {
+    "simulation": set(COUPLED_SIMULATION_KEYS),
+    "gravity": {"acceleration"},
+    "newton": None,  # checked against NewtonOptions
+    "organs": set(ORGAN_KEYS),
+    "graspers": set(GRASPER_KEYS),
+    "tissue": set(TISSUE_KEYS),
+    "cuts": set(CUT_KEYS),
+    "tearing": {"threshold"},
+    "run": set(RUN_KEYS),
+}
+ARRAYS = ("organs", "graspers", "cuts")
+MESH_GENERATORS = {
+    "ellipsoid": ("center", "radii", "divisions"),
+    "box": ("lower", "upper", "divisions"),
+}
+ORGAN_MESH_KEYS = ("generator", "file", "center", "radii", "lower", "upper", "divisions")
+MESH_EXAMPLE = (
+    'mesh = { generator = "ellipsoid", center = [0, 0, 0], radii = [0.06, 0.04, 0.02], '
+    'divisions = 8 }, { generator = "box", lower = [...], upper = [...], divisions = [4, 4, 2] } '
+    'or { file = "organ.vtu" }'
+)
+MATERIAL_EXAMPLE = (
+    'material = { model = "neo_hookean", youngs_modulus = 5000.0, poisson_ratio = 0.45 }'
+)
+VERTEX_SELECTORS = (*sorted(SELECTORS["vertices"]), "where")
+# Tables of other scenes, and what a coupled scene writes instead.
+ELSEWHERE = {
+    "mesh": "each organ has its own mesh = {...} in its [[organs]] table",
+    "material": "each organ has its own material = {...} in [[organs]], the tissue in [tissue]",
+    "frames": "the tissue's frames are [tissue] frames = N",
+    "region": "the tissue fills the space between the organs: [tissue] thickness and spacing",
+    "dirichlet": "hold an organ with fix = {...} in its [[organs]] table, move one with "
+    "[[graspers]]",
+    "fixed_frames": "hold an organ with fix = {...} in its [[organs]] table",
+    "prescribed_frames": "move an organ with [[graspers]]",
+    "initial": "coupled scenes start at rest",
+}
+_AXES = "xyz"
+
+
+def build_coupled_scene(data: dict, base_dir: Path, source: str, name: str) -> Scene:
+    """Build a Scene whose simulation is a CoupledSimulation from parsed TOML ``data``."""
+    from tissuesim.coupling.simulation import CoupledSimulation
+
+    for key, instead in ELSEWHERE.items():
+        if key in data:
+            raise SceneError(
+                f"{source}: [{key}] does not belong in a coupled scene (one with [[organs]]); "
+                f"{instead}"
+            )
+    _unknown(data, COUPLED_SCENE_KEYS, f"{source}: top level")
+    for key in ARRAYS:
+        _table(data, key, source, array=True)
+
+    newton = _newton(data, source)
+    sim_where = f"{source} [simulation]"
+    sim_table = _table(data, "simulation", source)
+    for key in ("density", "mass"):
+        if key in sim_table:
+            raise SceneError(
+                f"{sim_where}: {key} is set per body in a coupled scene: write {key} = ... in "
+                f"each [[organs]] table{' and in [tissue]' if key == 'density' else ''}"
+            )
+    _unknown(sim_table, COUPLED_SIMULATION_KEYS, sim_where)
+    gravity = _table(data, "gravity", source)
+    _unknown(gravity, COUPLED_SCENE_KEYS["gravity"], f"{source} [gravity]")
+    acceleration = None
+    if gravity:
+        where = f"{source} [gravity]"
+        acceleration = _vector3(_required(gravity, "acceleration", where), f"{where} acceleration")
+    with _context(sim_where):
+        sim = CoupledSimulation(newton=newton, gravity=acceleration, **sim_table)
+
+    organs = _table(data, "organs", source, array=True)
+    if not organs:
+        raise SceneError(f"{source}: [[organs]] is empty: give at least one organ")
+    meshes = {}
+    for i, item in enumerate(organs, start=1):
+        where = f"{source} organs[{i}]"
+        organ, mesh = _organ(sim, item, base_dir, where)
+        meshes[organ] = mesh
+    for i, item in enumerate(_table(data, "graspers", source, array=True), start=1):
+        _grasper(sim, item, meshes, f"{source} graspers[{i}]")
+    tissue = _table(data, "tissue", source)
+    if tissue:
+        _tissue(sim, tissue, f"{source} [tissue]")
+    cuts = _table(data, "cuts", source, array=True)
+    if cuts and not tissue:
+        raise SceneError(
+            f"{source} cuts[1]: a cut dissects the connective tissue, and the scene has none; "
+            f"add a [tissue] table (material, thickness, spacing)"
+        )
+    for i, item in enumerate(cuts, start=1):
+        _cut(sim, item, f"{source} cuts[{i}]")
+    tearing = _table(data, "tearing", source)
+    if tearing:
+        where = f"{source} [tearing]"
+        _unknown(tearing, COUPLED_SCENE_KEYS["tearing"], where)
+        if not tissue:
+            raise SceneError(
+                f"{where}: tearing removes overstretched connective tissue, and the scene has "
+                f"none; add a [tissue] table or drop [tearing]"
+            )
+        threshold = _required(tearing, "threshold", where)
+        _number(threshold, f"{where} threshold", "a strain > 0 (largest principal Green strain)")
+        with _context(where):
+            sim.set_tearing(threshold)
+    return Scene(sim, name, source, _run_table(data, source))
+
+
+# -- values -------------------------------------------------------------------------------------
+
+
+def _number(value, where: str, want: str, positive: bool = True) -> float:
+    if not (_is_number(value) and np.isfinite(value) and (value > 0 or not positive)):
+        raise SceneError(f"{where}: must be {want}, not {value!r}")
+    return float(value)
+
+
+def _variables(text) -> set[str]:
+    """Names an expression uses (none for a number, or text that does not parse: the
+    expression compiler reports that)."""
+    if not isinstance(text, str):
+        return set()
+    try:
+        tree = ast.parse(text.strip(), mode="eval")
+    except (SyntaxError, RecursionError, MemoryError, ValueError):
+        return set()
+    return {n.id for n in ast.walk(tree) if isinstance(n, ast.Name)}
+
+
+def _of_time(items, where: str, what: str):
+    """t -> (3,) from 3 numbers or expressions of t only (x, y, z are refused: ``what``
+    moves rigidly)."""
+    f = compile_vector(items, 3, where)
+    for i, item in enumerate(items):
+        used = _variables(item) & set(_AXES)
+        if used:
+            raise SceneError(
+                f"{where}[{i}]: {what} depends on t only; {sorted(used)[0]!r} has no meaning "
+                f"here (in {item!r})"
+            )
+    origin = np.zeros((1, 3))
+
+    def at(t: float) -> np.ndarray:
+        return f(origin, t)[0]
+
+    return at
+
+
+def _condition(text, where: str):
+    """points (k, 3) -> (k,) bool from a condition on x, y, z (no t)."""
+    if not isinstance(text, str):
+        raise SceneError(
+            f"{where}: expected a condition on the rest coordinates as a string, e.g. "
+            f'where = "z < -0.032", got {text!r}'
+        )
+    if "t" in _variables(text):
+        raise SceneError(
+            f"{where}: {text!r} uses t; a selection is made once, on the rest coordinates x, y, z"
+        )
+    f = compile_expression(text, where)
+
+    def mask(points: np.ndarray) -> np.ndarray:
+        values = f(points, 0.0)
+        if not np.all(np.isfinite(values)):
+            raise SceneError(f"{where}: {text!r} is not finite at every point")
+        return values != 0
+
+    return mask
+
+
+def _vertices(mesh, organ: str, selector, where: str, key: str) -> np.ndarray:
+    """Vertex ids of ``organ``'s rest mesh picked by a [mesh]-scene selector or where."""
+    if not isinstance(selector, dict) or len(selector) != 1:
+        raise SceneError(
+            f"{where}: {key} must be a table with one selector out of {list(VERTEX_SELECTORS)}, "
+            f'e.g. {key} = {{ where = "z < 0.0" }} or {{ on_plane = {{ axis = 2, value = 0.0 }} }}'
+        )
+    ((how, args),) = selector.items()
+    _unknown([how], VERTEX_SELECTORS, f"{where} {key}")
+    if how != "where":
+        return _select(mesh, "vertices", selector, f"{where} {key}")
+    ids = np.flatnonzero(_condition(args, f"{where} {key} where")(mesh.points))
+    if ids.size == 0:
+        raise SceneError(
+            f"{where} {key}: where = {args!r} selects no vertex of organ {organ!r}; its rest "
+            f"vertices span {_bbox(mesh.points)} (x, y, z)"
+        )
+    return ids
+
+
+# -- tables ---------------------------------------------------------------------------------------
+
+
+def _inline_material(item: dict, where: str):
+    value = _required(item, "material", where)
+    if not isinstance(value, dict):
+        raise SceneError(f"{where}: material must be a table, e.g. {MATERIAL_EXAMPLE}")
+    return _material(item, "", f"{where} material")
+
+
+def _mesh(table, base_dir: Path, where: str):
+    from tissuesim.mesh import box, ellipsoid, read_mesh
+
+    if not isinstance(table, dict):
+        raise SceneError(f"{where}: must be a table: {MESH_EXAMPLE}")
+    _unknown(table, ORGAN_MESH_KEYS, where)
+    if "file" in table:
+        extra = set(table) - {"file"}
+        if extra:
+            raise SceneError(f"{where}: 'file' cannot be combined with {sorted(extra)}")
+        path = Path(table["file"])
+        with _context(where):
+            return read_mesh(path if path.is_absolute() else base_dir / path)
+    generator = table.get("generator")
+    if generator not in MESH_GENERATORS:
+        close = difflib.get_close_matches(str(generator), MESH_GENERATORS, n=1)
+        hint = f" (did you mean {close[0]!r}?)" if close else ""
+        raise SceneError(
+            f"{where}: give generator = 'ellipsoid' | 'box', or file = 'organ.vtu' "
+            f"(got generator = {generator!r}){hint}"
+        )
+    args = MESH_GENERATORS[generator]
+    kwargs = {k: v for k, v in table.items() if k != "generator"}
+    for key in kwargs:
+        if key not in args:
+            raise SceneError(
+                f"{where}: {key!r} is not an argument of generator {generator!r}; it takes "
+                f"{', '.join(args)}"
+            )
+    with _context(where):
+        return {"ellipsoid": ellipsoid, "box": box}[generator](**kwargs)
+
+
+def _organ(sim, item: dict, base_dir: Path, where: str):
+    _unknown(item, ORGAN_KEYS, where)
+    name = _required(item, "name", where)
+    if not (isinstance(name, str) and name):
+        raise SceneError(f"{where}: name must be a non-empty string, e.g. name = 'liver'")
+    if "mesh" not in item:
+        raise SceneError(f"{where}: missing key 'mesh', e.g. {MESH_EXAMPLE}")
+    mesh = _mesh(item["mesh"], base_dir, f"{where}.mesh")
+    if "material" not in item:
+        raise SceneError(f"{where}: missing key 'material', e.g. {MATERIAL_EXAMPLE}")
+    material = _inline_material(item, where)
+    options = {}
+    if "density" in item:
+        options["density"] = _number(item["density"], f"{where} density", "a number > 0 (kg/m^3)")
+    if "mass" in item:
+        if item["mass"] not in ("consistent", "lumped"):
+            raise SceneError(
+                f"{where}: mass must be 'consistent' or 'lumped', not {item['mass']!r}"
+            )
+        options["mass"] = item["mass"]
+    with _context(where):
+        sim.add_organ(name, mesh, material, **options)
+    if "fix" in item:
+        vertices = _vertices(mesh, name, item["fix"], where, "fix")
+        with _context(f"{where} fix"):
+            sim.fix(name, vertices)
+    return name, mesh
+
+
+def _grasper(sim, item: dict, meshes: dict, where: str) -> None:
+    _unknown(item, GRASPER_KEYS, where)
+    organ = _required(item, "organ", where)
+    if organ not in meshes:
+        close = difflib.get_close_matches(str(organ), list(meshes), n=1)
+        hint = f"did you mean {close[0]!r}? " if close else ""
+        raise SceneError(
+            f"{where}: unknown organ {organ!r}; {hint}the [[organs]] are {list(meshes)}"
+        )
+    vertices = _vertices(
+        meshes[organ], organ, _required(item, "vertices", where), where, "vertices"
+    )
+    displacement = _of_time(
+        _required(item, "displacement", where), f"{where} displacement", "a grasper's displacement"
+    )
+    options = {}
+    if "stiffness" in item:
+        options["stiffness"] = _number(
+            item["stiffness"], f"{where} stiffness", "a number > 0 (N/m per vertex)"
+        )
+    if "name" in item:
+        if not (isinstance(item["name"], str) and item["name"]):
+            raise SceneError(f"{where}: name must be a non-empty string, e.g. name = 'grasper'")
+        options["name"] = item["name"]
+    u0 = displacement(sim.start_time)
+    if not np.all(np.isfinite(u0)):
+        raise SceneError(
+            f"{where} displacement: not finite at the start time t = {sim.start_time:g} s: "
+            f"{u0.tolist()}"
+        )
+    with _context(where):
+        sim.grasp(organ, vertices, displacement, **options)
+
+
+def _tissue(sim, table: dict, where: str) -> None:
+    _unknown(table, TISSUE_KEYS, where)
+    material = _inline_material(table, where)
+    for key, hint in (
+        ("thickness", "the widest gap (m) between organ surfaces the tissue fills, e.g. 0.008"),
+        ("spacing", "the distance (m) between the tissue's integration points, e.g. 0.002"),
+    ):
+        if key not in table:
+            raise SceneError(f"{where}: missing key {key!r}: {hint}")
+    options: dict[str, Any] = {
+        key: _number(table[key], f"{where} {key}", "a number > 0 (m)")
+        for key in ("thickness", "spacing")
+    }
+    for key, unit in (
+        ("density", "kg/m^3"),
+        ("radius_factor", "a factor"),
+        ("attach_distance", "m"),
+        ("attachment_stiffness", "N/m per m^2 of contact"),
+    ):
+        if key in table:
+            options[key] = _number(table[key], f"{where} {key}", f"a number > 0 ({unit})")
+    for key, valid in (("frame_type", ("affine", "rigid")), ("shape", ("wendland", "shepard"))):
+        if key in table:
+            if table[key] not in valid:
+                raise SceneError(
+                    f"{where}: {key} must be {' or '.join(map(repr, valid))}, not {table[key]!r}"
+                )
+            options[key] = table[key]
+    if "frames" in table:
+        frames = table["frames"]
+        if isinstance(frames, list):
+            if not frames:
+                raise SceneError(f"{where}: frames must be a count or a list [[x, y, z], ...]")
+            options["frames"] = np.array(
+                [_vector3(p, f"{where} frames[{i}]") for i, p in enumerate(frames)]
+            )
+        elif isinstance(frames, int) and not isinstance(frames, bool) and frames >= 1:
+            options["frames"] = frames
+        else:
+            raise SceneError(
+                f"{where}: frames must be an integer >= 1 (placed by farthest-point sampling) "
+                f"or a list of rest origins [[x, y, z], ...], not {frames!r}"
+            )
+    if "region" in table:
+        region = table["region"]
+        if not (isinstance(region, dict) and list(region) == ["where"]):
+            raise SceneError(
+                f'{where}: region must be {{ where = "<condition on x, y, z>" }}, e.g. '
+                f'region = {{ where = "abs(y) < 0.02" }}, not {region!r}'
+            )
+        options["region"] = _condition(region["where"], f"{where} region where")
+    with _context(where):
+        sim.add_tissue(material, **options)
+
+
+def _cut(sim, item: dict, where: str) -> None:
+    _unknown(item, CUT_KEYS, where)
+    blade = _required(item, "blade", where)
+    example = '[["-0.07 + 0.14 * t", "-0.05", "0.01"], ["-0.07 + 0.14 * t", "0.05", "0.01"]]'
+    if not (isinstance(blade, list) and all(isinstance(p, list) for p in blade)):
+        raise SceneError(
+            f"{where}: blade must be a polyline of points, each 3 numbers or expressions of t, "
+            f"e.g. blade = {example}; got {blade!r}"
+        )
+    if len(blade) < 2:
+        raise SceneError(
+            f"{where}: blade needs at least 2 points (a polyline), got {len(blade)}; e.g. "
+            f"blade = {example}"
+        )
+    points = [_of_time(p, f"{where} blade[{i}]", "a blade point") for i, p in enumerate(blade)]
+
+    def polyline(t: float) -> np.ndarray:
+        return np.stack([p(t) for p in points])
+
+    start = _number(_required(item, "start", where), f"{where} start", "a time (s)", False)
+    end = _number(_required(item, "end", where), f"{where} end", "a time (s)", False)
+    if not end > start:
+        raise SceneError(f"{where}: end ({end:g} s) must be after start ({start:g} s)")
+    options = {}
+    if "kerf" in item:
+        options["kerf"] = _number(item["kerf"], f"{where} kerf", "a width > 0 (m)")
+    name = item.get("name", "cut")
+    if not (isinstance(name, str) and name):
+        raise SceneError(f"{where}: name must be a non-empty string, e.g. name = 'cut'")
+    if any(c.name == name for c in sim.cuts):
+        raise SceneError(
+            f"{where}: a cut named {name!r} exists already; give each [[cuts]] table its own "
+            f"name = '...'"
+        )
+    with _context(where):
+        sim.add_cut(polyline, start, end, name=name, **options)
