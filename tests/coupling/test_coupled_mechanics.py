@@ -28,6 +28,7 @@ def two_boxes(
     ramp=1.0,
     peel=False,
     tissue_density=10.0,
+    grasper_stiffness=None,
 ):
     lower = box((0, 0, -0.5), (1, 1, 0), (3, 3, 2))
     upper = box((0, 0, GAP), (1, 1, GAP + 0.5), (3, 3, 2))
@@ -44,7 +45,9 @@ def two_boxes(
     held = upper.point_sets["zmax"]
     if peel:  # hold only the end x < 0.35 of the top: the tissue near it strains most
         held = held[upper.points[held, 0] < 0.35]
-    sim.grasp("upper", held, lambda t: (0, 0, lift * min(t / ramp, 1.0)))
+    sim.grasp(
+        "upper", held, lambda t: (0, 0, lift * min(t / ramp, 1.0)), stiffness=grasper_stiffness
+    )
     sim.add_tissue(
         make_material("stvk", youngs_modulus=tissue_E, poisson_ratio=0.3),
         thickness=GAP,
@@ -73,6 +76,23 @@ def test_quasistatic_force_balance():
     assert f["lower.support"][2] < 0.5 * W  # the stretched tissue lifts the lower organ
     np.testing.assert_allclose(total, [0.0, 0.0, W], atol=1e-7 * W)
     assert record.extra["attachment_gap"] < 0.02 * 0.1  # penalty gap << the lift
+
+
+def test_spring_grasper_force_balances_weight_and_lags_its_target():
+    """A soft grip: springs to the moving targets. Its force (sum k (target - x)) and the
+    support carry the weight; the held vertices lag behind the target by force / k."""
+    k = 2000.0
+    sim = two_boxes(grasper_stiffness=k)
+    for _ in range(4):
+        record = sim.step()
+    f = record.extra["forces"]
+    np.testing.assert_allclose(
+        np.add(f["grasper"], f["lower.support"]), [0, 0, total_weight(sim)], atol=1e-6
+    )
+    held = sim._organs["upper"].graspers[0].vertices
+    lag = 0.1 - (sim.organ_positions("upper")[held, 2] - sim.system.organs[1].mesh.points[held, 2])
+    assert lag.sum() * k == pytest.approx(f["grasper"][2], rel=1e-9)
+    assert lag.mean() > 0
 
 
 def test_retraction_force_balances_support_without_gravity():

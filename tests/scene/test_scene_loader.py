@@ -67,6 +67,9 @@ def test_each_example_builds(name):
     sim = scene.simulation
     if isinstance(sim, FrameSimulation):
         assert sim.model.prescribed_frames.size > 0
+    elif isinstance(sim, ts.CoupledSimulation):
+        assert sim.describe()["organs"] and sim.cuts
+        assert any(o["supports"] for o in sim.describe()["organs"].values())
     else:
         assert isinstance(sim, ts.Simulation)
         assert sim.model.prescribed.dofs.size > 0

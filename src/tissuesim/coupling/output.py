@@ -178,7 +178,10 @@ class CoupledRunOutput(RunOutput):
             from tissuesim.render.pyvista3d import GifWriter, render_frame_png
 
             strains = [f[2][2][f[2][1]] for f in self.frames if f[2] is not None]
-            top = max((float(s.max()) for s in strains if s.size), default=0.0)
+            strains = np.concatenate(strains) if strains else np.zeros(0)
+            # one colour range for the whole run; the 99th percentile, so that a few points at
+            # the lips of a cut do not wash out the colours of the rest
+            top = float(np.percentile(strains, 99)) if strains.size else 0.0
             clim = (0.0, max(top, 1e-6))
             camera = render_frame_png(
                 self.directory / "final.png", self._frame3d(self.frames[-1], clim)

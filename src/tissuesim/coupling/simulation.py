@@ -628,7 +628,7 @@ class CoupledSimulation:
         for tool in self.cuts:
             last = self._rest_blades.get(tool.name)
             count = None if last is None else len(last)
-            world = tool.blades(t0, t1, 0.5 * self._spacing, count)
+            world = tool.blades(t0, t1, self._spacing, count)
             if world is None:
                 continue
             rest = self._to_rest(world.reshape(-1, 3)).reshape(world.shape)
@@ -638,6 +638,15 @@ class CoupledSimulation:
                 rest[0] = last
             self._rest_blades[tool.name] = rest[-1]
             triangles = sweep_triangles(rest)
+            # the part of the sweep that passes beyond the tissue cuts nothing
+            pts = t.samples.points
+            lo, hi = pts.min(axis=0) - self._spacing, pts.max(axis=0) + self._spacing
+            inside = np.all((triangles.max(axis=1) >= lo) & (triangles.min(axis=1) <= hi), axis=1)
+            triangles = triangles[inside]
+            if not len(triangles):
+                self._cut_world.append(sweep_triangles(world))
+                events.append({"kind": "cut", "tool": tool.name, "time": t1})
+                continue
             report = d.cut(
                 triangles,
                 tool.kerf,

@@ -49,10 +49,18 @@ def block_pattern(n_frames: int, size: int, frame_stencils: list[np.ndarray]) ->
     cols = (pairs % n)[:, None, None] * size + a[None, :]
     rows, cols = np.broadcast_arrays(rows, cols)
     pattern = SparsityPattern.from_entries(n * size, rows.ravel(), cols.ravel())
-    first = np.asarray(frame_stencils[0], dtype=np.int64)
-    dofs = (first[:, :, None] * size + a).reshape(first.shape[0], -1)  # (q, w)
-    w = dofs.shape[1]
-    scatter = pattern.positions(np.repeat(dofs, w, axis=1), np.tile(dofs, (1, w)))
+    # every DOF row of frame I holds the same blocks, in order of J: the entry (I a, J b) sits
+    # at indptr[I size + a] + rank(I, J) size + b, with rank the position of J among I's
+    # blocks. So the scatter needs one lookup per frame pair, not per entry.
+    first_of_row = np.searchsorted(pairs, (pairs // n) * n)
+    rank = np.arange(pairs.size) - first_of_row
+    st = np.asarray(frame_stencils[0], dtype=np.int64)  # (q, k)
+    q, k = st.shape
+    where = np.searchsorted(pairs, st[:, :, None] * n + st[:, None, :])  # (q, k, k)
+    # positions (q, k, size, k, size): row block i, dof a, column block j, dof b
+    row_start = pattern.indptr[st[:, :, None] * size + a][:, :, :, None, None]  # (q,k,size,1,1)
+    col = (rank[where] * size)[:, :, None, :, None] + a[None, None, None, None, :]
+    scatter = (row_start + col).reshape(q, k * size * k * size)
     return SparsityPattern(pattern.n, pattern.indptr, pattern.indices, pattern.diagonal, (scatter,))
 
 

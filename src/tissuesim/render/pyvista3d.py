@@ -2,16 +2,17 @@
 
 A scene (``Frame3D``) holds organs as triangle surfaces (``SurfaceLayer``), connective tissue as
 points (``PointLayer``, e.g. integration points coloured by strain) and cut surfaces (triangle
-soups, drawn semi-transparent red). Organs are smooth-shaded in their colour (or coloured by
-their ``scalars``), without edges; points are rendered as small spheres; the title is written at
-the top, a legend names the layers (upper right) and one vertical colour bar per scalar name
-sits below it, in a right-hand column the camera keeps the scene clear of.
+soups, drawn semi-transparent red with dark red edges). Organs are smooth-shaded in their colour
+(or coloured by their ``scalars``), without edges; points are rendered as small spheres. The
+title is centred at the top; a right-hand column, which the default camera keeps the scene clear
+of, holds a legend naming the layers, one vertical colour bar per scalar name (stacked) and a
+small x-y-z axes marker. White background.
 
-Without a ``Camera``, the view is fixed from the scene's bounds: from above the front right
-(azimuth -55 degrees, elevation 22 degrees, as the matplotlib renderers), z up, the bounding box
-fitted into the free part of the window with a small margin. ``GifWriter`` fits that view once,
-to the first frame's bounds enlarged by ``_GIF_PAD`` of their size on every side (or takes the
-``camera`` given), so motion shows as motion rather than as a re-centred picture.
+Without a ``Camera``, the view looks from above the front right (azimuth -55 degrees, elevation
+22 degrees, as the matplotlib renderers), z up, with the scene's points fitted into the free part
+of the window with a small margin (4 % of the scene's size). ``GifWriter`` fits that view once,
+to the first frame enlarged by 15 % of its size on every side (or takes the ``camera`` given),
+so motion shows as motion rather than as a re-centred picture.
 
 PyVista is an optional dependency (``pip install 'tissuesim[pyvista]'``), imported only when a
 picture is made. Rendering is off-screen (``pyvista.OFF_SCREEN``); PNG and GIF files are written
@@ -44,14 +45,15 @@ _PNG_PAD = 0.04  # PNG: bounds enlarged by this fraction of their largest size o
 _GIF_PAD = 0.15  # GIF: bounds of the first frame enlarged by this fraction on every side
 # free part of the window for the scene, in normalised window coordinates (x0, y0, x1, y1):
 # the right-hand column holds the legend and colour bars, the top strip the title
-_SCENE_BOX = (0.03, 0.04, 0.80, 0.90)
-_COLUMN_X = 0.82  # left edge of the right-hand column: legend on top, colour bars, axes
+_SCENE_BOX = (0.03, 0.04, 0.79, 0.90)
+_COLUMN_X = 0.80  # left edge of the right-hand column: legend on top, colour bars, axes
 _BAR_BOX = (0.84, 0.20, 0.99, 0.62)  # colour bars (x0, y0, x1, y1)
 _AXES_BOX = (0.84, 0.0, 0.99, 0.16)  # the small x-y-z axes
 _LEGEND_TOP = 0.88  # top of the legend (normalised window height)
 _CUT_COLOUR = "#e0201b"
 _POINT_COLOUR = "#404040"  # points without scalars
 _BACKGROUND = "white"
+_KEY_WEIGHT = 0.05  # GIF palettes: weight of the key colours (bars, legend) against the picture
 
 
 def _import_pyvista():
@@ -293,13 +295,19 @@ def _apply_camera(plotter, camera: Camera) -> None:
 # ---- drawing --------------------------------------------------------------------------------
 
 
-def _new_plotter(pv, window_size: tuple[int, int]):
+def _check_window(window_size: tuple[int, int]) -> tuple[int, int]:
     w, h = (int(s) for s in window_size)
     if w < 16 or h < 16:
         raise ValueError(f"window_size must be at least (16, 16), got {window_size}")
+    return w, h
+
+
+def _new_plotter(pv, window_size: tuple[int, int]):
+    w, h = _check_window(window_size)
     plotter = pv.Plotter(off_screen=True, window_size=(w, h), lighting="light_kit")
     plotter.set_background(_BACKGROUND)
     plotter.enable_anti_aliasing("ssaa")
+    plotter.enable_depth_peeling(number_of_peels=4)  # translucent organs and cuts
     plotter.add_axes(color="black", viewport=_AXES_BOX, line_width=2)
     return plotter
 
@@ -341,21 +349,29 @@ def _clims(groups: dict[str, dict[str, Any]], seen: dict[str, tuple[float, float
     for title, g in groups.items():
         data = seen.get(title, g["data"]) if seen is not None else g["data"]
         lo, hi = _union(g["clim"], data) or (0.0, 1.0)
-        if hi <= lo:  # a constant field: a small range around it, so the colour map works
-            d = 0.5 * max(abs(lo) * 1e-3, 1e-12)
-            lo, hi = lo - d, hi + d
+        if hi <= lo:  # a constant field: 0 .. 1 for zero (e.g. no strain yet), else +-5 %
+            lo, hi = (0.0, 1.0) if lo == 0.0 else (lo - 0.05 * abs(lo), lo + 0.05 * abs(lo))
         out[title] = (lo, hi)
     return out
 
 
 def _font_sizes(window_size: tuple[int, int]) -> tuple[int, int]:
-    """(title, label) font sizes for the window, readable from 400 to 2000 pixels tall."""
+    """(title, label) font sizes for the window, readable from 400 to 2000 pixels tall.
+
+    In PyVista's units: text of size f is about 1.5 f pixels tall and 0.95 f wide per letter.
+    """
     scale = min(window_size[0] / 1024, window_size[1] / 768)
-    return max(9, round(15 * scale)), max(7, round(12 * scale))
+    return max(8, round(13 * scale)), max(7, round(11 * scale))
 
 
-def _draw(pv, plotter, frame: Frame3D, clims: dict[str, tuple[float, float]], camera: Camera):
-    """Replace the plotter's scene by ``frame`` seen through ``camera``."""
+def _draw(
+    pv, plotter, frame: Frame3D, clims: dict[str, tuple[float, float]], camera: Camera
+) -> np.ndarray:
+    """Replace the plotter's scene by ``frame`` seen through ``camera``.
+
+    Returns the picture's key colours (k, 3) uint8: samples of each colour bar and the legend's
+    colours (small areas that a GIF palette must not lose).
+    """
     for title in list(plotter.scalar_bars.keys()):
         plotter.remove_scalar_bar(title, render=False)
     plotter.clear_actors()  # surfaces, points, text and the legend's 2D actors
@@ -376,6 +392,8 @@ def _draw(pv, plotter, frame: Frame3D, clims: dict[str, tuple[float, float]], ca
             specular=0.25,
             specular_power=20.0,
             show_scalar_bar=False,
+            reset_camera=False,
+            render=False,  # else PyVista re-renders the whole scene after every add
         )
         if s.scalars is None:
             actor = plotter.add_mesh(mesh, color=s.color, **style)
@@ -396,6 +414,8 @@ def _draw(pv, plotter, frame: Frame3D, clims: dict[str, tuple[float, float]], ca
             render_points_as_spheres=True,
             ambient=0.25,
             show_scalar_bar=False,
+            reset_camera=False,
+            render=False,
         )
         if p.scalars is None:
             plotter.add_mesh(cloud, color=_POINT_COLOUR, **style)
@@ -421,34 +441,63 @@ def _draw(pv, plotter, frame: Frame3D, clims: dict[str, tuple[float, float]], ca
             show_edges=True,
             edge_color="#7a0000",
             line_width=0.8,
+            reset_camera=False,
+            render=False,
         )
         legend.append(("cut", _CUT_COLOUR))
 
-    # colour bars side by side in the right-hand column, legend above them
+    # colour bars stacked in the right-hand column under the legend, title on top
+    w, h = plotter.window_size
     x0, y0, x1, y1 = _BAR_BOX
-    width = (x1 - x0) / max(1, len(mappers))
+    slot = (y1 - y0) / max(1, len(mappers))
+    bar_font = round(1.5 * label_size)  # VTK's scalar bar font sizes are about pixels
+    shown: set[str] = set()
     for i, (title, mapper) in enumerate(mappers.items()):
-        plotter.add_scalar_bar(
-            title=title,
+        name = _fit_text(title, (1.0 - x0) * w - 4, 0.62 * (bar_font + 2))
+        while name in shown:  # PyVista merges bars of equal titles
+            name += " "
+        shown.add(name)
+        bar = plotter.add_scalar_bar(
+            title=name,
             mapper=mapper,
             vertical=True,
-            position_x=x0 + i * width,
-            position_y=y0,
-            width=min(0.05, 0.4 * width),
-            height=y1 - y0,
-            n_labels=5,
+            position_x=x0,
+            position_y=y1 - (i + 1) * slot + 0.02,
+            width=min(0.05, 0.3 * (x1 - x0)),
+            height=slot - 0.02,
+            n_labels=5 if slot > 0.25 else 3,
             fmt="%.3g",
             color="black",
-            title_font_size=label_size + 2,
-            label_font_size=label_size,
+            title_font_size=bar_font + 2,
+            label_font_size=bar_font,
             unconstrained_font_size=True,
+            render=False,
         )
+        bar.SetVerticalTitleSeparation(round(0.8 * label_size))
     _add_legend(plotter, legend, label_size)
     if frame.title:
-        plotter.add_text(
-            frame.title, position="upper_edge", font_size=title_size, color="black", render=False
+        # shrink a long title to fit the width (PyVista text: letters about 0.95 size wide)
+        size = max(7, min(title_size, int(0.96 * w / (0.95 * len(frame.title)))))
+        text = plotter.add_text(
+            _fit_text(frame.title, 0.96 * w, 0.95 * size),
+            position=(0.5 * w, h - 2.8 * size),
+            font_size=size,
+            color="black",
+            render=False,
         )
+        text.GetTextProperty().SetJustificationToCentered()
     _apply_camera(plotter, camera)
+    keys = [np.array([pv.Color(c).int_rgb for _, c in legend], dtype=np.uint8).reshape(-1, 3)]
+    for m in mappers.values():
+        table = pv.convert_array(m.lookup_table.GetTable())[:, :3]
+        keys.append(table[np.linspace(0, len(table) - 1, 32).astype(np.int64)].astype(np.uint8))
+    return np.concatenate(keys)
+
+
+def _fit_text(text: str, room: float, letter: float) -> str:
+    """``text`` cut to about ``room`` pixels at ``letter`` pixels a letter (ending in "..")."""
+    fits = max(3, int(room / letter))
+    return text if len(text) <= fits else text[: fits - 2] + ".."
 
 
 def _add_legend(plotter, entries: list[tuple[str, str]], font_size: int) -> None:
@@ -457,11 +506,17 @@ def _add_legend(plotter, entries: list[tuple[str, str]], font_size: int) -> None
     from vtkmodules.vtkCommonDataModel import vtkCellArray, vtkPolyData
     from vtkmodules.vtkRenderingCore import vtkActor2D, vtkPolyDataMapper2D
 
+    if not entries:
+        return
     pv = _import_pyvista()
     w, h = plotter.window_size
-    box = round(0.9 * font_size)
-    step = round(1.75 * font_size)
     x = _COLUMN_X * w
+    room = w - x - 8  # pixels for square, gap and name
+    longest = max(len(name) for name, _ in entries)
+    # shrink the font (to no less than 7) so the longest name fits, then cut names still too long
+    font_size = max(7, min(font_size, int(room / (0.95 * longest + 2.0))))
+    box = round(1.1 * font_size)
+    step = round(2.0 * font_size)
     for k, (name, colour) in enumerate(entries):
         y = _LEGEND_TOP * h - (k + 1) * step
         pts = vtkPoints()
@@ -479,8 +534,8 @@ def _add_legend(plotter, entries: list[tuple[str, str]], font_size: int) -> None
         actor.GetProperty().SetColor(pv.Color(colour).float_rgb)
         plotter.add_actor(actor, reset_camera=False, render=False)
         plotter.add_text(
-            name,
-            position=(x + box + 0.6 * font_size, y - 0.1 * font_size),
+            _fit_text(name, room - box - 0.7 * font_size, 0.95 * font_size),
+            position=(x + box + 0.7 * font_size, y - 0.3 * font_size),
             font_size=font_size,
             color="black",
             render=False,
@@ -488,6 +543,8 @@ def _add_legend(plotter, entries: list[tuple[str, str]], font_size: int) -> None
 
 
 def _screenshot(plotter) -> np.ndarray:
+    """(h, w, 3) uint8 picture of the current scene, freshly rendered."""
+    plotter.render()  # PyVista's screenshot re-renders only the first time
     img = plotter.screenshot(return_img=True)
     return np.ascontiguousarray(img[..., :3], dtype=np.uint8)
 
@@ -512,6 +569,7 @@ def render_frame_png(
     pv = _import_pyvista()
     if not isinstance(frame, Frame3D):
         raise TypeError(f"frame must be a Frame3D, got {type(frame).__name__}")
+    window_size = _check_window(window_size)
     if camera is None:
         camera = _fit_camera(_scene_points(frame), window_size, _PNG_PAD)
     plotter = _new_plotter(pv, window_size)
@@ -529,6 +587,29 @@ def render_frame_png(
 # ---- GIF ------------------------------------------------------------------------------------
 
 
+def _to_palette(img: np.ndarray, keys: np.ndarray):
+    """Pillow 256-colour ("P") image of img (h, w, 3), with its own palette, not dithered.
+
+    Median cut spends colours on the picture's big areas, so small ones (a colour bar, legend
+    squares) come out banded or wrong; the key colours keys (k, 3) are appended as a strip
+    weighing ``_KEY_WEIGHT`` of the picture while the palette is made. Dithering would make every
+    frame differ everywhere (large files, flicker).
+    """
+    from PIL import Image
+
+    h, w = img.shape[:2]
+    stack = img
+    if len(keys):
+        strip = np.repeat(keys, max(1, round(_KEY_WEIGHT * h * w / len(keys))), axis=0)
+        rows = -(-len(strip) // w)
+        strip = np.concatenate([strip, np.repeat(strip[-1:], rows * w - len(strip), axis=0)])
+        stack = np.concatenate([img, strip.reshape(rows, w, 3)])
+    pal = Image.fromarray(stack).quantize(
+        256, method=Image.Quantize.MEDIANCUT, dither=Image.Dither.NONE
+    )
+    return pal.crop((0, 0, w, h)) if len(keys) else pal
+
+
 class GifWriter:
     """Collect frames of a run into an animated GIF (looping forever), written by ``close()``.
 
@@ -544,7 +625,8 @@ class GifWriter:
     new k are dropped. So a long run ends up with every k-th frame, evenly spaced, and frames
     that will not be kept are never rendered. The last frame added is always shown (rendered
     by ``close()``, replacing the last kept one if the budget is full). As with any GIF writer,
-    pixel-identical consecutive frames are merged into one longer frame.
+    pixel-identical consecutive frames are merged into one longer frame. Kept frames are held
+    in memory until ``close()``, about width x height bytes each (96 MB for 200 at 800 x 600).
 
     Use as a context manager (``with GifWriter(p) as gif: gif.add(f)``): on a normal exit the
     GIF is written, after an exception nothing is written and the plotter is released.
@@ -565,7 +647,7 @@ class GifWriter:
         if max_frames < 1:
             raise ValueError(f"max_frames must be >= 1, got {max_frames}")
         self.path = Path(path)
-        self.window_size = (int(window_size[0]), int(window_size[1]))
+        self.window_size = _check_window(window_size)
         self.fps = int(fps)
         self.max_frames = int(max_frames)
         self._camera = camera
@@ -656,15 +738,10 @@ class GifWriter:
             self._release()
 
     def _render(self, frame: Frame3D):
-        from PIL import Image
-
         if self._plotter is None:
             self._plotter = _new_plotter(self._pv, self.window_size)
         if self._camera is None:
             self._camera = _fit_camera(_scene_points(frame), self.window_size, _GIF_PAD)
         clims = _clims(_scalar_groups(frame), self._seen)
-        _draw(self._pv, self._plotter, frame, clims, self._camera)
-        img = Image.fromarray(_screenshot(self._plotter))
-        # each frame gets its own 256-colour palette; no dithering (it would make every frame
-        # differ everywhere and the file large)
-        return img.quantize(256, method=Image.Quantize.MEDIANCUT, dither=Image.Dither.NONE)
+        keys = _draw(self._pv, self._plotter, frame, clims, self._camera)
+        return _to_palette(_screenshot(self._plotter), keys)
