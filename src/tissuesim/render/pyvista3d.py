@@ -2,8 +2,9 @@
 
 A scene (``Frame3D``) holds organs as triangle surfaces (``SurfaceLayer``), connective tissue as
 points (``PointLayer``, e.g. integration points coloured by strain) and cut surfaces (triangle
-soups, drawn semi-transparent red with dark red edges). Organs are smooth-shaded in their colour
-(or coloured by their ``scalars``), without edges; points are rendered as small spheres. The
+soups, drawn semi-transparent red, with dark red edges if they have few triangles). Organs are
+smooth-shaded in their colour (or coloured by their ``scalars``), without edges; points are
+rendered as small spheres. Translucent meshes are drawn back to front (no depth peeling). The
 title is centred at the top; a right-hand column, which the default camera keeps the scene clear
 of, holds a legend naming the layers, one vertical colour bar per scalar name (stacked) and a
 small x-y-z axes marker. White background.
@@ -51,6 +52,7 @@ _BAR_BOX = (0.84, 0.20, 0.99, 0.62)  # colour bars (x0, y0, x1, y1)
 _AXES_BOX = (0.84, 0.0, 0.99, 0.16)  # the small x-y-z axes
 _LEGEND_TOP = 0.88  # top of the legend (normalised window height)
 _CUT_COLOUR = "#e0201b"
+_CUT_EDGES_MAX = 400  # cuts of up to this many triangles show their edges (more: a plain sheet)
 _POINT_COLOUR = "#404040"  # points without scalars
 _BACKGROUND = "white"
 _KEY_WEIGHT = 0.05  # GIF palettes: weight of the key colours (bars, legend) against the picture
@@ -307,7 +309,6 @@ def _new_plotter(pv, window_size: tuple[int, int]):
     plotter = pv.Plotter(off_screen=True, window_size=(w, h), lighting="light_kit")
     plotter.set_background(_BACKGROUND)
     plotter.enable_anti_aliasing("ssaa")
-    plotter.enable_depth_peeling(number_of_peels=4)  # translucent organs and cuts
     plotter.add_axes(color="black", viewport=_AXES_BOX, line_width=2)
     return plotter
 
@@ -379,10 +380,28 @@ def _draw(
     title_size, label_size = _font_sizes(plotter.window_size)
     mappers: dict[str, Any] = {}
     legend: list[tuple[str, str]] = []
+    eye = np.asarray(camera.position)
+    translucent: list[tuple[float, Any, dict[str, Any], str | None]] = []
+
+    def add(mesh, style: dict[str, Any], bar: str | None = None) -> None:
+        actor = plotter.add_mesh(mesh, reset_camera=False, render=False, **style)
+        # (render=False: else PyVista re-renders the whole scene after every add)
+        if bar is not None:
+            mappers.setdefault(bar, actor.mapper)
+
+    def add_surface(points: np.ndarray, tri: np.ndarray, style: dict[str, Any], bar=None):
+        if style["opacity"] >= 1.0:
+            add(pv.PolyData.from_regular_faces(points, tri), style, bar)
+            return
+        # no depth peeling (broken in some Mesa/EGL builds): translucent triangles are drawn
+        # back to front instead, and translucent meshes after the opaque ones, far to near
+        depth = np.linalg.norm(points[tri].mean(axis=1) - eye, axis=1)
+        mesh = pv.PolyData.from_regular_faces(points, tri[np.argsort(-depth, kind="stable")])
+        translucent.append((float(depth.mean()), mesh, style, bar))
+
     for s in frame.surfaces:
         if not len(s.triangles):
             continue
-        mesh = pv.PolyData.from_regular_faces(s.points, s.triangles)
         style: dict[str, Any] = dict(
             opacity=s.opacity,
             smooth_shading=True,
@@ -392,59 +411,47 @@ def _draw(
             specular=0.25,
             specular_power=20.0,
             show_scalar_bar=False,
-            reset_camera=False,
-            render=False,  # else PyVista re-renders the whole scene after every add
         )
         if s.scalars is None:
-            actor = plotter.add_mesh(mesh, color=s.color, **style)
+            add_surface(s.points, s.triangles, dict(style, color=s.color))
             legend.append((s.name, s.color))
         else:
-            mesh.point_data[s.name] = s.scalars
-            actor = plotter.add_mesh(
-                mesh, scalars=s.name, cmap="viridis", clim=clims[s.name], **style
-            )
-            mappers.setdefault(s.name, actor.mapper)
+            style.update(scalars=s.scalars, cmap="viridis", clim=clims[s.name])
+            add_surface(s.points, s.triangles, style, s.name)
     for p in frame.points:
         if not len(p.points):
             continue
-        cloud = pv.PolyData(p.points)
         style = dict(
             style="points",
             point_size=p.point_size,
             render_points_as_spheres=True,
             ambient=0.25,
             show_scalar_bar=False,
-            reset_camera=False,
-            render=False,
         )
         if p.scalars is None:
-            plotter.add_mesh(cloud, color=_POINT_COLOUR, **style)
+            add(pv.PolyData(p.points), dict(style, color=_POINT_COLOUR))
             legend.append((p.name, _POINT_COLOUR))
         else:
-            cloud.point_data[p.bar_title] = p.scalars
             clim = clims[p.bar_title]
-            actor = plotter.add_mesh(cloud, scalars=p.bar_title, cmap=p.cmap, clim=clim, **style)
-            mappers.setdefault(p.bar_title, actor.mapper)
-            mid = actor.mapper.lookup_table.map_value(0.5 * (clim[0] + clim[1]))
+            style.update(scalars=p.scalars, cmap=p.cmap, clim=clim)
+            add(pv.PolyData(p.points), style, p.bar_title)
+            mid = mappers[p.bar_title].lookup_table.map_value(0.5 * (clim[0] + clim[1]))
             legend.append((p.name, pv.Color(mid).hex_rgb))
     if frame.cuts:
-        tris = np.concatenate(frame.cuts)
-        cut = pv.PolyData.from_regular_faces(
-            tris.reshape(-1, 3), np.arange(3 * len(tris)).reshape(-1, 3)
-        )
-        plotter.add_mesh(
-            cut,
-            color=_CUT_COLOUR,
+        corners = np.concatenate(frame.cuts).reshape(-1, 3)
+        style = dict(
             opacity=0.55,
+            color=_CUT_COLOUR,
             ambient=0.35,
             diffuse=0.7,
-            show_edges=True,
+            show_edges=len(corners) <= 3 * _CUT_EDGES_MAX,
             edge_color="#7a0000",
             line_width=0.8,
-            reset_camera=False,
-            render=False,
         )
+        add_surface(corners, np.arange(len(corners)).reshape(-1, 3), style)
         legend.append(("cut", _CUT_COLOUR))
+    for _, mesh, style, bar in sorted(translucent, key=lambda item: -item[0]):
+        add(mesh, style, bar)
 
     # colour bars stacked in the right-hand column under the legend, title on top
     w, h = plotter.window_size
@@ -453,7 +460,7 @@ def _draw(
     bar_font = round(1.5 * label_size)  # VTK's scalar bar font sizes are about pixels
     shown: set[str] = set()
     for i, (title, mapper) in enumerate(mappers.items()):
-        name = _fit_text(title, (1.0 - x0) * w - 4, 0.62 * (bar_font + 2))
+        name = _fit_text(title, (1.0 - _COLUMN_X) * w - 4, 0.45 * (bar_font + 2))
         while name in shown:  # PyVista merges bars of equal titles
             name += " "
         shown.add(name)
