@@ -34,7 +34,7 @@ def run_scene(steps: int | None, tissue: bool = True) -> tuple[list, float, obje
         sim._tissue, sim.cuts = None, []
     steps = steps or int(scene.run.get("steps", 120))
     start = time.perf_counter()
-    sim._build()
+    sim.build()
     setup = time.perf_counter() - start
     records = [sim.step() for _ in range(steps)]
     return records, setup, sim
@@ -73,7 +73,7 @@ def main() -> None:
         summarise(phase(records, c1 + sim.time_step, np.inf), f"after the cut (t > {c1:g} s)"),
         summarise(records, "all steps"),
     ]
-    grasper = next(iter(g.name for o in sim._organs.values() for g in o.graspers))
+    grasper = sim.graspers[0].name
     curve = [
         {
             "time": r.time,
@@ -90,7 +90,7 @@ def main() -> None:
     ]
     weight = None
     if sim.gravity is not None:
-        held = next(o.name for o in sim._organs.values() for g in o.graspers if g.name == grasper)
+        held = sim.graspers[0].organ
         m = sim.system.organs[sim.organ_names.index(held)]
         weight = float(m.mass.lumped.sum() / 3 * np.linalg.norm(sim.gravity))
     reference = None

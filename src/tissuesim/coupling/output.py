@@ -50,13 +50,14 @@ class CoupledRunOutput(RunOutput):
         render: bool = True,
         metadata: dict | None = None,
     ) -> None:
-        sim._build()
+        sim.build()
         super().__init__(sim, directory, every=every, render=render, metadata=metadata)
         self.organ_series: list[VTUSeriesWriter] = []
         self.point_series: VTUSeriesWriter | None = None
         self.cut_series: VTUSeriesWriter | None = None
         self.surfaces = [boundary_facets(m.mesh.cells) for m in sim.system.organs]
-        self._last_points = None if sim._tissue is None else sim._tissue.samples.points.copy()
+        samples = sim.tissue_samples
+        self._last_points = None if samples is None else samples.points.copy()
         self.pictures: str = "not rendered"
 
     def _describe_body(self) -> dict[str, Any]:
@@ -66,8 +67,8 @@ class CoupledRunOutput(RunOutput):
         sim = self.sim
         for name, model in zip(sim.organ_names, sim.system.organs, strict=True):
             self.organ_series.append(VTUSeriesWriter(self.directory, model.mesh, name))
-        if sim._tissue is not None:
-            n = sim._tissue.samples.n
+        if sim.tissue_samples is not None:
+            n = sim.tissue_samples.n
             ids = np.arange(n, dtype=np.int64)[:, None]
             self.point_series = VTUSeriesWriter(
                 self.directory, None, "tissue_points", cells=("vertex", ids), n_points=n
@@ -83,12 +84,12 @@ class CoupledRunOutput(RunOutput):
     def _tissue_state(self):
         """All original tissue points: positions (dead ones where last seen), alive, strain."""
         sim = self.sim
-        t = sim._tissue
-        if t is None:
+        samples = sim.tissue_samples
+        if samples is None:
             return None
         alive = sim.dissection.alive
-        strain = np.zeros(t.samples.n)
-        J = np.ones(t.samples.n)
+        strain = np.zeros(samples.n)
+        J = np.ones(samples.n)
         f = sim.tissue_fields()
         if f:
             self._last_points[f["ids"]] = f["positions"]
@@ -121,10 +122,10 @@ class CoupledRunOutput(RunOutput):
                     "alive": alive.astype(np.int8),
                     "max_principal_strain": strain,
                     "J": J,
-                    "displacement": p - sim._tissue.samples.points,
+                    "displacement": p - sim.tissue_samples.points,
                 },
             )
-        cut = np.concatenate(sim._cut_world) if sim._cut_world else np.zeros((0, 3, 3))
+        cut = sim.cut_surface
         if self.cut_series is not None and len(cut):
             self.cut_series.write(
                 time,
@@ -167,7 +168,7 @@ class CoupledRunOutput(RunOutput):
         return Frame3D(surfaces, points, [cut] if len(cut) else [], title)
 
     def _forces_at(self, t: float) -> float | None:
-        graspers = [g.name for o in self.sim._organs.values() for g in o.graspers]
+        graspers = [g.name for g in self.sim.graspers]
         for r in self.sim.history:
             if abs(r.time - t) < 1e-12 and graspers:
                 return float(np.linalg.norm(r.extra["forces"][graspers[0]]))

@@ -379,7 +379,9 @@ class CoupledSimulation:
     def organ_names(self) -> list[str]:
         return list(self._organs)
 
-    def _build(self) -> None:
+    def build(self) -> None:
+        """Assemble the bodies, attachments and the global system (done by the first step;
+        call it to inspect ``system`` earlier). Set-up methods are refused afterwards."""
         if self.system is not None:
             return
         if not self._organs:
@@ -470,13 +472,27 @@ class CoupledSimulation:
 
     def organ_positions(self, name: str) -> np.ndarray:
         """Current vertex positions (n, 3) of an organ."""
-        self._build()
+        self.build()
         j = self.organ_names.index(self._organ(name).name)
         return self.system.organ_x(self.state.x, j).reshape(-1, 3)
 
     @property
+    def tissue_samples(self) -> IntegrationPoints | None:
+        """The tissue's original integration points (rest), before any cut or tear."""
+        return None if self._tissue is None else self._tissue.samples
+
+    @property
+    def cut_surface(self) -> np.ndarray:
+        """Triangles (m, 3, 3) the blades swept through so far, in world coordinates as cut."""
+        return np.concatenate(self._cut_world) if self._cut_world else np.zeros((0, 3, 3))
+
+    @property
+    def graspers(self) -> list[Grasper]:
+        return [g for o in self._organs.values() for g in o.graspers]
+
+    @property
     def tissue(self) -> FrameModel | None:
-        self._build()
+        self.build()
         return self.system.tissue
 
     def tissue_fields(self) -> dict[str, np.ndarray]:
@@ -504,7 +520,7 @@ class CoupledSimulation:
     def forces(self) -> dict[str, list[float]]:
         """Force (N) each grasper and support applies to its organ at the current state (the
         reaction of prescribed vertices; the springs' pull for spring graspers)."""
-        self._build()
+        self.build()
         out: dict[str, list[float]] = {}
         g = self._last_gradient
         for j, o in enumerate(self._organs.values()):
@@ -569,7 +585,7 @@ class CoupledSimulation:
 
     def step(self) -> StepRecord:
         """Advance one time step (halving on failure), then apply cuts and tearing."""
-        self._build()
+        self.build()
         solver = self._linear_solver()
         start = wallclock.perf_counter()
         t0 = self.time
@@ -669,11 +685,12 @@ class CoupledSimulation:
         ) or any(e["kind"] == "tear" for e in events)
         if not changed:  # the blade is still outside the tissue: nothing to rebuild
             return events
-        inverted = 0
+        inverted, report = 0, {}
         for _ in range(10):
-            report = d.consolidate(
+            more = d.consolidate(
                 t.frames, t.samples.points, [c[1] for c in t.contacts], self._radii, t.shape
             )
+            report = {k: report.get(k, 0) + v for k, v in more.items()}
             self._rebuild()
             # renormalised weights change F at once; a point they leave inverted (at the lips
             # of a cut) has no finite neo-Hookean energy: it is removed like the kerf
