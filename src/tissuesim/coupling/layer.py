@@ -22,6 +22,7 @@ from tissuesim.frames.sampling import (
     _count,
     _grid,
     _positive,
+    cell_points,
 )
 from tissuesim.mesh.boundary import boundary_facets
 from tissuesim.mesh.locate import MeshLocator
@@ -93,15 +94,7 @@ def _sample_cells_staggered(
         count = mask.sum(axis=1)
         some = count > 0
         sub, mask, count = sub[some], mask[some], count[some]
-        centroid = np.einsum("ks,ksi->ki", mask.astype(np.float64), sub) / count[:, None]
-        cut = np.flatnonzero(count < len(offsets))
-        if len(cut):
-            outside = ~inside(centroid[cut])
-            if outside.any():
-                k = cut[outside]
-                d2 = ((sub[k] - centroid[k, None, :]) ** 2).sum(axis=2)
-                d2[~mask[k]] = np.inf
-                centroid[k] = sub[k, np.argmin(d2, axis=1)]
+        centroid = cell_points(sub, mask, inside)
         out_points.append(centroid)
         out_fractions.append(count / len(offsets))
     return np.concatenate(out_points), np.concatenate(out_fractions)

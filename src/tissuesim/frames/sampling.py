@@ -259,6 +259,25 @@ def _grid(lower: np.ndarray, upper: np.ndarray, spacing: float):
     return divisions, h, centres
 
 
+def cell_points(
+    sub: np.ndarray, mask: np.ndarray, inside: Callable[[np.ndarray], np.ndarray]
+) -> np.ndarray:
+    """One point per cell (k,) from its sub-samples sub (k, s, 3) and their inside mask (k, s),
+    every cell with at least one inside: the centroid of the inside sub-samples, or, where the
+    region is not convex and that centroid falls outside, the inside sub-sample nearest to it."""
+    count = mask.sum(axis=1)
+    centroid = np.einsum("ks,ksi->ki", mask.astype(np.float64), sub) / count[:, None]
+    cut = np.flatnonzero(count < mask.shape[1])
+    if len(cut):
+        outside = ~inside(centroid[cut])
+        if outside.any():
+            k = cut[outside]
+            d2 = ((sub[k] - centroid[k, None, :]) ** 2).sum(axis=2)
+            d2[~mask[k]] = np.inf
+            centroid[k] = sub[k, np.argmin(d2, axis=1)]
+    return centroid
+
+
 def _sample_cells(
     centres: np.ndarray,
     h: np.ndarray,
@@ -290,15 +309,7 @@ def _sample_cells(
         count = mask.sum(axis=1)
         some = count > 0
         cells, sub, mask, count = cells[some], sub[some], mask[some], count[some]
-        centroid = np.einsum("ks,ksi->ki", mask.astype(np.float64), sub) / count[:, None]
-        cut = np.flatnonzero(count < len(offsets))
-        if len(cut):
-            outside = ~inside(centroid[cut])
-            if outside.any():
-                k = cut[outside]
-                d2 = ((sub[k] - centroid[k, None, :]) ** 2).sum(axis=2)
-                d2[~mask[k]] = np.inf
-                centroid[k] = sub[k, np.argmin(d2, axis=1)]
+        centroid = cell_points(sub, mask, inside)
         points[cells] = centroid
         fractions[cells] = count / len(offsets)
     keep = fractions > 0
