@@ -193,7 +193,10 @@ class SuperLUSolver(LinearSolver):
         options = {"SymmetricMode": True}
         if self._perm is None:
             self._lu = spla.splu(A.tocsc(), permc_spec="MMD_AT_PLUS_A", options=options)
-            self._perm = self._lu.perm_c.copy()
+            # perm_c sends column j to position perm_c[j]; the ordering as a gather index
+            # (A[p][:, p]) is its inverse. Using perm_c itself gave 4x the fill and 20x the
+            # time on a coupled organ/tissue matrix.
+            self._perm = np.argsort(self._lu.perm_c)
             self._permuted = False
             return
         p = self._perm
