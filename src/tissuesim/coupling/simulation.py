@@ -723,8 +723,7 @@ class CoupledSimulation:
         n_org = old.tissue_config.start
         z, vz = self.state.x[old.tissue_config], self.state.v[old.tissue_tangent]
         self.system = self._make_system(tissue)
-        if tissue is None:  # all tissue gone: keep the last frames for pictures, drop the DOFs
-            self._frozen_tissue = (z, vz)
+        if tissue is None:  # all tissue gone: the organs go on alone (output keeps its last look)
             x, v = self.state.x[:n_org], self.state.v[:n_org]
         else:
             x = np.concatenate([self.state.x[:n_org], z])
