@@ -2,12 +2,13 @@
 time per step, Newton iterations per step, the grasper's force curve, the cost of the cut steps,
 and, as a reference measured in the same run, the same organs and grasper without the tissue.
 
-    python benchmarks/coupled_retraction.py            # full scene (a few minutes on 2 cores)
+    python benchmarks/coupled_retraction.py            # 3 runs of the full scene (~5 min, 2 cores)
     python benchmarks/coupled_retraction.py --quick    # first 6 steps, no reference run
     python benchmarks/coupled_retraction.py --out DIR  # write DIR/coupled_retraction.{json,md}
 
 Times are wall-clock seconds of ``CoupledSimulation.step`` (assembly, Newton, reactions, cuts and
-rebuilds), without output or pictures; medians over the steps of each phase.
+rebuilds), without output or pictures; per phase, the median over the steps of a run, then the
+median over ``--repeats`` runs (the reference likewise).
 """
 
 from __future__ import annotations
@@ -66,17 +67,30 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true")
     parser.add_argument("--out", default=str(Path(__file__).parent / "results"))
+    parser.add_argument("--repeats", type=int, default=3, help="whole-scene runs (timing medians)")
     args = parser.parse_args()
     steps = 6 if args.quick else None
-    records, setup, sim = run_scene(steps)
+    repeats = 1 if args.quick else max(1, args.repeats)
+    runs = [run_scene(steps) for _ in range(repeats)]
+    records, setup, sim = runs[0]  # the physics is deterministic: curve and counts from run 1
     cut = sim.cuts[0] if sim.cuts else None
     c0, c1 = (cut.start, cut.end) if cut else (np.inf, np.inf)
-    phases = [
-        summarise(phase(records, -1, c0), f"retraction and hold (t <= {c0:g} s)"),
-        summarise(phase(records, c0, c1 + sim.time_step), f"cutting ({c0:g} < t <= {c1:g} s)"),
-        summarise(phase(records, c1 + sim.time_step, np.inf), f"after the cut (t > {c1:g} s)"),
-        summarise(records, "all steps"),
+    bounds = [
+        (-1, c0, f"retraction and hold (t <= {c0:g} s)"),
+        (c0, c1 + sim.time_step, f"cutting ({c0:g} < t <= {c1:g} s)"),
+        (c1 + sim.time_step, np.inf, f"after the cut (t > {c1:g} s)"),
+        (-1, np.inf, "all steps"),
     ]
+    phases = []
+    for lo, hi, label in bounds:
+        each = [summarise(phase(r[0], lo, hi), label) for r in runs]
+        row = dict(each[0])
+        for key in ("median_step_s", "max_step_s", "median_s_per_newton_iteration"):
+            values = [e[key] for e in each if e[key] is not None]
+            row[key] = statistics.median(values) if values else None
+        row["runs"] = len(each)
+        phases.append(row)
+    setup = statistics.median(r[1] for r in runs)
     grasper = sim.graspers[0].name
     curve = [
         {
@@ -105,8 +119,11 @@ def main() -> None:
         weight = float(m.mass.lumped.sum() / 3 * np.linalg.norm(sim.gravity))
     reference = None
     if not args.quick:
-        ref_records, _, _ = run_scene(len(records), tissue=False)
-        ref = summarise(ref_records, "organs only")
+        refs = [summarise(run_scene(len(records), tissue=False)[0], "") for _ in range(repeats)]
+        ref = {
+            key: statistics.median(r[key] for r in refs)
+            for key in ("median_step_s", "median_s_per_newton_iteration", "newton_mean")
+        }
         reference = {
             "organs_only_median_step_s": ref["median_step_s"],
             "organs_only_s_per_newton_iteration": ref["median_s_per_newton_iteration"],
@@ -133,7 +150,9 @@ def main() -> None:
         f"# {SCENE}: time per step, Newton iterations, grasper force",
         "",
         f"Command: `python benchmarks/coupled_retraction.py{' --quick' if args.quick else ''}`; "
-        f"set-up (meshes, tissue sampling, attachments, patterns) {setup:.2f} s.",
+        f"{repeats} run(s) of the whole scene, times are medians over the runs of each run's "
+        f"per-phase median (max: median of the runs' maxima); set-up (meshes, tissue sampling, "
+        f"attachments, patterns) {setup:.2f} s.",
         "",
         "| phase | steps | median s/step | max s/step | median s/Newton iteration "
         "| Newton its mean / median / max |",

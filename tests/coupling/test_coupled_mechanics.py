@@ -103,7 +103,7 @@ def test_retraction_force_balances_support_without_gravity():
     np.testing.assert_allclose(f["grasper"], -np.asarray(f["lower.support"]), atol=1e-8)
 
 
-@pytest.mark.parametrize("tissue_E, follows", [(1e-3, False), (1e5, True)])
+@pytest.mark.parametrize("tissue_E, follows", [(1e-6, False), (1e5, True)])
 def test_tissue_stiffness_limits(tissue_E, follows):
     """Pull the upper organ up; the lower one is free (no support, no gravity). Near-zero
     tissue stiffness: it stays (unconnected); large: it moves nearly with the upper one."""
@@ -127,7 +127,8 @@ def test_tissue_stiffness_limits(tissue_E, follows):
     if follows:
         assert ratio > 0.9
     else:
-        assert abs(ratio) < 0.01  # under 1% of the retraction (stiff tissue: over 90%)
+        # the drag scales with the tissue's modulus: 4e-4 of the retraction at 1e-3 Pa
+        assert abs(ratio) < 1e-4
 
 
 def _blade(z):

@@ -24,7 +24,7 @@ from tissuesim.frames.sampling import (
     _positive,
     cell_points,
 )
-from tissuesim.mesh.boundary import boundary_facets
+from tissuesim.mesh.boundary import boundary_facets, facet_normals
 from tissuesim.mesh.locate import MeshLocator
 from tissuesim.mesh.mesh import Mesh
 
@@ -316,7 +316,8 @@ def _empty_message(func: str, layer: _Layer, cells: int, spacing: float, subsamp
 
 
 def contact_facets(mesh: Mesh, points: np.ndarray, distance: float) -> np.ndarray:
-    """Boundary triangles (k, 3) of ``mesh`` whose centroid is within ``distance`` of a point.
+    """Boundary triangles (k, 3) of ``mesh`` whose centroid is within ``distance`` of a point
+    that lies on the triangle's outer side (the triangle faces the points).
 
     points (q, 3): e.g. the layer's integration points. The triangles are outward oriented, in
     the order of ``boundary_facets``: where the layer touches the organ, so where to attach it.
@@ -336,5 +337,10 @@ def contact_facets(mesh: Mesh, points: np.ndarray, distance: float) -> np.ndarra
     if len(p) == 0:
         return facets[:0]
     centroids = mesh.points[facets].mean(axis=1)
-    d, _ = cKDTree(p).query(centroids, k=1, distance_upper_bound=distance * (1 + 1e-12), workers=-1)
-    return facets[d <= distance]
+    d, i = cKDTree(p).query(centroids, k=1, distance_upper_bound=distance * (1 + 1e-12), workers=-1)
+    near = d <= distance
+    # facing the layer: the nearest point lies on the outer side of the triangle; a side face
+    # next to the layer's edge (its nearest point is beside or below it) is not attached
+    normals = facet_normals(mesh.points, facets[near])
+    facing = np.einsum("ki,ki->k", p[i[near]] - centroids[near], normals) > 0
+    return facets[near][facing]
