@@ -7,7 +7,6 @@ from __future__ import annotations
 
 __version__ = "0.1.0"
 
-from tissuesim.coupling.simulation import CoupledSimulation
 from tissuesim.errors import (
     ConvergenceError,
     InvertedElementError,
@@ -52,3 +51,12 @@ __all__ = [
     "rectangle",
     "select",
 ]
+
+
+def __getattr__(name: str):
+    # lazily: coupled scenes pull in the frames (scipy.spatial), which FEM-only users never need
+    if name == "CoupledSimulation":
+        from tissuesim.coupling.simulation import CoupledSimulation
+
+        return CoupledSimulation
+    raise AttributeError(f"module 'tissuesim' has no attribute {name!r}")

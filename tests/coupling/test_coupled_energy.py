@@ -106,3 +106,23 @@ def test_cross_blocks_present_and_needed(scene_factory):
     system.cross = []
     without = system.pattern.matrix(system.evaluate(c, 2).hessian).toarray()
     assert np.abs(without[o, t]).max() == 0.0
+
+
+def test_grasper_springs_match_finite_differences(scene_factory):
+    """A spring grasper's energy on an organ, inside the coupled system (with the rest)."""
+    from tissuesim.energies.vertex_springs import VertexSprings
+
+    rng = np.random.default_rng(4)
+    system = scene_factory("rigid")
+    upper = system.organs[1].mesh
+    held = upper.point_sets["zmax"]
+    springs = VertexSprings(held, 500.0, lambda t: upper.points[held] + [0.01, -0.02, 0.1 * t])
+    energy = springs.energy(1.0)
+    c = perturbed(system, rng)
+
+    def evaluate(x, order):
+        return system.evaluate(x, order, False, [[], [energy]], [])
+
+    acc = evaluate(c, 1)
+    assert acc.terms["upper.grasper"] > 0
+    check_fd(system, c, rng, evaluate)

@@ -216,3 +216,21 @@ def test_errors_name_what_is_wrong():
         )
     with pytest.raises(ValueError, match="call add_tissue first"):
         sim.add_cut(_blade(0.1), 0.0, 1.0)
+
+
+def test_bad_cut_and_attachment_parameters_are_refused():
+    sim = two_boxes()
+    with pytest.raises(ValueError, match="kerf must be >= 0"):
+        sim.add_cut(_blade(0.15), 1.0, 2.0, kerf=-0.01)
+    with pytest.raises(ValueError, match="end .* must be after start"):
+        sim.add_cut(_blade(0.15), 2.0, 1.0)
+    with pytest.raises(ValueError, match="blade"):
+        sim.add_cut(lambda t: np.zeros((1, 3)), 1.0, 2.0)
+    lower = box((0, 0, -0.5), (1, 1, 0), (2, 2, 1))
+    upper = box((0, 0, GAP), (1, 1, GAP + 0.5), (2, 2, 1))
+    other = CoupledSimulation()
+    mat = make_material("stvk", youngs_modulus=1.0, poisson_ratio=0.3)
+    other.add_organ("lower", lower, mat)
+    other.add_organ("upper", upper, mat)
+    with pytest.raises(ValueError, match="attachment_stiffness must be > 0"):
+        other.add_tissue(mat, thickness=GAP, spacing=0.1, attachment_stiffness=-1.0)

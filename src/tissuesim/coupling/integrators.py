@@ -62,5 +62,5 @@ def coupled_step(
         return StepOutcome(None, False, [record], record.reason)
     v1 = system.difference(c1, state.x) / h if dynamic else np.zeros(system.n_dofs)
     if on_converged is not None:
-        on_converged(evaluate(c1, 1, False).gradient)
+        on_converged(record.gradient)  # Newton's last evaluation, at c1, not eliminated
     return StepOutcome(State(t1, c1, v1), True, [record])

@@ -132,7 +132,11 @@ class CoupledRunOutput(RunOutput):
                 cut.reshape(-1, 3),
                 cells=("triangle", np.arange(3 * len(cut)).reshape(-1, 3)),
             )
-        self.frames.append((time, organs, tissue, cut))
+        graspers = [g.name for g in sim.graspers]
+        force = None
+        if graspers and sim.history:
+            force = float(np.linalg.norm(sim.history[-1].extra["forces"][graspers[0]]))
+        self.frames.append((time, organs, tissue, cut, force))
 
     def _summary(self) -> dict:
         out = super()._summary()
@@ -143,7 +147,7 @@ class CoupledRunOutput(RunOutput):
     def _frame3d(self, frame, clim):
         from tissuesim.render.pyvista3d import Frame3D, PointLayer, SurfaceLayer
 
-        t, organs, tissue, cut = frame
+        t, organs, tissue, cut, force = frame
         surfaces = [
             SurfaceLayer(name, x, tri, color=_ORGAN_COLOURS[j % len(_ORGAN_COLOURS)])
             for j, (name, x, tri) in enumerate(
@@ -163,16 +167,8 @@ class CoupledRunOutput(RunOutput):
                     clim=clim,
                 )
             )
-        forces = self._forces_at(t)
-        title = f"t = {t:.3g} s" + (f"   grasper force {forces:.3g} N" if forces else "")
+        title = f"t = {t:.3g} s" + ("" if force is None else f"   grasper force {force:.3g} N")
         return Frame3D(surfaces, points, [cut] if len(cut) else [], title)
-
-    def _forces_at(self, t: float) -> float | None:
-        graspers = [g.name for g in self.sim.graspers]
-        for r in self.sim.history:
-            if abs(r.time - t) < 1e-12 and graspers:
-                return float(np.linalg.norm(r.extra["forces"][graspers[0]]))
-        return None
 
     def _render(self) -> None:
         try:

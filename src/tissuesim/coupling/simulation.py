@@ -312,6 +312,11 @@ class CoupledSimulation:
         attach_distance = float(1.5 * spacing if attach_distance is None else attach_distance)
         if attachment_stiffness is None:
             attachment_stiffness = ATTACHMENT_FACTOR * material.mu / spacing
+        elif not (np.isfinite(attachment_stiffness) and attachment_stiffness > 0):
+            raise ValueError(
+                f"attachment_stiffness must be > 0 N/m per m^2 of contact, got "
+                f"{attachment_stiffness!r}; leave it out for 250 shear moduli / spacing"
+            )
         self._spacing = float(spacing)
         tissue = _Tissue(
             material,
@@ -362,6 +367,10 @@ class CoupledSimulation:
             raise ValueError(f"cut {name!r}: end ({end}) must be after start ({start})")
         if kerf is None:
             kerf = 0.5 * float(np.cbrt(np.median(self._tissue.samples.volumes)))
+        elif not (np.isfinite(kerf) and kerf >= 0):
+            raise ValueError(
+                f"cut {name!r}: kerf must be >= 0 m (the width the blade removes), got {kerf!r}"
+            )
         tool = CutTool(blade, float(start), float(end), float(kerf), name)
         tool.positions(start)  # a malformed blade fails here
         self.cuts.append(tool)
@@ -528,11 +537,12 @@ class CoupledSimulation:
             x = self.system.organ_x(self.state.x, j)
             for name, v in o.supports.items():
                 out[name] = self._reaction(g, off, v)
+            springs = iter(self._springs[j])  # the spring graspers' energies, in order
             for gr in o.graspers:
                 if gr.stiffness is None:
                     out[gr.name] = self._reaction(g, off, gr.vertices)
                 else:
-                    out[gr.name] = gr.springs(o.mesh.points).force(x, self.time).tolist()
+                    out[gr.name] = next(springs).force(x, self.time).tolist()
         return out
 
     @staticmethod

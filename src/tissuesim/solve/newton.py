@@ -76,6 +76,9 @@ class NewtonResult:
     energies: list[float] = field(default_factory=list)  # Phi per iterate
     projected: list[bool] = field(default_factory=list)  # Hessian projected per iteration
     energy_terms: dict[str, float] = field(default_factory=dict)  # at the solution
+    # the full gradient of Phi at the solution, prescribed DOFs included (their reactions);
+    # not in as_dict: it is one vector per solve, kept for whoever reports forces
+    gradient: np.ndarray | None = field(default=None, repr=False)
 
     def as_dict(self) -> dict:
         return {
@@ -187,6 +190,7 @@ def minimize(
     if not result.converged and not result.reason:
         result.reason = f"no convergence in {options.max_iterations} iterations"
     result.energy_terms = dict(current.terms)
+    result.gradient = current.gradient
     return x, result
 
 
