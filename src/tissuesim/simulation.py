@@ -116,6 +116,7 @@ class Simulation:
         self.newton = newton or NewtonOptions()
         self.max_step_halvings = int(max_step_halvings)
         x = mesh.points.ravel().copy()
+        self.start_time = float(start_time)
         self.state = State(float(start_time), x, np.zeros_like(x))
         self._conditions: list[DirichletCondition] = []
         self._solver = None
@@ -125,6 +126,15 @@ class Simulation:
         self._fields: dict[str, np.ndarray] = {}
         if integrator != "symplectic_euler":
             self._linear_solver()  # an unknown or unavailable linear_solver fails here, not later
+
+    def __repr__(self) -> str:
+        return (
+            f"Simulation({self.mesh.n_points} vertices, {self.mesh.n_cells} "
+            f"{'triangles' if self.mesh.dim == 2 else 'tetrahedra'}, {self.model.material!r}, "
+            f"{self.integrator}, "
+            f"time_step {self.time_step:g} s, t = {self.time:g} s, {len(self.history)} steps, "
+            f"{self.model.prescribed.dofs.size} prescribed DOFs)"
+        )
 
     # -- set-up -------------------------------------------------------------------------------
     @property
@@ -248,6 +258,7 @@ class Simulation:
             solver,
             self.newton,
             self.max_step_halvings,
+            self.start_time + (len(self.history) + 1) * self.time_step,
         )
         self.state = new_state
         record = StepRecord.build(

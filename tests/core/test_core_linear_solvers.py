@@ -136,9 +136,19 @@ def test_automatic_choice_and_its_reason(monkeypatch):
     assert solver.name == "splu" and "SuperLU" in reason
     solver, reason = make_linear_solver("auto", 10**6, 3)
     assert solver.name == "cg+jacobi" and "no pyamg" in reason
+    # mid-size 3D FEM without a fast direct solver: CG (benchmarks/solver_choice.py), not SuperLU
+    vertices = np.zeros((6_000 // 3, 3))
+    solver, reason = make_linear_solver("auto", 6_000, 3, vertices)
+    assert solver.name == "cg+jacobi" and "beats SuperLU" in reason
+    solver, _ = make_linear_solver("auto", 900, 3, np.zeros((300, 3)))
+    assert solver.name == "splu"  # tiny 3D: SuperLU is as fast and exact
+    solver, _ = make_linear_solver("auto", 6_000, 3)  # no vertices (frames): SuperLU
+    assert solver.name == "splu"
     monkeypatch.setattr(linear, "has_pyamg", lambda: True)
     solver, reason = make_linear_solver("auto", 10**6, 3, np.zeros((10**6 // 3, 3)))
     assert solver.name == "cg+amg" and "pyamg" in reason
+    solver, reason = make_linear_solver("auto", 6_000, 3, vertices)
+    assert solver.name == "cg+amg" and "beats SuperLU" in reason
     with pytest.raises(ValueError, match="linear_solver must be one of"):
         make_linear_solver("umfpack", 10, 2)
     with pytest.raises(ValueError, match=r"tissuesim\[fast\]"):

@@ -613,6 +613,7 @@ class CoupledSimulation:
             solver,
             self.newton,
             self.max_step_halvings,
+            self.start_time + (len(self.history) + 1) * self.time_step,
         )
         forces = self.forces()
         events = self._topology(t0, self.time)

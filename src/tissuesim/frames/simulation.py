@@ -110,6 +110,7 @@ class FrameSimulation:
         self.newton = newton or NewtonOptions()
         self.max_step_halvings = int(max_step_halvings)
         z = self.model.rest_config()
+        self.start_time = float(start_time)
         self.state = State(float(start_time), z, np.zeros(self.model.n_dofs))
         self._prescribed: list[PrescribedFrames] = []
         self.embedded: dict[str, Embedding] = {}
@@ -294,6 +295,7 @@ class FrameSimulation:
             solver,
             self.newton,
             self.max_step_halvings,
+            self.start_time + (len(self.history) + 1) * self.time_step,
         )
         self.state = new_state
         record = StepRecord.build(

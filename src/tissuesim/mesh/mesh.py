@@ -31,6 +31,17 @@ class Mesh:
     cell_sets: Mapping[str, np.ndarray] = field(default_factory=dict)
     source: str = "<arrays>"
 
+    def __repr__(self) -> str:
+        kind = {2: "triangles", 3: "tetrahedra"}.get(self.dim, "cells")
+        lo, hi = self.points.min(axis=0), self.points.max(axis=0)
+        sets = f", sets {sorted({*self.point_sets, *self.facet_sets, *self.cell_sets})}"
+        return (
+            f"Mesh({self.n_points} vertices, {self.n_cells} {kind}, {self.dim}D, "
+            f"box {np.round(lo, 6).tolist()}..{np.round(hi, 6).tolist()}"
+            f"{sets if self.point_sets or self.facet_sets or self.cell_sets else ''}, "
+            f"source {self.source!r})"
+        )
+
     @property
     def dim(self) -> int:
         return int(self.points.shape[1])

@@ -50,6 +50,11 @@ LINEAR_SOLVERS = ("auto", "pardiso", "cholmod", "splu", "cg", "amg")
 #: too, but the whole Newton iteration with it was slower than with CHOLMOD, 0.24 s against
 #: 0.13 s, and a direct solver reports indefiniteness exactly).
 AMG_MIN_DOFS_3D = 30_000
+#: Without PARDISO or CHOLMOD, 3D FEM systems above this many DOFs go to CG (AMG-preconditioned
+#: when pyamg is installed, else Jacobi) instead of SuperLU (``benchmarks/solver_choice.py``,
+#: one thread, per iteration: 1,029 DOFs SuperLU 0.009 s, AMG-CG 0.010 s, Jacobi-CG 0.011 s;
+#: 3,000 DOFs 0.121 / 0.036 / 0.042 s; 20,577 DOFs 4.68 / 0.21 / 0.51 s).
+SPLU_MAX_DOFS_3D = 1_500
 
 
 class NotPositiveDefiniteError(RuntimeError):
@@ -358,6 +363,19 @@ def make_linear_solver(
     for label, available, cls in direct:
         if available():
             return cls(), f"auto: {label} available, {dim}D with {n_dofs} DOFs"
+    # without a fast direct solver, SuperLU's 3D fill makes CG faster from a few thousand DOFs
+    # on; only where the rigid-body modes are known (FEM vertices): AMG needs them, and the
+    # frames' and coupled systems' conditioning was not measured with CG
+    if dim == 3 and points is not None and n_dofs > SPLU_MAX_DOFS_3D:
+        if has_pyamg():
+            return CGSolver("amg", points=points), (
+                f"auto: 3D with {n_dofs} DOFs > {SPLU_MAX_DOFS_3D}, no pypardiso or "
+                "scikit-sparse, pyamg available (AMG-CG beats SuperLU there)"
+            )
+        return CGSolver("jacobi"), (
+            f"auto: 3D with {n_dofs} DOFs > {SPLU_MAX_DOFS_3D}, no pypardiso, scikit-sparse or "
+            "pyamg (Jacobi-CG beats SuperLU there)"
+        )
     if large_3d:
         return CGSolver("jacobi"), f"auto: 3D with {n_dofs} DOFs > {AMG_MIN_DOFS_3D}, no pyamg"
     return SuperLUSolver(), f"auto: no pypardiso or scikit-sparse, SciPy SuperLU for {n_dofs} DOFs"

@@ -135,6 +135,9 @@ def minimize(
     result.gradient_norms.append(g0)
     result.energies.append(current.value)
     shift = 0.0  # Levenberg-Marquardt shift of "auto", kept between iterations
+    # round-off of Phi: relative to the model's energy scale (force x length), not to |Phi|,
+    # which can be tiny next to the terms it sums (a small net energy of large parts)
+    noise_scale = force_scale * length_scale
     for iteration in range(options.max_iterations):
         gnorm = result.gradient_norms[-1]
         if gnorm <= target:
@@ -148,7 +151,7 @@ def minimize(
                 elimination.apply(acc.hessian, acc.gradient)
                 system[project] = acc
             return _try_direction(
-                evaluate, x, system[project], solver, options, project, s, retract
+                evaluate, x, system[project], solver, options, project, s, retract, noise_scale
             )
 
         if options.hessian_projection == "always":
@@ -194,7 +197,7 @@ def minimize(
     return x, result
 
 
-def _try_direction(evaluate, x, acc, solver, options, project, shift, retract):
+def _try_direction(evaluate, x, acc, solver, options, project, shift, retract, noise_scale):
     """Solve (H + shift diag|H|) dx = -g for an eliminated system ``acc`` and line-search.
 
     Returns (project, dx, alpha, accumulator at the new point) or None when the matrix is not
@@ -213,16 +216,22 @@ def _try_direction(evaluate, x, acc, solver, options, project, shift, retract):
     slope = float(g @ dx)
     if not np.all(np.isfinite(dx)) or slope >= -1e-14 * np.linalg.norm(g) * np.linalg.norm(dx):
         return None  # not a descent direction: the (shifted) Hessian was indefinite
-    step = _line_search(evaluate, x, acc.value, slope, dx, options, retract)
+    step = _line_search(evaluate, x, acc, slope, dx, options, retract, noise_scale)
     if step is None:
         return None
     return (project, dx, *step)
 
 
-def _line_search(evaluate, x, value, slope, dx, options, retract):
-    """Backtracking: the largest alpha in 1, 1/2, ... with Armijo decrease and finite Phi."""
+def _line_search(evaluate, x, acc, slope, dx, options, retract, noise_scale):
+    """Backtracking: the largest alpha in 1, 1/2, ... with Armijo decrease and finite Phi.
+
+    A trial may exceed the Armijo bound by Phi's round-off, 1e-12 times the largest of |Phi|,
+    the sum of its terms' magnitudes and the model's energy scale: near the solution the true
+    decrease of the last, correct step is below what Phi can resolve."""
     alpha = 1.0
-    noise = 1e-12 * max(abs(value), 1e-300)  # round-off of Phi near the solution
+    value = acc.value
+    magnitude = max(abs(value), sum(abs(v) for v in acc.terms.values()), noise_scale)
+    noise = 1e-12 * max(magnitude, 1e-300)
     for _ in range(options.max_line_search):
         trial = evaluate(retract(x, alpha * dx), 1, False)
         if (

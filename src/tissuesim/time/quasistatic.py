@@ -4,6 +4,8 @@ against rigid motions by its prescribed DOFs."""
 
 from __future__ import annotations
 
+import numpy as np
+
 from tissuesim.energies.loads import ExternalForce
 from tissuesim.time.implicit import solve_implicit_step
 from tissuesim.time.state import State, StepOutcome
@@ -25,4 +27,7 @@ def check_supported(model) -> None:
 
 def quasistatic_step(model, state: State, h: float, solver, options) -> StepOutcome:
     energies = (ExternalForce(model.external_force(state.time + h)),)
-    return solve_implicit_step(model, state, h, energies, (state.x,), solver, options)
+    outcome = solve_implicit_step(model, state, h, energies, (state.x,), solver, options)
+    if outcome.converged:  # a sequence of equilibria has no velocity
+        outcome.state = State(outcome.state.time, outcome.state.x, np.zeros_like(state.v))
+    return outcome

@@ -7,6 +7,7 @@ h / 2**max_halvings; if that still fails, ConvergenceError says when, why, and w
 from __future__ import annotations
 
 import numbers
+from dataclasses import replace
 
 import numpy as np
 
@@ -16,8 +17,21 @@ from tissuesim.time.state import State, StepOutcome
 __all__ = ["advance", "validate_stepping"]
 
 
-def advance(step_fn, model, state: State, h: float, solver, options, max_halvings: int):
-    """Advance by h; returns (new State, list of NewtonResult, number of substeps)."""
+def advance(
+    step_fn,
+    model,
+    state: State,
+    h: float,
+    solver,
+    options,
+    max_halvings: int,
+    end_time: float | None = None,
+):
+    """Advance by h; returns (new State, list of NewtonResult, number of substeps).
+
+    end_time: the time the new state gets (start + n h, given by the caller) instead of the
+    running sum of (sub)step lengths, which drifts by round-off (ten steps of 0.1 would end
+    at 0.9999999999999999)."""
     records, substeps = [], 0
 
     def attempt(s: State, dt: float, level: int) -> State:
@@ -38,6 +52,8 @@ def advance(step_fn, model, state: State, h: float, solver, options, max_halving
         return attempt(mid, dt / 2, level + 1)
 
     new_state = attempt(state, h, 0)
+    if end_time is not None:
+        new_state = replace(new_state, time=float(end_time))
     return new_state, records, substeps
 
 
