@@ -6,7 +6,7 @@ and, as a reference measured in the same run, the same organs and grasper withou
     python benchmarks/coupled_retraction.py --quick    # first 6 steps, no reference run
     python benchmarks/coupled_retraction.py --out DIR  # write DIR/coupled_retraction.{json,md}
 
-Times are wall-clock seconds of ``CoupledSimulation.step`` (assembly, Newton, reactions, cuts and
+Times are wall-clock seconds of ``Simulation.step`` (assembly, Newton, reactions, cuts and
 rebuilds), without output or pictures; per phase, the median over the steps of a run, then the
 median over ``--repeats`` runs (the reference likewise).
 """
@@ -32,7 +32,7 @@ def run_scene(steps: int | None, tissue: bool = True) -> tuple[list, float, obje
     scene = load_scene(example_path(SCENE))
     sim = scene.simulation
     if not tissue:  # the reference: organs, support and grasper only
-        sim._tissue, sim.cuts = None, []
+        sim.remove_body("tissue")
     steps = steps or int(scene.run.get("steps", 120))
     start = time.perf_counter()
     sim.build()
@@ -73,7 +73,7 @@ def main() -> None:
     repeats = 1 if args.quick else max(1, args.repeats)
     runs = [run_scene(steps) for _ in range(repeats)]
     records, setup, sim = runs[0]  # the physics is deterministic: curve and counts from run 1
-    cut = sim.cuts[0] if sim.cuts else None
+    cut = sim.tissue.cuts[0] if sim.tissue is not None and sim.tissue.cuts else None
     c0, c1 = (cut.start, cut.end) if cut else (np.inf, np.inf)
     bounds = [
         (-1, c0, f"retraction and hold (t <= {c0:g} s)"),
@@ -113,10 +113,9 @@ def main() -> None:
         for r in records
     ]
     weight = None
-    if sim.gravity is not None:
-        held = sim.graspers[0].organ
-        m = sim.system.organs[sim.organ_names.index(held)]
-        weight = float(m.mass.lumped.sum() / 3 * np.linalg.norm(sim.gravity))
+    if sim.gravity:
+        m = sim.bodies[sim.graspers[0].body].model
+        weight = float(m.mass.lumped.sum() / 3 * np.linalg.norm(sim.gravity[0]))
     reference = None
     if not args.quick:
         refs = [summarise(run_scene(len(records), tissue=False)[0], "") for _ in range(repeats)]

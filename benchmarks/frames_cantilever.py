@@ -253,8 +253,9 @@ def fem_modal(nd: int) -> dict:
 
 def fem_free_vibration(nd: int, periods: float, f_guess: float) -> dict:
     """Symplectic Euler (lumped mass) from the static deflection under SMALL_LOAD."""
+    from tissuesim.time.stability import critical_time_step
     from tissuesim.time.state import State
-    from tissuesim.time.symplectic_euler import critical_time_step, symplectic_euler_step
+    from tissuesim.time.steps import explicit_step
 
     static, tip = fem_simulation(nd, SMALL_LOAD)
     static.step()
@@ -267,7 +268,7 @@ def fem_free_vibration(nd: int, periods: float, f_guess: float) -> dict:
     times, ys = [0.0], [x0[3 * tip + 1] - rest_y]
     start = time.perf_counter()
     for _ in range(steps):
-        outcome = symplectic_euler_step(sim.model, state, h)
+        outcome = explicit_step(sim.system, state, h, energies=sim.step_energies, limit=float)
         if not outcome.converged:
             raise RuntimeError(outcome.reason)
         state = outcome.state
@@ -301,11 +302,11 @@ def frame_simulation(
 ):
     from tissuesim.frames.placement import grid_frames
     from tissuesim.frames.sampling import sample_box
-    from tissuesim.frames.simulation import FrameSimulation
+    from tissuesim.simulation import Simulation
 
     frames = grid_frames([0.2, 0.2, 0.0], [0.2, 0.2, LENGTH], (1, 1, n))
     samples = sample_box([0, 0, 0], [A_SIDE, A_SIDE, LENGTH], spacing)
-    sim = FrameSimulation(
+    sim = Simulation.from_frames(
         frames, samples, material(), density=DENSITY, integrator=integrator, time_step=time_step
     )
     if clamp == "fixed":
@@ -340,7 +341,7 @@ def frames_static(n: int, spacing: float, clamp: str, k: float, repeat: int) -> 
         return sim.step()
 
     solve_s, record = median_time(solve, repeat)
-    d = sim.describe()
+    d = {**sim.describe(), **sim.describe()["bodies"]["body"]}
     return {
         "clamp": clamp_label(clamp, k),
         "frames": n,
@@ -348,7 +349,7 @@ def frames_static(n: int, spacing: float, clamp: str, k: float, repeat: int) -> 
         "free_dofs": int(d["n_dofs"] - d["prescribed_dofs"]),
         "integration_points": int(d["integration_points"]),
         "frames_per_point": d["frames_per_point"]["mean"],
-        "tip_deflection": float(TIP[1] - sim.positions("tip")[0, 1]),
+        "tip_deflection": float(TIP[1] - sim.embedded_positions("tip")[0, 1]),
         "newton_iterations": int(record.newton_iterations),
         "setup_s": setup,
         "solve_s": solve_s,
@@ -435,13 +436,13 @@ def frames_free_vibration(
     newton = 0
     start = time.perf_counter()
     if integrator == "explicit":
-        # the step function itself: FrameSimulation.step() also evaluates energies and point
+        # the step function itself: Simulation.step() also evaluates energies and point
         # fields for its record every step, which would dominate the cost here
-        from tissuesim.frames.integrators import frame_explicit_step
+        from tissuesim.time.steps import explicit_step
 
         state = sim.state
         for _ in range(steps):
-            outcome = frame_explicit_step(sim.model, state, h)
+            outcome = explicit_step(sim.system, state, h, energies=sim.step_energies, limit=float)
             if not outcome.converged:
                 raise RuntimeError(outcome.reason)
             state = outcome.state
@@ -452,7 +453,7 @@ def frames_free_vibration(
             record = sim.step()
             newton += record.newton_iterations
             times.append(sim.time)
-            ys.append(sim.positions("tip")[0, 1] - TIP[1])
+            ys.append(sim.embedded_positions("tip")[0, 1] - TIP[1])
     wall = time.perf_counter() - start
     f_cross, n_cross = crossing_frequency(np.array(times), np.array(ys))
     f, decay = fitted_frequency(np.array(times), np.array(ys), f_cross)

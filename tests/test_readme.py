@@ -39,7 +39,7 @@ def test_python_example_runs(tmp_path):
     assert result.returncode == 0, result.stderr
     t, iterations, min_J = map(float, result.stdout.split())
     assert abs(t - 20 * 2 * np.pi / 200) < 1e-9 and iterations >= 1 and 0 < min_J < 2
-    assert (tmp_path / "out/python_example/frame.pvd").is_file()
+    assert (tmp_path / "out/python_example/body.pvd").is_file()
 
 
 def test_frames_python_example_runs(tmp_path):
@@ -55,7 +55,7 @@ def test_frames_python_example_runs(tmp_path):
     )
     assert result.returncode == 0, result.stderr
     out = tmp_path / "out/frames"
-    for name in ("surface.pvd", "frames.pvd", "integration_points.pvd", "final.png", "run.gif"):
+    for name in ("body_surface.pvd", "body_frames.pvd", "body.pvd", "final.png", "run.gif"):
         assert (out / name).is_file(), name
     assert json.loads((out / "summary.json").read_text())["status"] == "completed"
 
@@ -76,7 +76,7 @@ def test_coupled_python_example_runs(tmp_path):
     """The README's organs + tissue example, as shown: the force drops to the weight after the
     cut."""
     code = blocks("python")[2]
-    assert "CoupledSimulation" in code
+    assert "add_tissue" in code
     result = subprocess.run(
         [sys.executable, "-c", code], cwd=tmp_path, capture_output=True, text=True, timeout=300
     )

@@ -30,7 +30,6 @@ from tissuesim.solve.newton import NewtonOptions
 __all__ = [
     "__version__",
     "ConvergenceError",
-    "CoupledSimulation",
     "CourseNeoHookean",
     "FixedCorotated",
     "InvertedElementError",
@@ -51,12 +50,3 @@ __all__ = [
     "rectangle",
     "select",
 ]
-
-
-def __getattr__(name: str):
-    # lazily: coupled scenes pull in the frames (scipy.spatial), which FEM-only users never need
-    if name == "CoupledSimulation":
-        from tissuesim.coupling.simulation import CoupledSimulation
-
-        return CoupledSimulation
-    raise AttributeError(f"module 'tissuesim' has no attribute {name!r}")

@@ -38,29 +38,22 @@ def _resolve_scene(scene: str) -> Path:
 
 
 def _body(sim) -> str:
-    """What the body is made of, for the run banner: a mesh, frames (which have none), or
-    organs joined by tissue (a coupled scene)."""
-    if hasattr(sim, "organ_names"):
-        return _coupled_body(sim)
-    mesh = getattr(sim, "mesh", None)
-    if mesh is None:
-        m = sim.model
-        return f"{m.n_frames} {m.frame_type.name} frames, {m.samples.n} integration points"
-    kind = "triangles" if mesh.dim == 2 else "tetrahedra"
-    return f"{mesh.n_points} vertices, {mesh.n_cells} {kind}"
-
-
-def _coupled_body(sim) -> str:
-    """Organs (vertices each), the tissue's integration points and frames, and the cuts."""
-    d = sim.describe()
-    organs = ", ".join(f"{name} {o['vertices']} vertices" for name, o in d["organs"].items())
-    n = len(d["organs"])
-    text = f"{n} organ{'s' * (n != 1)} ({organs})"
-    tissue = d.get("tissue")
-    if tissue is not None:
-        text += f", tissue {tissue['integration_points']} points / {tissue['frames']} frames"
-    cuts = len(d["cuts"])
-    return text + f", {cuts} cut{'s' * (cuts != 1)}"
+    """What the scene is made of, for the run banner: each body, and the cuts."""
+    parts = []
+    for b in sim.bodies.values():
+        if b.kind == "fem":
+            kind = "triangles" if b.dim == 2 else "tetrahedra"
+            parts.append(f"{b.name}: {b.mesh.n_points} vertices, {b.mesh.n_cells} {kind}")
+        elif b.kind == "frames":
+            m = b.model
+            parts.append(f"{b.name}: {m.n_frames} {m.frame_type.name} frames, {m.samples.n} points")
+        else:
+            parts.append(f"{b.name}: {b.samples.n} points / {len(b.frames)} frames")
+    text = "; ".join(parts)
+    if sim.tissue is not None:
+        cuts = len(sim.tissue.cuts)
+        text += f"; {cuts} cut{'s' * (cuts != 1)}"
+    return text
 
 
 def _run(scene_path: Path, out: str | None, steps: int | None, render: bool, quiet: bool) -> int:

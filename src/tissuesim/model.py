@@ -65,6 +65,45 @@ class Model:
     def n_dofs(self) -> int:
         return self.kinematics.n_dofs
 
+    # -- the body interface shared with FrameModel (system.py) --------------------------------
+    @property
+    def n_config(self) -> int:
+        return self.kinematics.n_dofs
+
+    @property
+    def tangent_pattern(self) -> SparsityPattern:
+        return self.pattern
+
+    @property
+    def prescribed_dofs(self) -> np.ndarray:
+        return self.prescribed.dofs
+
+    @property
+    def scale_points(self) -> np.ndarray:
+        return self.mesh.points
+
+    def rest_config(self) -> np.ndarray:
+        return self.rest_positions()
+
+    @staticmethod
+    def retract(x: np.ndarray, dx: np.ndarray) -> np.ndarray:
+        return x + dx
+
+    @staticmethod
+    def difference(x1: np.ndarray, x0: np.ndarray) -> np.ndarray:
+        return x1 - x0
+
+    def apply_prescribed(self, x: np.ndarray, t: float) -> np.ndarray:
+        """x with the prescribed DOFs at their values at time t."""
+        if not self.prescribed.dofs.size:
+            return x
+        out = x.copy()
+        out[self.prescribed.dofs] = self.prescribed.positions(t)
+        return out
+
+    def kinetic_energy(self, x: np.ndarray, v: np.ndarray) -> float:
+        return 0.5 * float(v @ self.mass.dot(v))
+
     @cached_property
     def length_scale(self) -> float:
         """Bounding-box diagonal of the rest mesh (m)."""

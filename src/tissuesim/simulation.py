@@ -1,215 +1,486 @@
-"""Simulation: the thin object users script. It builds a Model, steps it, and writes output.
+"""Simulation: the object users script. Any number of bodies (FEM meshes, meshless frame bodies,
+the connective tissue between organs), their supports, graspers, springs and loads, advanced in
+time by one Newton solve over all of them per step (``time/steps.py`` on ``system.py``).
 
-sim = Simulation(mesh, CourseNeoHookean(youngs_modulus=1e3, poisson_ratio=0.3),
-                 density=1.0, integrator="backward_euler", time_step=0.02)
-sim.add_dirichlet(select.vertices_on_plane(mesh, axis=0, value=-1.0))
-sim.add_gravity([0.0, -9.81])
-sim.run(steps=100, output="out")
+One body, the short form:
+
+    sim = Simulation(mesh, CourseNeoHookean(youngs_modulus=1e3, poisson_ratio=0.3),
+                     density=1.0, integrator="backward_euler", time_step=0.02)
+    sim.add_dirichlet(select.vertices_on_plane(mesh, axis=0, value=-1.0))
+    sim.add_gravity([0.0, -9.81])
+    sim.run(steps=100, output="out")
+
+Many bodies:
+
+    sim = Simulation(integrator="quasistatic", time_step=0.1, gravity=(0, 0, -9.81))
+    sim.add_body("liver", ellipsoid(...), make_material(...), density=1050)
+    sim.add_body("gallbladder", ...)
+    sim.fix("liver", vertices)                                        # a support
+    sim.grasp("gallbladder", vertices, lambda t: (0, 0, 0.01 * t))     # retraction
+    sim.add_tissue(make_material(...), thickness=0.006, spacing=0.002, frames=30)
+    sim.add_cut(blade, start=1.0, end=2.0)
+    sim.run(150, "out")
+
+Set-up methods that act on one body take ``body=`` (its name); it may be left out when the
+simulation has one body of the kind the method needs. Every support, prescribed set, grasper
+and spring set has a name; its force (N) is reported per step in ``history[k].extra["forces"]``.
 """
 
 from __future__ import annotations
 
+import functools
+import re
 import time as wallclock
 from collections.abc import Callable, Sequence
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict
 from pathlib import Path
-from typing import Any, Literal
+from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 
-from tissuesim.constraints.dirichlet import DirichletCondition, constant_displacement
-from tissuesim.energies.loads import BodyForce, Gravity, Traction, as_field
+from tissuesim.bodies.fem import FemBody
 from tissuesim.energies.mass import MassKind
 from tissuesim.materials.base import Material
 from tissuesim.mesh.mesh import Mesh
-from tissuesim.model import Model
+from tissuesim.records import StepRecord
 from tissuesim.solve.linear import make_linear_solver
 from tissuesim.solve.newton import NewtonOptions
-from tissuesim.time.backward_euler import backward_euler_step
-from tissuesim.time.quasistatic import check_supported, quasistatic_step
 from tissuesim.time.retry import advance, validate_stepping
 from tissuesim.time.state import State
-from tissuesim.time.symplectic_euler import symplectic_euler_step
+
+if TYPE_CHECKING:  # frames and the system pull in scipy.spatial: imported when first used
+    from tissuesim.bodies.frames import FrameBody
+    from tissuesim.coupling.tissue import TissueBody
+    from tissuesim.system import System
 
 __all__ = ["Simulation", "StepRecord", "INTEGRATORS"]
 
-Integrator = Literal["backward_euler", "quasistatic", "symplectic_euler"]
-INTEGRATORS = {
-    "backward_euler": backward_euler_step,
-    "quasistatic": quasistatic_step,
-    "symplectic_euler": symplectic_euler_step,
-}
-
-
-@dataclass
-class StepRecord:
-    """What one time step did; one entry of summary.json's "steps"."""
-
-    step: int
-    time: float
-    converged: bool
-    substeps: int
-    newton_iterations: int
-    projected_iterations: int
-    residual_norms: list[list[float]]
-    energies: dict[str, float]
-    min_J: float
-    wall_time_s: float
-    linear_solver: str = ""
-    extra: dict[str, Any] = field(default_factory=dict)
-
-    @classmethod
-    def build(
-        cls, step: int, time: float, records, substeps: int, start: float, solver, **fields
-    ) -> StepRecord:
-        """The record of a converged step from its Newton records; ``start`` is the
-        perf_counter value when the step began; ``fields``: energies, min_J, extra."""
-        return cls(
-            step=step,
-            time=time,
-            converged=True,
-            substeps=substeps,
-            newton_iterations=sum(r.iterations for r in records),
-            projected_iterations=sum(sum(r.projected) for r in records),
-            residual_norms=[r.gradient_norms for r in records],
-            wall_time_s=wallclock.perf_counter() - start,
-            linear_solver=getattr(solver, "name", "none"),
-            **fields,
-        )
+Integrator = Literal["backward_euler", "quasistatic", "explicit", "symplectic_euler"]
+#: "symplectic_euler" is the FEM name of the explicit scheme; both step every body explicitly
+INTEGRATORS = ("backward_euler", "quasistatic", "explicit", "symplectic_euler")
+EXPLICIT = ("explicit", "symplectic_euler")
+_NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9_.-]*")
+#: series the output writes besides the bodies'; no body may take these names
+RESERVED_NAMES = ("cut", "summary", "forces", "manifest")
 
 
 class Simulation:
-    """A body of one material on one mesh, with loads, conditions and a time integrator.
+    """Bodies, their interactions and a time integrator; see the module docstring.
 
-    mesh: a validated Mesh (``tissuesim.mesh``); material: a Material.
-    density: kg/m^3, a scalar or one value per element (m,).
-    integrator: "backward_euler", "quasistatic" or "symplectic_euler".
-    time_step: s (for quasistatics, the load-step length in "time").
-    mass: "consistent" or "lumped" (symplectic Euler always uses the lumped mass).
-    newton: NewtonOptions (tolerances, hessian_projection, linear_solver).
-    max_step_halvings: how often a failing step is split in two before giving up.
-    backend: "auto", "numba" or "numpy": who assembles the elastic energy (``backend.py``).
+    mesh, material (optional): the short form, one FEM body named ``name`` with ``density``
+    (kg/m^3, scalar or per element) and ``mass`` ("consistent" or "lumped").
+    integrator: "backward_euler", "quasistatic" or "explicit" ("symplectic_euler": the same;
+    FEM bodies then use the lumped mass). time_step: s (quasistatics: the load-step length).
+    gravity: (d,) m/s^2 on every body, or None. newton: NewtonOptions. max_step_halvings: how
+    often a failing step is split in two before giving up. backend: "auto", "numba" or "numpy".
     """
 
     def __init__(
         self,
-        mesh: Mesh,
-        material: Material,
+        mesh: Mesh | None = None,
+        material: Material | None = None,
         *,
         density: float | np.ndarray = 1.0,
+        mass: MassKind = "consistent",
+        name: str = "body",
         integrator: Integrator = "backward_euler",
         time_step: float = 0.01,
-        mass: MassKind = "consistent",
+        gravity: Sequence[float] | None = None,
         newton: NewtonOptions | None = None,
         max_step_halvings: int = 6,
         start_time: float = 0.0,
         backend: str = "auto",
     ) -> None:
         if integrator not in INTEGRATORS:
-            raise ValueError(f"integrator must be one of {sorted(INTEGRATORS)}, not {integrator!r}")
-        time_step, max_step_halvings = validate_stepping(time_step, max_step_halvings)
-        if integrator == "symplectic_euler":
-            mass = "lumped"  # the explicit update inverts the mass: it must be diagonal
-        self.model = Model(mesh, material, density, mass, backend=backend)
+            raise ValueError(f"integrator must be one of {list(INTEGRATORS)}, not {integrator!r}")
+        self.time_step, self.max_step_halvings = validate_stepping(time_step, max_step_halvings)
+        if not np.isfinite(start_time):
+            raise ValueError(f"start_time must be a finite number of seconds, not {start_time!r}")
         self.integrator = integrator
-        self.time_step = float(time_step)
         self.newton = newton or NewtonOptions()
-        self.max_step_halvings = int(max_step_halvings)
-        x = mesh.points.ravel().copy()
+        self.backend = backend
         self.start_time = float(start_time)
-        self.state = State(float(start_time), x, np.zeros_like(x))
-        self._conditions: list[DirichletCondition] = []
+        self.bodies: dict[str, FemBody | FrameBody | TissueBody] = {}
+        self.tissue: TissueBody | None = None
+        self.history: list[StepRecord] = []
+        self.gravity: list[np.ndarray] = []  # on every body, those added later too
+        self._force_names: set[str] = set()
+        self._system: System | None = None
+        self._state: State | None = None
         self._solver = None
         self.solver_reason = ""
-        self.history: list[StepRecord] = []
-        self._fields_state: State | None = None  # the state ``_fields`` belongs to
-        self._fields: dict[str, np.ndarray] = {}
-        if integrator != "symplectic_euler":
-            self._linear_solver()  # an unknown or unavailable linear_solver fails here, not later
+        self._last_gradient: np.ndarray | None = None
+        if self.newton.linear_solver != "auto" and not self.explicit:
+            make_linear_solver(self.newton.linear_solver, 1, 3)  # unavailable: fail now
+        if mesh is not None:
+            if material is None:
+                raise ValueError("Simulation(mesh, material): a mesh needs its material")
+            self.add_body(name, mesh, material, density=density, mass=mass)
+        elif material is not None:
+            raise ValueError("Simulation(mesh, material): a material needs its mesh")
+        if gravity is not None:
+            self.add_gravity(gravity)
+
+    @classmethod
+    def from_frames(
+        cls, frames: np.ndarray, samples, material: Material, *, name: str = "body", **kw
+    ) -> Simulation:
+        """The short form for one frame body: ``Simulation.from_frames(frames, samples,
+        material, density=..., frame_type=..., integrator=..., time_step=...)``; the keywords
+        of ``Simulation`` go to the simulation, the others to ``add_frame_body``."""
+        own = ("integrator", "time_step", "gravity", "newton", "max_step_halvings")
+        own += ("start_time", "backend")
+        sim = cls(**{k: kw.pop(k) for k in own if k in kw})
+        sim.add_frame_body(name, frames, samples, material, **kw)
+        return sim
 
     def __repr__(self) -> str:
+        if len(self.bodies) == 1:
+            (b,) = self.bodies.values()
+            if b.kind == "fem":
+                kind = "triangles" if b.dim == 2 else "tetrahedra"
+                what = f"{b.mesh.n_points} vertices, {b.mesh.n_cells} {kind}, {b.model.material!r}"
+            else:
+                what = repr(b)
+        else:
+            what = ", ".join(repr(b) for b in self.bodies.values()) or "no bodies"
         return (
-            f"Simulation({self.mesh.n_points} vertices, {self.mesh.n_cells} "
-            f"{'triangles' if self.mesh.dim == 2 else 'tetrahedra'}, {self.model.material!r}, "
-            f"{self.integrator}, "
-            f"time_step {self.time_step:g} s, t = {self.time:g} s, {len(self.history)} steps, "
-            f"{self.model.prescribed.dofs.size} prescribed DOFs)"
+            f"Simulation({what}, {self.integrator}, time_step {self.time_step:g} s, "
+            f"t = {self.time:g} s, {len(self.history)} steps)"
         )
 
-    # -- set-up -------------------------------------------------------------------------------
     @property
-    def mesh(self) -> Mesh:
-        return self.model.mesh
+    def explicit(self) -> bool:
+        return self.integrator in EXPLICIT
 
-    def add_dirichlet(
+    # -- bodies -------------------------------------------------------------------------------
+    def _new_name(self, name: str, what: str) -> str:
+        if not isinstance(name, str) or not _NAME.fullmatch(name):
+            raise ValueError(
+                f"{what} name {name!r} must be letters, digits, '_', '-' or '.', starting with "
+                "a letter or digit (it names output files)"
+            )
+        if name in self.bodies or name in RESERVED_NAMES or (name == "tissue" != what):
+            raise ValueError(f"{what} name {name!r} is taken; choose another")
+        if self._system is not None and self.history:
+            raise RuntimeError(f"add {what}s before the first step")
+        return name
+
+    def _claim_force_name(self, name: str | None, default: str = "") -> str:
+        """``name`` if it is new (else an error); None: ``default``, numbered if taken."""
+        if name is None:
+            name, k = default, 1
+            while name in self._force_names:
+                name, k = f"{default}_{k}", k + 1
+        elif name in self._force_names:
+            raise ValueError(
+                f"a support, grasper or spring set named {name!r} exists; give another name"
+            )
+        self._force_names.add(name)
+        return name
+
+    def _changed(self, body: str = "", what: str = "structure") -> None:
+        """A body's set-up changed: ``structure`` rebuilds the system before the next step;
+        ``prescribed`` / ``velocity`` also update the body's part of the state."""
+        if self._state is not None and body and what in ("prescribed", "velocity"):
+            j = self._system.index(body)
+            b = self.bodies[body]
+            x, v = self._state.x.copy(), self._state.v.copy()
+            sc, st = self._system.config_slices[j], self._system.tangent_slices[j]
+            if what == "prescribed":
+                x[sc] = b.model.apply_prescribed(x[sc], self.time)
+            else:
+                v[st] = b.velocity
+            self._state = State(self.time, x, v)
+        self._system_dirty = True
+
+    def add_body(
         self,
-        vertices: np.ndarray,
-        displacement: Sequence[float] | Callable[[np.ndarray, float], np.ndarray] | None = None,
-        components: Sequence[int] | None = None,
-    ) -> None:
-        """Prescribe u = g(X, t) (m) on ``vertices``: None clamps, a vector is constant, a
-        callable maps rest positions (k, d) and time to displacements (k, d). ``components``
-        restricts the condition to some axes (e.g. (0,) for x only)."""
-        vertices = np.asarray(vertices, dtype=np.int64).ravel()
-        if vertices.size == 0:
-            raise ValueError("add_dirichlet: the vertex selection is empty")
-        if vertices.min() < 0 or vertices.max() >= self.mesh.n_points:
-            raise ValueError(
-                f"add_dirichlet: vertex indices must be in [0, {self.mesh.n_points}); "
-                f"got {vertices.min()}..{vertices.max()}"
-            )
-        if displacement is None:
-            displacement = np.zeros(self.mesh.dim)
-        g = displacement if callable(displacement) else constant_displacement(displacement)
-        try:
-            comps = None if components is None else tuple(int(c) for c in components)
-        except (TypeError, ValueError):
-            raise ValueError(
-                "add_dirichlet: components must be a sequence of axes, e.g. (0,), "
-                f"not {components!r}"
-            ) from None
-        if comps is not None and (not comps or min(comps) < 0 or max(comps) >= self.mesh.dim):
-            raise ValueError(
-                f"add_dirichlet: components must be axes in 0..{self.mesh.dim - 1}, "
-                f"not {components!r}"
-            )
-        self._conditions.append(DirichletCondition(vertices, g, comps))
-        self.model.set_conditions(self._conditions)
-        self._solver = None
+        name: str,
+        mesh: Mesh,
+        material: Material,
+        *,
+        density: float | np.ndarray = 1000.0,
+        mass: MassKind = "consistent",
+    ) -> FemBody:
+        """A FEM body: a triangle or tetrahedral mesh (``mesh.box``, ``mesh.ellipsoid``,
+        ``read_mesh``) of one material; density kg/m^3 (scalar or one per element)."""
+        name = self._new_name(name, "body")
+        if self.tissue is not None:
+            raise ValueError("add the organs before the tissue that connects them")
+        if self.explicit:
+            mass = "lumped"  # the explicit update inverts the mass: it must be diagonal
+        body = FemBody(
+            name,
+            mesh,
+            material,
+            density=density,
+            mass=mass,
+            backend=self.backend,
+            claim_name=self._claim_force_name,
+            changed=functools.partial(self._changed, name),
+        )
+        for g in self.gravity:
+            body.add_gravity(g)
+        self.bodies[name] = body
+        self._changed()
+        return body
 
-    def add_traction(self, facets: np.ndarray, traction) -> None:
-        """Dead traction (N/m in 2D, Pa in 3D) on boundary facets (k, d): a vector or a
-        callable (X (k, d), t) -> (k, d) evaluated at the facets' vertices."""
-        facets = np.asarray(facets, dtype=np.int64)
-        if facets.ndim != 2 or facets.shape[1] != self.mesh.dim:
-            raise ValueError(f"add_traction: facets must be (k, {self.mesh.dim}) vertex indices")
-        self.model.loads.append(Traction(facets, as_field(traction)))
+    def add_frame_body(self, name: str, frames: np.ndarray, samples, material: Material, **kw):
+        """A meshless body: frame origins (n, 3) (``grid_frames``, ``farthest_point_frames``),
+        integration points with volumes (``sample_box``, ``sample_surface``, ...), any
+        material; keywords of ``bodies.frames.FrameBody`` (density, frame_type "rigid" or
+        "affine", shape "wendland" or "shepard", radius, radius_factor, min_frames,
+        rotations, mass "full" or "lumped")."""
+        from tissuesim.bodies.frames import FrameBody
 
-    def add_gravity(self, acceleration: Sequence[float]) -> None:
-        """Gravity, acceleration (d,) in m/s^2, acting on the element densities."""
+        name = self._new_name(name, "body")
+        body = FrameBody(
+            name,
+            frames,
+            samples,
+            material,
+            backend=self.backend,
+            claim_name=self._claim_force_name,
+            changed=functools.partial(self._changed, name),
+            time=lambda: self.time,
+            **kw,
+        )
+        for g in self.gravity:
+            body.add_gravity(g)
+        self.bodies[name] = body
+        self._changed()
+        return body
+
+    def add_tissue(self, material: Material, *, name: str = "tissue", **kw) -> TissueBody:
+        """The connective tissue between the FEM bodies (``coupling/tissue.py``): integration
+        points ``samples=``, or sampled between the organs (``thickness``, ``spacing``,
+        ``region``); ``frames`` a count or (n, 3) origins; ``frame_type`` "affine" (default)
+        or "rigid"; attached to every organ it touches (``attach_distance``,
+        ``attachment_stiffness`` N/m per m^2)."""
+        from tissuesim.coupling.tissue import TissueBody
+
+        if self.tissue is not None:
+            raise ValueError("the scene has a tissue already; one tissue body per scene")
+        name = self._new_name(name, "tissue")
+        organs = [(n, b.mesh) for n, b in self.bodies.items() if b.kind == "fem"]
+        if any(m.dim != 3 for _, m in organs):
+            raise ValueError("the tissue joins 3D organs; a 2D body cannot take part")
+        tissue = TissueBody(name, organs, material, backend=self.backend, **kw)
+        for g in self.gravity:
+            tissue.add_gravity(g)
+        self.bodies[name] = self.tissue = tissue
+        self._changed()
+        return tissue
+
+    def remove_body(self, name: str) -> None:
+        """Take a body (and, for the tissue, its attachments and cuts) out, before the first
+        step (e.g. to measure a scene without its tissue)."""
+        if self.history:
+            raise RuntimeError("remove_body must come before the first step")
+        body = self.body(name)
+        del self.bodies[name]
+        if body is self.tissue:
+            self.tissue = None
+        self._state = None
+        self._system = None
+        self._changed()
+
+    def body(self, name: str | None = None, kinds: tuple[str, ...] = ()):
+        """The body called ``name``; None: the only body (of ``kinds``, if given)."""
+        if name is not None:
+            if name not in self.bodies:
+                raise ValueError(f"unknown body {name!r}; bodies: {list(self.bodies)}")
+            b = self.bodies[name]
+            if kinds and b.kind not in kinds:
+                raise ValueError(f"body {name!r} is a {b.kind} body; this needs {kinds}")
+            return b
+        candidates = [b for b in self.bodies.values() if not kinds or b.kind in kinds]
+        if len(candidates) != 1:
+            what = f"{'/'.join(kinds)} " if kinds else ""
+            raise ValueError(
+                f"the simulation has {len(candidates)} {what}bodies "
+                f"({[b.name for b in candidates]}); name one with body="
+            )
+        return candidates[0]
+
+    # -- set-up on one body (see bodies/fem.py, bodies/frames.py, coupling/tissue.py) ---------
+    def add_dirichlet(self, vertices, displacement=None, components=None, *, body=None, name=None):
+        return self.body(body, ("fem",)).add_dirichlet(
+            vertices, displacement, components, name=name
+        )
+
+    def fix(self, body: str, vertices, name: str | None = None) -> str:
+        return self.body(body, ("fem",)).fix(vertices, name)
+
+    def grasp(self, body: str, vertices, displacement, *, stiffness=None, name=None):
+        return self.body(body, ("fem",)).grasp(
+            vertices, displacement, stiffness=stiffness, name=name
+        )
+
+    def add_traction(self, facets, traction, *, body=None) -> None:
+        self.body(body, ("fem",)).add_traction(facets, traction)
+
+    def add_body_force(self, force_density, *, body=None) -> None:
+        self.body(body, ("fem",)).add_body_force(force_density)
+
+    def add_gravity(self, acceleration: Sequence[float], *, body: str | None = None) -> None:
+        """Gravity (m/s^2, one component per dimension): on ``body``, or with body None on
+        every body (also those added later)."""
+        if body is not None:
+            self.body(body).add_gravity(acceleration)
+            return
         g = np.asarray(acceleration, dtype=float)
-        if g.shape != (self.mesh.dim,):
-            raise ValueError(f"add_gravity: acceleration must have {self.mesh.dim} components")
-        self.model.loads.append(Gravity(g))
+        dims = {b.dim for b in self.bodies.values()}
+        if g.ndim != 1 or g.shape[0] not in (2, 3) or not np.all(np.isfinite(g)):
+            raise ValueError(f"gravity must be 2 or 3 finite numbers (m/s^2), got {acceleration!r}")
+        if dims and {g.shape[0]} != dims:
+            raise ValueError(
+                f"gravity must have {max(dims)} components (the bodies are {max(dims)}D), got "
+                f"{g.shape[0]}"
+            )
+        for b in self.bodies.values():
+            b.add_gravity(g)
+        self.gravity.append(g)
 
-    def add_body_force(self, force_density) -> None:
-        """Body force per unit rest volume (N/m^3): a vector or a callable (X (n, d), t)."""
-        self.model.loads.append(BodyForce(as_field(force_density)))
+    def set_velocity(self, velocity=None, *, linear=None, angular=None, body=None) -> None:
+        """Initial velocity: FEM bodies (n, d) or (d,) m/s; frame bodies ``linear`` (3,)
+        (``velocity`` is taken as linear) and ``angular`` (3,) rad/s."""
+        b = self.body(body, ("fem", "frames"))
+        if b.kind == "fem":
+            b.set_velocity(velocity if velocity is not None else linear)
+        else:
+            lin = linear if linear is not None else velocity
+            b.set_velocity(
+                (0, 0, 0) if lin is None else lin, (0, 0, 0) if angular is None else angular
+            )
 
-    def set_velocity(self, velocity) -> None:
-        """Initial velocity (n, d) or a constant vector (d,), m/s."""
-        v = np.broadcast_to(np.asarray(velocity, float), self.mesh.points.shape).ravel().copy()
-        self.state = State(self.state.time, self.state.x, v)
+    def fix_frames(self, frames, *, body=None, name=None) -> str:
+        return self.body(body, ("frames",)).fix_frames(frames, name)
 
-    # -- results ------------------------------------------------------------------------------
+    def prescribe_frames(self, frames, motion, *, body=None, name=None) -> str:
+        return self.body(body, ("frames",)).prescribe_frames(frames, motion, name=name)
+
+    def frames_where(self, predicate: Callable, *, body=None) -> np.ndarray:
+        return self.body(body, ("frames",)).frames_where(predicate)
+
+    def embed(self, name: str, points: np.ndarray, *, body=None):
+        return self.body(body, ("frames",)).embed(name, points)
+
+    def embed_surface(self, surface, *, body=None):
+        return self.body(body, ("frames",)).embed_surface(surface)
+
+    def add_spring(self, points, stiffness, target=None, *, body=None, name=None):
+        return self.body(body, ("frames",)).add_spring(points, stiffness, target, name=name)
+
+    def add_point_forces(self, points, force, *, body=None):
+        return self.body(body, ("frames",)).add_point_forces(points, force)
+
+    def _tissue(self, what: str) -> TissueBody:
+        if self.tissue is None:
+            raise ValueError(f"{what} acts on the tissue: call add_tissue first")
+        return self.tissue
+
+    def add_cut(self, blade, start: float, end: float, *, kerf=None, name: str = "cut"):
+        return self._tissue("add_cut").add_cut(blade, start, end, kerf=kerf, name=name)
+
+    def set_tearing(self, threshold: float) -> None:
+        self._tissue("set_tearing").set_tearing(threshold)
+
+    # -- the assembled system and the state ---------------------------------------------------
+    _system_dirty = True
+
+    @property
+    def system(self) -> System:
+        """The assembled system (built on first use and again after set-up changes)."""
+        if self._system is None or self._system_dirty:
+            self._build()
+        return self._system
+
+    def build(self) -> None:
+        """Assemble the system now (the first step does it otherwise)."""
+        self.system  # noqa: B018
+
+    def _active(self) -> list:
+        return [b for b in self.bodies.values() if b.model is not None]
+
+    def _build(self) -> None:
+        from tissuesim.system import System
+
+        if not self.bodies:
+            raise ValueError("the simulation has no bodies: add_body or add_frame_body first")
+        old, state = self._system, self._state
+        parts: dict[str, tuple[np.ndarray, np.ndarray]] = {}
+        if old is not None and state is not None:
+            for j, name in enumerate(old.names):
+                parts[name] = (state.x[old.config_slices[j]], state.v[old.tangent_slices[j]])
+        bodies = self._active()
+        names = [b.name for b in bodies]
+        attachments = []
+        if self.tissue is not None and self.tissue.model is not None:
+            attachments = self.tissue.attachments(names.index, names.index(self.tissue.name))
+        self._system = System([b.model for b in bodies], names, attachments)
+        self._system_dirty = False
+        x, v = [], []
+        for b in bodies:
+            c0, v0 = parts.get(b.name) or (self._initial_config(b), b.velocity)
+            x.append(c0)
+            v.append(v0)
+        t = self.start_time if state is None else state.time
+        self._state = State(t, np.concatenate(x), np.concatenate(v))
+        if old is None or old.pattern is not self._system.pattern:
+            self._solver = None  # the pattern changed: a new symbolic analysis
+
+    @staticmethod
+    def _initial_config(b) -> np.ndarray:
+        return b.mesh.points.ravel().copy() if b.kind == "fem" else b.config.copy()
+
+    @property
+    def state(self) -> State:
+        """Time, configuration (every body's block in turn) and tangent velocity."""
+        self.system  # noqa: B018
+        return self._state
+
+    @state.setter
+    def state(self, value: State) -> None:
+        self.system  # noqa: B018
+        if value.x.shape != self._state.x.shape or value.v.shape != self._state.v.shape:
+            raise ValueError("a state must have the shapes of the simulation's state")
+        self._state = value
+
     @property
     def time(self) -> float:
-        return self.state.time
+        return self.start_time if self._state is None else self._state.time
+
+    def _part(self, name: str | None, kinds=()) -> tuple[Any, np.ndarray, np.ndarray]:
+        b = self.body(name, kinds)
+        s = self.system
+        j = s.index(b.name) if b.name in s.names else None
+        if j is None:
+            raise ValueError(f"body {b.name!r} has no material left (all of it was cut away)")
+        return b, self._state.x[s.config_slices[j]], self._state.v[s.tangent_slices[j]]
+
+    # -- results of one body (name it with body= when there are several) ---------------------
+    @property
+    def model(self):
+        """The only body's model (``Model`` or ``FrameModel``)."""
+        return self.body(None).model
+
+    @property
+    def mesh(self) -> Mesh:
+        return self.body(None, ("fem",)).mesh
+
+    def body_positions(self, body: str | None = None) -> np.ndarray:
+        """Current positions: FEM vertices (n, d); frame bodies: integration points (q, 3)."""
+        b, x, _ = self._part(body)
+        if b.kind == "fem":
+            return x.reshape(b.mesh.points.shape)
+        return b.model.point_map.positions(x)
 
     @property
     def positions(self) -> np.ndarray:
-        """Current positions (n, d) in m."""
-        return self.state.x.reshape(self.mesh.points.shape)
+        """Current vertex positions (n, d) of the only FEM body (m)."""
+        return self.body_positions(self.body(None, ("fem",)).name)
 
     @property
     def displacement(self) -> np.ndarray:
@@ -217,50 +488,207 @@ class Simulation:
 
     @property
     def velocity(self) -> np.ndarray:
-        return self.state.v.reshape(self.mesh.points.shape)
+        b, _, v = self._part(None, ("fem",))
+        return v.reshape(b.mesh.points.shape)
 
-    def cell_fields(self) -> dict[str, np.ndarray]:
-        """Per-element J and energy density at the current state (computed once per state)."""
-        if self._fields_state is not self.state:
-            self._fields = self.model.elastic.cell_fields(self.state.x)
-            self._fields_state = self.state
-        return self._fields
+    def cell_fields(self, body: str | None = None) -> dict[str, np.ndarray]:
+        """Per element of a FEM body: J, green_strain, cauchy_stress, von_mises,
+        energy_density (``materials/measures.py``)."""
+        b, x, _ = self._part(body, ("fem",))
+        return b.cell_fields(x)
 
-    def kinetic_energy(self) -> float:
-        return 0.5 * float(self.state.v @ self.model.mass.dot(self.state.v))
+    def point_fields(self, body: str | None = None) -> dict[str, np.ndarray]:
+        """At a frame body's integration points: positions, F and the continuum fields."""
+        b, z, _ = self._part(body, ("frames", "tissue"))
+        return b.point_fields(z)
+
+    def embedded_positions(self, name: str = "surface", *, body: str | None = None):
+        """Current positions (k, 3) of a frame body's embedded points ``name``."""
+        b, z, _ = self._part(body, ("frames",))
+        if name not in b.embedded:
+            raise KeyError(f"no embedded points named {name!r}; known: {sorted(b.embedded)}")
+        return b.embedded[name].positions(z)
+
+    @property
+    def frame_positions(self) -> np.ndarray:
+        b, z, _ = self._part(None, ("frames",))
+        return b.model.frame_type.split(z)[0].copy()
+
+    @property
+    def frame_rotations(self) -> np.ndarray:
+        b, z, _ = self._part(None, ("frames",))
+        return b.model.rotations(z)
+
+    @property
+    def rest_frames(self) -> np.ndarray:
+        return self.body(None, ("frames",)).rest_frames
+
+    @property
+    def n_frames(self) -> int:
+        return self.body(None, ("frames",)).n_frames
+
+    @property
+    def surface(self):
+        return self.body(None, ("frames",)).surface
+
+    @property
+    def embedded(self) -> dict:
+        return self.body(None, ("frames",)).embedded
+
+    @property
+    def graspers(self) -> list:
+        return [g for b in self.bodies.values() if b.kind == "fem" for g in b.graspers]
+
+    def tissue_fields(self) -> dict[str, np.ndarray]:
+        """At the alive tissue points: positions, F, the continuum fields, the largest
+        principal strain and the points' stable ids ({} without tissue)."""
+        if self.tissue is None or self.tissue.model is None:
+            return {}
+        return self.point_fields(self.tissue.name)
+
+    def attachment_gap(self) -> float:
+        """Largest distance (m) between where an organ and the tissue put an attachment
+        point: the penalty's violation."""
+        s, gap = self.system, 0.0
+        for a in s.attachments:
+            organ = s.bodies[a.organ]
+            y = a.organ_positions(organ.mesh.cells, s.body_config(self._state.x, a.organ))
+            p = a.tissue.positions(s.body_config(self._state.x, s.index(self.tissue.name)))
+            gap = max(gap, float(np.linalg.norm(p - y, axis=1).max()))
+        return gap
+
+    def forces(self) -> dict[str, list[float]]:
+        """Force (N, 3-vector) every support, prescribed set, grasper and spring set applies
+        to its body at the current state (reactions from the last solve's gradient)."""
+        s, g, out = self.system, self._last_gradient, {}
+        for j, name in enumerate(s.names):
+            gj = None if g is None or g.size != s.n_dofs else g[s.tangent_slices[j]]
+            out.update(self.bodies[name].forces(s.body_config(self._state.x, j), gj, self.time))
+        return out
 
     def energies(self) -> dict[str, float]:
-        """Elastic, kinetic and external-load potential energy (J) at the current state."""
-        acc = self.model.evaluate(self.state.x, 0, False)
-        potential = -float(self.model.external_force(self.time) @ self.state.x)
-        return {"elastic": acc.value, "kinetic": self.kinetic_energy(), "load_potential": potential}
+        """Energies (J) at the current state: elastic, kinetic, load_potential (-f . x) and the
+        other terms (springs, grasper, attachment) summed over the bodies; with several
+        bodies also each body's own, as "<body>.<term>"."""
+        s, x, t = self.system, self._state.x, self.time
+        acc = s.evaluate(x, 0, False, [self.bodies[n].step_energies(t, None, 1.0) for n in s.names])
+        out: dict[str, float] = {"elastic": 0.0}
+        for key, value in acc.terms.items():
+            term = key.rsplit(".", 1)[-1]
+            term = "load_potential" if term == "external" else term
+            out[term] = out.get(term, 0.0) + value
+            if "." in key:
+                out[key.replace(".external", ".load_potential")] = value
+        out["kinetic"] = (
+            0.0 if self.integrator == "quasistatic" else s.kinetic_energy(x, self._state.v)
+        )
+        return out
+
+    def min_J(self) -> float:
+        s = self.system
+        return float(
+            min(
+                self.bodies[n].min_J(s.body_config(self._state.x, j)) for j, n in enumerate(s.names)
+            )
+        )
+
+    def critical_time_step(self) -> float:
+        """Explicit stability estimate (s): the smallest over the bodies (FEM: CFL h_min / c;
+        frames: 2 / omega_max at the current configuration, springs included)."""
+        from tissuesim.frames.stability import frame_critical_time_step
+        from tissuesim.time.stability import critical_time_step
+
+        s, out = self.system, np.inf
+        for j, name in enumerate(s.names):
+            b = self.bodies[name]
+            if b.kind == "fem":
+                out = min(out, critical_time_step(b.model))
+            else:
+                z = s.body_config(self._state.x, j)
+                out = min(out, frame_critical_time_step(b.model, z, self.time))
+        return float(out)
 
     # -- stepping -----------------------------------------------------------------------------
     def _linear_solver(self):
         if self._solver is None:
+            s = self.system
+            dims = {b.dim for b in self._active()}
+            single = len(s.bodies) == 1 and self._active()[0].kind == "fem"
             self._solver, self.solver_reason = make_linear_solver(
-                self.newton.linear_solver, self.model.n_dofs, self.mesh.dim, self.mesh.points
+                self.newton.linear_solver,
+                s.n_dofs,
+                max(dims),
+                self._active()[0].mesh.points if single else None,
             )
         return self._solver
 
+    def step_energies(self, t: float, c_pred: np.ndarray | None, h: float) -> list[list]:
+        """Every body's extra energies of a step at time t (inertia about c_pred when given,
+        loads, springs): what ``time/steps.py`` adds to the elastic energies."""
+        s = self.system
+        return [
+            self.bodies[name].step_energies(
+                t, None if c_pred is None else c_pred[s.config_slices[j]], h
+            )
+            for j, name in enumerate(s.names)
+        ]
+
+    def _check_supported(self) -> None:
+        """A quasistatic solve that nothing holds has no solution (SciPy would return finite
+        garbage): refuse it."""
+        s = self.system
+        if len(s.bodies) == 1 and self._active()[0].kind == "fem":
+            from tissuesim.time.quasistatic import check_supported
+
+            check_supported(s.bodies[0])
+            return
+        springs = any(b.kind == "frames" and b.model.springs for b in self._active())
+        spring_graspers = any(b.kind == "fem" and b.spring_graspers for b in self._active())
+        if not (s.prescribed_dofs.size or springs or spring_graspers):
+            raise ValueError(
+                "a quasistatic solve needs supports, fixed or prescribed frames, or springs, to "
+                "hold the bodies against rigid motions; add fix(...) / fix_frames(...) or use "
+                "backward_euler"
+            )
+
     def step(self) -> StepRecord:
-        """Advance one time step (with automatic halving on failure); ConvergenceError if it
-        cannot. Returns the step's record (also appended to ``history``)."""
+        """Advance one time step (halving on failure; ConvergenceError if it cannot), then
+        apply cuts and tearing. Returns the step's record (also appended to ``history``)."""
+        from tissuesim.time.steps import explicit_step, implicit_step
+
+        s = self.system
         if self.integrator == "quasistatic":
-            check_supported(self.model)
-        solver = self._linear_solver() if self.integrator != "symplectic_euler" else None
+            self._check_supported()
         start = wallclock.perf_counter()
-        new_state, records, substeps = advance(
-            INTEGRATORS[self.integrator],
-            self.model,
-            self.state,
+        t0 = self.time
+        if self.explicit:
+            solver = None
+
+            def step_fn(system, state, h, solver, options):
+                return explicit_step(
+                    system, state, h, energies=self.step_energies, limit=self.critical_time_step
+                )
+        else:
+            solver = self._linear_solver()
+            step_fn = functools.partial(
+                implicit_step,
+                dynamic=self.integrator == "backward_euler",
+                energies=self.step_energies,
+            )
+        self._state, records, substeps = advance(
+            step_fn,
+            s,
+            self._state,
             self.time_step,
             solver,
             self.newton,
             self.max_step_halvings,
-            self.start_time + (len(self.history) + 1) * self.time_step,
+            self._end_time(),
         )
-        self.state = new_state
+        self._last_gradient = records[-1].gradient if records else self._static_gradient()
+        extra: dict[str, Any] = {"forces": self.forces()}
+        if self.tissue is not None:
+            extra.update(self._tissue_step(t0))
         record = StepRecord.build(
             len(self.history) + 1,
             self.time,
@@ -269,10 +697,50 @@ class Simulation:
             start,
             solver,
             energies=self.energies(),
-            min_J=float(self.model.elastic.jacobians(self.state.x).min()),
+            min_J=self.min_J(),
+            extra=extra,
         )
         self.history.append(record)
         return record
+
+    def _end_time(self) -> float:
+        """start + (k + 1) h for a state at start + k h (no running sum: ten steps of 0.1 end
+        at 1.0); a state off that grid (set by hand, or a changed time_step) steps to t + h."""
+        h, t = self.time_step, self._state.time
+        k = round((t - self.start_time) / h)
+        if abs(self.start_time + k * h - t) <= 1e-9 * h:
+            return self.start_time + (k + 1) * h
+        return t + h
+
+    def _static_gradient(self) -> np.ndarray | None:
+        """Explicit steps have no Newton gradient: the reactions come from the static balance
+        at the new state (one gradient evaluation, only when there are forces to report)."""
+        if not self._force_names:
+            return None
+        s = self.system
+        energies = self.step_energies(self.time, None, self.time_step)
+        return s.evaluate(self._state.x, 1, False, energies).gradient
+
+    def _tissue_step(self, t0: float) -> dict[str, Any]:
+        tissue = self.tissue
+        events = []
+        if tissue.model is not None:
+            j = self.system.index(tissue.name)
+            z = self.system.body_config(self._state.x, j)
+
+            def rebuild() -> np.ndarray:
+                self._build()
+                return self.system.body_config(self._state.x, self.system.index(tissue.name))
+
+            events = tissue.topology(z, t0, self.time, rebuild)
+            if tissue.model is None:  # all tissue gone: the organs go on alone
+                self._build()
+        return {
+            "attachment_gap": self.attachment_gap() if tissue.model is not None else 0.0,
+            "tissue_points": int(tissue.dissection.alive.sum()),
+            "attachments": int(sum(a.n for a in self.system.attachments)),
+            "events": events,
+        }
 
     def run(
         self,
@@ -282,31 +750,31 @@ class Simulation:
         every: int = 1,
         progress: bool = True,
         render: bool = True,
+        field: str = "J",
         metadata: dict | None = None,
     ) -> list[StepRecord]:
-        """Run ``steps`` time steps; with ``output``, write a VTU series, summary.json and
-        (if ``render``) a PNG of the final frame and a GIF of the run (``io.run_output``)."""
+        """Run ``steps`` time steps; with ``output``, write per body a VTU series on rest
+        positions, summary.json, forces.csv / forces.png and (``render``) final.png and run.gif
+        coloured by ``field`` ("J", "von_mises", "displacement", "green_strain";
+        ``io/run_output.py``)."""
         from tissuesim.io.run_output import RunOutput
 
-        writer = RunOutput(self, output, every=every, render=render, metadata=metadata)
+        writer = RunOutput(self, output, every=every, render=render, field=field, metadata=metadata)
         return writer.run(steps, progress=progress)
 
     def describe(self) -> dict[str, Any]:
+        s = self.system
         return {
             "integrator": self.integrator,
             "time_step": self.time_step,
-            "mass": self.model.mass_kind,
-            "material": repr(self.model.material),
-            "n_dofs": self.model.n_dofs,
-            "prescribed_dofs": int(self.model.prescribed.dofs.size),
+            "start_time": self.start_time,
+            "gravity": [g.tolist() for g in self.gravity],
+            "bodies": {name: b.describe() for name, b in self.bodies.items()},
+            "n_dofs": s.n_dofs,
+            "prescribed_dofs": int(s.prescribed_dofs.size),
             "newton": asdict(self.newton),
             "linear_solver": {
                 "name": getattr(self._solver, "name", None),
                 "reason": self.solver_reason,
-            },
-            "backend": {
-                "name": self.model.backend,
-                "reason": self.model.backend_reason,
-                "fused_elastic": self.model.elastic.fused,
             },
         }

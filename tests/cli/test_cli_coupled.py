@@ -68,10 +68,8 @@ def test_run_coupled_example_for_two_steps(tmp_path, capsys):
     assert main(args) == 0
     captured = capsys.readouterr()
     banner = captured.err
-    assert (
-        "organs_retraction_cut: 2 organs (liver 729 vertices, gallbladder 729 vertices)" in banner
-    )
-    assert "/ 30 frames, 1 cut, backward_euler, time_step 0.025 s, 2 steps" in banner
+    assert "organs_retraction_cut: liver: 729 vertices, 3072 tetrahedra; gallbladder: 729" in banner
+    assert "/ 30 frames; 1 cut, backward_euler, time_step 0.025 s, 2 steps" in banner
     report = json.loads(captured.out)
     assert report["steps"] == 2 and report["end_time"] == 0.05
     assert 0 < report["min_J"] <= 1.0 + 1e-9
@@ -99,8 +97,8 @@ def test_small_coupled_scene_with_a_cut_and_pictures(tmp_path, capsys):
     out = tmp_path / "o"
     assert main(["run", str(scene), "--out", str(out)]) == 0
     captured = capsys.readouterr()
-    assert "boxes: 2 organs (lower 48 vertices, upper 48 vertices), tissue " in captured.err
-    assert "/ 8 frames, 1 cut, quasistatic" in captured.err
+    assert "boxes: lower: 48 vertices, 108 tetrahedra; upper: 48 vertices" in captured.err
+    assert "/ 8 frames; 1 cut, quasistatic" in captured.err
     report = json.loads(captured.out)
     assert report["steps"] == 3
     summary = json.loads((out / "summary.json").read_text())

@@ -6,12 +6,12 @@ import numpy as np
 import pytest
 
 from tissuesim.coupling.attachment import Attachment
-from tissuesim.coupling.system import CoupledSystem
 from tissuesim.frames.model import FrameModel
 from tissuesim.frames.sampling import sample_box
 from tissuesim.materials import make_material
 from tissuesim.mesh import box
 from tissuesim.model import Model
+from tissuesim.system import System
 
 
 def brute_barycentric(mesh, points):
@@ -65,7 +65,7 @@ def make_scene(frame_kind="rigid", tissue_E=300.0, k_attach=200.0, gap=0.2):
                 ids=np.arange(len(pts)),
             )
         )
-    return CoupledSystem(organs, ["lower", "upper"], tissue, attachments)
+    return System([*organs, tissue], ["lower", "upper", "tissue"], attachments)
 
 
 @pytest.fixture

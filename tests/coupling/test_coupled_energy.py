@@ -49,12 +49,12 @@ def test_total_energy_matches_finite_differences(frame_kind, scene_factory):
 def test_coupling_energy_alone_matches_finite_differences(scene_factory):
     make_scene = scene_factory
     """The attachments' energy alone: the full system minus the same bodies without them."""
-    from tissuesim.coupling.system import CoupledSystem
+    from tissuesim.system import System
 
     rng = np.random.default_rng(2)
     system = make_scene("rigid")
     other = make_scene("rigid")  # independent bodies with the same geometry
-    bare = CoupledSystem(other.organs, other.organ_names, other.tissue, [])
+    bare = System(other.bodies, other.names, [])
     c = perturbed(system, rng, 0.05)
 
     def coupling_only(x, order):
@@ -83,11 +83,13 @@ def test_coupling_is_zero_at_rest_and_for_rigid_motions(scene_factory):
     assert np.abs(acc.gradient).max() < 1e-12
     # translate everything: frames by their origins, organs by their vertices
     d = np.zeros(system.n_dofs)
-    d[: system.tissue_config.start] = np.tile([0.1, -0.2, 0.3], system.tissue_config.start // 3)
-    t = system.tissue.frame_type.tangent_size
-    dq = d[system.tissue_tangent].reshape(-1, t)
+    d[: system.config_slices[2].start] = np.tile(
+        [0.1, -0.2, 0.3], system.config_slices[2].start // 3
+    )
+    t = system.bodies[2].frame_type.tangent_size
+    dq = d[system.tangent_slices[2]].reshape(-1, t)
     dq[:, :3] = [0.1, -0.2, 0.3]
-    d[system.tissue_tangent] = dq.ravel()
+    d[system.tangent_slices[2]] = dq.ravel()
     moved = system.evaluate(system.retract(c, d), 1)
     assert abs(moved.value) < 1e-12
     assert np.abs(moved.gradient).max() < 1e-10
@@ -101,7 +103,7 @@ def test_cross_blocks_present_and_needed(scene_factory):
     c = perturbed(system, rng)
     acc = system.evaluate(c, 2)
     full = system.pattern.matrix(acc.hessian).toarray()
-    o, t = slice(0, system.tissue_tangent.start), system.tissue_tangent
+    o, t = slice(0, system.tangent_slices[2].start), system.tangent_slices[2]
     assert np.abs(full[o, t]).max() > 1.0
     system.cross = []
     without = system.pattern.matrix(system.evaluate(c, 2).hessian).toarray()
@@ -114,14 +116,14 @@ def test_grasper_springs_match_finite_differences(scene_factory):
 
     rng = np.random.default_rng(4)
     system = scene_factory("rigid")
-    upper = system.organs[1].mesh
+    upper = system.bodies[1].mesh
     held = upper.point_sets["zmax"]
     springs = VertexSprings(held, 500.0, lambda t: upper.points[held] + [0.01, -0.02, 0.1 * t])
     energy = springs.energy(1.0)
     c = perturbed(system, rng)
 
     def evaluate(x, order):
-        return system.evaluate(x, order, False, [[], [energy]], [])
+        return system.evaluate(x, order, False, [[], [energy], []])
 
     acc = evaluate(c, 1)
     assert acc.terms["upper.grasper"] > 0

@@ -6,9 +6,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from tissuesim.coupling.simulation import CoupledSimulation
 from tissuesim.materials import make_material
 from tissuesim.mesh import box
+from tissuesim.simulation import Simulation
 from tissuesim.solve.newton import NewtonOptions
 
 GAP = 0.2
@@ -33,13 +33,13 @@ def two_boxes(
     lower = box((0, 0, -0.5), (1, 1, 0), (3, 3, 2))
     upper = box((0, 0, GAP), (1, 1, GAP + 0.5), (3, 3, 2))
     mat = make_material("neo_hookean", youngs_modulus=1000.0, poisson_ratio=0.3)
-    sim = CoupledSimulation(
+    sim = Simulation(
         integrator=integrator,
         time_step=time_step,
         gravity=None if gravity is None else (0, 0, -gravity),
     )
-    sim.add_organ("lower", lower, mat, density=10.0)
-    sim.add_organ("upper", upper, mat, density=10.0)
+    sim.add_body("lower", lower, mat, density=10.0)
+    sim.add_body("upper", upper, mat, density=10.0)
     if fix_lower:
         sim.fix("lower", lower.point_sets["zmin"])
     held = upper.point_sets["zmax"]
@@ -60,8 +60,8 @@ def two_boxes(
 
 
 def total_weight(sim, g=9.81):
-    organs = sum(m.mass.lumped.sum() / 3 for m in sim.system.organs)
-    tissue = sim.system.tissue.masses.sum() if sim.system.tissue is not None else 0.0
+    organs = sum(sim.bodies[n].model.mass.lumped.sum() / 3 for n in ("lower", "upper"))
+    tissue = sim.tissue.model.masses.sum() if sim.tissue is not None else 0.0
     return (organs + tissue) * g
 
 
@@ -89,8 +89,8 @@ def test_spring_grasper_force_balances_weight_and_lags_its_target():
     np.testing.assert_allclose(
         np.add(f["grasper"], f["lower.support"]), [0, 0, total_weight(sim)], atol=1e-6
     )
-    held = sim._organs["upper"].graspers[0].vertices
-    lag = 0.1 - (sim.organ_positions("upper")[held, 2] - sim.system.organs[1].mesh.points[held, 2])
+    held = sim.bodies["upper"].graspers[0].vertices
+    lag = 0.1 - (sim.body_positions("upper")[held, 2] - sim.bodies["upper"].mesh.points[held, 2])
     assert lag.sum() * k == pytest.approx(f["grasper"][2], rel=1e-9)
     assert lag.mean() > 0
 
@@ -120,8 +120,8 @@ def test_tissue_stiffness_limits(tissue_E, follows):
     sim.newton = NewtonOptions(gradient_tolerance=1e-11, absolute_tolerance=1e-12)
     for _ in range(10):
         sim.step()
-    up = sim.organ_positions("upper").mean(axis=0) - sim.system.organs[1].mesh.points.mean(0)
-    low = sim.organ_positions("lower").mean(axis=0) - sim.system.organs[0].mesh.points.mean(0)
+    up = sim.body_positions("upper").mean(axis=0) - sim.bodies["upper"].mesh.points.mean(0)
+    low = sim.body_positions("lower").mean(axis=0) - sim.bodies["lower"].mesh.points.mean(0)
     assert up[2] == pytest.approx(0.1, rel=0.05)
     ratio = low[2] / up[2]
     if follows:
@@ -156,8 +156,8 @@ def test_full_cut_leaves_only_weight(gravity):
         return
     # what hangs on the grasper: the upper organ and the tissue points above the cut
     f = sim.tissue_fields()
-    tissue_above = sim.system.tissue.masses[f["positions"][:, 2] > zc].sum()
-    upper = sim.system.organs[1].mass.lumped.sum() / 3
+    tissue_above = sim.tissue.model.masses[f["positions"][:, 2] > zc].sum()
+    upper = sim.bodies["upper"].model.mass.lumped.sum() / 3
     expected = (upper + tissue_above) * gravity
     assert after[2] == pytest.approx(expected, rel=1e-6)
     assert before > 1.5 * expected
@@ -179,11 +179,11 @@ def test_tearing_removes_overstretched_points_and_continues():
     rest holds, and stepping goes on with the new topology."""
     sim = two_boxes(gravity=None, lift=0.3, peel=True)
     sim.set_tearing(0.3)
-    rest_x = sim._tissue.samples.points[:, 0]
+    rest_x = sim.tissue.samples.points[:, 0]
     records = [sim.step() for _ in range(4)]
     torn = [e for r in records for e in r.extra["events"] if e["kind"] == "tear"]
     assert torn, "nothing tore"
-    alive = sim.dissection.alive
+    alive = sim.tissue.dissection.alive
     assert 0 < alive.sum() < alive.size
     assert rest_x[~alive].mean() < rest_x[alive].mean()  # it tore at the peeled end
     assert all(r.converged for r in records)
@@ -192,12 +192,12 @@ def test_tearing_removes_overstretched_points_and_continues():
 
 
 def test_errors_name_what_is_wrong():
-    sim = CoupledSimulation()
+    sim = Simulation()
     with pytest.raises(ValueError, match="add the organs"):
         sim.add_tissue(make_material("stvk", youngs_modulus=1.0, poisson_ratio=0.3))
-    with pytest.raises(ValueError, match="unknown organ 'liver'"):
+    with pytest.raises(ValueError, match="unknown body 'liver'"):
         sim.fix("liver", [0])
-    sim.add_organ(
+    sim.add_body(
         "a",
         box((0, 0, 0), (1, 1, 1), (1, 1, 1)),
         make_material("stvk", youngs_modulus=1.0, poisson_ratio=0.3),
@@ -205,9 +205,9 @@ def test_errors_name_what_is_wrong():
     with pytest.raises(ValueError, match="out of range"):
         sim.fix("a", [100])
     with pytest.raises(ValueError, match="taken"):
-        sim.add_organ("a", box(), make_material("stvk", youngs_modulus=1.0, poisson_ratio=0.3))
+        sim.add_body("a", box(), make_material("stvk", youngs_modulus=1.0, poisson_ratio=0.3))
     far = box((5, 5, 5), (6, 6, 6), (1, 1, 1))
-    sim.add_organ("b", far, make_material("stvk", youngs_modulus=1.0, poisson_ratio=0.3))
+    sim.add_body("b", far, make_material("stvk", youngs_modulus=1.0, poisson_ratio=0.3))
     with pytest.raises(ValueError, match="touches no organ|layer is empty|empty"):
         sim.add_tissue(
             make_material("stvk", youngs_modulus=1.0, poisson_ratio=0.3),
@@ -228,9 +228,9 @@ def test_bad_cut_and_attachment_parameters_are_refused():
         sim.add_cut(lambda t: np.zeros((1, 3)), 1.0, 2.0)
     lower = box((0, 0, -0.5), (1, 1, 0), (2, 2, 1))
     upper = box((0, 0, GAP), (1, 1, GAP + 0.5), (2, 2, 1))
-    other = CoupledSimulation()
+    other = Simulation()
     mat = make_material("stvk", youngs_modulus=1.0, poisson_ratio=0.3)
-    other.add_organ("lower", lower, mat)
-    other.add_organ("upper", upper, mat)
+    other.add_body("lower", lower, mat)
+    other.add_body("upper", upper, mat)
     with pytest.raises(ValueError, match="attachment_stiffness must be > 0"):
         other.add_tissue(mat, thickness=GAP, spacing=0.1, attachment_stiffness=-1.0)

@@ -11,8 +11,8 @@ from tissuesim.backend import numba_available
 from tissuesim.frames.model import FrameModel
 from tissuesim.frames.placement import grid_frames
 from tissuesim.frames.sampling import sample_box
-from tissuesim.frames.simulation import FrameSimulation
 from tissuesim.materials import make_material
+from tissuesim.simulation import Simulation
 
 BACKENDS = ["numpy"] + (["numba"] if numba_available() else [])
 SAMPLES = sample_box([0.0, 0.0, 0.0], [0.4, 0.4, 1.0], 0.1)
@@ -132,7 +132,7 @@ def test_mass_conserves_total_mass_and_is_positive(kind, mass):
 
 
 def test_gravity_force_is_total_weight():
-    sim = FrameSimulation(
+    sim = Simulation.from_frames(
         FRAMES, SAMPLES, make_material("stvk", youngs_modulus=1e3, poisson_ratio=0.3), density=3.0
     )
     sim.add_gravity([0.0, -9.81, 0.0])
@@ -142,7 +142,7 @@ def test_gravity_force_is_total_weight():
 
 def _bend(steps=4):
     material = make_material("stvk", youngs_modulus=1000.0, poisson_ratio=0.3)
-    sim = FrameSimulation(
+    sim = Simulation.from_frames(
         grid_frames([0.2, 0.2, 0.0], [0.2, 0.2, 1.0], (1, 1, 5)),
         SAMPLES,
         material,
@@ -187,7 +187,7 @@ def test_explicit_and_implicit_agree_at_small_steps():
     material = make_material("stvk", youngs_modulus=1000.0, poisson_ratio=0.3)
     ends = {}
     for integrator, h in (("explicit", 2e-4), ("backward_euler", 2e-4), ("backward_euler", 2e-3)):
-        sim = FrameSimulation(
+        sim = Simulation.from_frames(
             FRAMES, SAMPLES, material, density=100.0, integrator=integrator, time_step=h
         )
         sim.fix_frames(sim.frames_where(lambda X: X[:, 2] < 1e-9))
@@ -207,7 +207,7 @@ def test_explicit_and_implicit_agree_at_small_steps():
 def test_explicit_rigid_spin_keeps_energy():
     """A free body spinning: explicit steps with the centripetal term keep the kinetic energy."""
     material = make_material("stvk", youngs_modulus=1e5, poisson_ratio=0.3)
-    sim = FrameSimulation(
+    sim = Simulation.from_frames(
         FRAMES, SAMPLES, material, density=10.0, integrator="explicit", time_step=1e-4
     )
     sim.set_velocity(angular=[0.0, 0.0, 2.0])
@@ -226,8 +226,8 @@ def test_errors_name_the_problem():
         FrameModel(np.vstack([FRAMES, [[5.0, 5.0, 5.0]]]), SAMPLES, material, radius=0.5)
     with pytest.raises(ValueError, match="integration point .* reached by 0"):
         FrameModel(FRAMES, SAMPLES, material, radius=0.05)
-    sim = FrameSimulation(FRAMES, SAMPLES, material, integrator="quasistatic")
-    with pytest.raises(ValueError, match="needs fixed or prescribed frames"):
+    sim = Simulation.from_frames(FRAMES, SAMPLES, material, integrator="quasistatic")
+    with pytest.raises(ValueError, match="needs supports, fixed or prescribed frames"):
         sim.step()
     sim.fix_frames([0])
     with pytest.raises(ValueError, match="already fixed"):
@@ -240,7 +240,7 @@ def test_errors_name_the_problem():
 
 def test_critical_time_step_counts_springs():
     material = make_material("stvk", youngs_modulus=1e3, poisson_ratio=0.3)
-    sim = FrameSimulation(FRAMES, SAMPLES, material, density=10.0, integrator="explicit")
+    sim = Simulation.from_frames(FRAMES, SAMPLES, material, density=10.0, integrator="explicit")
     free = sim.critical_time_step()
     sim.add_spring(SAMPLES.points[:5], 1e6)
     assert sim.critical_time_step() < 0.5 * free

@@ -1,4 +1,5 @@
-"""FrameSimulation.run output: VTU series of points, frames and surface, summary, pictures."""
+"""Simulation.run output of a frame body: series of points, frames and surface, summary,
+pictures."""
 
 import json
 import xml.etree.ElementTree as ET
@@ -12,18 +13,20 @@ from PIL import Image
 import tissuesim.render.points3d as points3d
 from tissuesim.frames.placement import grid_frames
 from tissuesim.frames.sampling import box_surface, sample_box
-from tissuesim.frames.simulation import FrameSimulation
 from tissuesim.io.vtu_series import VTUSeriesWriter
 from tissuesim.materials import make_material
+from tissuesim.simulation import Simulation
 
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
-POINT_ARRAYS = {"displacement", "J", "energy_density", "green_strain", "volume", "mass"}
-FRAME_ARRAYS = {"displacement", "axis_x", "axis_y", "axis_z", "radius"}
+FIELDS = {"J", "green_strain", "cauchy_stress", "von_mises", "energy_density"}
+POINT_ARRAYS = {"displacement", "velocity", "volume", "mass"} | FIELDS
+FRAME_ARRAYS = {"displacement", "velocity", "axis_x", "axis_y", "axis_z", "radius"}
+SERIES = {"integration_points": "body", "frames": "body_frames", "surface": "body_surface"}
 
 
-def column(surface: bool = True) -> FrameSimulation:
+def column(surface: bool = True) -> Simulation:
     """A 0.4 x 0.4 x 1 column on 3 rigid frames, clamped at z = 0, sagging under gravity."""
-    sim = FrameSimulation(
+    sim = Simulation.from_frames(
         grid_frames([0.2, 0.2, 0], [0.2, 0.2, 1], (1, 1, 3)),
         sample_box([0, 0, 0], [0.4, 0.4, 1], 0.1),
         make_material("stvk", youngs_modulus=1e3, poisson_ratio=0.3),
@@ -67,11 +70,9 @@ def test_run_writes_three_series_summary_and_pictures(tmp_path):
     history = sim.run(4, out, progress=False, metadata={"scene": "column"})
     assert len(history) == 4
 
-    series = {
-        name: read_pvd(out / f"{name}.pvd") for name in ("integration_points", "frames", "surface")
-    }
-    for name, rows in series.items():  # the rest frame, then every step
-        assert [p.name for _, p in rows] == [f"{name}_{k:05d}.vtu" for k in range(5)]
+    series = {kind: read_pvd(out / f"{name}.pvd") for kind, name in SERIES.items()}
+    for kind, rows in series.items():  # the rest frame, then every step
+        assert [p.name for _, p in rows] == [f"{SERIES[kind]}_{k:05d}.vtu" for k in range(5)]
         times = [t for t, _ in rows]
         assert times[0] == 0.0 and times[-1] == pytest.approx(sim.time)
         assert np.all(np.diff(times) > 0)
@@ -83,11 +84,10 @@ def test_run_writes_three_series_summary_and_pictures(tmp_path):
     assert [c.type for c in points.cells] == ["vertex"] and points.cells[0].data.shape == (q, 1)
     assert set(points.point_data) == POINT_ARRAYS
     fields = sim.point_fields()
-    np.testing.assert_allclose(points.points, fields["positions"], rtol=0, atol=1e-12)
+    # rest positions + displacement: ParaView's Warp By Vector gives the deformed body
+    np.testing.assert_allclose(points.points, sim.model.samples.points, rtol=0, atol=1e-12)
     np.testing.assert_allclose(
-        points.point_data["displacement"],
-        fields["positions"] - sim.model.samples.points,
-        atol=1e-12,
+        points.points + points.point_data["displacement"], fields["positions"], atol=1e-12
     )
     np.testing.assert_allclose(points.point_data["J"], fields["J"], atol=1e-12)
     assert points.point_data["green_strain"].shape == (q, 9)
@@ -101,7 +101,7 @@ def test_run_writes_three_series_summary_and_pictures(tmp_path):
     frames = meshio.read(series["frames"][-1][1])
     assert frames.points.shape == (3, 3) and frames.cells[0].type == "vertex"
     assert set(frames.point_data) == FRAME_ARRAYS
-    np.testing.assert_allclose(frames.points, sim.frame_positions, atol=1e-12)
+    np.testing.assert_allclose(frames.points, sim.rest_frames, atol=1e-12)
     np.testing.assert_allclose(
         frames.point_data["displacement"], sim.frame_positions - sim.rest_frames, atol=1e-12
     )
@@ -117,23 +117,22 @@ def test_run_writes_three_series_summary_and_pictures(tmp_path):
     assert [c.type for c in last.cells] == ["triangle"]
     np.testing.assert_array_equal(last.cells[0].data, sim.surface.triangles)
     np.testing.assert_allclose(first.points, sim.surface.points, atol=1e-12)
-    np.testing.assert_allclose(last.points, sim.positions("surface"), rtol=0, atol=1e-12)
+    np.testing.assert_allclose(last.points, sim.surface.points, rtol=0, atol=1e-12)
     np.testing.assert_allclose(
-        last.point_data["displacement"], sim.positions("surface") - sim.surface.points, atol=1e-12
+        last.points + last.point_data["displacement"],
+        sim.embedded_positions("surface"),
+        atol=1e-12,
     )
 
     summary = json.loads((out / "summary.json").read_text())
     assert summary["status"] == "completed" and summary["error"] is None
-    assert summary["scene"] == "column" and "mesh" not in summary
-    assert summary["body"] == {
-        "frames": 3,
-        "integration_points": q,
-        "volume": pytest.approx(0.16),
-        "mass": pytest.approx(1.6),
-        "surface_points": len(sim.surface.points),
-        "surface_triangles": len(sim.surface.triangles),
-    }
-    assert summary["simulation"]["discretisation"] == "frames"
+    assert summary["scene"] == "column"
+    body = summary["simulation"]["bodies"]["body"]
+    assert body["kind"] == "frames" and body["frames"] == 3 and body["integration_points"] == q
+    assert body["volume"] == pytest.approx(0.16) and body["mass"] == pytest.approx(1.6)
+    assert body["surface_triangles"] == len(sim.surface.triangles)
+    # the clamped frame's reaction balances the weight (1.6 kg) once the column has settled
+    assert summary["forces"][-1]["body.fixed_frames"][1] > 0
     assert summary["totals"]["steps"] == 4 and len(summary["steps"]) == 4
     assert [s["step"] for s in summary["steps"]] == [1, 2, 3, 4]
     assert summary["totals"]["min_J"] == pytest.approx(min(r.min_J for r in history))
@@ -147,7 +146,7 @@ def test_run_writes_three_series_summary_and_pictures(tmp_path):
 def test_every_and_no_pictures(tmp_path):
     sim = column()
     sim.run(3, tmp_path, every=2, progress=False, render=False)
-    for name in ("integration_points", "frames", "surface"):
+    for name in SERIES.values():
         times = [t for t, _ in read_pvd(tmp_path / f"{name}.pvd")]
         assert times == pytest.approx([0.0, 0.04, 0.06])  # rest, step 2, and the last step
     assert not (tmp_path / "final.png").exists() and not (tmp_path / "run.gif").exists()
@@ -170,7 +169,7 @@ def test_a_crash_leaves_a_failed_summary_and_readable_series(tmp_path, monkeypat
     assert summary["status"] == "failed"
     assert summary["error"] == "RuntimeError: solver exploded"
     assert summary["totals"]["steps"] == 2 and len(summary["steps"]) == 2
-    for name in ("integration_points", "frames", "surface"):
+    for name in SERIES.values():
         rows = read_pvd(tmp_path / f"{name}.pvd")
         assert len(rows) == 3  # the rest frame and the two steps done
         for _, path in rows:
@@ -181,7 +180,8 @@ def test_a_crash_leaves_a_failed_summary_and_readable_series(tmp_path, monkeypat
 def test_without_surface_the_point_cloud_is_drawn(tmp_path, monkeypatch):
     stale = column()  # an earlier run with a surface in the same directory
     stale.run(1, tmp_path, progress=False, render=False)
-    assert (tmp_path / "surface.pvd").exists()
+    assert (tmp_path / "body_surface.pvd").exists()
+    monkeypatch.setitem(__import__("sys").modules, "pyvista", None)  # the matplotlib fallback
 
     calls = []
     real = points3d.render_points_png
@@ -193,9 +193,11 @@ def test_without_surface_the_point_cloud_is_drawn(tmp_path, monkeypatch):
     monkeypatch.setattr(points3d, "render_points_png", spy)
     sim = column(surface=False)
     sim.run(2, tmp_path, progress=False)
-    assert not (tmp_path / "surface.pvd").exists()
-    assert not list(tmp_path.glob("surface_*.vtu"))
-    assert json.loads((tmp_path / "summary.json").read_text())["body"]["surface_triangles"] == 0
+    assert not (tmp_path / "body_surface.pvd").exists()
+    assert not list(tmp_path.glob("body_surface_*.vtu"))
+    summary = json.loads((tmp_path / "summary.json").read_text())
+    assert summary["simulation"]["bodies"]["body"]["surface_triangles"] == 0
+    assert "PyVista not installed" in summary["pictures"]
 
     ((positions, values, kwargs),) = calls
     assert kwargs["triangles"] is None

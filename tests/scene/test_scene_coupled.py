@@ -10,11 +10,11 @@ import numpy as np
 import pytest
 
 from tissuesim.cli import example_path, list_examples
-from tissuesim.coupling.simulation import CoupledSimulation
 from tissuesim.errors import SceneError
 from tissuesim.materials import make_material
 from tissuesim.mesh import box, ellipsoid, write_mesh
 from tissuesim.scene.loader import load_scene
+from tissuesim.simulation import Simulation
 
 # Two boxes 0.2 m apart joined by a tissue layer (as tests/coupling/test_coupled_mechanics.py's
 # two_boxes): the lower one held at its bottom, the upper one lifted 0.1 m over 0.5 s.
@@ -65,9 +65,9 @@ def write_scene(tmp_path, text, name="scene.toml"):
     return path
 
 
-def build(tmp_path, text) -> CoupledSimulation:
+def build(tmp_path, text) -> Simulation:
     sim = load_scene(write_scene(tmp_path, text)).simulation
-    assert isinstance(sim, CoupledSimulation)
+    assert isinstance(sim, Simulation)
     return sim
 
 
@@ -80,14 +80,14 @@ def scene_error(tmp_path, text) -> str:
     return message
 
 
-def two_boxes_api() -> CoupledSimulation:
+def two_boxes_api() -> Simulation:
     """BASE written with the Python API."""
     mat = make_material("neo_hookean", youngs_modulus=1000.0, poisson_ratio=0.3)
     lower = box((0, 0, -0.5), (1, 1, 0), (3, 3, 2))
     upper = box((0, 0, 0.2), (1, 1, 0.7), (3, 3, 2))
-    sim = CoupledSimulation(integrator="quasistatic", time_step=0.25)
-    sim.add_organ("lower", lower, mat, density=10.0)
-    sim.add_organ("upper", upper, mat, density=10.0)
+    sim = Simulation(integrator="quasistatic", time_step=0.25)
+    sim.add_body("lower", lower, mat, density=10.0)
+    sim.add_body("upper", upper, mat, density=10.0)
     sim.fix("lower", lower.point_sets["zmin"])
     sim.grasp("upper", upper.point_sets["zmax"], lambda t: (0, 0, 0.1 * min(t / 0.5, 1)))
     sim.add_tissue(
@@ -110,22 +110,24 @@ def test_coupled_example_is_the_python_scene():
     assert "organs_retraction_cut" in list_examples()
     scene = load_scene(example_path("organs_retraction_cut"))
     sim = scene.simulation
-    assert isinstance(sim, CoupledSimulation)
+    assert isinstance(sim, Simulation)
     assert scene.run == {"steps": 120, "every": 2}
     assert sim.integrator == "backward_euler" and sim.time_step == 0.025
-    np.testing.assert_array_equal(sim.gravity, [0.0, 0.0, -9.81])
-    assert sim.organ_names == ["liver", "gallbladder"]
+    np.testing.assert_array_equal(sim.gravity[0], [0.0, 0.0, -9.81])
+    assert [n for n, b in sim.bodies.items() if b.kind == "fem"] == ["liver", "gallbladder"]
 
     liver = ellipsoid((0, 0, -0.02), (0.06, 0.04, 0.02), 8)
     gb = ellipsoid((0, 0, 0.022), (0.035, 0.02, 0.015), 8)
-    organs = sim._organs
+    organs = sim.bodies
     np.testing.assert_array_equal(organs["liver"].mesh.points, liver.points)
     np.testing.assert_array_equal(organs["gallbladder"].mesh.points, gb.points)
-    assert organs["liver"].density == 1050.0 and organs["gallbladder"].density == 1030.0
-    assert organs["liver"].material.mu == pytest.approx(5000.0 / (2 * 1.45))
-    assert organs["gallbladder"].material.mu == pytest.approx(10000.0 / (2 * 1.45))
+    assert np.all(organs["liver"].model.density == 1050.0)
+    assert np.all(organs["gallbladder"].model.density == 1030.0)
+    assert organs["liver"].model.material.mu == pytest.approx(5000.0 / (2 * 1.45))
+    assert organs["gallbladder"].model.material.mu == pytest.approx(10000.0 / (2 * 1.45))
     np.testing.assert_array_equal(
-        organs["liver"].supports["liver.support"], np.flatnonzero(liver.points[:, 2] < -0.032)
+        dict(organs["liver"].conditions)["liver.support"].vertices,
+        np.flatnonzero(liver.points[:, 2] < -0.032),
     )
     (grasper,) = organs["gallbladder"].graspers
     assert grasper.name == "grasper" and grasper.stiffness is None
@@ -133,15 +135,15 @@ def test_coupled_example_is_the_python_scene():
     for t, z in ((0.0, 0.0), (0.5, 0.0075), (1.0, 0.015), (3.0, 0.015)):
         np.testing.assert_allclose(grasper.displacement(t), [0.0, 0.0, z])
 
-    tissue = sim._tissue
+    tissue = sim.tissue
     assert tissue.material.mu == pytest.approx(1000.0 / 2.8)
     assert len(tissue.frames) == 30 and tissue.density == 1000.0
     assert tissue.frame_type == "affine" and tissue.samples.n > 1000
-    assert {sim.organ_names[c[0]] for c in tissue.contacts} == {"liver", "gallbladder"}
-    (cut,) = sim.cuts
+    assert {c.organ for c in tissue.contacts} == {"liver", "gallbladder"}
+    (cut,) = sim.tissue.cuts
     assert (cut.start, cut.end, cut.name) == (1.2, 2.2, "cut")
     np.testing.assert_allclose(cut.positions(1.7), [[0.0, -0.05, 0.01], [0.0, 0.05, 0.01]])
-    assert sim.tear_threshold is None
+    assert sim.tissue.tear_threshold is None
 
 
 # -- a scene is the Python API ------------------------------------------------------------------
@@ -150,10 +152,10 @@ def test_coupled_example_is_the_python_scene():
 def test_scene_equals_python_api(tmp_path):
     scene_sim = build(tmp_path, BASE)
     sim = two_boxes_api()
-    np.testing.assert_array_equal(scene_sim._tissue.samples.points, sim._tissue.samples.points)
-    np.testing.assert_array_equal(scene_sim._tissue.frames, sim._tissue.frames)
-    g_scene = scene_sim._organs["upper"].graspers[0]
-    np.testing.assert_array_equal(g_scene.vertices, sim._organs["upper"].graspers[0].vertices)
+    np.testing.assert_array_equal(scene_sim.tissue.samples.points, sim.tissue.samples.points)
+    np.testing.assert_array_equal(scene_sim.tissue.frames, sim.tissue.frames)
+    g_scene = scene_sim.bodies["upper"].graspers[0]
+    np.testing.assert_array_equal(g_scene.vertices, sim.bodies["upper"].graspers[0].vertices)
     for _ in range(2):
         a, b = scene_sim.step(), sim.step()
     np.testing.assert_allclose(scene_sim.state.x, sim.state.x, rtol=1e-12, atol=1e-14)
@@ -196,23 +198,23 @@ def test_options_reach_the_api(tmp_path):
     scene = load_scene(write_scene(tmp_path, text))
     sim = scene.simulation
     assert scene.run == {"steps": 3, "every": 1, "render": False}
-    lower = sim._organs["lower"]
+    lower = sim.bodies["lower"]
     np.testing.assert_array_equal(
-        lower.supports["lower.support"], np.sort(lower.mesh.point_sets["zmin"])
+        dict(lower.conditions)["lower.support"].vertices, np.sort(lower.mesh.point_sets["zmin"])
     )
-    assert lower.mass == "lumped"
-    (g,) = sim._organs["upper"].graspers
+    assert lower.model.mass_kind == "lumped"
+    (g,) = sim.bodies["upper"].graspers
     assert (g.name, g.stiffness) == ("forceps", 50.0)
     np.testing.assert_array_equal(g.displacement(7.0), [0.0, 0.0, 0.05])
-    t = sim._tissue
+    t = sim.tissue
     np.testing.assert_array_equal(t.frames[2], [0.5, 0.5, 0.1])
     assert (t.frame_type, t.shape, t.radius_factor) == ("rigid", "shepard", 2.0)
     assert (t.attach_distance, t.attachment_stiffness) == (0.12, 1e5)
-    np.testing.assert_array_equal(sim.gravity, [0.0, 0.0, -1.0])
-    assert sim.tear_threshold == 0.5 and sim.newton.max_iterations == 7
-    (cut,) = sim.cuts
+    np.testing.assert_array_equal(sim.gravity[0], [0.0, 0.0, -1.0])
+    assert sim.tissue.tear_threshold == 0.5 and sim.newton.max_iterations == 7
+    (cut,) = sim.tissue.cuts
     assert (cut.name, cut.kerf) == ("scalpel", 0.01)
-    assert sim.describe()["organs"]["upper"]["graspers"]["forceps"]["kind"] == "spring"
+    assert sim.describe()["bodies"]["upper"]["graspers"]["forceps"] == "spring"
 
 
 def test_mesh_file_relative_to_the_scene_and_plane_selector(tmp_path, monkeypatch):
@@ -226,10 +228,10 @@ def test_mesh_file_relative_to_the_scene_and_plane_selector(tmp_path, monkeypatc
     path = write_scene(scenes, text)
     monkeypatch.chdir(tmp_path)
     sim = load_scene(path).simulation
-    lower = sim._organs["lower"]
+    lower = sim.bodies["lower"]
     assert lower.mesh.n_points == 4 * 4 * 3
     np.testing.assert_array_equal(
-        lower.supports["lower.support"],
+        dict(lower.conditions)["lower.support"].vertices,
         np.flatnonzero(np.abs(lower.mesh.points[:, 2] + 0.5) < 1e-9),
     )
 
@@ -237,7 +239,7 @@ def test_mesh_file_relative_to_the_scene_and_plane_selector(tmp_path, monkeypatc
 def test_organs_without_tissue(tmp_path):
     tissue = BASE.index("[tissue]")
     sim = build(tmp_path, BASE[:tissue])
-    assert sim._tissue is None and sim.cuts == []
+    assert sim.tissue is None
     assert sim.step().converged
 
 
@@ -418,7 +420,7 @@ GRASPER_DISPLACEMENT = 'displacement = ["0", "0", "0.1 * min(t / 0.5, 1)"]'
         # simulation, gravity, top level
         (
             'integrator = "quasistatic"',
-            'integrator = "explicit"',
+            'integrator = "implicit"',
             ["[simulation]", "integrator must be"],
         ),
         ("time_step = 0.25", "time_step = -1", ["[simulation]", "time_step"]),

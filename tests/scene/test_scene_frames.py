@@ -22,9 +22,9 @@ from tissuesim.frames.sampling import (
     sample_surface,
     surface_from_mesh,
 )
-from tissuesim.frames.simulation import FrameSimulation
 from tissuesim.mesh import write_mesh
 from tissuesim.scene.loader import load_scene
+from tissuesim.simulation import Simulation
 
 # A small body (40 integration points, 4 frames) so that every test builds in milliseconds.
 BASE = """
@@ -68,9 +68,9 @@ def write_scene(tmp_path, text, name="scene.toml"):
     return path
 
 
-def build(tmp_path, text) -> FrameSimulation:
+def build(tmp_path, text) -> Simulation:
     sim = load_scene(write_scene(tmp_path, text)).simulation
-    assert isinstance(sim, FrameSimulation)
+    assert isinstance(sim, Simulation)
     return sim
 
 
@@ -93,7 +93,7 @@ def test_frames_example_is_listed():
 def test_frames_example_loads_and_runs_two_steps():
     scene = load_scene(example_path("frames_block_sag"))
     sim = scene.simulation
-    assert isinstance(sim, FrameSimulation)
+    assert isinstance(sim, Simulation)
     assert sim.n_frames == 6 and sim.model.samples.n == 320
     assert sim.model.frame_type.name == "rigid" and sim.integrator == "backward_euler"
     np.testing.assert_array_equal(sim.model.prescribed_frames, [0])  # the z = 0 frame
@@ -138,7 +138,7 @@ def test_scene_equals_python_api(tmp_path):
     lower, upper = [0.0, 0.0, 0.0], [0.4, 0.4, 2.0]
     frames = grid_frames([0.2, 0.2, 0.0], [0.2, 0.2, 2.0], (1, 1, 4))
     material = ts.StVenantKirchhoff(youngs_modulus=1e5, poisson_ratio=0.3)
-    sim = FrameSimulation(
+    sim = Simulation.from_frames(
         frames, sample_box(lower, upper, 0.2), material, density=1000.0, time_step=0.02
     )
     sim.embed_surface(box_surface(lower, upper, (2, 2, 10)))  # the scene's: extent / spacing

@@ -11,7 +11,6 @@ import pytest
 import tissuesim as ts
 from tissuesim.cli import example_path, list_examples
 from tissuesim.errors import SceneError
-from tissuesim.frames.simulation import FrameSimulation
 from tissuesim.mesh import select, write_mesh
 from tissuesim.scene.loader import load_scene
 
@@ -65,14 +64,14 @@ def test_each_example_builds(name):
     scene = load_scene(example_path(name))
     assert scene.name == name
     sim = scene.simulation
-    if isinstance(sim, FrameSimulation):
-        assert sim.model.prescribed_frames.size > 0
-    elif isinstance(sim, ts.CoupledSimulation):
-        assert sim.describe()["organs"] and sim.cuts
-        assert any(o["supports"] for o in sim.describe()["organs"].values())
+    assert isinstance(sim, ts.Simulation)
+    if sim.tissue is not None:
+        assert sim.tissue.cuts
+        assert any(
+            b["prescribed_sets"] for b in sim.describe()["bodies"].values() if b["kind"] == "fem"
+        )
     else:
-        assert isinstance(sim, ts.Simulation)
-        assert sim.model.prescribed.dofs.size > 0
+        assert sim.system.prescribed_dofs.size > 0
     assert scene.run["steps"] > 0
 
 

@@ -38,6 +38,8 @@ class Attachment:
     cells (S,): organ tetrahedra holding the points; barycentric (S, 4) in them;
     stiffness (S,) N/m; tissue: the points' embedding in the tissue's frames.
     ids (S,): stable numbers of the points (they survive cuts that remove others).
+    organ: the FEM body's index in the system; tissue_body: the frame body's (None: the
+    system's only frame body).
     """
 
     organ: int
@@ -47,6 +49,7 @@ class Attachment:
     stiffness: np.ndarray
     tissue: Embedding
     ids: np.ndarray
+    tissue_body: int | None = None
 
     @property
     def n(self) -> int:

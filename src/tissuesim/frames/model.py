@@ -30,7 +30,7 @@ from tissuesim.constraints.dirichlet import Elimination
 from tissuesim.energies.accumulator import Accumulator
 from tissuesim.energies.elastic import ElasticEnergy
 from tissuesim.energies.mass import MassMatrix
-from tissuesim.frames.frame_types import FrameType, frame_type
+from tissuesim.frames.frame_types import CONFIG_SIZE, FrameType, frame_type
 from tissuesim.frames.kinematics import embedding_matrix, frame_kinematics
 from tissuesim.frames.rotations import exp_map
 from tissuesim.frames.sampling import IntegrationPoints
@@ -191,6 +191,25 @@ class FrameModel:
     def n_dofs(self) -> int:
         """Tangent DOFs (6 or 12 per frame)."""
         return self.n_frames * self.frame_type.tangent_size
+
+    # -- the body interface shared with Model (system.py) ------------------------------------
+    @property
+    def n_config(self) -> int:
+        return CONFIG_SIZE * self.n_frames
+
+    @property
+    def tangent_pattern(self):
+        return self.assembly.q_pattern
+
+    @property
+    def scale_points(self) -> np.ndarray:
+        return self.samples.points
+
+    def retract(self, z: np.ndarray, dq: np.ndarray) -> np.ndarray:
+        return self.frame_type.retract(z, dq)
+
+    def difference(self, z1: np.ndarray, z0: np.ndarray) -> np.ndarray:
+        return self.frame_type.difference(z1, z0)
 
     def _build(self) -> None:
         stencils = [self.shapes.frames] + [

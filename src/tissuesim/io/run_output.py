@@ -1,13 +1,12 @@
-"""Running a Simulation with output: VTU series + PVD, summary.json, progress bar, pictures.
+"""Running a Simulation with output, the same for every scene: per body a VTU series + PVD on
+rest positions (``io/body_series.py``), the cut surface, summary.json, forces.csv and
+forces.png, a progress bar and the pictures (``render/scene.py``).
 
-summary.json is rewritten atomically after every step, so a run stopped at any point (a crash,
-a ConvergenceError, Ctrl-C) leaves a valid summary whose "status" says how it ended, and every
-frame listed in the .pvd exists and is complete.
-
-``RunOutput`` owns the run loop, the summary and the status handling; what depends on the kind
-of body is in four hooks a subclass overrides (``frames.output.FrameRunOutput`` does):
-``_describe_body`` (once, stored under the summary key ``body_key``), ``_open_series``,
-``_write_frame`` (series and in-memory frames for pictures) and ``_render``.
+summary.json is written when the run starts and rewritten atomically after every step, so a run
+stopped at any point (a crash, a ConvergenceError, Ctrl-C) leaves a valid summary whose
+"status" says how it ended, and every frame listed in a .pvd exists and is complete. Series a
+run does not write (an earlier run's bodies, pictures) are removed from the directory when the
+run starts, so nothing stale sits beside the new output.
 """
 
 from __future__ import annotations
@@ -22,16 +21,17 @@ import numpy as np
 
 from tissuesim.errors import ConvergenceError
 from tissuesim.io.atomic import write_json_atomic
-from tissuesim.mesh.io import describe_mesh
+from tissuesim.io.body_series import series_for
 
 __all__ = ["RunOutput"]
 
 
 class RunOutput:
-    """Runs a Simulation's steps and writes its output into ``directory`` (None: nothing)."""
+    """Runs a Simulation's steps and writes its output into ``directory`` (None: nothing).
 
-    #: summary.json key of ``_describe_body()``
-    body_key = "mesh"
+    every: write a frame every this many steps (and the last). render: draw final.png and
+    run.gif, coloured by ``field`` ("J", "von_mises", "displacement", "green_strain").
+    """
 
     def __init__(
         self,
@@ -40,87 +40,114 @@ class RunOutput:
         *,
         every: int = 1,
         render: bool = True,
+        field: str = "J",
         metadata: dict | None = None,
     ) -> None:
-        if every < 1:
-            raise ValueError(f"every must be >= 1, not {every}")
+        from tissuesim.render.scene import field_label
+
+        if isinstance(every, bool) or not isinstance(every, int | np.integer) or every < 1:
+            raise ValueError(f"every must be an integer >= 1, not {every!r}")
+        field_label(field)  # an unknown field fails before the run
+        sim.build()
         self.sim = sim
         self.directory = None if directory is None else Path(directory)
-        self.every = every
+        self.every = int(every)
         self.render = render
+        self.field = field
         self.metadata = dict(metadata or {})
-        self.frames: list[tuple[Any, ...]] = []  # what _render draws, one entry per frame
-        self.series = None
+        self.frames: list[tuple[Any, ...]] = []  # what the pictures draw, one per written frame
+        self.series = [series_for(b) for b in sim.bodies.values()]
+        self.cut_series = None
         self.status = "running"
-        # once per run: it costs about a second at 1e5 elements, and the summary is
-        # rewritten after every step
-        self.body_description = self._describe_body()
         self.error = None
+        self.pictures = "not rendered" if render else "not asked for (render = false)"
+        self.description = sim.describe()  # once: describing meshes costs ~1 s at 1e5 cells
 
-    @property
-    def mesh_description(self) -> dict:
-        """The FEM name of ``body_description``, kept for existing callers."""
-        return self.body_description
-
-    # -- hooks: what depends on the kind of body ------------------------------------------
-    def _describe_body(self) -> dict:
-        return describe_mesh(self.sim.mesh)
-
+    # -- series -------------------------------------------------------------------------------
     def _open_series(self) -> None:
-        from tissuesim.io.vtu_series import VTUSeriesWriter
+        from tissuesim.io.vtu_series import VTUSeriesWriter, remove_series
 
-        self.series = VTUSeriesWriter(self.directory, self.sim.mesh)
+        for s in self.series:
+            s.open(self.directory)
+        tissue = self.sim.tissue
+        if tissue is not None and tissue.cuts:
+            self.cut_series = VTUSeriesWriter(
+                self.directory, None, "cut", cells=("triangle", np.zeros((1, 3), int)), n_points=3
+            )
+        else:
+            remove_series(self.directory, "cut")
+        for stale in ("final.png", "run.gif", "forces.png", "forces.csv"):
+            (self.directory / stale).unlink(missing_ok=True)
 
     def _write_frame(self) -> None:
         sim = self.sim
-        fields = sim.cell_fields()
-        if self.series is not None:
-            self.series.write(
-                sim.time,
-                sim.positions,
-                point_data={"displacement": sim.displacement, "velocity": sim.velocity},
-                cell_data={"J": fields["J"], "energy_density": fields["energy_density"]},
+        t = sim.time
+        data = {}
+        for s in self.series:
+            if s.body.model is not None or s.body.kind == "tissue":
+                data[s.body.name] = s.write(sim, t)
+        cut = sim.tissue.cut_surface if sim.tissue is not None else np.zeros((0, 3, 3))
+        if self.cut_series is not None and len(cut):
+            self.cut_series.write(
+                t, cut.reshape(-1, 3), cells=("triangle", np.arange(3 * len(cut)).reshape(-1, 3))
             )
-        self.frames.append((sim.time, sim.positions.copy(), fields["J"].copy()))
+        suffix = ""
+        graspers = [g.name for g in sim.graspers]
+        if graspers and sim.history:
+            force = np.linalg.norm(sim.history[-1].extra["forces"][graspers[0]])
+            suffix = f"   {graspers[0]} force {force:.3g} N"
+        self.frames.append((t, data, cut.copy(), suffix))
 
+    # -- summary ------------------------------------------------------------------------------
     def _summary(self) -> dict:
         from tissuesim import __version__
 
-        steps = [asdict(r) for r in self.sim.history]
-        iters = [r.newton_iterations for r in self.sim.history]
+        history = self.sim.history
+        steps = [asdict(r) for r in history]
+        iters = [r.newton_iterations for r in history]
         return {
             "tissuesim_version": __version__,
             "status": self.status,
             "error": self.error,
             **self.metadata,
-            self.body_key: self.body_description,
-            "simulation": self.sim.describe(),
+            "simulation": self.description,
             "totals": {
                 "steps": len(steps),
+                "end_time": float(self.sim.time),
                 "newton_iterations": int(sum(iters)),
                 "max_newton_iterations_per_step": int(max(iters, default=0)),
-                "min_J": float(min((r.min_J for r in self.sim.history), default=np.nan)),
-                "wall_time_s": float(sum(r.wall_time_s for r in self.sim.history)),
+                "min_J": float(min((r.min_J for r in history), default=np.nan)),
+                "wall_time_s": float(sum(r.wall_time_s for r in history)),
             },
+            "forces": [{"time": r.time, **r.extra.get("forces", {})} for r in history],
+            "pictures": self.pictures,
             "steps": steps,
         }
 
     def _write_summary(self) -> None:
-        if self.directory is not None:
-            write_json_atomic(self.directory / "summary.json", self._summary())
+        if self.directory is None:
+            return
+        from tissuesim.io.forces import write_forces_csv
 
+        write_json_atomic(self.directory / "summary.json", self._summary())
+        if self.sim.history and self.sim.history[-1].extra.get("forces"):
+            write_forces_csv(self.directory / "forces.csv", self.sim.history)
+
+    # -- the run --------------------------------------------------------------------------------
     def run(self, steps: int, progress: bool = True) -> list:
         """Step ``steps`` times, writing every ``every``-th frame, the last, and the summary;
         return the simulation's history. The summary's status records how the run ended."""
         from tqdm import tqdm
 
-        if steps < 0:
-            raise ValueError(f"steps must be >= 0, not {steps}")
+        if isinstance(steps, bool) or not isinstance(steps, int | np.integer) or steps < 0:
+            raise ValueError(f"steps must be an integer >= 0, not {steps!r}")
         if self.directory is not None:
             self.directory.mkdir(parents=True, exist_ok=True)
             self._open_series()
+            self._write_summary()
         self._write_frame()
         bar = tqdm(total=steps, disable=not progress, file=sys.stderr, unit="step")
+        interrupted = False
         try:
             for k in range(steps):
                 record = self.sim.step()
@@ -138,7 +165,7 @@ class RunOutput:
             self.status, self.error = "failed", str(exc)
             raise
         except KeyboardInterrupt:
-            self.status, self.error = "interrupted", "KeyboardInterrupt"
+            self.status, self.error, interrupted = "interrupted", "KeyboardInterrupt", True
             raise
         except Exception as exc:  # any other crash: the summary must not still say "running"
             self.status, self.error = "failed", f"{type(exc).__name__}: {exc}"
@@ -146,26 +173,23 @@ class RunOutput:
         finally:
             bar.close()
             self._write_summary()
-            if self.directory is not None and self.render and len(self.frames) > 0:
-                self._render()
+            if self.directory is not None and not interrupted:
+                self._pictures(progress)
         return self.sim.history
 
-    def _render(self) -> None:
-        from tissuesim.render import render_animation, render_frame
+    def _pictures(self, progress: bool) -> None:
+        from tissuesim.io.forces import render_forces_png
 
-        mesh = self.sim.mesh
-        if mesh.dim == 3 and mesh.n_cells > 200_000:
-            return  # matplotlib 3D is too slow there; use ParaView on the VTU series
-        t, x, J = self.frames[-1]
-        render_frame(mesh, x, J, self.directory / "final.png", title=f"t = {t:.4g} s", label="J")
-        if len(self.frames) > 1:
-            lo = min(float(f[2].min()) for f in self.frames)
-            hi = max(float(f[2].max()) for f in self.frames)
-            render_animation(
-                mesh,
-                self.frames,
-                self.directory / "run.gif",
-                label="J",
-                vmin=min(lo, 0.999),
-                vmax=max(hi, 1.001),
-            )
+        render_forces_png(self.directory / "forces.png", self.sim.history)  # none: no file
+        if self.render and self.frames:
+            from tissuesim.render.scene import MAX_GIF_FRAMES, render_run
+
+            if progress:
+                n = min(len(self.frames), MAX_GIF_FRAMES)
+                print(
+                    f"tissuesim: drawing final.png and run.gif ({n} frames, coloured by "
+                    f"{self.field}) ...",
+                    file=sys.stderr,
+                )
+            self.pictures = render_run(self.sim, self.frames, self.directory, self.field)
+        self._write_summary()

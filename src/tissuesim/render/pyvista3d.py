@@ -95,6 +95,12 @@ class SurfaceLayer:
     color: str = "lightgrey"
     opacity: float = 1.0
     scalars: np.ndarray | None = None
+    scalar_name: str = ""  # the colour bar's title (layers sharing it share one bar)
+    clim: tuple[float, float] | None = None
+
+    @property
+    def bar_title(self) -> str:
+        return self.scalar_name or self.name
 
     def __post_init__(self) -> None:
         x = _frozen_array(self.points, float, f"surface {self.name!r} points")
@@ -331,7 +337,7 @@ def _data_range(values: np.ndarray | None) -> tuple[float, float] | None:
 def _scalar_groups(frame: Frame3D) -> dict[str, dict[str, Any]]:
     """Colour bars of a frame: title -> {cmap, given clim, data range}, in drawing order."""
     groups: dict[str, dict[str, Any]] = {}
-    layers = [(s.name, "viridis", None, s.scalars) for s in frame.surfaces]
+    layers = [(s.bar_title, "viridis", s.clim, s.scalars) for s in frame.surfaces]
     layers += [(p.bar_title, p.cmap, p.clim, p.scalars) for p in frame.points]
     for title, cmap, clim, values in layers:
         if values is None:
@@ -416,8 +422,8 @@ def _draw(
             add_surface(s.points, s.triangles, dict(style, color=s.color))
             legend.append((s.name, s.color))
         else:
-            style.update(scalars=s.scalars, cmap="viridis", clim=clims[s.name])
-            add_surface(s.points, s.triangles, style, s.name)
+            style.update(scalars=s.scalars, cmap="viridis", clim=clims[s.bar_title])
+            add_surface(s.points, s.triangles, style, s.bar_title)
     for p in frame.points:
         if not len(p.points):
             continue

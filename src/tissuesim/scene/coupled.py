@@ -127,8 +127,9 @@ _AXES = "xyz"
 
 
 def build_coupled_scene(data: dict, base_dir: Path, source: str, name: str) -> Scene:
-    """Build a Scene whose simulation is a CoupledSimulation from parsed TOML ``data``."""
-    from tissuesim.coupling.simulation import CoupledSimulation
+    """Build a Scene whose simulation holds the organs, the tissue and its cuts from parsed
+    TOML ``data``."""
+    from tissuesim.simulation import Simulation
 
     for key, instead in ELSEWHERE.items():
         if key in data:
@@ -157,7 +158,7 @@ def build_coupled_scene(data: dict, base_dir: Path, source: str, name: str) -> S
         where = f"{source} [gravity]"
         acceleration = _vector3(_required(gravity, "acceleration", where), f"{where} acceleration")
     with _context(sim_where):
-        sim = CoupledSimulation(newton=newton, gravity=acceleration, **sim_table)
+        sim = Simulation(newton=newton, gravity=acceleration, **sim_table)
 
     organs = _table(data, "organs", source, array=True)
     if not organs:
@@ -342,7 +343,7 @@ def _organ(sim, item: dict, base_dir: Path, where: str):
             )
         options["mass"] = item["mass"]
     with _context(where):
-        sim.add_organ(name, mesh, material, **options)
+        sim.add_body(name, mesh, material, **options)
     if "fix" in item:
         vertices = _vertices(mesh, name, item["fix"], where, "fix")
         with _context(f"{where} fix"):
@@ -468,7 +469,7 @@ def _cut(sim, item: dict, where: str) -> None:
     name = item.get("name", "cut")
     if not (isinstance(name, str) and name):
         raise SceneError(f"{where}: name must be a non-empty string, e.g. name = 'cut'")
-    if any(c.name == name for c in sim.cuts):
+    if any(c.name == name for c in sim.tissue.cuts):
         raise SceneError(
             f"{where}: a cut named {name!r} exists already; give each [[cuts]] table its own "
             f"name = '...'"

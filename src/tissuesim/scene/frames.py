@@ -1,4 +1,4 @@
-"""Frame scenes: a ``[frames]`` table makes a scene a meshless frame-based body (FrameSimulation).
+"""Frame scenes: a ``[frames]`` table makes a scene a meshless frame-based body.
 
 ``tissuesim.scene.loader`` sends every scene with a ``[frames]`` table here. The tables map onto
 the Python API of ``tissuesim.frames`` the way [mesh] scenes map onto Simulation's:
@@ -6,7 +6,7 @@ the Python API of ``tissuesim.frames`` the way [mesh] scenes map onto Simulation
     [frames]               frame origins from grid_frames(lower, upper, counts) (grid = {...}),
                            farthest_point_frames(integration points, count) (count = N) or
                            positions = [[x, y, z], ...]; type, shape, radius, radius_factor and
-                           min_frames are FrameSimulation's frame_type, shape, radius, ...
+                           min_frames are add_frame_body's frame_type, shape, radius, ...
     [region]               the integration points: exactly one of box = {lower, upper},
                            ellipsoid = {center, semi_axes}, surface = "closed.stl",
                            mesh = "tets.msh" (files relative to the scene file), with spacing
@@ -100,11 +100,13 @@ SELECTOR_ARGS = {
     "in_box": ("lower", "upper", "tolerance"),
 }
 _AXES = "xyz"
+FRAME_INTEGRATORS = ("backward_euler", "quasistatic", "explicit")
 
 
 def build_frame_scene(data: dict, base_dir: Path, source: str, name: str) -> Scene:
-    """Build a Scene whose simulation is a FrameSimulation from parsed TOML ``data``."""
-    from tissuesim.frames.simulation import FrameSimulation
+    """Build a Scene whose simulation holds one frame body ("body") from parsed TOML
+    ``data``."""
+    from tissuesim.simulation import Simulation
 
     if "mesh" in data:
         raise SceneError(
@@ -141,8 +143,20 @@ def build_frame_scene(data: dict, base_dir: Path, source: str, name: str) -> Sce
         for key in ("type", "shape", "radius", "radius_factor", "min_frames")
         if key in frames_table
     }
+    body_keys = ("density", "mass")
+    with _context(sim_where):
+        sim = Simulation(
+            newton=newton, **{k: v for k, v in sim_table.items() if k not in body_keys}
+        )
     with _context(f"{source} [frames]"):
-        sim = FrameSimulation(positions, samples, material, newton=newton, **options, **sim_table)
+        sim.add_frame_body(
+            "body",
+            positions,
+            samples,
+            material,
+            **options,
+            **{k: v for k, v in sim_table.items() if k in body_keys},
+        )
     if surface is not None:
         with _context(f"{region_where} display"):
             sim.embed_surface(surface)
@@ -200,7 +214,7 @@ def build_frame_scene(data: dict, base_dir: Path, source: str, name: str) -> Sce
         linear = _vector3(initial.get("velocity", [0, 0, 0]), f"{where} velocity")
         angular = _vector3(initial.get("angular", [0, 0, 0]), f"{where} angular")
         with _context(where):
-            sim.set_velocity(linear, angular)
+            sim.set_velocity(linear=linear, angular=angular)
     return Scene(sim, name, source, _run_table(data, source))
 
 
@@ -275,9 +289,8 @@ def _stiffness(value, k: int, where: str) -> float | np.ndarray:
 
 def _check_simulation(table: dict, samples, where: str) -> None:
     """[simulation] values a frame body refuses, caught here so the error names this table
-    (FrameSimulation checks them too, but among the [frames] options)."""
+    (the Simulation checks them too, but among the [frames] options)."""
     from tissuesim.backend import resolve_backend
-    from tissuesim.frames.simulation import FRAME_INTEGRATORS
 
     integrator = table.get("integrator", "backward_euler")
     if integrator not in FRAME_INTEGRATORS:

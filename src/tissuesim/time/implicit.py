@@ -1,46 +1,10 @@
-"""The part every implicit scheme shares: minimise the step's energy with Newton from x0 and
-turn the result into the next state, v_{n+1} = (x_{n+1} - x_n) / h."""
+"""The start of every implicit step: Newton begins at the candidate of lowest energy."""
 
 from __future__ import annotations
 
 import numpy as np
 
-from tissuesim.solve.newton import minimize
-from tissuesim.time.state import State, StepOutcome
-
-__all__ = ["solve_implicit_step", "choose_start"]
-
-
-def solve_implicit_step(model, state: State, h: float, energies, x0_candidates, solver, options):
-    """Minimise elastic + ``energies`` over the free DOFs; prescribed DOFs at t_n + h.
-
-    x0_candidates: starting guesses (n_dofs,); Newton starts from the one of lowest energy
-    (ties: the first)."""
-    t1 = state.time + h
-
-    def evaluate(x: np.ndarray, order: int, project: bool):
-        return model.evaluate(x, order, project, energies)
-
-    prescribed = model.prescribed.positions(t1)
-
-    def with_prescribed(guess: np.ndarray) -> np.ndarray:
-        x0 = guess.copy()
-        x0[model.prescribed.dofs] = prescribed
-        return x0
-
-    x0 = choose_start(evaluate, x0_candidates, with_prescribed)
-    x1, record = minimize(
-        evaluate,
-        x0,
-        model.elimination,
-        solver,
-        options,
-        force_scale=model.force_scale,
-        length_scale=model.length_scale,
-    )
-    if not record.converged:
-        return StepOutcome(None, False, [record], record.reason)
-    return StepOutcome(State(t1, x1, (x1 - state.x) / h), True, [record])
+__all__ = ["choose_start"]
 
 
 def choose_start(evaluate, candidates, apply_prescribed) -> np.ndarray:

@@ -1,16 +1,10 @@
-"""Quasistatic load stepping: x_{n+1} = argmin_x E(x) - f(t_{n+1}) . x, loads and prescribed
-displacements taken at t_{n+1}, starting from x_n. No inertia, so the model must be held
-against rigid motions by its prescribed DOFs."""
+"""Quasistatic load stepping needs supports: x_{n+1} = argmin_x E(x) - f(t_{n+1}) . x has no
+inertia, so a body must be held against rigid motions by its prescribed DOFs (the step itself
+is ``time/steps.py``'s implicit step without inertia)."""
 
 from __future__ import annotations
 
-import numpy as np
-
-from tissuesim.energies.loads import ExternalForce
-from tissuesim.time.implicit import solve_implicit_step
-from tissuesim.time.state import State, StepOutcome
-
-__all__ = ["quasistatic_step", "check_supported"]
+__all__ = ["check_supported"]
 
 
 def check_supported(model) -> None:
@@ -23,11 +17,3 @@ def check_supported(model) -> None:
             f"motions of a {d}D body; this model prescribes {model.prescribed.dofs.size} DOFs. "
             "Add a [[dirichlet]] condition (e.g. clamp one side) or use backward_euler."
         )
-
-
-def quasistatic_step(model, state: State, h: float, solver, options) -> StepOutcome:
-    energies = (ExternalForce(model.external_force(state.time + h)),)
-    outcome = solve_implicit_step(model, state, h, energies, (state.x,), solver, options)
-    if outcome.converged:  # a sequence of equilibria has no velocity
-        outcome.state = State(outcome.state.time, outcome.state.x, np.zeros_like(state.v))
-    return outcome

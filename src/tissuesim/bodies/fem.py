@@ -1,0 +1,290 @@
+"""A finite-element body of a Simulation: a mesh of one material, its prescribed vertex sets
+(supports, prescribed motions, graspers), loads and initial velocity.
+
+The body owns its ``Model`` (kinematics, mass, pattern, elimination) from the moment it is
+added, so set-up calls check their arguments at once. Every prescribed set and grasper has a
+name under which its force is reported per step: the reaction sum over the set's vertices of
+the step's final gradient dPhi/dx (the force the constraint applies to the body; it includes
+the set's own inertia under Backward Euler), or for a spring grasper the springs' pull.
+"""
+
+from __future__ import annotations
+
+import functools
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from tissuesim.constraints.dirichlet import DirichletCondition, constant_displacement
+from tissuesim.energies.loads import BodyForce, ExternalForce, Gravity, Traction, as_field
+from tissuesim.energies.mass import Inertia, MassKind
+from tissuesim.energies.vertex_springs import VertexSprings
+from tissuesim.materials.base import Material
+from tissuesim.materials.measures import continuum_fields
+from tissuesim.mesh.mesh import Mesh
+from tissuesim.model import Model
+
+__all__ = ["FemBody", "Grasper", "vertex_indices"]
+
+Motion = Callable[[float], np.ndarray]
+
+
+def vertex_indices(vertices, n_points: int, what: str) -> np.ndarray:
+    """Checked, sorted unique vertex indices; a boolean mask or floats are refused (they would
+    silently select other vertices)."""
+    arr = np.asarray(vertices)
+    if arr.dtype == bool:
+        raise ValueError(f"{what}: got a boolean mask; pass vertex indices (np.flatnonzero(mask))")
+    if arr.size and not np.issubdtype(arr.dtype, np.integer):
+        if not np.all(np.isfinite(arr)) or np.any(arr != np.round(arr)):
+            raise ValueError(f"{what}: vertex indices must be integers, got {arr.dtype} values")
+    v = np.unique(arr.astype(np.int64).ravel())
+    if v.size == 0:
+        raise ValueError(f"{what}: the vertex selection is empty")
+    if v.min() < 0 or v.max() >= n_points:
+        raise ValueError(
+            f"{what}: vertex indices must be in [0, {n_points}); got {int(v.min())}.."
+            f"{int(v.max())} (out of range)"
+        )
+    return v
+
+
+def _vector(value, dim: int, what: str) -> np.ndarray:
+    v = np.asarray(value, dtype=float)
+    if v.shape != (dim,) or not np.all(np.isfinite(v)):
+        raise ValueError(f"{what} must be {dim} finite numbers (m), got {value!r}")
+    return v
+
+
+@dataclass(frozen=True, eq=False)
+class Grasper:
+    """Moves ``vertices`` of a body rigidly by ``displacement(t)`` (d,) m: prescribed
+    (stiffness None) or through zero-length springs of ``stiffness`` N/m per vertex."""
+
+    name: str
+    body: str
+    vertices: np.ndarray
+    displacement: Motion
+    stiffness: float | None = None
+
+    def springs(self, rest: np.ndarray) -> VertexSprings:
+        X = rest[self.vertices]
+        dim = rest.shape[1]
+        return VertexSprings(
+            self.vertices,
+            float(self.stiffness),
+            lambda t: X + _vector(self.displacement(t), dim, f"grasper {self.name!r} motion"),
+        )
+
+
+class FemBody:
+    """See the module docstring. Created by ``Simulation.add_body``; ``claim_name`` checks a
+    force name is new across the simulation."""
+
+    kind = "fem"
+
+    def __init__(
+        self,
+        name: str,
+        mesh: Mesh,
+        material: Material,
+        *,
+        density: float | np.ndarray,
+        mass: MassKind,
+        backend: str,
+        claim_name: Callable[[str], str],
+        changed: Callable[[], None],
+    ) -> None:
+        self.name = name
+        self.model = Model(mesh, material, density, mass, backend=backend)
+        self._claim, self._changed = claim_name, changed
+        self.conditions: list[tuple[str, DirichletCondition]] = []
+        self.graspers: list[Grasper] = []
+        self.spring_graspers: list[tuple[Grasper, VertexSprings]] = []
+        self.velocity = np.zeros(self.model.n_dofs)
+
+    def __repr__(self) -> str:
+        return f"FemBody({self.name!r}, {self.mesh!r})"
+
+    @property
+    def mesh(self) -> Mesh:
+        return self.model.mesh
+
+    @property
+    def dim(self) -> int:
+        return self.mesh.dim
+
+    # -- prescribed sets and graspers -----------------------------------------------------------
+    def _set_conditions(self) -> None:
+        self.model.set_conditions([c for _, c in self.conditions])
+        self._changed()
+
+    def add_dirichlet(
+        self,
+        vertices,
+        displacement: Sequence[float] | Callable[[np.ndarray, float], np.ndarray] | None = None,
+        components: Sequence[int] | None = None,
+        *,
+        name: str | None = None,
+    ) -> str:
+        """Prescribe u = g(X, t) (m) on ``vertices``: None clamps, a vector is constant, a
+        callable maps rest positions (k, d) and time to displacements (k, d). ``components``
+        restricts the condition to some axes (e.g. (0,) for x only). Returns the name its
+        reaction force is reported under (default "<body>.dirichlet_<k>")."""
+        default = f"{self.name}.dirichlet_{len(self.conditions)}"
+        return self._prescribe(vertices, displacement, components, name, default)
+
+    def _prescribe(self, vertices, displacement, components, name, default: str) -> str:
+        v = vertex_indices(vertices, self.mesh.n_points, "add_dirichlet")
+        if displacement is None:
+            displacement = np.zeros(self.dim)
+        g = displacement if callable(displacement) else constant_displacement(displacement)
+        comps = None
+        if components is not None:
+            arr = np.asarray(components)
+            if arr.dtype == bool or not np.issubdtype(arr.dtype, np.integer) or arr.ndim != 1:
+                raise ValueError(
+                    "add_dirichlet: components must be a sequence of integer axes, e.g. (0,), "
+                    f"not {components!r}"
+                )
+            comps = tuple(int(c) for c in arr)
+            if not comps or min(comps) < 0 or max(comps) >= self.dim:
+                raise ValueError(
+                    f"add_dirichlet: components must be axes in 0..{self.dim - 1}, "
+                    f"not {components!r}"
+                )
+        name = self._claim(name, default)
+        self.conditions.append((name, DirichletCondition(v, g, comps)))
+        self._set_conditions()
+        return name
+
+    def fix(self, vertices, name: str | None = None) -> str:
+        """Clamp ``vertices`` (a support); its reaction is reported as ``name`` (default
+        "<body>.support")."""
+        return self._prescribe(vertices, None, None, name, f"{self.name}.support")
+
+    def grasp(
+        self,
+        vertices,
+        displacement: Motion | Sequence[float],
+        *,
+        stiffness: float | None = None,
+        name: str | None = None,
+    ) -> Grasper:
+        """Retract: move ``vertices`` by ``displacement(t)`` (d,) m (a callable or a constant
+        vector). stiffness None prescribes the motion; a number (N/m per vertex) pulls through
+        springs to the moving targets. The grasper's force is reported per step."""
+        v = vertex_indices(vertices, self.mesh.n_points, f"grasp {name!r}")
+        if not callable(displacement):
+            const = _vector(displacement, self.dim, f"grasper {name!r} displacement")
+            displacement = functools.partial(lambda c, t: c, const)
+        _vector(displacement(0.0), self.dim, f"grasper {name!r} displacement at t = 0")
+        if stiffness is not None and not (np.isfinite(stiffness) and stiffness > 0):
+            raise ValueError(f"grasper {name!r}: stiffness must be > 0 N/m, got {stiffness!r}")
+        if stiffness is not None and self.dim != 3:
+            raise ValueError(f"grasper {name!r}: spring graspers need a 3D body")
+        name = self._claim(name, "grasper")
+        g = Grasper(name, self.name, v, displacement, stiffness)
+        self.graspers.append(g)
+        if stiffness is None:
+            motion = functools.partial(
+                lambda d, dim, X, t: np.broadcast_to(_vector(d(t), dim, "grasper motion"), X.shape),
+                displacement,
+                self.dim,
+            )
+            self.conditions.append((name, DirichletCondition(v, motion)))
+            self._set_conditions()
+        else:
+            self.spring_graspers.append((g, g.springs(self.mesh.points)))
+            self._changed()
+        return g
+
+    # -- loads -----------------------------------------------------------------------------------
+    def add_traction(self, facets, traction) -> None:
+        """Dead traction (N/m in 2D, Pa in 3D) on boundary facets (k, d): a vector or a
+        callable (X (k, d), t) -> (k, d) evaluated at the facets' vertices."""
+        facets = np.asarray(facets, dtype=np.int64)
+        if facets.ndim != 2 or facets.shape[1] != self.dim:
+            raise ValueError(f"add_traction: facets must be (k, {self.dim}) vertex indices")
+        self.model.loads.append(Traction(facets, as_field(traction)))
+
+    def add_gravity(self, acceleration: Sequence[float]) -> None:
+        """Gravity, acceleration (d,) in m/s^2, acting on the element densities."""
+        g = np.asarray(acceleration, dtype=float)
+        if g.shape != (self.dim,) or not np.all(np.isfinite(g)):
+            raise ValueError(f"add_gravity: acceleration must be {self.dim} finite numbers")
+        self.model.loads.append(Gravity(g))
+
+    def add_body_force(self, force_density) -> None:
+        """Body force per unit rest volume (N/m^3): a vector or a callable (X (n, d), t)."""
+        self.model.loads.append(BodyForce(as_field(force_density)))
+
+    def set_velocity(self, velocity) -> None:
+        """Initial velocity (n, d) or a constant vector (d,), m/s."""
+        v = np.asarray(velocity, dtype=float)
+        try:
+            v = np.broadcast_to(v, self.mesh.points.shape)
+        except ValueError:
+            raise ValueError(
+                f"set_velocity: body {self.name!r} needs ({self.mesh.n_points}, {self.dim}) or "
+                f"({self.dim},) velocities, got shape {v.shape}"
+            ) from None
+        if not np.all(np.isfinite(v)):
+            raise ValueError("set_velocity: velocities must be finite")
+        self.velocity = v.ravel().copy()
+        self._changed("velocity")
+
+    # -- what the system and the output ask of a body -------------------------------------------
+    def step_energies(self, t: float, x_pred: np.ndarray | None, h: float) -> list:
+        """Inertia (when x_pred is given), the dead loads at t and the spring graspers."""
+        energies = [] if x_pred is None else [Inertia(self.model.mass, x_pred, h)]
+        energies.append(ExternalForce(self.model.external_force(t)))
+        energies += [s.energy(t) for _, s in self.spring_graspers]
+        return energies
+
+    def forces(self, x: np.ndarray, gradient: np.ndarray | None, t: float) -> dict:
+        """Force (N, 3-vector) every prescribed set and grasper applies to the body."""
+        d = self.dim
+        out = {}
+        for name, c in self.conditions:
+            f = np.zeros(3)
+            if gradient is not None:
+                f[:d] = gradient.reshape(-1, d)[c.vertices].sum(axis=0)
+            out[name] = f.tolist()
+        for g, springs in self.spring_graspers:
+            f = np.zeros(3)
+            f[:d] = springs.stiffness * (
+                springs.targets(t)[:, :d] - x.reshape(-1, d)[g.vertices]
+            ).sum(axis=0)
+            out[g.name] = f.tolist()
+        return out
+
+    def cell_fields(self, x: np.ndarray) -> dict[str, np.ndarray]:
+        """Per element: J, green_strain, cauchy_stress, von_mises, energy_density
+        (``materials/measures.py``)."""
+        F = self.model.kinematics.deformation_gradients(x)
+        return continuum_fields(self.model.material, F)
+
+    def min_J(self, x: np.ndarray) -> float:
+        return float(self.model.elastic.jacobians(x).min())
+
+    def describe(self) -> dict:
+        from tissuesim.mesh.io import describe_mesh
+
+        return {
+            "kind": "fem",
+            "mesh": describe_mesh(self.mesh),
+            "material": repr(self.model.material),
+            "mass": self.model.mass_kind,
+            "prescribed_dofs": int(self.model.prescribed.dofs.size),
+            "prescribed_sets": {n: int(c.vertices.size) for n, c in self.conditions},
+            "graspers": {
+                g.name: "prescribed" if g.stiffness is None else "spring" for g in self.graspers
+            },
+            "backend": {
+                "name": self.model.backend,
+                "reason": self.model.backend_reason,
+                "fused_elastic": self.model.elastic.fused,
+            },
+        }

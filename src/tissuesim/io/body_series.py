@@ -1,0 +1,210 @@
+"""The VTU series of one body, the same habits for every kind: points at their **rest**
+positions with ``displacement`` (and ``velocity``) as point data, so ParaView's Warp By Vector
+shows the deformed body, and the continuum fields of ``materials/measures.py`` (``J``,
+``green_strain``, ``cauchy_stress``, ``von_mises``, ``energy_density``; tensors as 3 x 3) as cell
+data of FEM elements or point data at integration points.
+
+- FEM body ``<name>``: its triangles / tetrahedra.
+- frame body ``<name>``: its integration points as vertex cells (with ``volume`` and ``mass``);
+  ``<name>_frames``: the frame origins with the axes of each frame's rotation (``axis_x``,
+  ``axis_y``, ``axis_z``) and support ``radius``; ``<name>_surface``: its embedded surface.
+- tissue ``<name>_points``: every original integration point, with ``alive`` (0 once cut away or
+  torn; such points keep their last displacement) and ``max_principal_strain``; threshold on
+  ``alive`` to see the parted tissue.
+
+Each writer's ``write`` returns what the pictures need of that frame (``render/scene.py``).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from tissuesim.io.vtu_series import VTUSeriesWriter, remove_series
+from tissuesim.materials.measures import FIELD_NAMES
+
+__all__ = ["series_for", "BodySeries", "series_names"]
+
+
+def _vertices(n: int) -> tuple[str, np.ndarray]:
+    """One vertex cell per point, so ParaView shows a point cloud without a glyph filter."""
+    return "vertex", np.arange(n, dtype=np.int64)[:, None]
+
+
+def _fields(fields: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
+    return {k: fields[k] for k in FIELD_NAMES}
+
+
+def series_names(body) -> list[str]:
+    """The series a body writes (for name clashes and stale-file removal)."""
+    if body.kind == "fem":
+        return [body.name]
+    if body.kind == "frames":
+        return [body.name, f"{body.name}_frames", f"{body.name}_surface"]
+    return [f"{body.name}_points"]
+
+
+class BodySeries:
+    """Base: ``open(directory)`` once, then ``write(sim, time)`` per written frame."""
+
+    def __init__(self, body) -> None:
+        self.body = body
+        self.writers: list[VTUSeriesWriter] = []
+
+    def open(self, directory: Path) -> None:
+        raise NotImplementedError
+
+    def write(self, sim, t: float) -> dict[str, Any]:
+        raise NotImplementedError
+
+
+class FemSeries(BodySeries):
+    def open(self, directory: Path) -> None:
+        self.writers = [VTUSeriesWriter(directory, self.body.mesh, self.body.name)]
+
+    def write(self, sim, t: float) -> dict[str, Any]:
+        b = self.body
+        x = sim.body_positions(b.name)
+        rest = b.mesh.points
+        u = x - rest
+        _, c, v = sim._part(b.name)
+        fields = b.cell_fields(c)
+        if self.writers:
+            self.writers[0].write(
+                t,
+                rest,
+                point_data={"displacement": u, "velocity": v.reshape(rest.shape)},
+                cell_data=_fields(fields),
+            )
+        return {"kind": "fem", "positions": x.copy(), "cells": fields, "displacement": u}
+
+
+class FrameSeries(BodySeries):
+    def open(self, directory: Path) -> None:
+        b = self.body
+        n_points, n_frames = b.model.samples.n, b.n_frames
+        self.writers = [
+            VTUSeriesWriter(directory, None, b.name, cells=_vertices(n_points), n_points=n_points),
+            VTUSeriesWriter(
+                directory, None, f"{b.name}_frames", cells=_vertices(n_frames), n_points=n_frames
+            ),
+        ]
+        if b.surface is not None:
+            self.writers.append(
+                VTUSeriesWriter(
+                    directory,
+                    None,
+                    f"{b.name}_surface",
+                    cells=("triangle", b.surface.triangles),
+                    n_points=len(b.surface.points),
+                )
+            )
+        else:  # a surface series left by an earlier run must not pass for this run's
+            remove_series(directory, f"{b.name}_surface")
+
+    def write(self, sim, t: float) -> dict[str, Any]:
+        b, m = self.body, self.body.model
+        _, z, v = sim._part(b.name)
+        fields = b.point_fields(z)
+        x, rest = fields["positions"], m.samples.points
+        zdot = np.einsum(
+            "nij,nj->ni", m.frame_type.tangent_map(z), v.reshape(m.n_frames, -1)
+        ).ravel()
+        origins, R = m.frame_type.split(z)[0], m.rotations(z)
+        surface = None if b.surface is None else b.embedded["surface"].positions(z)
+        if self.writers:
+            self.writers[0].write(
+                t,
+                rest,
+                point_data={
+                    "displacement": x - rest,
+                    "velocity": m.point_map.positions(zdot),
+                    **_fields(fields),
+                    "volume": m.samples.volumes,
+                    "mass": m.masses,
+                },
+            )
+            self.writers[1].write(
+                t,
+                b.rest_frames,
+                point_data={
+                    "displacement": origins - b.rest_frames,
+                    "velocity": m.frame_type.split(zdot)[0],
+                    "axis_x": R[:, :, 0],
+                    "axis_y": R[:, :, 1],
+                    "axis_z": R[:, :, 2],
+                    "radius": m.shapes.radii,
+                },
+            )
+            if surface is not None:
+                self.writers[2].write(
+                    t, b.surface.points, point_data={"displacement": surface - b.surface.points}
+                )
+        return {
+            "kind": "frames",
+            "positions": x.copy(),
+            "points": fields,
+            "displacement": x - rest,
+            "surface": None if surface is None else surface.copy(),
+            "frames": origins.copy(),
+        }
+
+
+class TissueSeries(BodySeries):
+    def __init__(self, body) -> None:
+        super().__init__(body)
+        s = body.samples
+        self._last_u = np.zeros_like(s.points)  # dead points keep their last displacement
+        self._last = {k: np.zeros(s.n) for k in ("J", "von_mises", "energy_density")}
+        self._last["J"] = np.ones(s.n)
+        self._last_tensors = {k: np.zeros((s.n, 3, 3)) for k in ("green_strain", "cauchy_stress")}
+        self._strain = np.zeros(s.n)
+
+    def open(self, directory: Path) -> None:
+        n = self.body.samples.n
+        self.writers = [
+            VTUSeriesWriter(
+                directory, None, f"{self.body.name}_points", cells=_vertices(n), n_points=n
+            )
+        ]
+
+    def write(self, sim, t: float) -> dict[str, Any]:
+        b = self.body
+        f = sim.tissue_fields()
+        if f:
+            ids = f["ids"]
+            self._last_u[ids] = f["positions"] - b.samples.points[ids]
+            for k in self._last:
+                self._last[k][ids] = f[k]
+            for k in self._last_tensors:
+                self._last_tensors[k][ids] = f[k]
+            self._strain[ids] = f["max_principal_strain"]
+        alive = b.dissection.alive.copy()
+        if self.writers:
+            self.writers[0].write(
+                t,
+                b.samples.points,
+                point_data={
+                    "displacement": self._last_u,
+                    "alive": alive.astype(np.int8),
+                    "max_principal_strain": self._strain,
+                    **self._last,
+                    **self._last_tensors,
+                },
+            )
+        points = {**{k: v.copy() for k, v in self._last.items()}}
+        points["green_strain"] = self._last_tensors["green_strain"].copy()
+        return {
+            "kind": "tissue",
+            "positions": b.samples.points + self._last_u,
+            "alive": alive,
+            "points": points,
+            "max_principal_strain": self._strain.copy(),
+            "displacement": self._last_u.copy(),
+        }
+
+
+def series_for(body) -> BodySeries:
+    return {"fem": FemSeries, "frames": FrameSeries, "tissue": TissueSeries}[body.kind](body)

@@ -1,0 +1,67 @@
+"""Forces per step as a table: ``forces.csv`` (time, then x, y, z columns per named force, N) and
+``forces.png`` (the force curves: one panel per force, its components and magnitude against
+time, units on both axes)."""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Sequence
+from pathlib import Path
+
+import numpy as np
+
+from tissuesim.io.atomic import atomic_output, write_text_atomic
+
+__all__ = ["force_table", "write_forces_csv", "render_forces_png"]
+
+
+def force_table(history: Sequence) -> tuple[list[str], np.ndarray, np.ndarray]:
+    """(names, times (k,), forces (k, len(names), 3)) from step records' extra["forces"]."""
+    names: list[str] = []
+    for r in history:
+        for name in r.extra.get("forces", {}):
+            if name not in names:
+                names.append(name)
+    times = np.array([r.time for r in history], dtype=float)
+    table = np.full((len(history), len(names), 3), np.nan)
+    for i, r in enumerate(history):
+        for j, name in enumerate(names):
+            if name in r.extra.get("forces", {}):
+                table[i, j] = r.extra["forces"][name]
+    return names, times, table
+
+
+def write_forces_csv(path: str | os.PathLike[str], history: Sequence) -> Path:
+    names, times, table = force_table(history)
+    header = ["time_s"] + [f"{n}_{c}_N" for n in names for c in "xyz"]
+    rows = [",".join(header)]
+    for i, t in enumerate(times):
+        rows.append(",".join([repr(float(t))] + [repr(float(f)) for f in table[i].ravel()]))
+    return write_text_atomic(Path(path), "\n".join(rows) + "\n")
+
+
+def render_forces_png(path: str | os.PathLike[str], history: Sequence) -> Path | None:
+    """The force curves, or None when there is no force to draw."""
+    names, times, table = force_table(history)
+    if not names or not len(times):
+        return None
+    from matplotlib.figure import Figure
+
+    n = len(names)
+    fig = Figure(figsize=(7.0, 2.2 * n + 0.6), layout="constrained")
+    axes = fig.subplots(n, 1, sharex=True, squeeze=False)[:, 0]
+    for ax, name, forces in zip(axes, names, np.swapaxes(table, 0, 1), strict=True):
+        for k, (label, colour) in enumerate(
+            zip("xyz", ("#1f77b4", "#2ca02c", "#d62728"), strict=True)
+        ):
+            ax.plot(times, forces[:, k], color=colour, lw=1.2, label=f"$F_{label}$")
+        ax.plot(times, np.linalg.norm(forces, axis=1), color="k", lw=1.6, ls="--", label="|F|")
+        ax.set_ylabel("force (N)")
+        ax.set_title(name, loc="left", fontsize=10)
+        ax.grid(alpha=0.3)
+        ax.legend(loc="best", fontsize=8, ncols=4)
+    axes[-1].set_xlabel("time (s)")
+    path = Path(path)
+    with atomic_output(path) as tmp:
+        fig.savefig(tmp, format="png", dpi=110)
+    return path

@@ -1,0 +1,303 @@
+"""Pictures of a run, one renderer for every scene: ``final.png`` and ``run.gif``.
+
+2D scenes (FEM bodies in the plane) are drawn with matplotlib (``plot2d``); 3D scenes off-screen
+with PyVista (``pyvista3d``): FEM bodies as their boundary surfaces, frame bodies as their
+embedded surface (or their integration points), the tissue as points, cuts in red. Without
+PyVista, a 3D scene of one FEM or one frame body falls back to matplotlib and the summary says
+so; other 3D scenes are not drawn.
+
+Every picture is coloured by one field, chosen by ``field``: ``J``, ``von_mises`` (Pa),
+``displacement`` (its magnitude, m) or ``green_strain`` (the largest principal Green strain),
+on one colour range for the whole run, with a labelled colour bar; the title gives the time in
+seconds (and the first grasper's force). A GIF holds at most ``MAX_GIF_FRAMES`` frames, evenly
+subsampled, so drawing stays cheaper than the simulation.
+
+A frame (what ``io/body_series.py`` returns per written step) is
+(time, {body name: data}, cut triangles (m, 3, 3), title suffix).
+"""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+__all__ = ["FIELDS", "render_run", "field_label", "MAX_GIF_FRAMES"]
+
+FIELDS = {
+    "J": "J (-)",
+    "von_mises": "von Mises stress (Pa)",
+    "displacement": "|u| (m)",
+    "green_strain": "largest principal Green strain (-)",
+}
+MAX_GIF_FRAMES = 40
+_ORGAN_COLOURS = ("#c8745a", "#d9b35b", "#8fb0c9", "#a3c48d", "#b89ad0")
+
+
+def field_label(field: str) -> str:
+    if field not in FIELDS:
+        raise ValueError(f"render field must be one of {list(FIELDS)}, not {field!r}")
+    return FIELDS[field]
+
+
+def _values(data: dict[str, Any], field: str, where: str) -> np.ndarray:
+    """The field per cell (FEM, where="cells") or per point (frames, tissue)."""
+    if field == "displacement":
+        return np.linalg.norm(data["displacement"], axis=1)
+    source = data[where]
+    if field == "green_strain":
+        if "max_principal_strain" in data:
+            return data["max_principal_strain"]
+        return np.linalg.eigvalsh(source["green_strain"])[:, -1]
+    return np.asarray(source[field], dtype=float)
+
+
+def _subsample(n: int, most: int) -> list[int]:
+    if n <= most:
+        return list(range(n))
+    return sorted(set(np.linspace(0, n - 1, most).round().astype(int).tolist()))
+
+
+def render_run(sim, frames: list, directory: Path, field: str = "J") -> str:
+    """Draw final.png (and run.gif for several frames) into ``directory``; returns what was
+    drawn, for the summary."""
+    label = field_label(field)
+    bodies = [sim.bodies[n] for n in frames[-1][1]]
+    if all(b.kind == "fem" and b.dim == 2 for b in bodies):
+        return _render_2d(bodies, frames, directory, field, label)
+    try:
+        import pyvista  # noqa: F401
+    except ImportError:
+        if len(bodies) == 1 and bodies[0].kind in ("fem", "frames"):
+            print(
+                "tissuesim: PyVista is not installed: drawing with matplotlib "
+                "(pip install 'tissuesim[pyvista]' for better 3D pictures)",
+                file=sys.stderr,
+            )
+            return _render_matplotlib_3d(bodies[0], frames, directory, field, label)
+        return (
+            "skipped: 3D pictures of several bodies need PyVista (pip install 'tissuesim[pyvista]')"
+        )
+    return _render_pyvista(sim, bodies, frames, directory, field, label)
+
+
+# -- 2D: matplotlib ---------------------------------------------------------------------------
+def _merged_mesh(bodies):
+    from tissuesim.mesh.mesh import Mesh
+
+    points, cells, offset = [], [], 0
+    for b in bodies:
+        points.append(b.mesh.points)
+        cells.append(b.mesh.cells + offset)
+        offset += b.mesh.n_points
+    return Mesh(np.concatenate(points), np.concatenate(cells), source="scene")
+
+
+def _cell_values_2d(bodies, data, field) -> np.ndarray:
+    out = []
+    for b in bodies:
+        d = data[b.name]
+        if field == "displacement":  # per triangle: the mean of its vertices' |u|
+            out.append(np.linalg.norm(d["displacement"], axis=1)[b.mesh.cells].mean(axis=1))
+        else:
+            out.append(_values(d, field, "cells"))
+    return np.concatenate(out)
+
+
+def _render_2d(bodies, frames, directory, field, label) -> str:
+    from tissuesim.render.plot2d import render_frame_png, render_gif
+
+    mesh = _merged_mesh(bodies)
+    series = [
+        (
+            t,
+            np.concatenate([data[b.name]["positions"] for b in bodies]),
+            _cell_values_2d(bodies, data, field),
+        )
+        for t, data, _, _ in frames
+    ]
+    lo, hi = _range([v for _, _, v in series], field)
+    t, x, v = series[-1]
+    title = f"t = {t:.4g} s{frames[-1][3]}"
+    render_frame_png(
+        mesh, x, v, directory / "final.png", title=title, label=label, vmin=lo, vmax=hi
+    )
+    if len(series) > 1:
+        render_gif(
+            mesh,
+            [series[i] for i in _subsample(len(series), MAX_GIF_FRAMES)],
+            directory / "run.gif",
+            label=label,
+            vmin=lo,
+            vmax=hi,
+            max_frames=MAX_GIF_FRAMES,
+        )
+    return f"final.png, run.gif (matplotlib, coloured by {field})"
+
+
+def _range(values: list[np.ndarray], field: str) -> tuple[float, float]:
+    """One colour range for the run: J spans 1; others the 99th percentile (a few points at
+    the lips of a cut would wash out the rest)."""
+    v = np.concatenate([np.asarray(a, dtype=float).ravel() for a in values])
+    v = v[np.isfinite(v)]
+    if not v.size:
+        return (0.0, 1.0)
+    if field == "J":
+        return (min(float(v.min()), 0.999), max(float(v.max()), 1.001))
+    lo = float(min(v.min(), 0.0))
+    hi = float(np.percentile(v, 99)) if v.size > 100 else float(v.max())
+    return (lo, max(hi, lo + 1e-12))
+
+
+# -- 3D: PyVista ------------------------------------------------------------------------------
+def _vertex_values(b, cell_values: np.ndarray) -> np.ndarray:
+    """Cell values averaged to the vertices (volume-weighted)."""
+    w = b.model.kinematics.weights
+    n = b.mesh.n_points
+    num = np.bincount(b.mesh.cells.ravel(), np.repeat(w * cell_values, b.mesh.cells.shape[1]), n)
+    den = np.bincount(b.mesh.cells.ravel(), np.repeat(w, b.mesh.cells.shape[1]), n)
+    return num / np.where(den > 0, den, 1.0)
+
+
+def _frame3d(bodies, frame, field, label, clim, surfaces):
+    from tissuesim.render.pyvista3d import Frame3D, PointLayer, SurfaceLayer
+
+    t, data, cut, suffix = frame
+    layers, points = [], []
+    for j, b in enumerate(bodies):
+        d = data[b.name]
+        if b.kind == "fem":
+            if field == "displacement":
+                vals = np.linalg.norm(d["displacement"], axis=1)
+            else:
+                vals = _vertex_values(b, _values(d, field, "cells"))
+            layers.append(
+                SurfaceLayer(
+                    b.name,
+                    d["positions"],
+                    surfaces[b.name],
+                    scalars=vals,
+                    scalar_name=label,
+                    clim=clim,
+                )
+            )
+        elif b.kind == "frames" and d["surface"] is not None and field == "displacement":
+            vals = np.linalg.norm(d["surface"] - b.surface.points, axis=1)
+            layers.append(
+                SurfaceLayer(
+                    b.name,
+                    d["surface"],
+                    b.surface.triangles,
+                    scalars=vals,
+                    scalar_name=label,
+                    clim=clim,
+                )
+            )
+        else:
+            if b.kind == "frames" and d["surface"] is not None:
+                layers.append(
+                    SurfaceLayer(
+                        b.name,
+                        d["surface"],
+                        b.surface.triangles,
+                        color=_ORGAN_COLOURS[j % len(_ORGAN_COLOURS)],
+                        opacity=0.35,
+                    )
+                )
+            alive = d.get("alive", np.ones(len(d["positions"]), dtype=bool))
+            points.append(
+                PointLayer(
+                    b.name if b.kind == "tissue" else f"{b.name} points",
+                    d["positions"][alive],
+                    _values(d, field, "points")[alive],
+                    scalar_name=label,
+                    clim=clim,
+                )
+            )
+    return Frame3D(layers, points, [cut] if len(cut) else [], f"t = {t:.4g} s{suffix}")
+
+
+def _field_values(bodies, data, field) -> list[np.ndarray]:
+    out = []
+    for b in bodies:
+        d = data[b.name]
+        where = "cells" if b.kind == "fem" else "points"
+        v = _values(d, field, where)
+        out.append(v[d["alive"]] if "alive" in d else v)
+    return out
+
+
+def _render_pyvista(sim, bodies, frames, directory, field, label) -> str:
+    from tissuesim.mesh.boundary import boundary_facets
+    from tissuesim.render.pyvista3d import GifWriter, render_frame_png
+
+    surfaces = {b.name: boundary_facets(b.mesh.cells) for b in bodies if b.kind == "fem"}
+    picked = [frames[i] for i in _subsample(len(frames), MAX_GIF_FRAMES)]
+    clim = _range([v for f in picked for v in _field_values(bodies, f[1], field)], field)
+    camera = render_frame_png(
+        directory / "final.png", _frame3d(bodies, frames[-1], field, label, clim, surfaces)
+    )
+    if len(frames) > 1:
+        # the last frame spans the scene (a retracted organ is farthest away)
+        gif = GifWriter(directory / "run.gif", camera=camera)
+        for frame in picked:
+            gif.add(_frame3d(bodies, frame, field, label, clim, surfaces))
+        gif.close()
+    return f"final.png, run.gif (PyVista, coloured by {field})"
+
+
+def _render_matplotlib_3d(b, frames, directory, field, label) -> str:
+    picked = [frames[i] for i in _subsample(len(frames), MAX_GIF_FRAMES)]
+    if b.kind == "fem":
+        from tissuesim.render.plot3d import render_frame_png_3d, render_gif_3d
+
+        def vals(d):
+            if field == "displacement":
+                return np.linalg.norm(d["displacement"], axis=1)[b.mesh.cells].mean(axis=1)
+            return _values(d, field, "cells")
+
+        series = [(t, data[b.name]["positions"], vals(data[b.name])) for t, data, _, _ in picked]
+        lo, hi = _range([v for _, _, v in series], field)
+        t, x, v = series[-1]
+        render_frame_png_3d(
+            b.mesh,
+            x,
+            v,
+            directory / "final.png",
+            title=f"t = {t:.4g} s",
+            label=label,
+            vmin=lo,
+            vmax=hi,
+        )
+        if len(series) > 1:
+            render_gif_3d(b.mesh, series, directory / "run.gif", label=label, vmin=lo, vmax=hi)
+        return f"final.png, run.gif (matplotlib, coloured by {field}; PyVista not installed)"
+    from tissuesim.render.points3d import render_points_gif, render_points_png
+
+    surface = b.surface
+    series = []
+    for t, data, _, _ in picked:
+        d = data[b.name]
+        if surface is not None:
+            x = d["surface"]
+            series.append((t, x, np.linalg.norm(x - surface.points, axis=1), d["frames"]))
+        else:
+            series.append(
+                (t, d["positions"], np.linalg.norm(d["displacement"], axis=1), d["frames"])
+            )
+    drawing = {
+        "triangles": None if surface is None else surface.triangles,
+        "rest": b.model.samples.points if surface is None else surface.points,
+        "label": FIELDS["displacement"],
+        "vmin": 0.0,
+        "vmax": max(max(float(np.nanmax(f[2], initial=0.0)) for f in series), 1e-12),
+    }
+    t, x, mag, origins = series[-1]
+    render_points_png(
+        x, mag, directory / "final.png", markers=origins, title=f"t = {t:.4g} s", **drawing
+    )
+    if len(series) > 1:
+        render_points_gif(series, directory / "run.gif", **drawing)
+    return "final.png, run.gif (matplotlib, coloured by displacement; PyVista not installed)"
