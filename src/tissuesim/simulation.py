@@ -105,6 +105,7 @@ class Simulation:
         self.history: list[StepRecord] = []
         self.gravity: list[np.ndarray] = []  # on every body, those added later too
         self._force_names: set[str] = set()
+        self.ties: list = []  # coupling/tie.py
         self._system: System | None = None
         self._state: State | None = None
         self._solver = None
@@ -273,6 +274,45 @@ class Simulation:
         self._changed()
         return tissue
 
+    def attach(
+        self,
+        body: str,
+        to: str,
+        *,
+        distance: float | None = None,
+        stiffness: float | None = None,
+        name: str | None = None,
+    ):
+        """Glue FEM body ``body`` to FEM body ``to`` where they touch (``coupling/tie.py``):
+        ``body``'s boundary triangles whose vertices all lie within ``distance`` m of ``to``
+        (default 1e-3 of ``body``'s size), tied by a penalty of ``stiffness`` N/m per m^2 of
+        contact (default 250 times the stiffer shear modulus per median edge length). The
+        force ``to`` exerts on ``body`` is reported as ``name`` (default "<body>-<to>")."""
+        from tissuesim.coupling.tie import tie_bodies
+        from tissuesim.coupling.tissue import ATTACHMENT_FACTOR
+
+        a, b = self.body(body, ("fem",)), self.body(to, ("fem",))
+        if a is b:
+            raise ValueError(f"attach: a body cannot be attached to itself ({body!r})")
+        size = float(np.linalg.norm(np.ptp(a.mesh.points, axis=0)))
+        if distance is None:
+            distance = 1e-3 * size
+        elif not (np.isfinite(distance) and distance > 0):
+            raise ValueError(f"attach: distance must be > 0 m, got {distance!r}")
+        if stiffness is not None and not (np.isfinite(stiffness) and stiffness > 0):
+            raise ValueError(f"attach: stiffness must be > 0 N/m per m^2, got {stiffness!r}")
+        name = self._claim_force_name(name, f"{body}-{to}")
+        edge = _median_boundary_edge(a.mesh)
+        if stiffness is None:
+            mu = max(a.model.material.mu, b.model.material.mu)
+            stiffness = ATTACHMENT_FACTOR * mu / edge
+        tie = tie_bodies(
+            name, a.name, a.mesh, b.name, b.mesh, distance=distance, stiffness_per_area=stiffness
+        )
+        self.ties.append(tie)
+        self._changed()
+        return tie
+
     def remove_body(self, name: str) -> None:
         """Take a body (and, for the tissue, its attachments and cuts) out, before the first
         step (e.g. to measure a scene without its tissue)."""
@@ -320,6 +360,9 @@ class Simulation:
 
     def add_traction(self, facets, traction, *, body=None) -> None:
         self.body(body, ("fem",)).add_traction(facets, traction)
+
+    def add_nodal_forces(self, vertices, force, *, body=None) -> None:
+        self.body(body, ("fem",)).add_nodal_forces(vertices, force)
 
     def add_body_force(self, force_density, *, body=None) -> None:
         self.body(body, ("fem",)).add_body_force(force_density)
@@ -419,7 +462,8 @@ class Simulation:
         attachments = []
         if self.tissue is not None and self.tissue.model is not None:
             attachments = self.tissue.attachments(names.index, names.index(self.tissue.name))
-        self._system = System([b.model for b in bodies], names, attachments)
+        ties = [t for t in self.ties if t.a in names and t.b in names]
+        self._system = System([b.model for b in bodies], names, attachments, ties)
         self._system_dirty = False
         x, v = [], []
         for b in bodies:
@@ -564,6 +608,8 @@ class Simulation:
         for j, name in enumerate(s.names):
             gj = None if g is None or g.size != s.n_dofs else g[s.tangent_slices[j]]
             out.update(self.bodies[name].forces(s.body_config(self._state.x, j), gj, self.time))
+        for t, r in zip(s.ties, s.tie_residuals(self._state.x), strict=True):
+            out[t.name] = (-(t.stiffness[:, None] * r).sum(axis=0)).tolist()
         return out
 
     def energies(self) -> dict[str, float]:
@@ -778,3 +824,10 @@ class Simulation:
                 "reason": self.solver_reason,
             },
         }
+
+
+def _median_boundary_edge(mesh: Mesh) -> float:
+    from tissuesim.mesh.boundary import boundary_facets
+
+    P = mesh.points[boundary_facets(mesh.cells)]
+    return float(np.median(np.linalg.norm(P - np.roll(P, 1, axis=1), axis=2)))

@@ -62,6 +62,7 @@ class System:
     bodies: Sequence
     names: Sequence[str]
     attachments: Sequence[Attachment] = ()
+    ties: Sequence = ()  # coupling/tie.py: FEM bodies glued where they touch
 
     def __post_init__(self) -> None:
         self.bodies, self.names = list(self.bodies), list(self.names)
@@ -90,7 +91,9 @@ class System:
             self.tangent_slices.append(slice(t0, t0 + b.n_dofs))
             c0, t0 = c0 + b.n_config, t0 + b.n_dofs
         self.n_config, self.n_dofs = c0, t0
+        self.ties = list(self.ties)
         self.single = len(self.bodies) == 1 and not self.attachments
+        self._tie_matrices = [self._tie_matrix(t) for t in self.ties]
         self._build_pattern()
         self.organ_hessians = [
             OrganSide.hessian(a, self.bodies[a.organ].pattern) for a in self.attachments
@@ -119,10 +122,20 @@ class System:
         for r, c, _, _ in pairs:
             rows += [r.ravel(), c.ravel()]
             cols += [c.ravel(), r.ravel()]
+        tie_hessians = [
+            (Gt.T @ sp.diags(np.repeat(t.stiffness, 3)) @ Gt).tocoo()
+            for t, (_, Gt) in zip(self.ties, self._tie_matrices, strict=True)
+        ]
+        for H in tie_hessians:
+            rows.append(H.row.astype(np.int64))
+            cols.append(H.col.astype(np.int64))
         self.pattern = SparsityPattern.from_entries(
             self.n_dofs, np.concatenate(rows), np.concatenate(cols)
         )
         keys = self.pattern.keys()
+        self.tie_hessian = np.zeros(self.pattern.nnz)  # constant: the ties are quadratic
+        for H in tie_hessians:
+            np.add.at(self.tie_hessian, self.pattern.positions(H.row, H.col, keys=keys), H.data)
         self.body_positions = []
         for pattern, off in body_patterns:
             k = pattern.keys()
@@ -137,6 +150,23 @@ class System:
                 self.pattern.positions(np.swapaxes(c, 1, 2), np.swapaxes(r, 1, 2), keys=keys),
             )
             for (r, c, frames, coeff) in pairs
+        ]
+
+    def _tie_matrix(self, tie):
+        """G over the configuration (for G c) and over the tangent DOFs (gradient, Hessian)."""
+        ja, jb = self.index(tie.a), self.index(tie.b)
+        A, B = self.bodies[ja].mesh.cells, self.bodies[jb].mesh.cells
+        sc, st = self.config_slices, self.tangent_slices
+        return (
+            tie.matrix(A, B, sc[ja].start, sc[jb].start, self.n_config),
+            tie.matrix(A, B, st[ja].start, st[jb].start, self.n_dofs),
+        )
+
+    def tie_residuals(self, c: np.ndarray) -> list[np.ndarray]:
+        """y - w - d (S, 3) per tie: the gaps the penalty lets open."""
+        return [
+            (Gc @ c).reshape(-1, 3) - t.offset
+            for t, (Gc, _) in zip(self.ties, self._tie_matrices, strict=True)
         ]
 
     def _cross_pairs(self, a: Attachment, j: int):
@@ -254,6 +284,13 @@ class System:
         for j, body in enumerate(self.bodies):
             part = body.evaluate(c[self.config_slices[j]], order, project, parts[j])
             self._merge(acc, part, j)
+        for t, (_, Gt), r in zip(self.ties, self._tie_matrices, self.tie_residuals(c), strict=True):
+            kr = t.stiffness[:, None] * r
+            acc.add_value("ties", 0.5 * float(np.sum(kr * r)))
+            if order >= 1:
+                acc.gradient += Gt.T @ kr.ravel()
+        if order >= 2 and self.ties:
+            acc.hessian += self.tie_hessian
         if order >= 2:
             for i, cross in enumerate(self.cross):
                 j = self._tissue_of[i]

@@ -128,3 +128,45 @@ def test_grasper_springs_match_finite_differences(scene_factory):
     acc = evaluate(c, 1)
     assert acc.terms["upper.grasper"] > 0
     check_fd(system, c, rng, evaluate)
+
+
+def _two_blocks(gap: float = 0.0):
+    from tissuesim.mesh import box
+    from tissuesim.simulation import Simulation
+
+    mat = make_material_for_ties()
+    sim = Simulation(integrator="quasistatic", time_step=1.0)
+    sim.add_body("lower", box((0, 0, -0.5), (1, 1, 0), (2, 2, 2)), mat, density=10.0)
+    sim.add_body("upper", box((0, 0, gap), (1, 1, 0.5 + gap), (3, 3, 2)), mat, density=10.0)
+    return sim
+
+
+def make_material_for_ties():
+    from tissuesim.materials import make_material
+
+    return make_material("neo_hookean", youngs_modulus=1000.0, poisson_ratio=0.3)
+
+
+def test_tie_between_fem_bodies_matches_finite_differences():
+    sim = _two_blocks()
+    tie = sim.attach("upper", "lower")
+    assert tie.n > 0 and np.abs(tie.offset).max() < 1e-12  # touching: no rest offset
+    system = sim.system
+    rng = np.random.default_rng(5)
+    c = perturbed(system, rng, 0.02)
+    check_fd(system, c, rng)
+    assert system.evaluate(c, 0).terms["ties"] > 0
+    # zero at rest and for a rigid translation of both bodies
+    rest = system.rest_config()
+    moved = rest + np.tile([0.3, -0.1, 0.2], system.n_dofs // 3)
+    for x in (rest, moved):
+        acc = system.evaluate(x, 1)
+        assert acc.terms["ties"] == pytest.approx(0.0, abs=1e-20)
+
+
+def test_tie_reports_no_contact_clearly():
+    sim = _two_blocks(gap=0.1)
+    with pytest.raises(ValueError, match="within distance"):
+        sim.attach("upper", "lower")
+    tie = sim.attach("upper", "lower", distance=0.11)
+    np.testing.assert_allclose(tie.offset[:, 2], 0.1, atol=1e-12)  # the gap is kept at rest

@@ -234,3 +234,29 @@ def test_bad_cut_and_attachment_parameters_are_refused():
     other.add_body("upper", upper, mat)
     with pytest.raises(ValueError, match="attachment_stiffness must be > 0"):
         other.add_tissue(mat, thickness=GAP, spacing=0.1, attachment_stiffness=-1.0)
+
+
+def test_two_tied_blocks_hang_together_and_forces_balance():
+    """Two FEM blocks glued where they touch, the lower one supported: at equilibrium the
+    support carries both weights and the tie carries the upper block's."""
+    mat = make_material("neo_hookean", youngs_modulus=1000.0, poisson_ratio=0.3)
+    sim = Simulation(
+        integrator="quasistatic",
+        time_step=1.0,
+        gravity=(0, 0, -9.81),
+        newton=NewtonOptions(gradient_tolerance=1e-11, absolute_tolerance=1e-12),
+    )
+    lower = box((0, 0, -0.5), (1, 1, 0), (2, 2, 2))
+    sim.add_body("lower", lower, mat, density=10.0)
+    sim.add_body("upper", box((0, 0, 0), (1, 1, 0.5), (3, 3, 2)), mat, density=10.0)
+    sim.fix("lower", lower.point_sets["zmin"])
+    tie = sim.attach("upper", "lower", name="glue")
+    record = sim.step()
+    weight = 10.0 * 0.5 * 9.81  # each block
+    np.testing.assert_allclose(
+        record.extra["forces"]["lower.support"], [0, 0, 2 * weight], atol=1e-6
+    )
+    np.testing.assert_allclose(record.extra["forces"]["glue"], [0, 0, weight], atol=1e-6)
+    gap = max(float(np.abs(r).max()) for r in sim.system.tie_residuals(sim.state.x))
+    assert gap < 1e-3 * 0.5 and tie.n > 0  # the penalty lets only a small gap open
+    assert sim.body_positions("upper")[:, 2].min() > -0.05  # held by the tie, not fallen

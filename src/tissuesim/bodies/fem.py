@@ -17,7 +17,14 @@ from dataclasses import dataclass
 import numpy as np
 
 from tissuesim.constraints.dirichlet import DirichletCondition, constant_displacement
-from tissuesim.energies.loads import BodyForce, ExternalForce, Gravity, Traction, as_field
+from tissuesim.energies.loads import (
+    BodyForce,
+    ExternalForce,
+    Gravity,
+    NodalForces,
+    Traction,
+    as_field,
+)
 from tissuesim.energies.mass import Inertia, MassKind
 from tissuesim.energies.vertex_springs import VertexSprings
 from tissuesim.materials.base import Material
@@ -30,16 +37,17 @@ __all__ = ["FemBody", "Grasper", "vertex_indices"]
 Motion = Callable[[float], np.ndarray]
 
 
-def vertex_indices(vertices, n_points: int, what: str) -> np.ndarray:
-    """Checked, sorted unique vertex indices; a boolean mask or floats are refused (they would
-    silently select other vertices)."""
+def vertex_indices(vertices, n_points: int, what: str, unique: bool = True) -> np.ndarray:
+    """Checked vertex indices (sorted and unique, or as given); a boolean mask or floats are
+    refused (they would silently select other vertices)."""
     arr = np.asarray(vertices)
     if arr.dtype == bool:
         raise ValueError(f"{what}: got a boolean mask; pass vertex indices (np.flatnonzero(mask))")
     if arr.size and not np.issubdtype(arr.dtype, np.integer):
         if not np.all(np.isfinite(arr)) or np.any(arr != np.round(arr)):
             raise ValueError(f"{what}: vertex indices must be integers, got {arr.dtype} values")
-    v = np.unique(arr.astype(np.int64).ravel())
+    v = arr.astype(np.int64).ravel()
+    v = np.unique(v) if unique else v
     if v.size == 0:
         raise ValueError(f"{what}: the vertex selection is empty")
     if v.min() < 0 or v.max() >= n_points:
@@ -219,6 +227,25 @@ class FemBody:
     def add_body_force(self, force_density) -> None:
         """Body force per unit rest volume (N/m^3): a vector or a callable (X (n, d), t)."""
         self.model.loads.append(BodyForce(as_field(force_density)))
+
+    def add_nodal_forces(self, vertices, force) -> None:
+        """Dead point forces (N) on ``vertices``: a vector (d,) or (k, d) per vertex, or a
+        callable t -> (k, d)."""
+        v = vertex_indices(vertices, self.mesh.n_points, "add_nodal_forces", unique=False)
+        if callable(force):
+            fn = force
+        else:
+            f = np.asarray(force, dtype=float)
+            if f.shape not in ((self.dim,), (v.size, self.dim)) or not np.all(np.isfinite(f)):
+                raise ValueError(
+                    f"add_nodal_forces: force must be {self.dim} finite numbers or "
+                    f"({v.size}, {self.dim}) of them (N), got shape {f.shape}"
+                )
+            fn = functools.partial(lambda c, t: c, f)
+        fn_check = np.asarray(fn(0.0), dtype=float)
+        if fn_check.shape not in ((self.dim,), (v.size, self.dim)):
+            raise ValueError(f"add_nodal_forces: force(t) must give ({v.size}, {self.dim})")
+        self.model.loads.append(NodalForces(v, fn))
 
     def set_velocity(self, velocity) -> None:
         """Initial velocity (n, d) or a constant vector (d,), m/s."""

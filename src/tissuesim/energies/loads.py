@@ -17,7 +17,15 @@ import numpy as np
 from tissuesim.energies.accumulator import Accumulator
 from tissuesim.mesh.boundary import facet_measures
 
-__all__ = ["ExternalForce", "Gravity", "BodyForce", "Traction", "traction_nodal_forces", "as_field"]
+__all__ = [
+    "ExternalForce",
+    "Gravity",
+    "BodyForce",
+    "Traction",
+    "NodalForces",
+    "traction_nodal_forces",
+    "as_field",
+]
 
 
 @dataclass(frozen=True, eq=False)
@@ -96,3 +104,21 @@ class Traction:
         h = np.asarray(self.traction(X.reshape(-1, X.shape[-1]), t), dtype=float)
         h = np.broadcast_to(h, (X.shape[0] * X.shape[1], X.shape[2])).reshape(X.shape)
         return traction_nodal_forces(model.mesh.points, self.facets, h)
+
+
+@dataclass(frozen=True, eq=False)
+class NodalForces:
+    """Point forces (N) on vertices (k,): ``force(t)`` -> (k, d) or (d,) per vertex."""
+
+    vertices: np.ndarray
+    force: Callable[[float], np.ndarray]
+
+    def nodal_forces(self, model, t: float) -> np.ndarray:
+        f = np.broadcast_to(
+            np.asarray(self.force(t), dtype=float), (self.vertices.size, model.mesh.dim)
+        )
+        if not np.all(np.isfinite(f)):
+            raise ValueError(f"a nodal force is not finite at t = {t:g} s")
+        out = np.zeros(model.mesh.points.shape)
+        np.add.at(out, self.vertices, f)
+        return out

@@ -161,6 +161,7 @@ class TissueSeries(BodySeries):
         self._last["J"] = np.ones(s.n)
         self._last_tensors = {k: np.zeros((s.n, 3, 3)) for k in ("green_strain", "cauchy_stress")}
         self._strain = np.zeros(s.n)
+        self._velocity = np.zeros_like(s.points)
 
     def open(self, directory: Path) -> None:
         n = self.body.samples.n
@@ -181,6 +182,13 @@ class TissueSeries(BodySeries):
             for k in self._last_tensors:
                 self._last_tensors[k][ids] = f[k]
             self._strain[ids] = f["max_principal_strain"]
+            m = b.model
+            _, z, v = sim._part(b.name)
+            zdot = np.einsum(
+                "nij,nj->ni", m.frame_type.tangent_map(z), v.reshape(m.n_frames, -1)
+            ).ravel()
+            self._velocity[:] = 0.0  # cut-away points stand still
+            self._velocity[ids] = m.point_map.positions(zdot)
         alive = b.dissection.alive.copy()
         if self.writers:
             self.writers[0].write(
@@ -188,6 +196,7 @@ class TissueSeries(BodySeries):
                 b.samples.points,
                 point_data={
                     "displacement": self._last_u,
+                    "velocity": self._velocity,
                     "alive": alive.astype(np.int8),
                     "max_principal_strain": self._strain,
                     **self._last,

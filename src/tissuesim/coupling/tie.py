@@ -1,0 +1,109 @@
+"""Two FEM bodies glued where they touch: a stiff zero-length coupling energy between the
+points of one body's boundary facets that lie on the other body.
+
+Choice (as ``attachment.py`` for the tissue): a penalty energy, not a constraint. At points s on
+body a's boundary triangles that touch body b (every vertex of the triangle within ``distance``
+of b's boundary), a carries the point as y_s = sum_i a_si x_i (barycentric in a's tetrahedron)
+and b as w_s = sum_j b_sj x_j (barycentric at the closest point of b's boundary). The energy
+
+    W = sum_s k_s / 2 |y_s - w_s - d_s|^2,   d_s = the rest offset (zero where they touch),
+
+is zero at rest and quadratic in (x_a, x_b): its Hessian G^T K G (x) I_3, with G = [A, -B], is
+constant, one entry block per (a-vertex, b-vertex) pair that shares a point. k_s = stiffness
+per m^2 times the point's share of the contact area. The force b exerts on a (the sum of
+-dW/dx_a, N) is reported under the tie's name.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sp
+
+__all__ = ["Tie", "tie_bodies"]
+
+
+@dataclass(frozen=True, eq=False)
+class Tie:
+    """Points (S,) tied between FEM bodies ``a`` and ``b`` (names; indices in a system are
+    looked up when it is built). cells_*/barycentric_*: where each body carries the points;
+    offset (S, 3): rest offset; stiffness (S,) N/m."""
+
+    name: str
+    a: str
+    b: str
+    points: np.ndarray
+    cells_a: np.ndarray
+    barycentric_a: np.ndarray
+    cells_b: np.ndarray
+    barycentric_b: np.ndarray
+    offset: np.ndarray
+    stiffness: np.ndarray
+
+    @property
+    def n(self) -> int:
+        return int(self.points.shape[0])
+
+    def matrix(self, cells_a, cells_b, start_a: int, start_b: int, n_dofs: int) -> sp.csr_matrix:
+        """G (3 S, n_dofs): G c = y - w, over the system's DOFs."""
+        S = self.n
+        rows = np.repeat(np.arange(S), 4)
+        va = cells_a[self.cells_a].ravel()
+        vb = cells_b[self.cells_b].ravel()
+        blocks = []
+        for comp in range(3):
+            r = np.concatenate([rows, rows]) * 3 + comp
+            c = np.concatenate([start_a + 3 * va + comp, start_b + 3 * vb + comp])
+            v = np.concatenate([self.barycentric_a.ravel(), -self.barycentric_b.ravel()])
+            blocks.append(sp.coo_matrix((v, (r, c)), shape=(3 * S, n_dofs)))
+        return sp.csr_matrix(sum(blocks))
+
+
+def tie_bodies(
+    name: str,
+    a: str,
+    mesh_a,
+    b: str,
+    mesh_b,
+    *,
+    distance: float,
+    stiffness_per_area: float,
+) -> Tie:
+    """Tie ``mesh_a``'s boundary triangles that touch ``mesh_b`` (all three vertices within
+    ``distance`` m of b's boundary) to b, at points no farther apart than a's median boundary
+    edge."""
+    from tissuesim.coupling.tissue import _facet_samples
+    from tissuesim.mesh.boundary import boundary_facets
+    from tissuesim.mesh.locate import closest_boundary_points, distance_to_boundary
+
+    for mesh, who in ((mesh_a, a), (mesh_b, b)):
+        if mesh.dim != 3:
+            raise ValueError(f"attach: body {who!r} is {mesh.dim}D; ties join 3D bodies")
+    facets = boundary_facets(mesh_a.cells)
+    near = distance_to_boundary(mesh_b, mesh_a.points) <= distance
+    touching = facets[near[facets].all(axis=1)]
+    if not len(touching):
+        gap = float(distance_to_boundary(mesh_b, mesh_a.points).min())
+        raise ValueError(
+            f"attach {a!r} to {b!r}: no boundary triangle of {a!r} lies within distance "
+            f"{distance:g} m of {b!r} (the closest vertex is {gap:.3g} m away); move the bodies "
+            "together or give a larger distance"
+        )
+    P = mesh_a.points[touching]
+    spacing = float(np.median(np.linalg.norm(P - np.roll(P, 1, axis=1), axis=2)))
+    points, area = _facet_samples(mesh_a.points, touching, spacing)
+    on_a = closest_boundary_points(mesh_a, points)
+    on_b = closest_boundary_points(mesh_b, points)
+    return Tie(
+        name,
+        a,
+        b,
+        points,
+        on_a.cells,
+        on_a.barycentric,
+        on_b.cells,
+        on_b.barycentric,
+        on_a.positions - on_b.positions,
+        stiffness_per_area * area,
+    )
