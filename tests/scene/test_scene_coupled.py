@@ -268,7 +268,7 @@ GRASPER_DISPLACEMENT = 'displacement = ["0", "0", "0.1 * min(t / 0.5, 1)"]'
         ('name = "upper"\n', "", ["organs[2]", "missing key 'name'"]),
         (UPPER_MESH, "", ["organs[2]", "missing key 'mesh'", "generator"]),
         (UPPER_MESH, 'mesh = "upper.vtu"', ["organs[2].mesh", "must be a table"]),
-        (UPPER_MESH, 'mesh = { generator = "sphere" }', ["organs[2].mesh", "'ellipsoid' | 'box'"]),
+        (UPPER_MESH, 'mesh = { generator = "sphere" }', ["organs[2].mesh", "'box' | 'ellipsoid'"]),
         (
             UPPER_MESH,
             ELLIPSOID.replace("radii", "radius"),
@@ -311,7 +311,7 @@ GRASPER_DISPLACEMENT = 'displacement = ["0", "0", "0.1 * min(t / 0.5, 1)"]'
             'fix = { where = "z < -5" }',
             [
                 "organs[1] fix",
-                "selects no vertex of organ 'lower'",
+                "selects no vertex",
                 "span [0, 1] x [0, 1] x [-0.5, 0]",
             ],
         ),
@@ -356,11 +356,11 @@ GRASPER_DISPLACEMENT = 'displacement = ["0", "0", "0.1 * min(t / 0.5, 1)"]'
             'organ = "uper"',
             ["graspers[1]", "unknown organ 'uper'", "did you mean 'upper'"],
         ),
-        ('organ = "upper"\n', "", ["graspers[1]", "missing key 'organ'"]),
+        ('organ = "upper"\n', "", ["graspers[1]", "name the grasped body with body"]),
         (
             'vertices = { where = "z > 0.69" }',
             'vertices = { where = "z > 5" }',
-            ["graspers[1] vertices", "selects no vertex of organ 'upper'"],
+            ["graspers[1] vertices", "selects no vertex"],
         ),
         (
             GRASPER_DISPLACEMENT,

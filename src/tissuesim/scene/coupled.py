@@ -43,7 +43,6 @@ the key, and saying how to fix it.
 
 from __future__ import annotations
 
-import ast
 import difflib
 from pathlib import Path
 from typing import Any
@@ -51,26 +50,30 @@ from typing import Any
 import numpy as np
 
 from tissuesim.errors import SceneError
-from tissuesim.scene.expressions import compile_expression, compile_vector
-from tissuesim.scene.frames import _bbox, _is_number, _required, _vector3
+from tissuesim.scene.expressions import compile_vector
+from tissuesim.scene.frames import _is_number, _required, _vector3
 from tissuesim.scene.loader import (
     RUN_KEYS,
     SELECTORS,
     Scene,
     _context,
     _material,
+    _mesh,
     _newton,
     _run_table,
     _select,
     _table,
     _unknown,
+    _variables,
 )
+from tissuesim.scene.loader import condition as _condition
 
-__all__ = ["build_coupled_scene", "COUPLED_SCENE_KEYS"]
+__all__ = ["build_bodies_scene", "COUPLED_SCENE_KEYS"]
 
 COUPLED_SIMULATION_KEYS = ("integrator", "time_step", "max_step_halvings", "start_time", "backend")
 ORGAN_KEYS = ("name", "mesh", "material", "density", "mass", "fix")
-GRASPER_KEYS = ("organ", "name", "vertices", "displacement", "stiffness")
+GRASPER_KEYS = ("body", "organ", "name", "vertices", "displacement", "stiffness")
+ATTACHMENT_KEYS = ("body", "to", "distance", "stiffness", "name")
 TISSUE_KEYS = (
     "material",
     "thickness",
@@ -90,13 +93,15 @@ COUPLED_SCENE_KEYS: dict[str, Any] = {
     "gravity": {"acceleration"},
     "newton": None,  # checked against NewtonOptions
     "organs": set(ORGAN_KEYS),
+    "bodies": None,  # each checked by _body against its kind's keys
     "graspers": set(GRASPER_KEYS),
+    "attachments": set(ATTACHMENT_KEYS),
     "tissue": set(TISSUE_KEYS),
     "cuts": set(CUT_KEYS),
     "tearing": {"threshold"},
     "run": set(RUN_KEYS),
 }
-ARRAYS = ("organs", "graspers", "cuts")
+ARRAYS = ("organs", "bodies", "graspers", "attachments", "cuts")
 MESH_GENERATORS = {
     "ellipsoid": ("center", "radii", "divisions"),
     "box": ("lower", "upper", "divisions"),
@@ -126,16 +131,16 @@ ELSEWHERE = {
 _AXES = "xyz"
 
 
-def build_coupled_scene(data: dict, base_dir: Path, source: str, name: str) -> Scene:
-    """Build a Scene whose simulation holds the organs, the tissue and its cuts from parsed
-    TOML ``data``."""
+def build_bodies_scene(data: dict, base_dir: Path, source: str, name: str) -> Scene:
+    """Build a Scene of several bodies ([[bodies]] and/or [[organs]]) and their interactions
+    from parsed TOML ``data``."""
     from tissuesim.simulation import Simulation
 
     for key, instead in ELSEWHERE.items():
         if key in data:
             raise SceneError(
-                f"{source}: [{key}] does not belong in a coupled scene (one with [[organs]]); "
-                f"{instead}"
+                f"{source}: [{key}] does not belong in a scene of several bodies (one with "
+                f"[[bodies]] or [[organs]]); {instead}"
             )
     _unknown(data, COUPLED_SCENE_KEYS, f"{source}: top level")
     for key in ARRAYS:
@@ -147,8 +152,9 @@ def build_coupled_scene(data: dict, base_dir: Path, source: str, name: str) -> S
     for key in ("density", "mass"):
         if key in sim_table:
             raise SceneError(
-                f"{sim_where}: {key} is set per body in a coupled scene: write {key} = ... in "
-                f"each [[organs]] table{' and in [tissue]' if key == 'density' else ''}"
+                f"{sim_where}: {key} is set per body in a scene of several bodies: write "
+                f"{key} = ... in each [[bodies]] / [[organs]] table"
+                f"{' and in [tissue]' if key == 'density' else ''}"
             )
     _unknown(sim_table, COUPLED_SIMULATION_KEYS, sim_where)
     gravity = _table(data, "gravity", source)
@@ -161,15 +167,17 @@ def build_coupled_scene(data: dict, base_dir: Path, source: str, name: str) -> S
         sim = Simulation(newton=newton, gravity=acceleration, **sim_table)
 
     organs = _table(data, "organs", source, array=True)
-    if not organs:
-        raise SceneError(f"{source}: [[organs]] is empty: give at least one organ")
-    meshes = {}
+    bodies = _table(data, "bodies", source, array=True)
+    if not organs and not bodies:
+        raise SceneError(f"{source}: [[bodies]] is empty: give at least one body")
     for i, item in enumerate(organs, start=1):
-        where = f"{source} organs[{i}]"
-        organ, mesh = _organ(sim, item, base_dir, where)
-        meshes[organ] = mesh
+        _organ(sim, item, base_dir, f"{source} organs[{i}]")
+    for i, item in enumerate(bodies, start=1):
+        _body(sim, item, base_dir, source, i)
     for i, item in enumerate(_table(data, "graspers", source, array=True), start=1):
-        _grasper(sim, item, meshes, f"{source} graspers[{i}]")
+        _grasper(sim, item, f"{source} graspers[{i}]")
+    for i, item in enumerate(_table(data, "attachments", source, array=True), start=1):
+        _attachment(sim, item, f"{source} attachments[{i}]")
     tissue = _table(data, "tissue", source)
     if tissue:
         _tissue(sim, tissue, f"{source} [tissue]")
@@ -206,18 +214,6 @@ def _number(value, where: str, want: str, positive: bool = True) -> float:
     return float(value)
 
 
-def _variables(text) -> set[str]:
-    """Names an expression uses (none for a number, or text that does not parse: the
-    expression compiler reports that)."""
-    if not isinstance(text, str):
-        return set()
-    try:
-        tree = ast.parse(text.strip(), mode="eval")
-    except (SyntaxError, RecursionError, MemoryError, ValueError):
-        return set()
-    return {n.id for n in ast.walk(tree) if isinstance(n, ast.Name)}
-
-
 def _of_time(items, where: str, what: str):
     """t -> (3,) from 3 numbers or expressions of t only (x, y, z are refused: ``what``
     moves rigidly)."""
@@ -237,49 +233,16 @@ def _of_time(items, where: str, what: str):
     return at
 
 
-def _condition(text, where: str):
-    """points (k, 3) -> (k,) bool from a condition on x, y, z (no t)."""
-    if not isinstance(text, str):
-        raise SceneError(
-            f"{where}: expected a condition on the rest coordinates as a string, e.g. "
-            f'where = "z < -0.032", got {text!r}'
-        )
-    if "t" in _variables(text):
-        raise SceneError(
-            f"{where}: {text!r} uses t; a selection is made once, on the rest coordinates x, y, z"
-        )
-    f = compile_expression(text, where)
-
-    def mask(points: np.ndarray) -> np.ndarray:
-        values = f(points, 0.0)
-        if not np.all(np.isfinite(values)):
-            raise SceneError(f"{where}: {text!r} is not finite at every point")
-        return values != 0
-
-    return mask
-
-
 def _vertices(mesh, organ: str, selector, where: str, key: str) -> np.ndarray:
-    """Vertex ids of ``organ``'s rest mesh picked by a [mesh]-scene selector or where."""
+    """Vertex ids of ``organ``'s rest mesh picked by a vertex selector (``where`` included)."""
     if not isinstance(selector, dict) or len(selector) != 1:
         raise SceneError(
             f"{where}: {key} must be a table with one selector out of {list(VERTEX_SELECTORS)}, "
             f'e.g. {key} = {{ where = "z < 0.0" }} or {{ on_plane = {{ axis = 2, value = 0.0 }} }}'
         )
-    ((how, args),) = selector.items()
+    ((how, _),) = selector.items()
     _unknown([how], VERTEX_SELECTORS, f"{where} {key}")
-    if how != "where":
-        return _select(mesh, "vertices", selector, f"{where} {key}")
-    ids = np.flatnonzero(_condition(args, f"{where} {key} where")(mesh.points))
-    if ids.size == 0:
-        raise SceneError(
-            f"{where} {key}: where = {args!r} selects no vertex of organ {organ!r}; its rest "
-            f"vertices span {_bbox(mesh.points)} (x, y, z)"
-        )
-    return ids
-
-
-# -- tables ---------------------------------------------------------------------------------------
+    return _select(mesh, "vertices", selector, where, key)
 
 
 def _inline_material(item: dict, where: str):
@@ -289,47 +252,16 @@ def _inline_material(item: dict, where: str):
     return _material(item, "", f"{where} material")
 
 
-def _mesh(table, base_dir: Path, where: str):
-    from tissuesim.mesh import box, ellipsoid, read_mesh
-
-    if not isinstance(table, dict):
-        raise SceneError(f"{where}: must be a table: {MESH_EXAMPLE}")
-    _unknown(table, ORGAN_MESH_KEYS, where)
-    if "file" in table:
-        extra = set(table) - {"file"}
-        if extra:
-            raise SceneError(f"{where}: 'file' cannot be combined with {sorted(extra)}")
-        path = Path(table["file"])
-        with _context(where):
-            return read_mesh(path if path.is_absolute() else base_dir / path)
-    generator = table.get("generator")
-    if generator not in MESH_GENERATORS:
-        close = difflib.get_close_matches(str(generator), MESH_GENERATORS, n=1)
-        hint = f" (did you mean {close[0]!r}?)" if close else ""
-        raise SceneError(
-            f"{where}: give generator = 'ellipsoid' | 'box', or file = 'organ.vtu' "
-            f"(got generator = {generator!r}){hint}"
-        )
-    args = MESH_GENERATORS[generator]
-    kwargs = {k: v for k, v in table.items() if k != "generator"}
-    for key in kwargs:
-        if key not in args:
-            raise SceneError(
-                f"{where}: {key!r} is not an argument of generator {generator!r}; it takes "
-                f"{', '.join(args)}"
-            )
-    with _context(where):
-        return {"ellipsoid": ellipsoid, "box": box}[generator](**kwargs)
-
-
-def _organ(sim, item: dict, base_dir: Path, where: str):
+def _organ(sim, item: dict, base_dir: Path, where: str) -> None:
+    """One [[organs]] table: a FEM body with name, mesh, material, density, mass, fix."""
     _unknown(item, ORGAN_KEYS, where)
     name = _required(item, "name", where)
     if not (isinstance(name, str) and name):
         raise SceneError(f"{where}: name must be a non-empty string, e.g. name = 'liver'")
     if "mesh" not in item:
         raise SceneError(f"{where}: missing key 'mesh', e.g. {MESH_EXAMPLE}")
-    mesh = _mesh(item["mesh"], base_dir, f"{where}.mesh")
+    with _context(f"{where}.mesh"):
+        mesh = _mesh(item["mesh"], base_dir, f"{where}.mesh")
     if "material" not in item:
         raise SceneError(f"{where}: missing key 'material', e.g. {MATERIAL_EXAMPLE}")
     material = _inline_material(item, where)
@@ -348,20 +280,53 @@ def _organ(sim, item: dict, base_dir: Path, where: str):
         vertices = _vertices(mesh, name, item["fix"], where, "fix")
         with _context(f"{where} fix"):
             sim.fix(name, vertices)
-    return name, mesh
 
 
-def _grasper(sim, item: dict, meshes: dict, where: str) -> None:
-    _unknown(item, GRASPER_KEYS, where)
-    organ = _required(item, "organ", where)
-    if organ not in meshes:
-        close = difflib.get_close_matches(str(organ), list(meshes), n=1)
-        hint = f"did you mean {close[0]!r}? " if close else ""
+def _body(sim, item: dict, base_dir: Path, source: str, i: int) -> None:
+    """One [[bodies]] table: a FEM body (with mesh = {...}) or a frame body (with
+    frames = {...} and region = {...}); its conditions are arrays of tables inside it
+    ([[bodies.dirichlet]], [[bodies.fixed_frames]], ...)."""
+    from tissuesim.scene.frames import FRAME_BODY_KEYS, add_frame_body_tables
+    from tissuesim.scene.loader import FEM_BODY_KEYS, add_fem_body, body_label
+
+    label = body_label(source, "bodies", i)
+    where = label()
+    if not isinstance(item, dict):
+        raise SceneError(f"{where}: must be a table: [[bodies]] name = '...', mesh = {{...}}")
+    name = _required(item, "name", where)
+    if not (isinstance(name, str) and name):
+        raise SceneError(f"{where}: name must be a non-empty string, e.g. name = 'liver'")
+    kinds = [k for k in ("mesh", "frames") if k in item]
+    if len(kinds) != 1:
         raise SceneError(
-            f"{where}: unknown organ {organ!r}; {hint}the [[organs]] are {list(meshes)}"
+            f"{where}: a body is a mesh (mesh = {{...}}: finite elements) or frames "
+            f"(frames = {{...}} with region = {{...}}: meshless); give exactly one"
         )
+    if kinds == ["mesh"]:
+        _unknown(item, ("name", "density", "mass", "fix", *FEM_BODY_KEYS), where)
+        add_fem_body(sim, name, item, base_dir, source, label)
+    else:
+        _unknown(item, ("name", "density", "mass", *FRAME_BODY_KEYS), where)
+        add_frame_body_tables(sim, name, item, base_dir, source, label)
+
+
+def _fem_body_named(sim, name, where: str, key: str):
+    fem = [n for n, b in sim.bodies.items() if b.kind == "fem"]
+    if name not in fem:
+        close = difflib.get_close_matches(str(name), fem, n=1)
+        hint = f"did you mean {close[0]!r}? " if close else ""
+        raise SceneError(f"{where}: unknown {key} {name!r}; {hint}the bodies with a mesh are {fem}")
+    return sim.bodies[name]
+
+
+def _grasper(sim, item: dict, where: str) -> None:
+    _unknown(item, GRASPER_KEYS, where)
+    if ("organ" in item) == ("body" in item):
+        raise SceneError(f"{where}: name the grasped body with body = '...' (or organ = '...')")
+    key = "organ" if "organ" in item else "body"
+    body = _fem_body_named(sim, item[key], where, key)
     vertices = _vertices(
-        meshes[organ], organ, _required(item, "vertices", where), where, "vertices"
+        body.mesh, body.name, _required(item, "vertices", where), where, "vertices"
     )
     displacement = _of_time(
         _required(item, "displacement", where), f"{where} displacement", "a grasper's displacement"
@@ -382,7 +347,22 @@ def _grasper(sim, item: dict, meshes: dict, where: str) -> None:
             f"{u0.tolist()}"
         )
     with _context(where):
-        sim.grasp(organ, vertices, displacement, **options)
+        sim.grasp(body.name, vertices, displacement, **options)
+
+
+def _attachment(sim, item: dict, where: str) -> None:
+    """attach(body, to, distance, stiffness, name): two FEM bodies glued where they touch."""
+    _unknown(item, ATTACHMENT_KEYS, where)
+    a = _fem_body_named(sim, _required(item, "body", where), where, "body")
+    b = _fem_body_named(sim, _required(item, "to", where), where, "to")
+    options: dict[str, Any] = {}
+    for key, unit in (("distance", "m"), ("stiffness", "N/m per m^2 of contact")):
+        if key in item:
+            options[key] = _number(item[key], f"{where} {key}", f"a number > 0 ({unit})")
+    if "name" in item:
+        options["name"] = item["name"]
+    with _context(where):
+        sim.attach(a.name, b.name, **options)
 
 
 def _tissue(sim, table: dict, where: str) -> None:

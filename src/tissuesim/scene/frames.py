@@ -80,13 +80,16 @@ FRAME_SCENE_KEYS: dict[str, Any] = {
     "simulation": set(SIMULATION_KEYS),
     "newton": None,  # checked against NewtonOptions
     "gravity": {"acceleration"},
-    "fixed_frames": {"frames"},
-    "prescribed_frames": {"frames", "displacement", "rotation"},
-    "springs": {"points", "stiffness", "target"},
+    "fixed_frames": {"frames", "name"},
+    "prescribed_frames": {"frames", "displacement", "rotation", "name"},
+    "springs": {"points", "stiffness", "target", "name"},
     "point_forces": {"points", "force"},
     "initial": {"velocity", "angular"},
     "run": set(RUN_KEYS),
 }
+#: the tables of one frame body (top level in a one-body scene, inside each [[bodies]] entry)
+FRAME_BODY_KEYS = ("frames", "region", "material", "fixed_frames", "prescribed_frames")
+FRAME_BODY_KEYS += ("springs", "point_forces", "initial")
 # Tables of [mesh] scenes, and what a frame scene writes instead.
 MESH_ONLY = {
     "dirichlet": "clamp or move frames with [[fixed_frames]] / [[prescribed_frames]]",
@@ -100,19 +103,20 @@ SELECTOR_ARGS = {
     "in_box": ("lower", "upper", "tolerance"),
 }
 _AXES = "xyz"
-FRAME_INTEGRATORS = ("backward_euler", "quasistatic", "explicit")
+FRAME_INTEGRATORS = ("backward_euler", "quasistatic", "explicit", "symplectic_euler")
 
 
 def build_frame_scene(data: dict, base_dir: Path, source: str, name: str) -> Scene:
     """Build a Scene whose simulation holds one frame body ("body") from parsed TOML
-    ``data``."""
+    ``data`` (the short form: the body's tables at the top level)."""
+    from tissuesim.scene.loader import _short_label
     from tissuesim.simulation import Simulation
 
     if "mesh" in data:
         raise SceneError(
             f"{source}: the scene has both [mesh] (a finite-element body) and [frames] (a "
-            f"meshless frame body); choose one. To sample a frame body from a mesh file, drop "
-            f"[mesh] and write [region] mesh = 'file.msh'"
+            f"meshless frame body); choose one, or list both in [[bodies]]. To sample a frame "
+            f"body from a mesh file, drop [mesh] and write [region] mesh = 'file.msh'"
         )
     for key, instead in MESH_ONLY.items():
         if key in data:
@@ -120,102 +124,116 @@ def build_frame_scene(data: dict, base_dir: Path, source: str, name: str) -> Sce
                 f"{source}: [[{key}]] is for [mesh] scenes; in a [frames] scene {instead}"
             )
     _unknown(data, FRAME_SCENE_KEYS, f"{source}: top level")
-    frames_table = _table(data, "frames", source)
-    _unknown(frames_table, FRAMES_KEYS, f"{source} [frames]")
-    if "region" not in data:
-        raise SceneError(
-            f"{source}: [frames] needs a [region] table saying where the body is, e.g. "
-            f"[region] box = {{ lower = [0, 0, 0], upper = [1, 1, 1] }}, spacing = 0.1 "
-            f"(or ellipsoid, surface, mesh)"
-        )
-    region_where = f"{source} [region]"
-    samples, surface = _region(_table(data, "region", source), base_dir, region_where)
-    positions = _frame_positions(frames_table, samples, f"{source} [frames]")
-
-    material = _material(data, source)
     newton = _newton(data, source)
     sim_where = f"{source} [simulation]"
-    sim_table = _table(data, "simulation", source)
+    sim_table = dict(_table(data, "simulation", source))
     _unknown(sim_table, SIMULATION_KEYS, sim_where)
-    _check_simulation(sim_table, samples, sim_where)
-    options = {
-        ("frame_type" if key == "type" else key): frames_table[key]
-        for key in ("type", "shape", "radius", "radius_factor", "min_frames")
-        if key in frames_table
-    }
-    body_keys = ("density", "mass")
+    _check_simulation(sim_table, sim_where)
+    body = {k: sim_table.pop(k) for k in ("density", "mass") if k in sim_table}
     with _context(sim_where):
-        sim = Simulation(
-            newton=newton, **{k: v for k, v in sim_table.items() if k not in body_keys}
-        )
-    with _context(f"{source} [frames]"):
-        sim.add_frame_body(
-            "body",
-            positions,
-            samples,
-            material,
-            **options,
-            **{k: v for k, v in sim_table.items() if k in body_keys},
-        )
-    if surface is not None:
-        with _context(f"{region_where} display"):
-            sim.embed_surface(surface)
-    scale = _scale(samples.points, positions, surface)
-
+        sim = Simulation(newton=newton, **sim_table)
+    tables = {k: data[k] for k in FRAME_BODY_KEYS if k in data}
+    add_frame_body_tables(
+        sim, "body", {**tables, **body}, base_dir, source, _short_label(source), sim_where
+    )
     gravity = _table(data, "gravity", source)
     if gravity:
         where = f"{source} [gravity]"
         _unknown(gravity, FRAME_SCENE_KEYS["gravity"], where)
         with _context(where):
             sim.add_gravity(_vector3(gravity["acceleration"], f"{where} acceleration"))
-    for i, item in enumerate(_table(data, "fixed_frames", source, array=True)):
-        where = f"{source} [[fixed_frames]] #{i + 1}"
-        _unknown(item, FRAME_SCENE_KEYS["fixed_frames"], where)
-        frames = _select_frames(sim, _required(item, "frames", where), scale, where)
+    return Scene(sim, name, source, _run_table(data, source))
+
+
+def add_frame_body_tables(
+    sim, name: str, item: dict, base_dir: Path, source: str, label, options_where=None
+) -> None:
+    """A frame body from its tables: frames and region (required), material, density, mass,
+    fixed_frames, prescribed_frames, springs, point_forces (arrays of tables), initial."""
+    frames_table = _table(item, "frames", source)
+    _unknown(frames_table, FRAMES_KEYS, label("frames"))
+    if "region" not in item:
+        raise SceneError(
+            f"{label('frames')}: a frame body needs a [region] table saying where the body is, "
+            f"e.g. [region] box = {{ lower = [0, 0, 0], upper = [1, 1, 1] }}, spacing = 0.1 "
+            f"(or ellipsoid, surface, mesh)"
+        )
+    region_where = label("region")
+    samples, surface = _region(_table(item, "region", source), base_dir, region_where)
+    positions = _frame_positions(frames_table, samples, label("frames"))
+    material = _material(item, source, label("material"))
+    body_options = {k: item[k] for k in ("density", "mass") if k in item}
+    if "mass" in body_options and body_options["mass"] not in ("full", "lumped"):
+        raise SceneError(
+            f"{options_where or label()}: mass must be 'full' or 'lumped' for frame bodies, "
+            f"not {body_options['mass']!r}"
+        )
+    options = {
+        ("frame_type" if key == "type" else key): frames_table[key]
+        for key in ("type", "shape", "radius", "radius_factor", "min_frames")
+        if key in frames_table
+    }
+    density = body_options.get("density", 1.0)
+    if not (_is_number(density) and np.isfinite(density) and density > 0):
+        raise SceneError(
+            f"{options_where or label()}: density must be a number > 0 (kg/m^3), not {density!r}"
+        )
+    with _context(label("frames")):
+        sim.add_frame_body(name, positions, samples, material, **body_options, **options)
+    body = sim.bodies[name]
+    if surface is not None:
+        with _context(f"{region_where} display"):
+            body.embed_surface(surface)
+    scale = _scale(samples.points, positions, surface)
+    for i, entry in enumerate(_table(item, "fixed_frames", source, array=True), start=1):
+        where = label("fixed_frames", i)
+        _unknown(entry, FRAME_SCENE_KEYS["fixed_frames"], where)
+        frames = _select_frames(body, _required(entry, "frames", where), scale, where)
         with _context(where):
-            sim.fix_frames(frames)
-    for i, item in enumerate(_table(data, "prescribed_frames", source, array=True)):
-        where = f"{source} [[prescribed_frames]] #{i + 1}"
-        _unknown(item, FRAME_SCENE_KEYS["prescribed_frames"], where)
-        frames = _select_frames(sim, _required(item, "frames", where), scale, where)
-        if "displacement" not in item and "rotation" not in item:
+            body.fix_frames(frames, entry.get("name"))
+    for i, entry in enumerate(_table(item, "prescribed_frames", source, array=True), start=1):
+        where = label("prescribed_frames", i)
+        _unknown(entry, FRAME_SCENE_KEYS["prescribed_frames"], where)
+        frames = _select_frames(body, _required(entry, "frames", where), scale, where)
+        if "displacement" not in entry and "rotation" not in entry:
             raise SceneError(
                 f"{where}: give displacement = [...] and/or rotation = [...] (expressions of "
                 f"t); to hold frames at rest use [[fixed_frames]]"
             )
         with _context(where):
-            sim.prescribe_frames(frames, _motion(item, sim.rest_frames[frames], where))
-    for i, item in enumerate(_table(data, "springs", source, array=True)):
-        where = f"{source} [[springs]] #{i + 1}"
-        _unknown(item, FRAME_SCENE_KEYS["springs"], where)
-        points = _points(sim, _required(item, "points", where), scale, where)
-        stiffness = _stiffness(_required(item, "stiffness", where), len(points), where)
+            body.prescribe_frames(
+                frames, _motion(entry, body.rest_frames[frames], where), name=entry.get("name")
+            )
+    for i, entry in enumerate(_table(item, "springs", source, array=True), start=1):
+        where = label("springs", i)
+        _unknown(entry, FRAME_SCENE_KEYS["springs"], where)
+        points = _points(body, _required(entry, "points", where), scale, where)
+        stiffness = _stiffness(_required(entry, "stiffness", where), len(points), where)
         target = None
-        if "target" in item:
-            f = compile_vector(item["target"], 3, f"{where} target")
+        if "target" in entry:
+            f = compile_vector(entry["target"], 3, f"{where} target")
             target = _of_time(f, points)
         with _context(where):
-            sim.add_spring(points, stiffness, target)
-    for i, item in enumerate(_table(data, "point_forces", source, array=True)):
-        where = f"{source} [[point_forces]] #{i + 1}"
-        _unknown(item, FRAME_SCENE_KEYS["point_forces"], where)
-        points = _points(sim, _required(item, "points", where), scale, where)
-        force = _required(item, "force", where)
+            body.add_spring(points, stiffness, target, name=entry.get("name"))
+    for i, entry in enumerate(_table(item, "point_forces", source, array=True), start=1):
+        where = label("point_forces", i)
+        _unknown(entry, FRAME_SCENE_KEYS["point_forces"], where)
+        points = _points(body, _required(entry, "points", where), scale, where)
+        force = _required(entry, "force", where)
         if isinstance(force, list) and all(_is_number(v) for v in force):
             force = _vector3(force, f"{where} force")
         else:
             force = _of_time(compile_vector(force, 3, f"{where} force"), points)
         with _context(where):
-            sim.add_point_forces(points, force)
-    initial = _table(data, "initial", source)
-    where = f"{source} [initial]"
+            body.add_point_forces(points, force)
+    initial = _table(item, "initial", source)
+    where = label("initial")
     _unknown(initial, FRAME_SCENE_KEYS["initial"], where)
     if initial:
         linear = _vector3(initial.get("velocity", [0, 0, 0]), f"{where} velocity")
         angular = _vector3(initial.get("angular", [0, 0, 0]), f"{where} angular")
         with _context(where):
-            sim.set_velocity(linear=linear, angular=angular)
-    return Scene(sim, name, source, _run_table(data, source))
+            body.set_velocity(linear, angular)
 
 
 # -- values -------------------------------------------------------------------------------------
@@ -287,19 +305,15 @@ def _stiffness(value, k: int, where: str) -> float | np.ndarray:
     return float(values[0]) if _is_number(value) else values
 
 
-def _check_simulation(table: dict, samples, where: str) -> None:
+def _check_simulation(table: dict, where: str) -> None:
     """[simulation] values a frame body refuses, caught here so the error names this table
     (the Simulation checks them too, but among the [frames] options)."""
     from tissuesim.backend import resolve_backend
 
     integrator = table.get("integrator", "backward_euler")
     if integrator not in FRAME_INTEGRATORS:
-        hint = ""
-        if integrator == "symplectic_euler":
-            hint = " (a frame body's symplectic Euler is called 'explicit')"
         raise SceneError(
-            f"{where}: integrator {integrator!r} is not available for frame bodies; valid: "
-            f"{sorted(FRAME_INTEGRATORS)}{hint}"
+            f"{where}: integrator {integrator!r} is not one of {sorted(FRAME_INTEGRATORS)}"
         )
     step = table.get("time_step", 0.01)
     if not (_is_number(step) and np.isfinite(step) and step > 0):
@@ -312,8 +326,10 @@ def _check_simulation(table: dict, samples, where: str) -> None:
         raise SceneError(f"{where}: start_time must be a finite number (s), not {start!r}")
     if table.get("mass", "full") not in ("full", "lumped"):
         raise SceneError(f"{where}: mass must be 'full' or 'lumped', not {table['mass']!r}")
+    density = table.get("density", 1.0)
+    if not (_is_number(density) and np.isfinite(density) and density > 0):
+        raise SceneError(f"{where}: density must be a number > 0 (kg/m^3), not {density!r}")
     with _context(where):
-        samples.masses(table.get("density", 1.0))
         resolve_backend(table.get("backend", "auto"))
 
 
@@ -468,12 +484,12 @@ def _one_selector(selector, kinds: tuple[str, ...], key: str, example: str, wher
     return how, args
 
 
-def _select_frames(sim, selector, scale: float, where: str) -> np.ndarray:
+def _select_frames(body, selector, scale: float, where: str) -> np.ndarray:
     """Sorted frame indices picked by on_plane / in_box (rest origins) or indices."""
     how, args = _one_selector(
         selector, FRAME_SELECTORS, "frames", "{ on_plane = { axis = 2, value = 0.0 } }", where
     )
-    X = sim.rest_frames
+    X = body.rest_frames
     here = f"{where} frames {how}"
     if how == "indices":
         n = len(X)
@@ -492,7 +508,7 @@ def _select_frames(sim, selector, scale: float, where: str) -> np.ndarray:
     return np.flatnonzero(mask)
 
 
-def _points(sim, spec, scale: float, where: str) -> np.ndarray:
+def _points(body, spec, scale: float, where: str) -> np.ndarray:
     """(k, 3) rest points: an explicit list, or display-surface vertices picked by a selector."""
     if isinstance(spec, list):
         return _point_list(spec, f"{where} points")
@@ -504,12 +520,12 @@ def _points(sim, spec, scale: float, where: str) -> np.ndarray:
         where,
     )
     here = f"{where} points {how}"
-    if sim.surface is None:
+    if body.surface is None:
         raise SceneError(
             f"{here}: selects display-surface vertices but the body has no display surface; "
             f"set display = true in [region], or list the points as [[x, y, z], ...]"
         )
-    P = sim.surface.points
+    P = body.surface.points
     mask, text = _match(P, how.removeprefix("surface_"), args, scale, here)
     if not mask.any():
         raise SceneError(

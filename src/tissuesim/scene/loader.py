@@ -47,7 +47,9 @@ from tissuesim.scene.expressions import compile_vector
 __all__ = ["Scene", "load_scene", "build_scene", "SCENE_KEYS"]
 
 MESH_KEYS = {
-    "generator": "rectangle or box",
+    "generator": "rectangle, box or ellipsoid",
+    "center": "ellipsoid: centre",
+    "radii": "ellipsoid: semi-axes",
     "file": "path of a mesh file (relative to the scene file)",
     "lower": "generator: lower corner",
     "upper": "generator: upper corner",
@@ -65,21 +67,25 @@ SIMULATION_KEYS = (
 )
 RUN_KEYS = ("steps", "every", "render")
 SELECTORS = {
-    "vertices": {"on_plane", "in_box", "tagged", "boundary"},
-    "facets": {"on_plane", "in_box", "tagged", "boundary"},
+    "vertices": {"on_plane", "in_box", "tagged", "boundary", "where"},
+    "facets": {"on_plane", "in_box", "tagged", "boundary", "where"},
 }
 SCENE_KEYS = {
     "mesh": set(MESH_KEYS),
     "material": None,  # checked by make_material
     "simulation": set(SIMULATION_KEYS),
     "newton": None,  # checked against NewtonOptions
-    "dirichlet": {"vertices", "displacement", "components"},
+    "dirichlet": {"vertices", "displacement", "components", "name"},
     "traction": {"facets", "traction"},
     "gravity": {"acceleration"},
     "body_force": {"force_density"},
     "initial": {"velocity"},
+    "nodal_forces": {"vertices", "force"},
     "run": set(RUN_KEYS),
 }
+#: the tables of one FEM body (top level in a one-body scene, inside each [[bodies]] entry)
+FEM_BODY_KEYS = ("mesh", "material", "dirichlet", "traction", "body_force", "nodal_forces")
+FEM_BODY_KEYS += ("initial",)
 # Tables of frame scenes ([frames], tissuesim.scene.frames) that mean nothing for a [mesh] body.
 FRAME_ONLY_KEYS = ("region", "fixed_frames", "prescribed_frames", "springs", "point_forces")
 # Tables of coupled scenes ([[organs]], tissuesim.scene.coupled) that mean nothing for one body.
@@ -156,10 +162,10 @@ def build_scene(
 def _build(data: dict, base_dir: Path, source: str, name: str) -> Scene:
     from tissuesim.simulation import Simulation
 
-    if "organs" in data:
-        from tissuesim.scene.coupled import build_coupled_scene
+    if "organs" in data or "bodies" in data:
+        from tissuesim.scene.coupled import build_bodies_scene
 
-        return build_coupled_scene(data, base_dir, source, name)
+        return build_bodies_scene(data, base_dir, source, name)
     if "frames" in data:
         from tissuesim.scene.frames import build_frame_scene
 
@@ -178,60 +184,133 @@ def _build(data: dict, base_dir: Path, source: str, name: str) -> Scene:
             f"connective tissue): give the organs as [[organs]] tables (name, mesh, material) "
             f"instead of [mesh] and [material]"
         )
-    # "frames" and "organs" are valid too (handled above): a misspelt [frame] or [[organ]]
-    # then suggests them
-    _unknown(data, [*SCENE_KEYS, "frames", "organs"], f"{source}: top level")
-    with _context(f"{source} [mesh]"):
-        mesh = _mesh(_table(data, "mesh", source), base_dir, f"{source} [mesh]")
-    d = mesh.dim
-
-    material = _material(data, source)
+    # "frames", "organs" and "bodies" are valid too (handled above): a misspelt [frame] or
+    # [[organ]] then suggests them
+    _unknown(data, [*SCENE_KEYS, "frames", "organs", "bodies"], f"{source}: top level")
     newton = _newton(data, source)
-    sim_table = _table(data, "simulation", source)
+    sim_table = dict(_table(data, "simulation", source))
     _unknown(sim_table, SIMULATION_KEYS, f"{source} [simulation]")
+    body = {k: sim_table.pop(k) for k in ("density", "mass") if k in sim_table}
     with _context(f"{source} [simulation]"):
-        sim = Simulation(mesh, material, newton=newton, **sim_table)
-
-    for i, item in enumerate(_table(data, "dirichlet", source, array=True)):
-        where = f"{source} [[dirichlet]] #{i + 1}"
-        _unknown(item, SCENE_KEYS["dirichlet"], where)
-        if "vertices" not in item:
-            raise SceneError(f"{where}: missing key 'vertices' (a selector table)")
-        vertices = _select(mesh, "vertices", item["vertices"], where)
-        disp = item.get("displacement")
-        g = None if disp is None else compile_vector(disp, d, f"{where} displacement")
-        components = item.get("components")
-        if components is not None and not isinstance(components, list):
-            raise SceneError(f"{where}: components must be a list of axes, e.g. [0]")
-        with _context(where):
-            sim.add_dirichlet(vertices, g, components)
-    for i, item in enumerate(_table(data, "traction", source, array=True)):
-        where = f"{source} [[traction]] #{i + 1}"
-        _unknown(item, SCENE_KEYS["traction"], where)
-        for key in ("facets", "traction"):
-            if key not in item:
-                raise SceneError(f"{where}: missing key {key!r}")
-        facets = _select(mesh, "facets", item["facets"], where)
-        with _context(where):
-            sim.add_traction(facets, _field(item["traction"], d, f"{where} traction"))
+        sim = Simulation(newton=newton, **sim_table)
+    tables = {k: data[k] for k in FEM_BODY_KEYS if k in data}
+    add_fem_body(
+        sim,
+        "body",
+        {**tables, **body},
+        base_dir,
+        source,
+        _short_label(source),
+        f"{source} [simulation]",
+    )
     gravity = _table(data, "gravity", source)
     if gravity:
         _unknown(gravity, SCENE_KEYS["gravity"], f"{source} [gravity]")
         with _context(f"{source} [gravity]"):
             sim.add_gravity(gravity["acceleration"])
-    for i, item in enumerate(_table(data, "body_force", source, array=True)):
-        where = f"{source} [[body_force]] #{i + 1}"
-        _unknown(item, SCENE_KEYS["body_force"], where)
-        if "force_density" not in item:
+    return Scene(sim, name, source, _run_table(data, source))
+
+
+def _short_label(source: str):
+    """Where a table of a one-body scene is: "scene.toml [[dirichlet]] #2", "[mesh]"."""
+
+    def label(key: str | None = None, i: int | None = None) -> str:
+        if key is None:
+            return source
+        return f"{source} [{key}]" if i is None else f"{source} [[{key}]] #{i}"
+
+    return label
+
+
+def body_label(source: str, array: str, n: int):
+    """Where a table of the n-th [[bodies]] (or [[organs]]) entry is: "bodies[2]",
+    "bodies[2].dirichlet[1]" (counting from 1)."""
+
+    def label(key: str | None = None, i: int | None = None) -> str:
+        head = f"{source} {array}[{n}]"
+        if key is None:
+            return head
+        return f"{head}.{key}" if i is None else f"{head}.{key}[{i}]"
+
+    return label
+
+
+def add_fem_body(
+    sim, name: str, item: dict, base_dir: Path, source: str, label, options_where=None
+) -> None:
+    """A FEM body from its tables: mesh, material (required), density, mass, fix (a vertex
+    selector), dirichlet, traction, body_force, nodal_forces (arrays of tables), initial."""
+    if "mesh" not in item:
+        raise SceneError(f"{label('mesh')}: missing: give a mesh = {{ generator = ... }} table")
+    with _context(label("mesh")):
+        mesh = _mesh(_table(item, "mesh", source), base_dir, label("mesh"))
+    d = mesh.dim
+    material = _material(item, source, label("material"))
+    options = {k: item[k] for k in ("density", "mass") if k in item}
+    with _context(options_where or label()):
+        sim.add_body(name, mesh, material, **options)
+    if "fix" in item:
+        vertices = _select(mesh, "vertices", item["fix"], label("fix"))
+        with _context(label("fix")):
+            sim.fix(name, vertices)
+    for i, entry in enumerate(_table(item, "dirichlet", source, array=True), start=1):
+        where = label("dirichlet", i)
+        _unknown(entry, SCENE_KEYS["dirichlet"], where)
+        if "vertices" not in entry:
+            raise SceneError(f"{where}: missing key 'vertices' (a selector table)")
+        vertices = _select(mesh, "vertices", entry["vertices"], where)
+        disp = entry.get("displacement")
+        g = None if disp is None else compile_vector(disp, d, f"{where} displacement")
+        components = entry.get("components")
+        if components is not None and not isinstance(components, list):
+            raise SceneError(f"{where}: components must be a list of axes, e.g. [0]")
+        with _context(where):
+            sim.add_dirichlet(vertices, g, components, body=name, name=entry.get("name"))
+    for i, entry in enumerate(_table(item, "traction", source, array=True), start=1):
+        where = label("traction", i)
+        _unknown(entry, SCENE_KEYS["traction"], where)
+        for key in ("facets", "traction"):
+            if key not in entry:
+                raise SceneError(f"{where}: missing key {key!r}")
+        facets = _select(mesh, "facets", entry["facets"], where)
+        with _context(where):
+            sim.add_traction(facets, _field(entry["traction"], d, f"{where} traction"), body=name)
+    for i, entry in enumerate(_table(item, "body_force", source, array=True), start=1):
+        where = label("body_force", i)
+        _unknown(entry, SCENE_KEYS["body_force"], where)
+        if "force_density" not in entry:
             raise SceneError(f"{where}: missing key 'force_density'")
         with _context(where):
-            sim.add_body_force(_field(item["force_density"], d, f"{where} force_density"))
-    initial = _table(data, "initial", source)
-    _unknown(initial, SCENE_KEYS["initial"], f"{source} [initial]")
+            sim.add_body_force(
+                _field(entry["force_density"], d, f"{where} force_density"), body=name
+            )
+    for i, entry in enumerate(_table(item, "nodal_forces", source, array=True), start=1):
+        where = label("nodal_forces", i)
+        _unknown(entry, SCENE_KEYS["nodal_forces"], where)
+        for key in ("vertices", "force"):
+            if key not in entry:
+                raise SceneError(f"{where}: missing key {key!r}")
+        vertices = _select(mesh, "vertices", entry["vertices"], where)
+        force = _of_time_vector(entry["force"], d, f"{where} force")
+        with _context(where):
+            sim.add_nodal_forces(vertices, force, body=name)
+    initial = _table(item, "initial", source)
+    _unknown(initial, SCENE_KEYS["initial"], label("initial"))
     if "velocity" in initial:
-        v = compile_vector(initial["velocity"], d, f"{source} [initial] velocity")
-        sim.set_velocity(v(mesh.points, sim.time))
-    return Scene(sim, name, source, _run_table(data, source))
+        v = compile_vector(initial["velocity"], d, f"{label('initial')} velocity")
+        with _context(label("initial")):
+            sim.set_velocity(v(mesh.points, sim.time), body=name)
+
+
+def _of_time_vector(value, d: int, where: str):
+    """d numbers, or expressions of t only (a force on a vertex set): a callable t -> (d,)."""
+    if isinstance(value, list) and all(isinstance(v, (int, float)) for v in value):
+        if len(value) != d:
+            raise SceneError(f"{where}: expected {d} components, got {len(value)}")
+        return np.asarray(value, dtype=float)
+    f = compile_vector(value, d, where)
+    origin = np.zeros((1, d))
+    return lambda t: f(origin, t)[0]
 
 
 def _material(data: dict, source: str, where: str | None = None):
@@ -280,9 +359,19 @@ def _field(value, d: int, where: str):
     return compile_vector(value, d, where)
 
 
-def _mesh(table: dict, base_dir: Path, where: str):
-    from tissuesim.mesh import box, read_mesh, rectangle
+MESH_GENERATORS = {
+    "rectangle": ("lower", "upper", "divisions", "pattern"),
+    "box": ("lower", "upper", "divisions"),
+    "ellipsoid": ("center", "radii", "divisions"),
+}
 
+
+def _mesh(table: dict, base_dir: Path, where: str):
+    """A generated mesh (rectangle, box, ellipsoid) or a file (relative to the scene)."""
+    from tissuesim.mesh import box, ellipsoid, read_mesh, rectangle
+
+    if not isinstance(table, dict):
+        raise SceneError(f"{where}: must be a table, e.g. mesh = {{ generator = 'box', ... }}")
     _unknown(table, MESH_KEYS, where)
     if "file" in table:
         extra = set(table) - {"file"}
@@ -291,17 +380,63 @@ def _mesh(table: dict, base_dir: Path, where: str):
         path = Path(table["file"])
         return read_mesh(path if path.is_absolute() else base_dir / path)
     generator = table.get("generator")
-    generators = {"rectangle": rectangle, "box": box}
-    if generator not in generators:
+    if generator not in MESH_GENERATORS:
+        close = difflib.get_close_matches(str(generator), list(MESH_GENERATORS), n=1)
+        hint = f" (did you mean {close[0]!r}?)" if close else ""
         raise SceneError(
-            f"{where}: give either file = 'mesh.msh' or generator = 'rectangle' | 'box' "
-            f"(got generator = {generator!r})"
+            f"{where}: give either file = 'mesh.msh' or generator = 'rectangle' | 'box' | "
+            f"'ellipsoid' (got generator = {generator!r}){hint}"
         )
     kwargs = {k: v for k, v in table.items() if k != "generator"}
+    for key in kwargs:
+        if key not in MESH_GENERATORS[generator]:
+            raise SceneError(
+                f"{where}: {key!r} is not an argument of generator {generator!r}; it takes "
+                f"{', '.join(MESH_GENERATORS[generator])}"
+            )
+    generators = {"rectangle": rectangle, "box": box, "ellipsoid": ellipsoid}
     return generators[generator](**kwargs)
 
 
-def _select(mesh, kind: str, selector, where: str) -> np.ndarray:
+def _variables(text) -> set[str]:
+    """Names an expression uses (none for a number, or text that does not parse: the
+    expression compiler reports that)."""
+    import ast
+
+    if not isinstance(text, str):
+        return set()
+    try:
+        tree = ast.parse(text.strip(), mode="eval")
+    except (SyntaxError, RecursionError, MemoryError, ValueError):
+        return set()
+    return {n.id for n in ast.walk(tree) if isinstance(n, ast.Name)}
+
+
+def condition(text, where: str):
+    """points (k, d) -> (k,) bool from a condition on the rest coordinates x, y, z (no t)."""
+    from tissuesim.scene.expressions import compile_expression
+
+    if not isinstance(text, str):
+        raise SceneError(
+            f"{where}: expected a condition on the rest coordinates as a string, e.g. "
+            f'where = "z < -0.032", got {text!r}'
+        )
+    if "t" in _variables(text):
+        raise SceneError(
+            f"{where}: {text!r} uses t; a selection is made once, on the rest coordinates x, y, z"
+        )
+    f = compile_expression(text, where)
+
+    def mask(points: np.ndarray) -> np.ndarray:
+        values = f(points, 0.0)
+        if not np.all(np.isfinite(values)):
+            raise SceneError(f"{where}: {text!r} is not finite at every point")
+        return values != 0
+
+    return mask
+
+
+def _select(mesh, kind: str, selector, where: str, key: str | None = None) -> np.ndarray:
     from tissuesim.mesh import select
 
     if not isinstance(selector, dict) or len(selector) != 1:
@@ -312,16 +447,32 @@ def _select(mesh, kind: str, selector, where: str) -> np.ndarray:
     ((how, args),) = selector.items()
     _unknown([how], SELECTORS[kind], f"{where} {kind}")
     prefix = "vertices" if kind == "vertices" else "facets"
-    with _context(f"{where} {kind} {how}"):
+    key = key or kind
+    if how == "where":  # vertices (facets: all of whose vertices) where a condition holds
+        inside = condition(args, f"{where} {key} where")(mesh.points)
+        if kind == "vertices":
+            ids = np.flatnonzero(inside)
+        else:
+            facets = select.all_boundary_facets(mesh)
+            ids = facets[inside[facets].all(axis=1)]
+        if len(ids) == 0:
+            lo, hi = mesh.points.min(axis=0), mesh.points.max(axis=0)
+            what = "vertex" if kind == "vertices" else "boundary facet"
+            box = " x ".join(f"[{a:.6g}, {b:.6g}]" for a, b in zip(lo, hi, strict=True))
+            raise SceneError(
+                f"{where} {key}: where = {args!r} selects no {what}; its rest vertices span {box}"
+            )
+        return ids
+    with _context(f"{where} {key} {how}"):
         if how == "tagged":
             return getattr(select, f"{prefix}_tagged")(mesh, args)
         if how == "boundary":
             if args is not True:
-                raise SceneError(f"{where}: write {kind} = {{ boundary = true }}")
+                raise SceneError(f"{where}: write {key} = {{ boundary = true }}")
             fn = select.boundary_vertices if kind == "vertices" else select.all_boundary_facets
             return fn(mesh)
         if not isinstance(args, dict):
             raise SceneError(f"{where}: {how} takes a table of arguments")
         fn = getattr(select, f"{prefix}_{how}")
-        _unknown(args, list(inspect.signature(fn).parameters)[1:], f"{where} {kind} {how}")
+        _unknown(args, list(inspect.signature(fn).parameters)[1:], f"{where} {key} {how}")
         return fn(mesh, **args)
