@@ -21,6 +21,12 @@ def blocks(language: str) -> list[str]:
     return re.findall(rf"```{language}\n(.*?)```", README.read_text(), flags=re.S)
 
 
+def block(language: str, marker: str) -> str:
+    """The one ``language`` block of the README that contains ``marker``."""
+    (found,) = [b for b in blocks(language) if marker in b]
+    return found
+
+
 def test_quick_start_has_exactly_two_commands():
     text = README.read_text()
     section = text.split("## Quick start", 1)[1].split("\n## ", 1)[0]
@@ -44,7 +50,7 @@ def test_python_example_runs(tmp_path):
 
 def test_frames_python_example_runs(tmp_path):
     """The README's frame-based example, shortened to 3 steps (the code is otherwise as shown)."""
-    code = blocks("python")[1]
+    code = block("python", "Simulation.from_frames")
     assert "steps=50" in code
     result = subprocess.run(
         [sys.executable, "-c", code.replace("steps=50", "steps=3")],
@@ -61,8 +67,7 @@ def test_frames_python_example_runs(tmp_path):
 
 
 def test_toml_example_is_the_shipped_beam_scene():
-    (toml_text,) = blocks("toml")
-    readme_scene = tomllib.loads(toml_text)
+    readme_scene = tomllib.loads(block("toml", "[mesh]"))
     shipped = tomllib.loads(example_path("beam_3d_gravity").read_text())
     assert readme_scene == shipped
     scene = build_scene(readme_scene, name="readme_beam")
@@ -75,8 +80,7 @@ def test_toml_example_is_the_shipped_beam_scene():
 def test_coupled_python_example_runs(tmp_path):
     """The README's organs + tissue example, as shown: the force drops to the weight after the
     cut."""
-    code = blocks("python")[2]
-    assert "add_tissue" in code
+    code = block("python", "add_tissue")
     result = subprocess.run(
         [sys.executable, "-c", code], cwd=tmp_path, capture_output=True, text=True, timeout=300
     )
@@ -90,3 +94,35 @@ def test_coupled_python_example_runs(tmp_path):
         assert (out / name).is_file(), name
     summary = json.loads((out / "summary.json").read_text())
     assert summary["status"] == "completed" and len(summary["forces"]) == 10
+
+
+def test_several_bodies_python_example_runs(tmp_path):
+    """The README's two glued blocks, shortened to 2 steps: forces balance without gravity's
+    effect on the grasper's horizontal pull."""
+    code = block("python", 'sim.attach("fat", "muscle"')
+    assert 'sim.run(10, "out/two_blocks")' in code
+    code = code.replace(
+        'sim.run(10, "out/two_blocks")', 'sim.run(2, "out/two_blocks", render=False)'
+    )
+    result = subprocess.run(
+        [sys.executable, "-c", code], cwd=tmp_path, capture_output=True, text=True, timeout=300
+    )
+    assert result.returncode == 0, result.stderr
+    out = tmp_path / "out/two_blocks"
+    for name in ("fat.pvd", "muscle.pvd", "forces.csv", "forces.png", "summary.json"):
+        assert (out / name).is_file(), name
+    f = json.loads((out / "summary.json").read_text())["forces"][-1]
+    assert f["grasper"][0] > 0  # it pulls the layer along +x; the clamp holds back
+    total = np.array(f["grasper"]) + np.array(f["muscle.support"])
+    weight = (1060 * 0.06 * 0.04 * 0.03 + 950 * 0.06 * 0.04 * 0.02) * 9.81
+    np.testing.assert_allclose(total, [0, 0, weight], atol=1e-6 * weight)
+
+
+def test_the_scene_key_table_names_every_table_the_loaders_accept():
+    from tissuesim.scene.coupled import COUPLED_SCENE_KEYS
+    from tissuesim.scene.frames import FRAME_SCENE_KEYS
+    from tissuesim.scene.loader import SCENE_KEYS
+
+    section = README.read_text().split("Every key of every scene:", 1)[1].split("**Selectors**")[0]
+    for table in {*SCENE_KEYS, *FRAME_SCENE_KEYS, *COUPLED_SCENE_KEYS}:
+        assert f"[{table}]" in section or f"`{table}`" in section, table

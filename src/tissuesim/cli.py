@@ -56,7 +56,14 @@ def _body(sim) -> str:
     return text
 
 
-def _run(scene_path: Path, out: str | None, steps: int | None, render: bool, quiet: bool) -> int:
+def _run(
+    scene_path: Path,
+    out: str | None,
+    steps: int | None,
+    render: bool,
+    quiet: bool,
+    field: str | None = None,
+) -> int:
     from tissuesim.scene.loader import load_scene
 
     scene = load_scene(scene_path)
@@ -66,6 +73,8 @@ def _run(scene_path: Path, out: str | None, steps: int | None, render: bool, qui
     run.setdefault("steps", 100)
     if not render:
         run["render"] = False
+    if field is not None:
+        run["field"] = field
     directory = Path(out) if out else Path("out") / scene.name
     sim = scene.simulation
     if not quiet:
@@ -91,6 +100,7 @@ def _run(scene_path: Path, out: str | None, steps: int | None, render: bool, qui
             "max": max(iters, default=0),
         },
         "wall_time_s": sum(r.wall_time_s for r in history),
+        "forces": history[-1].extra.get("forces", {}) if history else {},
         "linear_solver": sim.describe()["linear_solver"],
     }
     print(json.dumps(report, indent=2))
@@ -116,10 +126,14 @@ def main(argv: list[str] | None = None) -> int:
     p_run.add_argument("--steps", type=_steps, help="number of time steps (overrides [run] steps)")
     p_run.add_argument("--no-render", action="store_true", help="skip the PNG and GIF")
     p_run.add_argument("--quiet", action="store_true", help="no progress bar")
+    fields = ("J", "von_mises", "displacement", "green_strain")
+    p_run.add_argument("--field", choices=fields, help="what colours the pictures (default J)")
     p_demo = sub.add_parser("demo", help=f"run the course's example problem ({DEMO})")
     p_demo.add_argument("--out", default="out/demo")
     p_demo.add_argument("--steps", type=_steps)
+    p_demo.add_argument("--no-render", action="store_true", help="skip the PNG and GIF")
     p_demo.add_argument("--quiet", action="store_true")
+    p_demo.add_argument("--field", choices=fields, help="what colours the pictures (default J)")
     p_info = sub.add_parser("info", help="describe a mesh file and check it")
     p_info.add_argument("mesh")
     sub.add_parser("examples", help="list the shipped example scenes")
@@ -130,10 +144,17 @@ def main(argv: list[str] | None = None) -> int:
     try:
         if args.command == "run":
             return _run(
-                _resolve_scene(args.scene), args.out, args.steps, not args.no_render, args.quiet
+                _resolve_scene(args.scene),
+                args.out,
+                args.steps,
+                not args.no_render,
+                args.quiet,
+                args.field,
             )
         if args.command == "demo":
-            return _run(example_path(DEMO), args.out, args.steps, True, args.quiet)
+            return _run(
+                example_path(DEMO), args.out, args.steps, not args.no_render, args.quiet, args.field
+            )
         if args.command == "info":
             from tissuesim.mesh import describe_mesh, read_mesh
 

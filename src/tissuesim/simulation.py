@@ -31,7 +31,7 @@ from __future__ import annotations
 import functools
 import re
 import time as wallclock
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from dataclasses import asdict
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Literal
@@ -43,6 +43,8 @@ from tissuesim.energies.mass import MassKind
 from tissuesim.materials.base import Material
 from tissuesim.mesh.mesh import Mesh
 from tissuesim.records import StepRecord
+from tissuesim.simulation_results import BodyResults
+from tissuesim.simulation_setup import SetupCalls
 from tissuesim.solve.linear import make_linear_solver
 from tissuesim.solve.newton import NewtonOptions
 from tissuesim.time.retry import advance, validate_stepping
@@ -64,7 +66,7 @@ _NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9_.-]*")
 RESERVED_NAMES = ("cut", "summary", "forces", "manifest")
 
 
-class Simulation:
+class Simulation(SetupCalls, BodyResults):
     """Bodies, their interactions and a time integrator; see the module docstring.
 
     mesh, material (optional): the short form, one FEM body named ``name`` with ``density``
@@ -155,7 +157,11 @@ class Simulation:
         return self.integrator in EXPLICIT
 
     # -- bodies -------------------------------------------------------------------------------
-    def _new_name(self, name: str, what: str) -> str:
+    def _new_name(self, name: str, what: str, kind: str = "fem") -> str:
+        """A body name that is valid as a file stem and clashes with no other body's output
+        series (``<name>``, ``<name>_frames``, ``<name>_surface``, ``<name>_points``)."""
+        from tissuesim.io.body_series import series_names
+
         if not isinstance(name, str) or not _NAME.fullmatch(name):
             raise ValueError(
                 f"{what} name {name!r} must be letters, digits, '_', '-' or '.', starting with "
@@ -163,6 +169,14 @@ class Simulation:
             )
         if name in self.bodies or name in RESERVED_NAMES or (name == "tissue" != what):
             raise ValueError(f"{what} name {name!r} is taken; choose another")
+        mine = set(series_names(_NameOnly(name, kind)))
+        for other in self.bodies.values():
+            clash = mine & set(series_names(other))
+            if clash:
+                raise ValueError(
+                    f"{what} name {name!r} would write the series {sorted(clash)[0]!r} that "
+                    f"body {other.name!r} writes; choose another name"
+                )
         if self._system is not None and self.history:
             raise RuntimeError(f"add {what}s before the first step")
         return name
@@ -235,7 +249,7 @@ class Simulation:
         rotations, mass "full" or "lumped")."""
         from tissuesim.bodies.frames import FrameBody
 
-        name = self._new_name(name, "body")
+        name = self._new_name(name, "body", "frames")
         body = FrameBody(
             name,
             frames,
@@ -263,7 +277,7 @@ class Simulation:
 
         if self.tissue is not None:
             raise ValueError("the scene has a tissue already; one tissue body per scene")
-        name = self._new_name(name, "tissue")
+        name = self._new_name(name, "tissue", "tissue")
         organs = [(n, b.mesh) for n, b in self.bodies.items() if b.kind == "fem"]
         if any(m.dim != 3 for _, m in organs):
             raise ValueError("the tissue joins 3D organs; a 2D body cannot take part")
@@ -273,45 +287,6 @@ class Simulation:
         self.bodies[name] = self.tissue = tissue
         self._changed()
         return tissue
-
-    def attach(
-        self,
-        body: str,
-        to: str,
-        *,
-        distance: float | None = None,
-        stiffness: float | None = None,
-        name: str | None = None,
-    ):
-        """Glue FEM body ``body`` to FEM body ``to`` where they touch (``coupling/tie.py``):
-        ``body``'s boundary triangles whose vertices all lie within ``distance`` m of ``to``
-        (default 1e-3 of ``body``'s size), tied by a penalty of ``stiffness`` N/m per m^2 of
-        contact (default 250 times the stiffer shear modulus per median edge length). The
-        force ``to`` exerts on ``body`` is reported as ``name`` (default "<body>-<to>")."""
-        from tissuesim.coupling.tie import tie_bodies
-        from tissuesim.coupling.tissue import ATTACHMENT_FACTOR
-
-        a, b = self.body(body, ("fem",)), self.body(to, ("fem",))
-        if a is b:
-            raise ValueError(f"attach: a body cannot be attached to itself ({body!r})")
-        size = float(np.linalg.norm(np.ptp(a.mesh.points, axis=0)))
-        if distance is None:
-            distance = 1e-3 * size
-        elif not (np.isfinite(distance) and distance > 0):
-            raise ValueError(f"attach: distance must be > 0 m, got {distance!r}")
-        if stiffness is not None and not (np.isfinite(stiffness) and stiffness > 0):
-            raise ValueError(f"attach: stiffness must be > 0 N/m per m^2, got {stiffness!r}")
-        name = self._claim_force_name(name, f"{body}-{to}")
-        edge = _median_boundary_edge(a.mesh)
-        if stiffness is None:
-            mu = max(a.model.material.mu, b.model.material.mu)
-            stiffness = ATTACHMENT_FACTOR * mu / edge
-        tie = tie_bodies(
-            name, a.name, a.mesh, b.name, b.mesh, distance=distance, stiffness_per_area=stiffness
-        )
-        self.ties.append(tie)
-        self._changed()
-        return tie
 
     def remove_body(self, name: str) -> None:
         """Take a body (and, for the tissue, its attachments and cuts) out, before the first
@@ -343,92 +318,6 @@ class Simulation:
                 f"({[b.name for b in candidates]}); name one with body="
             )
         return candidates[0]
-
-    # -- set-up on one body (see bodies/fem.py, bodies/frames.py, coupling/tissue.py) ---------
-    def add_dirichlet(self, vertices, displacement=None, components=None, *, body=None, name=None):
-        return self.body(body, ("fem",)).add_dirichlet(
-            vertices, displacement, components, name=name
-        )
-
-    def fix(self, body: str, vertices, name: str | None = None) -> str:
-        return self.body(body, ("fem",)).fix(vertices, name)
-
-    def grasp(self, body: str, vertices, displacement, *, stiffness=None, name=None):
-        return self.body(body, ("fem",)).grasp(
-            vertices, displacement, stiffness=stiffness, name=name
-        )
-
-    def add_traction(self, facets, traction, *, body=None) -> None:
-        self.body(body, ("fem",)).add_traction(facets, traction)
-
-    def add_nodal_forces(self, vertices, force, *, body=None) -> None:
-        self.body(body, ("fem",)).add_nodal_forces(vertices, force)
-
-    def add_body_force(self, force_density, *, body=None) -> None:
-        self.body(body, ("fem",)).add_body_force(force_density)
-
-    def add_gravity(self, acceleration: Sequence[float], *, body: str | None = None) -> None:
-        """Gravity (m/s^2, one component per dimension): on ``body``, or with body None on
-        every body (also those added later)."""
-        if body is not None:
-            self.body(body).add_gravity(acceleration)
-            return
-        g = np.asarray(acceleration, dtype=float)
-        dims = {b.dim for b in self.bodies.values()}
-        if g.ndim != 1 or g.shape[0] not in (2, 3) or not np.all(np.isfinite(g)):
-            raise ValueError(f"gravity must be 2 or 3 finite numbers (m/s^2), got {acceleration!r}")
-        if dims and {g.shape[0]} != dims:
-            raise ValueError(
-                f"gravity must have {max(dims)} components (the bodies are {max(dims)}D), got "
-                f"{g.shape[0]}"
-            )
-        for b in self.bodies.values():
-            b.add_gravity(g)
-        self.gravity.append(g)
-
-    def set_velocity(self, velocity=None, *, linear=None, angular=None, body=None) -> None:
-        """Initial velocity: FEM bodies (n, d) or (d,) m/s; frame bodies ``linear`` (3,)
-        (``velocity`` is taken as linear) and ``angular`` (3,) rad/s."""
-        b = self.body(body, ("fem", "frames"))
-        if b.kind == "fem":
-            b.set_velocity(velocity if velocity is not None else linear)
-        else:
-            lin = linear if linear is not None else velocity
-            b.set_velocity(
-                (0, 0, 0) if lin is None else lin, (0, 0, 0) if angular is None else angular
-            )
-
-    def fix_frames(self, frames, *, body=None, name=None) -> str:
-        return self.body(body, ("frames",)).fix_frames(frames, name)
-
-    def prescribe_frames(self, frames, motion, *, body=None, name=None) -> str:
-        return self.body(body, ("frames",)).prescribe_frames(frames, motion, name=name)
-
-    def frames_where(self, predicate: Callable, *, body=None) -> np.ndarray:
-        return self.body(body, ("frames",)).frames_where(predicate)
-
-    def embed(self, name: str, points: np.ndarray, *, body=None):
-        return self.body(body, ("frames",)).embed(name, points)
-
-    def embed_surface(self, surface, *, body=None):
-        return self.body(body, ("frames",)).embed_surface(surface)
-
-    def add_spring(self, points, stiffness, target=None, *, body=None, name=None):
-        return self.body(body, ("frames",)).add_spring(points, stiffness, target, name=name)
-
-    def add_point_forces(self, points, force, *, body=None):
-        return self.body(body, ("frames",)).add_point_forces(points, force)
-
-    def _tissue(self, what: str) -> TissueBody:
-        if self.tissue is None:
-            raise ValueError(f"{what} acts on the tissue: call add_tissue first")
-        return self.tissue
-
-    def add_cut(self, blade, start: float, end: float, *, kerf=None, name: str = "cut"):
-        return self._tissue("add_cut").add_cut(blade, start, end, kerf=kerf, name=name)
-
-    def set_tearing(self, threshold: float) -> None:
-        self._tissue("set_tearing").set_tearing(threshold)
 
     # -- the assembled system and the state ---------------------------------------------------
     _system_dirty = True
@@ -503,156 +392,6 @@ class Simulation:
         if j is None:
             raise ValueError(f"body {b.name!r} has no material left (all of it was cut away)")
         return b, self._state.x[s.config_slices[j]], self._state.v[s.tangent_slices[j]]
-
-    # -- results of one body (name it with body= when there are several) ---------------------
-    @property
-    def model(self):
-        """The only body's model (``Model`` or ``FrameModel``)."""
-        return self.body(None).model
-
-    @property
-    def mesh(self) -> Mesh:
-        return self.body(None, ("fem",)).mesh
-
-    def body_positions(self, body: str | None = None) -> np.ndarray:
-        """Current positions: FEM vertices (n, d); frame bodies: integration points (q, 3)."""
-        b, x, _ = self._part(body)
-        if b.kind == "fem":
-            return x.reshape(b.mesh.points.shape)
-        return b.model.point_map.positions(x)
-
-    @property
-    def positions(self) -> np.ndarray:
-        """Current vertex positions (n, d) of the only FEM body (m)."""
-        return self.body_positions(self.body(None, ("fem",)).name)
-
-    @property
-    def displacement(self) -> np.ndarray:
-        return self.positions - self.mesh.points
-
-    @property
-    def velocity(self) -> np.ndarray:
-        b, _, v = self._part(None, ("fem",))
-        return v.reshape(b.mesh.points.shape)
-
-    def cell_fields(self, body: str | None = None) -> dict[str, np.ndarray]:
-        """Per element of a FEM body: J, green_strain, cauchy_stress, von_mises,
-        energy_density (``materials/measures.py``)."""
-        b, x, _ = self._part(body, ("fem",))
-        return b.cell_fields(x)
-
-    def point_fields(self, body: str | None = None) -> dict[str, np.ndarray]:
-        """At a frame body's integration points: positions, F and the continuum fields."""
-        b, z, _ = self._part(body, ("frames", "tissue"))
-        return b.point_fields(z)
-
-    def embedded_positions(self, name: str = "surface", *, body: str | None = None):
-        """Current positions (k, 3) of a frame body's embedded points ``name``."""
-        b, z, _ = self._part(body, ("frames",))
-        if name not in b.embedded:
-            raise KeyError(f"no embedded points named {name!r}; known: {sorted(b.embedded)}")
-        return b.embedded[name].positions(z)
-
-    @property
-    def frame_positions(self) -> np.ndarray:
-        b, z, _ = self._part(None, ("frames",))
-        return b.model.frame_type.split(z)[0].copy()
-
-    @property
-    def frame_rotations(self) -> np.ndarray:
-        b, z, _ = self._part(None, ("frames",))
-        return b.model.rotations(z)
-
-    @property
-    def rest_frames(self) -> np.ndarray:
-        return self.body(None, ("frames",)).rest_frames
-
-    @property
-    def n_frames(self) -> int:
-        return self.body(None, ("frames",)).n_frames
-
-    @property
-    def surface(self):
-        return self.body(None, ("frames",)).surface
-
-    @property
-    def embedded(self) -> dict:
-        return self.body(None, ("frames",)).embedded
-
-    @property
-    def graspers(self) -> list:
-        return [g for b in self.bodies.values() if b.kind == "fem" for g in b.graspers]
-
-    def tissue_fields(self) -> dict[str, np.ndarray]:
-        """At the alive tissue points: positions, F, the continuum fields, the largest
-        principal strain and the points' stable ids ({} without tissue)."""
-        if self.tissue is None or self.tissue.model is None:
-            return {}
-        return self.point_fields(self.tissue.name)
-
-    def attachment_gap(self) -> float:
-        """Largest distance (m) between where an organ and the tissue put an attachment
-        point: the penalty's violation."""
-        s, gap = self.system, 0.0
-        for a in s.attachments:
-            organ = s.bodies[a.organ]
-            y = a.organ_positions(organ.mesh.cells, s.body_config(self._state.x, a.organ))
-            p = a.tissue.positions(s.body_config(self._state.x, s.index(self.tissue.name)))
-            gap = max(gap, float(np.linalg.norm(p - y, axis=1).max()))
-        return gap
-
-    def forces(self) -> dict[str, list[float]]:
-        """Force (N, 3-vector) every support, prescribed set, grasper and spring set applies
-        to its body at the current state (reactions from the last solve's gradient)."""
-        s, g, out = self.system, self._last_gradient, {}
-        for j, name in enumerate(s.names):
-            gj = None if g is None or g.size != s.n_dofs else g[s.tangent_slices[j]]
-            out.update(self.bodies[name].forces(s.body_config(self._state.x, j), gj, self.time))
-        for t, r in zip(s.ties, s.tie_residuals(self._state.x), strict=True):
-            out[t.name] = (-(t.stiffness[:, None] * r).sum(axis=0)).tolist()
-        return out
-
-    def energies(self) -> dict[str, float]:
-        """Energies (J) at the current state: elastic, kinetic, load_potential (-f . x) and the
-        other terms (springs, grasper, attachment) summed over the bodies; with several
-        bodies also each body's own, as "<body>.<term>"."""
-        s, x, t = self.system, self._state.x, self.time
-        acc = s.evaluate(x, 0, False, [self.bodies[n].step_energies(t, None, 1.0) for n in s.names])
-        out: dict[str, float] = {"elastic": 0.0}
-        for key, value in acc.terms.items():
-            term = key.rsplit(".", 1)[-1]
-            term = "load_potential" if term == "external" else term
-            out[term] = out.get(term, 0.0) + value
-            if "." in key:
-                out[key.replace(".external", ".load_potential")] = value
-        out["kinetic"] = (
-            0.0 if self.integrator == "quasistatic" else s.kinetic_energy(x, self._state.v)
-        )
-        return out
-
-    def min_J(self) -> float:
-        s = self.system
-        return float(
-            min(
-                self.bodies[n].min_J(s.body_config(self._state.x, j)) for j, n in enumerate(s.names)
-            )
-        )
-
-    def critical_time_step(self) -> float:
-        """Explicit stability estimate (s): the smallest over the bodies (FEM: CFL h_min / c;
-        frames: 2 / omega_max at the current configuration, springs included)."""
-        from tissuesim.frames.stability import frame_critical_time_step
-        from tissuesim.time.stability import critical_time_step
-
-        s, out = self.system, np.inf
-        for j, name in enumerate(s.names):
-            b = self.bodies[name]
-            if b.kind == "fem":
-                out = min(out, critical_time_step(b.model))
-            else:
-                z = s.body_config(self._state.x, j)
-                out = min(out, frame_critical_time_step(b.model, z, self.time))
-        return float(out)
 
     # -- stepping -----------------------------------------------------------------------------
     def _linear_solver(self):
@@ -826,8 +565,8 @@ class Simulation:
         }
 
 
-def _median_boundary_edge(mesh: Mesh) -> float:
-    from tissuesim.mesh.boundary import boundary_facets
+class _NameOnly:
+    """A body-to-be, for checking the series its name would write."""
 
-    P = mesh.points[boundary_facets(mesh.cells)]
-    return float(np.median(np.linalg.norm(P - np.roll(P, 1, axis=1), axis=2)))
+    def __init__(self, name: str, kind: str) -> None:
+        self.name, self.kind = name, kind

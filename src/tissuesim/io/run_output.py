@@ -61,6 +61,7 @@ class RunOutput:
         self.status = "running"
         self.error = None
         self.pictures = "not rendered" if render else "not asked for (render = false)"
+        self.render_time = 0.0  # s spent drawing final.png and run.gif
         self.description = sim.describe()  # once: describing meshes costs ~1 s at 1e5 cells
 
     # -- series -------------------------------------------------------------------------------
@@ -118,6 +119,7 @@ class RunOutput:
                 "max_newton_iterations_per_step": int(max(iters, default=0)),
                 "min_J": float(min((r.min_J for r in history), default=np.nan)),
                 "wall_time_s": float(sum(r.wall_time_s for r in history)),
+                "render_wall_time_s": self.render_time,
             },
             "forces": [{"time": r.time, **r.extra.get("forces", {})} for r in history],
             "pictures": self.pictures,
@@ -182,6 +184,8 @@ class RunOutput:
 
         render_forces_png(self.directory / "forces.png", self.sim.history)  # none: no file
         if self.render and self.frames:
+            import time
+
             from tissuesim.render.scene import MAX_GIF_FRAMES, render_run
 
             if progress:
@@ -191,5 +195,7 @@ class RunOutput:
                     f"{self.field}) ...",
                     file=sys.stderr,
                 )
+            start = time.perf_counter()
             self.pictures = render_run(self.sim, self.frames, self.directory, self.field)
+            self.render_time = time.perf_counter() - start
         self._write_summary()

@@ -65,7 +65,7 @@ SIMULATION_KEYS = (
     "start_time",
     "backend",
 )
-RUN_KEYS = ("steps", "every", "render")
+RUN_KEYS = ("steps", "every", "render", "field")
 SELECTORS = {
     "vertices": {"on_plane", "in_box", "tagged", "boundary", "where"},
     "facets": {"on_plane", "in_box", "tagged", "boundary", "where"},
@@ -83,6 +83,8 @@ SCENE_KEYS = {
     "nodal_forces": {"vertices", "force"},
     "run": set(RUN_KEYS),
 }
+#: what pictures can be coloured by (render/scene.py FIELDS)
+FIELD_CHOICES = ("J", "von_mises", "displacement", "green_strain")
 #: the tables of one FEM body (top level in a one-body scene, inside each [[bodies]] entry)
 FEM_BODY_KEYS = ("mesh", "material", "dirichlet", "traction", "body_force", "nodal_forces")
 FEM_BODY_KEYS += ("initial",)
@@ -344,6 +346,7 @@ def _run_table(data: dict, source: str) -> dict[str, Any]:
         ("steps", lambda v: type(v) is int and v >= 0, "an integer >= 0"),
         ("every", lambda v: type(v) is int and v >= 1, "an integer >= 1"),
         ("render", lambda v: isinstance(v, bool), "true or false"),
+        ("field", lambda v: v in FIELD_CHOICES, f"one of {list(FIELD_CHOICES)}"),
     ):
         if key in run and not ok(run[key]):
             raise SceneError(f"{source} [run]: {key} must be {want}, not {run[key]!r}")

@@ -1,0 +1,164 @@
+"""What ``Simulation`` tells about its bodies between steps: positions, fields, forces,
+energies, the stability limit (name the body with ``body=`` when there are several)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from tissuesim.mesh.mesh import Mesh
+
+__all__ = ["BodyResults"]
+
+
+class BodyResults:
+    """Mixed into ``Simulation``."""
+
+    # -- results of one body (name it with body= when there are several) ---------------------
+    @property
+    def model(self):
+        """The only body's model (``Model`` or ``FrameModel``)."""
+        return self.body(None).model
+
+    @property
+    def mesh(self) -> Mesh:
+        return self.body(None, ("fem",)).mesh
+
+    def body_positions(self, body: str | None = None) -> np.ndarray:
+        """Current positions: FEM vertices (n, d); frame bodies: integration points (q, 3)."""
+        b, x, _ = self._part(body)
+        if b.kind == "fem":
+            return x.reshape(b.mesh.points.shape)
+        return b.model.point_map.positions(x)
+
+    @property
+    def positions(self) -> np.ndarray:
+        """Current vertex positions (n, d) of the only FEM body (m)."""
+        return self.body_positions(self.body(None, ("fem",)).name)
+
+    @property
+    def displacement(self) -> np.ndarray:
+        return self.positions - self.mesh.points
+
+    @property
+    def velocity(self) -> np.ndarray:
+        b, _, v = self._part(None, ("fem",))
+        return v.reshape(b.mesh.points.shape)
+
+    def cell_fields(self, body: str | None = None) -> dict[str, np.ndarray]:
+        """Per element of a FEM body: J, green_strain, cauchy_stress, von_mises,
+        energy_density (``materials/measures.py``)."""
+        b, x, _ = self._part(body, ("fem",))
+        return b.cell_fields(x)
+
+    def point_fields(self, body: str | None = None) -> dict[str, np.ndarray]:
+        """At a frame body's integration points: positions, F and the continuum fields."""
+        b, z, _ = self._part(body, ("frames", "tissue"))
+        return b.point_fields(z)
+
+    def embedded_positions(self, name: str = "surface", *, body: str | None = None):
+        """Current positions (k, 3) of a frame body's embedded points ``name``."""
+        b, z, _ = self._part(body, ("frames",))
+        if name not in b.embedded:
+            raise KeyError(f"no embedded points named {name!r}; known: {sorted(b.embedded)}")
+        return b.embedded[name].positions(z)
+
+    @property
+    def frame_positions(self) -> np.ndarray:
+        b, z, _ = self._part(None, ("frames",))
+        return b.model.frame_type.split(z)[0].copy()
+
+    @property
+    def frame_rotations(self) -> np.ndarray:
+        b, z, _ = self._part(None, ("frames",))
+        return b.model.rotations(z)
+
+    @property
+    def rest_frames(self) -> np.ndarray:
+        return self.body(None, ("frames",)).rest_frames
+
+    @property
+    def n_frames(self) -> int:
+        return self.body(None, ("frames",)).n_frames
+
+    @property
+    def surface(self):
+        return self.body(None, ("frames",)).surface
+
+    @property
+    def embedded(self) -> dict:
+        return self.body(None, ("frames",)).embedded
+
+    @property
+    def graspers(self) -> list:
+        return [g for b in self.bodies.values() if b.kind == "fem" for g in b.graspers]
+
+    def tissue_fields(self) -> dict[str, np.ndarray]:
+        """At the alive tissue points: positions, F, the continuum fields, the largest
+        principal strain and the points' stable ids ({} without tissue)."""
+        if self.tissue is None or self.tissue.model is None:
+            return {}
+        return self.point_fields(self.tissue.name)
+
+    def attachment_gap(self) -> float:
+        """Largest distance (m) between where an organ and the tissue put an attachment
+        point: the penalty's violation."""
+        s, gap = self.system, 0.0
+        for a in s.attachments:
+            organ = s.bodies[a.organ]
+            y = a.organ_positions(organ.mesh.cells, s.body_config(self._state.x, a.organ))
+            p = a.tissue.positions(s.body_config(self._state.x, s.index(self.tissue.name)))
+            gap = max(gap, float(np.linalg.norm(p - y, axis=1).max()))
+        return gap
+
+    def forces(self) -> dict[str, list[float]]:
+        """Force (N, 3-vector) every support, prescribed set, grasper and spring set applies
+        to its body at the current state (reactions from the last solve's gradient)."""
+        s, g, out = self.system, self._last_gradient, {}
+        for j, name in enumerate(s.names):
+            gj = None if g is None or g.size != s.n_dofs else g[s.tangent_slices[j]]
+            out.update(self.bodies[name].forces(s.body_config(self._state.x, j), gj, self.time))
+        for t, r in zip(s.ties, s.tie_residuals(self._state.x), strict=True):
+            out[t.name] = (-(t.stiffness[:, None] * r).sum(axis=0)).tolist()
+        return out
+
+    def energies(self) -> dict[str, float]:
+        """Energies (J) at the current state: elastic, kinetic, load_potential (-f . x) and the
+        other terms (springs, grasper, attachment) summed over the bodies; with several
+        bodies also each body's own, as "<body>.<term>"."""
+        s, x, t = self.system, self._state.x, self.time
+        acc = s.evaluate(x, 0, False, [self.bodies[n].step_energies(t, None, 1.0) for n in s.names])
+        out: dict[str, float] = {"elastic": 0.0}
+        for key, value in acc.terms.items():
+            term = key.rsplit(".", 1)[-1]
+            term = "load_potential" if term == "external" else term
+            out[term] = out.get(term, 0.0) + value
+            if "." in key:
+                out[key.replace(".external", ".load_potential")] = value
+        out["kinetic"] = (
+            0.0 if self.integrator == "quasistatic" else s.kinetic_energy(x, self._state.v)
+        )
+        return out
+
+    def min_J(self) -> float:
+        s = self.system
+        return float(
+            min(
+                self.bodies[n].min_J(s.body_config(self._state.x, j)) for j, n in enumerate(s.names)
+            )
+        )
+
+    def critical_time_step(self) -> float:
+        """Explicit stability estimate (s): the smallest over the bodies (FEM: CFL h_min / c;
+        frames: 2 / omega_max at the current configuration, springs included)."""
+        from tissuesim.frames.stability import frame_critical_time_step
+        from tissuesim.time.stability import critical_time_step
+
+        s, out = self.system, np.inf
+        for j, name in enumerate(s.names):
+            b = self.bodies[name]
+            if b.kind == "fem":
+                out = min(out, critical_time_step(b.model))
+            else:
+                z = s.body_config(self._state.x, j)
+                out = min(out, frame_critical_time_step(b.model, z, self.time))
+        return float(out)

@@ -1,0 +1,153 @@
+"""The set-up calls of ``Simulation`` that act on one body (named with ``body=``, or the only
+body of the kind the call needs) or join two: each forwards to the body's own method
+(``bodies/fem.py``, ``bodies/frames.py``, ``coupling/tissue.py``) or builds an interaction."""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from tissuesim.mesh.mesh import Mesh
+
+if TYPE_CHECKING:
+    from tissuesim.coupling.tissue import TissueBody
+
+__all__ = ["SetupCalls"]
+
+
+class SetupCalls:
+    """Mixed into ``Simulation``."""
+
+    def attach(
+        self,
+        body: str,
+        to: str,
+        *,
+        distance: float | None = None,
+        stiffness: float | None = None,
+        name: str | None = None,
+    ):
+        """Glue FEM body ``body`` to FEM body ``to`` where they touch (``coupling/tie.py``):
+        ``body``'s boundary triangles whose vertices all lie within ``distance`` m of ``to``
+        (default 1e-3 of ``body``'s size), tied by a penalty of ``stiffness`` N/m per m^2 of
+        contact (default 250 times the stiffer shear modulus per median edge length). The
+        force ``to`` exerts on ``body`` is reported as ``name`` (default "<body>-<to>")."""
+        from tissuesim.coupling.tie import tie_bodies
+        from tissuesim.coupling.tissue import ATTACHMENT_FACTOR
+
+        a, b = self.body(body, ("fem",)), self.body(to, ("fem",))
+        if a is b:
+            raise ValueError(f"attach: a body cannot be attached to itself ({body!r})")
+        size = float(np.linalg.norm(np.ptp(a.mesh.points, axis=0)))
+        if distance is None:
+            distance = 1e-3 * size
+        elif not (np.isfinite(distance) and distance > 0):
+            raise ValueError(f"attach: distance must be > 0 m, got {distance!r}")
+        if stiffness is not None and not (np.isfinite(stiffness) and stiffness > 0):
+            raise ValueError(f"attach: stiffness must be > 0 N/m per m^2, got {stiffness!r}")
+        name = self._claim_force_name(name, f"{body}-{to}")
+        edge = _median_boundary_edge(a.mesh)
+        if stiffness is None:
+            mu = max(a.model.material.mu, b.model.material.mu)
+            stiffness = ATTACHMENT_FACTOR * mu / edge
+        tie = tie_bodies(
+            name, a.name, a.mesh, b.name, b.mesh, distance=distance, stiffness_per_area=stiffness
+        )
+        self.ties.append(tie)
+        self._changed()
+        return tie
+
+    # -- set-up on one body (see bodies/fem.py, bodies/frames.py, coupling/tissue.py) ---------
+    def add_dirichlet(self, vertices, displacement=None, components=None, *, body=None, name=None):
+        return self.body(body, ("fem",)).add_dirichlet(
+            vertices, displacement, components, name=name
+        )
+
+    def fix(self, body: str, vertices, name: str | None = None) -> str:
+        return self.body(body, ("fem",)).fix(vertices, name)
+
+    def grasp(self, body: str, vertices, displacement, *, stiffness=None, name=None):
+        return self.body(body, ("fem",)).grasp(
+            vertices, displacement, stiffness=stiffness, name=name
+        )
+
+    def add_traction(self, facets, traction, *, body=None) -> None:
+        self.body(body, ("fem",)).add_traction(facets, traction)
+
+    def add_nodal_forces(self, vertices, force, *, body=None) -> None:
+        self.body(body, ("fem",)).add_nodal_forces(vertices, force)
+
+    def add_body_force(self, force_density, *, body=None) -> None:
+        self.body(body, ("fem",)).add_body_force(force_density)
+
+    def add_gravity(self, acceleration: Sequence[float], *, body: str | None = None) -> None:
+        """Gravity (m/s^2, one component per dimension): on ``body``, or with body None on
+        every body (also those added later)."""
+        if body is not None:
+            self.body(body).add_gravity(acceleration)
+            return
+        g = np.asarray(acceleration, dtype=float)
+        dims = {b.dim for b in self.bodies.values()}
+        if g.ndim != 1 or g.shape[0] not in (2, 3) or not np.all(np.isfinite(g)):
+            raise ValueError(f"gravity must be 2 or 3 finite numbers (m/s^2), got {acceleration!r}")
+        if dims and {g.shape[0]} != dims:
+            raise ValueError(
+                f"gravity must have {max(dims)} components (the bodies are {max(dims)}D), got "
+                f"{g.shape[0]}"
+            )
+        for b in self.bodies.values():
+            b.add_gravity(g)
+        self.gravity.append(g)
+
+    def set_velocity(self, velocity=None, *, linear=None, angular=None, body=None) -> None:
+        """Initial velocity: FEM bodies (n, d) or (d,) m/s; frame bodies ``linear`` (3,)
+        (``velocity`` is taken as linear) and ``angular`` (3,) rad/s."""
+        b = self.body(body, ("fem", "frames"))
+        if b.kind == "fem":
+            b.set_velocity(velocity if velocity is not None else linear)
+        else:
+            lin = linear if linear is not None else velocity
+            b.set_velocity(
+                (0, 0, 0) if lin is None else lin, (0, 0, 0) if angular is None else angular
+            )
+
+    def fix_frames(self, frames, *, body=None, name=None) -> str:
+        return self.body(body, ("frames",)).fix_frames(frames, name)
+
+    def prescribe_frames(self, frames, motion, *, body=None, name=None) -> str:
+        return self.body(body, ("frames",)).prescribe_frames(frames, motion, name=name)
+
+    def frames_where(self, predicate: Callable, *, body=None) -> np.ndarray:
+        return self.body(body, ("frames",)).frames_where(predicate)
+
+    def embed(self, name: str, points: np.ndarray, *, body=None):
+        return self.body(body, ("frames",)).embed(name, points)
+
+    def embed_surface(self, surface, *, body=None):
+        return self.body(body, ("frames",)).embed_surface(surface)
+
+    def add_spring(self, points, stiffness, target=None, *, body=None, name=None):
+        return self.body(body, ("frames",)).add_spring(points, stiffness, target, name=name)
+
+    def add_point_forces(self, points, force, *, body=None):
+        return self.body(body, ("frames",)).add_point_forces(points, force)
+
+    def _tissue(self, what: str) -> TissueBody:
+        if self.tissue is None:
+            raise ValueError(f"{what} acts on the tissue: call add_tissue first")
+        return self.tissue
+
+    def add_cut(self, blade, start: float, end: float, *, kerf=None, name: str = "cut"):
+        return self._tissue("add_cut").add_cut(blade, start, end, kerf=kerf, name=name)
+
+    def set_tearing(self, threshold: float) -> None:
+        self._tissue("set_tearing").set_tearing(threshold)
+
+
+def _median_boundary_edge(mesh: Mesh) -> float:
+    from tissuesim.mesh.boundary import boundary_facets
+
+    P = mesh.points[boundary_facets(mesh.cells)]
+    return float(np.median(np.linalg.norm(P - np.roll(P, 1, axis=1), axis=2)))
