@@ -64,8 +64,10 @@ def main() -> None:
     parser.add_argument("--dims", type=int, nargs="*", default=[2, 3])
     parser.add_argument("--steps", type=int, default=5)
     parser.add_argument(
-        "--divisions", type=int, help="cells per side (default 224 in 2D, 26 in 3D); a small "
-        "mesh shows the per-step bookkeeping instead of the solve"
+        "--divisions",
+        type=int,
+        help="cells per side (default 224 in 2D, 26 in 3D); a small "
+        "mesh shows the per-step bookkeeping instead of the solve",
     )
     args = parser.parse_args()
     for dim in args.dims:
