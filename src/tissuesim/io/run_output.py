@@ -186,10 +186,11 @@ class RunOutput:
         if self.render and self.frames:
             import time
 
-            from tissuesim.render.scene import MAX_GIF_FRAMES, render_run
+            from tissuesim.render.scene import MAX_GIF_FRAMES, MAX_GIF_FRAMES_3D, render_run
 
             if progress:
-                n = min(len(self.frames), MAX_GIF_FRAMES)
+                flat = all(b.dim == 2 for b in self.sim.bodies.values())
+                n = min(len(self.frames), MAX_GIF_FRAMES if flat else MAX_GIF_FRAMES_3D)
                 print(
                     f"tissuesim: drawing final.png and run.gif ({n} frames, coloured by "
                     f"{self.field}) ...",

@@ -37,7 +37,7 @@ def _colour_map(values: Sequence[np.ndarray], label: str, vmin: float | None, vm
     finite = np.concatenate(finite) if finite else np.empty(0)
     lo = float(finite.min()) if vmin is None and finite.size else vmin
     hi = float(finite.max()) if vmax is None and finite.size else vmax
-    if label == "J":  # diverging map, white at J = 1; its half when the range is one-sided
+    if label.split(" (")[0] == "J":  # diverging, white at J = 1; its half when one-sided
         full = colormaps["RdBu_r"]
         lo = float(min(lo, 1.0) if vmin is None and lo is not None else (1.0 if lo is None else lo))
         hi = float(max(hi, 1.0) if vmax is None and hi is not None else (1.0 if hi is None else hi))
@@ -98,17 +98,23 @@ def _new_figure(figsize: tuple[float, float]):
     return fig
 
 
-def _save_gif(fig, update, n_frames: int, path: Path, fps: int, dpi: int) -> Path:
-    """Write frames update(0..n_frames-1) of ``fig`` as a GIF with matplotlib's PillowWriter.
+def _save_gif(
+    fig, update, n_frames: int, path: Path, fps: int, dpi: int, blit: bool = False
+) -> Path:
+    """Write frames update(0..n_frames-1) of ``fig`` as a GIF.
 
-    The layout is computed once, on the first frame, then frozen; frames are grabbed directly
-    (one draw each) rather than through FuncAnimation, whose Agg playback redraws every frame
-    a second time.
+    The layout is computed once, on the first frame, then frozen. With ``blit`` (2D), the
+    static picture (axes, ticks, colour bar, labels) is drawn once and each frame only redraws
+    the artists ``update`` returns, onto a copy of that background: axis drawing was 2/3 of
+    the time per frame. Otherwise each frame is one full draw through matplotlib's PillowWriter
+    (not FuncAnimation, whose Agg playback redraws every frame a second time).
     """
     from matplotlib.animation import PillowWriter
 
     if fps < 1:
         raise ValueError(f"fps must be >= 1, got {fps}")
+    if blit:
+        return _save_gif_blitted(fig, update, n_frames, path, fps, dpi)
     update(0)
     fig.canvas.draw()
     fig.set_layout_engine("none")
@@ -117,6 +123,40 @@ def _save_gif(fig, update, n_frames: int, path: Path, fps: int, dpi: int) -> Pat
         for i in range(n_frames):
             update(i)
             writer.grab_frame()
+    return path
+
+
+def _save_gif_blitted(fig, update, n_frames: int, path: Path, fps: int, dpi: int) -> Path:
+    from PIL import Image
+
+    fig.set_dpi(dpi)
+    canvas = fig.canvas
+    artists = update(0)
+    canvas.draw()
+    fig.set_layout_engine("none")
+    for a in artists:
+        a.set_visible(False)
+    canvas.draw()
+    background = canvas.copy_from_bbox(fig.bbox)
+    for a in artists:
+        a.set_visible(True)
+    images = []
+    for i in range(n_frames):
+        artists = update(i)
+        canvas.restore_region(background)
+        for a in artists:
+            fig.draw_artist(a)
+        rgb = np.asarray(canvas.buffer_rgba())[:, :, :3]
+        images.append(Image.fromarray(rgb.copy()).quantize(colors=255, method=2))
+    with atomic_output(path) as tmp:
+        images[0].save(
+            tmp,
+            format="GIF",
+            save_all=True,
+            append_images=images[1:],
+            duration=round(1000 / fps),
+            loop=0,
+        )
     return path
 
 
@@ -150,18 +190,21 @@ def _setup_2d(
         linewidths=0.2 if many else 0.3,
     )
     ax.add_collection(coll)
+    overlay = []  # drawn over the mesh: a GIF redraws it after the mesh in every frame
     if rest_outline:
         segs = rest[_boundary_edges(np.asarray(mesh.cells))]
-        ax.add_collection(
-            LineCollection(segs, colors="0.35", linewidths=0.8, linestyles="--", zorder=3)
+        overlay.append(
+            ax.add_collection(
+                LineCollection(segs, colors="0.35", linewidths=0.8, linestyles="--", zorder=3)
+            )
         )
     ax.set_xlim(lo[0], hi[0])
     ax.set_ylim(lo[1], hi[1])
     ax.set_aspect("equal")
-    ax.set_xlabel("x")
-    ax.set_ylabel("y")
+    ax.set_xlabel("x (m)")
+    ax.set_ylabel("y (m)")
     fig.colorbar(ScalarMappable(norm=norm, cmap=cmap), ax=ax, label=label, shrink=0.9)
-    return fig, ax, coll
+    return fig, ax, coll, overlay
 
 
 def render_frame_png(
@@ -186,7 +229,7 @@ def render_frame_png(
     vals = np.asarray(cell_values, dtype=float)
     _check(mesh, x, vals, 2)
     cmap, norm = _colour_map([vals], label, vmin, vmax)
-    fig, ax, coll = _setup_2d(mesh, [x], label, cmap, norm, rest_outline)
+    fig, ax, coll, _ = _setup_2d(mesh, [x], label, cmap, norm, rest_outline)
     coll.set_array(vals)
     if title:
         ax.set_title(title)
@@ -223,14 +266,16 @@ def render_gif(
     for _, x, v in data:
         _check(mesh, x, v, 2)
     cmap, norm = _colour_map([v for _, _, v in data], label, vmin, vmax)
-    fig, ax, coll = _setup_2d(mesh, [x for _, x, _ in data], label, cmap, norm, rest_outline)
+    fig, ax, coll, overlay = _setup_2d(
+        mesh, [x for _, x, _ in data], label, cmap, norm, rest_outline
+    )
     prefix = f"{title}   " if title else ""
 
     def update(i: int) -> Any:
         t, x, v = data[i]
         coll.set_verts(x[mesh.cells])
         coll.set_array(v)
-        ax.set_title(f"{prefix}t = {t:.4g}")
-        return (coll,)
+        ax.set_title(f"{prefix}t = {t:.4g} s")
+        return (coll, *overlay, ax.title)
 
-    return _save_gif(fig, update, len(data), Path(path), fps, dpi)
+    return _save_gif(fig, update, len(data), Path(path), fps, dpi, blit=True)
