@@ -197,7 +197,8 @@ class Simulation(SetupCalls, BodyResults):
     def _changed(self, body: str = "", what: str = "structure") -> None:
         """A body's set-up changed: ``structure`` rebuilds the system before the next step;
         ``prescribed`` / ``velocity`` also update the body's part of the state."""
-        if self._state is not None and body and what in ("prescribed", "velocity"):
+        known = self._system is not None and body in self._system.names
+        if self._state is not None and known and what in ("prescribed", "velocity"):
             j = self._system.index(body)
             b = self.bodies[body]
             x, v = self._state.x.copy(), self._state.v.copy()
@@ -207,7 +208,8 @@ class Simulation(SetupCalls, BodyResults):
             else:
                 v[st] = b.velocity
             self._state = State(self.time, x, v)
-        self._system_dirty = True
+        if what != "velocity":  # a new velocity changes the state, not the system
+            self._system_dirty = True
 
     def add_body(
         self,

@@ -190,3 +190,18 @@ def test_errors_name_the_body_table_and_key(tmp_path, edit, expected):
     message = scene_error(tmp_path, edit(TWO_BLOCKS))
     for part in expected:
         assert part in message, (part, message)
+
+
+def test_where_selects_frames_by_their_rest_origins(tmp_path):
+    text = FRAME_BODY.format(name="sheet", x=0.2, x0=0.0, x1=0.4).replace(
+        "frames = {{ on_plane = {{ axis = 2, value = 0.0 }} }}".replace("{{", "{").replace(
+            "}}", "}"
+        ),
+        'frames = { where = "z < 0.6" }',
+    )
+    sim = load_scene(write(tmp_path, "[simulation]\ntime_step = 0.1\n" + text)).simulation
+    np.testing.assert_array_equal(sim.bodies["sheet"].model.prescribed_frames, [0, 1])
+    message = scene_error(
+        tmp_path, "[simulation]\ntime_step = 0.1\n" + text.replace("z < 0.6", "z > 5")
+    )
+    assert "bodies[1].fixed_frames[1] frames where" in message and "selects no frame" in message

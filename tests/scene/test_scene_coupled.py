@@ -111,7 +111,7 @@ def test_coupled_example_is_the_python_scene():
     scene = load_scene(example_path("organs_retraction_cut"))
     sim = scene.simulation
     assert isinstance(sim, Simulation)
-    assert scene.run == {"steps": 120, "every": 2}
+    assert scene.run == {"steps": 120, "every": 2, "field": "green_strain"}
     assert sim.integrator == "backward_euler" and sim.time_step == 0.025
     np.testing.assert_array_equal(sim.gravity[0], [0.0, 0.0, -9.81])
     assert [n for n, b in sim.bodies.items() if b.kind == "fem"] == ["liver", "gallbladder"]

@@ -411,7 +411,7 @@ def test_selector_matching_no_frame(tmp_path):
         ("{ on_plane = { axis = 2 } }", "missing key 'value'"),
         ("{ on_plane = { axis = 2, value = 0.0, tolerance = -1 } }", "tolerance must be"),
         ("{ on_plane = 2 }", "on_plane takes a table"),
-        ("[0]", "one selector out of ['on_plane', 'in_box', 'indices']"),
+        ("[0]", "one selector out of ['on_plane', 'in_box', 'indices', 'where']"),
         ("{ indices = [0], on_plane = { axis = 2, value = 0.0 } }", "one selector"),
     ],
 )

@@ -24,8 +24,9 @@ the Python API of ``tissuesim.frames`` the way [mesh] scenes map onto Simulation
 
 Frame selectors pick frames by their rest origins: ``{ on_plane = { axis, value } }``,
 ``{ in_box = { lower, upper } }`` (optional tolerance, default 1e-6 times the body's
-bounding-box diagonal, as ``tissuesim.mesh.select`` does for mesh vertices) or
-``{ indices = [0, 1] }``. Points (springs, point forces) are a list ``[[x, y, z], ...]`` or
+bounding-box diagonal, as ``tissuesim.mesh.select`` does for mesh vertices),
+``{ where = "z < 0.1" }`` (a condition on the rest origins) or ``{ indices = [0, 1] }``.
+Points (springs, point forces) are a list ``[[x, y, z], ...]`` or
 display-surface vertices picked by ``{ surface_on_plane = {...} }`` or
 ``{ surface_in_box = {...} }`` (same arguments).
 Errors are SceneErrors naming the file, the table (``[[fixed_frames]] #2``) and the key.
@@ -96,7 +97,7 @@ MESH_ONLY = {
     "traction": "load display-surface points with [[point_forces]]",
     "body_force": "use [gravity] or [[point_forces]]",
 }
-FRAME_SELECTORS = ("on_plane", "in_box", "indices")
+FRAME_SELECTORS = ("on_plane", "in_box", "indices", "where")
 POINT_SELECTORS = ("surface_on_plane", "surface_in_box")
 SELECTOR_ARGS = {
     "on_plane": ("axis", "value", "tolerance"),
@@ -485,12 +486,22 @@ def _one_selector(selector, kinds: tuple[str, ...], key: str, example: str, wher
 
 
 def _select_frames(body, selector, scale: float, where: str) -> np.ndarray:
-    """Sorted frame indices picked by on_plane / in_box (rest origins) or indices."""
+    """Sorted frame indices picked by on_plane / in_box / where (rest origins) or indices."""
     how, args = _one_selector(
         selector, FRAME_SELECTORS, "frames", "{ on_plane = { axis = 2, value = 0.0 } }", where
     )
     X = body.rest_frames
     here = f"{where} frames {how}"
+    if how == "where":  # a condition on the frames' rest origins, as for mesh vertices
+        from tissuesim.scene.loader import condition
+
+        ids = np.flatnonzero(condition(args, here)(X))
+        if not ids.size:
+            raise SceneError(
+                f"{here}: {args!r} selects no frame; the {len(X)} frames' rest origins span "
+                f"{_bbox(X)}"
+            )
+        return ids
     if how == "indices":
         n = len(X)
         ok = isinstance(args, list) and args
