@@ -126,7 +126,9 @@ def main(argv: list[str] | None = None) -> int:
     p_run.add_argument("--steps", type=_steps, help="number of time steps (overrides [run] steps)")
     p_run.add_argument("--no-render", action="store_true", help="skip the PNG and GIF")
     p_run.add_argument("--quiet", action="store_true", help="no progress bar")
-    fields = ("J", "von_mises", "displacement", "green_strain")
+    from tissuesim.render.scene import FIELDS
+
+    fields = tuple(FIELDS)
     p_run.add_argument("--field", choices=fields, help="what colours the pictures (default J)")
     p_demo = sub.add_parser("demo", help=f"run the course's example problem ({DEMO})")
     p_demo.add_argument("--out", default="out/demo")

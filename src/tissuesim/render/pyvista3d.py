@@ -315,7 +315,14 @@ def _new_plotter(pv, window_size: tuple[int, int]):
     plotter = pv.Plotter(off_screen=True, window_size=(w, h), lighting="light_kit")
     plotter.set_background(_BACKGROUND)
     plotter.enable_anti_aliasing("ssaa")
-    plotter.add_axes(color="black", viewport=_AXES_BOX, line_width=2)
+    plotter.add_axes(
+        color="black",
+        viewport=_AXES_BOX,
+        line_width=2,
+        xlabel="x (m)",
+        ylabel="y (m)",
+        zlabel="z (m)",
+    )
     return plotter
 
 

@@ -42,6 +42,7 @@ from typing import Any
 import numpy as np
 
 from tissuesim.errors import SceneError, TissueSimError
+from tissuesim.render.scene import FIELDS
 from tissuesim.scene.expressions import compile_vector
 
 __all__ = ["Scene", "load_scene", "build_scene", "SCENE_KEYS"]
@@ -83,8 +84,8 @@ SCENE_KEYS = {
     "nodal_forces": {"vertices", "force"},
     "run": set(RUN_KEYS),
 }
-#: what pictures can be coloured by (render/scene.py FIELDS)
-FIELD_CHOICES = ("J", "von_mises", "displacement", "green_strain")
+#: what pictures can be coloured by
+FIELD_CHOICES = tuple(FIELDS)
 #: the tables of one FEM body (top level in a one-body scene, inside each [[bodies]] entry)
 FEM_BODY_KEYS = ("mesh", "material", "dirichlet", "traction", "body_force", "nodal_forces")
 FEM_BODY_KEYS += ("initial",)
