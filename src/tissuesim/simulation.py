@@ -108,6 +108,7 @@ class Simulation(SetupCalls, BodyResults):
         self.gravity: list[np.ndarray] = []  # on every body, those added later too
         self._force_names: set[str] = set()
         self.ties: list = []  # coupling/tie.py
+        self.frame_attachments: list = []  # (coupling/frame_attachment.py spec, sign)
         self._system: System | None = None
         self._state: State | None = None
         self._solver = None
@@ -353,6 +354,12 @@ class Simulation(SetupCalls, BodyResults):
         attachments = []
         if self.tissue is not None and self.tissue.model is not None:
             attachments = self.tissue.attachments(names.index, names.index(self.tissue.name))
+        self._named_attachments = []  # (name, sign, index among the system's attachments)
+        for spec, sign in self.frame_attachments:
+            if spec.fem in names and spec.frames in names:
+                j = names.index(spec.frames)
+                self._named_attachments.append((spec.name, sign, len(attachments)))
+                attachments.append(spec.build(names.index(spec.fem), j, bodies[j].model))
         ties = [t for t in self.ties if t.a in names and t.b in names]
         self._system = System([b.model for b in bodies], names, attachments, ties)
         self._system_dirty = False

@@ -106,7 +106,7 @@ class BodyResults:
         for a in s.attachments:
             organ = s.bodies[a.organ]
             y = a.organ_positions(organ.mesh.cells, s.body_config(self._state.x, a.organ))
-            p = a.tissue.positions(s.body_config(self._state.x, s.index(self.tissue.name)))
+            p = a.tissue.positions(s.body_config(self._state.x, a.tissue_body))
             gap = max(gap, float(np.linalg.norm(p - y, axis=1).max()))
         return gap
 
@@ -119,6 +119,14 @@ class BodyResults:
             out.update(self.bodies[name].forces(s.body_config(self._state.x, j), gj, self.time))
         for t, r in zip(s.ties, s.tie_residuals(self._state.x), strict=True):
             out[t.name] = (-(t.stiffness[:, None] * r).sum(axis=0)).tolist()
+        for name, sign, i in getattr(self, "_named_attachments", ()):
+            a = s.attachments[i]
+            organ = s.bodies[a.organ]
+            y = a.organ_positions(organ.mesh.cells, s.body_config(self._state.x, a.organ))
+            p = a.tissue.positions(s.body_config(self._state.x, a.tissue_body))
+            # the frames pull the FEM body's points towards p: sign -1 reports the force on
+            # the frame body instead
+            out[name] = (sign * (a.stiffness[:, None] * (p - y)).sum(axis=0)).tolist()
         return out
 
     def energies(self) -> dict[str, float]:

@@ -29,24 +29,36 @@ class SetupCalls:
         stiffness: float | None = None,
         name: str | None = None,
     ):
-        """Glue FEM body ``body`` to FEM body ``to`` where they touch (``coupling/tie.py``):
-        ``body``'s boundary triangles whose vertices all lie within ``distance`` m of ``to``
-        (default 1e-3 of ``body``'s size), tied by a penalty of ``stiffness`` N/m per m^2 of
-        contact (default 250 times the stiffer shear modulus per median edge length). The
-        force ``to`` exerts on ``body`` is reported as ``name`` (default "<body>-<to>")."""
+        """Glue ``body`` to ``to`` where they touch, by a stiff penalty; the force ``to`` exerts
+        on ``body`` is reported as ``name`` (default "<body>-<to>").
+
+        Two FEM bodies (``coupling/tie.py``): ``body``'s boundary triangles whose vertices all
+        lie within ``distance`` m of ``to`` (default 1e-3 of ``body``'s size); ``stiffness``
+        N/m per m^2 of contact (default 250 times the stiffer shear modulus per median edge).
+        A frame body and a FEM body (``coupling/frame_attachment.py``): the FEM body's
+        boundary triangles facing the frame body's integration points within ``distance``
+        (default 1.5 sample spacings); ``stiffness`` default 250 times the frame body's shear
+        modulus per spacing (the tissue's rule)."""
         from tissuesim.coupling.tie import tie_bodies
         from tissuesim.coupling.tissue import ATTACHMENT_FACTOR
 
-        a, b = self.body(body, ("fem",)), self.body(to, ("fem",))
+        a, b = self.body(body, ("fem", "frames")), self.body(to, ("fem", "frames"))
         if a is b:
             raise ValueError(f"attach: a body cannot be attached to itself ({body!r})")
-        size = float(np.linalg.norm(np.ptp(a.mesh.points, axis=0)))
-        if distance is None:
-            distance = 1e-3 * size
-        elif not (np.isfinite(distance) and distance > 0):
+        if distance is not None and not (np.isfinite(distance) and distance > 0):
             raise ValueError(f"attach: distance must be > 0 m, got {distance!r}")
         if stiffness is not None and not (np.isfinite(stiffness) and stiffness > 0):
             raise ValueError(f"attach: stiffness must be > 0 N/m per m^2, got {stiffness!r}")
+        if a.kind == b.kind == "frames":
+            raise ValueError(
+                f"attach: {body!r} and {to!r} are both frame bodies; attach a frame body to a "
+                "FEM body, or make them one frame body"
+            )
+        if "frames" in (a.kind, b.kind):
+            return self._attach_frames(a, b, distance, stiffness, name)
+        size = float(np.linalg.norm(np.ptp(a.mesh.points, axis=0)))
+        if distance is None:
+            distance = 1e-3 * size
         name = self._claim_force_name(name, f"{body}-{to}")
         edge = _median_boundary_edge(a.mesh)
         if stiffness is None:
@@ -58,6 +70,32 @@ class SetupCalls:
         self.ties.append(tie)
         self._changed()
         return tie
+
+    def _attach_frames(self, a, b, distance, stiffness, name):
+        from tissuesim.coupling.frame_attachment import frame_attachment
+        from tissuesim.coupling.tissue import ATTACHMENT_FACTOR
+
+        frame, fem = (a, b) if a.kind == "frames" else (b, a)
+        samples = frame.model.samples
+        spacing = float(np.cbrt(np.median(samples.volumes)))
+        distance = 1.5 * spacing if distance is None else float(distance)
+        if stiffness is None:
+            stiffness = ATTACHMENT_FACTOR * frame.model.material.mu / spacing
+        name = self._claim_force_name(name, f"{a.name}-{b.name}")
+        spec = frame_attachment(
+            name,
+            fem.name,
+            fem.mesh,
+            frame.name,
+            samples,
+            distance=distance,
+            stiffness_per_area=stiffness,
+        )
+        spec.build(0, 1, frame.model)  # points the frames do not reach fail now
+        spec_sign = 1.0 if a is fem else -1.0  # the force is reported on ``body``
+        self.frame_attachments.append((spec, spec_sign))
+        self._changed()
+        return spec
 
     # -- set-up on one body (see bodies/fem.py, bodies/frames.py, coupling/tissue.py) ---------
     def add_dirichlet(self, vertices, displacement=None, components=None, *, body=None, name=None):

@@ -170,3 +170,30 @@ def test_tie_reports_no_contact_clearly():
         sim.attach("upper", "lower")
     tie = sim.attach("upper", "lower", distance=0.11)
     np.testing.assert_allclose(tie.offset[:, 2], 0.1, atol=1e-12)  # the gap is kept at rest
+
+
+def test_frame_body_attachment_matches_finite_differences():
+    """A rigid-frame body attached to a FEM block: the whole system's gradient and Hessian
+    (attachment, cross blocks through the rotation chart) against differences of the value."""
+    from tissuesim.frames.placement import grid_frames
+    from tissuesim.frames.sampling import sample_box
+    from tissuesim.mesh import box
+    from tissuesim.simulation import Simulation
+
+    mat = make_material_for_ties()
+    sim = Simulation(integrator="quasistatic", time_step=1.0)
+    sim.add_body("lower", box((0, 0, -0.5), (1, 1, 0), (2, 2, 1)), mat, density=10.0)
+    sim.add_frame_body(
+        "cap",
+        grid_frames((0.25, 0.25, 0.1), (0.75, 0.75, 0.1), (2, 2, 1)),
+        sample_box((0, 0, 0), (1, 1, 0.2), 0.1),
+        mat,
+        frame_type="rigid",
+    )
+    sim.attach("cap", "lower")
+    system = sim.system
+    assert len(system.attachments) == 1 and system.cross
+    rng = np.random.default_rng(11)
+    c = perturbed(system, rng, 0.02)
+    check_fd(system, c, rng)
+    assert system.evaluate(c, 0).terms["attachment"] > 0

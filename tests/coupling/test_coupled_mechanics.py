@@ -260,3 +260,42 @@ def test_two_tied_blocks_hang_together_and_forces_balance():
     gap = max(float(np.abs(r).max()) for r in sim.system.tie_residuals(sim.state.x))
     assert gap < 1e-3 * 0.5 and tie.n > 0  # the penalty lets only a small gap open
     assert sim.body_positions("upper")[:, 2].min() > -0.05  # held by the tie, not fallen
+
+
+def test_frame_body_attached_on_a_fem_block_and_forces_balance():
+    """A meshless block resting on a FEM block it is attached to, the FEM block supported: at
+    equilibrium the support carries both weights and the attachment the frame body's."""
+    from tissuesim.frames.placement import grid_frames
+    from tissuesim.frames.sampling import sample_box
+
+    mat = make_material("neo_hookean", youngs_modulus=1000.0, poisson_ratio=0.3)
+    sim = Simulation(
+        integrator="quasistatic",
+        time_step=1.0,
+        gravity=(0, 0, -9.81),
+        newton=NewtonOptions(gradient_tolerance=1e-11, absolute_tolerance=1e-12),
+    )
+    lower = box((0, 0, -0.5), (1, 1, 0), (3, 3, 2))
+    sim.add_body("lower", lower, mat, density=10.0)
+    samples = sample_box((0, 0, 0), (1, 1, 0.4), 0.1)
+    sim.add_frame_body(
+        "cap",
+        grid_frames((0.25, 0.25, 0.1), (0.75, 0.75, 0.3), (2, 2, 2)),
+        samples,
+        make_material("stvk", youngs_modulus=500.0, poisson_ratio=0.3),
+        density=10.0,
+        frame_type="affine",
+    )
+    sim.fix("lower", lower.point_sets["zmin"])
+    spec = sim.attach("cap", "lower", name="seat")
+    assert spec.points.shape[0] > 0 and np.all(np.abs(spec.points[:, 2]) < 1e-9)
+    record = sim.step()
+    cap_weight = 10.0 * samples.volume * 9.81
+    lower_weight = 10.0 * 0.5 * 9.81
+    np.testing.assert_allclose(
+        record.extra["forces"]["lower.support"], [0, 0, cap_weight + lower_weight], atol=1e-6
+    )
+    np.testing.assert_allclose(record.extra["forces"]["seat"], [0, 0, cap_weight], atol=1e-6)
+    assert sim.attachment_gap() < 1e-3
+    with pytest.raises(ValueError, match="cannot be attached to itself"):
+        sim.attach("cap", "cap")

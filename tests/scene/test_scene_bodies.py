@@ -205,3 +205,42 @@ def test_where_selects_frames_by_their_rest_origins(tmp_path):
         tmp_path, "[simulation]\ntime_step = 0.1\n" + text.replace("z < 0.6", "z > 5")
     )
     assert "bodies[1].fixed_frames[1] frames where" in message and "selects no frame" in message
+
+
+def test_a_frame_body_attached_to_a_fem_body_in_a_scene(tmp_path):
+    text = """
+    [simulation]
+    integrator = "quasistatic"
+    time_step = 1.0
+
+    [gravity]
+    acceleration = [0.0, 0.0, -9.81]
+
+    [[bodies]]
+    name = "lower"
+    mesh = { generator = "box", lower = [0, 0, -0.5], upper = [1, 1, 0], divisions = [3, 3, 2] }
+    material = { model = "neo_hookean", youngs_modulus = 1000.0, poisson_ratio = 0.3 }
+    density = 10.0
+    fix = { tagged = "zmin" }
+
+    [[bodies]]
+    name = "cap"
+    region = { box = { lower = [0, 0, 0], upper = [1, 1, 0.4] }, spacing = 0.1 }
+    material = { model = "stvk", youngs_modulus = 500.0, poisson_ratio = 0.3 }
+    density = 10.0
+
+    [bodies.frames]
+    type = "affine"
+    grid = { lower = [0.25, 0.25, 0.1], upper = [0.75, 0.75, 0.3], counts = [2, 2, 2] }
+
+    [[attachments]]
+    body = "cap"
+    to = "lower"
+    name = "seat"
+    """
+    sim = load_scene(write(tmp_path, text)).simulation
+    record = sim.step()
+    cap = 10.0 * 0.4 * 9.81
+    np.testing.assert_allclose(record.extra["forces"]["seat"], [0, 0, cap], atol=1e-5)
+    message = scene_error(tmp_path, text.replace('to = "lower"', 'to = "lowr"'))
+    assert "attachments[1]" in message and "did you mean 'lower'" in message

@@ -319,6 +319,15 @@ def _fem_body_named(sim, name, where: str, key: str):
     return sim.bodies[name]
 
 
+def _body_named(sim, name, where: str, key: str):
+    known = [n for n, b in sim.bodies.items() if b.kind in ("fem", "frames")]
+    if name not in known:
+        close = difflib.get_close_matches(str(name), known, n=1)
+        hint = f"did you mean {close[0]!r}? " if close else ""
+        raise SceneError(f"{where}: unknown {key} {name!r}; {hint}the bodies are {known}")
+    return sim.bodies[name]
+
+
 def _grasper(sim, item: dict, where: str) -> None:
     _unknown(item, GRASPER_KEYS, where)
     if ("organ" in item) == ("body" in item):
@@ -351,10 +360,11 @@ def _grasper(sim, item: dict, where: str) -> None:
 
 
 def _attachment(sim, item: dict, where: str) -> None:
-    """attach(body, to, distance, stiffness, name): two FEM bodies glued where they touch."""
+    """attach(body, to, distance, stiffness, name): two bodies glued where they touch (FEM to
+    FEM, or a frame body to a FEM body)."""
     _unknown(item, ATTACHMENT_KEYS, where)
-    a = _fem_body_named(sim, _required(item, "body", where), where, "body")
-    b = _fem_body_named(sim, _required(item, "to", where), where, "to")
+    a = _body_named(sim, _required(item, "body", where), where, "body")
+    b = _body_named(sim, _required(item, "to", where), where, "to")
     options: dict[str, Any] = {}
     for key, unit in (("distance", "m"), ("stiffness", "N/m per m^2 of contact")):
         if key in item:
