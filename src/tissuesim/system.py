@@ -203,9 +203,6 @@ class System:
     def body_config(self, c: np.ndarray, j: int) -> np.ndarray:
         return c[self.config_slices[j]]
 
-    def body_tangent(self, v: np.ndarray, j: int) -> np.ndarray:
-        return v[self.tangent_slices[j]]
-
     def index(self, name: str) -> int:
         return self.names.index(name)
 

@@ -106,7 +106,6 @@ MESH_GENERATORS = {
     "ellipsoid": ("center", "radii", "divisions"),
     "box": ("lower", "upper", "divisions"),
 }
-ORGAN_MESH_KEYS = ("generator", "file", "center", "radii", "lower", "upper", "divisions")
 MESH_EXAMPLE = (
     'mesh = { generator = "ellipsoid", center = [0, 0, 0], radii = [0.06, 0.04, 0.02], '
     'divisions = 8 }, { generator = "box", lower = [...], upper = [...], divisions = [4, 4, 2] } '
