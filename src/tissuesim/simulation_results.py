@@ -157,7 +157,11 @@ class BodyResults:
 
     def critical_time_step(self) -> float:
         """Explicit stability estimate (s): the smallest over the bodies (FEM: CFL h_min / c;
-        frames: 2 / omega_max at the current configuration, springs included)."""
+        frames: 2 / omega_max at the current configuration, springs included), lowered for
+        the penalty springs of ties and attachments on FEM vertices: with omega_e = 2 / h_e
+        of the stiffest body, omega^2 <= omega_e^2 + max_i sum_j |K_ij| / m_i (Gershgorin on
+        the lumped masses; the sum of two PSD stiffnesses has at most the sum of their
+        largest eigenvalues). The frame side of an attachment is not counted."""
         from tissuesim.frames.stability import frame_critical_time_step
         from tissuesim.time.stability import critical_time_step
 
@@ -169,4 +173,31 @@ class BodyResults:
             else:
                 z = s.body_config(self._state.x, j)
                 out = min(out, frame_critical_time_step(b.model, z, self.time))
+        penalty = self._penalty_frequency_squared()
+        if penalty > 0.0:
+            out = 2.0 / np.sqrt((2.0 / out) ** 2 + penalty)
         return float(out)
+
+    def _penalty_frequency_squared(self) -> float:
+        """Gershgorin bound of M^-1 K over FEM vertex DOFs for ties and attachments (1/s^2)."""
+        import scipy.sparse as sp
+
+        s = self.system
+        rows = np.zeros(s.n_dofs)
+        for t, (_, Gt) in zip(s.ties, s._tie_matrices, strict=True):
+            K = Gt.T @ sp.diags(np.repeat(t.stiffness, 3)) @ Gt
+            rows += np.asarray(abs(K).sum(axis=1)).ravel()
+        for a in s.attachments:
+            organ = s.bodies[a.organ]
+            B = a.organ_matrix(organ.mesh.cells, organ.mesh.n_points)
+            K = abs(B.T @ sp.diags(a.stiffness) @ B)
+            per_vertex = np.asarray(K.sum(axis=1)).ravel()
+            start = s.tangent_slices[a.organ].start
+            rows[start : start + 3 * organ.mesh.n_points] += np.repeat(per_vertex, 3)
+        if not rows.any():
+            return 0.0
+        mass = np.full(s.n_dofs, np.inf)
+        for j, b in enumerate(s.bodies):
+            if not hasattr(b, "frame_type"):
+                mass[s.tangent_slices[j]] = b.mass.lumped
+        return float(np.max(rows / mass))

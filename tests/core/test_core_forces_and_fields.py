@@ -192,3 +192,20 @@ def test_explicit_step_moves_fem_and_frame_bodies_together_in_free_fall():
         atol=1e-12,
     )
     assert sim.time == pytest.approx(n * h, rel=1e-15)
+
+
+def test_critical_time_step_counts_the_ties_and_explicit_steps_below_it_stay_bounded():
+    soft = ts.make_material("neo_hookean", youngs_modulus=1e3, poisson_ratio=0.3)
+    sim = ts.Simulation(integrator="explicit", time_step=1.0)
+    lower = sim.add_body("lower", ts.box((0, 0, -0.5), (1, 1, 0), (2, 2, 2)), soft, density=10.0)
+    sim.add_body("upper", ts.box((0, 0, 0), (1, 1, 0.5), (2, 2, 2)), soft, density=10.0)
+    free = sim.critical_time_step()
+    sim.attach("upper", "lower")
+    tied = sim.critical_time_step()
+    assert tied < 0.5 * free  # the stiff glue lowers the limit
+    sim.fix("lower", lower.mesh.point_sets["zmin"])
+    sim.set_velocity(np.tile([0.0, 0.0, 0.1], (27, 1)), body="upper")
+    sim.time_step = 0.9 * tied
+    for _ in range(200):
+        sim.step()
+    assert np.abs(sim.body_positions("upper") - sim.bodies["upper"].mesh.points).max() < 0.1
