@@ -186,11 +186,12 @@ class RunOutput:
         if self.render and self.frames:
             import time
 
-            from tissuesim.render.scene import MAX_GIF_FRAMES, MAX_GIF_FRAMES_3D, render_run
+            from tissuesim.render.scene import MAX_GIF_FRAMES, gif_frames_3d, render_run
 
             if progress:
                 flat = all(b.dim == 2 for b in self.sim.bodies.values())
-                n = min(len(self.frames), MAX_GIF_FRAMES if flat else MAX_GIF_FRAMES_3D)
+                wall = sum(r.wall_time_s for r in self.sim.history)
+                n = min(len(self.frames), MAX_GIF_FRAMES if flat else gif_frames_3d(wall))
                 print(
                     f"tissuesim: drawing final.png and run.gif ({n} frames, coloured by "
                     f"{self.field}) ...",

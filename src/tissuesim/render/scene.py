@@ -9,9 +9,10 @@ so; other 3D scenes are not drawn.
 Every picture is coloured by one field, chosen by ``field``: ``J``, ``von_mises`` (Pa),
 ``displacement`` (its magnitude, m) or ``green_strain`` (the largest principal Green strain),
 on one colour range for the whole run, with a labelled colour bar; the title gives the time in
-seconds (and the first grasper's force). A GIF holds at most ``MAX_GIF_FRAMES`` (2D) or
-``MAX_GIF_FRAMES_3D`` frames, evenly subsampled, so drawing costs about what the shipped
-examples' simulations cost (measured in the README).
+seconds (and the first grasper's force). A GIF holds at most ``MAX_GIF_FRAMES`` (2D) frames,
+or in 3D as many as the simulation's own wall time pays for at ``SECONDS_PER_3D_FRAME`` (6 to
+``MAX_GIF_FRAMES_3D``), evenly subsampled, so drawing costs about what the simulation cost
+(measured in the README; PyVista's fixed cost, about 2 s, remains).
 
 A frame (what ``io/body_series.py`` returns per written step) is
 (time, {body name: data}, cut triangles (m, 3, 3), title suffix).
@@ -34,7 +35,9 @@ FIELDS = {
     "green_strain": "largest principal Green strain (-)",
 }
 MAX_GIF_FRAMES = 40  # 2D (matplotlib, blitted: about 0.03 s a frame)
-MAX_GIF_FRAMES_3D = 20  # 3D (PyVista: about 0.1 s a frame at GIF_WINDOW)
+MAX_GIF_FRAMES_3D = 20  # 3D (PyVista: about 0.15 s a frame at GIF_WINDOW)
+MIN_GIF_FRAMES_3D = 6
+SECONDS_PER_3D_FRAME = 0.15  # a 3D GIF gets about as many frames as the run's time allows
 GIF_WINDOW = (640, 480)
 _ORGAN_COLOURS = ("#c8745a", "#d9b35b", "#8fb0c9", "#a3c48d", "#b89ad0")
 
@@ -61,6 +64,12 @@ def _subsample(n: int, most: int) -> list[int]:
     if n <= most:
         return list(range(n))
     return sorted(set(np.linspace(0, n - 1, most).round().astype(int).tolist()))
+
+
+def gif_frames_3d(simulated_seconds: float) -> int:
+    """Frames of a 3D GIF: about what the simulation's own wall time pays for, 6 to 20."""
+    budget = int(simulated_seconds / SECONDS_PER_3D_FRAME)
+    return max(MIN_GIF_FRAMES_3D, min(MAX_GIF_FRAMES_3D, budget))
 
 
 def render_run(sim, frames: list, directory: Path, field: str = "J") -> str:
@@ -237,7 +246,8 @@ def _render_pyvista(sim, bodies, frames, directory, field, label) -> str:
     from tissuesim.render.pyvista3d import GifWriter, render_frame_png
 
     surfaces = {b.name: boundary_facets(b.mesh.cells) for b in bodies if b.kind == "fem"}
-    picked = [frames[i] for i in _subsample(len(frames), MAX_GIF_FRAMES_3D)]
+    wall = sum(r.wall_time_s for r in sim.history)
+    picked = [frames[i] for i in _subsample(len(frames), gif_frames_3d(wall))]
     clim = _range([v for f in picked for v in _field_values(bodies, f[1], field)], field)
     camera = render_frame_png(
         directory / "final.png", _frame3d(bodies, frames[-1], field, label, clim, surfaces)
