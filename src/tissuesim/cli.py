@@ -101,7 +101,7 @@ def _run(
         },
         "wall_time_s": sum(r.wall_time_s for r in history),
         "forces": history[-1].extra.get("forces", {}) if history else {},
-        "linear_solver": sim.describe()["linear_solver"],
+        "linear_solver": sim.linear_solver_info(),  # describe() would re-describe meshes
     }
     print(json.dumps(report, indent=2))
     return 0

@@ -556,6 +556,10 @@ class Simulation(SetupCalls, BodyResults):
         writer = RunOutput(self, output, every=every, render=render, field=field, metadata=metadata)
         return writer.run(steps, progress=progress)
 
+    def linear_solver_info(self) -> dict[str, Any]:
+        """The linear solver in use (None before the first implicit step) and why."""
+        return {"name": getattr(self._solver, "name", None), "reason": self.solver_reason}
+
     def describe(self) -> dict[str, Any]:
         s = self.system
         return {
@@ -567,10 +571,7 @@ class Simulation(SetupCalls, BodyResults):
             "n_dofs": s.n_dofs,
             "prescribed_dofs": int(s.prescribed_dofs.size),
             "newton": asdict(self.newton),
-            "linear_solver": {
-                "name": getattr(self._solver, "name", None),
-                "reason": self.solver_reason,
-            },
+            "linear_solver": self.linear_solver_info(),
         }
 
 
