@@ -108,6 +108,7 @@ class Simulation(SetupCalls, BodyResults):
         self.gravity: list[np.ndarray] = []  # on every body, those added later too
         self._force_names: set[str] = set()
         self.ties: list = []  # coupling/tie.py
+        self._named_attachments: list = []  # (name, sign, index in system.attachments)
         self.frame_attachments: list = []  # (coupling/frame_attachment.py spec, sign)
         self._system: System | None = None
         self._state: State | None = None
@@ -170,9 +171,9 @@ class Simulation(SetupCalls, BodyResults):
             )
         if name in self.bodies or name in RESERVED_NAMES or (name == "tissue" != what):
             raise ValueError(f"{what} name {name!r} is taken; choose another")
-        mine = set(series_names(_NameOnly(name, kind)))
+        mine = set(series_names(name, kind))
         for other in self.bodies.values():
-            clash = mine & set(series_names(other))
+            clash = mine & set(series_names(other.name, other.kind))
             if clash:
                 raise ValueError(
                     f"{what} name {name!r} would write the series {sorted(clash)[0]!r} that "
@@ -394,7 +395,8 @@ class Simulation(SetupCalls, BodyResults):
     def time(self) -> float:
         return self.start_time if self._state is None else self._state.time
 
-    def _part(self, name: str | None, kinds=()) -> tuple[Any, np.ndarray, np.ndarray]:
+    def body_state(self, name: str | None = None, kinds=()) -> tuple[Any, np.ndarray, np.ndarray]:
+        """(body, its block of the configuration, its block of the tangent velocity) now."""
         b = self.body(name, kinds)
         s = self.system
         j = s.index(b.name) if b.name in s.names else None
@@ -573,10 +575,3 @@ class Simulation(SetupCalls, BodyResults):
             "newton": asdict(self.newton),
             "linear_solver": self.linear_solver_info(),
         }
-
-
-class _NameOnly:
-    """A body-to-be, for checking the series its name would write."""
-
-    def __init__(self, name: str, kind: str) -> None:
-        self.name, self.kind = name, kind

@@ -25,7 +25,7 @@ class BodyResults:
 
     def body_positions(self, body: str | None = None) -> np.ndarray:
         """Current positions: FEM vertices (n, d); frame bodies: integration points (q, 3)."""
-        b, x, _ = self._part(body)
+        b, x, _ = self.body_state(body)
         if b.kind == "fem":
             return x.reshape(b.mesh.points.shape)
         return b.model.point_map.positions(x)
@@ -41,35 +41,35 @@ class BodyResults:
 
     @property
     def velocity(self) -> np.ndarray:
-        b, _, v = self._part(None, ("fem",))
+        b, _, v = self.body_state(None, ("fem",))
         return v.reshape(b.mesh.points.shape)
 
     def cell_fields(self, body: str | None = None) -> dict[str, np.ndarray]:
         """Per element of a FEM body: J, green_strain, cauchy_stress, von_mises,
         energy_density (``materials/measures.py``)."""
-        b, x, _ = self._part(body, ("fem",))
+        b, x, _ = self.body_state(body, ("fem",))
         return b.cell_fields(x)
 
     def point_fields(self, body: str | None = None) -> dict[str, np.ndarray]:
         """At a frame body's integration points: positions, F and the continuum fields."""
-        b, z, _ = self._part(body, ("frames", "tissue"))
+        b, z, _ = self.body_state(body, ("frames", "tissue"))
         return b.point_fields(z)
 
     def embedded_positions(self, name: str = "surface", *, body: str | None = None):
         """Current positions (k, 3) of a frame body's embedded points ``name``."""
-        b, z, _ = self._part(body, ("frames",))
+        b, z, _ = self.body_state(body, ("frames",))
         if name not in b.embedded:
             raise KeyError(f"no embedded points named {name!r}; known: {sorted(b.embedded)}")
         return b.embedded[name].positions(z)
 
     @property
     def frame_positions(self) -> np.ndarray:
-        b, z, _ = self._part(None, ("frames",))
+        b, z, _ = self.body_state(None, ("frames",))
         return b.model.frame_type.split(z)[0].copy()
 
     @property
     def frame_rotations(self) -> np.ndarray:
-        b, z, _ = self._part(None, ("frames",))
+        b, z, _ = self.body_state(None, ("frames",))
         return b.model.rotations(z)
 
     @property
@@ -119,7 +119,7 @@ class BodyResults:
             out.update(self.bodies[name].forces(s.body_config(self._state.x, j), gj, self.time))
         for t, r in zip(s.ties, s.tie_residuals(self._state.x), strict=True):
             out[t.name] = (-(t.stiffness[:, None] * r).sum(axis=0)).tolist()
-        for name, sign, i in getattr(self, "_named_attachments", ()):
+        for name, sign, i in self._named_attachments:
             a = s.attachments[i]
             organ = s.bodies[a.organ]
             y = a.organ_positions(organ.mesh.cells, s.body_config(self._state.x, a.organ))

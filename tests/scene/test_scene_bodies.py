@@ -244,3 +244,17 @@ def test_a_frame_body_attached_to_a_fem_body_in_a_scene(tmp_path):
     np.testing.assert_allclose(record.extra["forces"]["seat"], [0, 0, cap], atol=1e-5)
     message = scene_error(tmp_path, text.replace('to = "lower"', 'to = "lowr"'))
     assert "attachments[1]" in message and "did you mean 'lower'" in message
+
+
+def test_values_that_depend_on_t_only_refuse_x_y_z(tmp_path):
+    """A nodal force is one vector for its vertex set: x, y, z in it would be evaluated at
+    some point, so they are refused (as for a grasper's displacement)."""
+    text = TWO_BLOCKS + """
+[[bodies.nodal_forces]]
+vertices = { tagged = "zmax" }
+force = ["0.1 * t", "x", "0"]
+"""
+    message = scene_error(tmp_path, text)
+    assert "nodal_forces[1] force[1]" in message and "depends on t only" in message
+    ok = load_scene(write(tmp_path, text.replace('"x"', '"0"'))).simulation
+    assert ok.step().converged

@@ -371,9 +371,13 @@ class FrameModel:
         data = self.assembly.hessian(z, self.mass.data, None)
         return self.assembly.q_pattern.matrix(data)
 
+    def config_velocity(self, z: np.ndarray, v: np.ndarray) -> np.ndarray:
+        """zdot = T(z) v (12 n,): the tangent velocity v in configuration space."""
+        T = self.frame_type.tangent_map(z)
+        return np.einsum("nij,nj->ni", T, v.reshape(self.n_frames, -1)).ravel()
+
     def kinetic_energy(self, z: np.ndarray, v: np.ndarray) -> float:
-        zdot = np.einsum("nij,nj->ni", self.frame_type.tangent_map(z), v.reshape(self.n_frames, -1))
-        zdot = zdot.ravel()
+        zdot = self.config_velocity(z, v)
         return 0.5 * float(zdot @ self.mass.dot(zdot))
 
     def point_fields(self, z: np.ndarray) -> dict[str, np.ndarray]:

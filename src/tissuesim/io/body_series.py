@@ -37,13 +37,13 @@ def _fields(fields: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
     return {k: fields[k] for k in FIELD_NAMES}
 
 
-def series_names(body) -> list[str]:
-    """The series a body writes (for name clashes and stale-file removal)."""
-    if body.kind == "fem":
-        return [body.name]
-    if body.kind == "frames":
-        return [body.name, f"{body.name}_frames", f"{body.name}_surface"]
-    return [f"{body.name}_points"]
+def series_names(name: str, kind: str) -> list[str]:
+    """The series a body of ``kind`` named ``name`` writes (checked for name clashes)."""
+    if kind == "fem":
+        return [name]
+    if kind == "frames":
+        return [name, f"{name}_frames", f"{name}_surface"]
+    return [f"{name}_points"]
 
 
 class BodySeries:
@@ -66,10 +66,10 @@ class FemSeries(BodySeries):
 
     def write(self, sim, t: float) -> dict[str, Any]:
         b = self.body
-        x = sim.body_positions(b.name)
+        _, c, v = sim.body_state(b.name)
         rest = b.mesh.points
+        x = c.reshape(rest.shape)
         u = x - rest
-        _, c, v = sim._part(b.name)
         fields = b.cell_fields(c)
         if self.writers:
             self.writers[0].write(
@@ -106,12 +106,10 @@ class FrameSeries(BodySeries):
 
     def write(self, sim, t: float) -> dict[str, Any]:
         b, m = self.body, self.body.model
-        _, z, v = sim._part(b.name)
+        _, z, v = sim.body_state(b.name)
         fields = b.point_fields(z)
         x, rest = fields["positions"], m.samples.points
-        zdot = np.einsum(
-            "nij,nj->ni", m.frame_type.tangent_map(z), v.reshape(m.n_frames, -1)
-        ).ravel()
+        zdot = m.config_velocity(z, v)
         origins, R = m.frame_type.split(z)[0], m.rotations(z)
         surface = None if b.surface is None else b.embedded["surface"].positions(z)
         if self.writers:
@@ -183,10 +181,8 @@ class TissueSeries(BodySeries):
                 self._last_tensors[k][ids] = f[k]
             self._strain[ids] = f["max_principal_strain"]
             m = b.model
-            _, z, v = sim._part(b.name)
-            zdot = np.einsum(
-                "nij,nj->ni", m.frame_type.tangent_map(z), v.reshape(m.n_frames, -1)
-            ).ravel()
+            _, z, v = sim.body_state(b.name)
+            zdot = m.config_velocity(z, v)
             self._velocity[:] = 0.0  # cut-away points stand still
             self._velocity[ids] = m.point_map.positions(zdot)
         alive = b.dissection.alive.copy()

@@ -50,7 +50,6 @@ from typing import Any
 import numpy as np
 
 from tissuesim.errors import SceneError
-from tissuesim.scene.expressions import compile_vector
 from tissuesim.scene.frames import _is_number, _required, _vector3
 from tissuesim.scene.loader import (
     RUN_KEYS,
@@ -64,7 +63,7 @@ from tissuesim.scene.loader import (
     _select,
     _table,
     _unknown,
-    _variables,
+    of_time,
 )
 from tissuesim.scene.loader import condition as _condition
 
@@ -114,7 +113,7 @@ MESH_EXAMPLE = (
 MATERIAL_EXAMPLE = (
     'material = { model = "neo_hookean", youngs_modulus = 5000.0, poisson_ratio = 0.45 }'
 )
-VERTEX_SELECTORS = (*sorted(SELECTORS["vertices"]), "where")
+VERTEX_SELECTORS = tuple(sorted(SELECTORS["vertices"]))
 # Tables of other scenes, and what a coupled scene writes instead.
 ELSEWHERE = {
     "mesh": "each organ has its own mesh = {...} in its [[organs]] table",
@@ -214,22 +213,8 @@ def _number(value, where: str, want: str, positive: bool = True) -> float:
 
 
 def _of_time(items, where: str, what: str):
-    """t -> (3,) from 3 numbers or expressions of t only (x, y, z are refused: ``what``
-    moves rigidly)."""
-    f = compile_vector(items, 3, where)
-    for i, item in enumerate(items):
-        used = _variables(item) & set(_AXES)
-        if used:
-            raise SceneError(
-                f"{where}[{i}]: {what} depends on t only; {sorted(used)[0]!r} has no meaning "
-                f"here (in {item!r})"
-            )
-    origin = np.zeros((1, 3))
-
-    def at(t: float) -> np.ndarray:
-        return f(origin, t)[0]
-
-    return at
+    """t -> (3,) from 3 numbers or expressions of t only (``what`` moves rigidly)."""
+    return of_time(items, 3, where, what)
 
 
 def _vertices(mesh, organ: str, selector, where: str, key: str) -> np.ndarray:

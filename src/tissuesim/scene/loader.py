@@ -294,7 +294,7 @@ def add_fem_body(
             if key not in entry:
                 raise SceneError(f"{where}: missing key {key!r}")
         vertices = _select(mesh, "vertices", entry["vertices"], where)
-        force = _of_time_vector(entry["force"], d, f"{where} force")
+        force = of_time(entry["force"], d, f"{where} force", "a nodal force")
         with _context(where):
             sim.add_nodal_forces(vertices, force, body=name)
     initial = _table(item, "initial", source)
@@ -305,15 +305,24 @@ def add_fem_body(
             sim.set_velocity(v(mesh.points, sim.time), body=name)
 
 
-def _of_time_vector(value, d: int, where: str):
-    """d numbers, or expressions of t only (a force on a vertex set): a callable t -> (d,)."""
-    if isinstance(value, list) and all(isinstance(v, (int, float)) for v in value):
-        if len(value) != d:
-            raise SceneError(f"{where}: expected {d} components, got {len(value)}")
-        return np.asarray(value, dtype=float)
+def of_time(value, d: int, where: str, what: str = "this value"):
+    """t -> (d,) from d numbers or expressions of t only: a value that is the same for every
+    point (a force on a vertex set, a grasper's motion), so x, y, z are refused rather than
+    evaluated at some point."""
     f = compile_vector(value, d, where)
+    for i, item in enumerate(value):
+        used = _variables(item) & set("xyz")
+        if used:
+            raise SceneError(
+                f"{where}[{i}]: {what} depends on t only; {sorted(used)[0]!r} has no meaning "
+                f"here (in {item!r})"
+            )
     origin = np.zeros((1, d))
-    return lambda t: f(origin, t)[0]
+
+    def at(t: float) -> np.ndarray:
+        return f(origin, t)[0]
+
+    return at
 
 
 def _material(data: dict, source: str, where: str | None = None):
