@@ -249,11 +249,14 @@ def test_a_frame_body_attached_to_a_fem_body_in_a_scene(tmp_path):
 def test_values_that_depend_on_t_only_refuse_x_y_z(tmp_path):
     """A nodal force is one vector for its vertex set: x, y, z in it would be evaluated at
     some point, so they are refused (as for a grasper's displacement)."""
-    text = TWO_BLOCKS + """
+    text = (
+        TWO_BLOCKS
+        + """
 [[bodies.nodal_forces]]
 vertices = { tagged = "zmax" }
 force = ["0.1 * t", "x", "0"]
 """
+    )
     message = scene_error(tmp_path, text)
     assert "nodal_forces[1] force[1]" in message and "depends on t only" in message
     ok = load_scene(write(tmp_path, text.replace('"x"', '"0"'))).simulation
