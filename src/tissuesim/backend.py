@@ -17,6 +17,8 @@ import importlib.util
 import os
 from typing import Literal
 
+from tissuesim.errors import InputError
+
 __all__ = ["BACKENDS", "Backend", "numba_available", "resolve_backend"]
 
 Backend = Literal["auto", "numba", "numpy"]
@@ -30,12 +32,12 @@ def numba_available() -> bool:
 def resolve_backend(requested: str = "auto") -> tuple[str, str]:
     """The backend to use for ``requested`` and the reason, e.g. ("numba", "auto: ...")."""
     if requested not in BACKENDS:
-        raise ValueError(f"backend must be one of {BACKENDS}, not {requested!r}")
+        raise InputError(f"backend must be one of {BACKENDS}, not {requested!r}")
     reason = "requested"
     if requested == "auto":
         env = os.environ.get("TISSUESIM_BACKEND", "auto").strip().lower() or "auto"
         if env not in BACKENDS:
-            raise ValueError(
+            raise InputError(
                 f"environment variable TISSUESIM_BACKEND must be one of {BACKENDS}, not {env!r}"
             )
         if env != "auto":
@@ -45,7 +47,7 @@ def resolve_backend(requested: str = "auto") -> tuple[str, str]:
         else:
             requested, reason = "numpy", "auto: numba not installed (pip install 'tissuesim[fast]')"
     if requested == "numba" and not numba_available():
-        raise ValueError(
+        raise InputError(
             "backend 'numba' needs numba: pip install 'tissuesim[fast]', or use backend 'numpy'"
         )
     return requested, reason

@@ -6,6 +6,7 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+import warnings
 from importlib import resources
 from pathlib import Path
 
@@ -27,12 +28,15 @@ def list_examples() -> list[str]:
 
 def _resolve_scene(scene: str) -> Path:
     path = Path(scene)
-    if path.is_file():
-        return path
+    if path.exists():
+        return path  # load_scene says what is wrong with it (a directory, a FIFO)
     if scene in list_examples():
         return example_path(scene)
-    raise SystemExit(
-        f"tissuesim: no scene file {scene!r} and no shipped example of that name; "
+    from tissuesim.errors import InputError
+    from tissuesim.validate import short
+
+    raise InputError(
+        f"no scene file {short(scene)} and no shipped example of that name; "
         f"examples: {', '.join(list_examples())}"
     )
 
@@ -117,10 +121,28 @@ def _steps(text: str) -> int:
     return value
 
 
+def _options(debug_default=False) -> argparse.ArgumentParser:
+    common = argparse.ArgumentParser(add_help=False)
+    common.add_argument(
+        "--debug",
+        action="store_true",
+        default=argparse.SUPPRESS if debug_default else False,
+        help="show the Python traceback of an error",
+    )
+    return common
+
+
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="tissuesim", description=__doc__)
+    """The command line. Exit codes: 0 done, 1 the run failed (Newton, instability, an
+    internal error), 2 bad input (scene, mesh, arguments, output directory), 130 interrupted."""
+    parser = argparse.ArgumentParser(
+        prog="tissuesim", description=__doc__, parents=[_options()], epilog=EXIT_CODES
+    )
+    common = [_options(debug_default=True)]
     sub = parser.add_subparsers(dest="command", required=True)
-    p_run = sub.add_parser("run", help="run a TOML scene file (or a shipped example by name)")
+    p_run = sub.add_parser(
+        "run", parents=common, help="run a TOML scene file (or a shipped example by name)"
+    )
     p_run.add_argument("scene")
     p_run.add_argument("--out", help="output directory (default out/<scene name>)")
     p_run.add_argument("--steps", type=_steps, help="number of time steps (overrides [run] steps)")
@@ -130,46 +152,93 @@ def main(argv: list[str] | None = None) -> int:
 
     fields = tuple(FIELDS)
     p_run.add_argument("--field", choices=fields, help="what colours the pictures (default J)")
-    p_demo = sub.add_parser("demo", help=f"run the course's example problem ({DEMO})")
+    p_demo = sub.add_parser("demo", parents=common, help=f"run the course's example ({DEMO})")
     p_demo.add_argument("--out", default="out/demo")
     p_demo.add_argument("--steps", type=_steps)
     p_demo.add_argument("--no-render", action="store_true", help="skip the PNG and GIF")
     p_demo.add_argument("--quiet", action="store_true")
     p_demo.add_argument("--field", choices=fields, help="what colours the pictures (default J)")
-    p_info = sub.add_parser("info", help="describe a mesh file and check it")
+    p_info = sub.add_parser("info", parents=common, help="describe a mesh file and check it")
     p_info.add_argument("mesh")
-    sub.add_parser("examples", help="list the shipped example scenes")
+    sub.add_parser("examples", parents=common, help="list the shipped example scenes")
     args = parser.parse_args(argv)
+    with warnings.catch_warnings():
+        warnings.showwarning = _show_warning
+        try:
+            return _dispatch(args)
+        except KeyboardInterrupt:
+            if args.debug:
+                raise
+            print("tissuesim: interrupted", file=sys.stderr)
+            return 130
+        except BaseException as exc:
+            if args.debug or isinstance(exc, SystemExit):
+                raise
+            code, message = error_message(exc)
+            print(f"tissuesim: error: {message}", file=sys.stderr)
+            return code
 
-    from tissuesim.errors import TissueSimError
 
-    try:
-        if args.command == "run":
-            return _run(
-                _resolve_scene(args.scene),
-                args.out,
-                args.steps,
-                not args.no_render,
-                args.quiet,
-                args.field,
-            )
-        if args.command == "demo":
-            return _run(
-                example_path(DEMO), args.out, args.steps, not args.no_render, args.quiet, args.field
-            )
-        if args.command == "info":
-            from tissuesim.mesh import describe_mesh, read_mesh
+EXIT_CODES = (
+    "exit codes: 0 done; 1 the run failed (Newton did not converge, explicit steps blew up, an "
+    "internal error); 2 bad input (scene, mesh, argument, output directory); 130 interrupted"
+)
+MAX_MESSAGE = 1000  # characters of one error line
 
-            print(json.dumps(describe_mesh(read_mesh(args.mesh)), indent=2))
-            return 0
-        if args.command == "examples":
-            for name in list_examples():
-                print(f"{name}\t{example_path(name)}")
-            return 0
-    except TissueSimError as exc:
-        print(f"tissuesim: error: {exc}", file=sys.stderr)
-        return 2
-    return 1
+
+def error_message(exc: BaseException) -> tuple[int, str]:
+    """(exit code, one line) for an exception that ends a command."""
+    from tissuesim.errors import InputError, RunError, TissueSimError
+
+    if isinstance(exc, RunError):
+        code, text = 1, str(exc)
+    elif isinstance(exc, InputError | TissueSimError):
+        code, text = 2, str(exc)
+    elif isinstance(exc, MemoryError):
+        code, text = 1, f"out of memory ({exc}); use a coarser mesh or fewer frames/points"
+    elif isinstance(exc, OSError):
+        name = exc.filename if exc.filename is not None else ""
+        code = 1
+        text = f"{name}: {exc.strerror or exc}" if name else f"{exc.strerror or exc}"
+        text += " (a file tissuesim had to read or write)"
+    else:
+        code = 1
+        text = (
+            f"internal error ({type(exc).__name__}: {exc}); this is a bug in tissuesim: rerun "
+            "with --debug for the traceback and report it"
+        )
+    text = " ".join(text.split())
+    if len(text) > MAX_MESSAGE:
+        text = text[: MAX_MESSAGE - 20] + f" ... ({len(text)} characters)"
+    return code, text
+
+
+def _show_warning(message, category, filename, lineno, file=None, line=None) -> None:
+    print(f"tissuesim: warning: {' '.join(str(message).split())}", file=sys.stderr)
+
+
+def _dispatch(args) -> int:
+    if args.command == "run":
+        return _run(
+            _resolve_scene(args.scene),
+            args.out,
+            args.steps,
+            not args.no_render,
+            args.quiet,
+            args.field,
+        )
+    if args.command == "demo":
+        return _run(
+            example_path(DEMO), args.out, args.steps, not args.no_render, args.quiet, args.field
+        )
+    if args.command == "info":
+        from tissuesim.mesh import describe_mesh, read_mesh
+
+        print(json.dumps(describe_mesh(read_mesh(args.mesh)), indent=2))
+        return 0
+    for name in list_examples():  # "examples"
+        print(f"{name}\t{example_path(name)}")
+    return 0
 
 
 if __name__ == "__main__":

@@ -22,8 +22,14 @@ from tissuesim.energies.mass import MassKind, MassMatrix
 from tissuesim.kinematics.p1 import P1Kinematics
 from tissuesim.materials.base import Material
 from tissuesim.mesh.mesh import Mesh
+from tissuesim.validate import check_memory, positive_field
 
 __all__ = ["Model"]
+
+
+#: bytes a model needs per cell before any factorisation (measured: 2.7 KB per triangle,
+#: 9.8 KB per tetrahedron with its sparsity pattern and scatter maps)
+MODEL_BYTES_PER_CELL = {2: 2500, 3: 9000}
 
 
 @dataclass(eq=False)
@@ -37,14 +43,13 @@ class Model:
     backend: str = "auto"  # "auto", "numba" or "numpy" (see backend.py)
 
     def __post_init__(self) -> None:
-        self.density = np.broadcast_to(
-            np.asarray(self.density, dtype=float), (self.mesh.n_cells,)
-        ).copy()
-        if not np.all(np.isfinite(self.density)) or np.any(self.density <= 0):
-            bad = int(np.flatnonzero(~(self.density > 0))[0])
-            raise ValueError(
-                f"density must be finite and > 0; element {bad} has {self.density[bad]}"
-            )
+        cells = self.mesh.n_cells
+        check_memory(
+            cells * MODEL_BYTES_PER_CELL[self.mesh.dim],
+            f"a model of {self.mesh.source} ({cells} cells)",
+            "Use a coarser mesh.",
+        )
+        self.density = positive_field(self.density, "density", self.mesh.n_cells, "kg/m^3")
         self.kinematics = P1Kinematics.from_mesh(self.mesh)
         self.pattern = SparsityPattern.from_stencils(
             self.kinematics.n_dofs, [self.kinematics.stencil]

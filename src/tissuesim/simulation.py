@@ -31,6 +31,7 @@ from __future__ import annotations
 import functools
 import re
 import time as wallclock
+import warnings
 from collections.abc import Sequence
 from dataclasses import asdict
 from pathlib import Path
@@ -38,8 +39,10 @@ from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 
+from tissuesim import validate
 from tissuesim.bodies.fem import FemBody
 from tissuesim.energies.mass import MassKind
+from tissuesim.errors import InputError
 from tissuesim.materials.base import Material
 from tissuesim.mesh.mesh import Mesh
 from tissuesim.records import StepRecord
@@ -64,6 +67,18 @@ EXPLICIT = ("explicit", "symplectic_euler")
 _NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9_.-]*")
 #: series the output writes besides the bodies'; no body may take these names
 RESERVED_NAMES = ("cut", "summary", "forces", "manifest")
+#: explicit time steps above this multiple of the stability estimate are refused
+STABILITY_MARGIN = 1.5
+
+
+def check_time_resolution(t: float, h: float, what: str) -> None:
+    """Refuse a time so large that steps of h are lost to round-off (t + h == t, or h
+    resolved to worse than 1e-6 of itself): every frame would carry the same time."""
+    if abs(t) * 2.0**-52 > 1e-6 * h:
+        raise InputError(
+            f"{what} {t:g} s is too large for time_step {h:g} s: a double cannot resolve steps of "
+            f"{h:g} s at t = {t:g} s; count time from 0 (start_time = 0)"
+        )
 
 
 class Simulation(SetupCalls, BodyResults):
@@ -93,15 +108,14 @@ class Simulation(SetupCalls, BodyResults):
         start_time: float = 0.0,
         backend: str = "auto",
     ) -> None:
-        if integrator not in INTEGRATORS:
-            raise ValueError(f"integrator must be one of {list(INTEGRATORS)}, not {integrator!r}")
+        self.integrator = validate.choice(integrator, "integrator", INTEGRATORS)
         self.time_step, self.max_step_halvings = validate_stepping(time_step, max_step_halvings)
-        if not np.isfinite(start_time):
-            raise ValueError(f"start_time must be a finite number of seconds, not {start_time!r}")
-        self.integrator = integrator
+        self.start_time = validate.real(start_time, "start_time", unit="s")
+        check_time_resolution(self.start_time, self.time_step, "start_time")
+        if newton is not None and not isinstance(newton, NewtonOptions):
+            raise InputError(f"newton must be a NewtonOptions, not {validate.short(newton)}")
         self.newton = newton or NewtonOptions()
-        self.backend = backend
-        self.start_time = float(start_time)
+        self.backend = validate.choice(backend, "backend", ("auto", "numba", "numpy"))
         self.bodies: dict[str, FemBody | FrameBody | TissueBody] = {}
         self.tissue: TissueBody | None = None
         self.history: list[StepRecord] = []
@@ -119,10 +133,10 @@ class Simulation(SetupCalls, BodyResults):
             make_linear_solver(self.newton.linear_solver, 1, 3)  # unavailable: fail now
         if mesh is not None:
             if material is None:
-                raise ValueError("Simulation(mesh, material): a mesh needs its material")
+                raise InputError("Simulation(mesh, material): a mesh needs its material")
             self.add_body(name, mesh, material, density=density, mass=mass)
         elif material is not None:
-            raise ValueError("Simulation(mesh, material): a material needs its mesh")
+            raise InputError("Simulation(mesh, material): a material needs its mesh")
         if gravity is not None:
             self.add_gravity(gravity)
 
@@ -165,17 +179,17 @@ class Simulation(SetupCalls, BodyResults):
         from tissuesim.io.body_series import series_names
 
         if not isinstance(name, str) or not _NAME.fullmatch(name):
-            raise ValueError(
+            raise InputError(
                 f"{what} name {name!r} must be letters, digits, '_', '-' or '.', starting with "
                 "a letter or digit (it names output files)"
             )
         if name in self.bodies or name in RESERVED_NAMES or (name == "tissue" != what):
-            raise ValueError(f"{what} name {name!r} is taken; choose another")
+            raise InputError(f"{what} name {name!r} is taken; choose another")
         mine = set(series_names(name, kind))
         for other in self.bodies.values():
             clash = mine & set(series_names(other.name, other.kind))
             if clash:
-                raise ValueError(
+                raise InputError(
                     f"{what} name {name!r} would write the series {sorted(clash)[0]!r} that "
                     f"body {other.name!r} writes; choose another name"
                 )
@@ -190,7 +204,7 @@ class Simulation(SetupCalls, BodyResults):
             while name in self._force_names:
                 name, k = f"{default}_{k}", k + 1
         elif name in self._force_names:
-            raise ValueError(
+            raise InputError(
                 f"a support, grasper or spring set named {name!r} exists; give another name"
             )
         self._force_names.add(name)
@@ -226,7 +240,7 @@ class Simulation(SetupCalls, BodyResults):
         ``read_mesh``) of one material; density kg/m^3 (scalar or one per element)."""
         name = self._new_name(name, "body")
         if self.tissue is not None:
-            raise ValueError("add the organs before the tissue that connects them")
+            raise InputError("add the organs before the tissue that connects them")
         if self.explicit:
             mass = "lumped"  # the explicit update inverts the mass: it must be diagonal
         body = FemBody(
@@ -280,11 +294,11 @@ class Simulation(SetupCalls, BodyResults):
         from tissuesim.coupling.tissue import TissueBody
 
         if self.tissue is not None:
-            raise ValueError("the scene has a tissue already; one tissue body per scene")
+            raise InputError("the scene has a tissue already; one tissue body per scene")
         name = self._new_name(name, "tissue", "tissue")
         organs = [(n, b.mesh) for n, b in self.bodies.items() if b.kind == "fem"]
         if any(m.dim != 3 for _, m in organs):
-            raise ValueError("the tissue joins 3D organs; a 2D body cannot take part")
+            raise InputError("the tissue joins 3D organs; a 2D body cannot take part")
         tissue = TissueBody(name, organs, material, backend=self.backend, **kw)
         for g in self.gravity:
             tissue.add_gravity(g)
@@ -309,15 +323,15 @@ class Simulation(SetupCalls, BodyResults):
         """The body called ``name``; None: the only body (of ``kinds``, if given)."""
         if name is not None:
             if name not in self.bodies:
-                raise ValueError(f"unknown body {name!r}; bodies: {list(self.bodies)}")
+                raise InputError(f"unknown body {name!r}; bodies: {list(self.bodies)}")
             b = self.bodies[name]
             if kinds and b.kind not in kinds:
-                raise ValueError(f"body {name!r} is a {b.kind} body; this needs {kinds}")
+                raise InputError(f"body {name!r} is a {b.kind} body; this needs {kinds}")
             return b
         candidates = [b for b in self.bodies.values() if not kinds or b.kind in kinds]
         if len(candidates) != 1:
             what = f"{'/'.join(kinds)} " if kinds else ""
-            raise ValueError(
+            raise InputError(
                 f"the simulation has {len(candidates)} {what}bodies "
                 f"({[b.name for b in candidates]}); name one with body="
             )
@@ -344,7 +358,7 @@ class Simulation(SetupCalls, BodyResults):
         from tissuesim.system import System
 
         if not self.bodies:
-            raise ValueError("the simulation has no bodies: add_body or add_frame_body first")
+            raise InputError("the simulation has no bodies: add_body or add_frame_body first")
         old, state = self._system, self._state
         parts: dict[str, tuple[np.ndarray, np.ndarray]] = {}
         if old is not None and state is not None:
@@ -388,7 +402,7 @@ class Simulation(SetupCalls, BodyResults):
     def state(self, value: State) -> None:
         self.system  # noqa: B018
         if value.x.shape != self._state.x.shape or value.v.shape != self._state.v.shape:
-            raise ValueError("a state must have the shapes of the simulation's state")
+            raise InputError("a state must have the shapes of the simulation's state")
         self._state = value
 
     @property
@@ -401,7 +415,7 @@ class Simulation(SetupCalls, BodyResults):
         s = self.system
         j = s.index(b.name) if b.name in s.names else None
         if j is None:
-            raise ValueError(f"body {b.name!r} has no material left (all of it was cut away)")
+            raise InputError(f"body {b.name!r} has no material left (all of it was cut away)")
         return b, self._state.x[s.config_slices[j]], self._state.v[s.tangent_slices[j]]
 
     # -- stepping -----------------------------------------------------------------------------
@@ -441,10 +455,33 @@ class Simulation(SetupCalls, BodyResults):
         springs = any(b.kind == "frames" and b.model.springs for b in self._active())
         spring_graspers = any(b.kind == "fem" and b.spring_graspers for b in self._active())
         if not (s.prescribed_dofs.size or springs or spring_graspers):
-            raise ValueError(
+            raise InputError(
                 "a quasistatic solve needs supports, fixed or prescribed frames, or springs, to "
                 "hold the bodies against rigid motions; add fix(...) / fix_frames(...) or use "
                 "backward_euler"
+            )
+
+    _stability_checked = None  # the system whose explicit stability limit was checked
+
+    def _check_stability(self) -> None:
+        """Explicit steps far above the stability limit blow up: refuse them before the first
+        step. The estimate is within 20 % of the true limit 2 / omega_max on the test meshes
+        (benchmarks/results/explicit_limit.md), so above STABILITY_MARGIN times it no run is
+        stable; between 1 and that a warning, and the blow-up check of each step stands."""
+        limit = self.critical_time_step()
+        h = self.time_step
+        if h > STABILITY_MARGIN * limit:
+            raise InputError(
+                f"time_step {h:g} s is {h / limit:.3g} x the explicit stability limit (estimate "
+                f"{limit:.3g} s); explicit steps would blow up: use time_step <= "
+                f"{0.9 * limit:.3g} s, or integrator = backward_euler"
+            )
+        if h > limit:
+            warnings.warn(
+                f"time_step {h:g} s is above the explicit stability estimate {limit:.3g} s; the "
+                "run stops if the energy grows without bound",
+                UserWarning,
+                stacklevel=3,
             )
 
     def step(self) -> StepRecord:
@@ -455,6 +492,9 @@ class Simulation(SetupCalls, BodyResults):
         s = self.system
         if self.integrator == "quasistatic":
             self._check_supported()
+        if self.explicit and self._stability_checked is not s:
+            self._check_stability()
+            self._stability_checked = s
         start = wallclock.perf_counter()
         t0 = self.time
         if self.explicit:

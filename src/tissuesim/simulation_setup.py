@@ -9,6 +9,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from tissuesim.errors import InputError
 from tissuesim.mesh.mesh import Mesh
 
 if TYPE_CHECKING:
@@ -44,13 +45,13 @@ class SetupCalls:
 
         a, b = self.body(body, ("fem", "frames")), self.body(to, ("fem", "frames"))
         if a is b:
-            raise ValueError(f"attach: a body cannot be attached to itself ({body!r})")
+            raise InputError(f"attach: a body cannot be attached to itself ({body!r})")
         if distance is not None and not (np.isfinite(distance) and distance > 0):
-            raise ValueError(f"attach: distance must be > 0 m, got {distance!r}")
+            raise InputError(f"attach: distance must be > 0 m, got {distance!r}")
         if stiffness is not None and not (np.isfinite(stiffness) and stiffness > 0):
-            raise ValueError(f"attach: stiffness must be > 0 N/m per m^2, got {stiffness!r}")
+            raise InputError(f"attach: stiffness must be > 0 N/m per m^2, got {stiffness!r}")
         if a.kind == b.kind == "frames":
-            raise ValueError(
+            raise InputError(
                 f"attach: {body!r} and {to!r} are both frame bodies; attach a frame body to a "
                 "FEM body, or make them one frame body"
             )
@@ -129,9 +130,9 @@ class SetupCalls:
         g = np.asarray(acceleration, dtype=float)
         dims = {b.dim for b in self.bodies.values()}
         if g.ndim != 1 or g.shape[0] not in (2, 3) or not np.all(np.isfinite(g)):
-            raise ValueError(f"gravity must be 2 or 3 finite numbers (m/s^2), got {acceleration!r}")
+            raise InputError(f"gravity must be 2 or 3 finite numbers (m/s^2), got {acceleration!r}")
         if dims and {g.shape[0]} != dims:
-            raise ValueError(
+            raise InputError(
                 f"gravity must have {max(dims)} components (the bodies are {max(dims)}D), got "
                 f"{g.shape[0]}"
             )
@@ -174,7 +175,7 @@ class SetupCalls:
 
     def _tissue(self, what: str) -> TissueBody:
         if self.tissue is None:
-            raise ValueError(f"{what} acts on the tissue: call add_tissue first")
+            raise InputError(f"{what} acts on the tissue: call add_tissue first")
         return self.tissue
 
     def add_cut(self, blade, start: float, end: float, *, kerf=None, name: str = "cut"):

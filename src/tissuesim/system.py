@@ -34,6 +34,7 @@ from tissuesim.assembly.pattern import SparsityPattern
 from tissuesim.constraints.dirichlet import Elimination
 from tissuesim.coupling.attachment import Attachment, OrganSide, TissueSide
 from tissuesim.energies.accumulator import Accumulator
+from tissuesim.errors import InputError
 
 __all__ = ["System", "is_frame_body"]
 
@@ -67,14 +68,14 @@ class System:
     def __post_init__(self) -> None:
         self.bodies, self.names = list(self.bodies), list(self.names)
         if len(self.bodies) != len(self.names) or not self.bodies:
-            raise ValueError("a system needs one name per body and at least one body")
+            raise InputError("a system needs one name per body and at least one body")
         frame_bodies = [j for j, b in enumerate(self.bodies) if is_frame_body(b)]
         self.attachments = list(self.attachments)
         self._tissue_of = []
         for a in self.attachments:
             j = a.tissue_body if a.tissue_body is not None else _only(frame_bodies)
             if not is_frame_body(self.bodies[j]) or is_frame_body(self.bodies[a.organ]):
-                raise ValueError("an attachment joins a FEM body to a frame body")
+                raise InputError("an attachment joins a FEM body to a frame body")
             self._tissue_of.append(j)
         # each frame body gets its attachments (stencils in its pattern, constant Hessians)
         self._slot = [0] * len(self.attachments)
@@ -315,7 +316,7 @@ class System:
 
 def _only(frame_bodies: list[int]) -> int:
     if len(frame_bodies) != 1:
-        raise ValueError(
+        raise InputError(
             "an attachment must name its frame body (tissue_body) when the system has "
             f"{len(frame_bodies)} frame bodies"
         )

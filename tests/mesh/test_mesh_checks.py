@@ -3,6 +3,7 @@
 import numpy as np
 import pytest
 
+import tissuesim as ts
 from tissuesim.errors import MeshError
 from tissuesim.mesh import signed_volumes, validate_mesh
 
@@ -70,10 +71,53 @@ def test_reversed_elements_reoriented_with_warning():
     assert signed_volumes(m3.points, m3.cells)[0] > 0
 
 
-def test_unreferenced_vertex_warns():
+def test_unreferenced_vertices_are_dropped_and_indices_remapped():
+    # a stray vertex first: every later index shifts down by one, sets follow
+    p = np.vstack([[[5.0, 5.0]], SQUARE])
+    cells = np.asarray(TRIS) + 1
+    with pytest.warns(UserWarning, match=r"dropped 1 vertices that belong to no element"):
+        m = validate_mesh(p, cells, source="s", point_sets={"corner": [1, 3]})
+    assert m.n_points == len(SQUARE)
+    np.testing.assert_array_equal(m.points, SQUARE)
+    np.testing.assert_array_equal(m.cells, validate_mesh(SQUARE, TRIS, source="s").cells)
+    np.testing.assert_array_equal(m.point_sets["corner"], [0, 2])
+
+
+def test_unreferenced_vertices_no_longer_break_the_solver():
+    """Before: a stray vertex was a massless free DOF; Newton's line search then failed."""
     p = np.vstack([SQUARE, [[5.0, 5.0]]])
-    with pytest.warns(UserWarning, match=r"1 vertices belong to no element \(first: \[4\]\)"):
-        validate_mesh(p, TRIS, source="s")
+    with pytest.warns(UserWarning, match="dropped 1"):
+        mesh = validate_mesh(p, TRIS, source="s")
+    sim = ts.Simulation(
+        mesh,
+        ts.make_material("neo_hookean", youngs_modulus=1e3, poisson_ratio=0.3),
+        integrator="quasistatic",
+        time_step=1.0,
+    )
+    sim.add_dirichlet([0, 3])
+    sim.add_gravity([0.0, -9.81])
+    assert sim.step().newton_iterations >= 1
+
+
+def test_coincident_vertices_are_refused_or_merged():
+    # two triangles sharing an edge, exported unwelded: vertices 4 and 5 duplicate 1 and 2
+    pts = np.array([[0, 0], [1, 0], [0, 1], [1, 1], [1, 0], [0, 1 + 1e-13]], float)
+    cells = [[0, 1, 2], [4, 3, 5]]
+    with pytest.raises(
+        MeshError, match=r"2 vertices coincide .*vertices 1 and 4.*merge_coincident"
+    ):
+        validate_mesh(pts, cells, source="seam.vtu")
+    with pytest.warns(UserWarning, match="merged 2 coincident vertices"):
+        m = validate_mesh(pts, cells, source="seam.vtu", merge_coincident=True)
+    assert m.n_points == 4
+    assert set(m.cells[1].tolist()) == {1, 2, 3}  # one body now: the shared edge is 1-2
+
+
+def test_merging_that_collapses_an_element_is_refused():
+    # vertex 3 lies 1e-10 from vertex 1: element 1 is thin but valid, merged it collapses
+    pts = np.array([[0, 0], [1, 0], [0, 1], [1 + 1e-10, 1e-10]], float)
+    with pytest.raises(MeshError, match="collapses element 1"):
+        validate_mesh(pts, [[0, 1, 2], [1, 3, 2]], source="s", merge_coincident=True)
 
 
 def test_duplicate_element_rejected():

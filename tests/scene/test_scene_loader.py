@@ -239,7 +239,7 @@ def test_invalid_toml_names_the_file(tmp_path):
 
 
 def test_missing_scene_file(tmp_path):
-    with pytest.raises(SceneError, match="does not exist"):
+    with pytest.raises(SceneError, match="no such scene file"):
         load_scene(tmp_path / "nope.toml")
 
 

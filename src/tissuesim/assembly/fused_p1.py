@@ -23,6 +23,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from tissuesim.errors import InputError
 from tissuesim.materials.point_kernels import evaluate_point
 
 __all__ = ["assemble_p1", "element_jacobians"]
@@ -43,7 +44,7 @@ def assemble_p1(law, mu, lam, x, cells, grads, weights, order, scatter, gradient
     elif d == 3:
         kernel = _assemble_nodes_3d  # frames: 4 virtual nodes per frame in the stencil
     else:
-        raise ValueError(f"no fused kernel for {nv} nodes per point in {d}D")
+        raise InputError(f"no fused kernel for {nv} nodes per point in {d}D")
     return kernel(law, mu, lam, x, cells, grads, weights, order, scatter, gradient, hessian)
 
 

@@ -14,6 +14,8 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.sparse as sp
 
+from tissuesim.errors import InputError
+
 __all__ = ["SparsityPattern"]
 
 
@@ -80,7 +82,7 @@ class SparsityPattern:
         wanted = np.asarray(rows, dtype=np.int64) * self.n + cols
         pos = np.minimum(np.searchsorted(keys, wanted), keys.size - 1)
         if not np.array_equal(keys[pos], wanted):
-            raise ValueError("internal: an entry lies outside the sparsity pattern")
+            raise InputError("internal: an entry lies outside the sparsity pattern")
         return pos
 
     def matrix(self, data: np.ndarray) -> sp.csr_matrix:

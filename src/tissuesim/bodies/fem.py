@@ -27,6 +27,7 @@ from tissuesim.energies.loads import (
 )
 from tissuesim.energies.mass import Inertia, MassKind
 from tissuesim.energies.vertex_springs import VertexSprings
+from tissuesim.errors import InputError
 from tissuesim.materials.base import Material
 from tissuesim.materials.measures import continuum_fields
 from tissuesim.mesh.mesh import Mesh
@@ -42,16 +43,16 @@ def vertex_indices(vertices, n_points: int, what: str, unique: bool = True) -> n
     refused (they would silently select other vertices)."""
     arr = np.asarray(vertices)
     if arr.dtype == bool:
-        raise ValueError(f"{what}: got a boolean mask; pass vertex indices (np.flatnonzero(mask))")
+        raise InputError(f"{what}: got a boolean mask; pass vertex indices (np.flatnonzero(mask))")
     if arr.size and not np.issubdtype(arr.dtype, np.integer):
         if not np.all(np.isfinite(arr)) or np.any(arr != np.round(arr)):
-            raise ValueError(f"{what}: vertex indices must be integers, got {arr.dtype} values")
+            raise InputError(f"{what}: vertex indices must be integers, got {arr.dtype} values")
     v = arr.astype(np.int64).ravel()
     v = np.unique(v) if unique else v
     if v.size == 0:
-        raise ValueError(f"{what}: the vertex selection is empty")
+        raise InputError(f"{what}: the vertex selection is empty")
     if v.min() < 0 or v.max() >= n_points:
-        raise ValueError(
+        raise InputError(
             f"{what}: vertex indices must be in [0, {n_points}); got {int(v.min())}.."
             f"{int(v.max())} (out of range)"
         )
@@ -61,7 +62,7 @@ def vertex_indices(vertices, n_points: int, what: str, unique: bool = True) -> n
 def _vector(value, dim: int, what: str) -> np.ndarray:
     v = np.asarray(value, dtype=float)
     if v.shape != (dim,) or not np.all(np.isfinite(v)):
-        raise ValueError(f"{what} must be {dim} finite numbers (m), got {value!r}")
+        raise InputError(f"{what} must be {dim} finite numbers (m), got {value!r}")
     return v
 
 
@@ -152,18 +153,18 @@ class FemBody:
         if components is not None:
             arr = np.asarray(components)
             if arr.dtype == bool or not np.issubdtype(arr.dtype, np.integer) or arr.ndim != 1:
-                raise ValueError(
+                raise InputError(
                     "add_dirichlet: components must be a sequence of integer axes, e.g. (0,), "
                     f"not {components!r}"
                 )
             comps = tuple(int(c) for c in arr)
             if not comps or min(comps) < 0 or max(comps) >= self.dim:
-                raise ValueError(
+                raise InputError(
                     f"add_dirichlet: components must be axes in 0..{self.dim - 1}, "
                     f"not {components!r}"
                 )
         name = self._claim(name, default)
-        self.conditions.append((name, DirichletCondition(v, g, comps)))
+        self.conditions.append((name, DirichletCondition(v, g, comps, repr(name))))
         self._set_conditions()
         return name
 
@@ -189,9 +190,9 @@ class FemBody:
             displacement = functools.partial(lambda c, t: c, const)
         _vector(displacement(0.0), self.dim, f"grasper {name!r} displacement at t = 0")
         if stiffness is not None and not (np.isfinite(stiffness) and stiffness > 0):
-            raise ValueError(f"grasper {name!r}: stiffness must be > 0 N/m, got {stiffness!r}")
+            raise InputError(f"grasper {name!r}: stiffness must be > 0 N/m, got {stiffness!r}")
         if stiffness is not None and self.dim != 3:
-            raise ValueError(f"grasper {name!r}: spring graspers need a 3D body")
+            raise InputError(f"grasper {name!r}: spring graspers need a 3D body")
         name = self._claim(name, "grasper")
         g = Grasper(name, self.name, v, displacement, stiffness)
         self.graspers.append(g)
@@ -201,7 +202,7 @@ class FemBody:
                 displacement,
                 self.dim,
             )
-            self.conditions.append((name, DirichletCondition(v, motion)))
+            self.conditions.append((name, DirichletCondition(v, motion, name=repr(name))))
             self._set_conditions()
         else:
             self.spring_graspers.append((g, g.springs(self.mesh.points)))
@@ -214,14 +215,14 @@ class FemBody:
         callable (X (k, d), t) -> (k, d) evaluated at the facets' vertices."""
         facets = np.asarray(facets, dtype=np.int64)
         if facets.ndim != 2 or facets.shape[1] != self.dim:
-            raise ValueError(f"add_traction: facets must be (k, {self.dim}) vertex indices")
+            raise InputError(f"add_traction: facets must be (k, {self.dim}) vertex indices")
         self.model.loads.append(Traction(facets, as_field(traction)))
 
     def add_gravity(self, acceleration: Sequence[float]) -> None:
         """Gravity, acceleration (d,) in m/s^2, acting on the element densities."""
         g = np.asarray(acceleration, dtype=float)
         if g.shape != (self.dim,) or not np.all(np.isfinite(g)):
-            raise ValueError(f"add_gravity: acceleration must be {self.dim} finite numbers")
+            raise InputError(f"add_gravity: acceleration must be {self.dim} finite numbers")
         self.model.loads.append(Gravity(g))
 
     def add_body_force(self, force_density) -> None:
@@ -237,14 +238,14 @@ class FemBody:
         else:
             f = np.asarray(force, dtype=float)
             if f.shape not in ((self.dim,), (v.size, self.dim)) or not np.all(np.isfinite(f)):
-                raise ValueError(
+                raise InputError(
                     f"add_nodal_forces: force must be {self.dim} finite numbers or "
                     f"({v.size}, {self.dim}) of them (N), got shape {f.shape}"
                 )
             fn = functools.partial(lambda c, t: c, f)
         fn_check = np.asarray(fn(0.0), dtype=float)
         if fn_check.shape not in ((self.dim,), (v.size, self.dim)):
-            raise ValueError(f"add_nodal_forces: force(t) must give ({v.size}, {self.dim})")
+            raise InputError(f"add_nodal_forces: force(t) must give ({v.size}, {self.dim})")
         self.model.loads.append(NodalForces(v, fn))
 
     def set_velocity(self, velocity) -> None:
@@ -253,12 +254,12 @@ class FemBody:
         try:
             v = np.broadcast_to(v, self.mesh.points.shape)
         except ValueError:
-            raise ValueError(
+            raise InputError(
                 f"set_velocity: body {self.name!r} needs ({self.mesh.n_points}, {self.dim}) or "
                 f"({self.dim},) velocities, got shape {v.shape}"
             ) from None
         if not np.all(np.isfinite(v)):
-            raise ValueError("set_velocity: velocities must be finite")
+            raise InputError("set_velocity: velocities must be finite")
         self.velocity = v.ravel().copy()
         self._changed("velocity")
 

@@ -17,6 +17,7 @@ import numpy as np
 
 from tissuesim.energies.loads import ExternalForce
 from tissuesim.energies.mass import Inertia
+from tissuesim.errors import InputError
 from tissuesim.frames.frame_types import FrameType
 from tissuesim.frames.loads import FrameGravity, PointForces
 from tissuesim.frames.model import (
@@ -103,26 +104,26 @@ class FrameBody:
         """Indices of frames whose rest positions (n, 3) satisfy ``predicate`` (-> bool (n,))."""
         mask = np.asarray(predicate(self.rest_frames), dtype=bool).reshape(-1)
         if mask.shape != (self.n_frames,):
-            raise ValueError("frames_where: the predicate must return one bool per frame")
+            raise InputError("frames_where: the predicate must return one bool per frame")
         return np.flatnonzero(mask)
 
     def _frame_indices(self, frames, what: str) -> np.ndarray:
         arr = np.asarray(frames)
         if arr.dtype == bool:
-            raise ValueError(f"{what}: got a boolean mask; pass frame indices")
+            raise InputError(f"{what}: got a boolean mask; pass frame indices")
         if arr.size and not np.issubdtype(arr.dtype, np.integer):
-            raise ValueError(f"{what}: frame indices must be integers, got {arr.dtype}")
+            raise InputError(f"{what}: frame indices must be integers, got {arr.dtype}")
         idx = arr.astype(np.int64).ravel()
         if idx.size == 0:
-            raise ValueError(f"{what}: the frame selection is empty")
+            raise InputError(f"{what}: the frame selection is empty")
         if idx.min() < 0 or idx.max() >= self.n_frames:
-            raise ValueError(
+            raise InputError(
                 f"{what}: frame indices must be in [0, {self.n_frames}); got "
                 f"{idx.min()}..{idx.max()}"
             )
         taken = set(self.model.prescribed_frames.tolist()) & set(idx.tolist())
         if taken:
-            raise ValueError(f"{what}: frames {sorted(taken)} are already fixed or prescribed")
+            raise InputError(f"{what}: frames {sorted(taken)} are already fixed or prescribed")
         return idx
 
     def fix_frames(self, frames, name: str | None = None) -> str:
@@ -166,7 +167,7 @@ class FrameBody:
     def add_gravity(self, acceleration: Sequence[float]) -> None:
         g = np.asarray(acceleration, dtype=float)
         if g.shape != (3,) or not np.all(np.isfinite(g)):
-            raise ValueError(
+            raise InputError(
                 f"add_gravity: acceleration must be 3 finite numbers, not {acceleration!r}"
             )
         self.model.loads.append(FrameGravity(g))
@@ -177,7 +178,7 @@ class FrameBody:
         if not callable(force):
             f = np.asarray(force, dtype=float)
             if f.shape not in ((3,), embedding.points.shape) or not np.all(np.isfinite(f)):
-                raise ValueError("add_point_forces: force must be (3,) or (k, 3) finite numbers")
+                raise InputError("add_point_forces: force must be (3,) or (k, 3) finite numbers")
         self.model.loads.append(PointForces(embedding, force))
         return embedding
 
@@ -195,7 +196,7 @@ class FrameBody:
         embedding = self.model.embed(points, what="spring point")
         k = np.broadcast_to(np.asarray(stiffness, dtype=float), (embedding.points.shape[0],))
         if not np.all(np.isfinite(k)) or np.any(k <= 0):
-            raise ValueError("add_spring: stiffness must be finite and > 0 (N/m)")
+            raise InputError("add_spring: stiffness must be finite and > 0 (N/m)")
         spring = AttachmentSpring(embedding, k.copy(), target)
         spring.targets(self._time())  # a bad target fails now
         name = self._claim(name, f"{self.name}.springs")
@@ -212,13 +213,13 @@ class FrameBody:
         n, t = self.n_frames, self.model.frame_type.tangent_size
         lin, ang = np.asarray(linear, dtype=float), np.asarray(angular, dtype=float)
         if lin.shape != (3,) or ang.shape != (3,):
-            raise ValueError("set_velocity: linear and angular velocities are 3 numbers each")
+            raise InputError("set_velocity: linear and angular velocities are 3 numbers each")
         v = np.zeros((n, t))
         v[:, :3] = lin
         if self.model.frame_type.rigid:
             v[:, 3:] = ang
         elif np.any(ang != 0):
-            raise ValueError("set_velocity: angular velocity needs rigid frames")
+            raise InputError("set_velocity: angular velocity needs rigid frames")
         self.velocity = v.ravel()
         self._changed("velocity")
 

@@ -14,6 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from tissuesim.assembly.pattern import SparsityPattern
+from tissuesim.errors import InputError
 
 __all__ = ["DirichletCondition", "PrescribedDofs", "Displacement"]
 
@@ -28,10 +29,13 @@ class DirichletCondition:
     vertices: np.ndarray
     displacement: Displacement
     components: tuple[int, ...] | None = None
+    name: str = "a prescribed set"  # in error messages
 
 
 def constant_displacement(value: Sequence[float]) -> Displacement:
     v = np.asarray(value, dtype=float)
+    if v.ndim != 1 or not np.all(np.isfinite(v)):
+        raise InputError(f"a constant displacement must be finite numbers (m), not {value!r}")
 
     def g(X: np.ndarray, t: float) -> np.ndarray:
         return np.broadcast_to(v, X.shape).copy()
@@ -55,7 +59,7 @@ class PrescribedDofs:
         for c in conditions:
             comps = np.arange(d) if c.components is None else np.asarray(c.components)
             if comps.size and (comps.min() < 0 or comps.max() >= d):
-                raise ValueError(f"components {c.components} out of range for a {d}D mesh")
+                raise InputError(f"components {c.components} out of range for a {d}D mesh")
             free[(c.vertices[:, None] * d + comps).ravel()] = False
         dofs = np.flatnonzero(~free)
         return cls(tuple(conditions), rest_positions, dofs, free)
@@ -68,14 +72,25 @@ class PrescribedDofs:
             X = self.rest_positions[c.vertices]
             u = np.asarray(c.displacement(X, t), dtype=float)
             if u.shape != X.shape:
-                u = np.broadcast_to(u, X.shape)
+                try:
+                    u = np.broadcast_to(u, X.shape)
+                except ValueError:
+                    raise InputError(
+                        f"the displacement of {c.name} gives shape {u.shape}; it must give "
+                        f"one {d}-vector per vertex, shape {X.shape}"
+                    ) from None
             comps = np.arange(d) if c.components is None else np.asarray(c.components)
+            bad = ~np.isfinite(u[:, comps]).all(axis=1)
+            if bad.any():
+                k = int(np.flatnonzero(bad)[0])
+                raise InputError(
+                    f"the displacement of {c.name} is not finite at t = {t:g} s at "
+                    f"{int(bad.sum())} of its vertices (first: rest position "
+                    f"{X[k].tolist()}, u = {u[k].tolist()}); check its expression"
+                )
             idx = c.vertices[:, None] * d + comps
             x[idx.ravel()] = (X[:, comps] + u[:, comps]).ravel()
-        values = x[self.dofs]
-        if not np.all(np.isfinite(values)):
-            raise ValueError(f"a prescribed displacement is not finite at t = {t}")
-        return values
+        return x[self.dofs]
 
 
 @dataclass(frozen=True, eq=False)

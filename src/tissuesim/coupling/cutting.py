@@ -39,6 +39,7 @@ from tissuesim.coupling.geometry import (
     segments_hit_triangles,
     swept_blade_triangles,
 )
+from tissuesim.errors import InputError
 from tissuesim.frames.shape_functions import shape_functions
 
 __all__ = ["CutTool", "Dissection", "MIN_POINTS_PER_FRAME", "sweep_triangles"]
@@ -60,7 +61,7 @@ class CutTool:
     def positions(self, t: float) -> np.ndarray:
         b = np.asarray(self.blade(t), dtype=float)
         if b.ndim != 2 or b.shape[1] != 3 or b.shape[0] < 2 or not np.all(np.isfinite(b)):
-            raise ValueError(
+            raise InputError(
                 f"cut {self.name!r}: blade({t:g}) must give a finite (k, 3) polyline with k >= 2 "
                 f"points, got shape {b.shape}"
             )

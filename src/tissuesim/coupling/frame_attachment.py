@@ -16,6 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from tissuesim.coupling.attachment import Attachment
+from tissuesim.errors import InputError
 
 __all__ = ["FrameAttachment", "frame_attachment"]
 
@@ -38,7 +39,7 @@ class FrameAttachment:
         try:
             embedding = frame_model.embed(self.points, f"attachment point of {self.name!r}")
         except ValueError as exc:
-            raise ValueError(
+            raise InputError(
                 f"attach {self.frames!r} to {self.fem!r}: {exc}. The frames must reach the "
                 f"contact points: add frames near the contact or raise radius_factor"
             ) from None
@@ -63,11 +64,11 @@ def frame_attachment(
     from tissuesim.mesh.locate import closest_boundary_points
 
     if mesh.dim != 3:
-        raise ValueError(f"attach: body {fem!r} is {mesh.dim}D; frame bodies attach to 3D bodies")
+        raise InputError(f"attach: body {fem!r} is {mesh.dim}D; frame bodies attach to 3D bodies")
     spacing = float(np.cbrt(np.median(samples.volumes)))
     facets = contact_facets(mesh, samples.points, distance)
     if not len(facets):
-        raise ValueError(
+        raise InputError(
             f"attach {frames!r} to {fem!r}: no boundary triangle of {fem!r} faces an "
             f"integration point of {frames!r} within distance {distance:g} m; move the bodies "
             "together or give a larger distance"

@@ -11,6 +11,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial import cKDTree
 
+from tissuesim.errors import InputError
 from tissuesim.mesh.locate import TriangleSoup
 
 __all__ = ["swept_blade_triangles", "point_triangle_distance", "segments_hit_triangles"]
@@ -28,11 +29,11 @@ def _array(func: str, name: str, value, shape: str, trailing: tuple[int, ...]) -
     try:
         a = np.asarray(value, dtype=np.float64)
     except (TypeError, ValueError) as exc:
-        raise ValueError(f"{func}: {name} must be an array {shape} of numbers: {exc}") from exc
+        raise InputError(f"{func}: {name} must be an array {shape} of numbers: {exc}") from exc
     if a.ndim != 1 + len(trailing) or a.shape[1:] != trailing:
-        raise ValueError(f"{func}: {name} must have shape {shape}, got {a.shape}")
+        raise InputError(f"{func}: {name} must have shape {shape}, got {a.shape}")
     if not np.isfinite(a).all():
-        raise ValueError(f"{func}: {name} has non-finite values; check the positions")
+        raise InputError(f"{func}: {name} has non-finite values; check the positions")
     return a
 
 
@@ -49,9 +50,9 @@ def swept_blade_triangles(before: np.ndarray, after: np.ndarray) -> np.ndarray:
     b = _array(func, "before", before, "(k, 3)", (3,))
     a = _array(func, "after", after, "(k, 3)", (3,))
     if len(b) < 2:
-        raise ValueError(f"{func}: a blade needs k >= 2 points, got before with shape {b.shape}")
+        raise InputError(f"{func}: a blade needs k >= 2 points, got before with shape {b.shape}")
     if a.shape != b.shape:
-        raise ValueError(
+        raise InputError(
             f"{func}: before {b.shape} and after {a.shape} must have the same shape: the same "
             f"blade points at the start and the end of the step"
         )
@@ -71,7 +72,7 @@ def point_triangle_distance(points: np.ndarray, triangles: np.ndarray) -> np.nda
     p = _array(func, "points", points, "(q, 3)", (3,))
     t = _array(func, "triangles", triangles, "(m, 3, 3)", (3, 3))
     if len(t) == 0:
-        raise ValueError(f"{func}: triangles is empty (shape {t.shape}); give at least one")
+        raise InputError(f"{func}: triangles is empty (shape {t.shape}); give at least one")
     if len(p) == 0:
         return np.zeros(0)
     return TriangleSoup(t).closest(p, with_points=False)[3]
@@ -92,7 +93,7 @@ def segments_hit_triangles(a: np.ndarray, b: np.ndarray, triangles: np.ndarray) 
     b = _array(func, "b", b, "(q, 3)", (3,))
     tri = _array(func, "triangles", triangles, "(m, 3, 3)", (3, 3))
     if a.shape != b.shape:
-        raise ValueError(
+        raise InputError(
             f"{func}: a {a.shape} and b {b.shape} must have the same shape: segment i runs "
             f"from a[i] to b[i]"
         )

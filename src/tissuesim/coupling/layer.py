@@ -15,6 +15,7 @@ from collections.abc import Callable, Sequence
 import numpy as np
 from scipy.spatial import cKDTree
 
+from tissuesim.errors import InputError
 from tissuesim.frames.sampling import (
     _SAMPLES_PER_CHUNK,
     _SPACING_HINT,
@@ -35,16 +36,16 @@ _THICKNESS_HINT = "give the largest distance from an organ's surface that the ti
 
 def _meshes(func: str, meshes) -> list[Mesh]:
     if isinstance(meshes, Mesh):
-        raise ValueError(f"{func}: meshes must be a sequence of meshes; for one mesh use [mesh]")
+        raise InputError(f"{func}: meshes must be a sequence of meshes; for one mesh use [mesh]")
     if not isinstance(meshes, Sequence) or len(meshes) == 0:
-        raise ValueError(f"{func}: meshes must be a non-empty sequence of Mesh, got {meshes!r}")
+        raise InputError(f"{func}: meshes must be a non-empty sequence of Mesh, got {meshes!r}")
     for i, m in enumerate(meshes):
         if not isinstance(m, Mesh):
-            raise ValueError(
+            raise InputError(
                 f"{func}: meshes[{i}] must be a tissuesim Mesh, got {type(m).__name__}"
             )
         if m.dim != 3 or m.cells.shape[1] != 4:
-            raise ValueError(
+            raise InputError(
                 f"{func}: meshes[{i}] ({m.source}) is a {m.dim}D mesh; organs must be tetrahedral "
                 f"meshes (tissuesim.mesh.box, ellipsoid or a tetrahedral mesh file)"
             )
@@ -124,7 +125,7 @@ class _Layer:
     def in_region(self, x: np.ndarray) -> np.ndarray:
         mask = np.asarray(self.region(x))
         if mask.shape != (len(x),) or mask.dtype != bool:
-            raise ValueError(
+            raise InputError(
                 f"{self.func}: region must map points (q, 3) to a (q,) boolean mask, got "
                 f"{mask.dtype} with shape {mask.shape} for q = {len(x)}"
             )
@@ -262,7 +263,7 @@ def sample_between(
     spacing = _positive(func, "spacing", spacing, _SPACING_HINT)
     subsamples = _count(func, "subsamples", subsamples, 1)
     if region is not None and not callable(region):
-        raise ValueError(
+        raise InputError(
             f"{func}: region must be None or a callable mapping points (q, 3) to a (q,) bool "
             f"mask, got {type(region).__name__}"
         )
@@ -287,7 +288,7 @@ def sample_between(
         f"subsamples {subsamples}" + (" in region" if region is not None else "")
     )
     if len(points) == 0:
-        raise ValueError(_empty_message(func, layer, len(centres), spacing, subsamples))
+        raise InputError(_empty_message(func, layer, len(centres), spacing, subsamples))
     return IntegrationPoints(points, fractions * float(np.prod(h)), source)
 
 
@@ -325,14 +326,14 @@ def contact_facets(mesh: Mesh, points: np.ndarray, distance: float) -> np.ndarra
     func = "contact_facets"
     if not isinstance(mesh, Mesh) or mesh.dim != 3 or mesh.cells.shape[1] != 4:
         what = mesh.source if isinstance(mesh, Mesh) else type(mesh).__name__
-        raise ValueError(f"{func}: mesh must be a tetrahedral (3D) tissuesim Mesh, got {what}")
+        raise InputError(f"{func}: mesh must be a tetrahedral (3D) tissuesim Mesh, got {what}")
     distance = _positive(func, "distance", distance, "give the largest centroid-point distance")
     try:
         p = np.asarray(points, dtype=np.float64)
     except (TypeError, ValueError) as exc:
-        raise ValueError(f"{func}: points must be a (q, 3) array of numbers: {exc}") from exc
+        raise InputError(f"{func}: points must be a (q, 3) array of numbers: {exc}") from exc
     if p.ndim != 2 or p.shape[1] != 3 or not np.isfinite(p).all():
-        raise ValueError(f"{func}: points must be a (q, 3) array of finite numbers, got {p.shape}")
+        raise InputError(f"{func}: points must be a (q, 3) array of finite numbers, got {p.shape}")
     facets = boundary_facets(mesh.cells)
     if len(p) == 0:
         return facets[:0]

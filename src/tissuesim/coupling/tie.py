@@ -21,6 +21,8 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.sparse as sp
 
+from tissuesim.errors import InputError
+
 __all__ = ["Tie", "tie_bodies"]
 
 
@@ -79,13 +81,13 @@ def tie_bodies(
 
     for mesh, who in ((mesh_a, a), (mesh_b, b)):
         if mesh.dim != 3:
-            raise ValueError(f"attach: body {who!r} is {mesh.dim}D; ties join 3D bodies")
+            raise InputError(f"attach: body {who!r} is {mesh.dim}D; ties join 3D bodies")
     facets = boundary_facets(mesh_a.cells)
     near = distance_to_boundary(mesh_b, mesh_a.points) <= distance
     touching = facets[near[facets].all(axis=1)]
     if not len(touching):
         gap = float(distance_to_boundary(mesh_b, mesh_a.points).min())
-        raise ValueError(
+        raise InputError(
             f"attach {a!r} to {b!r}: no boundary triangle of {a!r} lies within distance "
             f"{distance:g} m of {b!r} (the closest vertex is {gap:.3g} m away); move the bodies "
             "together or give a larger distance"

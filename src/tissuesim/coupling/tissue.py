@@ -21,6 +21,7 @@ from tissuesim.coupling.attachment import Attachment
 from tissuesim.coupling.cutting import CutTool, Dissection, sweep_triangles
 from tissuesim.energies.loads import ExternalForce
 from tissuesim.energies.mass import Inertia
+from tissuesim.errors import InputError
 from tissuesim.frames.loads import FrameGravity
 from tissuesim.frames.model import FrameModel
 from tissuesim.frames.placement import farthest_point_frames
@@ -106,11 +107,11 @@ class TissueBody:
         from tissuesim.mesh.locate import closest_boundary_points
 
         if not organs:
-            raise ValueError("add the organs before the tissue that connects them")
+            raise InputError("add the organs before the tissue that connects them")
         meshes = [m for _, m in organs]
         if samples is None:
             if thickness is None or spacing is None:
-                raise ValueError(
+                raise InputError(
                     "add_tissue needs samples=, or thickness= and spacing= to sample the layer "
                     "between the organs"
                 )
@@ -119,13 +120,13 @@ class TissueBody:
             spacing = float(np.cbrt(np.median(samples.volumes)))
         if isinstance(frames, int | np.integer):
             if frames < 1 or frames > samples.n:
-                raise ValueError(
+                raise InputError(
                     f"frames must be between 1 and the number of tissue points ({samples.n}), "
                     f"got {frames}"
                 )
             frames = farthest_point_frames(samples.points, int(frames))
         if not (np.isfinite(density) and density > 0):
-            raise ValueError(f"tissue density must be > 0 kg/m^3, got {density!r}")
+            raise InputError(f"tissue density must be > 0 kg/m^3, got {density!r}")
         self.name = name
         self.material = material
         self.samples = samples
@@ -139,7 +140,7 @@ class TissueBody:
         if attachment_stiffness is None:
             attachment_stiffness = ATTACHMENT_FACTOR * material.mu / spacing
         elif not (np.isfinite(attachment_stiffness) and attachment_stiffness > 0):
-            raise ValueError(
+            raise InputError(
                 f"attachment_stiffness must be > 0 N/m per m^2 of contact, got "
                 f"{attachment_stiffness!r}; leave it out for 250 shear moduli / spacing"
             )
@@ -165,7 +166,7 @@ class TissueBody:
                 )
             )
         if not self.contacts:
-            raise ValueError(
+            raise InputError(
                 f"the tissue touches no organ: no organ boundary triangle lies within "
                 f"attach_distance {self.attach_distance:g} m of a tissue point; increase "
                 "attach_distance or move the tissue against the organs"
@@ -188,7 +189,7 @@ class TissueBody:
     def add_gravity(self, acceleration) -> None:
         g = np.asarray(acceleration, dtype=float)
         if g.shape != (3,) or not np.all(np.isfinite(g)):
-            raise ValueError(f"add_gravity: acceleration must be 3 finite numbers, not {g!r}")
+            raise InputError(f"add_gravity: acceleration must be 3 finite numbers, not {g!r}")
         self.gravity.append(g)
         if self.model is not None:
             self.model.loads.append(FrameGravity(g))
@@ -206,13 +207,13 @@ class TissueBody:
         start <= t <= end; kerf (m, default: half the tissue's sample spacing) is the width
         of material it removes."""
         if not end > start:
-            raise ValueError(f"cut {name!r}: end ({end}) must be after start ({start})")
+            raise InputError(f"cut {name!r}: end ({end}) must be after start ({start})")
         if any(c.name == name for c in self.cuts):
-            raise ValueError(f"a cut named {name!r} exists; give another name")
+            raise InputError(f"a cut named {name!r} exists; give another name")
         if kerf is None:
             kerf = 0.5 * float(np.cbrt(np.median(self.samples.volumes)))
         elif not (np.isfinite(kerf) and kerf >= 0):
-            raise ValueError(
+            raise InputError(
                 f"cut {name!r}: kerf must be >= 0 m (the width the blade removes), got {kerf!r}"
             )
         tool = CutTool(blade, float(start), float(end), float(kerf), name)
@@ -224,7 +225,7 @@ class TissueBody:
         """Tissue integration points whose largest principal Green strain passes
         ``threshold`` are removed after the step (tearing)."""
         if not (np.isfinite(threshold) and threshold > 0):
-            raise ValueError(f"tearing threshold must be a strain > 0, got {threshold!r}")
+            raise InputError(f"tearing threshold must be a strain > 0, got {threshold!r}")
         self.tear_threshold = float(threshold)
 
     # -- the frame model and its attachments -------------------------------------------------

@@ -15,6 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from tissuesim.energies.accumulator import Accumulator
+from tissuesim.errors import InputError
 from tissuesim.mesh.boundary import facet_measures
 
 __all__ = [
@@ -118,7 +119,7 @@ class NodalForces:
             np.asarray(self.force(t), dtype=float), (self.vertices.size, model.mesh.dim)
         )
         if not np.all(np.isfinite(f)):
-            raise ValueError(f"a nodal force is not finite at t = {t:g} s")
+            raise InputError(f"a nodal force is not finite at t = {t:g} s")
         out = np.zeros(model.mesh.points.shape)
         np.add.at(out, self.vertices, f)
         return out

@@ -19,6 +19,7 @@ import scipy.sparse as sp
 
 from tissuesim.assembly.pattern import SparsityPattern
 from tissuesim.energies.accumulator import Accumulator
+from tissuesim.errors import InputError
 from tissuesim.kinematics.p1 import P1Kinematics
 
 __all__ = ["MassMatrix", "Inertia", "MassKind"]
@@ -51,7 +52,7 @@ class MassMatrix:
         if kind == "lumped":
             ref = np.diag(ref.sum(axis=1))
         elif kind != "consistent":
-            raise ValueError(f"mass must be 'consistent' or 'lumped', not {kind!r}")
+            raise InputError(f"mass must be 'consistent' or 'lumped', not {kind!r}")
         local = np.kron(ref, np.eye(d))  # ((a,i),(b,k)) = ref_ab delta_ik
         blocks = element_mass[:, None, None] * local[None]
         data = np.zeros(pattern.nnz)

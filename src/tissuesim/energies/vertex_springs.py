@@ -9,6 +9,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from tissuesim.energies.accumulator import Accumulator
+from tissuesim.errors import InputError
 
 __all__ = ["VertexSprings", "VertexSpringEnergy"]
 
@@ -26,7 +27,7 @@ class VertexSprings:
         y = np.asarray(self.target(t), dtype=float)
         y = np.broadcast_to(y, (self.vertices.size, 3))
         if not np.all(np.isfinite(y)):
-            raise ValueError(f"grasper target is not finite at t = {t:g} s")
+            raise InputError(f"grasper target is not finite at t = {t:g} s")
         return y
 
     def energy(self, t: float) -> VertexSpringEnergy:

@@ -33,6 +33,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from tissuesim.errors import InputError
 from tissuesim.frames.rotations import exp_map, log_map, skew
 
 __all__ = ["FrameType", "RIGID", "AFFINE", "FRAME_TYPES", "frame_type"]
@@ -136,4 +137,4 @@ def frame_type(name: str | FrameType) -> FrameType:
     try:
         return FRAME_TYPES[name]
     except KeyError:
-        raise ValueError(f"frame type must be one of {sorted(FRAME_TYPES)}, not {name!r}") from None
+        raise InputError(f"frame type must be one of {sorted(FRAME_TYPES)}, not {name!r}") from None

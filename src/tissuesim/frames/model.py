@@ -30,6 +30,7 @@ from tissuesim.constraints.dirichlet import Elimination
 from tissuesim.energies.accumulator import Accumulator
 from tissuesim.energies.elastic import ElasticEnergy
 from tissuesim.energies.mass import MassMatrix
+from tissuesim.errors import InputError
 from tissuesim.frames.frame_types import CONFIG_SIZE, FrameType, frame_type
 from tissuesim.frames.kinematics import embedding_matrix, frame_kinematics
 from tissuesim.frames.rotations import exp_map
@@ -72,7 +73,7 @@ class PrescribedFrames:
         u = np.broadcast_to(np.asarray(u, dtype=float), (k, 3))
         r = np.broadcast_to(np.asarray(r, dtype=float), (k, 3))
         if not (np.all(np.isfinite(u)) and np.all(np.isfinite(r))):
-            raise ValueError(f"prescribed frame motion is not finite at t = {t:g} s")
+            raise InputError(f"prescribed frame motion is not finite at t = {t:g} s")
         return u, r
 
 
@@ -136,7 +137,7 @@ class FrameModel:
     def __post_init__(self) -> None:
         X = np.asarray(self.frame_positions, dtype=float)
         if X.ndim != 2 or X.shape[1] != 3 or X.shape[0] == 0:
-            raise ValueError(f"frame positions must be an (n, 3) array, not shape {X.shape}")
+            raise InputError(f"frame positions must be an (n, 3) array, not shape {X.shape}")
         self.frame_positions = X
         n = X.shape[0]
         self.frame_type = frame_type(self.frame_kind)
@@ -144,10 +145,10 @@ class FrameModel:
             self.frame_rotations = np.broadcast_to(np.eye(3), (n, 3, 3)).copy()
         R = np.asarray(self.frame_rotations, dtype=float)
         if R.shape != (n, 3, 3) or not np.allclose(R @ np.swapaxes(R, 1, 2), np.eye(3), atol=1e-9):
-            raise ValueError("frame rotations must be (n, 3, 3) rotation matrices")
+            raise InputError("frame rotations must be (n, 3, 3) rotation matrices")
         self.frame_rotations = R
         if self.mass_kind not in ("full", "lumped"):
-            raise ValueError(f"frame mass must be 'full' or 'lumped', not {self.mass_kind!r}")
+            raise InputError(f"frame mass must be 'full' or 'lumped', not {self.mass_kind!r}")
         self.masses = self.samples.masses(self.density)
         self.shapes = shape_functions(
             X,
@@ -165,7 +166,7 @@ class FrameModel:
         self.orphan_frames = np.flatnonzero(~reached) if self.allow_orphans else np.zeros(0, int)
         if not reached.all() and not self.allow_orphans:
             i = int(np.flatnonzero(~reached)[0])
-            raise ValueError(
+            raise InputError(
                 f"frame {i} at {X[i].round(6).tolist()} reaches no integration point "
                 f"(support radius {self.shapes.radii[i]:.4g}): it would have no stiffness and "
                 "no mass. Move it inside the body, increase its radius, or remove it."
@@ -264,7 +265,7 @@ class FrameModel:
         ``keep_pair`` drops (point, frame) pairs (cuts)."""
         P = np.asarray(points, dtype=float)
         if P.ndim != 2 or P.shape[1] != 3:
-            raise ValueError(f"{what}s must be a (k, 3) array, not shape {P.shape}")
+            raise InputError(f"{what}s must be a (k, 3) array, not shape {P.shape}")
         radius = None if self.shape == "shepard" else self.shapes.radii
         sf = shape_functions(
             self.frame_positions,

@@ -2,9 +2,13 @@
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 
 import numpy as np
+
+from tissuesim.errors import InputError
+from tissuesim.validate import check_memory
 
 __all__ = ["grid_frames", "farthest_point_frames"]
 
@@ -17,11 +21,12 @@ def grid_frames(
     lo, hi = np.asarray(lower, dtype=float), np.asarray(upper, dtype=float)
     counts = [int(c) for c in counts]
     if lo.shape != (3,) or hi.shape != (3,) or len(counts) != 3:
-        raise ValueError("grid_frames: lower, upper and counts need 3 entries each")
+        raise InputError("grid_frames: lower, upper and counts need 3 entries each")
     if min(counts) < 1:
-        raise ValueError(f"grid_frames: counts must be >= 1, not {counts}")
+        raise InputError(f"grid_frames: counts must be >= 1, not {counts}")
+    check_memory(math.prod(counts) * 1000.0, f"grid_frames {counts}", "Use fewer frames.")
     if np.any(hi < lo):
-        raise ValueError(f"grid_frames: upper {hi.tolist()} is below lower {lo.tolist()}")
+        raise InputError(f"grid_frames: upper {hi.tolist()} is below lower {lo.tolist()}")
     axes = [
         np.linspace(lo[a], hi[a], counts[a]) if counts[a] > 1 else np.array([0.5 * (lo[a] + hi[a])])
         for a in range(3)
@@ -35,9 +40,9 @@ def farthest_point_frames(points: np.ndarray, n: int, first: int = 0) -> np.ndar
     (Gilles et al. 2011 start from such a sampling): evenly spread over any shape."""
     P = np.asarray(points, dtype=float)
     if P.ndim != 2 or P.shape[1] != 3 or P.shape[0] == 0:
-        raise ValueError(f"farthest_point_frames: points must be (k, 3), not shape {P.shape}")
+        raise InputError(f"farthest_point_frames: points must be (k, 3), not shape {P.shape}")
     if not 1 <= n <= P.shape[0]:
-        raise ValueError(f"farthest_point_frames: n must be in 1..{P.shape[0]}, not {n}")
+        raise InputError(f"farthest_point_frames: n must be in 1..{P.shape[0]}, not {n}")
     chosen = [int(first)]
     dist = np.linalg.norm(P - P[first], axis=1)
     for _ in range(n - 1):  # n is small (frames), each pass is vectorised over the points

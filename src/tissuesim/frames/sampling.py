@@ -20,12 +20,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from tissuesim.errors import MeshError
+from tissuesim.errors import InputError, MeshError
 from tissuesim.mesh.boundary import boundary_facets
 from tissuesim.mesh.checks import signed_volumes
 from tissuesim.mesh.generators import _arguments
 from tissuesim.mesh.io import _load
 from tissuesim.mesh.mesh import Mesh
+from tissuesim.validate import check_memory
 
 __all__ = [
     "IntegrationPoints",
@@ -68,23 +69,23 @@ class IntegrationPoints:
             points = np.array(self.points, dtype=np.float64)
             volumes = np.array(self.volumes, dtype=np.float64)
         except (TypeError, ValueError) as exc:
-            raise ValueError(f"{self.source}: points and volumes must be numbers: {exc}") from exc
+            raise InputError(f"{self.source}: points and volumes must be numbers: {exc}") from exc
         if points.ndim != 2 or points.shape[1] != 3 or len(points) == 0:
-            raise ValueError(
+            raise InputError(
                 f"{self.source}: points must have shape (q, 3) with q >= 1, got {points.shape}"
             )
         if volumes.shape != (len(points),):
-            raise ValueError(
+            raise InputError(
                 f"{self.source}: volumes must have shape ({len(points)},), one per point, "
                 f"got {volumes.shape}"
             )
         if not np.isfinite(points).all():
             i = int(np.flatnonzero(~np.isfinite(points).all(axis=1))[0])
-            raise ValueError(f"{self.source}: point {i} is not finite: {points[i].tolist()}")
+            raise InputError(f"{self.source}: point {i} is not finite: {points[i].tolist()}")
         bad = ~(np.isfinite(volumes) & (volumes > 0))
         if bad.any():
             i = int(np.flatnonzero(bad)[0])
-            raise ValueError(
+            raise InputError(
                 f"{self.source}: volumes must be finite and > 0; volume {i} is "
                 f"{float(volumes[i])!r} ({int(bad.sum())} bad): drop empty points or give them "
                 f"their region's volume"
@@ -110,12 +111,12 @@ class IntegrationPoints:
         try:
             rho = np.asarray(density, dtype=np.float64)
         except (TypeError, ValueError) as exc:
-            raise ValueError(
+            raise InputError(
                 f"density must be a positive number or ({self.n},) positive numbers, "
                 f"got {density!r}"
             ) from exc
         if rho.shape not in ((), (self.n,)):
-            raise ValueError(
+            raise InputError(
                 f"density must be a scalar or have shape ({self.n},), one per integration point, "
                 f"got shape {rho.shape}"
             )
@@ -123,7 +124,7 @@ class IntegrationPoints:
         if bad.any():
             where = "" if rho.ndim == 0 else f" at point {int(np.flatnonzero(bad)[0])}"
             value = rho[()] if rho.ndim == 0 else rho[bad][0]
-            raise ValueError(
+            raise InputError(
                 f"density must be finite and > 0 (e.g. 1000 kg/m^3 for soft tissue), got "
                 f"{float(value)!r}{where}"
             )
@@ -146,24 +147,24 @@ class Surface:
             points = np.array(self.points, dtype=np.float64)
             tri = np.asarray(self.triangles)
         except (TypeError, ValueError) as exc:
-            raise ValueError(f"{self.source}: points and triangles must be arrays: {exc}") from exc
+            raise InputError(f"{self.source}: points and triangles must be arrays: {exc}") from exc
         if points.ndim != 2 or points.shape[1] != 3 or not np.isfinite(points).all():
-            raise ValueError(
+            raise InputError(
                 f"{self.source}: surface points must be an (n, 3) array of finite numbers, "
                 f"got shape {points.shape}"
             )
         if tri.ndim != 2 or tri.shape[1] != 3 or len(tri) == 0:
-            raise ValueError(
+            raise InputError(
                 f"{self.source}: triangles must have shape (m, 3) with m >= 1, got {tri.shape}"
             )
         if not np.issubdtype(tri.dtype, np.integer):
             if not np.issubdtype(tri.dtype, np.floating) or not (np.round(tri) == tri).all():
-                raise ValueError(
+                raise InputError(
                     f"{self.source}: triangles must hold integer vertex ids, got {tri.dtype}"
                 )
         tri = np.array(tri, dtype=np.int64)
         if tri.min() < 0 or tri.max() >= len(points):
-            raise ValueError(
+            raise InputError(
                 f"{self.source}: triangle vertex ids must lie in [0, {len(points) - 1}], got "
                 f"ids from {int(tri.min())} to {int(tri.max())}"
             )
@@ -216,11 +217,11 @@ def _vector3(func: str, name: str, value, positive: bool = False) -> np.ndarray:
     try:
         v = np.array(value, dtype=np.float64)
     except (TypeError, ValueError) as exc:
-        raise ValueError(f"{func}: {name} must be 3 numbers (x, y, z), got {value!r}") from exc
+        raise InputError(f"{func}: {name} must be 3 numbers (x, y, z), got {value!r}") from exc
     if v.shape != (3,) or not np.isfinite(v).all():
-        raise ValueError(f"{func}: {name} must be 3 finite numbers (x, y, z), got {value!r}")
+        raise InputError(f"{func}: {name} must be 3 finite numbers (x, y, z), got {value!r}")
     if positive and not (v > 0).all():
-        raise ValueError(
+        raise InputError(
             f"{func}: {name} must all be > 0, got {_fmt(v)}; give the half-lengths of the "
             f"solid along x, y and z"
         )
@@ -229,16 +230,16 @@ def _vector3(func: str, name: str, value, positive: bool = False) -> np.ndarray:
 
 def _positive(func: str, name: str, value, hint: str) -> float:
     if isinstance(value, bool) or not isinstance(value, numbers.Real):
-        raise ValueError(f"{func}: {name} must be a number > 0, got {value!r}; {hint}")
+        raise InputError(f"{func}: {name} must be a number > 0, got {value!r}; {hint}")
     v = float(value)
     if not (np.isfinite(v) and v > 0):
-        raise ValueError(f"{func}: {name} must be finite and > 0, got {value!r}; {hint}")
+        raise InputError(f"{func}: {name} must be finite and > 0, got {value!r}; {hint}")
     return v
 
 
 def _count(func: str, name: str, value, minimum: int) -> int:
     if isinstance(value, bool) or not isinstance(value, numbers.Integral) or value < minimum:
-        raise ValueError(f"{func}: {name} must be an integer >= {minimum}, got {value!r}")
+        raise InputError(f"{func}: {name} must be an integer >= {minimum}, got {value!r}")
     return int(value)
 
 
@@ -249,10 +250,20 @@ _SPACING_HINT = "give the distance between neighbouring integration points in le
 # regular grids
 
 
+#: bytes per cell of a sampling grid while it is built (index grids, centres, volumes)
+SAMPLE_GRID_BYTES = 200
+
+
 def _grid(lower: np.ndarray, upper: np.ndarray, spacing: float):
     """(divisions (3,), cell size h (3,), cell centres (N, 3), x fastest) of [lower, upper]."""
     extent = upper - lower
-    divisions = np.maximum(1, np.round(extent / spacing)).astype(np.int64)
+    counts = np.maximum(1.0, np.round(extent / spacing))
+    check_memory(
+        float(np.prod(counts)) * SAMPLE_GRID_BYTES,
+        f"a sampling grid of spacing {spacing:g} ({np.prod(counts):.3g} cells)",
+        "Use a larger spacing.",
+    )
+    divisions = counts.astype(np.int64)
     h = extent / divisions
     iz, iy, ix = (g.ravel() for g in np.indices(divisions[::-1]))
     centres = lower + (np.column_stack([ix, iy, iz]) + 0.5) * h
@@ -325,7 +336,7 @@ def _scaled(
     spacing: float,
 ) -> IntegrationPoints:
     if len(points) == 0:
-        raise ValueError(
+        raise InputError(
             f"{source}: no sub-sample fell inside the region; spacing {spacing:g} is too coarse "
             f"for it: use a smaller spacing or more subsamples"
         )
@@ -391,7 +402,7 @@ def winding_number(surface: Surface, points: np.ndarray) -> np.ndarray:
     """
     p = np.asarray(points, dtype=np.float64)
     if p.ndim != 2 or p.shape[1] != 3:
-        raise ValueError(f"winding_number: points must have shape (q, 3), got {p.shape}")
+        raise InputError(f"winding_number: points must have shape (q, 3), got {p.shape}")
     tri = surface.points[surface.triangles]  # (m, 3, 3)
     A, B, C = (np.ascontiguousarray(tri[:, v].T) for v in range(3))  # (3, m) each
     w = np.empty(len(p))
@@ -452,7 +463,7 @@ def sample_surface(surface: Surface, spacing: float, subsamples: int = 4) -> Int
     """
     func = "sample_surface"
     if not isinstance(surface, Surface):
-        raise ValueError(f"{func}: surface must be a Surface, got {type(surface).__name__}")
+        raise InputError(f"{func}: surface must be a Surface, got {type(surface).__name__}")
     spacing = _positive(func, "spacing", spacing, _SPACING_HINT)
     subsamples = _count(func, "subsamples", subsamples, 1)
     exact = surface.volume()
@@ -486,9 +497,9 @@ def sample_mesh(mesh: Mesh, spacing: float | None = None) -> IntegrationPoints:
     """
     func = "sample_mesh"
     if not isinstance(mesh, Mesh):
-        raise ValueError(f"{func}: mesh must be a tissuesim Mesh, got {type(mesh).__name__}")
+        raise InputError(f"{func}: mesh must be a tissuesim Mesh, got {type(mesh).__name__}")
     if mesh.dim != 3 or mesh.cells.shape[1] != 4:
-        raise ValueError(
+        raise InputError(
             f"{func}: {mesh.source} is a {mesh.dim}D mesh; 3D tetrahedra are needed: use "
             f"tissuesim.mesh.box or a tetrahedral mesh file"
         )
@@ -633,11 +644,11 @@ def ellipsoid_surface(
 def surface_from_mesh(mesh: Mesh) -> Surface:
     """Outward boundary triangles of a tetrahedral mesh, with only the vertices they use."""
     if not isinstance(mesh, Mesh):
-        raise ValueError(
+        raise InputError(
             f"surface_from_mesh: mesh must be a tissuesim Mesh, got {type(mesh).__name__}"
         )
     if mesh.dim != 3 or mesh.cells.shape[1] != 4:
-        raise ValueError(
+        raise InputError(
             f"surface_from_mesh: {mesh.source} is a {mesh.dim}D mesh; its boundary is not a "
             f"triangle surface: give a tetrahedral (3D) mesh"
         )

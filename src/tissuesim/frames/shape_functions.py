@@ -26,6 +26,8 @@ from typing import Literal, get_args
 import numpy as np
 from scipy.spatial import cKDTree
 
+from tissuesim.errors import InputError
+
 __all__ = ["ShapeKind", "ShapeFunctions", "PairFilter", "auto_radii", "shape_functions"]
 
 ShapeKind = Literal["wendland", "shepard"]
@@ -75,15 +77,15 @@ def _as_coordinates(values, name: str, noun: str) -> np.ndarray:
     try:
         a = np.array(values, dtype=np.float64)
     except (TypeError, ValueError) as exc:
-        raise ValueError(f"{name} must be an (m, d) array of numbers: {exc}") from exc
+        raise InputError(f"{name} must be an (m, d) array of numbers: {exc}") from exc
     if a.ndim != 2 or a.shape[1] not in (2, 3):
-        raise ValueError(
+        raise InputError(
             f"{name} has shape {a.shape}; expected a 2-D array (m, 2) or (m, 3) of coordinates"
         )
     bad = ~np.all(np.isfinite(a), axis=1)
     if np.any(bad):
         i = int(np.flatnonzero(bad)[0])
-        raise ValueError(
+        raise InputError(
             f"{noun} {i} has non-finite coordinates {_fmt_point(a[i])} "
             f"({int(bad.sum())} row(s) of {name} in total); give finite coordinates"
         )
@@ -92,7 +94,7 @@ def _as_coordinates(values, name: str, noun: str) -> np.ndarray:
 
 def _check_same_width(frames: np.ndarray, other: np.ndarray, name: str) -> None:
     if other.shape[1] != frames.shape[1]:
-        raise ValueError(
+        raise InputError(
             f"{name} are {other.shape[1]}-D but frame_positions are {frames.shape[1]}-D; "
             "give both with the same number of coordinates per row"
         )
@@ -113,7 +115,7 @@ def _nearest_other_frame(frames: np.ndarray) -> np.ndarray:
     if np.any(dup):
         i = int(np.flatnonzero(dup)[0])
         a, b = sorted((i, int(other[i])))
-        raise ValueError(
+        raise InputError(
             f"frames {a} and {b} are at the same place {_fmt_point(frames[a])} "
             f"({int(dup.sum())} frame(s) coincide with another); remove or move one of them"
         )
@@ -123,7 +125,7 @@ def _nearest_other_frame(frames: np.ndarray) -> np.ndarray:
 def _validate_frames(frame_positions) -> tuple[np.ndarray, np.ndarray]:
     frames = _as_coordinates(frame_positions, "frame_positions", "frame")
     if frames.shape[0] == 0:
-        raise ValueError("no frames: frame_positions is empty; give at least one frame position")
+        raise InputError("no frames: frame_positions is empty; give at least one frame position")
     return frames, _nearest_other_frame(frames)
 
 
@@ -132,7 +134,7 @@ def _auto_radii(
 ) -> np.ndarray:
     factor = float(factor)
     if not np.isfinite(factor) or factor <= 1.0:
-        raise ValueError(
+        raise InputError(
             f"radius factor (radius_factor=) is {factor}; it must be a finite number > 1 so that "
             "every sample lies strictly inside the support of its nearest frame (default 1.5)"
         )
@@ -165,20 +167,20 @@ def _radii(radius, n: int) -> np.ndarray:
     try:
         r = np.array(radius, dtype=np.float64)
     except (TypeError, ValueError) as exc:
-        raise ValueError(
+        raise InputError(
             f"radius must be None, a positive number or an array of {n} positive numbers: {exc}"
         ) from exc
     if r.ndim == 0:
         r = np.full(n, float(r))
     elif r.shape != (n,):
-        raise ValueError(
+        raise InputError(
             f"radius has shape {r.shape}; give a positive scalar for all frames, an array of "
             f"shape ({n},) with one radius per frame, or None for automatic radii"
         )
     bad = ~(np.isfinite(r) & (r > 0))
     if np.any(bad):
         i = int(np.flatnonzero(bad)[0])
-        raise ValueError(
+        raise InputError(
             f"support radius of frame {i} is {r[i]}; radii must be finite and > 0 "
             f"({int(bad.sum())} bad radius value(s)); give positive radii or radius=None"
         )
@@ -249,7 +251,7 @@ def _report_unreached(
     j = int(np.flatnonzero(outside)[np.argmin(dist[outside])])
     nearest = "the nearest frame" if count[i] == 0 else "the nearest frame that does not reach it"
     total = int(bad.sum())
-    raise ValueError(
+    raise InputError(
         f"{what} {i} at {_fmt_point(p)} is reached by {int(count[i])} frame(s), at least "
         f"{min_frames} needed; {nearest} is {j} at distance {dist[j]:.4g} with support radius "
         f"{radii[j]:.4g}. Increase the support radius (radius= or radius_factor=) or add a "
@@ -282,28 +284,28 @@ def shape_functions(
     weights still sum to 1 (used by cutting: no frame acts across a cut).
     """
     if kind not in _KINDS:
-        raise ValueError(
+        raise InputError(
             f"unknown shape function kind {kind!r}; known kinds: {', '.join(map(repr, _KINDS))}"
         )
     if isinstance(min_frames, bool) or not isinstance(min_frames, int | np.integer):
-        raise ValueError(f"min_frames must be an integer >= 1, got {min_frames!r}")
+        raise InputError(f"min_frames must be an integer >= 1, got {min_frames!r}")
     min_frames = int(min_frames)
     if min_frames < 1:
-        raise ValueError(f"min_frames is {min_frames}; it must be >= 1 (frames per point)")
+        raise InputError(f"min_frames is {min_frames}; it must be >= 1 (frames per point)")
     frames, near = _validate_frames(frame_positions)
     pts = _as_coordinates(points, "points", what)
     _check_same_width(frames, pts, "points")
     n = frames.shape[0]
     q, d = pts.shape
     if min_frames > n:
-        raise ValueError(
+        raise InputError(
             f"min_frames is {min_frames} but there are only {n} frame(s); "
             f"add frames or lower min_frames to at most {n}"
         )
 
     if kind == "shepard":
         if radius is not None:
-            raise ValueError(
+            raise InputError(
                 "radius= applies to the compactly supported 'wendland' kernel only; 'shepard' "
                 "is global (every frame reaches every point): drop radius= or use kind='wendland'"
             )

@@ -19,7 +19,7 @@ from typing import Any
 
 import numpy as np
 
-from tissuesim.errors import ConvergenceError
+from tissuesim.errors import ConvergenceError, InputError
 from tissuesim.io.atomic import write_json_atomic
 from tissuesim.io.body_series import series_for
 
@@ -46,7 +46,7 @@ class RunOutput:
         from tissuesim.render.scene import field_label
 
         if isinstance(every, bool) or not isinstance(every, int | np.integer) or every < 1:
-            raise ValueError(f"every must be an integer >= 1, not {every!r}")
+            raise InputError(f"every must be an integer >= 1, not {every!r}")
         field_label(field)  # an unknown field fails before the run
         sim.build()
         self.sim = sim
@@ -142,7 +142,7 @@ class RunOutput:
         from tqdm import tqdm
 
         if isinstance(steps, bool) or not isinstance(steps, int | np.integer) or steps < 0:
-            raise ValueError(f"steps must be an integer >= 0, not {steps!r}")
+            raise InputError(f"steps must be an integer >= 0, not {steps!r}")
         if self.directory is not None:
             self.directory.mkdir(parents=True, exist_ok=True)
             self._open_series()

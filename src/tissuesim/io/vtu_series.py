@@ -16,6 +16,7 @@ from xml.sax.saxutils import quoteattr
 
 import numpy as np
 
+from tissuesim.errors import InputError
 from tissuesim.io.atomic import atomic_output, write_text_atomic
 from tissuesim.mesh.mesh import Mesh
 
@@ -56,19 +57,19 @@ def _cell_block(cells: tuple[str, np.ndarray], n_points: int) -> tuple[str, np.n
     try:
         cell_type, ids = cells
     except (TypeError, ValueError):
-        raise ValueError("cells must be a pair (cell_type, ids (m, k))") from None
+        raise InputError("cells must be a pair (cell_type, ids (m, k))") from None
     if cell_type not in _NODES_PER_CELL:
-        raise ValueError(f"cell type {cell_type!r} is not one of {sorted(_NODES_PER_CELL)}")
+        raise InputError(f"cell type {cell_type!r} is not one of {sorted(_NODES_PER_CELL)}")
     ids = np.asarray(ids)
     k = _NODES_PER_CELL[cell_type]
     if ids.ndim != 2 or ids.shape[1] != k or not np.issubdtype(ids.dtype, np.integer):
-        raise ValueError(
+        raise InputError(
             f"{cell_type} cells need integer ids of shape (m, {k}), got {ids.dtype} {ids.shape}"
         )
     if n_points < 1:
-        raise ValueError(f"n_points must be >= 1, got {n_points}")
+        raise InputError(f"n_points must be >= 1, got {n_points}")
     if ids.size and (ids.min() < 0 or ids.max() >= n_points):
-        raise ValueError(
+        raise InputError(
             f"cell vertex ids must lie in [0, {n_points - 1}], got {ids.min()}..{ids.max()}"
         )
     return str(cell_type), np.ascontiguousarray(ids, dtype=np.int64)
@@ -82,7 +83,7 @@ def _prepare(
     for key, value in data.items():
         arr = np.asarray(value)
         if arr.ndim == 0 or arr.shape[0] != count:
-            raise ValueError(
+            raise InputError(
                 f"{kind} {key!r} has shape {arr.shape}; it needs one row per "
                 f"{'point' if kind == 'point_data' else 'cell'} ({count}, ...)"
             )
@@ -119,23 +120,23 @@ class VTUSeriesWriter:
         n_points: int | None = None,
     ) -> None:
         if (mesh is None) == (cells is None):
-            raise ValueError("VTUSeriesWriter needs either a mesh or cells=(cell_type, ids)")
+            raise InputError("VTUSeriesWriter needs either a mesh or cells=(cell_type, ids)")
         if mesh is not None:
             if n_points is not None:
-                raise ValueError("n_points is taken from the mesh; give it only with cells=")
+                raise InputError("n_points is taken from the mesh; give it only with cells=")
             if mesh.dim not in _CELL_TYPE:
-                raise ValueError(f"VTUSeriesWriter supports 2D and 3D meshes, got dim {mesh.dim}")
+                raise InputError(f"VTUSeriesWriter supports 2D and 3D meshes, got dim {mesh.dim}")
             block = (_CELL_TYPE[mesh.dim], np.asarray(mesh.cells, dtype=np.int64))
             self.dim, self.n_points = mesh.dim, mesh.n_points
             self._mesh_based = True
         else:
             if n_points is None:
-                raise ValueError("VTUSeriesWriter with cells= needs n_points")
+                raise InputError("VTUSeriesWriter with cells= needs n_points")
             block = _cell_block(cells, int(n_points))
             self.dim, self.n_points = 3, int(n_points)
             self._mesh_based = False
         if not name or os.sep in name or "/" in name:
-            raise ValueError(f"series name {name!r} must be a non-empty file name stem")
+            raise InputError(f"series name {name!r} must be a non-empty file name stem")
         self.directory = Path(directory)
         self.mesh = mesh
         self.name = name
@@ -180,16 +181,16 @@ class VTUSeriesWriter:
         blocks, n_cells = self._cells, self.n_cells
         if cells is not None:
             if self._mesh_based:
-                raise ValueError("per-frame cells= need a writer made with cells=")
+                raise InputError("per-frame cells= need a writer made with cells=")
             n = int(np.asarray(positions).shape[0])
             block = _cell_block(cells, max(n, 1))
             blocks, n_cells = [block], int(block[1].shape[0])
         time = float(time)
         if not math.isfinite(time):
-            raise ValueError(f"frame time must be finite, got {time}")
+            raise InputError(f"frame time must be finite, got {time}")
         x = np.asarray(positions, dtype=np.float64)
         if x.shape != (n, dim):
-            raise ValueError(f"positions have shape {x.shape}; expected ({n}, {dim})")
+            raise InputError(f"positions have shape {x.shape}; expected ({n}, {dim})")
         if dim == 2:
             x = np.concatenate([x, np.zeros((n, 1))], axis=1)
         pdata = _prepare(point_data or {}, n, dim, "point_data")

@@ -10,6 +10,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from tissuesim.errors import InputError
+
 __all__ = ["project_psd", "project_tangent_psd"]
 
 
@@ -21,7 +23,7 @@ def project_psd(A: np.ndarray) -> np.ndarray:
     """
     A = np.asarray(A, dtype=float)
     if A.ndim != 3 or A.shape[1] != A.shape[2]:
-        raise ValueError(f"project_psd expects shape (q, n, n), got {A.shape}")
+        raise InputError(f"project_psd expects shape (q, n, n), got {A.shape}")
     sym = 0.5 * (A + np.swapaxes(A, 1, 2))
     w, V = np.linalg.eigh(sym)
     clamped = (V * np.maximum(w, 0.0)[:, None, :]) @ np.swapaxes(V, 1, 2)
@@ -32,6 +34,6 @@ def project_tangent_psd(tangent: np.ndarray) -> np.ndarray:
     """PSD projection of dP/dF as a (d*d, d*d) matrix per point; (q, d, d, d, d)."""
     tangent = np.asarray(tangent, dtype=float)
     if tangent.ndim != 5 or len(set(tangent.shape[1:])) != 1:
-        raise ValueError(f"project_tangent_psd expects shape (q, d, d, d, d), got {tangent.shape}")
+        raise InputError(f"project_tangent_psd expects shape (q, d, d, d, d), got {tangent.shape}")
     q, d = tangent.shape[:2]
     return project_psd(tangent.reshape(q, d * d, d * d)).reshape(tangent.shape)

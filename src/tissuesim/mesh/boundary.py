@@ -10,6 +10,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from tissuesim.errors import InputError
+
 __all__ = ["boundary_facets", "facet_measures", "facet_normals"]
 
 # Local vertex ids of the facets of a positively oriented simplex, each oriented outward.
@@ -24,7 +26,7 @@ def all_facets(cells: np.ndarray) -> np.ndarray:
     cells = np.asarray(cells)
     d = cells.shape[1] - 1
     if d not in _LOCAL_FACETS:
-        raise ValueError(f"cells must have 3 (triangles) or 4 (tetrahedra) columns, got {d + 1}")
+        raise InputError(f"cells must have 3 (triangles) or 4 (tetrahedra) columns, got {d + 1}")
     return cells[:, _LOCAL_FACETS[d]]
 
 
@@ -109,7 +111,7 @@ def _facet_vectors(points: np.ndarray, facets: np.ndarray) -> np.ndarray:
     facets = np.asarray(facets, dtype=np.int64)
     d = points.shape[1]
     if facets.ndim != 2 or facets.shape[1] != d:
-        raise ValueError(f"facets must have shape (k, {d}) for {d}D points, got {facets.shape}")
+        raise InputError(f"facets must have shape (k, {d}) for {d}D points, got {facets.shape}")
     x = points[facets]
     if d == 2:
         e = x[:, 1] - x[:, 0]

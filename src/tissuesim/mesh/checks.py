@@ -53,6 +53,81 @@ def _index_array(values, source: str, what: str, shape_hint: str) -> np.ndarray:
     return np.array(a, dtype=np.int64)
 
 
+#: vertices closer than this fraction of the bounding-box diagonal count as one point
+COINCIDENT_TOLERANCE = 1e-9
+
+
+def _weld(pts, c, point_sets, facet_sets, source: str, merge: bool):
+    """Find vertices closer than the tolerance; refuse them, or merge each group into its
+    lowest index (cells, point and facet sets remapped)."""
+    from scipy.spatial import cKDTree
+
+    tol = COINCIDENT_TOLERANCE * float(np.linalg.norm(np.ptp(pts, axis=0)))
+    pairs = cKDTree(pts).query_pairs(tol, output_type="ndarray") if len(pts) > 1 else None
+    if pairs is None or not len(pairs):
+        return pts, c, point_sets, facet_sets
+    if not merge:
+        i, j = (int(k) for k in pairs[0])
+        groups = len(np.unique(pairs.max(axis=1)))
+        raise MeshError(
+            f"{source}: {groups} vertices coincide with another vertex (within {tol:.3g}, "
+            f"{COINCIDENT_TOLERANCE:g} of the mesh size; e.g. vertices {i} and {j} at "
+            f"{pts[i].tolist()}): an unwelded seam splits the body. Weld them in the mesher, or "
+            "merge them with merge_coincident = true (read_mesh(..., merge_coincident=True))"
+        )
+    import scipy.sparse as sp
+    from scipy.sparse.csgraph import connected_components
+
+    n = len(pts)
+    graph = sp.coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(n, n))
+    _, label = connected_components(graph, directed=False)
+    first = np.full(label.max() + 1, n)
+    np.minimum.at(first, label, np.arange(n))
+    target = first[label]  # each vertex -> the lowest index of its group
+    merged = int((target != np.arange(n)).sum())
+    warnings.warn(
+        f"{source}: merged {merged} coincident vertices (within {tol:.3g}) into their "
+        "neighbours (merge_coincident)",
+        UserWarning,
+        stacklevel=3,
+    )
+    c = target[c]
+    point_sets = {k: target[v] for k, v in point_sets.items()}
+    facet_sets = {k: target[np.asarray(v, dtype=np.int64)] for k, v in (facet_sets or {}).items()}
+    return pts, c, point_sets, facet_sets
+
+
+def _drop_unused(pts, c, point_sets, facet_sets, source: str):
+    """Drop vertices no element uses (a solver would see them as free, massless DOFs)."""
+    n = len(pts)
+    used = np.bincount(c.ravel(), minlength=n) > 0
+    if used.all():
+        return pts, c, point_sets, facet_sets
+    new = np.cumsum(used) - 1
+    dropped = np.flatnonzero(~used)
+    warnings.warn(
+        f"{source}: dropped {dropped.size} vertices that belong to no element (first: "
+        f"{dropped[:5].tolist()}); the indices of later vertices shift down by as many: select "
+        "vertices by position or tag rather than by index",
+        UserWarning,
+        stacklevel=3,
+    )
+    point_sets = {k: new[v[used[v]]] for k, v in point_sets.items()}
+    fsets = {}
+    for k, v in (facet_sets or {}).items():
+        a = np.asarray(v)
+        if a.size and np.issubdtype(a.dtype, np.integer) and a.min() >= 0 and a.max() < n:
+            if not used[a].all():
+                v = int(a[~used[a]][0])
+                raise MeshError(
+                    f"{source}: facet set {k!r} uses vertex {v}, which belongs to no element; "
+                    "a facet set must list boundary facets of the elements"
+                )
+            a = new[a]
+        fsets[k] = a
+    return pts[used], new[c], point_sets, fsets
+
+
 def validate_mesh(
     points,
     cells,
@@ -61,13 +136,17 @@ def validate_mesh(
     point_sets: Mapping[str, np.ndarray] | None = None,
     facet_sets: Mapping[str, np.ndarray] | None = None,
     cell_sets: Mapping[str, np.ndarray] | None = None,
+    merge_coincident: bool = False,
 ) -> Mesh:
     """Check raw arrays and build a Mesh; raises MeshError naming ``source`` and the bad element.
 
     points: (n, d) coordinates, d = 2 or 3, finite. cells: (m, d+1) 0-based vertex indices.
     point_sets: name -> (k,) vertex ids. facet_sets: name -> (k, d) boundary facets (reoriented
     outward). cell_sets: name -> (k,) cell ids. Negatively oriented cells are fixed by swapping
-    their last two vertices (with a UserWarning); unreferenced vertices only warn.
+    their last two vertices (with a UserWarning). Vertices closer than COINCIDENT_TOLERANCE
+    times the bounding-box diagonal (an unwelded seam) are refused, or merged with
+    ``merge_coincident``; vertices no element uses are dropped (UserWarning; indices after
+    them shift down, point sets are remapped).
     """
     try:
         pts = np.array(points, dtype=np.float64)
@@ -133,14 +212,24 @@ def validate_mesh(
             UserWarning,
             stacklevel=2,
         )
-    used = np.bincount(c.ravel(), minlength=n) > 0
-    if not used.all():
-        warnings.warn(
-            f"{source}: {int((~used).sum())} vertices belong to no element "
-            f"(first: {np.flatnonzero(~used)[:5].tolist()}); they get no stiffness or mass",
-            UserWarning,
-            stacklevel=2,
+    point_sets = {
+        k: _index_array(v, source, f"point set {k!r}", "(k,)").reshape(-1)
+        for k, v in (point_sets or {}).items()
+    }
+    for name, a in point_sets.items():
+        if ((a < 0) | (a >= n)).any():
+            raise MeshError(f"{source}: point set {name!r} has vertex ids outside 0..{n - 1}")
+    pts, c, point_sets, facet_sets = _weld(pts, c, point_sets, facet_sets, source, merge_coincident)
+    s = np.sort(c, axis=1)
+    collapsed = (s[:, 1:] == s[:, :-1]).any(axis=1)
+    if collapsed.any():
+        raise MeshError(
+            f"{source}: merging coincident vertices collapses element {_first(collapsed)} "
+            f"({int(collapsed.sum())} such elements): the vertices are not a seam but part of "
+            "tiny elements; remesh instead of merging"
         )
+    pts, c, point_sets, facet_sets = _drop_unused(pts, c, point_sets, facet_sets, source)
+    n = pts.shape[0]
     table = facet_table(c)
     facets, first, inverse, counts = table
     if (counts > 2).any():
@@ -151,12 +240,7 @@ def validate_mesh(
             f"a facet belongs to at most 2 elements: remove duplicate or overlapping elements"
         )
 
-    psets = {}
-    for name, v in (point_sets or {}).items():
-        a = _index_array(v, source, f"point set {name!r}", "(k,)").reshape(-1)
-        if ((a < 0) | (a >= n)).any():
-            raise MeshError(f"{source}: point set {name!r} has vertex ids outside 0..{n - 1}")
-        psets[str(name)] = np.unique(a)
+    psets = {str(name): np.unique(a) for name, a in point_sets.items()}
     csets = {}
     for name, v in (cell_sets or {}).items():
         a = _index_array(v, source, f"cell set {name!r}", "(k,)").reshape(-1)

@@ -16,7 +16,7 @@ from collections import defaultdict
 
 import numpy as np
 
-from tissuesim.errors import MeshError
+from tissuesim.errors import InputError, MeshError
 from tissuesim.mesh.boundary import all_facets, facet_measures, facet_table, match_facets
 from tissuesim.mesh.checks import edge_lengths, signed_volumes, validate_mesh
 from tissuesim.mesh.mesh import Mesh
@@ -127,17 +127,25 @@ def _tagged_sets(m, d: int, vtype: str):
     return point_sets, facet_sets, cell_sets
 
 
-def read_mesh(path: str | os.PathLike[str]) -> Mesh:
+def read_mesh(path: str | os.PathLike[str], *, merge_coincident: bool = False) -> Mesh:
     """Read a linear tetrahedral (3D) or triangle (2D) mesh file; points in the file's units.
 
     Any format meshio reads (.vtu, .msh gmsh 2.2/4.1, .mesh medit, .xdmf, ...). Raises MeshError
-    naming the file for a missing, unreadable, surface-only or non-simplex mesh.
+    naming the file for a missing, unreadable (a FIFO or device is refused before it is opened),
+    surface-only or non-simplex mesh, or one with coincident vertices (an unwelded seam) unless
+    ``merge_coincident``; vertices no element uses are dropped (``validate_mesh``).
     """
+    from tissuesim.validate import regular_file
+
     path = os.fspath(path)
     if not os.path.exists(path):
         raise MeshError(f"{path}: no such mesh file; check the path (cwd is {os.getcwd()})")
-    if os.path.isdir(path):
-        raise MeshError(f"{path}: is a directory, not a mesh file")
+    try:
+        regular_file(path, "mesh file")
+    except InputError as exc:
+        raise MeshError(str(exc)) from None
+    if not isinstance(merge_coincident, bool):
+        raise MeshError(f"merge_coincident must be true or false, not {merge_coincident!r}")
     m = _load(path)
     points, d, vtype = _choose_cells(path, m)
     cells = np.concatenate([np.asarray(b.data) for b in m.cells if b.type == vtype])
@@ -169,6 +177,7 @@ def read_mesh(path: str | os.PathLike[str]) -> Mesh:
         point_sets=point_sets,
         facet_sets=facet_sets,
         cell_sets=cell_sets,
+        merge_coincident=merge_coincident,
     )
 
 

@@ -20,6 +20,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial import cKDTree
 
+from tissuesim.errors import InputError
 from tissuesim.mesh.boundary import _LOCAL_FACETS, boundary_from_table, facet_table
 from tissuesim.mesh.mesh import Mesh
 
@@ -139,14 +140,14 @@ def _points(func: str, points) -> np.ndarray:
     try:
         p = np.asarray(points, dtype=np.float64)
     except (TypeError, ValueError) as exc:
-        raise ValueError(f"{func}: points must be a (q, 3) array of numbers: {exc}") from exc
+        raise InputError(f"{func}: points must be a (q, 3) array of numbers: {exc}") from exc
     if p.ndim == 1 and p.shape == (3,):
-        raise ValueError(f"{func}: points must have shape (q, 3); for one point use [point]")
+        raise InputError(f"{func}: points must have shape (q, 3); for one point use [point]")
     if p.ndim != 2 or p.shape[1] != 3:
-        raise ValueError(f"{func}: points must have shape (q, 3), got {p.shape}")
+        raise InputError(f"{func}: points must have shape (q, 3), got {p.shape}")
     if not np.isfinite(p).all():
         i = int(np.flatnonzero(~np.isfinite(p).all(axis=1))[0])
-        raise ValueError(f"{func}: point {i} is not finite: {p[i].tolist()}")
+        raise InputError(f"{func}: point {i} is not finite: {p[i].tolist()}")
     return p
 
 
@@ -160,7 +161,7 @@ class TriangleSoup:
     def __init__(self, triangles: np.ndarray) -> None:
         tri = np.ascontiguousarray(triangles, dtype=np.float64)
         if tri.ndim != 3 or tri.shape[1:] != (3, 3) or len(tri) == 0:
-            raise ValueError(f"triangles must have shape (m, 3, 3) with m >= 1, got {tri.shape}")
+            raise InputError(f"triangles must have shape (m, 3, 3) with m >= 1, got {tri.shape}")
         self.triangles = tri
         self.centroids = tri.mean(axis=1)
         self.radii = np.sqrt(((tri - self.centroids[:, None]) ** 2).sum(axis=2).max(axis=1))
@@ -297,9 +298,9 @@ class MeshLocator:
 
     def __init__(self, mesh: Mesh, func: str = "MeshLocator") -> None:
         if not isinstance(mesh, Mesh):
-            raise ValueError(f"{func}: mesh must be a tissuesim Mesh, got {type(mesh).__name__}")
+            raise InputError(f"{func}: mesh must be a tissuesim Mesh, got {type(mesh).__name__}")
         if mesh.dim != 3 or mesh.cells.shape[1] != 4:
-            raise ValueError(
+            raise InputError(
                 f"{func}: {mesh.source} is a {mesh.dim}D mesh; tetrahedra are needed: use "
                 f"tissuesim.mesh.box, ellipsoid or a tetrahedral mesh file"
             )
@@ -331,7 +332,7 @@ class MeshLocator:
         """Unsigned distance (q,) to the boundary; inf where it exceeds ``max_distance``."""
         p = _points("distance_to_boundary", points)
         if not (isinstance(max_distance, int | float | np.floating) and max_distance >= 0):
-            raise ValueError(
+            raise InputError(
                 f"distance_to_boundary: max_distance must be a number >= 0 (inf for no cap), "
                 f"got {max_distance!r}"
             )

@@ -14,6 +14,7 @@ from typing import Any
 
 import numpy as np
 
+from tissuesim.errors import InputError
 from tissuesim.mesh.mesh import Mesh
 from tissuesim.render.plot2d import Frame, render_frame_png, render_gif
 from tissuesim.render.plot3d import render_frame_png_3d, render_gif_3d
@@ -43,7 +44,7 @@ def render_frame(
         return render_frame_png(mesh, positions, cell_values, path, **kwargs)
     if mesh.dim == 3:
         return render_frame_png_3d(mesh, positions, cell_values, path, **kwargs)
-    raise ValueError(f"cannot render a {mesh.dim}D mesh; only 2D and 3D are supported")
+    raise InputError(f"cannot render a {mesh.dim}D mesh; only 2D and 3D are supported")
 
 
 def render_animation(
@@ -54,4 +55,4 @@ def render_animation(
         return render_gif(mesh, frames, path, **kwargs)
     if mesh.dim == 3:
         return render_gif_3d(mesh, frames, path, **kwargs)
-    raise ValueError(f"cannot animate a {mesh.dim}D mesh; only 2D and 3D are supported")
+    raise InputError(f"cannot animate a {mesh.dim}D mesh; only 2D and 3D are supported")

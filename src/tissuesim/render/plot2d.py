@@ -17,6 +17,7 @@ from typing import Any
 
 import numpy as np
 
+from tissuesim.errors import InputError
 from tissuesim.io.atomic import atomic_output
 from tissuesim.mesh.mesh import Mesh
 
@@ -60,7 +61,7 @@ def _colour_map(values: Sequence[np.ndarray], label: str, vmin: float | None, vm
 def _subsample(n: int, max_frames: int) -> np.ndarray:
     """Evenly spaced indices into n frames, keeping the first and last, at most max_frames."""
     if max_frames < 1:
-        raise ValueError(f"max_frames must be >= 1, got {max_frames}")
+        raise InputError(f"max_frames must be >= 1, got {max_frames}")
     if n <= max_frames:
         return np.arange(n)
     return np.unique(np.round(np.linspace(0, n - 1, max_frames)).astype(np.int64))
@@ -71,7 +72,7 @@ def _bounds(arrays: Sequence[np.ndarray], pad: float = 0.05) -> tuple[np.ndarray
     pts = np.concatenate([np.asarray(a, dtype=float) for a in arrays])
     pts = pts[np.all(np.isfinite(pts), axis=1)]
     if pts.size == 0:
-        raise ValueError("no finite positions to draw")
+        raise InputError("no finite positions to draw")
     lo, hi = pts.min(axis=0), pts.max(axis=0)
     span = np.maximum(hi - lo, 1e-12 + 1e-9 * np.abs(hi).max())
     margin = pad * span.max()
@@ -80,13 +81,13 @@ def _bounds(arrays: Sequence[np.ndarray], pad: float = 0.05) -> tuple[np.ndarray
 
 def _check(mesh: Mesh, positions: np.ndarray, values: np.ndarray, dim: int) -> None:
     if mesh.dim != dim:
-        raise ValueError(f"this renderer needs a {dim}D mesh, got a {mesh.dim}D one")
+        raise InputError(f"this renderer needs a {dim}D mesh, got a {mesh.dim}D one")
     if np.shape(positions) != (mesh.n_points, dim):
-        raise ValueError(
+        raise InputError(
             f"positions have shape {np.shape(positions)}; expected ({mesh.n_points}, {dim})"
         )
     if np.shape(values) != (mesh.n_cells,):
-        raise ValueError(f"cell_values have shape {np.shape(values)}; expected ({mesh.n_cells},)")
+        raise InputError(f"cell_values have shape {np.shape(values)}; expected ({mesh.n_cells},)")
 
 
 def _new_figure(figsize: tuple[float, float]):
@@ -112,7 +113,7 @@ def _save_gif(
     from matplotlib.animation import PillowWriter
 
     if fps < 1:
-        raise ValueError(f"fps must be >= 1, got {fps}")
+        raise InputError(f"fps must be >= 1, got {fps}")
     if blit:
         return _save_gif_blitted(fig, update, n_frames, path, fps, dpi)
     update(0)
@@ -260,7 +261,7 @@ def render_gif(
     last kept). Note that GIF writers merge pixel-identical consecutive frames.
     """
     if not frames:
-        raise ValueError("render_gif needs at least one frame")
+        raise InputError("render_gif needs at least one frame")
     sel = [frames[i] for i in _subsample(len(frames), max_frames)]
     data = [(float(t), np.asarray(x, dtype=float), np.asarray(v, dtype=float)) for t, x, v in sel]
     for _, x, v in data:

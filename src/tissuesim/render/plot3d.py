@@ -17,6 +17,7 @@ from typing import Any
 
 import numpy as np
 
+from tissuesim.errors import InputError
 from tissuesim.io.atomic import atomic_output
 from tissuesim.mesh.mesh import Mesh
 from tissuesim.render.plot2d import (
@@ -201,7 +202,7 @@ def render_gif_3d(
     ``max_frames`` frames are subsampled evenly (first and last kept).
     """
     if not frames:
-        raise ValueError("render_gif_3d needs at least one frame")
+        raise InputError("render_gif_3d needs at least one frame")
     sel = [frames[i] for i in _subsample(len(frames), max_frames)]
     data = [(float(t), np.asarray(x, dtype=float), np.asarray(v, dtype=float)) for t, x, v in sel]
     for _, x, v in data:

@@ -21,6 +21,7 @@ from typing import Any
 
 import numpy as np
 
+from tissuesim.errors import InputError
 from tissuesim.io.atomic import atomic_output
 from tissuesim.render.plot2d import _bounds, _colour_map, _save_gif, _subsample
 from tissuesim.render.plot3d import (
@@ -48,11 +49,11 @@ def _as_frame(
     v = np.asarray(values, dtype=float)
     m = np.zeros((0, 3)) if markers is None else np.asarray(markers, dtype=float)
     if x.shape != (n, 3):
-        raise ValueError(f"positions have shape {x.shape}; expected ({n}, 3)")
+        raise InputError(f"positions have shape {x.shape}; expected ({n}, 3)")
     if v.shape != (n,):
-        raise ValueError(f"values have shape {v.shape}; expected ({n},), one per point")
+        raise InputError(f"values have shape {v.shape}; expected ({n},), one per point")
     if m.ndim != 2 or m.shape[1] != 3:
-        raise ValueError(f"markers have shape {m.shape}; expected (k, 3)")
+        raise InputError(f"markers have shape {m.shape}; expected (k, 3)")
     return x, v, m
 
 
@@ -61,10 +62,10 @@ def _check_body(n: int, triangles: np.ndarray | None, rest: np.ndarray | None):
     if tri is not None and (
         tri.ndim != 2 or tri.shape[1] != 3 or len(tri) == 0 or tri.min() < 0 or tri.max() >= n
     ):
-        raise ValueError(f"triangles must be (m, 3) ids in [0, {n}), got shape {tri.shape}")
+        raise InputError(f"triangles must be (m, 3) ids in [0, {n}), got shape {tri.shape}")
     x0 = None if rest is None else np.asarray(rest, dtype=float)
     if x0 is not None and x0.shape != (n, 3):
-        raise ValueError(f"rest positions have shape {x0.shape}; expected ({n}, 3)")
+        raise InputError(f"rest positions have shape {x0.shape}; expected ({n}, 3)")
     return tri, x0
 
 
@@ -172,7 +173,7 @@ def render_points_gif(
     ``max_frames`` frames are subsampled evenly (first and last kept).
     """
     if not frames:
-        raise ValueError("render_points_gif needs at least one frame")
+        raise InputError("render_points_gif needs at least one frame")
     n = np.shape(frames[0][1])[0]
     tri, x0 = _check_body(n, triangles, rest)
     sel = [frames[i] for i in _subsample(len(frames), max_frames)]

@@ -34,6 +34,7 @@ from typing import Any
 
 import numpy as np
 
+from tissuesim.errors import InputError
 from tissuesim.io.atomic import atomic_output
 
 __all__ = ["Camera", "Frame3D", "GifWriter", "PointLayer", "SurfaceLayer", "render_frame_png"]
@@ -72,7 +73,7 @@ def _frozen_array(a: Any, dtype, what: str) -> np.ndarray:
     try:
         x = np.array(a, dtype=dtype)  # a copy: later changes to the caller's array do not leak in
     except (TypeError, ValueError) as exc:
-        raise ValueError(f"{what} must be a numeric array: {exc}") from exc
+        raise InputError(f"{what} must be a numeric array: {exc}") from exc
     x.flags.writeable = False
     return x
 
@@ -106,24 +107,24 @@ class SurfaceLayer:
         x = _frozen_array(self.points, float, f"surface {self.name!r} points")
         tri = _frozen_array(self.triangles, np.int64, f"surface {self.name!r} triangles")
         if x.ndim != 2 or x.shape[1] != 3:
-            raise ValueError(f"surface {self.name!r} points have shape {x.shape}; expected (n, 3)")
+            raise InputError(f"surface {self.name!r} points have shape {x.shape}; expected (n, 3)")
         if tri.size == 0:
             tri = np.zeros((0, 3), dtype=np.int64)
         if tri.ndim != 2 or tri.shape[1] != 3:
-            raise ValueError(
+            raise InputError(
                 f"surface {self.name!r} triangles have shape {tri.shape}; expected (m, 3)"
             )
         if len(tri) and (tri.min() < 0 or tri.max() >= len(x)):
-            raise ValueError(f"surface {self.name!r} triangles must be ids in [0, {len(x)})")
+            raise InputError(f"surface {self.name!r} triangles must be ids in [0, {len(x)})")
         if not 0.0 <= float(self.opacity) <= 1.0:
-            raise ValueError(f"surface {self.name!r} opacity must be in [0, 1], got {self.opacity}")
+            raise InputError(f"surface {self.name!r} opacity must be in [0, 1], got {self.opacity}")
         object.__setattr__(self, "points", x)
         object.__setattr__(self, "triangles", tri)
         object.__setattr__(self, "opacity", float(self.opacity))
         if self.scalars is not None:
             s = _frozen_array(self.scalars, float, f"surface {self.name!r} scalars")
             if s.shape != (len(x),):
-                raise ValueError(
+                raise InputError(
                     f"surface {self.name!r} scalars have shape {s.shape}; expected ({len(x)},)"
                 )
             object.__setattr__(self, "scalars", s)
@@ -152,22 +153,22 @@ class PointLayer:
         if x.size == 0:
             x = _frozen_array(np.zeros((0, 3)), float, "points")
         if x.ndim != 2 or x.shape[1] != 3:
-            raise ValueError(f"point layer {self.name!r} points have shape {x.shape}; (q, 3)")
+            raise InputError(f"point layer {self.name!r} points have shape {x.shape}; (q, 3)")
         object.__setattr__(self, "points", x)
         if self.scalars is not None:
             s = _frozen_array(self.scalars, float, f"point layer {self.name!r} scalars")
             if s.shape != (len(x),):
-                raise ValueError(
+                raise InputError(
                     f"point layer {self.name!r} scalars have shape {s.shape}; expected ({len(x)},)"
                 )
             object.__setattr__(self, "scalars", s)
         if self.clim is not None:
             lo, hi = (float(c) for c in self.clim)
             if not (math.isfinite(lo) and math.isfinite(hi) and lo <= hi):
-                raise ValueError(f"point layer {self.name!r} clim must be finite lo <= hi")
+                raise InputError(f"point layer {self.name!r} clim must be finite lo <= hi")
             object.__setattr__(self, "clim", (lo, hi))
         if not float(self.point_size) > 0:
-            raise ValueError(f"point layer {self.name!r} point_size must be > 0")
+            raise InputError(f"point layer {self.name!r} point_size must be > 0")
         object.__setattr__(self, "point_size", float(self.point_size))
 
     @property
@@ -205,7 +206,7 @@ class Frame3D:
             if a.size == 0:
                 continue
             if a.ndim != 3 or a.shape[1:] != (3, 3):
-                raise ValueError(f"cut {i} has shape {a.shape}; expected (m, 3, 3)")
+                raise InputError(f"cut {i} has shape {a.shape}; expected (m, 3, 3)")
             arrays.append(a)
         object.__setattr__(self, "surfaces", tuple(self.surfaces))
         object.__setattr__(self, "points", tuple(self.points))
@@ -232,7 +233,7 @@ class Camera:
         for name in ("position", "focal_point", "view_up"):
             v = tuple(float(c) for c in getattr(self, name))
             if len(v) != 3 or not all(math.isfinite(c) for c in v):
-                raise ValueError(f"Camera.{name} must be 3 finite numbers, got {v}")
+                raise InputError(f"Camera.{name} must be 3 finite numbers, got {v}")
             object.__setattr__(self, name, v)
 
 
@@ -306,7 +307,7 @@ def _apply_camera(plotter, camera: Camera) -> None:
 def _check_window(window_size: tuple[int, int]) -> tuple[int, int]:
     w, h = (int(s) for s in window_size)
     if w < 16 or h < 16:
-        raise ValueError(f"window_size must be at least (16, 16), got {window_size}")
+        raise InputError(f"window_size must be at least (16, 16), got {window_size}")
     return w, h
 
 
@@ -663,9 +664,9 @@ class GifWriter:
     ) -> None:
         self._pv = _import_pyvista()
         if fps < 1:
-            raise ValueError(f"fps must be >= 1, got {fps}")
+            raise InputError(f"fps must be >= 1, got {fps}")
         if max_frames < 1:
-            raise ValueError(f"max_frames must be >= 1, got {max_frames}")
+            raise InputError(f"max_frames must be >= 1, got {max_frames}")
         self.path = Path(path)
         self.window_size = _check_window(window_size)
         self.fps = int(fps)
@@ -725,7 +726,7 @@ class GifWriter:
                     self._kept[-1] = last
                 self._pending = None
             if not self._kept:
-                raise ValueError("GifWriter needs at least one frame")
+                raise InputError("GifWriter needs at least one frame")
             images = [im for _, im in self._kept]
             with atomic_output(self.path) as tmp:
                 images[0].save(

@@ -26,6 +26,8 @@ from typing import Any
 
 import numpy as np
 
+from tissuesim.errors import InputError
+
 __all__ = ["FIELDS", "render_run", "field_label", "MAX_GIF_FRAMES"]
 
 FIELDS = {
@@ -44,7 +46,7 @@ _ORGAN_COLOURS = ("#c8745a", "#d9b35b", "#8fb0c9", "#a3c48d", "#b89ad0")
 
 def field_label(field: str) -> str:
     if field not in FIELDS:
-        raise ValueError(f"render field must be one of {list(FIELDS)}, not {field!r}")
+        raise InputError(f"render field must be one of {list(FIELDS)}, not {field!r}")
     return FIELDS[field]
 
 

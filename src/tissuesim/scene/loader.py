@@ -44,6 +44,7 @@ import numpy as np
 from tissuesim.errors import SceneError, TissueSimError
 from tissuesim.render.scene import FIELDS
 from tissuesim.scene.expressions import compile_vector
+from tissuesim.validate import short
 
 __all__ = ["Scene", "load_scene", "build_scene", "SCENE_KEYS"]
 
@@ -56,6 +57,7 @@ MESH_KEYS = {
     "upper": "generator: upper corner",
     "divisions": "generator: cells per axis",
     "pattern": "rectangle: triangle pattern",
+    "merge_coincident": "file: merge vertices that coincide (an unwelded seam) instead of refusing",
 }
 SIMULATION_KEYS = (
     "density",
@@ -138,12 +140,20 @@ def _table(data: dict, key: str, where: str, array: bool = False):
 
 def load_scene(path: str | Path) -> Scene:
     """Read a TOML scene file and build its Simulation."""
-    path = Path(path)
-    if not path.is_file():
-        raise SceneError(f"scene file {str(path)!r} does not exist")
+    from tissuesim.validate import regular_file
+
     try:
-        data = tomllib.loads(path.read_text())
-    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
+        path = regular_file(path, "scene file")
+        text = path.read_text(encoding="utf-8")
+    except TissueSimError as exc:
+        raise SceneError(str(exc)) from None
+    except OSError as exc:
+        raise SceneError(f"{path}: cannot read the scene file ({exc.strerror})") from None
+    except UnicodeDecodeError:
+        raise SceneError(f"{path}: not a text file (not UTF-8); a scene is a TOML file") from None
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
         raise SceneError(f"{path}: not valid TOML: {exc}") from None
     return build_scene(data, base_dir=path.parent, source=str(path), name=path.stem)
 
@@ -387,11 +397,21 @@ def _mesh(table: dict, base_dir: Path, where: str):
         raise SceneError(f"{where}: must be a table, e.g. mesh = {{ generator = 'box', ... }}")
     _unknown(table, MESH_KEYS, where)
     if "file" in table:
-        extra = set(table) - {"file"}
+        extra = set(table) - {"file", "merge_coincident"}
         if extra:
             raise SceneError(f"{where}: 'file' cannot be combined with {sorted(extra)}")
+        if not isinstance(table["file"], str):
+            raise SceneError(f"{where}: file must be a path (a string), not {short(table['file'])}")
         path = Path(table["file"])
-        return read_mesh(path if path.is_absolute() else base_dir / path)
+        merge = table.get("merge_coincident", False)
+        if not isinstance(merge, bool):
+            raise SceneError(f"{where}: merge_coincident must be true or false, not {short(merge)}")
+        return read_mesh(path if path.is_absolute() else base_dir / path, merge_coincident=merge)
+    if "merge_coincident" in table:
+        raise SceneError(
+            f"{where}: merge_coincident applies to mesh files; generators never "
+            "make coincident vertices"
+        )
     generator = table.get("generator")
     if generator not in MESH_GENERATORS:
         close = difflib.get_close_matches(str(generator), list(MESH_GENERATORS), n=1)

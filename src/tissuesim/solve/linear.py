@@ -31,6 +31,8 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
+from tissuesim.errors import InputError
+
 __all__ = [
     "LinearSolver",
     "NotPositiveDefiniteError",
@@ -328,16 +330,16 @@ def make_linear_solver(
 
     points: rest positions (n, d), used by AMG for the rigid-body near-null space."""
     if name not in LINEAR_SOLVERS:
-        raise ValueError(f"linear_solver must be one of {LINEAR_SOLVERS}, not {name!r}")
+        raise InputError(f"linear_solver must be one of {LINEAR_SOLVERS}, not {name!r}")
     if name == "pardiso":
         if not has_pardiso():
-            raise ValueError(
+            raise InputError(
                 "linear_solver 'pardiso' needs pypardiso: pip install 'tissuesim[fast]'"
             )
         return PardisoSolver(), "requested"
     if name == "cholmod":
         if not has_cholmod():
-            raise ValueError(
+            raise InputError(
                 "linear_solver 'cholmod' needs scikit-sparse: apt-get install libsuitesparse-dev, "
                 "then pip install 'tissuesim[cholmod]'"
             )
@@ -348,7 +350,7 @@ def make_linear_solver(
         return CGSolver("jacobi"), "requested"
     if name == "amg":
         if not has_pyamg():
-            raise ValueError("linear_solver 'amg' needs pyamg: pip install 'tissuesim[amg]'")
+            raise InputError("linear_solver 'amg' needs pyamg: pip install 'tissuesim[amg]'")
         return CGSolver("amg", points=points), "requested"
     # auto (benchmarks/solvers.py): AMG-CG for large 3D; else a direct solver, PARDISO first in
     # 2D (fastest factorisation) and CHOLMOD first in 3D (PARDISO's 3D factorisation is slower).

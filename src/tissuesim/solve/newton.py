@@ -30,6 +30,7 @@ import numpy as np
 
 from tissuesim.constraints.dirichlet import Elimination
 from tissuesim.energies.accumulator import Accumulator
+from tissuesim.errors import InputError
 from tissuesim.solve.linear import LinearSolver, NotPositiveDefiniteError
 
 __all__ = ["NewtonOptions", "NewtonResult", "minimize"]
@@ -51,16 +52,17 @@ class NewtonOptions:
     armijo: float = 1e-4
 
     def __post_init__(self) -> None:
-        if self.hessian_projection not in ("auto", "always", "never"):
-            raise ValueError(
-                f"hessian_projection must be 'auto', 'always' or 'never', "
-                f"not {self.hessian_projection!r}"
-            )
-        if self.max_iterations < 1:
-            raise ValueError(f"max_iterations must be >= 1, not {self.max_iterations}")
+        from tissuesim import validate
+
+        validate.choice(self.hessian_projection, "hessian_projection", ("auto", "always", "never"))
+        validate.integer(self.max_iterations, "max_iterations", low=1, high=10_000)
+        validate.integer(self.max_line_search, "max_line_search", low=1, high=200)
+        validate.real(self.armijo, "armijo", low=0.0, high=1.0, low_open=True, high_open=True)
         for key in ("gradient_tolerance", "absolute_tolerance", "step_tolerance"):
-            if not getattr(self, key) > 0:
-                raise ValueError(f"{key} must be > 0, not {getattr(self, key)}")
+            validate.real(getattr(self, key), key, low=0.0, low_open=True)
+        if not isinstance(self.linear_solver, str):
+            given = validate.short(self.linear_solver)
+            raise InputError(f"linear_solver must be a name such as 'auto', not {given}")
 
 
 @dataclass

@@ -4,6 +4,8 @@ is ``time/steps.py``'s implicit step without inertia)."""
 
 from __future__ import annotations
 
+from tissuesim.errors import InputError
+
 __all__ = ["check_supported"]
 
 
@@ -12,7 +14,7 @@ def check_supported(model) -> None:
     d = model.mesh.dim
     needed = d * (d + 1) // 2  # rigid motions: 3 in 2D, 6 in 3D
     if model.prescribed.dofs.size < needed:
-        raise ValueError(
+        raise InputError(
             f"a quasistatic solve needs prescribed displacements that remove the {needed} rigid "
             f"motions of a {d}D body; this model prescribes {model.prescribed.dofs.size} DOFs. "
             "Add a [[dirichlet]] condition (e.g. clamp one side) or use backward_euler."

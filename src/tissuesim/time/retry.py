@@ -6,12 +6,9 @@ h / 2**max_halvings; if that still fails, ConvergenceError says when, why, and w
 
 from __future__ import annotations
 
-import numbers
 from dataclasses import replace
 
-import numpy as np
-
-from tissuesim.errors import ConvergenceError
+from tissuesim.errors import ConvergenceError, InputError
 from tissuesim.time.state import State, StepOutcome
 
 __all__ = ["advance", "validate_stepping"]
@@ -58,14 +55,17 @@ def advance(
 
 
 def validate_stepping(time_step, max_step_halvings) -> tuple[float, int]:
-    """Checked (time_step > 0 s, max_step_halvings >= 0) for every simulation object."""
-    if not (
-        isinstance(time_step, numbers.Real)
-        and not isinstance(time_step, bool)
-        and np.isfinite(time_step)
-        and time_step > 0
-    ):
-        raise ValueError(f"time_step must be > 0 seconds, not {time_step!r}")
-    if not (isinstance(max_step_halvings, numbers.Integral) and max_step_halvings >= 0):
-        raise ValueError(f"max_step_halvings must be an integer >= 0, not {max_step_halvings!r}")
-    return float(time_step), int(max_step_halvings)
+    """Checked (1e-12 s <= time_step <= 1e9 s, 0 <= max_step_halvings <= 30) for every
+    simulation object: outside, the inertia scale 1/h^2 over- or underflows."""
+    from tissuesim import validate
+
+    h = validate.real(time_step, "time_step", low=0.0, low_open=True, unit="s")
+    if not MIN_TIME_STEP <= h <= MAX_TIME_STEP:
+        raise InputError(
+            f"time_step {h:g} s is outside {MIN_TIME_STEP:g}..{MAX_TIME_STEP:g} s, where the "
+            "inertia term 1/h^2 over- or underflows; choose a time step in that range"
+        )
+    return h, validate.integer(max_step_halvings, "max_step_halvings", low=0, high=30)
+
+
+MIN_TIME_STEP, MAX_TIME_STEP = 1e-12, 1e9

@@ -25,6 +25,7 @@ from collections.abc import Callable
 import numpy as np
 import scipy.sparse.linalg as spla
 
+from tissuesim.errors import InstabilityError
 from tissuesim.solve.newton import minimize
 from tissuesim.system import is_frame_body
 from tissuesim.time.implicit import choose_start
@@ -93,15 +94,38 @@ def explicit_step(
     # prescribed DOFs move with their condition: their velocity is the difference quotient
     if held.size:
         v1[held] = (system.difference(c1, state.x) / h)[held]
-    if not (np.all(np.isfinite(c1)) and np.isfinite(acc.value)):
-        return StepOutcome(
-            None,
-            False,
-            [],
-            f"explicit step blew up; time_step {h:g} s exceeds the stability limit "
-            f"(estimate {limit():.3g} s)",
+    moved, size = largest_motion(system, state.x, c1)
+    if not (np.all(np.isfinite(c1)) and np.isfinite(acc.value)) or moved > BLOW_UP * size:
+        what = "non-finite positions" if not np.isfinite(moved) else f"a point moved {moved:.3g} m"
+        raise InstabilityError(
+            f"explicit steps blew up at t = {t0:.6g} s ({what} in one step of {h:g} s, more than "
+            f"{BLOW_UP:g} x the body size {size:.3g} m: the energy grows without bound); "
+            f"time_step {h:g} s exceeds the stability limit (estimate {limit():.3g} s): use a "
+            "time_step below the estimate, or integrator = backward_euler"
         )
     return StepOutcome(State(t1, c1, v1), True, [])
+
+
+#: an explicit step in which a point moves more than this fraction of its body's size is
+#: unstable: a stable step moves every point far less than an element (CFL), and no tissue
+#: motion covers half its own size in one step
+BLOW_UP = 0.5
+
+
+def largest_motion(system, c0: np.ndarray, c1: np.ndarray) -> tuple[float, float]:
+    """(the largest displacement of a FEM vertex or frame origin from c0 to c1 (m), the size
+    of that body (m)); (nan, size) if c1 is not finite."""
+    worst, size = 0.0, system.length_scale
+    for j, body in enumerate(system.bodies):
+        sc = system.config_slices[j]
+        d = (c1[sc] - c0[sc]).reshape(-1, 12 if is_frame_body(body) else body.mesh.dim)
+        d = d[:, :3] if is_frame_body(body) else d
+        if not np.all(np.isfinite(d)):
+            return float("nan"), body.length_scale
+        step = float(np.sqrt(np.max(np.einsum("ij,ij->i", d, d)))) if d.size else 0.0
+        if step / body.length_scale > worst / size:
+            worst, size = step, body.length_scale
+    return worst, size
 
 
 def _frame_acceleration(body, z: np.ndarray, v: np.ndarray, force: np.ndarray) -> np.ndarray:
