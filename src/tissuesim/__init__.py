@@ -9,9 +9,14 @@ __version__ = "0.1.0"
 
 from tissuesim.errors import (
     ConvergenceError,
+    InputError,
+    InstabilityError,
     InvertedElementError,
     MaterialError,
     MeshError,
+    OutputError,
+    ResourceError,
+    RunError,
     SceneError,
     TissueSimError,
 )
@@ -30,6 +35,11 @@ from tissuesim.solve.newton import NewtonOptions
 __all__ = [
     "__version__",
     "ConvergenceError",
+    "InputError",
+    "InstabilityError",
+    "OutputError",
+    "ResourceError",
+    "RunError",
     "CourseNeoHookean",
     "FixedCorotated",
     "InvertedElementError",

@@ -4,7 +4,9 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
+import signal
 import sys
 import warnings
 from importlib import resources
@@ -169,6 +171,8 @@ def main(argv: list[str] | None = None) -> int:
         except KeyboardInterrupt:
             if args.debug:
                 raise
+            with contextlib.suppress(ValueError):  # not the main thread: no signals here
+                signal.signal(signal.SIGINT, signal.SIG_IGN)  # a second Ctrl-C: we are leaving
             print("tissuesim: interrupted", file=sys.stderr)
             return 130
         except BaseException as exc:

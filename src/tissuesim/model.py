@@ -19,6 +19,7 @@ from tissuesim.constraints.dirichlet import DirichletCondition, Elimination, Pre
 from tissuesim.energies.accumulator import Accumulator
 from tissuesim.energies.elastic import ElasticEnergy
 from tissuesim.energies.mass import MassKind, MassMatrix
+from tissuesim.errors import InputError
 from tissuesim.kinematics.p1 import P1Kinematics
 from tissuesim.materials.base import Material
 from tissuesim.mesh.mesh import Mesh
@@ -132,7 +133,14 @@ class Model:
         """Sum of dead loads at time t, flat (n_dofs,) in N."""
         f = np.zeros((self.mesh.n_points, self.mesh.dim))
         for load in self.loads:
-            f += load.nodal_forces(self, t)
+            part = load.nodal_forces(self, t)
+            if not np.all(np.isfinite(part)):
+                what = type(load).__name__.lower().replace("nodalforces", "nodal force")
+                raise InputError(
+                    f"the {what} on {self.mesh.source} is not finite at t = {t:g} s; check its "
+                    "value or expression"
+                )
+            f += part
         return f.ravel()
 
     def new_accumulator(self, order: int, project: bool = False) -> Accumulator:

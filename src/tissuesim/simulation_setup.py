@@ -11,6 +11,7 @@ import numpy as np
 
 from tissuesim.errors import InputError
 from tissuesim.mesh.mesh import Mesh
+from tissuesim.validate import vector
 
 if TYPE_CHECKING:
     from tissuesim.coupling.tissue import TissueBody
@@ -127,10 +128,8 @@ class SetupCalls:
         if body is not None:
             self.body(body).add_gravity(acceleration)
             return
-        g = np.asarray(acceleration, dtype=float)
+        g = vector(acceleration, "gravity", (2, 3), unit="m/s^2")
         dims = {b.dim for b in self.bodies.values()}
-        if g.ndim != 1 or g.shape[0] not in (2, 3) or not np.all(np.isfinite(g)):
-            raise InputError(f"gravity must be 2 or 3 finite numbers (m/s^2), got {acceleration!r}")
         if dims and {g.shape[0]} != dims:
             raise InputError(
                 f"gravity must have {max(dims)} components (the bodies are {max(dims)}D), got "

@@ -32,6 +32,7 @@ from tissuesim.materials.base import Material
 from tissuesim.materials.measures import continuum_fields
 from tissuesim.mesh.mesh import Mesh
 from tissuesim.model import Model
+from tissuesim.validate import indices, short, vector
 
 __all__ = ["FemBody", "Grasper", "vertex_indices"]
 
@@ -213,21 +214,22 @@ class FemBody:
     def add_traction(self, facets, traction) -> None:
         """Dead traction (N/m in 2D, Pa in 3D) on boundary facets (k, d): a vector or a
         callable (X (k, d), t) -> (k, d) evaluated at the facets' vertices."""
-        facets = np.asarray(facets, dtype=np.int64)
+        ids = indices(facets, "add_traction: facets", self.mesh.n_points)
+        facets = ids.reshape(np.shape(facets)) if ids.size else ids.reshape(0, self.dim)
         if facets.ndim != 2 or facets.shape[1] != self.dim:
             raise InputError(f"add_traction: facets must be (k, {self.dim}) vertex indices")
-        self.model.loads.append(Traction(facets, as_field(traction)))
+        field = as_field(traction, "add_traction: traction (N/m or Pa)", self.dim)
+        self.model.loads.append(Traction(facets, field))
 
     def add_gravity(self, acceleration: Sequence[float]) -> None:
         """Gravity, acceleration (d,) in m/s^2, acting on the element densities."""
-        g = np.asarray(acceleration, dtype=float)
-        if g.shape != (self.dim,) or not np.all(np.isfinite(g)):
-            raise InputError(f"add_gravity: acceleration must be {self.dim} finite numbers")
+        g = vector(acceleration, "add_gravity: acceleration", self.dim, unit="m/s^2")
         self.model.loads.append(Gravity(g))
 
     def add_body_force(self, force_density) -> None:
         """Body force per unit rest volume (N/m^3): a vector or a callable (X (n, d), t)."""
-        self.model.loads.append(BodyForce(as_field(force_density)))
+        field = as_field(force_density, "add_body_force: force_density (N/m^3)", self.dim)
+        self.model.loads.append(BodyForce(field))
 
     def add_nodal_forces(self, vertices, force) -> None:
         """Dead point forces (N) on ``vertices``: a vector (d,) or (k, d) per vertex, or a
@@ -250,7 +252,11 @@ class FemBody:
 
     def set_velocity(self, velocity) -> None:
         """Initial velocity (n, d) or a constant vector (d,), m/s."""
-        v = np.asarray(velocity, dtype=float)
+        try:
+            v = np.asarray(velocity, dtype=float)
+        except (TypeError, ValueError):
+            given = short(velocity)
+            raise InputError(f"set_velocity: velocities must be numbers, not {given}") from None
         try:
             v = np.broadcast_to(v, self.mesh.points.shape)
         except ValueError:

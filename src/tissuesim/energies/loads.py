@@ -58,11 +58,14 @@ def traction_nodal_forces(
 ForceField = Callable[[np.ndarray, float], np.ndarray]
 
 
-def as_field(value) -> ForceField:
-    """A constant vector or a callable (X (k, d), t) -> (k, d) as a callable."""
+def as_field(value, what: str = "load", dim: int | None = None) -> ForceField:
+    """A constant vector (finite, ``dim`` entries) or a callable (X (k, d), t) -> (k, d) as a
+    callable (callables are checked where they are evaluated, ``Model.external_force``)."""
     if callable(value):
         return value
-    v = np.asarray(value, dtype=float)
+    from tissuesim.validate import vector
+
+    v = vector(value, what, dim if dim is not None else (2, 3))
 
     def field(X: np.ndarray, t: float) -> np.ndarray:
         return np.broadcast_to(v, X.shape)

@@ -2,11 +2,14 @@
 rest positions (``io/body_series.py``), the cut surface, summary.json, forces.csv and
 forces.png, a progress bar and the pictures (``render/scene.py``).
 
-summary.json is written when the run starts and rewritten atomically after every step, so a run
-stopped at any point (a crash, a ConvergenceError, Ctrl-C) leaves a valid summary whose
-"status" says how it ended, and every frame listed in a .pvd exists and is complete. Series a
-run does not write (an earlier run's bodies, pictures) are removed from the directory when the
-run starts, so nothing stale sits beside the new output.
+The directory is checked before anything is written (``io/manifest.py``). summary.json is
+written the moment the run starts (before the model is assembled) and rewritten atomically
+after every step, so a run stopped at any point (a crash, a ConvergenceError, Ctrl-C, SIGTERM)
+leaves a valid summary whose "status" says how it ended, and every frame listed in a .pvd
+exists and is complete. What an earlier run into the same directory wrote (its manifest.json)
+is removed when the new run starts, so nothing stale sits beside the new output. Interrupts
+(one Ctrl-C or several, SIGTERM) end the run with status "interrupted" and skip the pictures;
+while the final summary is written further interrupts wait.
 """
 
 from __future__ import annotations
@@ -14,14 +17,15 @@ from __future__ import annotations
 import os
 import sys
 from dataclasses import asdict
-from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from tissuesim.errors import ConvergenceError, InputError
+from tissuesim.errors import InputError, TissueSimError
 from tissuesim.io.atomic import write_json_atomic
 from tissuesim.io.body_series import series_for
+from tissuesim.io.interrupts import deferred_interrupts, interrupts_as_keyboard_interrupt
+from tissuesim.io.manifest import Manifest, prepare_directory
 
 __all__ = ["RunOutput"]
 
@@ -48,21 +52,31 @@ class RunOutput:
         if isinstance(every, bool) or not isinstance(every, int | np.integer) or every < 1:
             raise InputError(f"every must be an integer >= 1, not {every!r}")
         field_label(field)  # an unknown field fails before the run
-        sim.build()
         self.sim = sim
-        self.directory = None if directory is None else Path(directory)
         self.every = int(every)
         self.render = render
         self.field = field
         self.metadata = dict(metadata or {})
         self.frames: list[tuple[Any, ...]] = []  # what the pictures draw, one per written frame
-        self.series = [series_for(b) for b in sim.bodies.values()]
         self.cut_series = None
         self.status = "running"
         self.error = None
         self.pictures = "not rendered" if render else "not asked for (render = false)"
         self.render_time = 0.0  # s spent drawing final.png and run.gif
-        self.description = sim.describe()  # once: describing meshes costs ~1 s at 1e5 cells
+        self.description = None
+        self.directory = None if directory is None else prepare_directory(directory)
+        if self.directory is not None:
+            self.manifest = Manifest(self.directory)
+            self._write_summary()  # replaces the previous run's summary first
+            self.manifest.remove_previous()
+            self.manifest.add(file="summary.json")
+        try:
+            sim.build()
+            self.series = [series_for(b) for b in sim.bodies.values()]
+            self.description = sim.describe()  # once: ~1 s for meshes of 1e5 cells
+        except BaseException as exc:
+            self._fail(exc)
+            raise
 
     # -- series -------------------------------------------------------------------------------
     def _open_series(self) -> None:
@@ -70,15 +84,18 @@ class RunOutput:
 
         for s in self.series:
             s.open(self.directory)
+            for w in s.writers:
+                self.manifest.add(series=w.name)
         tissue = self.sim.tissue
         if tissue is not None and tissue.cuts:
             self.cut_series = VTUSeriesWriter(
                 self.directory, None, "cut", cells=("triangle", np.zeros((1, 3), int)), n_points=3
             )
+            self.manifest.add(series="cut")
         else:
             remove_series(self.directory, "cut")
         for stale in ("final.png", "run.gif", "forces.png", "forces.csv"):
-            (self.directory / stale).unlink(missing_ok=True)
+            (self.directory / stale).unlink(missing_ok=True)  # from a run without a manifest
 
     def _write_frame(self) -> None:
         sim = self.sim
@@ -111,7 +128,7 @@ class RunOutput:
             "status": self.status,
             "error": self.error,
             **self.metadata,
-            "simulation": self.description,
+            "simulation": self.description,  # None until the model is assembled
             "totals": {
                 "steps": len(steps),
                 "end_time": float(self.sim.time),
@@ -134,6 +151,18 @@ class RunOutput:
         write_json_atomic(self.directory / "summary.json", self._summary())
         if self.sim.history and self.sim.history[-1].extra.get("forces"):
             write_forces_csv(self.directory / "forces.csv", self.sim.history)
+            self.manifest.add(file="forces.csv")
+
+    def _fail(self, exc: BaseException) -> None:
+        """Record how the run ended in the summary (any exception; an interrupt included)."""
+        if isinstance(exc, KeyboardInterrupt):
+            self.status, self.error = "interrupted", str(exc) or "KeyboardInterrupt"
+        elif isinstance(exc, TissueSimError):
+            self.status, self.error = "failed", " ".join(str(exc).split())
+        else:
+            self.status, self.error = "failed", f"{type(exc).__name__}: {exc}"
+        with deferred_interrupts():  # a Ctrl-C now waits until the summary says how it ended
+            self._write_summary()
 
     # -- the run --------------------------------------------------------------------------------
     def run(self, steps: int, progress: bool = True) -> list:
@@ -141,43 +170,59 @@ class RunOutput:
         return the simulation's history. The summary's status records how the run ended."""
         from tqdm import tqdm
 
-        if isinstance(steps, bool) or not isinstance(steps, int | np.integer) or steps < 0:
-            raise InputError(f"steps must be an integer >= 0, not {steps!r}")
-        if self.directory is not None:
-            self.directory.mkdir(parents=True, exist_ok=True)
-            self._open_series()
-            self._write_summary()
-        self._write_frame()
-        bar = tqdm(total=steps, disable=not progress, file=sys.stderr, unit="step")
-        interrupted = False
+        from tissuesim.simulation import check_time_resolution
+
         try:
-            for k in range(steps):
-                record = self.sim.step()
-                if (k + 1) % self.every == 0 or k + 1 == steps:
-                    self._write_frame()
+            if isinstance(steps, bool) or not isinstance(steps, int | np.integer) or steps < 0:
+                raise InputError(f"steps must be an integer >= 0, not {steps!r}")
+            h = self.sim.time_step
+            check_time_resolution(self.sim.time + steps * h, h, "the end time")
+            if self.directory is not None:
+                self._open_series()
                 self._write_summary()
-                bar.set_postfix(
-                    t=f"{record.time:.4g}",
-                    newton=record.newton_iterations,
-                    minJ=f"{record.min_J:.3g}",
-                )
-                bar.update(1)
-            self.status = "completed"
-        except ConvergenceError as exc:
-            self.status, self.error = "failed", str(exc)
+            self._write_frame()
+        except BaseException as exc:
+            self._fail(exc)
             raise
-        except KeyboardInterrupt:
-            self.status, self.error, interrupted = "interrupted", "KeyboardInterrupt", True
-            raise
-        except Exception as exc:  # any other crash: the summary must not still say "running"
-            self.status, self.error = "failed", f"{type(exc).__name__}: {exc}"
-            raise
-        finally:
+        bar = tqdm(total=steps, disable=not progress, file=sys.stderr, unit="step")
+        with interrupts_as_keyboard_interrupt():  # one interrupt stops; more are ignored
+            try:
+                for k in range(steps):
+                    record = self.sim.step()
+                    if (k + 1) % self.every == 0 or k + 1 == steps:
+                        self._write_frame()
+                    self._write_summary()
+                    bar.set_postfix(
+                        t=f"{record.time:.4g}",
+                        newton=record.newton_iterations,
+                        minJ=f"{record.min_J:.3g}",
+                    )
+                    bar.update(1)
+            except BaseException as exc:  # the summary must not still say "running"
+                self._fail(exc)
+                bar.close()
+                if self.directory is not None and isinstance(exc, Exception):
+                    self._pictures_of_a_failed_run(progress)  # they show where it went wrong
+                raise
             bar.close()
-            self._write_summary()
-            if self.directory is not None and not interrupted:
-                self._pictures(progress)
+            self.status = "completed"
+            with deferred_interrupts():
+                self._write_summary()
+            if self.directory is not None:
+                try:
+                    self._pictures(progress)
+                except KeyboardInterrupt:  # the run is complete: only the pictures are skipped
+                    self.pictures = "skipped (interrupted while drawing)"
+                    self._write_summary()
+                    raise
         return self.sim.history
+
+    def _pictures_of_a_failed_run(self, progress: bool) -> None:
+        try:
+            self._pictures(progress)
+        except KeyboardInterrupt:
+            self.pictures = "skipped (interrupted while drawing)"
+            self._write_summary()
 
     def _pictures(self, progress: bool) -> None:
         from tissuesim.io.forces import render_forces_png
@@ -200,4 +245,7 @@ class RunOutput:
             start = time.perf_counter()
             self.pictures = render_run(self.sim, self.frames, self.directory, self.field)
             self.render_time = time.perf_counter() - start
+        for name in ("forces.png", "final.png", "run.gif"):
+            if (self.directory / name).is_file():
+                self.manifest.add(file=name)
         self._write_summary()

@@ -15,6 +15,7 @@ from collections.abc import Callable, Sequence
 import numpy as np
 
 from tissuesim.errors import SceneError
+from tissuesim.validate import real, short
 
 __all__ = ["compile_expression", "compile_vector", "FUNCTIONS"]
 
@@ -70,58 +71,58 @@ class _FloatLiterals(ast.NodeTransformer):
 def compile_expression(text: str | float | int, where: str) -> Callable:
     """A function f(X (k, d), t) -> (k,) from an expression; ``where`` names it in errors."""
     if isinstance(text, bool) or not isinstance(text, (str, int, float)):
-        raise SceneError(f"{where}: expected a number or an expression string, got {text!r}")
+        raise SceneError(f"{where}: expected a number or an expression string, got {short(text)}")
     if not isinstance(text, str):
-        value = float(text)
+        value = real(text, where)
         return lambda X, t: np.full(X.shape[0], value)
     try:
         tree = ast.parse(text.strip(), mode="eval")
     except SyntaxError as exc:
-        raise SceneError(f"{where}: cannot parse expression {text!r}: {exc.msg}") from None
+        raise SceneError(f"{where}: cannot parse expression {short(text)}: {exc.msg}") from None
     except (RecursionError, MemoryError):
         raise SceneError(
-            f"{where}: expression {text[:40]!r}... is too long or too deeply nested"
+            f"{where}: expression {short(text)} is too long or too deeply nested"
         ) from None
     called = {id(n.func) for n in ast.walk(tree) if isinstance(n, ast.Call)}
     for node in ast.walk(tree):
         if not isinstance(node, _ALLOWED):
             raise SceneError(
-                f"{where}: {type(node).__name__} is not allowed in expression {text!r}; use "
+                f"{where}: {type(node).__name__} is not allowed in expression {short(text)}; use "
                 "numbers, x, y, z, t, pi, e, arithmetic and functions "
                 f"{', '.join(sorted(FUNCTIONS))}"
             )
         if isinstance(node, ast.Constant) and not isinstance(node.value, (int, float)):
-            raise SceneError(f"{where}: only numeric constants are allowed in {text!r}")
+            raise SceneError(f"{where}: only numeric constants are allowed in {short(text)}")
         if isinstance(node, ast.Compare) and len(node.ops) > 1:
             raise SceneError(
-                f"{where}: chained comparison in {text!r}; write e.g. (0 < x) * (x < 1)"
+                f"{where}: chained comparison in {short(text)}; write e.g. (0 < x) * (x < 1)"
             )
         if isinstance(node, ast.Call):
             if not (isinstance(node.func, ast.Name) and node.func.id in FUNCTIONS):
                 name = getattr(node.func, "id", ast.unparse(node.func))
                 raise SceneError(
-                    f"{where}: unknown function {name!r} in {text!r}; "
+                    f"{where}: unknown function {short(name)} in {short(text)}; "
                     f"allowed: {', '.join(sorted(FUNCTIONS))}"
                 )
             name = node.func.id
             if node.keywords:
                 raise SceneError(
-                    f"{where}: keyword argument {node.keywords[0].arg!r} of {name}() is not "
-                    f"allowed in {text!r}; pass arguments by position"
+                    f"{where}: keyword argument {short(node.keywords[0].arg)} of {name}() is not "
+                    f"allowed in {short(text)}; pass arguments by position"
                 )
             if len(node.args) != ARITY[name]:
                 raise SceneError(
                     f"{where}: {name}() takes {ARITY[name]} argument(s), got {len(node.args)} "
-                    f"in {text!r}"
+                    f"in {short(text)}"
                 )
         if isinstance(node, ast.Name) and node.id not in (*VARIABLES, *CONSTANTS, *FUNCTIONS):
             raise SceneError(
-                f"{where}: unknown name {node.id!r} in {text!r}; variables are x, y, z, t "
-                "and constants pi, e"
+                f"{where}: unknown name {short(node.id)} in {short(text)}; variables are x, y, "
+                "z, t and constants pi, e"
             )
         if isinstance(node, ast.Name) and node.id in FUNCTIONS and id(node) not in called:
             raise SceneError(
-                f"{where}: {node.id!r} is a function: call it, e.g. {node.id}(x), in {text!r}"
+                f"{where}: {node.id!r} is a function: call it, e.g. {node.id}(x), in {short(text)}"
             )
     # Integer literals become floats so that "9**9**9" overflows at once instead of running
     # Python's unbounded integer power.
@@ -129,7 +130,7 @@ def compile_expression(text: str | float | int, where: str) -> Callable:
         tree = ast.fix_missing_locations(_FloatLiterals().visit(tree))
         code = compile(tree, f"<{where}>", "eval")
     except (RecursionError, MemoryError):
-        raise SceneError(f"{where}: expression {text[:40]!r}... is too deeply nested") from None
+        raise SceneError(f"{where}: expression {short(text)} is too deeply nested") from None
 
     def f(X: np.ndarray, t: float) -> np.ndarray:
         X = np.array(X, dtype=float)  # a copy: nothing here may write into the caller's array
@@ -141,7 +142,7 @@ def compile_expression(text: str | float | int, where: str) -> Callable:
                 out = eval(code, {"__builtins__": {}}, names)  # checked tree, restricted names
             return np.broadcast_to(np.asarray(out, dtype=float), (X.shape[0],))
         except (ArithmeticError, ValueError, TypeError) as exc:
-            raise SceneError(f"{where}: evaluating {text!r} failed: {exc}") from None
+            raise SceneError(f"{where}: evaluating {short(text)} failed: {exc}") from None
 
     return f
 
@@ -151,7 +152,7 @@ def compile_vector(items: Sequence, dim: int, where: str) -> Callable:
     if isinstance(items, (str, int, float)) or len(items) != dim:
         raise SceneError(
             f"{where}: expected a list of {dim} numbers or expressions (one per axis), "
-            f"got {items!r}"
+            f"got {short(items)}"
         )
     parts = [compile_expression(item, f"{where}[{i}]") for i, item in enumerate(items)]
 

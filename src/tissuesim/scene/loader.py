@@ -123,8 +123,20 @@ def _context(where: str):
         yield
     except SceneError:
         raise
-    except (TissueSimError, ValueError, TypeError) as exc:
+    except TissueSimError as exc:
         raise SceneError(f"{where}: {exc}") from exc
+    except (ValueError, TypeError, KeyError, IndexError, AttributeError) as exc:
+        raise SceneError(wrong_form(where)) from exc
+
+
+def wrong_form(where: str) -> str:
+    """The message for a value that no validator caught (numpy or Python refused it): the
+    place, not Python's wording; ``--debug`` shows the traceback."""
+    return (
+        f"{where}: a value has the wrong type or shape for its key (a string where a number "
+        "or list belongs, a list of the wrong length, a table where a value belongs); see the "
+        "README's scene keys, or rerun with --debug"
+    )
 
 
 def _table(data: dict, key: str, where: str, array: bool = False):
@@ -168,8 +180,8 @@ def build_scene(
         raise
     except TissueSimError as exc:
         raise SceneError(f"{source}: {exc}") from exc
-    except (ValueError, TypeError) as exc:
-        raise SceneError(f"{source}: {exc}") from exc
+    except (ValueError, TypeError, KeyError, IndexError, AttributeError) as exc:
+        raise SceneError(wrong_form(source)) from exc
 
 
 def _build(data: dict, base_dir: Path, source: str, name: str) -> Scene:
@@ -413,7 +425,7 @@ def _mesh(table: dict, base_dir: Path, where: str):
             "make coincident vertices"
         )
     generator = table.get("generator")
-    if generator not in MESH_GENERATORS:
+    if not isinstance(generator, str) or generator not in MESH_GENERATORS:
         close = difflib.get_close_matches(str(generator), list(MESH_GENERATORS), n=1)
         hint = f" (did you mean {close[0]!r}?)" if close else ""
         raise SceneError(

@@ -45,6 +45,7 @@ __all__ = [
     "LINEAR_SOLVERS",
 ]
 
+AMG_SEED = 20261201  # see _build_amg: repeatable AMG hierarchies
 LINEAR_SOLVERS = ("auto", "pardiso", "cholmod", "splu", "cg", "amg")
 
 #: 3D systems above this many DOFs go to AMG-CG under "auto" (docs/performance.md: at 59,049
@@ -286,10 +287,17 @@ class CGSolver(LinearSolver):
     def _build_amg(self) -> None:
         import pyamg
 
-        # coarse_solver="splu": pyamg's default ("pinv") forms a dense pseudo-inverse (seconds)
-        ml = pyamg.smoothed_aggregation_solver(
-            self._A, B=self._B, symmetry="symmetric", coarse_solver="splu"
-        )
+        # coarse_solver="splu": pyamg's default ("pinv") forms a dense pseudo-inverse (seconds).
+        # pyamg starts its spectral-radius estimates from numpy's global random generator: seed
+        # it for the set-up (and restore the caller's state) so runs are bit-for-bit repeatable
+        state = np.random.get_state()  # noqa: NPY002 (pyamg uses the legacy global)
+        np.random.seed(AMG_SEED)  # noqa: NPY002
+        try:
+            ml = pyamg.smoothed_aggregation_solver(
+                self._A, B=self._B, symmetry="symmetric", coarse_solver="splu"
+            )
+        finally:
+            np.random.set_state(state)  # noqa: NPY002
         self._M = ml.aspreconditioner(cycle="V")
         self._reference_iterations = None
         self.stats.setups += 1
