@@ -175,7 +175,8 @@ def indices(value: Any, name: str, n: int, *, what: str = "vertex") -> np.ndarra
     v = arr.astype(np.int64).ravel()
     if v.size and (v.min() < 0 or v.max() >= n):
         raise InputError(
-            f"{name}: {what} indices must be in [0, {n}); got {int(v.min())}..{int(v.max())}"
+            f"{name}: {what} indices must be in [0, {n}); got {int(v.min())}..{int(v.max())} "
+            "(out of range)"
         )
     return v
 

@@ -41,22 +41,11 @@ Motion = Callable[[float], np.ndarray]
 
 def vertex_indices(vertices, n_points: int, what: str, unique: bool = True) -> np.ndarray:
     """Checked vertex indices (sorted and unique, or as given); a boolean mask or floats are
-    refused (they would silently select other vertices)."""
-    arr = np.asarray(vertices)
-    if arr.dtype == bool:
-        raise InputError(f"{what}: got a boolean mask; pass vertex indices (np.flatnonzero(mask))")
-    if arr.size and not np.issubdtype(arr.dtype, np.integer):
-        if not np.all(np.isfinite(arr)) or np.any(arr != np.round(arr)):
-            raise InputError(f"{what}: vertex indices must be integers, got {arr.dtype} values")
-    v = arr.astype(np.int64).ravel()
+    refused (they would silently select other vertices), and so is an empty selection."""
+    v = indices(vertices, what, n_points)
     v = np.unique(v) if unique else v
     if v.size == 0:
         raise InputError(f"{what}: the vertex selection is empty")
-    if v.min() < 0 or v.max() >= n_points:
-        raise InputError(
-            f"{what}: vertex indices must be in [0, {n_points}); got {int(v.min())}.."
-            f"{int(v.max())} (out of range)"
-        )
     return v
 
 

@@ -304,6 +304,7 @@ def _sample_cells(
     be entirely inside (1) or outside (0); -1 means classify the sub-samples.
     """
     s = subsamples
+    check_memory(8 * 3 * 4.0 * s**3, f"{s}^3 sub-samples per cell", "Use fewer subsamples.")
     j = (np.arange(s) + 0.5) / s - 0.5
     oz, oy, ox = (g.ravel() for g in np.meshgrid(j, j, j, indexing="ij"))
     offsets = np.column_stack([ox, oy, oz]) * h  # (s^3, 3), centred on the cell centre

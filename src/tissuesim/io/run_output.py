@@ -48,12 +48,14 @@ class RunOutput:
         metadata: dict | None = None,
     ) -> None:
         from tissuesim.render.scene import field_label
+        from tissuesim.validate import integer, short
 
-        if isinstance(every, bool) or not isinstance(every, int | np.integer) or every < 1:
-            raise InputError(f"every must be an integer >= 1, not {every!r}")
+        every = integer(every, "every", low=1)
+        if not isinstance(render, bool):
+            raise InputError(f"render must be true or false, not {short(render)}")
         field_label(field)  # an unknown field fails before the run
         self.sim = sim
-        self.every = int(every)
+        self.every = every
         self.render = render
         self.field = field
         self.metadata = dict(metadata or {})
@@ -173,8 +175,9 @@ class RunOutput:
         from tissuesim.simulation import check_time_resolution
 
         try:
-            if isinstance(steps, bool) or not isinstance(steps, int | np.integer) or steps < 0:
-                raise InputError(f"steps must be an integer >= 0, not {steps!r}")
+            from tissuesim.validate import integer
+
+            steps = integer(steps, "steps", low=0)
             h = self.sim.time_step
             check_time_resolution(self.sim.time + steps * h, h, "the end time")
             if self.directory is not None:

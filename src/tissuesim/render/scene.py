@@ -45,8 +45,10 @@ _ORGAN_COLOURS = ("#c8745a", "#d9b35b", "#8fb0c9", "#a3c48d", "#b89ad0")
 
 
 def field_label(field: str) -> str:
-    if field not in FIELDS:
-        raise InputError(f"render field must be one of {list(FIELDS)}, not {field!r}")
+    if not isinstance(field, str) or field not in FIELDS:
+        from tissuesim.validate import short
+
+        raise InputError(f"render field must be one of {list(FIELDS)}, not {short(field)}")
     return FIELDS[field]
 
 

@@ -18,11 +18,11 @@ naming a function of ``tissuesim.mesh.select``. Vectors may hold numbers or expr
 x, y, z, t (``tissuesim.scene.expressions``). Unknown keys are errors that suggest the nearest
 valid key; every error names the file and the table.
 
-A scene with a ``[frames]`` table is a meshless frame-based body instead (FrameSimulation): its
+A scene with a ``[frames]`` table is a meshless frame-based body instead: its
 tables are read by ``tissuesim.scene.frames``, which shares [material], [simulation], [newton],
 [gravity] and [run] with this module.
 
-A scene with ``[[organs]]`` tables is a coupled scene instead (CoupledSimulation: organs joined
+A scene with ``[[bodies]]`` (or ``[[organs]]``) tables has many bodies (organs joined
 by connective tissue, with [[graspers]], [tissue], [[cuts]] and [tearing]): its tables are read
 by ``tissuesim.scene.coupled``, which shares [simulation], [newton], [gravity], [run], the
 material tables and the vertex selectors with this module. ``[[organs]]`` decides even when
@@ -99,7 +99,7 @@ COUPLED_ONLY_KEYS = ("graspers", "tissue", "cuts", "tearing")
 
 @dataclass
 class Scene:
-    """A scene ready to run: the Simulation (or FrameSimulation, or CoupledSimulation) and the
+    """A scene ready to run: the Simulation and the
     arguments of its ``run``."""
 
     simulation: Any
