@@ -18,6 +18,7 @@ import os
 from typing import Literal
 
 from tissuesim.errors import InputError
+from tissuesim.validate import short
 
 __all__ = ["BACKENDS", "Backend", "numba_available", "resolve_backend"]
 
@@ -32,13 +33,14 @@ def numba_available() -> bool:
 def resolve_backend(requested: str = "auto") -> tuple[str, str]:
     """The backend to use for ``requested`` and the reason, e.g. ("numba", "auto: ...")."""
     if requested not in BACKENDS:
-        raise InputError(f"backend must be one of {BACKENDS}, not {requested!r}")
+        raise InputError(f"backend must be one of {BACKENDS}, not {short(requested)}")
     reason = "requested"
     if requested == "auto":
         env = os.environ.get("TISSUESIM_BACKEND", "auto").strip().lower() or "auto"
         if env not in BACKENDS:
             raise InputError(
-                f"environment variable TISSUESIM_BACKEND must be one of {BACKENDS}, not {env!r}"
+                f"environment variable TISSUESIM_BACKEND must be one of {BACKENDS}, "
+                f"not {short(env)}"
             )
         if env != "auto":
             requested, reason = env, "TISSUESIM_BACKEND"

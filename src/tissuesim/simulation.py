@@ -331,7 +331,9 @@ class Simulation(SetupCalls, BodyResults):
         """The body called ``name``; None: the only body (of ``kinds``, if given)."""
         if name is not None:
             if name not in self.bodies:
-                raise InputError(f"unknown body {name!r}; bodies: {list(self.bodies)}")
+                raise InputError(
+                    f"unknown body {validate.short(name)}; bodies: {list(self.bodies)}"
+                )
             b = self.bodies[name]
             if kinds and b.kind not in kinds:
                 raise InputError(f"body {name!r} is a {b.kind} body; this needs {kinds}")

@@ -11,7 +11,7 @@ import numpy as np
 
 from tissuesim.errors import InputError
 from tissuesim.mesh.mesh import Mesh
-from tissuesim.validate import vector
+from tissuesim.validate import short, vector
 
 if TYPE_CHECKING:
     from tissuesim.coupling.tissue import TissueBody
@@ -48,9 +48,9 @@ class SetupCalls:
         if a is b:
             raise InputError(f"attach: a body cannot be attached to itself ({body!r})")
         if distance is not None and not (np.isfinite(distance) and distance > 0):
-            raise InputError(f"attach: distance must be > 0 m, got {distance!r}")
+            raise InputError(f"attach: distance must be > 0 m, got {short(distance)}")
         if stiffness is not None and not (np.isfinite(stiffness) and stiffness > 0):
-            raise InputError(f"attach: stiffness must be > 0 N/m per m^2, got {stiffness!r}")
+            raise InputError(f"attach: stiffness must be > 0 N/m per m^2, got {short(stiffness)}")
         if a.kind == b.kind == "frames":
             raise InputError(
                 f"attach: {body!r} and {to!r} are both frame bodies; attach a frame body to a "

@@ -66,7 +66,7 @@ def toml_value(value) -> str:
             return "inf" if value > 0 else "-inf"
         return repr(value)
     if isinstance(value, str):
-        return json.dumps(value)  # a JSON string is a valid TOML basic string
+        return toml_string(value)
     if isinstance(value, list):
         return "[" + ", ".join(toml_value(v) for v in value) + "]"
     if isinstance(value, dict):
@@ -74,9 +74,15 @@ def toml_value(value) -> str:
     raise TypeError(type(value))
 
 
+def toml_string(text: str) -> str:
+    """A TOML basic string: JSON's escapes, but astral characters raw (JSON would write them as
+    surrogate pairs, which TOML refuses) and DEL escaped (TOML refuses it raw)."""
+    return json.dumps(text, ensure_ascii=False).replace("\x7f", "\\u007f")
+
+
 def toml_key(key: str) -> str:
     bare = key and all(c.isalnum() or c in "_-" for c in key) and key.isascii()
-    return key if bare else json.dumps(key)
+    return key if bare else toml_string(key)
 
 
 def to_toml(data: dict) -> str:

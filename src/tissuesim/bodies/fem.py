@@ -52,7 +52,7 @@ def vertex_indices(vertices, n_points: int, what: str, unique: bool = True) -> n
 def _vector(value, dim: int, what: str) -> np.ndarray:
     v = np.asarray(value, dtype=float)
     if v.shape != (dim,) or not np.all(np.isfinite(v)):
-        raise InputError(f"{what} must be {dim} finite numbers (m), got {value!r}")
+        raise InputError(f"{what} must be {dim} finite numbers (m), got {short(value)}")
     return v
 
 
@@ -145,13 +145,13 @@ class FemBody:
             if arr.dtype == bool or not np.issubdtype(arr.dtype, np.integer) or arr.ndim != 1:
                 raise InputError(
                     "add_dirichlet: components must be a sequence of integer axes, e.g. (0,), "
-                    f"not {components!r}"
+                    f"not {short(components)}"
                 )
             comps = tuple(int(c) for c in arr)
             if not comps or min(comps) < 0 or max(comps) >= self.dim:
                 raise InputError(
                     f"add_dirichlet: components must be axes in 0..{self.dim - 1}, "
-                    f"not {components!r}"
+                    f"not {short(components)}"
                 )
         name = self._claim(name, default)
         self.conditions.append((name, DirichletCondition(v, g, comps, repr(name))))
@@ -180,7 +180,7 @@ class FemBody:
             displacement = functools.partial(lambda c, t: c, const)
         _vector(displacement(0.0), self.dim, f"grasper {name!r} displacement at t = 0")
         if stiffness is not None and not (np.isfinite(stiffness) and stiffness > 0):
-            raise InputError(f"grasper {name!r}: stiffness must be > 0 N/m, got {stiffness!r}")
+            raise InputError(f"grasper {name!r}: stiffness must be > 0 N/m, got {short(stiffness)}")
         if stiffness is not None and self.dim != 3:
             raise InputError(f"grasper {name!r}: spring graspers need a 3D body")
         name = self._claim(name, "grasper")

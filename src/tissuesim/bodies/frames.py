@@ -30,6 +30,7 @@ from tissuesim.frames.model import (
 from tissuesim.frames.sampling import IntegrationPoints, Surface
 from tissuesim.materials.base import Material
 from tissuesim.materials.measures import continuum_fields
+from tissuesim.validate import short
 
 __all__ = ["FrameBody"]
 
@@ -168,7 +169,7 @@ class FrameBody:
         g = np.asarray(acceleration, dtype=float)
         if g.shape != (3,) or not np.all(np.isfinite(g)):
             raise InputError(
-                f"add_gravity: acceleration must be 3 finite numbers, not {acceleration!r}"
+                f"add_gravity: acceleration must be 3 finite numbers, not {short(acceleration)}"
             )
         self.model.loads.append(FrameGravity(g))
 

@@ -15,6 +15,7 @@ import numpy as np
 
 from tissuesim.assembly.pattern import SparsityPattern
 from tissuesim.errors import InputError
+from tissuesim.validate import short
 
 __all__ = ["DirichletCondition", "PrescribedDofs", "Displacement"]
 
@@ -35,7 +36,7 @@ class DirichletCondition:
 def constant_displacement(value: Sequence[float]) -> Displacement:
     v = np.asarray(value, dtype=float)
     if v.ndim != 1 or not np.all(np.isfinite(v)):
-        raise InputError(f"a constant displacement must be finite numbers (m), not {value!r}")
+        raise InputError(f"a constant displacement must be finite numbers (m), not {short(value)}")
 
     def g(X: np.ndarray, t: float) -> np.ndarray:
         return np.broadcast_to(v, X.shape).copy()

@@ -28,6 +28,7 @@ from tissuesim.frames.sampling import (
 from tissuesim.mesh.boundary import boundary_facets, facet_normals
 from tissuesim.mesh.locate import MeshLocator
 from tissuesim.mesh.mesh import Mesh
+from tissuesim.validate import short
 
 __all__ = ["sample_between", "contact_facets"]
 
@@ -38,7 +39,9 @@ def _meshes(func: str, meshes) -> list[Mesh]:
     if isinstance(meshes, Mesh):
         raise InputError(f"{func}: meshes must be a sequence of meshes; for one mesh use [mesh]")
     if not isinstance(meshes, Sequence) or len(meshes) == 0:
-        raise InputError(f"{func}: meshes must be a non-empty sequence of Mesh, got {meshes!r}")
+        raise InputError(
+            f"{func}: meshes must be a non-empty sequence of Mesh, got {short(meshes)}"
+        )
     for i, m in enumerate(meshes):
         if not isinstance(m, Mesh):
             raise InputError(

@@ -29,6 +29,7 @@ from tissuesim.frames.sampling import IntegrationPoints
 from tissuesim.materials.base import Material
 from tissuesim.materials.measures import continuum_fields
 from tissuesim.mesh.boundary import facet_measures
+from tissuesim.validate import short
 
 __all__ = ["TissueBody", "ATTACHMENT_FACTOR", "MIN_J_AFTER_CUT"]
 
@@ -126,7 +127,7 @@ class TissueBody:
                 )
             frames = farthest_point_frames(samples.points, int(frames))
         if not (np.isfinite(density) and density > 0):
-            raise InputError(f"tissue density must be > 0 kg/m^3, got {density!r}")
+            raise InputError(f"tissue density must be > 0 kg/m^3, got {short(density)}")
         self.name = name
         self.material = material
         self.samples = samples
@@ -189,7 +190,7 @@ class TissueBody:
     def add_gravity(self, acceleration) -> None:
         g = np.asarray(acceleration, dtype=float)
         if g.shape != (3,) or not np.all(np.isfinite(g)):
-            raise InputError(f"add_gravity: acceleration must be 3 finite numbers, not {g!r}")
+            raise InputError(f"add_gravity: acceleration must be 3 finite numbers, not {short(g)}")
         self.gravity.append(g)
         if self.model is not None:
             self.model.loads.append(FrameGravity(g))
@@ -214,7 +215,8 @@ class TissueBody:
             kerf = 0.5 * float(np.cbrt(np.median(self.samples.volumes)))
         elif not (np.isfinite(kerf) and kerf >= 0):
             raise InputError(
-                f"cut {name!r}: kerf must be >= 0 m (the width the blade removes), got {kerf!r}"
+                f"cut {name!r}: kerf must be >= 0 m (the width the blade removes), "
+                f"got {short(kerf)}"
             )
         tool = CutTool(blade, float(start), float(end), float(kerf), name)
         tool.positions(start)  # a malformed blade fails here
@@ -225,7 +227,7 @@ class TissueBody:
         """Tissue integration points whose largest principal Green strain passes
         ``threshold`` are removed after the step (tearing)."""
         if not (np.isfinite(threshold) and threshold > 0):
-            raise InputError(f"tearing threshold must be a strain > 0, got {threshold!r}")
+            raise InputError(f"tearing threshold must be a strain > 0, got {short(threshold)}")
         self.tear_threshold = float(threshold)
 
     # -- the frame model and its attachments -------------------------------------------------

@@ -21,6 +21,7 @@ from tissuesim.assembly.pattern import SparsityPattern
 from tissuesim.energies.accumulator import Accumulator
 from tissuesim.errors import InputError
 from tissuesim.kinematics.p1 import P1Kinematics
+from tissuesim.validate import short
 
 __all__ = ["MassMatrix", "Inertia", "MassKind"]
 
@@ -52,7 +53,7 @@ class MassMatrix:
         if kind == "lumped":
             ref = np.diag(ref.sum(axis=1))
         elif kind != "consistent":
-            raise InputError(f"mass must be 'consistent' or 'lumped', not {kind!r}")
+            raise InputError(f"mass must be 'consistent' or 'lumped', not {short(kind)}")
         local = np.kron(ref, np.eye(d))  # ((a,i),(b,k)) = ref_ab delta_ik
         blocks = element_mass[:, None, None] * local[None]
         data = np.zeros(pattern.nnz)

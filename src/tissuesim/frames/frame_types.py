@@ -35,6 +35,7 @@ import numpy as np
 
 from tissuesim.errors import InputError
 from tissuesim.frames.rotations import exp_map, log_map, skew
+from tissuesim.validate import short
 
 __all__ = ["FrameType", "RIGID", "AFFINE", "FRAME_TYPES", "frame_type"]
 
@@ -137,4 +138,6 @@ def frame_type(name: str | FrameType) -> FrameType:
     try:
         return FRAME_TYPES[name]
     except KeyError:
-        raise InputError(f"frame type must be one of {sorted(FRAME_TYPES)}, not {name!r}") from None
+        raise InputError(
+            f"frame type must be one of {sorted(FRAME_TYPES)}, not {short(name)}"
+        ) from None

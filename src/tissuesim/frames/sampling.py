@@ -26,7 +26,7 @@ from tissuesim.mesh.checks import signed_volumes
 from tissuesim.mesh.generators import _arguments
 from tissuesim.mesh.io import _load
 from tissuesim.mesh.mesh import Mesh
-from tissuesim.validate import check_memory
+from tissuesim.validate import check_memory, short
 
 __all__ = [
     "IntegrationPoints",
@@ -113,7 +113,7 @@ class IntegrationPoints:
         except (TypeError, ValueError) as exc:
             raise InputError(
                 f"density must be a positive number or ({self.n},) positive numbers, "
-                f"got {density!r}"
+                f"got {short(density)}"
             ) from exc
         if rho.shape not in ((), (self.n,)):
             raise InputError(
@@ -217,9 +217,9 @@ def _vector3(func: str, name: str, value, positive: bool = False) -> np.ndarray:
     try:
         v = np.array(value, dtype=np.float64)
     except (TypeError, ValueError) as exc:
-        raise InputError(f"{func}: {name} must be 3 numbers (x, y, z), got {value!r}") from exc
+        raise InputError(f"{func}: {name} must be 3 numbers (x, y, z), got {short(value)}") from exc
     if v.shape != (3,) or not np.isfinite(v).all():
-        raise InputError(f"{func}: {name} must be 3 finite numbers (x, y, z), got {value!r}")
+        raise InputError(f"{func}: {name} must be 3 finite numbers (x, y, z), got {short(value)}")
     if positive and not (v > 0).all():
         raise InputError(
             f"{func}: {name} must all be > 0, got {_fmt(v)}; give the half-lengths of the "
@@ -230,16 +230,16 @@ def _vector3(func: str, name: str, value, positive: bool = False) -> np.ndarray:
 
 def _positive(func: str, name: str, value, hint: str) -> float:
     if isinstance(value, bool) or not isinstance(value, numbers.Real):
-        raise InputError(f"{func}: {name} must be a number > 0, got {value!r}; {hint}")
+        raise InputError(f"{func}: {name} must be a number > 0, got {short(value)}; {hint}")
     v = float(value)
     if not (np.isfinite(v) and v > 0):
-        raise InputError(f"{func}: {name} must be finite and > 0, got {value!r}; {hint}")
+        raise InputError(f"{func}: {name} must be finite and > 0, got {short(value)}; {hint}")
     return v
 
 
 def _count(func: str, name: str, value, minimum: int) -> int:
     if isinstance(value, bool) or not isinstance(value, numbers.Integral) or value < minimum:
-        raise InputError(f"{func}: {name} must be an integer >= {minimum}, got {value!r}")
+        raise InputError(f"{func}: {name} must be an integer >= {minimum}, got {short(value)}")
     return int(value)
 
 

@@ -27,6 +27,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from tissuesim.errors import InputError
+from tissuesim.validate import short
 
 __all__ = ["ShapeKind", "ShapeFunctions", "PairFilter", "auto_radii", "shape_functions"]
 
@@ -285,10 +286,11 @@ def shape_functions(
     """
     if kind not in _KINDS:
         raise InputError(
-            f"unknown shape function kind {kind!r}; known kinds: {', '.join(map(repr, _KINDS))}"
+            f"unknown shape function kind {short(kind)}; known kinds: "
+            f"{', '.join(map(repr, _KINDS))}"
         )
     if isinstance(min_frames, bool) or not isinstance(min_frames, int | np.integer):
-        raise InputError(f"min_frames must be an integer >= 1, got {min_frames!r}")
+        raise InputError(f"min_frames must be an integer >= 1, got {short(min_frames)}")
     min_frames = int(min_frames)
     if min_frames < 1:
         raise InputError(f"min_frames is {min_frames}; it must be >= 1 (frames per point)")

@@ -12,6 +12,7 @@ import numpy as np
 from tissuesim.errors import MaterialError
 from tissuesim.materials.base import Material
 from tissuesim.materials.lame import lame_parameters
+from tissuesim.validate import short
 
 _EPS2 = np.array([[0.0, 1.0], [-1.0, 0.0]])
 _EPS3 = np.zeros((3, 3, 3))
@@ -36,7 +37,7 @@ def check_input(F: np.ndarray, order: int) -> np.ndarray:
         )
     if order not in (0, 1, 2):
         raise MaterialError(
-            f"order must be 0 (energy), 1 (+ stress) or 2 (+ tangent), got {order!r}"
+            f"order must be 0 (energy), 1 (+ stress) or 2 (+ tangent), got {short(order)}"
         )
     return F
 

@@ -10,6 +10,7 @@ from __future__ import annotations
 import math
 
 from tissuesim.errors import MaterialError
+from tissuesim.validate import short
 
 __all__ = ["lame_parameters"]
 
@@ -20,9 +21,9 @@ def _finite(key: str, value: object) -> float:
     try:
         x = float(value)  # type: ignore[arg-type]
     except (TypeError, ValueError):
-        raise MaterialError(f"{key} must be a real number, got {value!r}") from None
+        raise MaterialError(f"{key} must be a real number, got {short(value)}") from None
     if not math.isfinite(x):
-        raise MaterialError(f"{key} must be finite, got {value!r}")
+        raise MaterialError(f"{key} must be finite, got {short(value)}")
     return x
 
 
@@ -49,10 +50,10 @@ def lame_parameters(
         E = _finite("youngs_modulus", youngs_modulus)
         nu = _finite("poisson_ratio", poisson_ratio)
         if E <= 0.0:
-            raise MaterialError(f"youngs_modulus must be > 0 Pa, got {E!r}")
+            raise MaterialError(f"youngs_modulus must be > 0 Pa, got {short(E)}")
         if not -1.0 < nu < 0.5:
             raise MaterialError(
-                f"poisson_ratio must satisfy -1 < poisson_ratio < 0.5, got {nu!r} "
+                f"poisson_ratio must satisfy -1 < poisson_ratio < 0.5, got {short(nu)} "
                 "(0.5 is incompressible, which these compressible laws cannot represent)"
             )
         return E / (2.0 * (1.0 + nu)), E * nu / ((1.0 + nu) * (1.0 - 2.0 * nu))
@@ -60,11 +61,11 @@ def lame_parameters(
         mu = _finite("shear_modulus", shear_modulus)
         lam = _finite("lame_lambda", lame_lambda)
         if mu <= 0.0:
-            raise MaterialError(f"shear_modulus must be > 0 Pa, got {mu!r}")
+            raise MaterialError(f"shear_modulus must be > 0 Pa, got {short(mu)}")
         if lam + 2.0 * mu / 3.0 <= 0.0:
             raise MaterialError(
                 f"lame_lambda must be > -2/3 shear_modulus = {-2.0 * mu / 3.0!r} Pa "
-                f"(positive bulk modulus), got {lam!r}"
+                f"(positive bulk modulus), got {short(lam)}"
             )
         return mu, lam
     got = ", ".join(sorted(keys)) or "nothing"

@@ -12,6 +12,7 @@ from tissuesim.materials.course_neo_hookean import CourseNeoHookean
 from tissuesim.materials.linear import LinearElastic
 from tissuesim.materials.neo_hookean import NeoHookean
 from tissuesim.materials.stvk import StVenantKirchhoff
+from tissuesim.validate import short
 
 __all__ = ["MATERIALS", "make_material"]
 
@@ -31,13 +32,15 @@ def make_material(model: str, **params: float) -> Material:
     """Build the law registered as ``model`` with keyword parameters (e.g. E and nu)."""
     key = str(model).strip().lower().replace("-", "_").replace(" ", "_")
     if key not in MATERIALS:
-        raise MaterialError(f"unknown material model {model!r}; {_suggest(key, list(MATERIALS))}")
+        raise MaterialError(
+            f"unknown material model {short(model)}; {_suggest(key, list(MATERIALS))}"
+        )
     cls = MATERIALS[key]
     sig = inspect.signature(cls.__init__).parameters
     allowed = [n for n, p in sig.items() if p.kind is inspect.Parameter.KEYWORD_ONLY]
     for name in params:
         if name not in allowed:
             raise MaterialError(
-                f"unknown parameter {name!r} for material {key!r}; {_suggest(name, allowed)}"
+                f"unknown parameter {short(name)} for material {key!r}; {_suggest(name, allowed)}"
             )
     return cls(**params)

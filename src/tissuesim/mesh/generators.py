@@ -17,7 +17,7 @@ from tissuesim.errors import MeshError
 from tissuesim.mesh.boundary import boundary_facets
 from tissuesim.mesh.checks import validate_mesh
 from tissuesim.mesh.mesh import Mesh
-from tissuesim.validate import check_memory
+from tissuesim.validate import check_memory, short
 
 __all__ = ["rectangle", "box", "ellipsoid", "PATTERNS"]
 
@@ -31,9 +31,9 @@ def _arguments(name, lower, upper, divisions, d):
         try:
             a = np.asarray(v, dtype=np.float64)
         except (TypeError, ValueError) as exc:
-            raise MeshError(f"{name}: {arg} must be {d} numbers, got {v!r}") from exc
+            raise MeshError(f"{name}: {arg} must be {d} numbers, got {short(v)}") from exc
         if a.shape != (d,) or not np.isfinite(a).all():
-            raise MeshError(f"{name}: {arg} must be {d} finite numbers, got {v!r}")
+            raise MeshError(f"{name}: {arg} must be {d} finite numbers, got {short(v)}")
         values[arg] = tuple(float(x) for x in a)
     lo, hi = values["lower"], values["upper"]
     for i in range(d):
@@ -47,7 +47,7 @@ def _arguments(name, lower, upper, divisions, d):
         or not all(isinstance(k, numbers.Integral) and not isinstance(k, bool) for k in divisions)
         or min(divisions) < 1
     ):
-        raise MeshError(f"{name}: divisions must be {d} integers >= 1, got {divisions!r}")
+        raise MeshError(f"{name}: divisions must be {d} integers >= 1, got {short(divisions)}")
     divisions = tuple(int(k) for k in divisions)
     cells = (2 if d == 2 else 6) * math.prod(divisions) * (2 if name == "rectangle" else 1)
     check_mesh_size(f"{name} with divisions {list(divisions)}", cells, d)
@@ -93,7 +93,7 @@ def rectangle(
     """
     lo, hi, (nx, ny) = _arguments("rectangle", lower, upper, divisions, 2)
     if pattern not in PATTERNS:
-        raise MeshError(f"rectangle: pattern must be one of {PATTERNS}, got {pattern!r}")
+        raise MeshError(f"rectangle: pattern must be one of {PATTERNS}, got {short(pattern)}")
     source = f"rectangle(lower={lo}, upper={hi}, divisions={(nx, ny)}, pattern={pattern!r})"
     gy, gx = np.mgrid[0 : ny + 1, 0 : nx + 1]
     gx, gy = gx.ravel(), gy.ravel()
@@ -229,9 +229,9 @@ def ellipsoid(
         try:
             a = np.asarray(v, dtype=np.float64)
         except (TypeError, ValueError) as exc:
-            raise MeshError(f"{func}: {arg} must be 3 numbers (x, y, z), got {v!r}") from exc
+            raise MeshError(f"{func}: {arg} must be 3 numbers (x, y, z), got {short(v)}") from exc
         if a.shape != (3,) or not np.isfinite(a).all():
-            raise MeshError(f"{func}: {arg} must be 3 finite numbers (x, y, z), got {v!r}")
+            raise MeshError(f"{func}: {arg} must be 3 finite numbers (x, y, z), got {short(v)}")
         values[arg] = a
     c, r = values["center"], values["radii"]
     if not (r > 0).all():
@@ -241,7 +241,7 @@ def ellipsoid(
     if isinstance(divisions, bool) or not isinstance(divisions, numbers.Integral) or divisions < 1:
         raise MeshError(
             f"{func}: divisions must be an integer >= 1 (hexahedra along each axis of the "
-            f"mapped cube), got {divisions!r}"
+            f"mapped cube), got {short(divisions)}"
         )
     n = int(divisions)
     check_mesh_size(f"ellipsoid with divisions {n}", 6 * n**3, 3)

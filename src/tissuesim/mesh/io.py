@@ -21,6 +21,7 @@ from tissuesim.mesh.boundary import all_facets, facet_measures, facet_table, mat
 from tissuesim.mesh.checks import edge_lengths, signed_volumes, validate_mesh
 from tissuesim.mesh.mesh import Mesh
 from tissuesim.mesh.select import _boundary
+from tissuesim.validate import short
 
 __all__ = ["read_mesh", "write_mesh", "describe_mesh"]
 
@@ -145,7 +146,7 @@ def read_mesh(path: str | os.PathLike[str], *, merge_coincident: bool = False) -
     except InputError as exc:
         raise MeshError(str(exc)) from None
     if not isinstance(merge_coincident, bool):
-        raise MeshError(f"merge_coincident must be true or false, not {merge_coincident!r}")
+        raise MeshError(f"merge_coincident must be true or false, not {short(merge_coincident)}")
     m = _load(path)
     points, d, vtype = _choose_cells(path, m)
     cells = np.concatenate([np.asarray(b.data) for b in m.cells if b.type == vtype])

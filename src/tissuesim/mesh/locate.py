@@ -23,6 +23,7 @@ from scipy.spatial import cKDTree
 from tissuesim.errors import InputError
 from tissuesim.mesh.boundary import _LOCAL_FACETS, boundary_from_table, facet_table
 from tissuesim.mesh.mesh import Mesh
+from tissuesim.validate import short
 
 __all__ = [
     "ClosestPoints",
@@ -334,7 +335,7 @@ class MeshLocator:
         if not (isinstance(max_distance, int | float | np.floating) and max_distance >= 0):
             raise InputError(
                 f"distance_to_boundary: max_distance must be a number >= 0 (inf for no cap), "
-                f"got {max_distance!r}"
+                f"got {short(max_distance)}"
             )
         return self._boundary().closest(p, max_distance, with_points=False)[3]
 

@@ -66,6 +66,7 @@ from tissuesim.scene.loader import (
     of_time,
 )
 from tissuesim.scene.loader import condition as _condition
+from tissuesim.validate import short
 
 __all__ = ["build_bodies_scene", "COUPLED_SCENE_KEYS"]
 
@@ -208,7 +209,7 @@ def build_bodies_scene(data: dict, base_dir: Path, source: str, name: str) -> Sc
 
 def _number(value, where: str, want: str, positive: bool = True) -> float:
     if not (_is_number(value) and np.isfinite(value) and (value > 0 or not positive)):
-        raise SceneError(f"{where}: must be {want}, not {value!r}")
+        raise SceneError(f"{where}: must be {want}, not {short(value)}")
     return float(value)
 
 
@@ -308,7 +309,7 @@ def _body_named(sim, name, where: str, key: str):
     if name not in known:
         close = difflib.get_close_matches(str(name), known, n=1)
         hint = f"did you mean {close[0]!r}? " if close else ""
-        raise SceneError(f"{where}: unknown {key} {name!r}; {hint}the bodies are {known}")
+        raise SceneError(f"{where}: unknown {key} {short(name)}; {hint}the bodies are {known}")
     return sim.bodies[name]
 
 
@@ -400,14 +401,14 @@ def _tissue(sim, table: dict, where: str) -> None:
         else:
             raise SceneError(
                 f"{where}: frames must be an integer >= 1 (placed by farthest-point sampling) "
-                f"or a list of rest origins [[x, y, z], ...], not {frames!r}"
+                f"or a list of rest origins [[x, y, z], ...], not {short(frames)}"
             )
     if "region" in table:
         region = table["region"]
         if not (isinstance(region, dict) and list(region) == ["where"]):
             raise SceneError(
                 f'{where}: region must be {{ where = "<condition on x, y, z>" }}, e.g. '
-                f'region = {{ where = "abs(y) < 0.02" }}, not {region!r}'
+                f'region = {{ where = "abs(y) < 0.02" }}, not {short(region)}'
             )
         options["region"] = _condition(region["where"], f"{where} region where")
     with _context(where):
@@ -421,7 +422,7 @@ def _cut(sim, item: dict, where: str) -> None:
     if not (isinstance(blade, list) and all(isinstance(p, list) for p in blade)):
         raise SceneError(
             f"{where}: blade must be a polyline of points, each 3 numbers or expressions of t, "
-            f"e.g. blade = {example}; got {blade!r}"
+            f"e.g. blade = {example}; got {short(blade)}"
         )
     if len(blade) < 2:
         raise SceneError(

@@ -53,6 +53,7 @@ from tissuesim.scene.loader import (
     _table,
     _unknown,
 )
+from tissuesim.validate import short
 
 __all__ = ["build_frame_scene", "FRAME_SCENE_KEYS"]
 
@@ -177,7 +178,8 @@ def add_frame_body_tables(
     density = body_options.get("density", 1.0)
     if not (_is_number(density) and np.isfinite(density) and density > 0):
         raise SceneError(
-            f"{options_where or label()}: density must be a number > 0 (kg/m^3), not {density!r}"
+            f"{options_where or label()}: density must be a number > 0 (kg/m^3), "
+            f"not {short(density)}"
         )
     with _context(label("frames")):
         sim.add_frame_body(name, positions, samples, material, **body_options, **options)
@@ -253,10 +255,10 @@ def _required(table: dict, key: str, where: str):
 def _vector3(value, where: str) -> np.ndarray:
     """Three finite numbers (a TOML array), e.g. an acceleration or a corner."""
     if not (isinstance(value, list) and len(value) == 3 and all(_is_number(v) for v in value)):
-        raise SceneError(f"{where}: expected 3 numbers [x, y, z], got {value!r}")
+        raise SceneError(f"{where}: expected 3 numbers [x, y, z], got {short(value)}")
     v = np.asarray(value, dtype=float)
     if not np.all(np.isfinite(v)):
-        raise SceneError(f"{where}: expected 3 finite numbers, got {value!r}")
+        raise SceneError(f"{where}: expected 3 finite numbers, got {short(value)}")
     return v
 
 
@@ -264,7 +266,7 @@ def _point_list(value, where: str) -> np.ndarray:
     """A non-empty list of [x, y, z] points as a (k, 3) array."""
     ok = isinstance(value, list) and value and all(isinstance(p, list) for p in value)
     if not ok:
-        raise SceneError(f"{where}: expected a list of points [[x, y, z], ...], got {value!r}")
+        raise SceneError(f"{where}: expected a list of points [[x, y, z], ...], got {short(value)}")
     return np.array([_vector3(p, f"{where}[{i}]") for i, p in enumerate(value)])
 
 
@@ -299,10 +301,10 @@ def _stiffness(value, k: int, where: str) -> float | np.ndarray:
     else:
         raise SceneError(
             f"{where}: stiffness must be a number (N/m per point) or a list of {k} numbers, "
-            f"one per point, got {value!r}"
+            f"one per point, got {short(value)}"
         )
     if not np.all(np.isfinite(values) & (values > 0)):
-        raise SceneError(f"{where}: stiffness must be finite and > 0 (N/m), got {value!r}")
+        raise SceneError(f"{where}: stiffness must be finite and > 0 (N/m), got {short(value)}")
     return float(values[0]) if _is_number(value) else values
 
 
@@ -314,22 +316,24 @@ def _check_simulation(table: dict, where: str) -> None:
     integrator = table.get("integrator", "backward_euler")
     if integrator not in FRAME_INTEGRATORS:
         raise SceneError(
-            f"{where}: integrator {integrator!r} is not one of {sorted(FRAME_INTEGRATORS)}"
+            f"{where}: integrator {short(integrator)} is not one of {sorted(FRAME_INTEGRATORS)}"
         )
     step = table.get("time_step", 0.01)
     if not (_is_number(step) and np.isfinite(step) and step > 0):
-        raise SceneError(f"{where}: time_step must be a number > 0 (seconds), not {step!r}")
+        raise SceneError(f"{where}: time_step must be a number > 0 (seconds), not {short(step)}")
     halvings = table.get("max_step_halvings", 6)
     if not (isinstance(halvings, int) and not isinstance(halvings, bool) and halvings >= 0):
-        raise SceneError(f"{where}: max_step_halvings must be an integer >= 0, not {halvings!r}")
+        raise SceneError(
+            f"{where}: max_step_halvings must be an integer >= 0, not {short(halvings)}"
+        )
     start = table.get("start_time", 0.0)
     if not (_is_number(start) and np.isfinite(start)):
-        raise SceneError(f"{where}: start_time must be a finite number (s), not {start!r}")
+        raise SceneError(f"{where}: start_time must be a finite number (s), not {short(start)}")
     if table.get("mass", "full") not in ("full", "lumped"):
         raise SceneError(f"{where}: mass must be 'full' or 'lumped', not {table['mass']!r}")
     density = table.get("density", 1.0)
     if not (_is_number(density) and np.isfinite(density) and density > 0):
-        raise SceneError(f"{where}: density must be a number > 0 (kg/m^3), not {density!r}")
+        raise SceneError(f"{where}: density must be a number > 0 (kg/m^3), not {short(density)}")
     with _context(where):
         resolve_backend(table.get("backend", "auto"))
 
@@ -356,7 +360,7 @@ def _region(table: dict, base_dir: Path, where: str):
         )
     display = table.get("display", True)
     if not isinstance(display, bool):
-        raise SceneError(f"{where}: display must be true or false, not {display!r}")
+        raise SceneError(f"{where}: display must be true or false, not {short(display)}")
     extra = {}
     if "subsamples" in table:
         if kind not in ("ellipsoid", "surface"):
@@ -417,12 +421,12 @@ def _frame_positions(table: dict, samples, where: str) -> np.ndarray:
         counts = _required(value, "counts", here)
         ok = isinstance(counts, list) and len(counts) == 3
         if not (ok and all(isinstance(c, int) and not isinstance(c, bool) for c in counts)):
-            raise SceneError(f"{here}: counts must be 3 integers >= 1, got {counts!r}")
+            raise SceneError(f"{here}: counts must be 3 integers >= 1, got {short(counts)}")
         with _context(here):
             return grid_frames(lower, upper, counts)
     if how == "count":
         if not (isinstance(value, int) and not isinstance(value, bool) and value >= 1):
-            raise SceneError(f"{where}: count must be an integer >= 1, got {value!r}")
+            raise SceneError(f"{where}: count must be an integer >= 1, got {short(value)}")
         if value > samples.n:
             raise SceneError(
                 f"{where}: count = {value} frames but the region has only {samples.n} "
@@ -458,14 +462,14 @@ def _match(points: np.ndarray, how: str, args, scale: float, where: str) -> tupl
     if tol is None:
         tol = 1e-6 * scale
     elif not (_is_number(tol) and tol >= 0):
-        raise SceneError(f"{where}: tolerance must be a number >= 0, not {tol!r}")
+        raise SceneError(f"{where}: tolerance must be a number >= 0, not {short(tol)}")
     if how == "on_plane":
         axis = _required(args, "axis", where)
         if not (isinstance(axis, int) and not isinstance(axis, bool) and 0 <= axis <= 2):
-            raise SceneError(f"{where}: axis must be 0, 1 or 2 (x, y or z), not {axis!r}")
+            raise SceneError(f"{where}: axis must be 0, 1 or 2 (x, y or z), not {short(axis)}")
         value = _required(args, "value", where)
         if not _is_number(value):
-            raise SceneError(f"{where}: value must be a number, not {value!r}")
+            raise SceneError(f"{where}: value must be a number, not {short(value)}")
         mask = np.abs(points[:, axis] - value) <= tol
         return mask, f"on the plane {_AXES[axis]} = {value} (tolerance {tol:.3g})"
     lo = _vector3(_required(args, "lower", where), f"{where} lower")
@@ -506,7 +510,9 @@ def _select_frames(body, selector, scale: float, where: str) -> np.ndarray:
         n = len(X)
         ok = isinstance(args, list) and args
         if not (ok and all(isinstance(i, int) and not isinstance(i, bool) for i in args)):
-            raise SceneError(f"{here}: expected a list of frame indices, e.g. [0, 1], got {args!r}")
+            raise SceneError(
+                f"{here}: expected a list of frame indices, e.g. [0, 1], got {short(args)}"
+            )
         bad = [i for i in args if not 0 <= i < n]
         if bad:
             raise SceneError(f"{here}: frame indices must be in 0..{n - 1}, got {bad}")

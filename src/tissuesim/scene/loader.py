@@ -144,6 +144,14 @@ def _table(data: dict, key: str, where: str, array: bool = False):
     if array:
         if isinstance(value, dict):
             raise SceneError(f"{where}: [{key}] must be an array of tables: write [[{key}]]")
+        if not isinstance(value, list):
+            raise SceneError(f"{where}: {key} must be an array of tables ([[{key}]])")
+        for i, item in enumerate(value, start=1):
+            if not isinstance(item, dict):
+                raise SceneError(
+                    f"{where}: [[{key}]] #{i} must be a table (key = value lines under "
+                    f"[[{key}]]), not {short(item)}"
+                )
         return value
     if not isinstance(value, dict):
         raise SceneError(f"{where}: {key} must be a table ([{key}])")
@@ -464,7 +472,7 @@ def condition(text, where: str):
     if not isinstance(text, str):
         raise SceneError(
             f"{where}: expected a condition on the rest coordinates as a string, e.g. "
-            f'where = "z < -0.032", got {text!r}'
+            f'where = "z < -0.032", got {short(text)}'
         )
     if "t" in _variables(text):
         raise SceneError(

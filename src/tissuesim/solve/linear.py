@@ -32,6 +32,7 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from tissuesim.errors import InputError
+from tissuesim.validate import short
 
 __all__ = [
     "LinearSolver",
@@ -338,7 +339,7 @@ def make_linear_solver(
 
     points: rest positions (n, d), used by AMG for the rigid-body near-null space."""
     if name not in LINEAR_SOLVERS:
-        raise InputError(f"linear_solver must be one of {LINEAR_SOLVERS}, not {name!r}")
+        raise InputError(f"linear_solver must be one of {LINEAR_SOLVERS}, not {short(name)}")
     if name == "pardiso":
         if not has_pardiso():
             raise InputError(
