@@ -82,11 +82,11 @@ def test_masses():
     rho = np.arange(1.0, 9.0)
     assert np.allclose(ip.masses(rho), rho * 0.125)
     for bad in (0.0, -1.0, np.nan, np.inf):
-        with pytest.raises(ValueError, match="density must be finite and > 0"):
+        with pytest.raises(ValueError, match="density must be (finite and )?> 0|finite number"):
             ip.masses(bad)
-    with pytest.raises(ValueError, match="at point 3"):
+    with pytest.raises(ValueError, match="integration point 3 has -1.0"):
         ip.masses(np.where(np.arange(8) == 3, -1.0, 1.0))
-    with pytest.raises(ValueError, match=r"shape \(8,\).*got shape \(3,\)"):
+    with pytest.raises(ValueError, match=r"or 8 numbers \(one per integration point\)"):
         ip.masses(np.ones(3))
     with pytest.raises(ValueError, match="density"):
         ip.masses("heavy")

@@ -26,7 +26,7 @@ from tissuesim.mesh.checks import signed_volumes
 from tissuesim.mesh.generators import _arguments
 from tissuesim.mesh.io import _load
 from tissuesim.mesh.mesh import Mesh
-from tissuesim.validate import check_memory, short
+from tissuesim.validate import check_memory, positive_field, regular_file, short
 
 __all__ = [
     "IntegrationPoints",
@@ -108,26 +108,7 @@ class IntegrationPoints:
 
         density: one value for a homogeneous body or (q,) values, one per point; all finite > 0.
         """
-        try:
-            rho = np.asarray(density, dtype=np.float64)
-        except (TypeError, ValueError) as exc:
-            raise InputError(
-                f"density must be a positive number or ({self.n},) positive numbers, "
-                f"got {short(density)}"
-            ) from exc
-        if rho.shape not in ((), (self.n,)):
-            raise InputError(
-                f"density must be a scalar or have shape ({self.n},), one per integration point, "
-                f"got shape {rho.shape}"
-            )
-        bad = ~(np.isfinite(rho) & (rho > 0))
-        if bad.any():
-            where = "" if rho.ndim == 0 else f" at point {int(np.flatnonzero(bad)[0])}"
-            value = rho[()] if rho.ndim == 0 else rho[bad][0]
-            raise InputError(
-                f"density must be finite and > 0 (e.g. 1000 kg/m^3 for soft tissue), got "
-                f"{float(value)!r}{where}"
-            )
+        rho = positive_field(density, "density", self.n, "kg/m^3", entry="integration point")
         return rho * self.volumes
 
 
@@ -535,8 +516,10 @@ def read_surface(path: str | os.PathLike[str]) -> Surface:
     path = os.fspath(path)
     if not os.path.exists(path):
         raise MeshError(f"{path}: no such surface file; check the path (cwd is {os.getcwd()})")
-    if os.path.isdir(path):
-        raise MeshError(f"{path}: is a directory, not a surface file")
+    try:
+        regular_file(path, "surface file")  # a FIFO or device would block the reader
+    except InputError as exc:
+        raise MeshError(str(exc)) from None
     m = _load(path)
     blocks = [np.asarray(b.data) for b in m.cells if b.type == "triangle" and len(b.data)]
     if not blocks:

@@ -7,10 +7,8 @@ Valid ranges: E > 0, -1 < nu < 0.5, mu > 0 and a positive 3D bulk modulus lambda
 
 from __future__ import annotations
 
-import math
-
-from tissuesim.errors import MaterialError
-from tissuesim.validate import short
+from tissuesim.errors import InputError, MaterialError
+from tissuesim.validate import real, short
 
 __all__ = ["lame_parameters"]
 
@@ -18,13 +16,11 @@ _PAIRS = "(youngs_modulus, poisson_ratio) or (shear_modulus, lame_lambda)"
 
 
 def _finite(key: str, value: object) -> float:
+    """A finite real number (not a bool, not a numeric string), via the shared validator."""
     try:
-        x = float(value)  # type: ignore[arg-type]
-    except (TypeError, ValueError):
-        raise MaterialError(f"{key} must be a real number, got {short(value)}") from None
-    if not math.isfinite(x):
-        raise MaterialError(f"{key} must be finite, got {short(value)}")
-    return x
+        return real(value, key, unit="Pa" if key != "poisson_ratio" else "")
+    except InputError as exc:
+        raise MaterialError(str(exc)) from None
 
 
 def lame_parameters(

@@ -310,31 +310,18 @@ def _stiffness(value, k: int, where: str) -> float | np.ndarray:
 
 def _check_simulation(table: dict, where: str) -> None:
     """[simulation] values a frame body refuses, caught here so the error names this table
-    (the Simulation checks them too, but among the [frames] options)."""
+    (the Simulation checks them too, but among the [frames] options); the shared validators
+    of ``validate.py``, as in the API."""
+    from tissuesim import validate
     from tissuesim.backend import resolve_backend
+    from tissuesim.time.retry import validate_stepping
 
-    integrator = table.get("integrator", "backward_euler")
-    if integrator not in FRAME_INTEGRATORS:
-        raise SceneError(
-            f"{where}: integrator {short(integrator)} is not one of {sorted(FRAME_INTEGRATORS)}"
-        )
-    step = table.get("time_step", 0.01)
-    if not (_is_number(step) and np.isfinite(step) and step > 0):
-        raise SceneError(f"{where}: time_step must be a number > 0 (seconds), not {short(step)}")
-    halvings = table.get("max_step_halvings", 6)
-    if not (isinstance(halvings, int) and not isinstance(halvings, bool) and halvings >= 0):
-        raise SceneError(
-            f"{where}: max_step_halvings must be an integer >= 0, not {short(halvings)}"
-        )
-    start = table.get("start_time", 0.0)
-    if not (_is_number(start) and np.isfinite(start)):
-        raise SceneError(f"{where}: start_time must be a finite number (s), not {short(start)}")
-    if table.get("mass", "full") not in ("full", "lumped"):
-        raise SceneError(f"{where}: mass must be 'full' or 'lumped', not {table['mass']!r}")
-    density = table.get("density", 1.0)
-    if not (_is_number(density) and np.isfinite(density) and density > 0):
-        raise SceneError(f"{where}: density must be a number > 0 (kg/m^3), not {short(density)}")
     with _context(where):
+        validate.choice(table.get("integrator", "backward_euler"), "integrator", FRAME_INTEGRATORS)
+        validate_stepping(table.get("time_step", 0.01), table.get("max_step_halvings", 6))
+        validate.real(table.get("start_time", 0.0), "start_time", unit="s")
+        validate.choice(table.get("mass", "full"), "mass", ("full", "lumped"))
+        validate.real(table.get("density", 1.0), "density", low=0.0, low_open=True, unit="kg/m^3")
         resolve_backend(table.get("backend", "auto"))
 
 

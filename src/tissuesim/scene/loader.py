@@ -125,7 +125,7 @@ def _context(where: str):
         raise
     except TissueSimError as exc:
         raise SceneError(f"{where}: {exc}") from exc
-    except (ValueError, TypeError, KeyError, IndexError, AttributeError) as exc:
+    except (ValueError, TypeError, KeyError, IndexError, AttributeError, ArithmeticError) as exc:
         raise SceneError(wrong_form(where)) from exc
 
 
@@ -188,7 +188,7 @@ def build_scene(
         raise
     except TissueSimError as exc:
         raise SceneError(f"{source}: {exc}") from exc
-    except (ValueError, TypeError, KeyError, IndexError, AttributeError) as exc:
+    except (ValueError, TypeError, KeyError, IndexError, AttributeError, ArithmeticError) as exc:
         raise SceneError(wrong_form(source)) from exc
 
 
