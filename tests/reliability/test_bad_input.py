@@ -108,6 +108,9 @@ def test_a_fifo_is_refused_not_read(cli, scene, tmp_path):
     text = SCENE.replace(MESH_TABLE, 'file = "mesh.vtu"')
     result = run(cli, scene(text), tmp_path)
     assert result.code == 2 and "not a regular file" in result.error_line
+    for device in ("/dev/zero", "/dev/null"):
+        if os.path.exists(device):
+            assert "not a regular file" in cli("info", device).error_line
     scene_fifo = tmp_path / "scene_fifo.toml"
     os.mkfifo(scene_fifo)
     assert "not a regular file" in run(cli, scene_fifo, tmp_path).error_line

@@ -57,6 +57,10 @@ def test_names_are_checked_against_internal_series_and_each_other():
     sim.fix("liver", [0, 1, 2], name="clamp")
     with pytest.raises(InputError, match="named 'clamp' exists"):
         sim.grasp("liver", [5, 6], lambda t: np.zeros(3), name="clamp")
+    organs = ts.Simulation()
+    organs.add_body("tissue_points", box(), MATERIAL)  # the series the tissue "tissue" writes
+    with pytest.raises(InputError, match="would write the series 'tissue_points'"):
+        organs.add_tissue(MATERIAL, thickness=0.01, spacing=0.01, frames=4)
     frames = ts.Simulation()
     frames.add_frame_body(
         "flap",
