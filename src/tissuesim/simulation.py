@@ -124,6 +124,8 @@ class Simulation(SetupCalls, BodyResults):
         self.ties: list = []  # coupling/tie.py
         self._named_attachments: list = []  # (name, sign, index in system.attachments)
         self.frame_attachments: list = []  # (coupling/frame_attachment.py spec, sign)
+        self.contact = None  # contact/model.py ContactSettings when contact is on
+        self.obstacles: list = []  # contact/obstacles.py Obstacle
         self._system: System | None = None
         self._state: State | None = None
         self._solver = None
@@ -387,6 +389,8 @@ class Simulation(SetupCalls, BodyResults):
                 attachments.append(spec.build(names.index(spec.fem), j, bodies[j].model))
         ties = [t for t in self.ties if t.a in names and t.b in names]
         self._system = System([b.model for b in bodies], names, attachments, ties)
+        if self.contact is not None:
+            self._system.contact = self._contact_model()
         self._system_dirty = False
         x, v = [], []
         for b in bodies:
@@ -397,6 +401,19 @@ class Simulation(SetupCalls, BodyResults):
         self._state = State(t, np.concatenate(x), np.concatenate(v))
         if old is None or old.pattern is not self._system.pattern:
             self._solver = None  # the pattern changed: a new symbolic analysis
+
+    def _contact_model(self):
+        from tissuesim.contact.model import ContactModel
+
+        s = self._system
+        fem = [
+            (name, s.bodies[j], s.config_slices[j].start, s.tangent_slices[j].start)
+            for j, name in enumerate(s.names)
+            if self.bodies[name].kind == "fem"
+        ]
+        if not fem:
+            raise InputError("contact acts on FEM bodies; this simulation has none")
+        return ContactModel(fem, list(self.obstacles), self.contact, s.n_dofs)
 
     @staticmethod
     def _initial_config(b) -> np.ndarray:
@@ -533,6 +550,8 @@ class Simulation(SetupCalls, BodyResults):
         )
         self._last_gradient = records[-1].gradient if records else self._static_gradient()
         extra: dict[str, Any] = {"forces": self.forces()}
+        if s.contact is not None:
+            extra["contact"] = self._contact_report(s.contact, self._state.x)
         if self.tissue is not None:
             extra.update(self._tissue_step(t0))
         record = StepRecord.build(
@@ -548,6 +567,21 @@ class Simulation(SetupCalls, BodyResults):
         )
         self.history.append(record)
         return record
+
+    @staticmethod
+    def _contact_report(contact, x: np.ndarray) -> dict[str, Any]:
+        """The step's contact figures, and the time split since the last report."""
+        stats = contact.stats
+        report = {
+            "min_distance": contact.min_distance(x),
+            "active_pairs": contact.active_pairs(x),
+            "candidates_and_barrier_s": stats.candidates_and_barrier_s,
+            "ccd_s": stats.ccd_s,
+            "barrier_evaluations": stats.evaluations,
+            "ccd_calls": stats.ccd_calls,
+        }
+        contact.reset_stats()
+        return report
 
     def _end_time(self) -> float:
         """start + (k + 1) h for a state at start + k h (no running sum: ten steps of 0.1 end
@@ -624,4 +658,5 @@ class Simulation(SetupCalls, BodyResults):
             "prescribed_dofs": int(s.prescribed_dofs.size),
             "newton": asdict(self.newton),
             "linear_solver": self.linear_solver_info(),
+            "contact": None if s.contact is None else s.contact.describe(),
         }

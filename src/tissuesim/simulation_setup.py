@@ -22,6 +22,54 @@ __all__ = ["SetupCalls"]
 class SetupCalls:
     """Mixed into ``Simulation``."""
 
+    # -- contact ------------------------------------------------------------------------------
+    def set_contact(
+        self, enabled: bool = True, *, dhat: float | None = None, stiffness: float | None = None
+    ) -> None:
+        """Barrier contact (IPC) between every FEM body's surface, itself and the obstacles
+        (``contact/model.py``): ``dhat`` the activation distance (m; default 1e-3 of the
+        scene's size), ``stiffness`` the barrier's kappa (Pa; default the largest Young's
+        modulus). Needs ``pip install "tissuesim[contact]"`` (ipctk)."""
+        import importlib.util
+
+        from tissuesim.contact.model import ContactSettings
+        from tissuesim.validate import real
+
+        if enabled and importlib.util.find_spec("ipctk") is None:
+            raise InputError('contact needs the IPC Toolkit: pip install "tissuesim[contact]"')
+        if self.explicit and enabled:
+            raise InputError("contact needs an implicit integrator (backward_euler, quasistatic)")
+        if dhat is not None:
+            dhat = real(dhat, "contact dhat", low=0.0, low_open=True, unit="m")
+        if stiffness is not None:
+            stiffness = real(stiffness, "contact stiffness", low=0.0, low_open=True, unit="Pa")
+        self.contact = ContactSettings(dhat, stiffness) if enabled else None
+        self._changed()
+
+    def add_obstacle(self, name: str, surface, *, translation=None, rotation=None):
+        """A kinematic rigid obstacle (``contact/obstacles.py``): a triangle ``surface``
+        (``contact.obstacles.plane`` / ``sphere``, ``frames.sampling.box_surface``,
+        ``read_surface``) moved by ``translation(t)`` (m) and ``rotation(t)`` (a rotation
+        vector about its centroid, rad). Its force on the bodies is reported as ``name``.
+        Switches contact on (``set_contact``) if it is off."""
+        from tissuesim.contact.obstacles import Obstacle
+        from tissuesim.frames.sampling import Surface
+
+        if not isinstance(surface, Surface):
+            raise InputError(
+                f"add_obstacle: surface must be a Surface, not {type(surface).__name__}"
+            )
+        for motion, what in ((translation, "translation"), (rotation, "rotation")):
+            if motion is not None and not callable(motion):
+                raise InputError(f"add_obstacle: {what} must be a function of t or None")
+        name = self._claim_force_name(name)
+        if name in self.bodies or name in ("cut", "summary", "forces", "manifest"):
+            raise InputError(f"obstacle name {name!r} is taken; choose another")
+        self.obstacles.append(Obstacle(name, surface, translation, rotation))
+        if getattr(self, "contact", None) is None:
+            self.set_contact()
+        self._changed()
+
     def attach(
         self,
         body: str,

@@ -64,6 +64,7 @@ class System:
     names: Sequence[str]
     attachments: Sequence[Attachment] = ()
     ties: Sequence = ()  # coupling/tie.py: FEM bodies glued where they touch
+    contact: object = None  # contact/model.py ContactModel, or None
 
     def __post_init__(self) -> None:
         self.bodies, self.names = list(self.bodies), list(self.names)
@@ -266,7 +267,7 @@ class System:
         its configuration space) plus the coupling, over the tangent DOFs."""
         energies = energies if energies is not None else [() for _ in self.bodies]
         if self.single:
-            return self.bodies[0].evaluate(c, order, project, energies[0])
+            return self._add_contact(self.bodies[0].evaluate(c, order, project, energies[0]), c)
         acc = Accumulator(self.pattern, order, project)
         parts = [list(e) for e in energies]
         for i, a in enumerate(self.attachments):
@@ -293,6 +294,18 @@ class System:
             for i, cross in enumerate(self.cross):
                 j = self._tissue_of[i]
                 self._add_cross(cross, self.bodies[j], c[self.config_slices[j]], acc.hessian)
+        return self._add_contact(acc, c)
+
+    def _add_contact(self, acc: Accumulator, c: np.ndarray) -> Accumulator:
+        """The barrier contact energy (contact/model.py) on top of everything else."""
+        if self.contact is None:
+            return acc
+        value, grad, hess = self.contact.evaluate(c, acc.order)
+        acc.add_value("contact", value)
+        if grad is not None and acc.order >= 1:
+            acc.gradient += grad
+        if hess is not None and acc.order >= 2:
+            acc.extra_hessian = hess
         return acc
 
     def _merge(self, acc: Accumulator, part: Accumulator, j: int) -> None:

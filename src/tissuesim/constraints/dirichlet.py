@@ -111,6 +111,15 @@ class Elimination:
         zero = np.flatnonzero(fixed[rows] | fixed[pattern.indices])
         return cls(zero, pattern.diagonal[dofs], pattern.diagonal[~fixed], dofs)
 
+    def eliminate_matrix(self, matrix):
+        """A sparse (n, n) matrix with the rows and columns of prescribed DOFs zeroed."""
+        import scipy.sparse as sp
+
+        keep = np.ones(matrix.shape[0])
+        keep[self.dofs] = 0.0
+        D = sp.diags(keep)
+        return D @ matrix @ D
+
     def apply(self, hessian: np.ndarray, gradient: np.ndarray) -> None:
         """Eliminate in place; the diagonal of prescribed DOFs gets the mean free diagonal."""
         scale = float(np.mean(np.abs(hessian[self.free_diagonal_entries]))) or 1.0

@@ -26,6 +26,9 @@ class Accumulator:
     gradient: np.ndarray | None = None
     hessian: np.ndarray | None = None
     terms: dict[str, float] = field(default_factory=dict)
+    # Hessian terms whose sparsity changes between evaluations (contact pairs): a sparse
+    # (n, n) matrix added to the pattern's matrix when Newton solves
+    extra_hessian: object = None
 
     def __post_init__(self) -> None:
         if self.order >= 1:

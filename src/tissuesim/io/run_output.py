@@ -88,6 +88,17 @@ class RunOutput:
             s.open(self.directory)
             for w in s.writers:
                 self.manifest.add(series=w.name)
+        self.obstacle_series = []
+        for ob in self.sim.obstacles:  # rest surface + displacement, like the bodies
+            writer = VTUSeriesWriter(
+                self.directory,
+                None,
+                ob.name,
+                cells=("triangle", ob.triangles),
+                n_points=len(ob.rest),
+            )
+            self.obstacle_series.append((ob, writer))
+            self.manifest.add(series=ob.name)
         tissue = self.sim.tissue
         if tissue is not None and tissue.cuts:
             self.cut_series = VTUSeriesWriter(
@@ -106,6 +117,8 @@ class RunOutput:
         for s in self.series:
             if s.body.model is not None or s.body.kind == "tissue":
                 data[s.body.name] = s.write(sim, t)
+        for ob, writer in getattr(self, "obstacle_series", []):
+            writer.write(t, ob.rest, point_data={"displacement": ob.positions(t) - ob.rest})
         cut = sim.tissue.cut_surface if sim.tissue is not None else np.zeros((0, 3, 3))
         if self.cut_series is not None and len(cut):
             self.cut_series.write(

@@ -126,7 +126,12 @@ class PardisoSolver(LinearSolver):
         return int(error.value)
 
     def factorize(self, A: sp.csr_matrix) -> None:
-        if self._upper is None:  # analysis, once: the upper triangle of the fixed pattern
+        if self._upper is not None and not _same_pattern(self._analysed, A):
+            # contact pairs change the sparsity: analyse the new pattern
+            self._finalizer()
+            self._upper = None
+        if self._upper is None:  # analysis, once per pattern: its upper triangle
+            self._analysed = (A.indptr.copy(), A.indices.copy())
             A = A if A.has_sorted_indices else A.sorted_indices()
             rows = np.repeat(np.arange(A.shape[0]), np.diff(A.indptr))
             self._upper = np.flatnonzero(A.indices >= rows)
@@ -159,6 +164,17 @@ class PardisoSolver(LinearSolver):
         return x
 
 
+def _same_pattern(analysed: tuple[np.ndarray, np.ndarray], A: sp.csr_matrix) -> bool:
+    """Whether A has the sparsity (indptr, indices) a symbolic analysis was made for."""
+    indptr, indices = analysed
+    return (
+        indptr.shape == A.indptr.shape
+        and indices.shape == A.indices.shape
+        and np.array_equal(indptr, A.indptr)
+        and np.array_equal(indices, A.indices)
+    )
+
+
 def _pardiso_release(solver: PardisoSolver) -> None:
     """Phase -1: free PARDISO's internal memory (it is not Python-managed)."""
     dummy = np.zeros(1)
@@ -180,8 +196,11 @@ class CholmodSolver(LinearSolver):
     def factorize(self, A: sp.csr_matrix) -> None:
         # A symmetric CSR matrix read as CSC is itself: no conversion needed.
         csc = sp.csc_matrix((A.data, A.indices, A.indptr), shape=A.shape)
+        if self._factor is not None and not _same_pattern(self._analysed, A):
+            self._factor = None  # contact pairs change the sparsity: analyse the new pattern
         try:
             if self._factor is None:
+                self._analysed = (A.indptr.copy(), A.indices.copy())
                 self._factor = self._cholmod.analyze(csc, mode="supernodal")
             self._factor.cholesky_inplace(csc)
         except self._cholmod.CholmodNotPositiveDefiniteError as exc:

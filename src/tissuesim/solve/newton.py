@@ -113,6 +113,7 @@ def minimize(
     force_scale: float,
     length_scale: float,
     retract: Retract | None = None,
+    max_step: Callable[[np.ndarray, np.ndarray], float] | None = None,
 ) -> tuple[np.ndarray, NewtonResult]:
     """Minimise Phi from x0 (prescribed DOFs already at their values) over the free DOFs.
 
@@ -121,6 +122,8 @@ def minimize(
     DOFs; frame rotations are updated multiplicatively, R <- exp(dtheta^) R, so the
     configuration x and the step dx (a tangent vector) may even differ in size. The gradient and
     Hessian from ``evaluate`` are then with respect to dx at 0.
+    max_step(x, y) -> the largest fraction of the move x -> y that is free of intersection
+    (contact's CCD); every line search starts there instead of at 1.
     Returns the final x and the record. x0 must give a finite Phi.
     """
     result = NewtonResult()
@@ -153,7 +156,17 @@ def minimize(
                 elimination.apply(acc.hessian, acc.gradient)
                 system[project] = acc
             return _try_direction(
-                evaluate, x, system[project], solver, options, project, s, retract, noise_scale
+                evaluate,
+                x,
+                system[project],
+                solver,
+                options,
+                project,
+                s,
+                retract,
+                noise_scale,
+                elimination,
+                max_step,
             )
 
         if options.hessian_projection == "always":
@@ -199,7 +212,19 @@ def minimize(
     return x, result
 
 
-def _try_direction(evaluate, x, acc, solver, options, project, shift, retract, noise_scale):
+def _try_direction(
+    evaluate,
+    x,
+    acc,
+    solver,
+    options,
+    project,
+    shift,
+    retract,
+    noise_scale,
+    elimination=None,
+    max_step=None,
+):
     """Solve (H + shift diag|H|) dx = -g for an eliminated system ``acc`` and line-search.
 
     Returns (project, dx, alpha, accumulator at the new point) or None when the matrix is not
@@ -210,27 +235,34 @@ def _try_direction(evaluate, x, acc, solver, options, project, shift, retract, n
         H = H.copy()
         diag = acc.pattern.diagonal
         H[diag] += shift * np.abs(H[diag])
+    A = acc.pattern.matrix(H)
+    if acc.extra_hessian is not None:
+        A = A + elimination.eliminate_matrix(acc.extra_hessian)
     try:
-        solver.factorize(acc.pattern.matrix(H))
+        solver.factorize(A.tocsr())
         dx = solver.solve(-g)
     except NotPositiveDefiniteError:
         return None
     slope = float(g @ dx)
     if not np.all(np.isfinite(dx)) or slope >= -1e-14 * np.linalg.norm(g) * np.linalg.norm(dx):
         return None  # not a descent direction: the (shifted) Hessian was indefinite
-    step = _line_search(evaluate, x, acc, slope, dx, options, retract, noise_scale)
+    first = 1.0 if max_step is None else min(1.0, max_step(x, retract(x, dx)))
+    if first <= 0.0:
+        return None
+    step = _line_search(evaluate, x, acc, slope, dx, options, retract, noise_scale, first)
     if step is None:
         return None
     return (project, dx, *step)
 
 
-def _line_search(evaluate, x, acc, slope, dx, options, retract, noise_scale):
+def _line_search(evaluate, x, acc, slope, dx, options, retract, noise_scale, first=1.0):
     """Backtracking: the largest alpha in 1, 1/2, ... with Armijo decrease and finite Phi.
 
     A trial may exceed the Armijo bound by Phi's round-off, 1e-12 times the largest of |Phi|,
     the sum of its terms' magnitudes and the model's energy scale: near the solution the true
-    decrease of the last, correct step is below what Phi can resolve."""
-    alpha = 1.0
+    decrease of the last, correct step is below what Phi can resolve. ``first``: the first
+    trial (below 1 when contact's CCD limits the step)."""
+    alpha = first
     value = acc.value
     magnitude = max(abs(value), sum(abs(v) for v in acc.terms.values()), noise_scale)
     noise = 1e-12 * max(magnitude, 1e-300)

@@ -55,6 +55,25 @@ def implicit_step(
         return system.evaluate(c, order, project, body_energies)
 
     candidates = (c_pred, state.x) if dynamic else (state.x,)
+    contact = system.contact
+    max_step = None
+    if contact is not None:
+        contact.time = t1
+        # Newton must start where the bodies can get from x_n without crossing a surface,
+        # the obstacles and prescribed vertices moving to their t1 places on the way
+        candidates = tuple(
+            c
+            for c in candidates
+            if contact.reachable(state.x, state.time, system.apply_prescribed(c, t1), t1)
+        )
+        if not candidates:
+            return StepOutcome(
+                None,
+                False,
+                [],
+                "the obstacles' or prescribed motion in this step crosses a surface",
+            )
+        max_step = contact.max_step
     c0 = choose_start(evaluate, candidates, lambda c: system.apply_prescribed(c, t1))
     c1, record = minimize(
         evaluate,
@@ -65,6 +84,7 @@ def implicit_step(
         force_scale=system.force_scale,
         length_scale=system.length_scale,
         retract=system.retract,
+        max_step=max_step,
     )
     if not record.converged:
         return StepOutcome(None, False, [record], record.reason)

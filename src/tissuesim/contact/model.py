@@ -1,0 +1,230 @@
+"""Barrier contact (IPC, Li et al. 2020) between the boundary surfaces of every FEM body (each
+with itself, too) and the kinematic obstacles, through the IPC Toolkit (``ipctk``).
+
+The collision mesh stacks the boundary vertices of every FEM body (their positions are rows of
+the system configuration) and the obstacles' vertices (positions given by their motion at the
+step's time, no unknowns). The energy is ipctk's area-weighted "physical" barrier
+
+    B(x) = kappa * sum_k w_k b(d_k^2; dhat^2) / dhat^3,  b(s) = -(s - dhat^2)^2 ln(s / dhat^2),
+
+over the collision pairs closer than the activation distance ``dhat`` (m); w_k are surface
+areas, so kappa is a pressure (Pa): by default the largest Young's modulus of the bodies in
+contact, so the barrier is as stiff as a layer of the stiffest material dhat thick. Its gradient
+and PSD-projected Hessian (per collision, as IPC does) enter the same Newton system as every
+other energy; the Hessian's sparsity changes with the active pairs, so it is added as a sparse
+matrix (``Accumulator.extra_hessian``). Newton's line search never tries a step longer than
+ipctk's CCD (additive CCD, LBVH broad phase; its default narrow phase takes a minute, see the
+field notes) says is free of intersection.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+import scipy.sparse as sp
+
+from tissuesim.errors import InputError
+
+__all__ = ["ContactModel", "ContactSettings", "ContactStats"]
+
+
+@dataclass(frozen=True)
+class ContactSettings:
+    """dhat: activation distance (m; None: 1e-3 of the scene's bounding-box diagonal).
+    stiffness: kappa (Pa; None: the largest Young's modulus of the FEM bodies)."""
+
+    dhat: float | None = None
+    stiffness: float | None = None
+
+
+@dataclass
+class ContactStats:
+    """Per step: seconds in candidates + barrier assembly and in CCD, the number of active
+    collision pairs and the smallest surface distance (m) at the end of the step."""
+
+    candidates_and_barrier_s: float = 0.0
+    ccd_s: float = 0.0
+    active: int = 0
+    min_distance: float = float("inf")
+    evaluations: int = 0
+    ccd_calls: int = 0
+
+
+@dataclass(eq=False)
+class ContactModel:
+    """See the module docstring. ``bodies``: (name, Model, configuration offset, tangent
+    offset) of every FEM body in the system; ``obstacles``: the Obstacle list; ``n_dofs``: the
+    system's tangent DOFs."""
+
+    bodies: list
+    obstacles: list
+    settings: ContactSettings
+    n_dofs: int
+    time: float = 0.0
+    stats: ContactStats = field(default_factory=ContactStats)
+
+    def __post_init__(self) -> None:
+        import ipctk
+
+        self._ipctk = ipctk
+        dims = {m.mesh.dim for _, m, _, _ in self.bodies}
+        if dims != {3}:
+            raise InputError("contact needs 3D FEM bodies (tetrahedra); 2D contact is not built")
+        rest, faces, dofs, config, self.slices = [], [], [], [], {}
+        start = 0
+        for name, model, config_offset, offset in self.bodies:
+            from tissuesim.mesh.boundary import boundary_facets
+
+            tri = boundary_facets(model.mesh.cells)
+            surface = np.unique(tri)
+            local = np.full(model.mesh.n_points, -1)
+            local[surface] = np.arange(surface.size)
+            rest.append(model.mesh.points[surface])
+            faces.append(local[tri] + start)
+            dofs.append(offset + 3 * surface[:, None] + np.arange(3))
+            config.append(config_offset + 3 * surface[:, None] + np.arange(3))
+            self.slices[name] = (slice(start, start + surface.size), surface)
+            start += surface.size
+        self.n_deformable = start
+        for ob in self.obstacles:
+            rest.append(ob.rest)
+            faces.append(ob.triangles + start)
+            dofs.append(np.full((len(ob.rest), 3), -1))
+            config.append(np.full((len(ob.rest), 3), -1))
+            self.slices[ob.name] = (slice(start, start + len(ob.rest)), None)
+            start += len(ob.rest)
+        self.rest = np.vstack(rest)
+        F = np.ascontiguousarray(np.vstack(faces), dtype=np.int32)
+        E = ipctk.edges(F)
+        self.mesh = ipctk.CollisionMesh(np.asfortranarray(self.rest), E, F)
+        self.dofs = np.vstack(dofs).ravel()  # system tangent DOF of each mesh coordinate
+        self.config_dofs = np.vstack(config).ravel()  # and its place in the configuration
+        mapped = self.dofs >= 0
+        self._select = sp.csr_matrix(
+            (np.ones(mapped.sum()), (np.flatnonzero(mapped), self.dofs[mapped])),
+            shape=(self.dofs.size, self.n_dofs),
+        )
+        diag = float(np.linalg.norm(np.ptp(self.rest, axis=0)))
+        self.dhat = self.settings.dhat if self.settings.dhat is not None else 1e-3 * diag
+        default = max(_youngs(m.material) for _, m, _, _ in self.bodies)
+        self.kappa = self.settings.stiffness if self.settings.stiffness is not None else default
+        self.barrier = ipctk.BarrierPotential(self.dhat, self.kappa, True)
+        self.broad_phase = ipctk.LBVH()
+        self.ccd = ipctk.AdditiveCCD()
+
+    def reset_stats(self) -> None:
+        self.stats = ContactStats()
+
+    def describe(self) -> dict:
+        return {
+            "dhat_m": self.dhat,
+            "stiffness_Pa": self.kappa,
+            "surface_vertices": self.n_deformable,
+            "obstacle_vertices": int(len(self.rest) - self.n_deformable),
+            "obstacles": [ob.name for ob in self.obstacles],
+        }
+
+    # -- positions ------------------------------------------------------------------------------
+    def vertices(self, c: np.ndarray, t: float | None = None) -> np.ndarray:
+        """Collision-mesh vertices (n, 3) for the system configuration c at time t."""
+        t = self.time if t is None else t
+        V = np.empty_like(self.rest)
+        mapped = self.config_dofs >= 0
+        flat = V.reshape(-1)
+        flat[mapped] = c[self.config_dofs[mapped]]
+        for ob in self.obstacles:
+            V[self.slices[ob.name][0]] = ob.positions(t)
+        return np.asfortranarray(V)
+
+    def _collisions(self, V: np.ndarray):
+        col = self._ipctk.NormalCollisions()
+        col.use_area_weighting = True
+        col.build(self.mesh, V, self.dhat, broad_phase=self.broad_phase)
+        return col
+
+    # -- the energy -------------------------------------------------------------------------------
+    def evaluate(self, c: np.ndarray, order: int, project: bool = True):
+        """(value J, gradient over the system DOFs or None, Hessian sparse or None); the
+        Hessian is PSD-projected per collision (as IPC does) unless ``project`` is False."""
+        start = time.perf_counter()
+        V = self.vertices(c)
+        col = self._collisions(V)
+        self.stats.evaluations += 1
+        if len(col) == 0:
+            self.stats.candidates_and_barrier_s += time.perf_counter() - start
+            return 0.0, None, None
+        value = float(self.barrier(col, self.mesh, V))
+        grad = hess = None
+        if order >= 1:
+            grad = self._select.T @ self.barrier.gradient(col, self.mesh, V)
+        if order >= 2:
+            method = self._ipctk.PSDProjectionMethod
+            H = self.barrier.hessian(col, self.mesh, V, method.CLAMP if project else method.NONE)
+            hess = (self._select.T @ sp.csr_matrix(H) @ self._select).tocsr()
+        self.stats.candidates_and_barrier_s += time.perf_counter() - start
+        return value, grad, hess
+
+    def max_step(self, c0: np.ndarray, c1: np.ndarray) -> float:
+        """The largest fraction of the straight move c0 -> c1 free of intersection (CCD)."""
+        start = time.perf_counter()
+        step = self._ipctk.compute_collision_free_stepsize(
+            self.mesh,
+            self.vertices(c0),
+            self.vertices(c1),
+            broad_phase=self.broad_phase,
+            narrow_phase_ccd=self.ccd,
+        )
+        self.stats.ccd_s += time.perf_counter() - start
+        self.stats.ccd_calls += 1
+        return float(step)
+
+    def reachable(self, c0: np.ndarray, t0: float, c1: np.ndarray, t1: float) -> bool:
+        """Whether the straight move from (c0, obstacles at t0) to (c1, obstacles at t1) is
+        free of intersection: the start of a step's Newton solve must be reached so."""
+        start = time.perf_counter()
+        free = self._ipctk.is_step_collision_free(
+            self.mesh,
+            self.vertices(c0, t0),
+            self.vertices(c1, t1),
+            broad_phase=self.broad_phase,
+            narrow_phase_ccd=self.ccd,
+        )
+        self.stats.ccd_s += time.perf_counter() - start
+        return bool(free)
+
+    def intersecting(self, c: np.ndarray, t: float | None = None) -> bool:
+        return bool(self._ipctk.has_intersections(self.mesh, self.vertices(c, t)))
+
+    def min_distance(self, c: np.ndarray) -> float:
+        """The smallest distance (m) between surface elements within dhat (inf if none)."""
+        V = self.vertices(c)
+        col = self._collisions(V)
+        if len(col) == 0:
+            return float("inf")
+        return float(np.sqrt(col.compute_minimum_distance(self.mesh, V)))
+
+    def active_pairs(self, c: np.ndarray) -> int:
+        return len(self._collisions(self.vertices(c)))
+
+    def obstacle_forces(self, c: np.ndarray) -> dict[str, np.ndarray]:
+        """Force (N, 3-vector) each obstacle exerts on the bodies: the barrier's gradient with
+        respect to the obstacle's vertices, summed (the bodies' side is its negative)."""
+        V = self.vertices(c)
+        col = self._collisions(V)
+        out = {}
+        grad = (
+            self.barrier.gradient(col, self.mesh, V).reshape(-1, 3)
+            if len(col)
+            else np.zeros_like(V)
+        )
+        for ob in self.obstacles:
+            out[ob.name] = grad[self.slices[ob.name][0]].sum(axis=0)
+        return out
+
+
+def _youngs(material) -> float:
+    """Young's modulus E = mu (3 lambda + 2 mu) / (lambda + mu) of a material (Pa)."""
+    mu, lam = float(material.mu), float(material.lam)
+    return mu * (3 * lam + 2 * mu) / (lam + mu)

@@ -1,0 +1,149 @@
+"""Barrier contact (contact/model.py through ipctk): the energy's gradient and Hessian against
+finite differences through the system DOFs, no intersection after any step (checked with an
+exact intersection test), CCD stopping a body that would cross the barrier in one step,
+obstacle forces balancing the weight at rest, quadratic-enough Newton on contact steps."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import tissuesim as ts
+
+ipctk = pytest.importorskip("ipctk")
+
+from tissuesim.contact.obstacles import Obstacle, plane, sphere  # noqa: E402
+from tissuesim.frames.sampling import box_surface  # noqa: E402
+
+MATERIAL = ts.make_material("neo_hookean", youngs_modulus=1e4, poisson_ratio=0.3)
+
+
+def two_blocks(gap: float = 0.004, dhat: float = 0.01) -> ts.Simulation:
+    sim = ts.Simulation(integrator="backward_euler", time_step=0.01)
+    sim.add_body("low", ts.box((0, 0, 0), (1, 1, 0.3), (3, 3, 1)), MATERIAL, density=100.0)
+    top = ts.box((0.2, 0.1, 0.3 + gap), (0.9, 0.8, 0.6 + gap), (2, 2, 1))
+    sim.add_body("high", top, MATERIAL, density=100.0)
+    sim.fix("low", ts.select.vertices_on_plane(sim.bodies["low"].mesh, axis=2, value=0.0))
+    sim.set_contact(dhat=dhat)
+    return sim
+
+
+def test_contact_energy_gradient_and_hessian_match_finite_differences():
+    sim = two_blocks()
+    s = sim.system
+    rng = np.random.default_rng(3)
+    x = sim.state.x + 1e-4 * rng.standard_normal(sim.state.x.size)
+    value, grad, hess = s.contact.evaluate(x, 2)
+    assert value > 0 and np.count_nonzero(grad) > 0
+    h = 1e-7
+    for _ in range(6):
+        d = rng.standard_normal(x.size)
+        fd = (s.contact.evaluate(x + h * d, 0)[0] - s.contact.evaluate(x - h * d, 0)[0]) / (2 * h)
+        assert fd == pytest.approx(grad @ d, rel=1e-5, abs=1e-9 * abs(value))
+    # the exact (unprojected) Hessian against differences of the gradient
+    exact = s.contact.evaluate(x, 2, project=False)[2]
+    for _ in range(3):
+        d = rng.standard_normal(x.size)
+        fd = (s.contact.evaluate(x + h * d, 1)[1] - s.contact.evaluate(x - h * d, 1)[1]) / (2 * h)
+        assert np.linalg.norm(fd - exact @ d) <= 1e-4 * np.linalg.norm(exact @ d)
+    # what Newton uses, PSD-projected per collision: positive semi-definite
+    eig = np.linalg.eigvalsh(hess.toarray())
+    assert eig.min() >= -1e-9 * eig.max()
+
+
+def test_the_system_energy_includes_contact_and_its_gradient_is_consistent():
+    sim = two_blocks()
+    s = sim.system
+    x = sim.state.x.copy()
+    acc = s.evaluate(x, 2)
+    assert acc.terms["contact"] > 0 and acc.extra_hessian is not None
+    rng = np.random.default_rng(5)
+    d = rng.standard_normal(x.size) * 1e-3
+    h = 1e-6
+    fd = (s.evaluate(x + h * d, 0).value - s.evaluate(x - h * d, 0).value) / (2 * h)
+    assert fd == pytest.approx(acc.gradient @ d, rel=1e-5)
+
+
+def _above(sim) -> bool:
+    """The upper block's lowest vertex is above the lower block's centroid (a block that
+    tunnelled through would be intersection-free at the end of a step, but below)."""
+    high = sim.body_state("high")[1].reshape(-1, 3)
+    low = sim.body_state("low")[1].reshape(-1, 3)
+    return bool(high[:, 2].min() > low[:, 2].mean())
+
+
+def _no_intersection_after_every_step(sim, steps: int) -> list:
+    records = []
+    for _ in range(steps):
+        records.append(sim.step())
+        contact = sim.system.contact
+        assert not contact.intersecting(sim.state.x, sim.time), f"intersecting at t = {sim.time}"
+    return records
+
+
+def test_a_block_dropped_on_a_block_never_intersects_and_comes_to_rest():
+    sim = two_blocks(gap=0.05)
+    sim.add_gravity([0.0, 0.0, -9.81])
+    records = _no_intersection_after_every_step(sim, 40)
+    assert all(r.converged for r in records)
+    last = records[-1].extra["contact"]
+    assert 0 < last["min_distance"] < sim.system.contact.dhat and last["active_pairs"] > 0
+    assert _above(sim)  # it rests on the lower block, it did not tunnel through it
+
+
+def test_ccd_stops_a_block_that_would_cross_the_barrier_in_one_step():
+    """10 m/s towards the other block, 0.01 s steps: it would move 0.1 m, 20 x the gap, in the
+    first step; the line search never leaves the intersection-free set."""
+    sim = two_blocks(gap=0.005, dhat=0.002)
+    high = sim.bodies["high"]
+    sim.set_velocity(np.tile([0.0, 0.0, -10.0], (high.mesh.n_points, 1)), body="high")
+    records = _no_intersection_after_every_step(sim, 5)
+    assert all(r.converged for r in records)
+    assert _above(sim)  # it did not pass through
+
+
+def test_a_block_resting_on_a_floor_obstacle_weighs_its_weight():
+    mesh = ts.box((0, 0, 0), (1, 1, 0.5), (3, 3, 2))
+    sim = ts.Simulation(mesh, MATERIAL, density=100.0, integrator="backward_euler", time_step=0.05)
+    sim.add_gravity([0.0, 0.0, -9.81])
+    sim.add_obstacle("floor", plane((0.5, 0.5, -0.004), (0, 0, 1), 4.0))
+    sim.set_contact(dhat=0.01)
+    records = _no_intersection_after_every_step(sim, 60)
+    weight = 100.0 * 0.5 * 9.81
+    force = np.asarray(records[-1].extra["forces"]["floor"])
+    assert force[2] == pytest.approx(weight, rel=0.02)
+    assert np.abs(force[:2]).max() < 0.01 * weight
+    assert max(r.newton_iterations for r in records[-10:]) <= 8  # Newton converges at rest
+
+
+def test_a_moving_probe_indents_and_the_steps_halve_when_it_would_cross():
+    mesh = ts.box((0, 0, 0), (1, 1, 0.5), (4, 4, 2))
+    sim = ts.Simulation(mesh, MATERIAL, integrator="quasistatic", time_step=0.1)
+    sim.fix("body", ts.select.vertices_on_plane(mesh, axis=2, value=0.0))
+    probe = sphere((0.5, 0.5, 0.5 + 0.2 + 0.003), 0.2, refinement=2)
+    sim.add_obstacle("probe", probe, translation=lambda t: (0.0, 0.0, -0.02 * t))
+    sim.set_contact(dhat=0.005)
+    records = _no_intersection_after_every_step(sim, 5)
+    forces = [r.extra["forces"]["probe"][2] for r in records]
+    assert forces[-1] < 0 and np.all(np.diff(forces) < 0)  # pushes down, harder and harder
+    assert all(r.converged for r in records)
+
+
+def test_obstacle_motion_and_validation():
+    ob = Obstacle(
+        "box",
+        box_surface((0, 0, 0), (1, 1, 1), (1, 1, 1)),
+        translation=lambda t: (t, 0, 0),
+        rotation=lambda t: (0, 0, np.pi / 2 * t),
+    )
+    x = ob.positions(1.0)
+    c = ob.rest.mean(axis=0)
+    assert np.allclose(x.mean(axis=0), c + [1, 0, 0])
+    assert np.allclose(
+        np.linalg.norm(x - x.mean(axis=0), axis=1), np.linalg.norm(ob.rest - c, axis=1)
+    )
+    with pytest.raises(ts.InputError, match="normal must not be zero"):
+        plane((0, 0, 0), (0, 0, 0), 1.0)
+    sim = ts.Simulation(ts.box(), MATERIAL, integrator="explicit", time_step=1e-4)
+    with pytest.raises(ts.InputError, match="implicit integrator"):
+        sim.set_contact()
