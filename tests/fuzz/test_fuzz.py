@@ -158,6 +158,33 @@ displacement = ["0.004 * min(t, 1)", "0", "0.003 * min(t, 1)"]
 steps = 2
 """,
 }
+BASES["contact"] = """
+[mesh]
+generator = "box"
+lower = [0.0, 0.0, 0.0]
+upper = [1.0, 1.0, 0.5]
+divisions = [2, 2, 1]
+[material]
+model = "neo_hookean"
+youngs_modulus = 1e4
+poisson_ratio = 0.3
+[simulation]
+integrator = "quasistatic"
+time_step = 0.1
+[[dirichlet]]
+vertices = { tagged = "zmin" }
+[contact]
+dhat = 0.01
+[[obstacles]]
+name = "probe"
+sphere = { center = [0.5, 0.5, 0.71], radius = 0.2, refinement = 1 }
+translation = ["0", "0", "-0.02 * t"]
+[[obstacles]]
+name = "wall"
+plane = { point = [1.05, 0.5, 0.25], normal = [-1, 0, 0], size = 2.0 }
+[run]
+steps = 2
+"""
 PARSED = {k: tomllib.loads(v) for k, v in BASES.items()}
 
 NASTY_NUMBERS = [

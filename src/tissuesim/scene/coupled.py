@@ -100,8 +100,10 @@ COUPLED_SCENE_KEYS: dict[str, Any] = {
     "cuts": set(CUT_KEYS),
     "tearing": {"threshold"},
     "run": set(RUN_KEYS),
+    "contact": {"enabled", "dhat", "stiffness"},  # scene/contact.py
+    "obstacles": {"name", "translation", "rotation", "plane", "sphere", "box", "file"},
 }
-ARRAYS = ("organs", "bodies", "graspers", "attachments", "cuts")
+ARRAYS = ("organs", "bodies", "graspers", "attachments", "cuts", "obstacles")
 MESH_GENERATORS = {
     "ellipsoid": ("center", "radii", "divisions"),
     "box": ("lower", "upper", "divisions"),
@@ -177,6 +179,9 @@ def build_bodies_scene(data: dict, base_dir: Path, source: str, name: str) -> Sc
         _grasper(sim, item, f"{source} graspers[{i}]")
     for i, item in enumerate(_table(data, "attachments", source, array=True), start=1):
         _attachment(sim, item, f"{source} attachments[{i}]")
+    from tissuesim.scene.contact import add_contact_tables
+
+    add_contact_tables(sim, data, base_dir, source)
     tissue = _table(data, "tissue", source)
     if tissue:
         _tissue(sim, tissue, f"{source} [tissue]")

@@ -85,6 +85,8 @@ SCENE_KEYS = {
     "initial": {"velocity"},
     "nodal_forces": {"vertices", "force"},
     "run": set(RUN_KEYS),
+    "contact": {"enabled", "dhat", "stiffness"},  # scene/contact.py
+    "obstacles": {"name", "translation", "rotation", "plane", "sphere", "box", "file"},
 }
 #: what pictures can be coloured by
 FIELD_CHOICES = tuple(FIELDS)
@@ -241,6 +243,9 @@ def _build(data: dict, base_dir: Path, source: str, name: str) -> Scene:
         _unknown(gravity, SCENE_KEYS["gravity"], f"{source} [gravity]")
         with _context(f"{source} [gravity]"):
             sim.add_gravity(gravity["acceleration"])
+    from tissuesim.scene.contact import add_contact_tables
+
+    add_contact_tables(sim, data, base_dir, source)
     return Scene(sim, name, source, _run_table(data, source))
 
 

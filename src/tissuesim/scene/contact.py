@@ -1,0 +1,92 @@
+"""The scene tables of contact: ``[contact]`` (switch it on, its parameters) and
+``[[obstacles]]`` (kinematic rigid surfaces and their motion), for every scene of FEM bodies
+(the one-body short form and ``[[bodies]]``). Each key is an argument of
+``Simulation.set_contact`` / ``Simulation.add_obstacle`` (README, "Contact").
+
+    [contact]
+    dhat = 0.001          # m, activation distance (default 1e-3 of the scene's size)
+    stiffness = 1e4       # Pa, barrier stiffness (default the largest Young's modulus)
+
+    [[obstacles]]
+    name = "probe"
+    sphere = { center = [0, 0, 0.11], radius = 0.1, refinement = 3 }
+    translation = ["0", "0", "-0.001 * t"]     # m, expressions of t
+    rotation = ["0", "0", "0"]                 # rad, rotation vector about the centroid
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from tissuesim.errors import SceneError
+from tissuesim.validate import short
+
+__all__ = ["add_contact_tables", "CONTACT_KEYS", "OBSTACLE_KEYS", "SHAPES"]
+
+CONTACT_KEYS = {"enabled", "dhat", "stiffness"}
+SHAPES = {
+    "plane": {"point", "normal", "size"},
+    "sphere": {"center", "radius", "refinement"},
+    "box": {"lower", "upper", "divisions"},
+    "file": None,
+}
+OBSTACLE_KEYS = {"name", "translation", "rotation", *SHAPES}
+
+
+def add_contact_tables(sim, data: dict, base_dir: Path, source: str) -> None:
+    """Read [contact] and [[obstacles]] of a parsed scene into ``sim``."""
+    from tissuesim.scene.loader import _context, _table, _unknown
+
+    contact = _table(data, "contact", source)
+    obstacles = _table(data, "obstacles", source, array=True)
+    where = f"{source} [contact]"
+    _unknown(contact, CONTACT_KEYS, where)
+    enabled = contact.get("enabled", bool(contact) or bool(obstacles))
+    if not isinstance(enabled, bool):
+        raise SceneError(f"{where}: enabled must be true or false, not {short(enabled)}")
+    if not enabled:
+        if obstacles:
+            raise SceneError(f"{where}: enabled = false, but the scene has [[obstacles]]")
+        return
+    with _context(where):
+        sim.set_contact(dhat=contact.get("dhat"), stiffness=contact.get("stiffness"))
+    for i, item in enumerate(obstacles, start=1):
+        _obstacle(sim, item, base_dir, f"{source} obstacles[{i}]")
+
+
+def _obstacle(sim, item: dict, base_dir: Path, where: str) -> None:
+    from tissuesim.contact.obstacles import plane, sphere
+    from tissuesim.frames.sampling import box_surface, read_surface
+    from tissuesim.scene.loader import _context, _unknown, of_time
+
+    _unknown(item, OBSTACLE_KEYS, where)
+    name = item.get("name")
+    if not isinstance(name, str) or not name:
+        raise SceneError(f"{where}: name must be a non-empty string, e.g. name = 'probe'")
+    shapes = [k for k in SHAPES if k in item]
+    if len(shapes) != 1:
+        raise SceneError(
+            f"{where}: give exactly one shape: plane = {{ point, normal, size }}, sphere = "
+            "{ center, radius }, box = { lower, upper }, or file = 'instrument.stl'"
+        )
+    shape = shapes[0]
+    here = f"{where} {shape}"
+    value = item[shape]
+    with _context(here):
+        if shape == "file":
+            if not isinstance(value, str):
+                raise SceneError(f"{here}: must be a path (a string), not {short(value)}")
+            path = Path(value)
+            surface = read_surface(path if path.is_absolute() else base_dir / path)
+        else:
+            if not isinstance(value, dict):
+                raise SceneError(f"{here}: must be a table of {sorted(SHAPES[shape])}")
+            _unknown(value, SHAPES[shape], here)
+            make = {"plane": plane, "sphere": sphere, "box": box_surface}[shape]
+            surface = make(**value)
+    motions = {}
+    for key in ("translation", "rotation"):
+        if key in item:
+            motions[key] = of_time(item[key], 3, f"{where} {key}", f"the obstacle's {key}")
+    with _context(where):
+        sim.add_obstacle(name, surface, **motions)
