@@ -147,3 +147,25 @@ def test_obstacle_motion_and_validation():
     sim = ts.Simulation(ts.box(), MATERIAL, integrator="explicit", time_step=1e-4)
     with pytest.raises(ts.InputError, match="implicit integrator"):
         sim.set_contact()
+
+
+def test_sphere_and_plane_obstacles_report_their_indentation_depth():
+    rest = np.array([[0.0, 0.0, 0.0], [0.5, 0.0, 0.0]])
+    probe = Obstacle("probe", sphere((0, 0, 0.1), 0.1, 2), translation=lambda t: (0, 0, -0.01 * t))
+    assert probe.indentation_depth(rest, 0.0) == pytest.approx(0.0, abs=1e-15)
+    assert probe.indentation_depth(rest, 1.0) == pytest.approx(0.01)
+    floor = Obstacle("floor", plane((0, 0, -0.2), (0, 0, 1), 2.0), translation=lambda t: (0, 0, t))
+    assert floor.indentation_depth(rest, 0.0) == 0.0
+    assert floor.indentation_depth(rest, 0.25) == pytest.approx(0.05)
+    assert Obstacle("box", box_surface((0, 0, 0), (1, 1, 1))).indentation_depth(rest, 0.0) is None
+
+
+def test_a_graded_box_is_finer_where_asked_and_stays_positive():
+    mesh = ts.box((0, 0, -1), (1, 1, 0), (4, 4, 4), grading=(2.0, 1.0, -2.0))
+    xs = np.unique(mesh.points[:, 0])
+    zs = np.unique(mesh.points[:, 2])
+    np.testing.assert_allclose(xs, (np.arange(5) / 4) ** 2)
+    np.testing.assert_allclose(zs, -1 + (1 - (1 - np.arange(5) / 4) ** 2))
+    np.testing.assert_allclose(np.unique(mesh.points[:, 1]), np.arange(5) / 4)
+    with pytest.raises(ts.MeshError, match="grading must be 1"):
+        ts.box(grading=(0.5, 1, 1))

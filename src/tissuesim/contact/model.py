@@ -208,6 +208,17 @@ class ContactModel:
     def active_pairs(self, c: np.ndarray) -> int:
         return len(self._collisions(self.vertices(c)))
 
+    def indentation_depths(self) -> dict[str, float]:
+        """Per sphere or plane obstacle, how deep (m) it reaches below the bodies' rest
+        surfaces at the current time (``Obstacle.indentation_depth``)."""
+        rest = self.rest[: self.n_deformable]
+        out = {}
+        for ob in self.obstacles:
+            depth = ob.indentation_depth(rest, self.time)
+            if depth is not None:
+                out[ob.name] = depth
+        return out
+
     def obstacle_forces(self, c: np.ndarray) -> dict[str, np.ndarray]:
         """Force (N, 3-vector) each obstacle exerts on the bodies: the barrier's gradient with
         respect to the obstacle's vertices, summed (the bodies' side is its negative)."""

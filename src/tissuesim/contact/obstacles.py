@@ -12,7 +12,7 @@ Surfaces come from ``frames.sampling`` (``box_surface``, ``ellipsoid_surface``,
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -20,9 +20,19 @@ from tissuesim.errors import InputError
 from tissuesim.frames.sampling import Surface, ellipsoid_surface
 from tissuesim.validate import real, vector
 
-__all__ = ["Obstacle", "plane", "sphere"]
+__all__ = ["Obstacle", "ShapeSurface", "plane", "sphere"]
 
 Motion = Callable[[float], Sequence[float]]
+
+
+@dataclass(frozen=True, eq=False)
+class ShapeSurface(Surface):
+    """A Surface that remembers the exact shape it approximates (``kind`` "sphere": params
+    center, radius; "plane": point, normal), so an obstacle can report its indentation depth
+    exactly rather than from facets."""
+
+    kind: str = ""
+    params: dict = field(default_factory=dict)
 
 
 def plane(point: Sequence[float], normal: Sequence[float], size: float) -> Surface:
@@ -38,13 +48,17 @@ def plane(point: Sequence[float], normal: Sequence[float], size: float) -> Surfa
     a /= np.linalg.norm(a)
     b = np.cross(n, a)
     corners = p + half * np.array([-a - b, a - b, a + b, -a + b])
-    return Surface(corners, np.array([[0, 1, 2], [0, 2, 3]]), source="plane")
+    return ShapeSurface(
+        corners, np.array([[0, 1, 2], [0, 2, 3]]), "plane", "plane", {"point": p, "normal": n}
+    )
 
 
 def sphere(center: Sequence[float], radius: float, refinement: int = 3) -> Surface:
     """An icosphere of ``radius`` (m): 20 * 4^refinement triangles, vertices on the sphere."""
     r = real(radius, "sphere: radius", low=0.0, low_open=True, unit="m")
-    return ellipsoid_surface(center, (r, r, r), refinement)
+    s = ellipsoid_surface(center, (r, r, r), refinement)
+    c = vector(center, "sphere: center", 3, unit="m")
+    return ShapeSurface(s.points, s.triangles, s.source, "sphere", {"center": c, "radius": r})
 
 
 def _rotation(r: np.ndarray) -> np.ndarray:
@@ -78,12 +92,35 @@ class Obstacle:
         X = self.surface.points
         if self.translation is None and self.rotation is None:
             return X
-        c = X.mean(axis=0)
+        return self._moved(X, t)
+
+    def indentation_depth(self, rest_points: np.ndarray, t: float) -> float | None:
+        """How deep (m) the obstacle at time t reaches below the bodies' rest surface
+        ``rest_points``: for a sphere R - min |X - c(t)|, for a plane the largest distance of
+        a rest point behind it (0 when it does not reach); None for other surfaces."""
+        kind = getattr(self.surface, "kind", "")
+        if kind == "sphere":
+            p = self.surface.params
+            c = self._moved(p["center"][None, :], t)[0]
+            gap = float(np.min(np.linalg.norm(rest_points - c, axis=1)))
+            return max(0.0, p["radius"] - gap)
+        if kind == "plane":
+            p = self.surface.params
+            point = self._moved(p["point"][None, :], t)[0]
+            n = p["normal"] if self.rotation is None else self._rotate(p["normal"], t)
+            return max(0.0, float(np.max(-(rest_points - point) @ n)))
+        return None
+
+    def _moved(self, points: np.ndarray, t: float) -> np.ndarray:
+        c = self.surface.points.mean(axis=0)
         u = np.zeros(3) if self.translation is None else self._vector(self.translation, t, "m")
         if self.rotation is None:
-            return X + u
+            return points + u
         R = _rotation(self._vector(self.rotation, t, "rad"))
-        return c + (X - c) @ R.T + u
+        return c + (points - c) @ R.T + u
+
+    def _rotate(self, v: np.ndarray, t: float) -> np.ndarray:
+        return _rotation(self._vector(self.rotation, t, "rad")) @ v
 
     def _vector(self, motion: Motion, t: float, unit: str) -> np.ndarray:
         return vector(

@@ -179,22 +179,48 @@ def box(
     lower: Sequence[float] = (0.0, 0.0, 0.0),
     upper: Sequence[float] = (1.0, 1.0, 1.0),
     divisions: Sequence[int] = (4, 4, 4),
+    grading: Sequence[float] = (1.0, 1.0, 1.0),
 ) -> Mesh:
     """Tetrahedral mesh of the box [lower, upper] with divisions (nx, ny, nz) hexahedra.
 
     Each hexahedron is split into 6 tetrahedra around its main diagonal (Kuhn/Freudenthal), the
     same way in every hexahedron, so faces conform. Points (n, 3); cells (6 nx ny nz, 4) positive.
     Sets: "xmin", "xmax", "ymin", "ymax", "zmin", "zmax".
+    grading (gx, gy, gz): per axis, 1 uniform; p > 1 places the grid planes at s^p of the way
+    (cells shrink towards ``lower``); -p at 1 - (1 - s)^p (finer
+    towards ``upper``), e.g. to resolve a contact on a face. Cells stay positive (each hexahedron
+    maps to a box).
     """
     lo, hi, (nx, ny, nz) = _arguments("box", lower, upper, divisions, 3)
+    exponents = _grading(grading)
     source = f"box(lower={lo}, upper={hi}, divisions={(nx, ny, nz)})"
+    if exponents != (1.0, 1.0, 1.0):
+        source = source[:-1] + f", grading={exponents})"
     gz, gy, gx = (g.ravel() for g in np.mgrid[0 : nz + 1, 0 : ny + 1, 0 : nx + 1])
     n = np.array([nx, ny, nz])
-    points = np.asarray(lo) + (np.asarray(hi) - np.asarray(lo)) * np.column_stack([gx, gy, gz]) / n
+    s = np.column_stack([gx, gy, gz]) / n
+    for axis, p in enumerate(exponents):
+        if p > 1.0:
+            s[:, axis] = s[:, axis] ** p
+        elif p < -1.0:
+            s[:, axis] = 1.0 - (1.0 - s[:, axis]) ** (-p)
+    points = np.asarray(lo) + (np.asarray(hi) - np.asarray(lo)) * s
     cells = _kuhn_cells(nx, ny, nz)
     names = (("xmin", "xmax"), ("ymin", "ymax"), ("zmin", "zmax"))
     psets, fsets = _side_sets(cells, (gx, gy, gz), names)
     return validate_mesh(points, cells, source=source, point_sets=psets, facet_sets=fsets)
+
+
+def _grading(grading) -> tuple[float, float, float]:
+    from tissuesim.validate import vector
+
+    g = vector(grading, "box: grading", 3)
+    if np.any(np.abs(g) < 1.0):
+        raise MeshError(
+            f"box: grading must be 1 (uniform), p >= 1 (finer towards lower) or -p <= -1 (finer "
+            f"towards upper) per axis, got {g.tolist()}"
+        )
+    return tuple(float(x) for x in g)
 
 
 def _cube_to_ball(p: np.ndarray) -> np.ndarray:

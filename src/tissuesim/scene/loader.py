@@ -57,6 +57,7 @@ MESH_KEYS = {
     "upper": "generator: upper corner",
     "divisions": "generator: cells per axis",
     "pattern": "rectangle: triangle pattern",
+    "grading": "box: per-axis grading exponents (1 uniform, p finer towards lower, -p upper)",
     "merge_coincident": "file: merge vertices that coincide (an unwelded seam) instead of refusing",
 }
 SIMULATION_KEYS = (
@@ -409,7 +410,7 @@ def _field(value, d: int, where: str):
 
 MESH_GENERATORS = {
     "rectangle": ("lower", "upper", "divisions", "pattern"),
-    "box": ("lower", "upper", "divisions"),
+    "box": ("lower", "upper", "divisions", "grading"),
     "ellipsoid": ("center", "radii", "divisions"),
 }
 
