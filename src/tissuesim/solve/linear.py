@@ -219,7 +219,12 @@ class SuperLUSolver(LinearSolver):
 
     def factorize(self, A: sp.csr_matrix) -> None:
         options = {"SymmetricMode": True}
+        if self._perm is not None and abs(A.nnz - self._analysed_nnz) > 0.02 * self._analysed_nnz:
+            # contact pairs changed the sparsity much: a new fill-reducing order (any order is
+            # valid; one made for a pattern close to this one keeps the fill low)
+            self._perm = None
         if self._perm is None:
+            self._analysed_nnz = A.nnz
             self._lu = spla.splu(A.tocsc(), permc_spec="MMD_AT_PLUS_A", options=options)
             # perm_c sends column j to position perm_c[j]; the ordering as a gather index
             # (A[p][:, p]) is its inverse. Using perm_c itself gave 4x the fill and 20x the
