@@ -262,12 +262,15 @@ class System:
         order: int,
         project: bool = False,
         energies: Sequence[Sequence] | None = None,
+        contact: bool = True,
     ) -> Accumulator:
         """Phi at c: every body's energies (``energies[j]``: the extra energies of body j in
-        its configuration space) plus the coupling, over the tangent DOFs."""
+        its configuration space) plus the coupling, over the tangent DOFs; ``contact`` False
+        leaves the contact energy out (contact/kinematic.py adds its own)."""
         energies = energies if energies is not None else [() for _ in self.bodies]
         if self.single:
-            return self._add_contact(self.bodies[0].evaluate(c, order, project, energies[0]), c)
+            acc = self.bodies[0].evaluate(c, order, project, energies[0])
+            return self._add_contact(acc, c) if contact else acc
         acc = Accumulator(self.pattern, order, project)
         parts = [list(e) for e in energies]
         for i, a in enumerate(self.attachments):
@@ -294,7 +297,7 @@ class System:
             for i, cross in enumerate(self.cross):
                 j = self._tissue_of[i]
                 self._add_cross(cross, self.bodies[j], c[self.config_slices[j]], acc.hessian)
-        return self._add_contact(acc, c)
+        return self._add_contact(acc, c) if contact else acc
 
     def _add_contact(self, acc: Accumulator, c: np.ndarray) -> Accumulator:
         """The barrier contact energy (contact/model.py) on top of everything else."""

@@ -169,3 +169,25 @@ def test_a_graded_box_is_finer_where_asked_and_stays_positive():
     np.testing.assert_allclose(np.unique(mesh.points[:, 1]), np.arange(5) / 4)
     with pytest.raises(ts.MeshError, match="grading must be 1"):
         ts.box(grading=(0.5, 1, 1))
+
+
+def test_newton_moves_an_obstacle_that_outruns_the_barrier_gap_without_halving():
+    """The probe moves 10 x dhat per step into the block: the start of every step is
+    unreachable with the probe at its target, so Newton moves it (contact/kinematic.py)."""
+    mesh = ts.box((0, 0, 0), (1, 1, 0.5), (4, 4, 2))
+    sim = ts.Simulation(mesh, MATERIAL, integrator="quasistatic", time_step=0.1)
+    sim.fix("body", ts.select.vertices_on_plane(mesh, axis=2, value=0.0))
+    dhat = 0.001
+    probe = sphere((0.5, 0.5, 0.5 + 0.2 + dhat / 2), 0.2, refinement=2)
+    sim.add_obstacle("probe", probe, translation=lambda t: (0.0, 0.0, -0.1 * t))  # 0.01 / step
+    sim.set_contact(dhat=dhat)
+    records = _no_intersection_after_every_step(sim, 4)
+    assert all(r.converged and r.substeps == 1 for r in records)
+    assert max(r.newton_iterations for r in records) <= 30
+    contact = sim.system.contact
+    target = contact.obstacle_positions(sim.time)
+    assert np.abs(contact.obstacle_state - target).max() <= 0.01 * dhat  # landed on its target
+    depth = records[-1].extra["contact"]["indentation_depth"]["probe"]
+    assert depth == pytest.approx(0.04 - dhat / 2, rel=1e-9)
+    forces = [-r.extra["forces"]["probe"][2] for r in records]
+    assert np.all(np.diff(forces) > 0)

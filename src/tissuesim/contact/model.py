@@ -106,6 +106,15 @@ class ContactModel:
             (np.ones(mapped.sum()), (np.flatnonzero(mapped), self.dofs[mapped])),
             shape=(self.dofs.size, self.n_dofs),
         )
+        # the obstacles' vertex coordinates as unknowns after the system's DOFs (kinematic.py)
+        self.n_obstacle = int((~mapped).sum())
+        aug = self.dofs.copy()
+        aug[~mapped] = self.n_dofs + np.arange(self.n_obstacle)
+        self._select_aug = sp.csr_matrix(
+            (np.ones(aug.size), (np.arange(aug.size), aug)),
+            shape=(aug.size, self.n_dofs + self.n_obstacle),
+        )
+        self.obstacle_state: np.ndarray | None = None  # where the obstacles are (flat), if lagged
         diag = float(np.linalg.norm(np.ptp(self.rest, axis=0)))
         self.dhat = self.settings.dhat if self.settings.dhat is not None else 1e-3 * diag
         default = max(_youngs(m.material) for _, m, _, _ in self.bodies)
@@ -127,15 +136,35 @@ class ContactModel:
         }
 
     # -- positions ------------------------------------------------------------------------------
-    def vertices(self, c: np.ndarray, t: float | None = None) -> np.ndarray:
-        """Collision-mesh vertices (n, 3) for the system configuration c at time t."""
-        t = self.time if t is None else t
+    def obstacle_positions(self, t: float) -> np.ndarray:
+        """Every obstacle's vertices at time t, flat (n_obstacle,)."""
+        if not self.obstacles:
+            return np.zeros(0)
+        return np.concatenate([ob.positions(t).ravel() for ob in self.obstacles])
+
+    @property
+    def moving(self) -> bool:
+        """Whether any obstacle has a motion (then Newton moves them: kinematic.py)."""
+        return any(ob.translation or ob.rotation for ob in self.obstacles)
+
+    def vertices(
+        self, c: np.ndarray, t: float | None = None, obstacle: np.ndarray | None = None
+    ) -> np.ndarray:
+        """Collision-mesh vertices (n, 3) for the system configuration c, the obstacles at
+        ``obstacle`` (flat), else at time t, else where they are (``obstacle_state``, or at
+        ``self.time``)."""
         V = np.empty_like(self.rest)
         mapped = self.config_dofs >= 0
         flat = V.reshape(-1)
         flat[mapped] = c[self.config_dofs[mapped]]
-        for ob in self.obstacles:
-            V[self.slices[ob.name][0]] = ob.positions(t)
+        if obstacle is None and t is None and self.obstacle_state is not None:
+            obstacle = self.obstacle_state
+        if obstacle is not None:
+            flat[~mapped] = obstacle
+        else:
+            t = self.time if t is None else t
+            for ob in self.obstacles:
+                V[self.slices[ob.name][0]] = ob.positions(t)
         return np.asfortranarray(V)
 
     def _collisions(self, V: np.ndarray):
@@ -166,13 +195,41 @@ class ContactModel:
         self.stats.candidates_and_barrier_s += time.perf_counter() - start
         return value, grad, hess
 
-    def max_step(self, c0: np.ndarray, c1: np.ndarray) -> float:
-        """The largest fraction of the straight move c0 -> c1 free of intersection (CCD)."""
+    def evaluate_augmented(self, c: np.ndarray, y: np.ndarray, order: int, project: bool = True):
+        """As ``evaluate``, with the obstacles at y (flat) and their coordinates as unknowns
+        after the system's: gradient (n_dofs + n_obstacle,), Hessian over the same."""
+        start = time.perf_counter()
+        V = self.vertices(c, obstacle=y)
+        col = self._collisions(V)
+        self.stats.evaluations += 1
+        if len(col) == 0:
+            self.stats.candidates_and_barrier_s += time.perf_counter() - start
+            return 0.0, None, None
+        value = float(self.barrier(col, self.mesh, V))
+        grad = hess = None
+        if order >= 1:
+            grad = self._select_aug.T @ self.barrier.gradient(col, self.mesh, V)
+        if order >= 2:
+            method = self._ipctk.PSDProjectionMethod
+            H = self.barrier.hessian(col, self.mesh, V, method.CLAMP if project else method.NONE)
+            hess = (self._select_aug.T @ sp.csr_matrix(H) @ self._select_aug).tocsr()
+        self.stats.candidates_and_barrier_s += time.perf_counter() - start
+        return value, grad, hess
+
+    def max_step(
+        self,
+        c0: np.ndarray,
+        c1: np.ndarray,
+        y0: np.ndarray | None = None,
+        y1: np.ndarray | None = None,
+    ) -> float:
+        """The largest fraction of the straight move c0 -> c1 (obstacles y0 -> y1, or where
+        they are) free of intersection (CCD)."""
         start = time.perf_counter()
         step = self._ipctk.compute_collision_free_stepsize(
             self.mesh,
-            self.vertices(c0),
-            self.vertices(c1),
+            self.vertices(c0, obstacle=y0),
+            self.vertices(c1, obstacle=y1),
             broad_phase=self.broad_phase,
             narrow_phase_ccd=self.ccd,
         )

@@ -219,7 +219,9 @@ class SuperLUSolver(LinearSolver):
 
     def factorize(self, A: sp.csr_matrix) -> None:
         options = {"SymmetricMode": True}
-        if self._perm is not None and abs(A.nnz - self._analysed_nnz) > 0.02 * self._analysed_nnz:
+        if self._perm is not None and (
+            A.shape != self._lu.shape or abs(A.nnz - self._analysed_nnz) > 0.02 * self._analysed_nnz
+        ):
             # contact pairs changed the sparsity much: a new fill-reducing order (any order is
             # valid; one made for a pattern close to this one keeps the fill low)
             self._perm = None

@@ -57,6 +57,10 @@ def implicit_step(
     candidates = (c_pred, state.x) if dynamic else (state.x,)
     contact = system.contact
     max_step = None
+    if contact is not None and contact.moving:
+        return _step_with_moving_obstacles(
+            system, state, h, solver, options, dynamic, body_energies, candidates, evaluate
+        )
     if contact is not None:
         contact.time = t1
         # Newton must start where the bodies can get from x_n without crossing a surface,
@@ -90,6 +94,36 @@ def implicit_step(
         return StepOutcome(None, False, [record], record.reason)
     v1 = system.difference(c1, state.x) / h if dynamic else np.zeros(system.n_dofs)
     return StepOutcome(State(t1, c1, v1), True, [record])
+
+
+def _step_with_moving_obstacles(
+    system, state, h, solver, options, dynamic, body_energies, candidates, evaluate
+) -> StepOutcome:
+    """Implicit step in which Newton moves the obstacles too (contact/kinematic.py): the start
+    must only be reachable with the obstacles where they are."""
+    from tissuesim.contact.kinematic import solve_with_moving_obstacles
+
+    contact, t1 = system.contact, state.time + h
+    if contact.obstacle_state is None:
+        contact.obstacle_state = contact.obstacle_positions(state.time)
+    y = contact.obstacle_state
+    contact.time = t1
+    starts = []
+    for c in candidates:
+        c = system.apply_prescribed(c, t1)
+        if contact.max_step(state.x, c, y, y) >= 1.0:
+            starts.append(c)
+    if not starts:
+        return StepOutcome(None, False, [], "the prescribed motion of this step crosses a surface")
+    c0 = choose_start(evaluate, starts, lambda c: c)
+    c1, y1, record, results = solve_with_moving_obstacles(
+        system, c0, state.time, t1, body_energies, solver, options
+    )
+    if not record.converged:
+        return StepOutcome(None, False, results, record.reason)
+    contact.obstacle_state = y1
+    v1 = system.difference(c1, state.x) / h if dynamic else np.zeros(system.n_dofs)
+    return StepOutcome(State(t1, c1, v1), True, [*results[:-1], record])
 
 
 def explicit_step(
