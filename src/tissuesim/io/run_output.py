@@ -27,7 +27,10 @@ from tissuesim.io.body_series import series_for
 from tissuesim.io.interrupts import deferred_interrupts, interrupts_as_keyboard_interrupt
 from tissuesim.io.manifest import Manifest, prepare_directory
 
-__all__ = ["RunOutput"]
+__all__ = ["RunOutput", "OBSTACLES"]
+
+#: the key of a frame's data under which the obstacles' (positions, triangles) are kept
+OBSTACLES = "__obstacles__"
 
 
 class RunOutput:
@@ -117,8 +120,13 @@ class RunOutput:
         for s in self.series:
             if s.body.model is not None or s.body.kind == "tissue":
                 data[s.body.name] = s.write(sim, t)
+        obstacles = {}
+        for ob in sim.obstacles:
+            obstacles[ob.name] = (ob.positions(t), ob.triangles)
         for ob, writer in getattr(self, "obstacle_series", []):
-            writer.write(t, ob.rest, point_data={"displacement": ob.positions(t) - ob.rest})
+            writer.write(t, ob.rest, point_data={"displacement": obstacles[ob.name][0] - ob.rest})
+        if obstacles:
+            data[OBSTACLES] = obstacles  # drawn by render/scene.py
         cut = sim.tissue.cut_surface if sim.tissue is not None else np.zeros((0, 3, 3))
         if self.cut_series is not None and len(cut):
             self.cut_series.write(

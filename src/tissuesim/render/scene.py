@@ -80,7 +80,7 @@ def render_run(sim, frames: list, directory: Path, field: str = "J") -> str:
     """Draw final.png (and run.gif for several frames) into ``directory``; returns what was
     drawn, for the summary."""
     label = field_label(field)
-    bodies = [sim.bodies[n] for n in frames[-1][1]]
+    bodies = [sim.bodies[n] for n in frames[-1][1] if n in sim.bodies]
     if all(b.kind == "fem" and b.dim == 2 for b in bodies):
         return _render_2d(bodies, frames, directory, field, label)
     try:
@@ -182,6 +182,8 @@ def _frame3d(bodies, frame, field, label, clim, surfaces):
 
     t, data, cut, suffix = frame
     layers, points = [], []
+    for name, (x, tri) in data.get("__obstacles__", {}).items():  # io/run_output.py OBSTACLES
+        layers.append(SurfaceLayer(name, x, tri, color="silver", opacity=0.45))
     for j, b in enumerate(bodies):
         d = data[b.name]
         if b.kind == "fem":
