@@ -579,6 +579,7 @@ class Simulation(SetupCalls, BodyResults):
             "ccd_s": stats.ccd_s,
             "barrier_evaluations": stats.evaluations,
             "ccd_calls": stats.ccd_calls,
+            "friction_solves": stats.friction_solves,
             "indentation_depth": contact.indentation_depths(),
         }
         contact.reset_stats()

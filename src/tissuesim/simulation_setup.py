@@ -24,12 +24,21 @@ class SetupCalls:
 
     # -- contact ------------------------------------------------------------------------------
     def set_contact(
-        self, enabled: bool = True, *, dhat: float | None = None, stiffness: float | None = None
+        self,
+        enabled: bool = True,
+        *,
+        dhat: float | None = None,
+        stiffness: float | None = None,
+        friction: float = 0.0,
+        eps_v: float = 1e-3,
+        friction_iterations: int = 2,
     ) -> None:
         """Barrier contact (IPC) between every FEM body's surface, itself and the obstacles
         (``contact/model.py``): ``dhat`` the activation distance (m; default 1e-3 of the
         scene's size), ``stiffness`` the barrier's kappa (Pa; default the largest Young's
-        modulus). Needs ``pip install "tissuesim[contact]"`` (ipctk)."""
+        modulus); ``friction`` the Coulomb coefficient mu (IPC's smoothed friction, static
+        below the sliding speed ``eps_v`` m/s, lagged over ``friction_iterations`` Newton
+        solves per step). Needs ``pip install "tissuesim[contact]"`` (ipctk)."""
         import importlib.util
 
         from tissuesim.contact.model import ContactSettings
@@ -43,7 +52,13 @@ class SetupCalls:
             dhat = real(dhat, "contact dhat", low=0.0, low_open=True, unit="m")
         if stiffness is not None:
             stiffness = real(stiffness, "contact stiffness", low=0.0, low_open=True, unit="Pa")
-        self.contact = ContactSettings(dhat, stiffness) if enabled else None
+        from tissuesim.validate import integer
+
+        friction = real(friction, "contact friction", low=0.0)
+        eps_v = real(eps_v, "contact eps_v", low=0.0, low_open=True, unit="m/s")
+        iterations = integer(friction_iterations, "contact friction_iterations", low=1, high=20)
+        settings = ContactSettings(dhat, stiffness, friction, eps_v, iterations)
+        self.contact = settings if enabled else None
         self._changed()
 
     def add_obstacle(self, name: str, surface, *, translation=None, rotation=None):

@@ -63,7 +63,11 @@ def test_a_probe_scene_runs_and_its_force_balances_the_support(tmp_path, capsys)
     ("old", "new", "words"),
     [
         ("dhat = 0.005", "dhat = -1", "[contact]: contact dhat must be > 0"),
-        ("dhat = 0.005", "dhat = 0.005\nfriction = 0.3", "[contact]: unknown key 'friction'"),
+        (
+            "dhat = 0.005",
+            "dhat = 0.005\nfrictoin = 0.3",
+            "[contact]: unknown key 'frictoin'; did you mean 'friction'",
+        ),
         ('name = "probe"\n', "", "obstacles[1]: name must be a non-empty string"),
         ("sphere = {", "cylinder = {", "obstacles[1]: unknown key 'cylinder'"),
         ("radius = 0.2", "radius = 0.0", "obstacles[1] sphere: sphere: radius must be > 0"),

@@ -102,14 +102,14 @@ def _solver_for(problem: _Augmented, contact, solver, options):
     return cached[1]
 
 
-def solve_with_moving_obstacles(system, c0, t0, t1, energies, solver, options):
+def solve_with_moving_obstacles(system, c0, t0, t1, energies, solver, options, y0=None):
     """Newton over the bodies and the obstacles (see the module docstring); returns (c1, the
     obstacles' final coordinates, NewtonResult of the last solve, all results)."""
     contact = system.contact
     problem = _Augmented(system, contact, energies)
     solver = _solver_for(problem, contact, solver, options)
     problem.target = contact.obstacle_positions(t1)
-    y = contact.obstacle_state
+    y = contact.obstacle_state if y0 is None else y0
     if y is None:
         y = contact.obstacle_positions(t0)
     z = np.concatenate([c0, y])

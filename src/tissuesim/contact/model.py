@@ -37,6 +37,9 @@ class ContactSettings:
 
     dhat: float | None = None
     stiffness: float | None = None
+    friction: float = 0.0  # Coulomb coefficient mu (0: frictionless)
+    eps_v: float = 1e-3  # m/s: below this sliding speed friction is smoothed (static regime)
+    friction_iterations: int = 2  # Newton solves per step, the friction lagged between them
 
 
 @dataclass
@@ -50,6 +53,7 @@ class ContactStats:
     min_distance: float = float("inf")
     evaluations: int = 0
     ccd_calls: int = 0
+    friction_solves: int = 0  # Newton solves with the friction lagged (0 without friction)
 
 
 @dataclass(eq=False)
@@ -120,8 +124,44 @@ class ContactModel:
         default = max(_youngs(m.material) for _, m, _, _ in self.bodies)
         self.kappa = self.settings.stiffness if self.settings.stiffness is not None else default
         self.barrier = ipctk.BarrierPotential(self.dhat, self.kappa, True)
+        self._friction = None  # (TangentialCollisions, vertices at the step's start), lagged
         self.broad_phase = ipctk.LBVH()
         self.ccd = ipctk.AdditiveCCD()
+
+    # -- friction (IPC's smoothed, lagged Coulomb friction) ----------------------------------------
+    def lag_friction(self, V_start: np.ndarray, V_lag: np.ndarray, h: float) -> int:
+        """Fix the friction's normal forces and tangent bases at V_lag (the step's start, then
+        each Newton solution) for displacements from V_start; returns the active pairs."""
+        if self.settings.friction <= 0.0:
+            self._friction = None
+            return 0
+        ipctk = self._ipctk
+        col = self._collisions(V_lag)
+        tangential = ipctk.TangentialCollisions()
+        tangential.build(self.mesh, V_lag, col, self.barrier, self.settings.friction)
+        potential = ipctk.FrictionPotential(self.settings.eps_v * h)
+        self._friction = (tangential, np.asfortranarray(V_start), potential)
+        return len(tangential)
+
+    def clear_friction(self) -> None:
+        self._friction = None
+
+    def _add_friction(self, V: np.ndarray, order: int, select, value, grad, hess):
+        if self._friction is None:
+            return value, grad, hess
+        tangential, V_start, potential = self._friction
+        if len(tangential) == 0:
+            return value, grad, hess
+        U = np.asfortranarray(V - V_start)
+        value += float(potential(tangential, self.mesh, U))
+        if order >= 1:
+            g = select.T @ potential.gradient(tangential, self.mesh, U)
+            grad = g if grad is None else grad + g
+        if order >= 2:
+            H = potential.hessian(tangential, self.mesh, U, self._ipctk.PSDProjectionMethod.CLAMP)
+            Hs = (select.T @ sp.csr_matrix(H) @ select).tocsr()
+            hess = Hs if hess is None else hess + Hs
+        return value, grad, hess
 
     def reset_stats(self) -> None:
         self.stats = ContactStats()
@@ -133,6 +173,9 @@ class ContactModel:
             "surface_vertices": self.n_deformable,
             "obstacle_vertices": int(len(self.rest) - self.n_deformable),
             "obstacles": [ob.name for ob in self.obstacles],
+            "friction": self.settings.friction,
+            "eps_v_m_per_s": self.settings.eps_v,
+            "friction_iterations": self.settings.friction_iterations,
         }
 
     # -- positions ------------------------------------------------------------------------------
@@ -179,20 +222,24 @@ class ContactModel:
         Hessian is PSD-projected per collision (as IPC does) unless ``project`` is False."""
         start = time.perf_counter()
         V = self.vertices(c)
+        value, grad, hess = self._barrier_terms(V, order, project, self._select)
+        value, grad, hess = self._add_friction(V, order, self._select, value, grad, hess)
+        self.stats.candidates_and_barrier_s += time.perf_counter() - start
+        return value, grad, hess
+
+    def _barrier_terms(self, V: np.ndarray, order: int, project: bool, select):
         col = self._collisions(V)
         self.stats.evaluations += 1
         if len(col) == 0:
-            self.stats.candidates_and_barrier_s += time.perf_counter() - start
             return 0.0, None, None
         value = float(self.barrier(col, self.mesh, V))
         grad = hess = None
         if order >= 1:
-            grad = self._select.T @ self.barrier.gradient(col, self.mesh, V)
+            grad = select.T @ self.barrier.gradient(col, self.mesh, V)
         if order >= 2:
             method = self._ipctk.PSDProjectionMethod
             H = self.barrier.hessian(col, self.mesh, V, method.CLAMP if project else method.NONE)
-            hess = (self._select.T @ sp.csr_matrix(H) @ self._select).tocsr()
-        self.stats.candidates_and_barrier_s += time.perf_counter() - start
+            hess = (select.T @ sp.csr_matrix(H) @ select).tocsr()
         return value, grad, hess
 
     def evaluate_augmented(self, c: np.ndarray, y: np.ndarray, order: int, project: bool = True):
@@ -200,19 +247,8 @@ class ContactModel:
         after the system's: gradient (n_dofs + n_obstacle,), Hessian over the same."""
         start = time.perf_counter()
         V = self.vertices(c, obstacle=y)
-        col = self._collisions(V)
-        self.stats.evaluations += 1
-        if len(col) == 0:
-            self.stats.candidates_and_barrier_s += time.perf_counter() - start
-            return 0.0, None, None
-        value = float(self.barrier(col, self.mesh, V))
-        grad = hess = None
-        if order >= 1:
-            grad = self._select_aug.T @ self.barrier.gradient(col, self.mesh, V)
-        if order >= 2:
-            method = self._ipctk.PSDProjectionMethod
-            H = self.barrier.hessian(col, self.mesh, V, method.CLAMP if project else method.NONE)
-            hess = (self._select_aug.T @ sp.csr_matrix(H) @ self._select_aug).tocsr()
+        value, grad, hess = self._barrier_terms(V, order, project, self._select_aug)
+        value, grad, hess = self._add_friction(V, order, self._select_aug, value, grad, hess)
         self.stats.candidates_and_barrier_s += time.perf_counter() - start
         return value, grad, hess
 

@@ -6,6 +6,7 @@
     [contact]
     dhat = 0.001          # m, activation distance (default 1e-3 of the scene's size)
     stiffness = 1e4       # Pa, barrier stiffness (default the largest Young's modulus)
+    friction = 0.3        # Coulomb mu (default 0); eps_v (m/s), friction_iterations
 
     [[obstacles]]
     name = "probe"
@@ -23,7 +24,7 @@ from tissuesim.validate import short
 
 __all__ = ["add_contact_tables", "CONTACT_KEYS", "OBSTACLE_KEYS", "SHAPES"]
 
-CONTACT_KEYS = {"enabled", "dhat", "stiffness"}
+CONTACT_KEYS = {"enabled", "dhat", "stiffness", "friction", "eps_v", "friction_iterations"}
 SHAPES = {
     "plane": {"point", "normal", "size"},
     "sphere": {"center", "radius", "refinement"},
@@ -49,7 +50,10 @@ def add_contact_tables(sim, data: dict, base_dir: Path, source: str) -> None:
             raise SceneError(f"{where}: enabled = false, but the scene has [[obstacles]]")
         return
     with _context(where):
-        sim.set_contact(dhat=contact.get("dhat"), stiffness=contact.get("stiffness"))
+        options = {
+            k: contact[k] for k in ("friction", "eps_v", "friction_iterations") if k in contact
+        }
+        sim.set_contact(dhat=contact.get("dhat"), stiffness=contact.get("stiffness"), **options)
     for i, item in enumerate(obstacles, start=1):
         _obstacle(sim, item, base_dir, f"{source} obstacles[{i}]")
 

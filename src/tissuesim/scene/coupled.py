@@ -100,7 +100,7 @@ COUPLED_SCENE_KEYS: dict[str, Any] = {
     "cuts": set(CUT_KEYS),
     "tearing": {"threshold"},
     "run": set(RUN_KEYS),
-    "contact": {"enabled", "dhat", "stiffness"},  # scene/contact.py
+    "contact": {"enabled", "dhat", "stiffness", "friction", "eps_v", "friction_iterations"},
     "obstacles": {"name", "translation", "rotation", "plane", "sphere", "box", "file"},
 }
 ARRAYS = ("organs", "bodies", "graspers", "attachments", "cuts", "obstacles")

@@ -86,7 +86,7 @@ SCENE_KEYS = {
     "initial": {"velocity"},
     "nodal_forces": {"vertices", "force"},
     "run": set(RUN_KEYS),
-    "contact": {"enabled", "dhat", "stiffness"},  # scene/contact.py
+    "contact": {"enabled", "dhat", "stiffness", "friction", "eps_v", "friction_iterations"},
     "obstacles": {"name", "translation", "rotation", "plane", "sphere", "box", "file"},
 }
 #: what pictures can be coloured by

@@ -79,21 +79,37 @@ def implicit_step(
             )
         max_step = contact.max_step
     c0 = choose_start(evaluate, candidates, lambda c: system.apply_prescribed(c, t1))
-    c1, record = minimize(
-        evaluate,
-        c0,
-        system.elimination,
-        solver,
-        options,
-        force_scale=system.force_scale,
-        length_scale=system.length_scale,
-        retract=system.retract,
-        max_step=max_step,
-    )
+    solves = 1
+    if contact is not None and contact.settings.friction > 0.0:
+        V_start = contact.vertices(state.x, t=state.time)
+        contact.lag_friction(V_start, V_start, h)
+        solves = contact.settings.friction_iterations
+    records = []
+    for k in range(solves):
+        if k:  # friction lagged at the last solution (IPC): normal forces, tangent bases
+            contact.lag_friction(V_start, contact.vertices(c0), h)
+        c0, record = minimize(
+            evaluate,
+            c0,
+            system.elimination,
+            solver,
+            options,
+            force_scale=system.force_scale,
+            length_scale=system.length_scale,
+            retract=system.retract,
+            max_step=max_step,
+        )
+        records.append(record)
+        if not record.converged:
+            break
+    c1 = c0
+    if contact is not None:
+        contact.clear_friction()
+        contact.stats.friction_solves += len(records) if solves > 1 else 0
     if not record.converged:
-        return StepOutcome(None, False, [record], record.reason)
+        return StepOutcome(None, False, records, record.reason)
     v1 = system.difference(c1, state.x) / h if dynamic else np.zeros(system.n_dofs)
-    return StepOutcome(State(t1, c1, v1), True, [record])
+    return StepOutcome(State(t1, c1, v1), True, records)
 
 
 def _step_with_moving_obstacles(
@@ -116,9 +132,24 @@ def _step_with_moving_obstacles(
     if not starts:
         return StepOutcome(None, False, [], "the prescribed motion of this step crosses a surface")
     c0 = choose_start(evaluate, starts, lambda c: c)
-    c1, y1, record, results = solve_with_moving_obstacles(
-        system, c0, state.time, t1, body_energies, solver, options
-    )
+    solves = 1
+    if contact.settings.friction > 0.0:
+        V_start = contact.vertices(state.x, obstacle=y)
+        contact.lag_friction(V_start, V_start, h)
+        solves = contact.settings.friction_iterations
+    results, y_k = [], y
+    for k in range(solves):
+        if k:
+            contact.lag_friction(V_start, contact.vertices(c0, obstacle=y_k), h)
+        c0, y_k, record, part = solve_with_moving_obstacles(
+            system, c0, state.time, t1, body_energies, solver, options, y0=y_k
+        )
+        results += part
+        if not record.converged:
+            break
+    contact.clear_friction()
+    contact.stats.friction_solves += solves if solves > 1 else 0
+    c1, y1 = c0, y_k
     if not record.converged:
         return StepOutcome(None, False, results, record.reason)
     contact.obstacle_state = y1
