@@ -175,6 +175,7 @@ time_step = 0.1
 vertices = { tagged = "zmin" }
 [contact]
 dhat = 0.01
+friction = 0.3
 [[obstacles]]
 name = "probe"
 sphere = { center = [0.5, 0.5, 0.71], radius = 0.2, refinement = 1 }
