@@ -182,10 +182,11 @@ class Simulation(SetupCalls, BodyResults):
 
         if not isinstance(name, str) or not _NAME.fullmatch(name):
             raise InputError(
-                f"{what} name {name!r} must be letters, digits, '_', '-' or '.', starting with "
-                "a letter or digit (it names output files)"
+                f"{what} name {validate.short(name)} must be letters, digits, '_', '-' or '.', "
+                "starting with a letter or digit (it names output files)"
             )
-        if name in self.bodies or name in RESERVED_NAMES or (name == "tissue" != what):
+        taken = name in self.bodies or name in {o.name for o in self.obstacles}
+        if taken or name in RESERVED_NAMES or (name == "tissue" != what):
             raise InputError(f"{what} name {name!r} is taken; choose another")
         mine = set(series_names(name, kind))
         for other in self.bodies.values():
@@ -572,9 +573,10 @@ class Simulation(SetupCalls, BodyResults):
     def _contact_report(contact, x: np.ndarray) -> dict[str, Any]:
         """The step's contact figures, and the time split since the last report."""
         stats = contact.stats
+        distance, pairs = contact.proximity(x)
         report = {
-            "min_distance": contact.min_distance(x),
-            "active_pairs": contact.active_pairs(x),
+            "min_distance": distance,
+            "active_pairs": pairs,
             "candidates_and_barrier_s": stats.candidates_and_barrier_s,
             "ccd_s": stats.ccd_s,
             "barrier_evaluations": stats.evaluations,

@@ -77,9 +77,8 @@ class SetupCalls:
         for motion, what in ((translation, "translation"), (rotation, "rotation")):
             if motion is not None and not callable(motion):
                 raise InputError(f"add_obstacle: {what} must be a function of t or None")
-        name = self._claim_force_name(name)
-        if name in self.bodies or name in ("cut", "summary", "forces", "manifest"):
-            raise InputError(f"obstacle name {name!r} is taken; choose another")
+        # a file stem clashing with no body, obstacle or internal series; then its force name
+        name = self._claim_force_name(self._new_name(name, "obstacle"))
         self.obstacles.append(Obstacle(name, surface, translation, rotation))
         if getattr(self, "contact", None) is None:
             self.set_contact()

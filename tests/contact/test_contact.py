@@ -191,3 +191,57 @@ def test_newton_moves_an_obstacle_that_outruns_the_barrier_gap_without_halving()
     assert depth == pytest.approx(0.04 - dhat / 2, rel=1e-9)
     forces = [-r.extra["forces"]["probe"][2] for r in records]
     assert np.all(np.diff(forces) > 0)
+
+
+def test_the_augmented_energy_with_obstacle_unknowns_matches_finite_differences():
+    """contact/kinematic.py: bodies' energy + barrier over bodies and obstacle vertices +
+    the augmented Lagrangian pull of the obstacles to their targets."""
+    from tissuesim.contact.kinematic import _Augmented
+
+    mesh = ts.box((0, 0, 0), (1, 1, 0.5), (3, 3, 2))
+    sim = ts.Simulation(mesh, MATERIAL, integrator="quasistatic", time_step=0.1)
+    sim.fix("body", ts.select.vertices_on_plane(mesh, axis=2, value=0.0))
+    dhat = 0.01
+    sim.add_obstacle(
+        "probe", sphere((0.5, 0.5, 0.7 + dhat / 3), 0.2, 1), translation=lambda t: (0, 0, -t)
+    )
+    sim.set_contact(dhat=dhat)
+    system = sim.system
+    contact = system.contact
+    problem = _Augmented(system, contact, sim.step_energies(0.1, None, 0.1))
+    problem.target = contact.obstacle_positions(0.1)
+    rng = np.random.default_rng(2)
+    problem.multiplier = rng.standard_normal(contact.n_obstacle)
+    z = np.concatenate([sim.state.x, contact.obstacle_positions(0.0)])
+    z = z + 1e-4 * rng.standard_normal(z.size) * (np.arange(z.size) >= system.n_config)
+    acc = problem.evaluate(z, 2, False)
+    assert acc.terms["contact"] > 0
+    h = 1e-7
+    for _ in range(4):
+        d = rng.standard_normal(z.size)
+        fd = (
+            problem.evaluate(z + h * d, 0, False).value
+            - problem.evaluate(z - h * d, 0, False).value
+        ) / (2 * h)
+        assert fd == pytest.approx(acc.gradient @ d, rel=1e-5)
+    H = acc.pattern.matrix(acc.hessian) + acc.extra_hessian
+    d = rng.standard_normal(z.size)
+    fd = (
+        problem.evaluate(z + h * d, 1, False).gradient
+        - problem.evaluate(z - h * d, 1, False).gradient
+    ) / (2 * h)
+    assert np.linalg.norm(fd - H @ d) <= 1e-4 * np.linalg.norm(H @ d)
+
+
+def test_obstacle_names_clash_with_nothing():
+    sim = ts.Simulation(ts.box(), MATERIAL, name="liver")
+    with pytest.raises(ts.InputError, match="taken"):
+        sim.add_obstacle("liver", plane((0, 0, 0), (0, 0, 1), 1.0))
+    with pytest.raises(ts.InputError, match="taken"):
+        sim.add_obstacle("manifest", plane((0, 0, 0), (0, 0, 1), 1.0))
+    sim.add_obstacle("probe", sphere((0, 0, 2), 0.1, 1))
+    with pytest.raises(ts.InputError, match="taken"):
+        sim.add_obstacle("probe", sphere((0, 0, 3), 0.1, 1))
+    with pytest.raises(ts.InputError, match="taken"):
+        sim.add_body("probe", ts.box(), MATERIAL)
+    assert [o.name for o in sim.obstacles] == ["probe"]

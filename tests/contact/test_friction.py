@@ -85,3 +85,29 @@ def test_a_block_slides_above_it_with_coulombs_acceleration():
     v0, _ = _slide(frictionless, 30)
     a0 = np.polyfit(t[15:30], v0[15:], 1)[0]
     assert a0 == pytest.approx(G * np.sin(theta), rel=0.02)
+
+
+def test_friction_hessian_matches_differences_of_its_gradient():
+    sim = block_on_incline(0.8, 0.5)
+    for _ in range(3):
+        sim.step()
+    contact = sim.system.contact
+    x0 = sim.state.x.copy()
+    V0 = contact.vertices(x0)
+    rng = np.random.default_rng(1)
+    x = x0.copy()
+    x[0::3] += 2e-4 * rng.random(x.size // 3)
+
+    def friction(y: np.ndarray):
+        contact.lag_friction(V0, V0, sim.time_step)
+        _, grad, hess = contact.evaluate(y, 2, project=False)
+        contact.clear_friction()
+        _, grad0, hess0 = contact.evaluate(y, 2, project=False)
+        return grad - grad0, hess - hess0
+
+    _, H = friction(x)
+    h = 1e-9
+    for _ in range(3):
+        d = rng.standard_normal(x.size)
+        fd = (friction(x + h * d)[0] - friction(x - h * d)[0]) / (2 * h)
+        assert np.linalg.norm(fd - H @ d) <= 1e-4 * np.linalg.norm(H @ d)

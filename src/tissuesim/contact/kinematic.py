@@ -34,24 +34,37 @@ TOLERANCE = 0.01  # of dhat: how close every obstacle vertex must end to its tar
 PENALTY = 1e4
 
 
+def _structure(system, contact) -> tuple[SparsityPattern, Elimination]:
+    """The augmented pattern (the system's, then a diagonal for the obstacles' coordinates)
+    and its elimination, built once per system and prescribed set (kept on the contact
+    model), not every step."""
+    key = (id(system.pattern), id(system.elimination))
+    cached = contact.augmented_cache.get("structure")
+    if cached is not None and cached[0] == key:
+        return cached[1]
+    n, k = system.n_dofs, contact.n_obstacle
+    base = system.pattern
+    keys = base.keys()
+    rows = np.concatenate([keys // n, n + np.arange(k)])
+    cols = np.concatenate([keys % n, n + np.arange(k)])
+    pattern = SparsityPattern.from_entries(n + k, rows, cols)
+    # rows of the system come first with the same columns: its data is a prefix
+    assert np.array_equal(pattern.indices[: base.nnz], base.indices)
+    structure = (pattern, Elimination.build(pattern, system.elimination.dofs))
+    contact.augmented_cache["structure"] = (key, structure)
+    return structure
+
+
 class _Augmented:
     """The system with the obstacles' coordinates appended: pattern, elimination, energy."""
 
     def __init__(self, system, contact, energies) -> None:
         self.system, self.contact, self.energies = system, contact, energies
-        n, k = system.n_dofs, contact.n_obstacle
         self.n_config = system.n_config
-        base = system.pattern
-        keys = base.keys()
-        rows = np.concatenate([keys // n, n + np.arange(k)])
-        cols = np.concatenate([keys % n, n + np.arange(k)])
-        self.pattern = SparsityPattern.from_entries(n + k, rows, cols)
-        # rows of the system come first with the same columns: its data is a prefix
-        assert np.array_equal(self.pattern.indices[: base.nnz], base.indices)
-        self.elimination = Elimination.build(self.pattern, system.elimination.dofs)
+        self.pattern, self.elimination = _structure(system, contact)
         self.penalty = PENALTY * system.force_scale / system.length_scale
-        self.target = np.zeros(k)
-        self.multiplier = np.zeros(k)
+        self.target = np.zeros(contact.n_obstacle)
+        self.multiplier = np.zeros(contact.n_obstacle)
 
     def split(self, z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         return z[: self.n_config], z[self.n_config :]
@@ -95,10 +108,10 @@ def _solver_for(problem: _Augmented, contact, solver, options):
     system's AMG solver carries near-null-space modes of the system's size."""
     from tissuesim.solve.linear import make_linear_solver
 
-    cached = getattr(contact, "_augmented_solver", None)
+    cached = contact.augmented_cache.get("solver")
     if cached is None or cached[0] != problem.pattern.n:
         made, _ = make_linear_solver(options.linear_solver, problem.pattern.n, 3, None)
-        contact._augmented_solver = cached = (problem.pattern.n, made)
+        contact.augmented_cache["solver"] = cached = (problem.pattern.n, made)
     return cached[1]
 
 

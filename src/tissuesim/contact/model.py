@@ -68,6 +68,8 @@ class ContactModel:
     n_dofs: int
     time: float = 0.0
     stats: ContactStats = field(default_factory=ContactStats)
+    # contact/kinematic.py's augmented pattern, elimination and linear solver
+    augmented_cache: dict = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         import ipctk
@@ -146,7 +148,7 @@ class ContactModel:
     def clear_friction(self) -> None:
         self._friction = None
 
-    def _add_friction(self, V: np.ndarray, order: int, select, value, grad, hess):
+    def _add_friction(self, V: np.ndarray, order: int, select, value, grad, hess, project=True):
         if self._friction is None:
             return value, grad, hess
         tangential, V_start, potential = self._friction
@@ -158,7 +160,10 @@ class ContactModel:
             g = select.T @ potential.gradient(tangential, self.mesh, U)
             grad = g if grad is None else grad + g
         if order >= 2:
-            H = potential.hessian(tangential, self.mesh, U, self._ipctk.PSDProjectionMethod.CLAMP)
+            method = self._ipctk.PSDProjectionMethod
+            H = potential.hessian(
+                tangential, self.mesh, U, method.CLAMP if project else method.NONE
+            )
             Hs = (select.T @ sp.csr_matrix(H) @ select).tocsr()
             hess = Hs if hess is None else hess + Hs
         return value, grad, hess
@@ -223,7 +228,7 @@ class ContactModel:
         start = time.perf_counter()
         V = self.vertices(c)
         value, grad, hess = self._barrier_terms(V, order, project, self._select)
-        value, grad, hess = self._add_friction(V, order, self._select, value, grad, hess)
+        value, grad, hess = self._add_friction(V, order, self._select, value, grad, hess, project)
         self.stats.candidates_and_barrier_s += time.perf_counter() - start
         return value, grad, hess
 
@@ -248,7 +253,8 @@ class ContactModel:
         start = time.perf_counter()
         V = self.vertices(c, obstacle=y)
         value, grad, hess = self._barrier_terms(V, order, project, self._select_aug)
-        value, grad, hess = self._add_friction(V, order, self._select_aug, value, grad, hess)
+        sel = self._select_aug
+        value, grad, hess = self._add_friction(V, order, sel, value, grad, hess, project)
         self.stats.candidates_and_barrier_s += time.perf_counter() - start
         return value, grad, hess
 
@@ -290,16 +296,17 @@ class ContactModel:
     def intersecting(self, c: np.ndarray, t: float | None = None) -> bool:
         return bool(self._ipctk.has_intersections(self.mesh, self.vertices(c, t)))
 
-    def min_distance(self, c: np.ndarray) -> float:
-        """The smallest distance (m) between surface elements within dhat (inf if none)."""
+    def proximity(self, c: np.ndarray) -> tuple[float, int]:
+        """(the smallest distance (m) between surface elements within dhat, inf if none; the
+        number of collision pairs within dhat), from one collision build."""
         V = self.vertices(c)
         col = self._collisions(V)
         if len(col) == 0:
-            return float("inf")
-        return float(np.sqrt(col.compute_minimum_distance(self.mesh, V)))
+            return float("inf"), 0
+        return float(np.sqrt(col.compute_minimum_distance(self.mesh, V))), len(col)
 
-    def active_pairs(self, c: np.ndarray) -> int:
-        return len(self._collisions(self.vertices(c)))
+    def min_distance(self, c: np.ndarray) -> float:
+        return self.proximity(c)[0]
 
     def indentation_depths(self) -> dict[str, float]:
         """Per sphere or plane obstacle, how deep (m) it reaches below the bodies' rest

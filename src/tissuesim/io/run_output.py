@@ -64,6 +64,7 @@ class RunOutput:
         self.metadata = dict(metadata or {})
         self.frames: list[tuple[Any, ...]] = []  # what the pictures draw, one per written frame
         self.cut_series = None
+        self.obstacle_series: list = []  # (Obstacle, VTUSeriesWriter), opened with the series
         self.status = "running"
         self.error = None
         self.pictures = "not rendered" if render else "not asked for (render = false)"
@@ -89,9 +90,6 @@ class RunOutput:
 
         for s in self.series:
             s.open(self.directory)
-            for w in s.writers:
-                self.manifest.add(series=w.name)
-        self.obstacle_series = []
         for ob in self.sim.obstacles:  # rest surface + displacement, like the bodies
             writer = VTUSeriesWriter(
                 self.directory,
@@ -101,13 +99,11 @@ class RunOutput:
                 n_points=len(ob.rest),
             )
             self.obstacle_series.append((ob, writer))
-            self.manifest.add(series=ob.name)
         tissue = self.sim.tissue
         if tissue is not None and tissue.cuts:
             self.cut_series = VTUSeriesWriter(
                 self.directory, None, "cut", cells=("triangle", np.zeros((1, 3), int)), n_points=3
             )
-            self.manifest.add(series="cut")
         else:
             remove_series(self.directory, "cut")
         for stale in ("final.png", "run.gif", "forces.png", "forces.csv"):
@@ -123,7 +119,7 @@ class RunOutput:
         obstacles = {}
         for ob in sim.obstacles:
             obstacles[ob.name] = (ob.positions(t), ob.triangles)
-        for ob, writer in getattr(self, "obstacle_series", []):
+        for ob, writer in self.obstacle_series:
             writer.write(t, ob.rest, point_data={"displacement": obstacles[ob.name][0] - ob.rest})
         if obstacles:
             data[OBSTACLES] = obstacles  # drawn by render/scene.py
@@ -132,12 +128,25 @@ class RunOutput:
             self.cut_series.write(
                 t, cut.reshape(-1, 3), cells=("triangle", np.arange(3 * len(cut)).reshape(-1, 3))
             )
+        self._record_series()
         suffix = ""
         graspers = [g.name for g in sim.graspers]
         if graspers and sim.history:
             force = np.linalg.norm(sim.history[-1].extra["forces"][graspers[0]])
             suffix = f"   {graspers[0]} force {force:.3g} N"
         self.frames.append((t, data, cut.copy(), suffix))
+
+    def _record_series(self) -> None:
+        """List in the manifest every series that has written its index (a series opened but
+        not yet written, e.g. the cut before the blade starts, is not listed)."""
+        if self.directory is None:
+            return
+        writers = [w for s in self.series for w in s.writers]
+        writers += [w for _, w in self.obstacle_series]
+        writers += [self.cut_series] if self.cut_series is not None else []
+        for w in writers:
+            if w.pvd_path.is_file():
+                self.manifest.add(series=w.name)
 
     # -- summary ------------------------------------------------------------------------------
     def _summary(self) -> dict:
