@@ -1,16 +1,21 @@
 """Hertz contact against tissuesim's barrier contact: a rigid sphere (R = 10 mm) pressed
-quasistatically into a soft block (E = 10 kPa, nu = 0.3), a quarter of it (symmetry planes
-x = 0 and y = 0) 3R wide and 3R deep, clamped at its base, the mesh graded towards the contact
-point; the probe moves 100 um per step to d = 500 um = R / 20 (contact radius a = 0.22 R, so
-the probe's facets, 0.3 mm at refinement 5, are small against it).
+quasistatically into a soft block (E = 10 kPa, nu = 0.3).
 
-Hertz for a rigid sphere on a half-space: F = 4/3 E* sqrt(R) d^(3/2), E* = E / (1 - nu^2);
-the quarter carries F / 4. d is the probe's depth below the rest surface minus the barrier gap
-(the surface stays min_distance away from the sphere). Prints and writes the table of F / F_Hertz
-per depth for each mesh (``results/hertz.md``).
+The half-space is a quarter block (symmetry planes x = 0 and y = 0) L = 150 mm wide and deep
+(L / a > 100 at the largest depth: a finite block is stiffer than the half-space by about
+0.9 a / L when clamped at its base), clamped at its base. Its tetrahedra are graded by gmsh
+(an optional tool for this benchmark, ``pip install gmsh``): size h0 within 1.2 a_max of the
+contact point, growing linearly at ``--growth`` per metre of distance to L / 8. The probe is a
+30-degree cap of an icosphere of refinement 7 (facets R / 110). The probe moves
+``--step`` per step (quasistatic, moving obstacle).
 
-    python3 benchmarks/hertz.py                     # divisions 8 12 16
-    python3 benchmarks/hertz.py --divisions 8 --steps 2
+Hertz for a rigid sphere on a half-space: F = 4/3 E* sqrt(R) d^(3/2), E* = E / (1 - nu^2); the
+quarter carries F / 4. d is the probe's depth below the rest surface minus the barrier gap (the
+surface stays ``min_distance`` away from the sphere). Prints and writes the table of F / F_Hertz
+per depth for each h0 (``results/hertz.md``).
+
+    python3 benchmarks/hertz.py                          # h0 = 0.2, 0.14, 0.1 mm
+    python3 benchmarks/hertz.py --h0 0.2 --steps 2 --material linear
 """
 
 from __future__ import annotations
@@ -22,6 +27,8 @@ for _v in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "NUMBA_
 
 import argparse  # noqa: E402
 import json  # noqa: E402
+import sys  # noqa: E402
+import tempfile  # noqa: E402
 import time  # noqa: E402
 from pathlib import Path  # noqa: E402
 
@@ -30,22 +37,27 @@ import numpy as np  # noqa: E402
 import tissuesim as ts  # noqa: E402
 from tissuesim.contact.obstacles import sphere  # noqa: E402
 
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from hertz_mesh import L, graded_block  # noqa: E402
+
 R, E, NU = 0.01, 1e4, 0.3
-DHAT = 1e-6
-STEP = 1e-4  # m of probe travel per step
+DHAT = 1e-7
 
 
-def run(n: int, steps: int, grading: float) -> dict:
-    size = 3 * R
-    mesh = ts.box((0, 0, -size), (size, size, 0), (n, n, n), grading=(grading, grading, -grading))
-    material = ts.make_material("neo_hookean", youngs_modulus=E, poisson_ratio=NU)
-    sim = ts.Simulation(mesh, material, integrator="quasistatic", time_step=1.0)
-    sim.fix("body", mesh.point_sets["zmin"], name="base")
-    sim.add_dirichlet(mesh.point_sets["xmin"], components=[0], name="symmetry_x")
-    sim.add_dirichlet(mesh.point_sets["ymin"], components=[1], name="symmetry_y")
-    probe = sphere((0, 0, R + DHAT / 2), R, refinement=5)
-    sim.add_obstacle("probe", probe, translation=lambda t: (0.0, 0.0, -STEP * t))
-    sim.set_contact(dhat=DHAT)
+def run(h0: float, steps: int, step: float, growth: float, r_fine: float, material: str) -> dict:
+    with tempfile.TemporaryDirectory() as tmp:
+        mesh = ts.read_mesh(graded_block(Path(tmp) / "block.msh", h0, r_fine, growth))
+    p = mesh.points
+    tol = 1e-9
+    law = ts.make_material(material, youngs_modulus=E, poisson_ratio=NU)
+    sim = ts.Simulation(mesh, law, integrator="quasistatic", time_step=1.0)
+    sim.fix("body", np.unique(mesh.facet_sets["base"]), name="base")
+    sim.add_dirichlet(np.flatnonzero(p[:, 0] < tol), components=[0], name="symmetry_x")
+    sim.add_dirichlet(np.flatnonzero(p[:, 1] < tol), components=[1], name="symmetry_y")
+    probe = sphere((0, 0, R + DHAT / 2), R, refinement=7, cap_angle=30)
+    sim.add_obstacle("probe", probe, translation=lambda t: (0.0, 0.0, -step * t))
+    # only the top face touches: the probe passes the symmetry planes' faces (x = 0, y = 0)
+    sim.set_contact(dhat=DHAT, surfaces={"body": "top"})
     e_star = E / (1 - NU**2)
     rows = []
     start = time.perf_counter()
@@ -58,6 +70,7 @@ def run(n: int, steps: int, grading: float) -> dict:
         rows.append(
             {
                 "depth_m": d,
+                "gap_m": c["min_distance"],
                 "force_N": force,
                 "hertz_N": hertz,
                 "ratio": force / hertz,
@@ -65,10 +78,11 @@ def run(n: int, steps: int, grading: float) -> dict:
                 "substeps": record.substeps,
             }
         )
+        print(json.dumps(rows[-1]), flush=True)
     return {
-        "divisions": n,
-        "grading": grading,
+        "h0_m": h0,
         "tetrahedra": mesh.n_cells,
+        "vertices": mesh.n_points,
         "wall_s": time.perf_counter() - start,
         "rows": rows,
     }
@@ -76,32 +90,43 @@ def run(n: int, steps: int, grading: float) -> dict:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--divisions", type=int, nargs="*", default=[8, 12, 16])
-    parser.add_argument("--steps", type=int, default=5)
-    parser.add_argument("--grading", type=float, default=3.0)
+    parser.add_argument("--h0", type=float, nargs="*", default=[0.2e-3, 0.14e-3, 0.1e-3])
+    parser.add_argument("--steps", type=int, default=4)
+    parser.add_argument("--step", type=float, default=5e-5, help="probe travel per step (m)")
+    parser.add_argument("--growth", type=float, default=0.25)
+    parser.add_argument("--r-fine", type=float, default=1.7e-3, help="radius of the h0 region (m)")
+    parser.add_argument("--material", default="neo_hookean")
     args = parser.parse_args()
     results = []
-    for n in args.divisions:
-        r = run(n, args.steps, args.grading)
+    for h0 in args.h0:
+        r = run(h0, args.steps, args.step, args.growth, args.r_fine, args.material)
         results.append(r)
-        print(json.dumps(r))
+        print(json.dumps({k: v for k, v in r.items() if k != "rows"}), flush=True)
     depths = [row["depth_m"] for row in results[0]["rows"]]
     lines = [
         "# Hertz indentation: F / F_Hertz per depth and mesh",
         "",
-        f"`python3 benchmarks/hertz.py --divisions {' '.join(map(str, args.divisions))} "
-        f"--steps {args.steps} --grading {args.grading}`; R = {R} m, E = {E} Pa, nu = {NU}, "
-        f"quarter block 3R x 3R x 3R clamped at its base, dhat = {DHAT} m, probe sphere of "
-        "20,480 triangles.",
+        f"`python3 benchmarks/hertz.py --h0 {' '.join(f'{h:g}' for h in args.h0)} "
+        f"--steps {args.steps} --step {args.step:g} --growth {args.growth} "
+        f"--material {args.material}`; R = {R} m, E = {E} Pa, nu = {NU}, quarter block "
+        f"{L} m wide and deep clamped at its base, graded by gmsh, dhat = {DHAT} m, probe a "
+        "30-degree cap of an icosphere of refinement 7.",
         "",
-        "| divisions (tets) | " + " | ".join(f"d = {d * 1e6:.0f} um" for d in depths) + " | s |",
+        "| h0 (tets) | "
+        + " | ".join(
+            f"d = {d * 1e6:.0f} um (a / h0 = {np.sqrt(R * d) / results[0]['h0_m']:.1f})"
+            for d in depths
+        )
+        + " | s |",
         "| --- | " + " | ".join("---" for _ in depths) + " | --- |",
     ]
     for r in results:
-        ratios = " | ".join(f"{row['ratio']:.3f}" for row in r["rows"])
-        lines.append(f"| {r['divisions']} ({r['tetrahedra']}) | {ratios} | {r['wall_s']:.0f} |")
+        ratios = " | ".join(f"{row['ratio']:.4f}" for row in r["rows"])
+        lines.append(
+            f"| {r['h0_m'] * 1e3:g} mm ({r['tetrahedra']}) | {ratios} | {r['wall_s']:.0f} |"
+        )
     lines.append("")
-    out = Path(__file__).resolve().parent / "results" / "hertz.md"
+    out = Path(__file__).resolve().parent / "results" / f"hertz_{args.material}.md"
     out.write_text("\n".join(lines))
     print(f"wrote {out}")
 

@@ -32,13 +32,20 @@ class SetupCalls:
         friction: float = 0.0,
         eps_v: float = 1e-3,
         friction_iterations: int = 2,
+        surfaces: dict | None = None,
+        pairs: Sequence | None = None,
     ) -> None:
         """Barrier contact (IPC) between every FEM body's surface, itself and the obstacles
         (``contact/model.py``): ``dhat`` the activation distance (m; default 1e-3 of the
         scene's size), ``stiffness`` the barrier's kappa (Pa; default the largest Young's
         modulus); ``friction`` the Coulomb coefficient mu (IPC's smoothed friction, static
         below the sliding speed ``eps_v`` m/s, lagged over ``friction_iterations`` Newton
-        solves per step). Needs ``pip install "tissuesim[contact]"`` (ipctk)."""
+        solves per step). ``surfaces`` maps a body name to its contact surface, a facet set
+        name (e.g. "zmax") or (k, 3) vertex indices (default: its whole boundary; leave out
+        symmetry planes and faces that cannot touch). ``pairs``: ``ContactPair(a, b,
+        enabled=, friction=)`` or ``{"bodies": [a, b], "enabled": ..., "friction": ...}``
+        per pair of bodies / a body and an obstacle / a body with itself (a == b). Needs
+        ``pip install "tissuesim[contact]"`` (ipctk)."""
         import importlib.util
 
         from tissuesim.contact.model import ContactSettings
@@ -57,16 +64,22 @@ class SetupCalls:
         friction = real(friction, "contact friction", low=0.0)
         eps_v = real(eps_v, "contact eps_v", low=0.0, low_open=True, unit="m/s")
         iterations = integer(friction_iterations, "contact friction_iterations", low=1, high=20)
-        settings = ContactSettings(dhat, stiffness, friction, eps_v, iterations)
+        settings = ContactSettings(
+            dhat, stiffness, friction, eps_v, iterations, _surfaces(surfaces), _pairs(pairs)
+        )
         self.contact = settings if enabled else None
         self._changed()
 
-    def add_obstacle(self, name: str, surface, *, translation=None, rotation=None):
+    def add_obstacle(
+        self, name: str, surface, *, translation=None, rotation=None, friction=None
+    ) -> str:
         """A kinematic rigid obstacle (``contact/obstacles.py``): a triangle ``surface``
         (``contact.obstacles.plane`` / ``sphere``, ``frames.sampling.box_surface``,
         ``read_surface``) moved by ``translation(t)`` (m) and ``rotation(t)`` (a rotation
-        vector about its centroid, rad). Its force on the bodies is reported as ``name``.
-        Switches contact on (``set_contact``) if it is off."""
+        vector about its centroid, rad), with its own Coulomb ``friction`` against every body
+        (default the scene's). Its force on the bodies is reported as ``name`` (and its
+        normal and friction parts as ``name.normal``, ``name.friction``). Switches contact
+        on (``set_contact``) if it is off."""
         from tissuesim.contact.obstacles import Obstacle
         from tissuesim.frames.sampling import Surface
 
@@ -78,11 +91,16 @@ class SetupCalls:
             if motion is not None and not callable(motion):
                 raise InputError(f"add_obstacle: {what} must be a function of t or None")
         # a file stem clashing with no body, obstacle or internal series; then its force name
+        if friction is not None:
+            from tissuesim.validate import real
+
+            friction = real(friction, f"obstacle {name!r} friction", low=0.0)
         name = self._claim_force_name(self._new_name(name, "obstacle"))
-        self.obstacles.append(Obstacle(name, surface, translation, rotation))
+        self.obstacles.append(Obstacle(name, surface, translation, rotation, friction))
         if getattr(self, "contact", None) is None:
             self.set_contact()
         self._changed()
+        return name
 
     def attach(
         self,
@@ -251,3 +269,41 @@ def _median_boundary_edge(mesh: Mesh) -> float:
 
     P = mesh.points[boundary_facets(mesh.cells)]
     return float(np.median(np.linalg.norm(P - np.roll(P, 1, axis=1), axis=2)))
+
+
+def _surfaces(surfaces) -> dict:
+    if surfaces is None:
+        return {}
+    if not isinstance(surfaces, dict) or not all(isinstance(k, str) for k in surfaces):
+        raise InputError(
+            "contact surfaces: give a table of body name -> facet set name (or vertex "
+            f"triangles), e.g. {{'block': 'zmax'}}, not {short(surfaces)}"
+        )
+    return dict(surfaces)
+
+
+def _pairs(pairs) -> tuple:
+    from tissuesim.contact.pairs import ContactPair
+
+    if pairs is None:
+        return ()
+    if isinstance(pairs, (str, dict)) or not isinstance(pairs, Sequence):
+        raise InputError(f"contact pairs: give a list of pairs, not {short(pairs)}")
+    out = []
+    for item in pairs:
+        if isinstance(item, ContactPair):
+            out.append(item)
+            continue
+        if not isinstance(item, dict) or set(item) - {"bodies", "enabled", "friction"}:
+            raise InputError(
+                "contact pairs: each is ContactPair(a, b, ...) or a table with keys bodies, "
+                f"enabled, friction, not {short(item)}"
+            )
+        names = item.get("bodies")
+        if not isinstance(names, (list, tuple)) or len(names) != 2:
+            raise InputError(
+                f"contact pairs: bodies must name two bodies (or a body twice, for its self "
+                f"contact, or a body and an obstacle), not {short(names)}"
+            )
+        out.append(ContactPair(names[0], names[1], item.get("enabled", True), item.get("friction")))
+    return tuple(out)

@@ -267,13 +267,19 @@ class FemBody:
         return energies
 
     def forces(self, x: np.ndarray, gradient: np.ndarray | None, t: float) -> dict:
-        """Force (N, 3-vector) every prescribed set and grasper applies to the body."""
+        """Force (N, 3-vector) every prescribed set and grasper applies to the body: a set's
+        reaction sums the gradient over the DOFs it prescribes (only its ``components``); a DOF
+        prescribed by several sets counts for the last of them, as its value does."""
         d = self.dim
         out = {}
-        for name, c in self.conditions:
+        owner = np.full((self.mesh.n_points, d), -1)
+        for k, (_, c) in enumerate(self.conditions):
+            owner[c.vertices, slice(None) if c.components is None else list(c.components)] = k
+        for k, (name, c) in enumerate(self.conditions):
             f = np.zeros(3)
             if gradient is not None:
-                f[:d] = gradient.reshape(-1, d)[c.vertices].sum(axis=0)
+                g = gradient.reshape(-1, d)[c.vertices]
+                f[:d] = np.where(owner[c.vertices] == k, g, 0.0).sum(axis=0)
             out[name] = f.tolist()
         for g, springs in self.spring_graspers:
             f = np.zeros(3)

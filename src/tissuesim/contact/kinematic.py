@@ -138,6 +138,7 @@ def solve_with_moving_obstacles(system, c0, t0, t1, energies, solver, options, y
             length_scale=system.length_scale,
             retract=problem.retract,
             max_step=problem.max_step,
+            reference_rows=slice(0, system.n_dofs),
         )
         results.append(record)
         if not record.converged:

@@ -40,6 +40,10 @@ class ContactSettings:
     friction: float = 0.0  # Coulomb coefficient mu (0: frictionless)
     eps_v: float = 1e-3  # m/s: below this sliding speed friction is smoothed (static regime)
     friction_iterations: int = 2  # Newton solves per step, the friction lagged between them
+    # body name -> its contact surface: a facet set name or (k, 3) vertex indices (default:
+    # the whole boundary)
+    surfaces: dict = field(default_factory=dict)
+    pairs: tuple = ()  # contact/pairs.py ContactPair: a pair switched off or with its own mu
 
 
 @dataclass
@@ -78,12 +82,18 @@ class ContactModel:
         dims = {m.mesh.dim for _, m, _, _ in self.bodies}
         if dims != {3}:
             raise InputError("contact needs 3D FEM bodies (tetrahedra); 2D contact is not built")
-        rest, faces, dofs, config, self.slices = [], [], [], [], {}
+        from tissuesim.contact.pairs import PairTable, contact_facets
+
+        unknown = set(self.settings.surfaces) - {name for name, *_ in self.bodies}
+        if unknown:
+            raise InputError(
+                f"contact surfaces: no FEM body {sorted(unknown)[0]!r} (bodies: "
+                f"{', '.join(name for name, *_ in self.bodies)})"
+            )
+        rest, faces, dofs, config, groups, self.slices = [], [], [], [], [], {}
         start = 0
         for name, model, config_offset, offset in self.bodies:
-            from tissuesim.mesh.boundary import boundary_facets
-
-            tri = boundary_facets(model.mesh.cells)
+            tri = contact_facets(name, model.mesh, self.settings.surfaces.get(name))
             surface = np.unique(tri)
             local = np.full(model.mesh.n_points, -1)
             local[surface] = np.arange(surface.size)
@@ -91,6 +101,7 @@ class ContactModel:
             faces.append(local[tri] + start)
             dofs.append(offset + 3 * surface[:, None] + np.arange(3))
             config.append(config_offset + 3 * surface[:, None] + np.arange(3))
+            groups.append(np.full(surface.size, len(groups)))
             self.slices[name] = (slice(start, start + surface.size), surface)
             start += surface.size
         self.n_deformable = start
@@ -99,12 +110,24 @@ class ContactModel:
             faces.append(ob.triangles + start)
             dofs.append(np.full((len(ob.rest), 3), -1))
             config.append(np.full((len(ob.rest), 3), -1))
+            groups.append(np.full(len(ob.rest), len(groups)))
             self.slices[ob.name] = (slice(start, start + len(ob.rest)), None)
             start += len(ob.rest)
+        self.group = np.concatenate(groups)  # collision-mesh vertex -> body / obstacle index
+        self.table = PairTable(
+            [name for name, *_ in self.bodies],
+            self.obstacles,
+            self.settings.friction,
+            self.settings.pairs,
+        )
         self.rest = np.vstack(rest)
         F = np.ascontiguousarray(np.vstack(faces), dtype=np.int32)
         E = ipctk.edges(F)
         self.mesh = ipctk.CollisionMesh(np.asfortranarray(self.rest), E, F)
+        if self.table.filtered:
+            # pairs of groups that do not collide are dropped in the broad phase (a compiled
+            # filter: a Python callable deadlocks ipctk's threads and is slow)
+            self.mesh.can_collide = self.table.collision_filter(ipctk, self.group, start)
         self.dofs = np.vstack(dofs).ravel()  # system tangent DOF of each mesh coordinate
         self.config_dofs = np.vstack(config).ravel()  # and its place in the configuration
         mapped = self.dofs >= 0
@@ -127,26 +150,47 @@ class ContactModel:
         self.kappa = self.settings.stiffness if self.settings.stiffness is not None else default
         self.barrier = ipctk.BarrierPotential(self.dhat, self.kappa, True)
         self._friction = None  # (TangentialCollisions, vertices at the step's start), lagged
+        self._reported_friction = None  # the last step's, for obstacle_forces
         self.broad_phase = ipctk.LBVH()
         self.ccd = ipctk.AdditiveCCD()
 
     # -- friction (IPC's smoothed, lagged Coulomb friction) ----------------------------------------
+    @property
+    def has_friction(self) -> bool:
+        return self.table.has_friction
+
     def lag_friction(self, V_start: np.ndarray, V_lag: np.ndarray, h: float) -> int:
         """Fix the friction's normal forces and tangent bases at V_lag (the step's start, then
         each Newton solution) for displacements from V_start; returns the active pairs."""
-        if self.settings.friction <= 0.0:
+        if not self.has_friction:
             self._friction = None
             return 0
         ipctk = self._ipctk
         col = self._collisions(V_lag)
         tangential = ipctk.TangentialCollisions()
-        tangential.build(self.mesh, V_lag, col, self.barrier, self.settings.friction)
+        mu = self.table.uniform_mu
+        tangential.build(self.mesh, V_lag, col, self.barrier, 0.0 if mu is None else mu)
+        if mu is None:
+            self._pair_friction(tangential)
         potential = ipctk.FrictionPotential(self.settings.eps_v * h)
         self._friction = (tangential, np.asfortranarray(V_start), potential)
         return len(tangential)
 
+    def _pair_friction(self, tangential) -> None:
+        """Each collision's mu from its pair of groups (the first and last vertex of a stencil
+        lie on its two sides)."""
+        E, F = self.mesh.edges, self.mesh.faces
+        group, mu = self.group, self.table.mu
+        for k in range(len(tangential)):
+            c = tangential[k]
+            ids = [i for i in c.vertex_ids(E, F) if i >= 0]
+            value = float(mu[group[ids[0]], group[ids[-1]]])
+            c.mu_s = value
+            c.mu_k = value
+
     def clear_friction(self) -> None:
-        self._friction = None
+        """End of a step: the lagged friction is dropped, kept only to report its forces."""
+        self._reported_friction, self._friction = self._friction, None
 
     def _add_friction(self, V: np.ndarray, order: int, select, value, grad, hess, project=True):
         if self._friction is None:
@@ -179,6 +223,11 @@ class ContactModel:
             "obstacle_vertices": int(len(self.rest) - self.n_deformable),
             "obstacles": [ob.name for ob in self.obstacles],
             "friction": self.settings.friction,
+            "surfaces": {
+                k: (v if isinstance(v, str) else f"{len(v)} triangles")
+                for k, v in self.settings.surfaces.items()
+            },
+            "pairs": self.table.describe(),
             "eps_v_m_per_s": self.settings.eps_v,
             "friction_iterations": self.settings.friction_iterations,
         }
@@ -320,18 +369,32 @@ class ContactModel:
         return out
 
     def obstacle_forces(self, c: np.ndarray) -> dict[str, np.ndarray]:
-        """Force (N, 3-vector) each obstacle exerts on the bodies: the barrier's gradient with
-        respect to the obstacle's vertices, summed (the bodies' side is its negative)."""
+        """Force (N, 3-vector) each obstacle exerts on the bodies, as ``name``, and with
+        friction its parts ``name.normal`` (the barrier's gradient with respect to the
+        obstacle's vertices, summed: the bodies' side is its negative) and ``name.friction``
+        (the last step's lagged friction potential's, likewise)."""
         V = self.vertices(c)
         col = self._collisions(V)
-        out = {}
-        grad = (
+        normal = (
             self.barrier.gradient(col, self.mesh, V).reshape(-1, 3)
             if len(col)
             else np.zeros_like(V)
         )
+        friction = None
+        state = self._friction or self._reported_friction
+        if self.has_friction and state is not None and len(state[0]):
+            tangential, V_start, potential = state
+            U = np.asfortranarray(V - V_start)
+            friction = potential.gradient(tangential, self.mesh, U).reshape(-1, 3)
+        out = {}
         for ob in self.obstacles:
-            out[ob.name] = grad[self.slices[ob.name][0]].sum(axis=0)
+            rows = self.slices[ob.name][0]
+            n = normal[rows].sum(axis=0)
+            f = np.zeros(3) if friction is None else friction[rows].sum(axis=0)
+            out[ob.name] = n + f
+            if self.has_friction:
+                out[f"{ob.name}.normal"] = n
+                out[f"{ob.name}.friction"] = f
         return out
 
 

@@ -53,12 +53,40 @@ def plane(point: Sequence[float], normal: Sequence[float], size: float) -> Surfa
     )
 
 
-def sphere(center: Sequence[float], radius: float, refinement: int = 3) -> Surface:
-    """An icosphere of ``radius`` (m): 20 * 4^refinement triangles, vertices on the sphere."""
+def sphere(
+    center: Sequence[float],
+    radius: float,
+    refinement: int = 3,
+    cap_angle: float | None = None,
+    cap_axis: Sequence[float] = (0.0, 0.0, -1.0),
+) -> Surface:
+    """An icosphere of ``radius`` (m): 20 * 4^refinement triangles, vertices on the sphere.
+
+    ``cap_angle`` (degrees, 0 < angle <= 180): keep only the triangles within that angle of
+    ``cap_axis`` seen from the centre, an open cap: a probe needs fine facets only where it
+    touches (refinement 7 has facets of R / 110, and a 30-degree cap keeps 7 % of them)."""
     r = real(radius, "sphere: radius", low=0.0, low_open=True, unit="m")
     s = ellipsoid_surface(center, (r, r, r), refinement)
     c = vector(center, "sphere: center", 3, unit="m")
-    return ShapeSurface(s.points, s.triangles, s.source, "sphere", {"center": c, "radius": r})
+    points, triangles, source = s.points, s.triangles, s.source
+    if cap_angle is not None:
+        angle = real(cap_angle, "sphere: cap_angle", low=0.0, high=180.0, low_open=True)
+        axis = vector(cap_axis, "sphere: cap_axis", 3)
+        if not np.linalg.norm(axis) > 0:
+            raise InputError("sphere: cap_axis must not be zero, e.g. [0, 0, -1]")
+        axis = axis / np.linalg.norm(axis)
+        centroids = points[triangles].mean(axis=1) - c
+        cosines = centroids @ axis / np.linalg.norm(centroids, axis=1)
+        keep = triangles[cosines >= np.cos(np.radians(angle))]
+        if len(keep) == 0:
+            raise InputError(
+                f"sphere: cap_angle {angle} degrees keeps no triangle at refinement "
+                f"{refinement}; give a larger angle or a higher refinement"
+            )
+        used, local = np.unique(keep, return_inverse=True)
+        points, triangles = points[used], local.reshape(-1, 3)
+        source += f" cap_angle {angle} cap_axis {axis.tolist()}"
+    return ShapeSurface(points, triangles, source, "sphere", {"center": c, "radius": r})
 
 
 def _rotation(r: np.ndarray) -> np.ndarray:
@@ -78,6 +106,7 @@ class Obstacle:
     surface: Surface
     translation: Motion | None = None
     rotation: Motion | None = None
+    friction: float | None = None  # Coulomb mu against every body (None: the scene's)
 
     @property
     def rest(self) -> np.ndarray:

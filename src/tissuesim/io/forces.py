@@ -1,6 +1,7 @@
 """Forces per step as a table: ``forces.csv`` (time, then x, y, z columns per named force, N) and
 ``forces.png`` (the force curves: one panel per force, its components and magnitude against
-time, units on both axes)."""
+time, units on both axes; for an obstacle with an indentation depth, a sphere or a plane, also
+its force's magnitude against that depth)."""
 
 from __future__ import annotations
 
@@ -40,6 +41,18 @@ def write_forces_csv(path: str | os.PathLike[str], history: Sequence) -> Path:
     return write_text_atomic(Path(path), "\n".join(rows) + "\n")
 
 
+def depth_table(history: Sequence, names: list[str]) -> dict[str, np.ndarray]:
+    """Per force name that is also an obstacle with an indentation depth: depths (k,) in m
+    (NaN where a step has none), from extra["contact"]["indentation_depth"]."""
+    out: dict[str, np.ndarray] = {}
+    for i, r in enumerate(history):
+        depths = (r.extra.get("contact") or {}).get("indentation_depth") or {}
+        for name, d in depths.items():
+            if name in names:
+                out.setdefault(name, np.full(len(history), np.nan))[i] = d
+    return out
+
+
 def render_forces_png(path: str | os.PathLike[str], history: Sequence) -> Path | None:
     """The force curves, or None when there is no force to draw."""
     names, times, table = force_table(history)
@@ -47,9 +60,21 @@ def render_forces_png(path: str | os.PathLike[str], history: Sequence) -> Path |
         return None
     from matplotlib.figure import Figure
 
+    depths = depth_table(history, names)
     n = len(names)
-    fig = Figure(figsize=(7.0, 2.2 * n + 0.6), layout="constrained")
-    axes = fig.subplots(n, 1, sharex=True, squeeze=False)[:, 0]
+    fig = Figure(figsize=(7.0, 2.2 * (n + len(depths)) + 0.6), layout="constrained")
+    grid = fig.subplots(n + len(depths), 1, squeeze=False)[:, 0]
+    axes = grid[:n]
+    for ax in axes[1:]:
+        ax.sharex(axes[0])
+    for ax, name in zip(grid[n:], depths, strict=True):
+        d = depths[name]
+        f = np.linalg.norm(table[:, names.index(name)], axis=1)
+        ax.plot(d * 1e3, f, "o-", color="k", lw=1.4, ms=3, label="|F|")
+        ax.set_xlabel("indentation depth (mm)")
+        ax.set_ylabel("force (N)")
+        ax.set_title(f"{name}: force against indentation depth", loc="left", fontsize=10)
+        ax.grid(alpha=0.3)
     for ax, name, forces in zip(axes, names, np.swapaxes(table, 0, 1), strict=True):
         for k, (label, colour) in enumerate(
             zip("xyz", ("#1f77b4", "#2ca02c", "#d62728"), strict=True)
@@ -60,7 +85,8 @@ def render_forces_png(path: str | os.PathLike[str], history: Sequence) -> Path |
         ax.set_title(name, loc="left", fontsize=10)
         ax.grid(alpha=0.3)
         ax.legend(loc="best", fontsize=8, ncols=4)
-    axes[-1].set_xlabel("time (s)")
+    for ax in axes:
+        ax.set_xlabel("time (s)")
     path = Path(path)
     with atomic_output(path) as tmp:
         fig.savefig(tmp, format="png", dpi=110)

@@ -153,7 +153,7 @@ class RunOutput:
         from tissuesim import __version__
 
         history = self.sim.history
-        steps = [asdict(r) for r in history]
+        steps = [_promote_contact(asdict(r)) for r in history]
         iters = [r.newton_iterations for r in history]
         return {
             "tissuesim_version": __version__,
@@ -282,3 +282,15 @@ class RunOutput:
             if (self.directory / name).is_file():
                 self.manifest.add(file=name)
         self._write_summary()
+
+
+def _promote_contact(step: dict) -> dict:
+    """A contact step's headline figures at the step's top level (summary.json "steps"):
+    min_distance (m), active_pairs and indentation_depth (obstacle -> m); the time split stays
+    under extra.contact."""
+    contact = step.get("extra", {}).get("contact")
+    if contact:
+        for key in ("min_distance", "active_pairs", "indentation_depth"):
+            if key in contact:
+                step[key] = contact[key]
+    return step

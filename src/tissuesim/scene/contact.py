@@ -7,12 +7,18 @@
     dhat = 0.001          # m, activation distance (default 1e-3 of the scene's size)
     stiffness = 1e4       # Pa, barrier stiffness (default the largest Young's modulus)
     friction = 0.3        # Coulomb mu (default 0); eps_v (m/s), friction_iterations
+    surfaces = { block = "zmax" }   # a body's contact surface: a facet set (default: boundary)
+
+    [[contact.pairs]]     # per pair of bodies (a body twice: its self contact; or an obstacle)
+    bodies = ["liver", "gallbladder"]
+    friction = 0.1        # and/or enabled = false
 
     [[obstacles]]
     name = "probe"
-    sphere = { center = [0, 0, 0.11], radius = 0.1, refinement = 3 }
+    sphere = { center = [0, 0, 0.11], radius = 0.1, refinement = 3 }  # cap_angle, cap_axis
     translation = ["0", "0", "-0.001 * t"]     # m, expressions of t
     rotation = ["0", "0", "0"]                 # rad, rotation vector about the centroid
+    friction = 0.2                             # its own mu against every body (optional)
 """
 
 from __future__ import annotations
@@ -24,14 +30,23 @@ from tissuesim.validate import short
 
 __all__ = ["add_contact_tables", "CONTACT_KEYS", "OBSTACLE_KEYS", "SHAPES"]
 
-CONTACT_KEYS = {"enabled", "dhat", "stiffness", "friction", "eps_v", "friction_iterations"}
+CONTACT_KEYS = {
+    "enabled",
+    "dhat",
+    "stiffness",
+    "friction",
+    "eps_v",
+    "friction_iterations",
+    "surfaces",
+    "pairs",
+}
 SHAPES = {
     "plane": {"point", "normal", "size"},
-    "sphere": {"center", "radius", "refinement"},
+    "sphere": {"center", "radius", "refinement", "cap_angle", "cap_axis"},
     "box": {"lower", "upper", "divisions"},
     "file": None,
 }
-OBSTACLE_KEYS = {"name", "translation", "rotation", *SHAPES}
+OBSTACLE_KEYS = {"name", "translation", "rotation", "friction", *SHAPES}
 
 
 def add_contact_tables(sim, data: dict, base_dir: Path, source: str) -> None:
@@ -51,7 +66,9 @@ def add_contact_tables(sim, data: dict, base_dir: Path, source: str) -> None:
         return
     with _context(where):
         options = {
-            k: contact[k] for k in ("friction", "eps_v", "friction_iterations") if k in contact
+            k: contact[k]
+            for k in ("friction", "eps_v", "friction_iterations", "surfaces", "pairs")
+            if k in contact
         }
         sim.set_contact(dhat=contact.get("dhat"), stiffness=contact.get("stiffness"), **options)
     for i, item in enumerate(obstacles, start=1):
@@ -92,5 +109,7 @@ def _obstacle(sim, item: dict, base_dir: Path, where: str) -> None:
     for key in ("translation", "rotation"):
         if key in item:
             motions[key] = of_time(item[key], 3, f"{where} {key}", f"the obstacle's {key}")
+    if "friction" in item:
+        motions["friction"] = item["friction"]
     with _context(where):
         sim.add_obstacle(name, surface, **motions)

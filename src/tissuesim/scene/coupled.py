@@ -50,6 +50,7 @@ from typing import Any
 import numpy as np
 
 from tissuesim.errors import SceneError
+from tissuesim.scene.contact import CONTACT_KEYS, OBSTACLE_KEYS
 from tissuesim.scene.frames import _is_number, _required, _vector3
 from tissuesim.scene.loader import (
     RUN_KEYS,
@@ -100,8 +101,8 @@ COUPLED_SCENE_KEYS: dict[str, Any] = {
     "cuts": set(CUT_KEYS),
     "tearing": {"threshold"},
     "run": set(RUN_KEYS),
-    "contact": {"enabled", "dhat", "stiffness", "friction", "eps_v", "friction_iterations"},
-    "obstacles": {"name", "translation", "rotation", "plane", "sphere", "box", "file"},
+    "contact": set(CONTACT_KEYS),
+    "obstacles": set(OBSTACLE_KEYS),
 }
 ARRAYS = ("organs", "bodies", "graspers", "attachments", "cuts", "obstacles")
 MESH_GENERATORS = {

@@ -43,6 +43,7 @@ import numpy as np
 
 from tissuesim.errors import SceneError, TissueSimError
 from tissuesim.render.scene import FIELDS
+from tissuesim.scene.contact import CONTACT_KEYS, OBSTACLE_KEYS
 from tissuesim.scene.expressions import compile_vector
 from tissuesim.validate import short
 
@@ -86,8 +87,8 @@ SCENE_KEYS = {
     "initial": {"velocity"},
     "nodal_forces": {"vertices", "force"},
     "run": set(RUN_KEYS),
-    "contact": {"enabled", "dhat", "stiffness", "friction", "eps_v", "friction_iterations"},
-    "obstacles": {"name", "translation", "rotation", "plane", "sphere", "box", "file"},
+    "contact": set(CONTACT_KEYS),
+    "obstacles": set(OBSTACLE_KEYS),
 }
 #: what pictures can be coloured by
 FIELD_CHOICES = tuple(FIELDS)

@@ -80,7 +80,7 @@ def implicit_step(
         max_step = contact.max_step
     c0 = choose_start(evaluate, candidates, lambda c: system.apply_prescribed(c, t1))
     solves = 1
-    if contact is not None and contact.settings.friction > 0.0:
+    if contact is not None and contact.has_friction:
         V_start = contact.vertices(state.x, t=state.time)
         contact.lag_friction(V_start, V_start, h)
         solves = contact.settings.friction_iterations
@@ -133,7 +133,7 @@ def _step_with_moving_obstacles(
         return StepOutcome(None, False, [], "the prescribed motion of this step crosses a surface")
     c0 = choose_start(evaluate, starts, lambda c: c)
     solves = 1
-    if contact.settings.friction > 0.0:
+    if contact.has_friction:
         V_start = contact.vertices(state.x, obstacle=y)
         contact.lag_friction(V_start, V_start, h)
         solves = contact.settings.friction_iterations
