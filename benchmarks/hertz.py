@@ -14,7 +14,7 @@ quarter carries F / 4. d is the probe's depth below the rest surface minus the b
 surface stays ``min_distance`` away from the sphere). Prints and writes the table of F / F_Hertz
 per depth for each h0 (``results/hertz.md``).
 
-    python3 benchmarks/hertz.py                          # h0 = 0.2, 0.14, 0.1 mm
+    python3 benchmarks/hertz.py --steps 2 --material linear   # the README's table
     python3 benchmarks/hertz.py --h0 0.2 --steps 2 --material linear
 """
 
@@ -113,10 +113,7 @@ def main() -> None:
         "30-degree cap of an icosphere of refinement 7.",
         "",
         "| h0 (tets) | "
-        + " | ".join(
-            f"d = {d * 1e6:.0f} um (a / h0 = {np.sqrt(R * d) / results[0]['h0_m']:.1f})"
-            for d in depths
-        )
+        + " | ".join(f"d = {d * 1e6:.0f} um (a = {np.sqrt(R * d) * 1e3:.2f} mm)" for d in depths)
         + " | s |",
         "| --- | " + " | ".join("---" for _ in depths) + " | --- |",
     ]

@@ -15,7 +15,7 @@ import sys
 from pathlib import Path
 
 L = 0.15  # m: block width and depth, > 100 contact radii at the benchmark's deepest step
-H0, R_FINE, GROWTH = 1e-4, 1.7e-3, 0.5  # the example's mesh
+H0, R_FINE, GROWTH = 1.4e-4, 1.7e-3, 0.15  # the example's mesh
 
 
 def graded_block(

@@ -517,6 +517,10 @@ class Simulation(SetupCalls, BodyResults):
         apply cuts and tearing. Returns the step's record (also appended to ``history``)."""
         from tissuesim.time.steps import explicit_step, implicit_step
 
+        tol = 1e-9 * self.time_step  # a release at t_n counts for the step from t_n
+        for body in self.bodies.values():
+            if body.kind == "fem":
+                body.release_graspers(self.time + tol)
         s = self.system
         if self.integrator == "quasistatic":
             self._check_supported()

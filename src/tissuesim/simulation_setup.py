@@ -188,9 +188,9 @@ class SetupCalls:
     def fix(self, body: str, vertices, name: str | None = None) -> str:
         return self.body(body, ("fem",)).fix(vertices, name)
 
-    def grasp(self, body: str, vertices, displacement, *, stiffness=None, name=None):
+    def grasp(self, body: str, vertices, displacement, *, stiffness=None, name=None, release=None):
         return self.body(body, ("fem",)).grasp(
-            vertices, displacement, stiffness=stiffness, name=name
+            vertices, displacement, stiffness=stiffness, name=name, release=release
         )
 
     def add_traction(self, facets, traction, *, body=None) -> None:

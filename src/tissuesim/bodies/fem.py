@@ -66,6 +66,7 @@ class Grasper:
     vertices: np.ndarray
     displacement: Motion
     stiffness: float | None = None
+    release: float | None = None  # s: the time it lets go (None: never)
 
     def springs(self, rest: np.ndarray) -> VertexSprings:
         X = rest[self.vertices]
@@ -170,10 +171,13 @@ class FemBody:
         *,
         stiffness: float | None = None,
         name: str | None = None,
+        release: float | None = None,
     ) -> Grasper:
         """Retract: move ``vertices`` by ``displacement(t)`` (d,) m (a callable or a constant
         vector). stiffness None prescribes the motion; a number (N/m per vertex) pulls through
-        springs to the moving targets. The grasper's force is reported per step."""
+        springs to the moving targets. The grasper's force is reported per step until it lets
+        go at time ``release`` (s; None: never): from the first step that starts at or after it,
+        its vertices are free."""
         v = vertex_indices(vertices, self.mesh.n_points, f"grasp {name!r}")
         if not callable(displacement):
             const = _vector(displacement, self.dim, f"grasper {name!r} displacement")
@@ -183,8 +187,12 @@ class FemBody:
             raise InputError(f"grasper {name!r}: stiffness must be > 0 N/m, got {short(stiffness)}")
         if stiffness is not None and self.dim != 3:
             raise InputError(f"grasper {name!r}: spring graspers need a 3D body")
+        if release is not None:
+            from tissuesim.validate import real
+
+            release = real(release, f"grasper {name!r} release", unit="s")
         name = self._claim(name, "grasper")
-        g = Grasper(name, self.name, v, displacement, stiffness)
+        g = Grasper(name, self.name, v, displacement, stiffness, release)
         self.graspers.append(g)
         if stiffness is None:
             motion = functools.partial(
@@ -198,6 +206,18 @@ class FemBody:
             self.spring_graspers.append((g, g.springs(self.mesh.points)))
             self._changed()
         return g
+
+    def release_graspers(self, t: float) -> list[str]:
+        """Let go of every grasper whose release time is at or before t; their names."""
+        done = [g for g in self.graspers if g.release is not None and g.release <= t]
+        if not done:
+            return []
+        names = {g.name for g in done}
+        self.graspers = [g for g in self.graspers if g.name not in names]
+        self.spring_graspers = [(g, sp) for g, sp in self.spring_graspers if g.name not in names]
+        self.conditions = [(n, c) for n, c in self.conditions if n not in names]
+        self._set_conditions()
+        return sorted(names)
 
     # -- loads -----------------------------------------------------------------------------------
     def add_traction(self, facets, traction) -> None:

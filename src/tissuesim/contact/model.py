@@ -185,8 +185,8 @@ class ContactModel:
             c = tangential[k]
             ids = [i for i in c.vertex_ids(E, F) if i >= 0]
             value = float(mu[group[ids[0]], group[ids[-1]]])
-            c.mu_s = value
-            c.mu_k = value
+            # the potential reads the lagged effective coefficients, set at build time
+            c.mu_s = c.mu_k = c.mu_s_effective_lagged = c.mu_k_effective_lagged = value
 
     def clear_friction(self) -> None:
         """End of a step: the lagged friction is dropped, kept only to report its forces."""

@@ -73,7 +73,7 @@ __all__ = ["build_bodies_scene", "COUPLED_SCENE_KEYS"]
 
 COUPLED_SIMULATION_KEYS = ("integrator", "time_step", "max_step_halvings", "start_time", "backend")
 ORGAN_KEYS = ("name", "mesh", "material", "density", "mass", "fix")
-GRASPER_KEYS = ("body", "organ", "name", "vertices", "displacement", "stiffness")
+GRASPER_KEYS = ("body", "organ", "name", "vertices", "displacement", "stiffness", "release")
 ATTACHMENT_KEYS = ("body", "to", "distance", "stiffness", "name")
 TISSUE_KEYS = (
     "material",
@@ -340,6 +340,8 @@ def _grasper(sim, item: dict, where: str) -> None:
         if not (isinstance(item["name"], str) and item["name"]):
             raise SceneError(f"{where}: name must be a non-empty string, e.g. name = 'grasper'")
         options["name"] = item["name"]
+    if "release" in item:
+        options["release"] = _number(item["release"], f"{where} release", "a time in s")
     u0 = displacement(sim.start_time)
     if not np.all(np.isfinite(u0)):
         raise SceneError(
