@@ -44,7 +44,16 @@ R, E, NU = 0.01, 1e4, 0.3
 DHAT = 1e-7
 
 
-def run(h0: float, steps: int, step: float, growth: float, r_fine: float, material: str) -> dict:
+def run(
+    h0: float,
+    steps: int,
+    step: float,
+    growth: float,
+    r_fine: float,
+    material: str,
+    dhat: float = DHAT,
+    stiffness=None,
+) -> dict:
     with tempfile.TemporaryDirectory() as tmp:
         mesh = ts.read_mesh(graded_block(Path(tmp) / "block.msh", h0, r_fine, growth))
     p = mesh.points
@@ -54,10 +63,10 @@ def run(h0: float, steps: int, step: float, growth: float, r_fine: float, materi
     sim.fix("body", np.unique(mesh.facet_sets["base"]), name="base")
     sim.add_dirichlet(np.flatnonzero(p[:, 0] < tol), components=[0], name="symmetry_x")
     sim.add_dirichlet(np.flatnonzero(p[:, 1] < tol), components=[1], name="symmetry_y")
-    probe = sphere((0, 0, R + DHAT / 2), R, refinement=7, cap_angle=30)
+    probe = sphere((0, 0, R + dhat / 2), R, refinement=7, cap_angle=30)
     sim.add_obstacle("probe", probe, translation=lambda t: (0.0, 0.0, -step * t))
     # only the top face touches: the probe passes the symmetry planes' faces (x = 0, y = 0)
-    sim.set_contact(dhat=DHAT, surfaces={"body": "top"})
+    sim.set_contact(dhat=dhat, stiffness=stiffness, surfaces={"body": "top"})
     e_star = E / (1 - NU**2)
     rows = []
     start = time.perf_counter()
@@ -76,6 +85,7 @@ def run(h0: float, steps: int, step: float, growth: float, r_fine: float, materi
                 "ratio": force / hertz,
                 "newton_iterations": record.newton_iterations,
                 "substeps": record.substeps,
+                "stiffness_Pa": c["stiffness_Pa"],
             }
         )
         print(json.dumps(rows[-1]), flush=True)
@@ -96,10 +106,24 @@ def main() -> None:
     parser.add_argument("--growth", type=float, default=0.25)
     parser.add_argument("--r-fine", type=float, default=1.7e-3, help="radius of the h0 region (m)")
     parser.add_argument("--material", default="neo_hookean")
+    parser.add_argument("--dhat", type=float, default=DHAT, help="barrier activation distance (m)")
+    parser.add_argument("--stiffness", default=None, help='kappa (Pa) or "adaptive"')
     args = parser.parse_args()
+    stiffness = args.stiffness
+    if stiffness is not None and stiffness != "adaptive":
+        stiffness = float(stiffness)
     results = []
     for h0 in args.h0:
-        r = run(h0, args.steps, args.step, args.growth, args.r_fine, args.material)
+        r = run(
+            h0,
+            args.steps,
+            args.step,
+            args.growth,
+            args.r_fine,
+            args.material,
+            args.dhat,
+            stiffness,
+        )
         results.append(r)
         print(json.dumps({k: v for k, v in r.items() if k != "rows"}), flush=True)
     depths = [row["depth_m"] for row in results[0]["rows"]]
@@ -109,21 +133,24 @@ def main() -> None:
         f"`python3 benchmarks/hertz.py --h0 {' '.join(f'{h:g}' for h in args.h0)} "
         f"--steps {args.steps} --step {args.step:g} --growth {args.growth} "
         f"--material {args.material}`; R = {R} m, E = {E} Pa, nu = {NU}, quarter block "
-        f"{L} m wide and deep clamped at its base, graded by gmsh, dhat = {DHAT} m, probe a "
+        f"{L} m wide and deep clamped at its base, graded by gmsh, dhat = {args.dhat} m, "
+        f"stiffness {args.stiffness or 'E'}, probe a "
         "30-degree cap of an icosphere of refinement 7.",
         "",
         "| h0 (tets) | "
         + " | ".join(f"d = {d * 1e6:.0f} um (a = {np.sqrt(R * d) * 1e3:.2f} mm)" for d in depths)
-        + " | s |",
-        "| --- | " + " | ".join("---" for _ in depths) + " | --- |",
+        + " | s | Newton iterations per step |",
+        "| --- | " + " | ".join("---" for _ in depths) + " | --- | --- |",
     ]
     for r in results:
         ratios = " | ".join(f"{row['ratio']:.4f}" for row in r["rows"])
         lines.append(
-            f"| {r['h0_m'] * 1e3:g} mm ({r['tetrahedra']}) | {ratios} | {r['wall_s']:.0f} |"
+            f"| {r['h0_m'] * 1e3:g} mm ({r['tetrahedra']}) | {ratios} | {r['wall_s']:.0f} | "
+            f"{[row['newton_iterations'] for row in r['rows']]} |"
         )
     lines.append("")
-    out = Path(__file__).resolve().parent / "results" / f"hertz_{args.material}.md"
+    tag = "" if args.stiffness is None and args.dhat == DHAT else "_variant"
+    out = Path(__file__).resolve().parent / "results" / f"hertz_{args.material}{tag}.md"
     out.write_text("\n".join(lines))
     print(f"wrote {out}")
 

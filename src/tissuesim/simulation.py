@@ -404,17 +404,49 @@ class Simulation(SetupCalls, BodyResults):
             self._solver = None  # the pattern changed: a new symbolic analysis
 
     def _contact_model(self):
+        """The contact model over every FEM body's surface and every frame body's embedded
+        surface (a frame body without one, and the tissue, take no part)."""
         from tissuesim.contact.model import ContactModel
+        from tissuesim.contact.surfaces import fem_surface, frame_surface
 
-        s = self._system
-        fem = [
-            (name, s.bodies[j], s.config_slices[j].start, s.tangent_slices[j].start)
-            for j, name in enumerate(s.names)
-            if self.bodies[name].kind == "fem"
-        ]
-        if not fem:
-            raise InputError("contact acts on FEM bodies; this simulation has none")
-        return ContactModel(fem, list(self.obstacles), self.contact, s.n_dofs)
+        s, settings = self._system, self.contact
+        surfaces = []
+        for j, name in enumerate(s.names):
+            body, choice = self.bodies[name], settings.surfaces.get(name)
+            config, tangent = s.config_slices[j], s.tangent_slices[j]
+            if body.kind == "fem":
+                surfaces.append(fem_surface(name, s.bodies[j], config.start, tangent.start, choice))
+            elif body.kind == "frames" and body.surface is not None:
+                embedding = body.embedded["surface"]
+                surfaces.append(
+                    frame_surface(
+                        name,
+                        s.bodies[j],
+                        embedding,
+                        body.surface.triangles,
+                        config,
+                        tangent,
+                        choice,
+                    )
+                )
+            elif choice is not None:
+                raise InputError(
+                    f"contact surfaces: body {name!r} has no contact surface (a frame body "
+                    "needs an embedded surface, embed_surface; the tissue takes no part)"
+                )
+        named = {sf.name for sf in surfaces}
+        unknown = set(settings.surfaces) - set(s.names)
+        if unknown:
+            raise InputError(
+                f"contact surfaces: no body {sorted(unknown)[0]!r} (bodies in contact: "
+                f"{', '.join(sorted(named))})"
+            )
+        if not surfaces:
+            raise InputError(
+                "contact acts on FEM bodies and frame bodies with an embedded surface; this "
+                "simulation has none"
+            )
+        return ContactModel(surfaces, list(self.obstacles), settings, s.n_dofs)
 
     @staticmethod
     def _initial_config(b) -> np.ndarray:
@@ -586,6 +618,7 @@ class Simulation(SetupCalls, BodyResults):
             "barrier_evaluations": stats.evaluations,
             "ccd_calls": stats.ccd_calls,
             "friction_solves": stats.friction_solves,
+            "stiffness_Pa": contact.kappa,
             "indentation_depth": contact.indentation_depths(),
         }
         contact.reset_stats()

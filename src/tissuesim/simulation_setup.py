@@ -28,7 +28,7 @@ class SetupCalls:
         enabled: bool = True,
         *,
         dhat: float | None = None,
-        stiffness: float | None = None,
+        stiffness: float | str | None = None,
         friction: float = 0.0,
         eps_v: float = 1e-3,
         friction_iterations: int = 2,
@@ -38,7 +38,8 @@ class SetupCalls:
         """Barrier contact (IPC) between every FEM body's surface, itself and the obstacles
         (``contact/model.py``): ``dhat`` the activation distance (m; default 1e-3 of the
         scene's size), ``stiffness`` the barrier's kappa (Pa; default the largest Young's
-        modulus); ``friction`` the Coulomb coefficient mu (IPC's smoothed friction, static
+        modulus E; "adaptive": IPC's adaptive kappa, from E to 100 E, contact/stiffness.py);
+        ``friction`` the Coulomb coefficient mu (IPC's smoothed friction, static
         below the sliding speed ``eps_v`` m/s, lagged over ``friction_iterations`` Newton
         solves per step). ``surfaces`` maps a body name to its contact surface, a facet set
         name (e.g. "zmax") or (k, 3) vertex indices (default: its whole boundary; leave out
@@ -57,7 +58,11 @@ class SetupCalls:
             raise InputError("contact needs an implicit integrator (backward_euler, quasistatic)")
         if dhat is not None:
             dhat = real(dhat, "contact dhat", low=0.0, low_open=True, unit="m")
-        if stiffness is not None:
+        if stiffness is not None and stiffness != "adaptive":
+            if isinstance(stiffness, str):
+                raise InputError(
+                    f'contact stiffness must be a number (Pa) or "adaptive", not {stiffness!r}'
+                )
             stiffness = real(stiffness, "contact stiffness", low=0.0, low_open=True, unit="Pa")
         from tissuesim.validate import integer
 

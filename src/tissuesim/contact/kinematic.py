@@ -102,6 +102,11 @@ class _Augmented:
         c1, y1 = self.split(z1)
         return self.contact.max_step(c0, c1, y0, y1)
 
+    def path_free(self, z0: np.ndarray, z1: np.ndarray) -> bool:
+        c0, y0 = self.split(z0)
+        c1, y1 = self.split(z1)
+        return self.contact.path_free(c0, c1, y0, y1)
+
 
 def _solver_for(problem: _Augmented, contact, solver, options):
     """A linear solver for the augmented size (kept on the contact model across steps): the
@@ -139,6 +144,7 @@ def solve_with_moving_obstacles(system, c0, t0, t1, energies, solver, options, y
             retract=problem.retract,
             max_step=problem.max_step,
             reference_rows=slice(0, system.n_dofs),
+            path_free=None if contact.linear else problem.path_free,
         )
         results.append(record)
         if not record.converged:

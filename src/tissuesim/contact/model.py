@@ -1,9 +1,12 @@
-"""Barrier contact (IPC, Li et al. 2020) between the boundary surfaces of every FEM body (each
-with itself, too) and the kinematic obstacles, through the IPC Toolkit (``ipctk``).
+"""Barrier contact (IPC, Li et al. 2020) between the surfaces of the bodies (each with itself,
+too) and the kinematic obstacles, through the IPC Toolkit (``ipctk``).
 
-The collision mesh stacks the boundary vertices of every FEM body (their positions are rows of
-the system configuration) and the obstacles' vertices (positions given by their motion at the
-step's time, no unknowns). The energy is ipctk's area-weighted "physical" barrier
+The collision mesh stacks every body's contact surface (contact/surfaces.py: a FEM body's
+boundary vertices are rows of the system configuration; a frame body's embedded surface moves
+with its frames, mapped to frame DOFs with the chain rule) and the obstacles' vertices
+(positions given by their motion at the step's time, no unknowns). Energies are evaluated over
+the vertices and mapped to the system's DOFs by the surfaces' Jacobians. The energy is
+ipctk's area-weighted "physical" barrier
 
     B(x) = kappa * sum_k w_k b(d_k^2; dhat^2) / dhat^3,  b(s) = -(s - dhat^2)^2 ln(s / dhat^2),
 
@@ -14,7 +17,8 @@ and PSD-projected Hessian (per collision, as IPC does) enter the same Newton sys
 other energy; the Hessian's sparsity changes with the active pairs, so it is added as a sparse
 matrix (``Accumulator.extra_hessian``). Newton's line search never tries a step longer than
 ipctk's CCD (additive CCD, LBVH broad phase; its default narrow phase takes a minute, see the
-field notes) says is free of intersection.
+field notes) says is free of intersection; when rigid frames are in contact (their points
+move on arcs, not on CCD's straight lines) every trial is also checked (``path_free``).
 """
 
 from __future__ import annotations
@@ -25,6 +29,8 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.sparse as sp
 
+from tissuesim.contact.stiffness import AdaptiveStiffness
+from tissuesim.contact.surfaces import FemSurface
 from tissuesim.errors import InputError
 
 __all__ = ["ContactModel", "ContactSettings", "ContactStats"]
@@ -33,10 +39,11 @@ __all__ = ["ContactModel", "ContactSettings", "ContactStats"]
 @dataclass(frozen=True)
 class ContactSettings:
     """dhat: activation distance (m; None: 1e-3 of the scene's bounding-box diagonal).
-    stiffness: kappa (Pa; None: the largest Young's modulus of the FEM bodies)."""
+    stiffness: kappa (Pa; None: the largest Young's modulus E of the bodies in contact;
+    "adaptive": IPC's adaptive kappa, at least E, contact/stiffness.py)."""
 
     dhat: float | None = None
-    stiffness: float | None = None
+    stiffness: float | str | None = None
     friction: float = 0.0  # Coulomb coefficient mu (0: frictionless)
     eps_v: float = 1e-3  # m/s: below this sliding speed friction is smoothed (static regime)
     friction_iterations: int = 2  # Newton solves per step, the friction lagged between them
@@ -62,11 +69,11 @@ class ContactStats:
 
 @dataclass(eq=False)
 class ContactModel:
-    """See the module docstring. ``bodies``: (name, Model, configuration offset, tangent
-    offset) of every FEM body in the system; ``obstacles``: the Obstacle list; ``n_dofs``: the
-    system's tangent DOFs."""
+    """See the module docstring. ``surfaces``: every body's contact surface
+    (``contact/surfaces.py``: FEM boundaries, frame bodies' embedded surfaces); ``obstacles``:
+    the Obstacle list; ``n_dofs``: the system's tangent DOFs."""
 
-    bodies: list
+    surfaces: list
     obstacles: list
     settings: ContactSettings
     n_dofs: int
@@ -79,43 +86,29 @@ class ContactModel:
         import ipctk
 
         self._ipctk = ipctk
-        dims = {m.mesh.dim for _, m, _, _ in self.bodies}
-        if dims != {3}:
-            raise InputError("contact needs 3D FEM bodies (tetrahedra); 2D contact is not built")
-        from tissuesim.contact.pairs import PairTable, contact_facets
+        if not self.surfaces:
+            raise InputError("contact needs at least one body with a surface")
+        from tissuesim.contact.pairs import PairTable
 
-        unknown = set(self.settings.surfaces) - {name for name, *_ in self.bodies}
-        if unknown:
-            raise InputError(
-                f"contact surfaces: no FEM body {sorted(unknown)[0]!r} (bodies: "
-                f"{', '.join(name for name, *_ in self.bodies)})"
-            )
-        rest, faces, dofs, config, groups, self.slices = [], [], [], [], [], {}
+        rest, faces, groups, self.slices = [], [], [], {}
         start = 0
-        for name, model, config_offset, offset in self.bodies:
-            tri = contact_facets(name, model.mesh, self.settings.surfaces.get(name))
-            surface = np.unique(tri)
-            local = np.full(model.mesh.n_points, -1)
-            local[surface] = np.arange(surface.size)
-            rest.append(model.mesh.points[surface])
-            faces.append(local[tri] + start)
-            dofs.append(offset + 3 * surface[:, None] + np.arange(3))
-            config.append(config_offset + 3 * surface[:, None] + np.arange(3))
-            groups.append(np.full(surface.size, len(groups)))
-            self.slices[name] = (slice(start, start + surface.size), surface)
-            start += surface.size
+        for surface in self.surfaces:
+            k = len(surface.rest)
+            rest.append(surface.rest)
+            faces.append(surface.triangles + start)
+            groups.append(np.full(k, len(groups)))
+            self.slices[surface.name] = (slice(start, start + k), surface)
+            start += k
         self.n_deformable = start
         for ob in self.obstacles:
             rest.append(ob.rest)
             faces.append(ob.triangles + start)
-            dofs.append(np.full((len(ob.rest), 3), -1))
-            config.append(np.full((len(ob.rest), 3), -1))
             groups.append(np.full(len(ob.rest), len(groups)))
             self.slices[ob.name] = (slice(start, start + len(ob.rest)), None)
             start += len(ob.rest)
         self.group = np.concatenate(groups)  # collision-mesh vertex -> body / obstacle index
         self.table = PairTable(
-            [name for name, *_ in self.bodies],
+            [s.name for s in self.surfaces],
             self.obstacles,
             self.settings.friction,
             self.settings.pairs,
@@ -128,31 +121,107 @@ class ContactModel:
             # pairs of groups that do not collide are dropped in the broad phase (a compiled
             # filter: a Python callable deadlocks ipctk's threads and is slow)
             self.mesh.can_collide = self.table.collision_filter(ipctk, self.group, start)
-        self.dofs = np.vstack(dofs).ravel()  # system tangent DOF of each mesh coordinate
-        self.config_dofs = np.vstack(config).ravel()  # and its place in the configuration
-        mapped = self.dofs >= 0
-        self._select = sp.csr_matrix(
-            (np.ones(mapped.sum()), (np.flatnonzero(mapped), self.dofs[mapped])),
-            shape=(self.dofs.size, self.n_dofs),
-        )
         # the obstacles' vertex coordinates as unknowns after the system's DOFs (kinematic.py)
-        self.n_obstacle = int((~mapped).sum())
-        aug = self.dofs.copy()
-        aug[~mapped] = self.n_dofs + np.arange(self.n_obstacle)
-        self._select_aug = sp.csr_matrix(
-            (np.ones(aug.size), (np.arange(aug.size), aug)),
-            shape=(aug.size, self.n_dofs + self.n_obstacle),
-        )
+        self.n_obstacle = 3 * (start - self.n_deformable)
+        # rigid frames move points on arcs: line-search trials are checked by CCD (surfaces.py)
+        self.linear = all(s.linear for s in self.surfaces)
+        self._constant_selection: dict = {}
         self.obstacle_state: np.ndarray | None = None  # where the obstacles are (flat), if lagged
         diag = float(np.linalg.norm(np.ptp(self.rest, axis=0)))
         self.dhat = self.settings.dhat if self.settings.dhat is not None else 1e-3 * diag
-        default = max(_youngs(m.material) for _, m, _, _ in self.bodies)
-        self.kappa = self.settings.stiffness if self.settings.stiffness is not None else default
-        self.barrier = ipctk.BarrierPotential(self.dhat, self.kappa, True)
+        default = max(_youngs(s.material) for s in self.surfaces)
+        self.adaptive = None  # contact/stiffness.py, with stiffness = "adaptive"
+        if self.settings.stiffness == "adaptive":
+            self.adaptive = AdaptiveStiffness(default, diag)
+        fixed = isinstance(self.settings.stiffness, float)
+        self.set_stiffness(self.settings.stiffness if fixed else default)
         self._friction = None  # (TangentialCollisions, vertices at the step's start), lagged
         self._reported_friction = None  # the last step's, for obstacle_forces
         self.broad_phase = ipctk.LBVH()
         self.ccd = ipctk.AdditiveCCD()
+
+    # -- the barrier's stiffness (fixed, or IPC's adaptive one: contact/stiffness.py) -------------
+    def set_stiffness(self, kappa: float) -> None:
+        self.kappa = float(kappa)
+        self.barrier = self._ipctk.BarrierPotential(self.dhat, self.kappa, True)
+
+    def initialize_stiffness(
+        self, c: np.ndarray, g_energy: np.ndarray, held: np.ndarray, obstacle=None
+    ) -> None:
+        """Adaptive stiffness: once contact appears at a step's start c, kappa balances the
+        other energies' gradient ``g_energy`` (system DOFs; ``held`` DOFs left out)."""
+        if self.adaptive is None or self.adaptive.initialized:
+            return
+        V = self.vertices(c, obstacle=obstacle)
+        col = self._collisions(V)
+        if len(col) == 0:
+            return
+        g_B = self.selection(c).T @ self.barrier.gradient(col, self.mesh, V) / self.kappa
+        free = np.ones(self.n_dofs, dtype=bool)
+        free[held] = False
+        self.set_stiffness(self.adaptive.initial(g_energy[free], g_B[free]))
+
+    def update_stiffness(self, c: np.ndarray) -> None:
+        """Adaptive stiffness, after a step: double kappa if the gap keeps closing below
+        round-off scale (IPC)."""
+        if self.adaptive is None or not self.adaptive.initialized:
+            return
+        kappa = self.adaptive.update(self.kappa, self.proximity(c)[0])
+        if kappa != self.kappa:
+            self.set_stiffness(kappa)
+
+    # -- the map from the system's DOFs to the collision vertices (surfaces.py) ------------------
+    def selection(self, c: np.ndarray, augmented: bool = False) -> sp.csr_matrix:
+        """dV/dq (3 n_vertices, n_dofs [+ n_obstacle]): the bodies' Jacobians, and with
+        ``augmented`` the identity on the obstacles' coordinates (unknowns after the system's);
+        constant (kept) when every surface is a FEM body's."""
+        constant = all(isinstance(s, FemSurface) for s in self.surfaces)
+        if constant and augmented in self._constant_selection:
+            return self._constant_selection[augmented]
+        rows, cols, vals = [], [], []
+        for surface in self.surfaces:
+            r, cc, v = surface.jacobian(c)
+            rows.append(r + 3 * self.slices[surface.name][0].start)
+            cols.append(cc)
+            vals.append(v)
+        n_cols = self.n_dofs
+        if augmented:
+            rows.append(3 * self.n_deformable + np.arange(self.n_obstacle))
+            cols.append(self.n_dofs + np.arange(self.n_obstacle))
+            vals.append(np.ones(self.n_obstacle))
+            n_cols += self.n_obstacle
+        S = sp.csr_matrix(
+            (np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
+            shape=(3 * len(self.rest), n_cols),
+        )
+        if constant:
+            self._constant_selection[augmented] = S
+        return S
+
+    def _to_dofs(self, c, order, g_V, H_V, augmented):
+        """(gradient, Hessian) over the system's DOFs from those over the vertices: J^T g and
+        J^T H J + the rigid frames' curvature (surfaces.py)."""
+        if g_V is None:
+            return None, None
+        S = self.selection(c, augmented)
+        grad = S.T @ g_V
+        hess = None
+        if order >= 2:
+            hess = (S.T @ H_V @ S).tocsr()
+            rows, cols, vals = [], [], []
+            for surface in self.surfaces:
+                part = surface.curvature(c, g_V.reshape(-1, 3)[self.slices[surface.name][0]])
+                if part is not None:
+                    rows.append(part[0])
+                    cols.append(part[1])
+                    vals.append(part[2])
+            if rows:
+                K = sp.csr_matrix(
+                    (np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
+                    shape=hess.shape,
+                )
+                hess = (hess + K).tocsr()
+        return grad, hess
 
     # -- friction (IPC's smoothed, lagged Coulomb friction) ----------------------------------------
     @property
@@ -192,24 +261,21 @@ class ContactModel:
         """End of a step: the lagged friction is dropped, kept only to report its forces."""
         self._reported_friction, self._friction = self._friction, None
 
-    def _add_friction(self, V: np.ndarray, order: int, select, value, grad, hess, project=True):
-        if self._friction is None:
-            return value, grad, hess
+    def _friction_terms(self, V: np.ndarray, order: int, project: bool):
+        """(value, dD/dV, d2D/dV2) of the lagged friction potential D (zeros when none)."""
+        if self._friction is None or len(self._friction[0]) == 0:
+            return 0.0, None, None
         tangential, V_start, potential = self._friction
-        if len(tangential) == 0:
-            return value, grad, hess
         U = np.asfortranarray(V - V_start)
-        value += float(potential(tangential, self.mesh, U))
-        if order >= 1:
-            g = select.T @ potential.gradient(tangential, self.mesh, U)
-            grad = g if grad is None else grad + g
+        value = float(potential(tangential, self.mesh, U))
+        grad = potential.gradient(tangential, self.mesh, U) if order >= 1 else None
+        hess = None
         if order >= 2:
             method = self._ipctk.PSDProjectionMethod
             H = potential.hessian(
                 tangential, self.mesh, U, method.CLAMP if project else method.NONE
             )
-            Hs = (select.T @ sp.csr_matrix(H) @ select).tocsr()
-            hess = Hs if hess is None else hess + Hs
+            hess = sp.csr_matrix(H)
         return value, grad, hess
 
     def reset_stats(self) -> None:
@@ -217,8 +283,10 @@ class ContactModel:
 
     def describe(self) -> dict:
         return {
+            "bodies": [surface.name for surface in self.surfaces],
             "dhat_m": self.dhat,
             "stiffness_Pa": self.kappa,
+            "adaptive_stiffness": self.adaptive is not None,
             "surface_vertices": self.n_deformable,
             "obstacle_vertices": int(len(self.rest) - self.n_deformable),
             "obstacles": [ob.name for ob in self.obstacles],
@@ -251,13 +319,12 @@ class ContactModel:
         ``obstacle`` (flat), else at time t, else where they are (``obstacle_state``, or at
         ``self.time``)."""
         V = np.empty_like(self.rest)
-        mapped = self.config_dofs >= 0
-        flat = V.reshape(-1)
-        flat[mapped] = c[self.config_dofs[mapped]]
+        for surface in self.surfaces:
+            V[self.slices[surface.name][0]] = surface.positions(c)
         if obstacle is None and t is None and self.obstacle_state is not None:
             obstacle = self.obstacle_state
         if obstacle is not None:
-            flat[~mapped] = obstacle
+            V[self.n_deformable :] = np.reshape(obstacle, (-1, 3))
         else:
             t = self.time if t is None else t
             for ob in self.obstacles:
@@ -275,36 +342,40 @@ class ContactModel:
         """(value J, gradient over the system DOFs or None, Hessian sparse or None); the
         Hessian is PSD-projected per collision (as IPC does) unless ``project`` is False."""
         start = time.perf_counter()
-        V = self.vertices(c)
-        value, grad, hess = self._barrier_terms(V, order, project, self._select)
-        value, grad, hess = self._add_friction(V, order, self._select, value, grad, hess, project)
+        out = self._terms(c, self.vertices(c), order, project, augmented=False)
         self.stats.candidates_and_barrier_s += time.perf_counter() - start
-        return value, grad, hess
-
-    def _barrier_terms(self, V: np.ndarray, order: int, project: bool, select):
-        col = self._collisions(V)
-        self.stats.evaluations += 1
-        if len(col) == 0:
-            return 0.0, None, None
-        value = float(self.barrier(col, self.mesh, V))
-        grad = hess = None
-        if order >= 1:
-            grad = select.T @ self.barrier.gradient(col, self.mesh, V)
-        if order >= 2:
-            method = self._ipctk.PSDProjectionMethod
-            H = self.barrier.hessian(col, self.mesh, V, method.CLAMP if project else method.NONE)
-            hess = (select.T @ sp.csr_matrix(H) @ select).tocsr()
-        return value, grad, hess
+        return out
 
     def evaluate_augmented(self, c: np.ndarray, y: np.ndarray, order: int, project: bool = True):
         """As ``evaluate``, with the obstacles at y (flat) and their coordinates as unknowns
         after the system's: gradient (n_dofs + n_obstacle,), Hessian over the same."""
         start = time.perf_counter()
-        V = self.vertices(c, obstacle=y)
-        value, grad, hess = self._barrier_terms(V, order, project, self._select_aug)
-        sel = self._select_aug
-        value, grad, hess = self._add_friction(V, order, sel, value, grad, hess, project)
+        out = self._terms(c, self.vertices(c, obstacle=y), order, project, augmented=True)
         self.stats.candidates_and_barrier_s += time.perf_counter() - start
+        return out
+
+    def _terms(self, c, V, order: int, project: bool, augmented: bool):
+        """Barrier + lagged friction over the vertices, then through the surfaces' maps."""
+        col = self._collisions(V)
+        self.stats.evaluations += 1
+        value, g_V, H_V = 0.0, None, None
+        if len(col):
+            value = float(self.barrier(col, self.mesh, V))
+            if order >= 1:
+                g_V = self.barrier.gradient(col, self.mesh, V)
+            if order >= 2:
+                method = self._ipctk.PSDProjectionMethod
+                H = self.barrier.hessian(
+                    col, self.mesh, V, method.CLAMP if project else method.NONE
+                )
+                H_V = sp.csr_matrix(H)
+        f_value, f_grad, f_hess = self._friction_terms(V, order, project)
+        value += f_value
+        if f_grad is not None:
+            g_V = f_grad if g_V is None else g_V + f_grad
+        if f_hess is not None:
+            H_V = f_hess if H_V is None else H_V + f_hess
+        grad, hess = self._to_dofs(c, order, g_V, H_V, augmented)
         return value, grad, hess
 
     def max_step(
@@ -327,6 +398,28 @@ class ContactModel:
         self.stats.ccd_s += time.perf_counter() - start
         self.stats.ccd_calls += 1
         return float(step)
+
+    def path_free(
+        self,
+        c0: np.ndarray,
+        c1: np.ndarray,
+        y0: np.ndarray | None = None,
+        y1: np.ndarray | None = None,
+    ) -> bool:
+        """Whether the straight move of the vertices from c0 to c1 (obstacles y0 -> y1, or
+        where they are) is free of intersection: Newton's check of each line-search trial when
+        rigid frames move points on arcs (``linear`` False)."""
+        start = time.perf_counter()
+        free = self._ipctk.is_step_collision_free(
+            self.mesh,
+            self.vertices(c0, obstacle=y0),
+            self.vertices(c1, obstacle=y1),
+            broad_phase=self.broad_phase,
+            narrow_phase_ccd=self.ccd,
+        )
+        self.stats.ccd_s += time.perf_counter() - start
+        self.stats.ccd_calls += 1
+        return bool(free)
 
     def reachable(self, c0: np.ndarray, t0: float, c1: np.ndarray, t1: float) -> bool:
         """Whether the straight move from (c0, obstacles at t0) to (c1, obstacles at t1) is

@@ -1,11 +1,12 @@
 """The scene tables of contact: ``[contact]`` (switch it on, its parameters) and
-``[[obstacles]]`` (kinematic rigid surfaces and their motion), for every scene of FEM bodies
-(the one-body short form and ``[[bodies]]``). Each key is an argument of
+``[[obstacles]]`` (kinematic rigid surfaces and their motion), for every scene (the one-body
+[mesh] and [frames] short forms and ``[[bodies]]``). Each key is an argument of
 ``Simulation.set_contact`` / ``Simulation.add_obstacle`` (README, "Contact").
 
     [contact]
     dhat = 0.001          # m, activation distance (default 1e-3 of the scene's size)
-    stiffness = 1e4       # Pa, barrier stiffness (default the largest Young's modulus)
+    stiffness = 1e4       # Pa, barrier kappa (default the largest Young's modulus E);
+                          # "adaptive": IPC's adaptive kappa, E to 100 E
     friction = 0.3        # Coulomb mu (default 0); eps_v (m/s), friction_iterations
     surfaces = { block = "zmax" }   # a body's contact surface: a facet set (default: boundary)
 

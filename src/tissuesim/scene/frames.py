@@ -41,6 +41,7 @@ from typing import Any
 import numpy as np
 
 from tissuesim.errors import SceneError
+from tissuesim.scene.contact import CONTACT_KEYS, OBSTACLE_KEYS
 from tissuesim.scene.expressions import compile_vector
 from tissuesim.scene.loader import (
     RUN_KEYS,
@@ -87,6 +88,8 @@ FRAME_SCENE_KEYS: dict[str, Any] = {
     "springs": {"points", "stiffness", "target", "name"},
     "point_forces": {"points", "force"},
     "initial": {"velocity", "angular"},
+    "contact": set(CONTACT_KEYS),
+    "obstacles": set(OBSTACLE_KEYS),
     "run": set(RUN_KEYS),
 }
 #: the tables of one frame body (top level in a one-body scene, inside each [[bodies]] entry)
@@ -144,6 +147,9 @@ def build_frame_scene(data: dict, base_dir: Path, source: str, name: str) -> Sce
         _unknown(gravity, FRAME_SCENE_KEYS["gravity"], where)
         with _context(where):
             sim.add_gravity(_vector3(gravity["acceleration"], f"{where} acceleration"))
+    from tissuesim.scene.contact import add_contact_tables
+
+    add_contact_tables(sim, data, base_dir, source)
     return Scene(sim, name, source, _run_table(data, source))
 
 

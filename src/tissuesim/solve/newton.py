@@ -115,6 +115,7 @@ def minimize(
     retract: Retract | None = None,
     max_step: Callable[[np.ndarray, np.ndarray], float] | None = None,
     reference_rows: slice | None = None,
+    path_free: Callable[[np.ndarray, np.ndarray], bool] | None = None,
 ) -> tuple[np.ndarray, NewtonResult]:
     """Minimise Phi from x0 (prescribed DOFs already at their values) over the free DOFs.
 
@@ -125,6 +126,9 @@ def minimize(
     Hessian from ``evaluate`` are then with respect to dx at 0.
     max_step(x, y) -> the largest fraction of the move x -> y that is free of intersection
     (contact's CCD); every line search starts there instead of at 1.
+    path_free(x, y) -> whether the straight move x -> y is free of intersection: checked for
+    every line-search trial when ``retract`` does not move the surfaces on straight lines
+    (rigid frames rotate their points on arcs), so no accepted iterate intersects.
     reference_rows: the gradient rows whose starting norm sets the relative tolerance (default
     all): the moving-obstacle solve leaves out its obstacles' rows, whose penalty forces at the
     start dwarf the bodies' and would end Newton while the bodies are far from balance.
@@ -174,6 +178,7 @@ def minimize(
                 noise_scale,
                 elimination,
                 max_step,
+                path_free,
             )
 
         if options.hessian_projection == "always":
@@ -231,6 +236,7 @@ def _try_direction(
     noise_scale,
     elimination=None,
     max_step=None,
+    path_free=None,
 ):
     """Solve (H + shift diag|H|) dx = -g for an eliminated system ``acc`` and line-search.
 
@@ -256,25 +262,34 @@ def _try_direction(
     first = 1.0 if max_step is None else min(1.0, max_step(x, retract(x, dx)))
     if first <= 0.0:
         return None
-    step = _line_search(evaluate, x, acc, slope, dx, options, retract, noise_scale, first)
+    step = _line_search(
+        evaluate, x, acc, slope, dx, options, retract, noise_scale, first, path_free
+    )
     if step is None:
         return None
     return (project, dx, *step)
 
 
-def _line_search(evaluate, x, acc, slope, dx, options, retract, noise_scale, first=1.0):
+def _line_search(
+    evaluate, x, acc, slope, dx, options, retract, noise_scale, first=1.0, path_free=None
+):
     """Backtracking: the largest alpha in 1, 1/2, ... with Armijo decrease and finite Phi.
 
     A trial may exceed the Armijo bound by Phi's round-off, 1e-12 times the largest of |Phi|,
     the sum of its terms' magnitudes and the model's energy scale: near the solution the true
     decrease of the last, correct step is below what Phi can resolve. ``first``: the first
-    trial (below 1 when contact's CCD limits the step)."""
+    trial (below 1 when contact's CCD limits the step); ``path_free``: a trial whose move from x
+    is not free of intersection is halved before it is evaluated."""
     alpha = first
     value = acc.value
     magnitude = max(abs(value), sum(abs(v) for v in acc.terms.values()), noise_scale)
     noise = 1e-12 * max(magnitude, 1e-300)
     for _ in range(options.max_line_search):
-        trial = evaluate(retract(x, alpha * dx), 1, False)
+        y = retract(x, alpha * dx)
+        if path_free is not None and not path_free(x, y):
+            alpha *= 0.5
+            continue
+        trial = evaluate(y, 1, False)
         if (
             np.isfinite(trial.value)
             and trial.value <= value + options.armijo * alpha * slope + noise

@@ -79,6 +79,8 @@ def implicit_step(
             )
         max_step = contact.max_step
     c0 = choose_start(evaluate, candidates, lambda c: system.apply_prescribed(c, t1))
+    if contact is not None:
+        _initialize_stiffness(system, c0, body_energies)
     solves = 1
     if contact is not None and contact.has_friction:
         V_start = contact.vertices(state.x, t=state.time)
@@ -98,6 +100,7 @@ def implicit_step(
             length_scale=system.length_scale,
             retract=system.retract,
             max_step=max_step,
+            path_free=None if contact is None or contact.linear else contact.path_free,
         )
         records.append(record)
         if not record.converged:
@@ -108,8 +111,19 @@ def implicit_step(
         contact.stats.friction_solves += len(records) if solves > 1 else 0
     if not record.converged:
         return StepOutcome(None, False, records, record.reason)
+    if contact is not None:
+        contact.update_stiffness(c1)
     v1 = system.difference(c1, state.x) / h if dynamic else np.zeros(system.n_dofs)
     return StepOutcome(State(t1, c1, v1), True, records)
+
+
+def _initialize_stiffness(system, c0, body_energies, obstacle=None) -> None:
+    """IPC's adaptive barrier stiffness starts when contact first appears (contact/stiffness)."""
+    contact = system.contact
+    if contact.adaptive is None or contact.adaptive.initialized:
+        return
+    g = system.evaluate(c0, 1, False, body_energies, contact=False).gradient
+    contact.initialize_stiffness(c0, g, system.elimination.dofs, obstacle)
 
 
 def _step_with_moving_obstacles(
@@ -132,6 +146,7 @@ def _step_with_moving_obstacles(
     if not starts:
         return StepOutcome(None, False, [], "the prescribed motion of this step crosses a surface")
     c0 = choose_start(evaluate, starts, lambda c: c)
+    _initialize_stiffness(system, c0, body_energies, y)
     solves = 1
     if contact.has_friction:
         V_start = contact.vertices(state.x, obstacle=y)
@@ -153,6 +168,7 @@ def _step_with_moving_obstacles(
     if not record.converged:
         return StepOutcome(None, False, results, record.reason)
     contact.obstacle_state = y1
+    contact.update_stiffness(c1)
     v1 = system.difference(c1, state.x) / h if dynamic else np.zeros(system.n_dofs)
     return StepOutcome(State(t1, c1, v1), True, [*results[:-1], record])
 

@@ -1,0 +1,158 @@
+"""The bodies' contact surfaces as maps from the system configuration to collision vertices.
+
+A FEM body's surface vertices are rows of its configuration: V = c[rows], and dV/dq is a
+constant 0/1 selection. A frame body's embedded surface moves with its frames by eq. (3),
+V = E Z (Z: the frames' virtual nodes, z reshaped (4n, 3)), linear in z. Newton's tangent DOFs
+of rigid frames enter through dz_i = T_i(z) dq_i, so for an energy B(V)
+
+    dB/dq = J^T dB/dV,   d2B/dq2 = J^T (d2B/dV2) J + K(z, g_z),   J = (E (x) I_3) diag(T_i),
+
+with g_z = (E (x) I_3)^T dB/dV and K the rotation chart's curvature on each rigid frame's
+rotation block (``FrameType.curvature``): the chain rule the frames' own energies use
+(frames/tangent_assembly.py). Affine frames have T = I and K = 0. A straight step in q moves a
+rigid frame's points on arcs, not on the straight lines CCD sweeps, so such a surface is not
+``linear``: Newton then checks each line-search trial with CCD from the current iterate.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sp
+
+from tissuesim.errors import InputError
+
+__all__ = ["FemSurface", "FrameSurface", "fem_surface", "frame_surface"]
+
+
+@dataclass(frozen=True, eq=False)
+class FemSurface:
+    """A FEM body's contact vertices ``vertices`` (its mesh's ids), rest positions ``rest``
+    (k, 3), triangles ``triangles`` (m, 3) over 0..k-1, and where their coordinates are in
+    the system configuration (``config_rows``) and tangent DOFs (``tangent_rows``), (3 k,)."""
+
+    name: str
+    material: object
+    vertices: np.ndarray
+    rest: np.ndarray
+    triangles: np.ndarray
+    config_rows: np.ndarray
+    tangent_rows: np.ndarray
+    linear = True
+
+    def positions(self, c: np.ndarray) -> np.ndarray:
+        return c[self.config_rows].reshape(-1, 3)
+
+    def jacobian(self, c: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(row over 0..3k-1, system tangent column, value) of dV/dq."""
+        rows = np.arange(self.tangent_rows.size)
+        return rows, self.tangent_rows, np.ones(rows.size)
+
+    def curvature(self, c: np.ndarray, g_vertices: np.ndarray):
+        return None
+
+
+@dataclass(frozen=True, eq=False)
+class FrameSurface:
+    """A frame body's embedded surface: rest points ``rest`` (k, 3), ``triangles`` (m, 3),
+    ``embedding`` (k, 4 n) with V = embedding @ z.reshape(-1, 3), the body's ``config`` and
+    ``tangent`` slices of the system and its frame type."""
+
+    name: str
+    material: object
+    rest: np.ndarray
+    triangles: np.ndarray
+    embedding: sp.csr_matrix
+    frame_type: object
+    config: slice
+    tangent: slice
+
+    @property
+    def linear(self) -> bool:
+        return not self.frame_type.rigid
+
+    def positions(self, c: np.ndarray) -> np.ndarray:
+        return self.embedding @ c[self.config].reshape(-1, 3)
+
+    def jacobian(self, c: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(row over 0..3k-1, system tangent column, value) of dV/dq = (E (x) I_3) diag T."""
+        ft, t = self.frame_type, self.frame_type.tangent_size
+        z = c[self.config]
+        n = z.size // 12
+        T = ft.tangent_map(z).reshape(n, 4, 3, t)  # virtual node a, coordinate, tangent DOF
+        E = self.embedding.tocoo()
+        frame, node = E.col // 4, E.col % 4
+        blocks = E.data[:, None, None] * T[frame, node]  # (nnz, 3, t)
+        rows = 3 * E.row[:, None, None] + np.arange(3)[None, :, None]
+        cols = self.tangent.start + t * frame[:, None, None] + np.arange(t)[None, None, :]
+        rows, cols = np.broadcast_arrays(rows, cols)
+        return rows.ravel(), cols.ravel(), blocks.ravel()
+
+    def curvature(self, c: np.ndarray, g_vertices: np.ndarray):
+        """(rows, cols, values) over the system's tangent DOFs of K(z, g_z) for rigid frames
+        (None for affine ones); g_vertices: dB/dV (k, 3)."""
+        if not self.frame_type.rigid:
+            return None
+        z = c[self.config]
+        g_z = (self.embedding.T @ g_vertices).ravel()
+        K = self.frame_type.curvature(z, g_z)  # (n, 3, 3)
+        n = K.shape[0]
+        base = self.tangent.start + 6 * np.arange(n)[:, None, None] + 3
+        rows = base + np.arange(3)[None, :, None]
+        cols = base + np.arange(3)[None, None, :]
+        rows, cols = np.broadcast_arrays(rows, cols)
+        return rows.ravel(), cols.ravel(), K.ravel()
+
+
+def fem_surface(name: str, model, config_offset: int, tangent_offset: int, choice) -> FemSurface:
+    """Body ``name``'s contact surface: its boundary, or a facet set / triangles (``choice``)."""
+    from tissuesim.contact.pairs import contact_facets
+
+    if model.mesh.dim != 3:
+        raise InputError(f"contact needs 3D bodies; {name!r} is 2D (2D contact is not built)")
+    tri = contact_facets(name, model.mesh, choice)
+    vertices = np.unique(tri)
+    local = np.full(model.mesh.n_points, -1)
+    local[vertices] = np.arange(vertices.size)
+    coords = (3 * vertices[:, None] + np.arange(3)).ravel()
+    return FemSurface(
+        name,
+        model.material,
+        vertices,
+        model.mesh.points[vertices],
+        local[tri],
+        config_offset + coords,
+        tangent_offset + coords,
+    )
+
+
+def frame_surface(name: str, model, embedding, triangles, config: slice, tangent: slice, choice):
+    """A frame body's embedded surface (``FrameBody.embed_surface``) as a contact surface; a
+    ``choice`` of (k, 3) triangles over the surface's points restricts it."""
+    tri = np.asarray(triangles, dtype=np.int64)
+    if choice is not None:
+        try:
+            tri = np.asarray(choice)
+            ok = tri.ndim == 2 and tri.shape[1] == 3 and tri.dtype.kind in "iu" and len(tri)
+        except (TypeError, ValueError):
+            ok = False
+        if not ok or (tri.min() < 0 or tri.max() >= len(embedding.points)):
+            raise InputError(
+                f"contact surface of frame body {name!r}: give (k, 3) integer triangles over "
+                f"its embedded surface's {len(embedding.points)} points (frame bodies have no "
+                "facet sets)"
+            )
+    used = np.unique(tri)
+    local = np.full(len(embedding.points), -1)
+    local[used] = np.arange(used.size)
+    return FrameSurface(
+        name,
+        model.material,
+        embedding.points[used],
+        local[tri],
+        sp.csr_matrix(embedding.matrix)[used],
+        model.frame_type,
+        config,
+        tangent,
+    )
