@@ -245,3 +245,50 @@ def test_obstacle_names_clash_with_nothing():
     with pytest.raises(ts.InputError, match="taken"):
         sim.add_body("probe", ts.box(), MATERIAL)
     assert [o.name for o in sim.obstacles] == ["probe"]
+
+
+def _closed_and_outward(surface) -> float:
+    """Every edge in exactly two triangles, once each way; returns the enclosed volume."""
+    T = surface.triangles
+    edges = np.concatenate([T[:, [0, 1]], T[:, [1, 2]], T[:, [2, 0]]])
+    directed = {tuple(e) for e in edges.tolist()}
+    assert len(directed) == len(edges)  # no directed edge twice: consistently oriented
+    assert all((b, a) in directed for a, b in directed)  # closed: each edge has its twin
+    P = surface.points
+    return float(np.einsum("ij,ij->i", P[T[:, 0]], np.cross(P[T[:, 1]], P[T[:, 2]])).sum() / 6)
+
+
+def test_capsule_and_cylinder_obstacles_are_closed_outward_surfaces_of_their_shape():
+    from tissuesim.contact.obstacles import capsule, cylinder
+
+    a, b, r = np.array([0.1, 0.2, 0.3]), np.array([0.4, -0.1, 0.5]), 0.05
+    length = np.linalg.norm(b - a)
+    cap = capsule(a, b, r, segments=48)
+    volume = _closed_and_outward(cap)
+    exact = np.pi * r**2 * length + 4 / 3 * np.pi * r**3
+    assert 0.97 * exact < volume < exact  # inscribed facets: slightly less
+    s = np.clip((cap.points - a) @ (b - a) / length**2, 0, 1)
+    gap = np.linalg.norm(cap.points - (a + s[:, None] * (b - a)), axis=1)
+    np.testing.assert_allclose(gap, r, rtol=1e-12)  # every vertex on the capsule
+    cyl = cylinder(a, b, r, segments=48)
+    assert 0.99 * np.pi * r**2 * length < _closed_and_outward(cyl) < np.pi * r**2 * length
+    with pytest.raises(ts.InputError, match="start and end must differ"):
+        capsule(a, a, r)
+    with pytest.raises(ts.InputError, match="radius"):
+        cylinder(a, b, -1.0)
+
+
+def test_a_capsule_jaw_presses_a_block_and_reports_its_depth_and_force():
+    from tissuesim.contact.obstacles import capsule
+
+    mesh = ts.box((0, 0, 0), (1, 1, 0.5), (4, 4, 2))
+    sim = ts.Simulation(mesh, MATERIAL, integrator="quasistatic", time_step=0.1)
+    sim.fix("body", ts.select.vertices_on_plane(mesh, axis=2, value=0.0))
+    jaw = capsule((0.1, 0.5, 0.6 + 0.003), (0.9, 0.5, 0.6 + 0.003), 0.1, segments=24)
+    sim.add_obstacle("jaw", jaw, translation=lambda t: (0.0, 0.0, -0.02 * t))
+    sim.set_contact(dhat=0.005)
+    records = _no_intersection_after_every_step(sim, 4)
+    depths = [r.extra["contact"]["indentation_depth"]["jaw"] for r in records]
+    assert depths[-1] == pytest.approx(0.02 * 0.4 - 0.003, abs=1e-9)
+    forces = [r.extra["forces"]["jaw"][2] for r in records]
+    assert forces[-1] < 0 and np.all(np.diff(forces[1:]) < 0)

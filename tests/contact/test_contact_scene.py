@@ -69,7 +69,7 @@ def test_a_probe_scene_runs_and_its_force_balances_the_support(tmp_path, capsys)
             "[contact]: unknown key 'frictoin'; did you mean 'friction'",
         ),
         ('name = "probe"\n', "", "obstacles[1]: name must be a non-empty string"),
-        ("sphere = {", "cylinder = {", "obstacles[1]: unknown key 'cylinder'"),
+        ("sphere = {", "torus = {", "obstacles[1]: unknown key 'torus'"),
         ("radius = 0.2", "radius = 0.0", "obstacles[1] sphere: sphere: radius must be > 0"),
         ('"-0.02 * t"', '"-0.02 * z"', "translation[2]: the obstacle's translation depends on t"),
     ],
@@ -81,3 +81,29 @@ def test_bad_contact_tables_are_one_error_line(tmp_path, capsys, old, new, words
     assert main(["run", str(scene), "--out", str(tmp_path / "o"), "--quiet"]) == 2
     err = capsys.readouterr().err
     assert err.count("tissuesim: error:") == 1 and words in err, err
+
+
+@pytest.mark.parametrize(
+    "shape, kind",
+    [
+        (
+            "capsule = { start = [0.2, 0.5, 0.603], end = [0.8, 0.5, 0.603], radius = 0.1 }",
+            "capsule",
+        ),
+        ("cylinder = { start = [0.5, 0.5, 0.52], end = [0.5, 0.5, 0.8], radius = 0.1 }", ""),
+    ],
+)
+def test_capsule_and_cylinder_obstacles_in_a_scene(tmp_path, shape, kind):
+    from tissuesim.scene.loader import load_scene
+
+    scene = tmp_path / "jaw.toml"
+    scene.write_text(
+        SCENE.replace(
+            "sphere = { center = [0.5, 0.5, 0.703], radius = 0.2, refinement = 2 }", shape
+        )
+    )
+    sim = load_scene(scene).simulation
+    (obstacle,) = sim.obstacles
+    assert getattr(obstacle.surface, "kind", "") == kind
+    record = sim.step()
+    assert record.converged and not sim.system.contact.intersecting(sim.state.x, sim.time)

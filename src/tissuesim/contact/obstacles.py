@@ -6,7 +6,8 @@ table, a probe). Their vertices are no unknowns: at time t they sit at
 X the rest vertices, c the rest centroid, u(t) a translation (m) and R(t) the rotation of the
 rotation vector r(t) (rad, about the centroid); u and r are callables of t (None: at rest).
 Surfaces come from ``frames.sampling`` (``box_surface``, ``ellipsoid_surface``,
-``read_surface`` for STL/OBJ/... files) or from the generators here (``plane``, ``sphere``).
+``read_surface`` for STL/OBJ/... files) or from the generators here (``plane``, ``sphere``,
+``capsule`` for an instrument's shaft or a grasper's jaw, ``cylinder``).
 """
 
 from __future__ import annotations
@@ -20,7 +21,7 @@ from tissuesim.errors import InputError
 from tissuesim.frames.sampling import Surface, ellipsoid_surface
 from tissuesim.validate import real, vector
 
-__all__ = ["Obstacle", "ShapeSurface", "plane", "sphere"]
+__all__ = ["Obstacle", "ShapeSurface", "capsule", "cylinder", "plane", "sphere"]
 
 Motion = Callable[[float], Sequence[float]]
 
@@ -89,6 +90,82 @@ def sphere(
     return ShapeSurface(points, triangles, source, "sphere", {"center": c, "radius": r})
 
 
+def capsule(
+    start: Sequence[float], end: Sequence[float], radius: float, segments: int = 24
+) -> Surface:
+    """A closed capsule (m): the points within ``radius`` of the segment start-end, a cylinder
+    with hemispherical ends; ``segments`` facets around the axis (and segments / 4 rings per
+    hemisphere). An instrument's shaft, a retractor's edge, a grasper's jaw."""
+    a, b, r, n = _axis("capsule", start, end, radius, segments)
+    rings = max(2, n // 4)
+    phi = np.linspace(0.0, 0.5 * np.pi, rings + 1)  # from the pole to the equator
+    length = float(np.linalg.norm(b - a))
+    z = np.concatenate([-r * np.cos(phi), length + r * np.cos(phi[::-1])])
+    rho = np.concatenate([r * np.sin(phi), r * np.sin(phi[::-1])])
+    surface = _revolve(a, b, z, rho, n, f"capsule {a.tolist()}-{b.tolist()} radius {r:g}")
+    params = {"start": a, "end": b, "radius": r}
+    return ShapeSurface(surface.points, surface.triangles, surface.source, "capsule", params)
+
+
+def cylinder(
+    start: Sequence[float], end: Sequence[float], radius: float, segments: int = 24
+) -> Surface:
+    """A closed cylinder (m) of ``radius`` about the segment start-end, with flat ends."""
+    a, b, r, n = _axis("cylinder", start, end, radius, segments)
+    length = float(np.linalg.norm(b - a))
+    z, rho = np.array([0.0, 0.0, length, length]), np.array([0.0, r, r, 0.0])
+    return _revolve(a, b, z, rho, n, f"cylinder {a.tolist()}-{b.tolist()} radius {r:g}")
+
+
+def _axis(what: str, start, end, radius, segments):
+    from tissuesim.validate import integer
+
+    a = vector(start, f"{what}: start", 3, unit="m")
+    b = vector(end, f"{what}: end", 3, unit="m")
+    if not np.linalg.norm(b - a) > 0:
+        raise InputError(f"{what}: start and end must differ (they give its axis)")
+    r = real(radius, f"{what}: radius", low=0.0, low_open=True, unit="m")
+    n = integer(segments, f"{what}: segments", low=6, high=4096)
+    return a, b, r, n
+
+
+def _revolve(a, b, z, rho, segments: int, source: str) -> Surface:
+    """The closed surface of revolution about the axis a -> b of the profile (z along the axis
+    from a, rho from it; rho = 0 only at the two ends, the poles), outward oriented."""
+    k = (b - a) / np.linalg.norm(b - a)
+    e1 = np.cross(k, [1.0, 0.0, 0.0] if abs(k[0]) < 0.9 else [0.0, 1.0, 0.0])
+    e1 /= np.linalg.norm(e1)
+    e2 = np.cross(k, e1)
+    theta = 2 * np.pi * np.arange(segments) / segments
+    around = np.cos(theta)[:, None] * e1 + np.sin(theta)[:, None] * e2  # (n, 3)
+    points, rows = [], []  # rows: the vertex ids of each profile point (1 at a pole, else n)
+    for zi, ri in zip(z, rho, strict=True):
+        ring = a + zi * k + (ri * around if ri > 0 else np.zeros((1, 3)))
+        start = sum(len(p) for p in points)
+        rows.append(start + np.arange(len(ring)))
+        points.append(ring)
+    j = np.arange(segments)
+    triangles = []
+    for lower, upper in zip(rows[:-1], rows[1:], strict=True):
+        if len(lower) == 1:  # a fan from the first pole
+            triangles.append(
+                np.column_stack([np.full(segments, lower[0]), upper[(j + 1) % segments], upper[j]])
+            )
+        elif len(upper) == 1:  # a fan to the last pole
+            triangles.append(
+                np.column_stack([lower[j], lower[(j + 1) % segments], np.full(segments, upper[0])])
+            )
+        else:
+            nxt = (j + 1) % segments
+            triangles.append(np.column_stack([lower[j], lower[nxt], upper[nxt]]))
+            triangles.append(np.column_stack([lower[j], upper[nxt], upper[j]]))
+    P, T = np.vstack(points), np.vstack(triangles)
+    volume = np.einsum("ij,ij->i", P[T[:, 0]], np.cross(P[T[:, 1]], P[T[:, 2]])).sum() / 6
+    if volume < 0:
+        T = T[:, ::-1]
+    return Surface(P, np.ascontiguousarray(T), source)
+
+
 def _rotation(r: np.ndarray) -> np.ndarray:
     angle = float(np.linalg.norm(r))
     if angle == 0.0:
@@ -125,14 +202,22 @@ class Obstacle:
 
     def indentation_depth(self, rest_points: np.ndarray, t: float) -> float | None:
         """How deep (m) the obstacle at time t reaches below the bodies' rest surface
-        ``rest_points``: for a sphere R - min |X - c(t)|, for a plane the largest distance of
-        a rest point behind it (0 when it does not reach); None for other surfaces."""
+        ``rest_points``: for a sphere R - min |X - c(t)|, for a capsule R - the smallest
+        distance to its axis segment, for a plane the largest distance of a rest point behind
+        it (0 when it does not reach); None for other surfaces."""
         kind = getattr(self.surface, "kind", "")
         if kind == "sphere":
             p = self.surface.params
             c = self._moved(p["center"][None, :], t)[0]
             gap = float(np.min(np.linalg.norm(rest_points - c, axis=1)))
             return max(0.0, p["radius"] - gap)
+        if kind == "capsule":
+            p = self.surface.params
+            a, b = self._moved(np.stack([p["start"], p["end"]]), t)
+            ab = b - a
+            s = np.clip((rest_points - a) @ ab / (ab @ ab), 0.0, 1.0)
+            gap = np.linalg.norm(rest_points - (a + s[:, None] * ab), axis=1)
+            return max(0.0, p["radius"] - float(gap.min()))
         if kind == "plane":
             p = self.surface.params
             point = self._moved(p["point"][None, :], t)[0]

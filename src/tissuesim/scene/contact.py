@@ -45,6 +45,8 @@ SHAPES = {
     "plane": {"point", "normal", "size"},
     "sphere": {"center", "radius", "refinement", "cap_angle", "cap_axis"},
     "box": {"lower", "upper", "divisions"},
+    "capsule": {"start", "end", "radius", "segments"},
+    "cylinder": {"start", "end", "radius", "segments"},
     "file": None,
 }
 OBSTACLE_KEYS = {"name", "translation", "rotation", "friction", *SHAPES}
@@ -77,7 +79,7 @@ def add_contact_tables(sim, data: dict, base_dir: Path, source: str) -> None:
 
 
 def _obstacle(sim, item: dict, base_dir: Path, where: str) -> None:
-    from tissuesim.contact.obstacles import plane, sphere
+    from tissuesim.contact.obstacles import capsule, cylinder, plane, sphere
     from tissuesim.frames.sampling import box_surface, read_surface
     from tissuesim.scene.loader import _context, _unknown, of_time
 
@@ -89,7 +91,8 @@ def _obstacle(sim, item: dict, base_dir: Path, where: str) -> None:
     if len(shapes) != 1:
         raise SceneError(
             f"{where}: give exactly one shape: plane = {{ point, normal, size }}, sphere = "
-            "{ center, radius }, box = { lower, upper }, or file = 'instrument.stl'"
+            "{ center, radius }, box = { lower, upper }, capsule or cylinder = { start, end, "
+            "radius }, or file = 'instrument.stl'"
         )
     shape = shapes[0]
     here = f"{where} {shape}"
@@ -104,7 +107,13 @@ def _obstacle(sim, item: dict, base_dir: Path, where: str) -> None:
             if not isinstance(value, dict):
                 raise SceneError(f"{here}: must be a table of {sorted(SHAPES[shape])}")
             _unknown(value, SHAPES[shape], here)
-            make = {"plane": plane, "sphere": sphere, "box": box_surface}[shape]
+            make = {
+                "plane": plane,
+                "sphere": sphere,
+                "box": box_surface,
+                "capsule": capsule,
+                "cylinder": cylinder,
+            }[shape]
             surface = make(**value)
     motions = {}
     for key in ("translation", "rotation"):
