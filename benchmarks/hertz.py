@@ -53,13 +53,15 @@ def run(
     material: str,
     dhat: float = DHAT,
     stiffness=None,
+    max_iterations: int = 150,
 ) -> dict:
     with tempfile.TemporaryDirectory() as tmp:
         mesh = ts.read_mesh(graded_block(Path(tmp) / "block.msh", h0, r_fine, growth))
     p = mesh.points
     tol = 1e-9
     law = ts.make_material(material, youngs_modulus=E, poisson_ratio=NU)
-    sim = ts.Simulation(mesh, law, integrator="quasistatic", time_step=1.0)
+    newton = ts.NewtonOptions(max_iterations=max_iterations)
+    sim = ts.Simulation(mesh, law, integrator="quasistatic", time_step=1.0, newton=newton)
     sim.fix("body", np.unique(mesh.facet_sets["base"]), name="base")
     sim.add_dirichlet(np.flatnonzero(p[:, 0] < tol), components=[0], name="symmetry_x")
     sim.add_dirichlet(np.flatnonzero(p[:, 1] < tol), components=[1], name="symmetry_y")
@@ -108,6 +110,7 @@ def main() -> None:
     parser.add_argument("--material", default="neo_hookean")
     parser.add_argument("--dhat", type=float, default=DHAT, help="barrier activation distance (m)")
     parser.add_argument("--stiffness", default=None, help='kappa (Pa) or "adaptive"')
+    parser.add_argument("--max-iterations", type=int, default=150, help="Newton, per solve")
     args = parser.parse_args()
     stiffness = args.stiffness
     if stiffness is not None and stiffness != "adaptive":
@@ -123,6 +126,7 @@ def main() -> None:
             args.material,
             args.dhat,
             stiffness,
+            args.max_iterations,
         )
         results.append(r)
         print(json.dumps({k: v for k, v in r.items() if k != "rows"}), flush=True)
