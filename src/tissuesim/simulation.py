@@ -614,6 +614,7 @@ class Simulation(SetupCalls, BodyResults):
             "min_distance": distance,
             "active_pairs": pairs,
             "candidates_and_barrier_s": stats.candidates_and_barrier_s,
+            "candidates_s": stats.candidates_s,
             "ccd_s": stats.ccd_s,
             "barrier_evaluations": stats.evaluations,
             "ccd_calls": stats.ccd_calls,

@@ -164,3 +164,27 @@ def test_a_grasper_lets_go_at_its_release_time_and_the_body_falls():
     assert all("hand" not in r.extra["forces"] for r in free)
     vz = sim.state.v.reshape(-1, 3)[:, 2].mean()
     assert vz == pytest.approx(-G * 0.05, rel=0.05)  # falling freely since t = 0.05 s
+
+
+def test_grasp_lift_holds_the_cube_by_friction_and_the_jaws_carry_its_weight(tmp_path):
+    """The shipped grasp_lift scene: after the table has gone the cube rises with the jaws
+    (20 mm/s), the jaws' vertical forces sum to its weight, and their friction carries it."""
+    summary = _run("grasp_lift", tmp_path)
+    steps = summary["forces"]
+    weight = 1000.0 * 0.02**3 * G
+    for row in steps[-10:]:  # lifting, the table long gone
+        assert row["table"] == [0.0, 0.0, 0.0]
+        assert row["left"][2] + row["right"][2] == pytest.approx(weight, rel=0.02)
+        assert row["left"][0] > 0.5 and row["right"][0] < -0.5  # the squeeze, N
+        # friction holds it up: the normal parts' vertical components nearly cancel
+        held = row["left.friction"][2] + row["right.friction"][2]
+        assert held > 0.9 * weight
+    scene = load_scene(example_path("grasp_lift"))
+    sim = scene.simulation
+    heights = []
+    for _ in range(40):
+        sim.step()
+        assert not sim.system.contact.intersecting(sim.state.x, sim.time)
+        heights.append(sim.positions[:, 2].mean())
+    rise = (heights[-1] - heights[-11]) / (10 * 0.02)
+    assert rise == pytest.approx(0.02, rel=0.02)  # it moves with the jaws
