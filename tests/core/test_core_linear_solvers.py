@@ -184,3 +184,24 @@ def test_superlu_reused_ordering_has_the_fill_of_a_fresh_one():
     assert reused <= 1.01 * fresh
     b = -acc.gradient[shuffle]
     np.testing.assert_allclose(A @ solver.solve(b), b, atol=1e-9 * np.abs(b).max())
+
+
+def test_superlu_pivots_on_the_diagonal_and_reports_a_singular_matrix_as_not_definite():
+    """Newton's matrix is SPD (shifted when not): SuperLU keeps diagonal pivots, so a stiff
+    entry does not pull pivots off the diagonal, and an exactly singular matrix is a
+    NotPositiveDefiniteError, which makes Newton shift the matrix, not a crash."""
+    import scipy.sparse as sp
+
+    from tissuesim.solve.linear import NotPositiveDefiniteError, SuperLUSolver
+
+    rng = np.random.default_rng(0)
+    B = sp.random(60, 60, density=0.1, random_state=1)
+    A = (B @ B.T + sp.identity(60) * 1e-3).tocsr()
+    A[3, 3] += 1e9  # a stiff entry, as a barrier or a near-incompressible volume gives
+    solver = SuperLUSolver()
+    solver.factorize(A.tocsr())
+    b = rng.standard_normal(60)
+    x = solver.solve(b)
+    assert np.linalg.norm(A @ x - b) <= 1e-6 * np.linalg.norm(b)
+    with pytest.raises(NotPositiveDefiniteError):
+        SuperLUSolver().factorize(sp.csr_matrix(np.array([[1.0, 1.0], [1.0, 1.0]])))

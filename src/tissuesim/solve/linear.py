@@ -220,7 +220,7 @@ class SuperLUSolver(LinearSolver):
     def factorize(self, A: sp.csr_matrix) -> None:
         try:
             self._factorize(A)
-        except RuntimeError as exc:  # a zero pivot: with diagonal pivots, not positive definite
+        except RuntimeError as exc:  # "exactly singular": not positive definite either
             raise NotPositiveDefiniteError(str(exc)) from exc
 
     def _factorize(self, A: sp.csr_matrix) -> None:
