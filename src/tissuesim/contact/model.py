@@ -92,6 +92,15 @@ class ContactModel:
             raise InputError("contact needs at least one body with a surface")
         from tissuesim.contact.pairs import PairTable
 
+        dims = {surface.dim for surface in self.surfaces}
+        if len(dims) != 1:
+            raise InputError("contact: the bodies in contact must all be 2D or all be 3D")
+        self.dim = dims.pop()
+        if self.dim == 2 and self.obstacles:
+            raise InputError(
+                "contact in 2D: obstacles are not built (they are 3D surfaces); model the "
+                "obstacle as a 2D body with prescribed motion"
+            )
         rest, faces, groups, self.slices = [], [], [], {}
         start = 0
         for surface in self.surfaces:
@@ -116,15 +125,18 @@ class ContactModel:
             self.settings.pairs,
         )
         self.rest = np.vstack(rest)
-        F = np.ascontiguousarray(np.vstack(faces), dtype=np.int32)
-        E = ipctk.edges(F)
+        facets = np.ascontiguousarray(np.vstack(faces), dtype=np.int32)
+        if self.dim == 3:
+            F, E = facets, ipctk.edges(facets)
+        else:  # 2D: the boundary edges, no faces (point-edge and edge-edge contact)
+            F, E = np.zeros((0, 3), dtype=np.int32), facets
         self.mesh = ipctk.CollisionMesh(np.asfortranarray(self.rest), E, F)
         if self.table.filtered:
             # pairs of groups that do not collide are dropped in the broad phase (a compiled
             # filter: a Python callable deadlocks ipctk's threads and is slow)
             self.mesh.can_collide = self.table.collision_filter(ipctk, self.group, start)
         # the obstacles' vertex coordinates as unknowns after the system's DOFs (kinematic.py)
-        self.n_obstacle = 3 * (start - self.n_deformable)
+        self.n_obstacle = self.dim * (start - self.n_deformable)
         # rigid frames move points on arcs: line-search trials are checked by CCD (surfaces.py)
         self.linear = all(s.linear for s in self.surfaces)
         self._constant_selection: dict = {}
@@ -174,7 +186,7 @@ class ContactModel:
 
     # -- the map from the system's DOFs to the collision vertices (surfaces.py) ------------------
     def selection(self, c: np.ndarray, augmented: bool = False) -> sp.csr_matrix:
-        """dV/dq (3 n_vertices, n_dofs [+ n_obstacle]): the bodies' Jacobians, and with
+        """dV/dq (d n_vertices, n_dofs [+ n_obstacle]): the bodies' Jacobians, and with
         ``augmented`` the identity on the obstacles' coordinates (unknowns after the system's);
         constant (kept) when every surface is a FEM body's."""
         constant = all(isinstance(s, FemSurface) for s in self.surfaces)
@@ -183,18 +195,18 @@ class ContactModel:
         rows, cols, vals = [], [], []
         for surface in self.surfaces:
             r, cc, v = surface.jacobian(c)
-            rows.append(r + 3 * self.slices[surface.name][0].start)
+            rows.append(r + self.dim * self.slices[surface.name][0].start)
             cols.append(cc)
             vals.append(v)
         n_cols = self.n_dofs
         if augmented:
-            rows.append(3 * self.n_deformable + np.arange(self.n_obstacle))
+            rows.append(self.dim * self.n_deformable + np.arange(self.n_obstacle))
             cols.append(self.n_dofs + np.arange(self.n_obstacle))
             vals.append(np.ones(self.n_obstacle))
             n_cols += self.n_obstacle
         S = sp.csr_matrix(
             (np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
-            shape=(3 * len(self.rest), n_cols),
+            shape=(self.dim * len(self.rest), n_cols),
         )
         if constant:
             self._constant_selection[augmented] = S
@@ -212,7 +224,8 @@ class ContactModel:
             hess = (S.T @ H_V @ S).tocsr()
             rows, cols, vals = [], [], []
             for surface in self.surfaces:
-                part = surface.curvature(c, g_V.reshape(-1, 3)[self.slices[surface.name][0]])
+                g_surface = g_V.reshape(-1, self.dim)[self.slices[surface.name][0]]
+                part = surface.curvature(c, g_surface)
                 if part is not None:
                     rows.append(part[0])
                     cols.append(part[1])
@@ -317,7 +330,7 @@ class ContactModel:
     def vertices(
         self, c: np.ndarray, t: float | None = None, obstacle: np.ndarray | None = None
     ) -> np.ndarray:
-        """Collision-mesh vertices (n, 3) for the system configuration c, the obstacles at
+        """Collision-mesh vertices (n, d) for the system configuration c, the obstacles at
         ``obstacle`` (flat), else at time t, else where they are (``obstacle_state``, or at
         ``self.time``)."""
         V = np.empty_like(self.rest)
@@ -326,7 +339,7 @@ class ContactModel:
         if obstacle is None and t is None and self.obstacle_state is not None:
             obstacle = self.obstacle_state
         if obstacle is not None:
-            V[self.n_deformable :] = np.reshape(obstacle, (-1, 3))
+            V[self.n_deformable :] = np.reshape(obstacle, (-1, self.dim))
         else:
             t = self.time if t is None else t
             for ob in self.obstacles:
@@ -473,7 +486,7 @@ class ContactModel:
         V = self.vertices(c)
         col = self._collisions(V)
         normal = (
-            self.barrier.gradient(col, self.mesh, V).reshape(-1, 3)
+            self.barrier.gradient(col, self.mesh, V).reshape(-1, self.dim)
             if len(col)
             else np.zeros_like(V)
         )
@@ -482,12 +495,12 @@ class ContactModel:
         if self.has_friction and state is not None and len(state[0]):
             tangential, V_start, potential = state
             U = np.asfortranarray(V - V_start)
-            friction = potential.gradient(tangential, self.mesh, U).reshape(-1, 3)
+            friction = potential.gradient(tangential, self.mesh, U).reshape(-1, self.dim)
         out = {}
         for ob in self.obstacles:
             rows = self.slices[ob.name][0]
             n = normal[rows].sum(axis=0)
-            f = np.zeros(3) if friction is None else friction[rows].sum(axis=0)
+            f = np.zeros(self.dim) if friction is None else friction[rows].sum(axis=0)
             out[ob.name] = n + f
             if self.has_friction:
                 out[f"{ob.name}.normal"] = n

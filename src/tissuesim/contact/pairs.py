@@ -47,8 +47,9 @@ class ContactPair:
 
 
 def contact_facets(name: str, mesh, surface) -> np.ndarray:
-    """The triangles (k, 3) of body ``name`` that take part in contact: its whole boundary
-    (``surface`` None), a facet set of its mesh by name, or a (k, 3) array of vertex indices."""
+    """The boundary facets (k, d: triangles in 3D, edges in 2D) of body ``name`` that take part
+    in contact: its whole boundary (``surface`` None), a facet set of its mesh by name, or a
+    (k, d) array of vertex indices."""
     from tissuesim.mesh.boundary import boundary_facets
 
     if surface is None:
@@ -64,13 +65,13 @@ def contact_facets(name: str, mesh, surface) -> np.ndarray:
     else:
         try:
             tri = np.asarray(surface)
-            ok = tri.ndim == 2 and tri.shape[1] == 3 and tri.dtype.kind in "iu"
+            ok = tri.ndim == 2 and tri.shape[1] == mesh.dim and tri.dtype.kind in "iu"
         except (TypeError, ValueError):
             ok = False
         if not ok:
             raise InputError(
-                f"contact surface of {name!r}: give a facet set name or a (k, 3) integer array "
-                f"of vertex indices, not {short(surface)}"
+                f"contact surface of {name!r}: give a facet set name or a (k, {mesh.dim}) integer "
+                f"array of vertex indices, not {short(surface)}"
             )
         if tri.size and (tri.min() < 0 or tri.max() >= mesh.n_points):
             raise InputError(
@@ -78,8 +79,9 @@ def contact_facets(name: str, mesh, surface) -> np.ndarray:
             )
     if len(tri) == 0:
         raise InputError(f"contact surface of {name!r} has no triangles")
-    if tri.shape[1] != 3:
-        raise InputError(f"contact surface of {name!r} must be triangles (a 3D mesh's facets)")
+    if tri.shape[1] != mesh.dim:
+        kind = "triangles (a 3D mesh's facets)" if mesh.dim == 3 else "edges (a 2D mesh's facets)"
+        raise InputError(f"contact surface of {name!r} must be {kind}")
     return tri.astype(np.int64)
 
 

@@ -29,8 +29,9 @@ __all__ = ["FemSurface", "FrameSurface", "fem_surface", "frame_surface"]
 @dataclass(frozen=True, eq=False)
 class FemSurface:
     """A FEM body's contact vertices ``vertices`` (its mesh's ids), rest positions ``rest``
-    (k, 3), triangles ``triangles`` (m, 3) over 0..k-1, and where their coordinates are in
-    the system configuration (``config_rows``) and tangent DOFs (``tangent_rows``), (3 k,)."""
+    (k, d), facets ``triangles`` (m, d: triangles in 3D, edges in 2D) over 0..k-1, and where
+    their coordinates are in the system configuration (``config_rows``) and tangent DOFs
+    (``tangent_rows``), (d k,)."""
 
     name: str
     material: object
@@ -41,11 +42,15 @@ class FemSurface:
     tangent_rows: np.ndarray
     linear = True
 
+    @property
+    def dim(self) -> int:
+        return self.rest.shape[1]
+
     def positions(self, c: np.ndarray) -> np.ndarray:
-        return c[self.config_rows].reshape(-1, 3)
+        return c[self.config_rows].reshape(-1, self.dim)
 
     def jacobian(self, c: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """(row over 0..3k-1, system tangent column, value) of dV/dq."""
+        """(row over 0..dk-1, system tangent column, value) of dV/dq."""
         rows = np.arange(self.tangent_rows.size)
         return rows, self.tangent_rows, np.ones(rows.size)
 
@@ -67,6 +72,7 @@ class FrameSurface:
     frame_type: object
     config: slice
     tangent: slice
+    dim = 3
 
     @property
     def linear(self) -> bool:
@@ -106,16 +112,16 @@ class FrameSurface:
 
 
 def fem_surface(name: str, model, config_offset: int, tangent_offset: int, choice) -> FemSurface:
-    """Body ``name``'s contact surface: its boundary, or a facet set / triangles (``choice``)."""
+    """Body ``name``'s contact surface: its boundary (triangles in 3D, edges in 2D), or a
+    facet set / facets (``choice``)."""
     from tissuesim.contact.pairs import contact_facets
 
-    if model.mesh.dim != 3:
-        raise InputError(f"contact needs 3D bodies; {name!r} is 2D (2D contact is not built)")
+    d = model.mesh.dim
     tri = contact_facets(name, model.mesh, choice)
     vertices = np.unique(tri)
     local = np.full(model.mesh.n_points, -1)
     local[vertices] = np.arange(vertices.size)
-    coords = (3 * vertices[:, None] + np.arange(3)).ravel()
+    coords = (d * vertices[:, None] + np.arange(d)).ravel()
     return FemSurface(
         name,
         model.material,
