@@ -138,7 +138,7 @@ def main() -> None:
         f"--steps {args.steps} --step {args.step:g} --growth {args.growth} "
         f"--material {args.material}`; R = {R} m, E = {E} Pa, nu = {NU}, quarter block "
         f"{L} m wide and deep clamped at its base, graded by gmsh, dhat = {args.dhat} m, "
-        f"stiffness {args.stiffness or 'E'}, probe a "
+        f"stiffness {args.stiffness or 'adaptive (from E)'}, probe a "
         "30-degree cap of an icosphere of refinement 7.",
         "",
         "| h0 (tets) | "

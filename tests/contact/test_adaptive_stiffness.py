@@ -43,7 +43,7 @@ def test_a_block_on_a_floor_with_adaptive_stiffness_rests_with_its_weight():
     sim = ts.Simulation(mesh, material, density=100.0, integrator="backward_euler", time_step=0.05)
     sim.add_gravity([0.0, 0.0, -9.81])
     sim.add_obstacle("floor", plane((0.5, 0.5, -0.004), (0, 0, 1), 4.0))
-    sim.set_contact(dhat=0.01, stiffness="adaptive")
+    sim.set_contact(dhat=0.01)  # adaptive is the default
     contact = sim.system.contact
     assert contact.adaptive is not None and contact.kappa == pytest.approx(1e4)
     records = []
@@ -56,6 +56,17 @@ def test_a_block_on_a_floor_with_adaptive_stiffness_rests_with_its_weight():
     force = np.asarray(records[-1].extra["forces"]["floor"])
     assert force[2] == pytest.approx(100.0 * 0.5 * 9.81, rel=0.02)
     assert sim.describe()["contact"]["adaptive_stiffness"] is True
+
+
+def test_a_number_fixes_the_stiffness_and_adaptive_can_be_named():
+    sim = ts.Simulation(
+        ts.box((0, 0, 0), (1, 1, 1), (1, 1, 1)),
+        ts.make_material("neo_hookean", youngs_modulus=1e4, poisson_ratio=0.3),
+    )
+    sim.set_contact(stiffness=3e4)
+    assert sim.system.contact.adaptive is None and sim.system.contact.kappa == 3e4
+    sim.set_contact(stiffness="adaptive")
+    assert sim.system.contact.adaptive is not None
 
 
 def test_a_stiffness_word_other_than_adaptive_is_one_clear_error():

@@ -39,8 +39,8 @@ __all__ = ["ContactModel", "ContactSettings", "ContactStats"]
 @dataclass(frozen=True)
 class ContactSettings:
     """dhat: activation distance (m; None: 1e-3 of the scene's bounding-box diagonal).
-    stiffness: kappa (Pa; None: the largest Young's modulus E of the bodies in contact;
-    "adaptive": IPC's adaptive kappa, at least E, contact/stiffness.py)."""
+    stiffness: kappa (Pa, fixed) or None / "adaptive": IPC's adaptive kappa, starting at the
+    largest Young's modulus E of the bodies in contact, within [E, 100 E] (contact/stiffness.py)."""
 
     dhat: float | None = None
     stiffness: float | str | None = None
@@ -144,8 +144,8 @@ class ContactModel:
         diag = float(np.linalg.norm(np.ptp(self.rest, axis=0)))
         self.dhat = self.settings.dhat if self.settings.dhat is not None else 1e-3 * diag
         default = max(_youngs(s.material) for s in self.surfaces)
-        self.adaptive = None  # contact/stiffness.py, with stiffness = "adaptive"
-        if self.settings.stiffness == "adaptive":
+        self.adaptive = None  # contact/stiffness.py, unless a fixed stiffness is given
+        if self.settings.stiffness in (None, "adaptive"):
             self.adaptive = AdaptiveStiffness(default, diag)
         fixed = isinstance(self.settings.stiffness, float)
         self.set_stiffness(self.settings.stiffness if fixed else default)

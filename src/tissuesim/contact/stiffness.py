@@ -13,6 +13,9 @@ stiffest material dhat thick, and kappa_max = MAX_FACTOR x E). After every step,
 smallest surface distance is below EPSILON x the scene's diagonal and still shrinking, kappa
 doubles (up to kappa_max; ``ipctk.update_barrier_stiffness``): the surfaces may not get closer
 than round-off can tell apart. The value is reported per step (``extra.contact.stiffness_Pa``).
+It is the default; a number given as the contact ``stiffness`` fixes kappa instead. In every
+scene measured (a block on a floor, a fast drop, the self-contact fold, Hertz) the balance
+stayed at kappa_min = E: the physical scale already balances elasticity there.
 """
 
 from __future__ import annotations

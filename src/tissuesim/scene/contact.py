@@ -5,8 +5,8 @@
 
     [contact]
     dhat = 0.001          # m, activation distance (default 1e-3 of the scene's size)
-    stiffness = 1e4       # Pa, barrier kappa (default the largest Young's modulus E);
-                          # "adaptive": IPC's adaptive kappa, E to 100 E
+    stiffness = 1e4       # Pa, a fixed barrier kappa (default: IPC's adaptive kappa,
+                          # from the largest Young's modulus E, within [E, 100 E])
     friction = 0.3        # Coulomb mu (default 0); eps_v (m/s), friction_iterations
     surfaces = { block = "zmax" }   # a body's contact surface: a facet set (default: boundary)
 
