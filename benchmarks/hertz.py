@@ -12,7 +12,8 @@ contact point, growing linearly at ``--growth`` per metre of distance to L / 8. 
 Hertz for a rigid sphere on a half-space: F = 4/3 E* sqrt(R) d^(3/2), E* = E / (1 - nu^2); the
 quarter carries F / 4. d is the probe's depth below the rest surface minus the barrier gap (the
 surface stays ``min_distance`` away from the sphere). Prints and writes the table of F / F_Hertz
-per depth for each h0 (``results/hertz.md``).
+per depth for each h0 (``results/hertz_<material>_last_run.md``; the README's table,
+collected from several runs, is ``results/hertz_linear.md``).
 
     python3 benchmarks/hertz.py --steps 2 --material linear   # the README's table
     python3 benchmarks/hertz.py --h0 0.2 --steps 2 --material linear
@@ -136,7 +137,9 @@ def main() -> None:
         "",
         f"`python3 benchmarks/hertz.py --h0 {' '.join(f'{h:g}' for h in args.h0)} "
         f"--steps {args.steps} --step {args.step:g} --growth {args.growth} "
-        f"--material {args.material}`; R = {R} m, E = {E} Pa, nu = {NU}, quarter block "
+        f"--material {args.material} --dhat {args.dhat:g}"
+        + (f" --stiffness {args.stiffness}" if args.stiffness else "")
+        + f"`; R = {R} m, E = {E} Pa, nu = {NU}, quarter block "
         f"{L} m wide and deep clamped at its base, graded by gmsh, dhat = {args.dhat} m, "
         f"stiffness {args.stiffness or 'adaptive (from E)'}, probe a "
         "30-degree cap of an icosphere of refinement 7.",
@@ -153,8 +156,8 @@ def main() -> None:
             f"{[row['newton_iterations'] for row in r['rows']]} |"
         )
     lines.append("")
-    tag = "" if args.stiffness is None and args.dhat == DHAT else "_variant"
-    out = Path(__file__).resolve().parent / "results" / f"hertz_{args.material}{tag}.md"
+    # the run's own table; results/hertz_linear.md is the curated table of many runs
+    out = Path(__file__).resolve().parent / "results" / f"hertz_{args.material}_last_run.md"
     out.write_text("\n".join(lines))
     print(f"wrote {out}")
 

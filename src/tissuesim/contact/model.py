@@ -139,6 +139,8 @@ class ContactModel:
         self.n_obstacle = self.dim * (start - self.n_deformable)
         # rigid frames move points on arcs: line-search trials are checked by CCD (surfaces.py)
         self.linear = all(s.linear for s in self.surfaces)
+        # dV/dq is constant (kept per augmented flag) when every surface is a FEM body's
+        self._constant = all(isinstance(s, FemSurface) for s in self.surfaces)
         self._constant_selection: dict = {}
         self.obstacle_state: np.ndarray | None = None  # where the obstacles are (flat), if lagged
         diag = float(np.linalg.norm(np.ptp(self.rest, axis=0)))
@@ -189,8 +191,7 @@ class ContactModel:
         """dV/dq (d n_vertices, n_dofs [+ n_obstacle]): the bodies' Jacobians, and with
         ``augmented`` the identity on the obstacles' coordinates (unknowns after the system's);
         constant (kept) when every surface is a FEM body's."""
-        constant = all(isinstance(s, FemSurface) for s in self.surfaces)
-        if constant and augmented in self._constant_selection:
+        if self._constant and augmented in self._constant_selection:
             return self._constant_selection[augmented]
         rows, cols, vals = [], [], []
         for surface in self.surfaces:
@@ -208,7 +209,7 @@ class ContactModel:
             (np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
             shape=(self.dim * len(self.rest), n_cols),
         )
-        if constant:
+        if self._constant:
             self._constant_selection[augmented] = S
         return S
 
@@ -404,17 +405,8 @@ class ContactModel:
     ) -> float:
         """The largest fraction of the straight move c0 -> c1 (obstacles y0 -> y1, or where
         they are) free of intersection (CCD)."""
-        start = time.perf_counter()
-        step = self._ipctk.compute_collision_free_stepsize(
-            self.mesh,
-            self.vertices(c0, obstacle=y0),
-            self.vertices(c1, obstacle=y1),
-            broad_phase=self.broad_phase,
-            narrow_phase_ccd=self.ccd,
-        )
-        self.stats.ccd_s += time.perf_counter() - start
-        self.stats.ccd_calls += 1
-        return float(step)
+        V0, V1 = self.vertices(c0, obstacle=y0), self.vertices(c1, obstacle=y1)
+        return float(self._sweep(self._ipctk.compute_collision_free_stepsize, V0, V1))
 
     def path_free(
         self,
@@ -426,31 +418,22 @@ class ContactModel:
         """Whether the straight move of the vertices from c0 to c1 (obstacles y0 -> y1, or
         where they are) is free of intersection: Newton's check of each line-search trial when
         rigid frames move points on arcs (``linear`` False)."""
-        start = time.perf_counter()
-        free = self._ipctk.is_step_collision_free(
-            self.mesh,
-            self.vertices(c0, obstacle=y0),
-            self.vertices(c1, obstacle=y1),
-            broad_phase=self.broad_phase,
-            narrow_phase_ccd=self.ccd,
-        )
-        self.stats.ccd_s += time.perf_counter() - start
-        self.stats.ccd_calls += 1
-        return bool(free)
+        V0, V1 = self.vertices(c0, obstacle=y0), self.vertices(c1, obstacle=y1)
+        return bool(self._sweep(self._ipctk.is_step_collision_free, V0, V1))
 
     def reachable(self, c0: np.ndarray, t0: float, c1: np.ndarray, t1: float) -> bool:
         """Whether the straight move from (c0, obstacles at t0) to (c1, obstacles at t1) is
         free of intersection: the start of a step's Newton solve must be reached so."""
+        V0, V1 = self.vertices(c0, t0), self.vertices(c1, t1)
+        return bool(self._sweep(self._ipctk.is_step_collision_free, V0, V1))
+
+    def _sweep(self, query, V0: np.ndarray, V1: np.ndarray):
+        """One CCD query over the straight move V0 -> V1, timed into the step's stats."""
         start = time.perf_counter()
-        free = self._ipctk.is_step_collision_free(
-            self.mesh,
-            self.vertices(c0, t0),
-            self.vertices(c1, t1),
-            broad_phase=self.broad_phase,
-            narrow_phase_ccd=self.ccd,
-        )
+        out = query(self.mesh, V0, V1, broad_phase=self.broad_phase, narrow_phase_ccd=self.ccd)
         self.stats.ccd_s += time.perf_counter() - start
-        return bool(free)
+        self.stats.ccd_calls += 1
+        return out
 
     def intersecting(self, c: np.ndarray, t: float | None = None) -> bool:
         return bool(self._ipctk.has_intersections(self.mesh, self.vertices(c, t)))
