@@ -19,18 +19,20 @@ from tissuesim.constraints.dirichlet import DirichletCondition, Elimination, Pre
 from tissuesim.energies.accumulator import Accumulator
 from tissuesim.energies.elastic import ElasticEnergy
 from tissuesim.energies.mass import MassKind, MassMatrix
+from tissuesim.energies.mean_dilatation import MeanDilatationEnergy
 from tissuesim.errors import InputError
 from tissuesim.kinematics.p1 import P1Kinematics
+from tissuesim.kinematics.p2 import P2Kinematics
 from tissuesim.materials.base import Material
 from tissuesim.mesh.mesh import Mesh
-from tissuesim.validate import check_memory, positive_field
+from tissuesim.validate import check_memory, positive_field, short
 
 __all__ = ["Model"]
 
 
 #: bytes a model needs per cell before any factorisation (measured: 2.7 KB per triangle,
-#: 9.8 KB per tetrahedron with its sparsity pattern and scatter maps)
-MODEL_BYTES_PER_CELL = {2: 2500, 3: 9000}
+#: 9.8 KB per tetrahedron with its sparsity pattern and scatter maps); keys (dim, order)
+MODEL_BYTES_PER_CELL = {(2, 1): 2500, (3, 1): 9000, (2, 2): 8000, (3, 2): 40000}
 
 
 @dataclass(eq=False)
@@ -42,23 +44,37 @@ class Model:
     loads: list = field(default_factory=list)
     conditions: Sequence[DirichletCondition] = ()
     backend: str = "auto"  # "auto", "numba" or "numpy" (see backend.py)
+    formulation: str = "displacement"  # or "mean_dilatation" (energies/mean_dilatation.py)
 
     def __post_init__(self) -> None:
         cells = self.mesh.n_cells
         check_memory(
-            cells * MODEL_BYTES_PER_CELL[self.mesh.dim],
+            cells * MODEL_BYTES_PER_CELL[self.mesh.dim, self.mesh.order],
             f"a model of {self.mesh.source} ({cells} cells)",
             "Use a coarser mesh.",
         )
         self.density = positive_field(self.density, "density", self.mesh.n_cells, "kg/m^3")
-        self.kinematics = P1Kinematics.from_mesh(self.mesh)
-        self.pattern = SparsityPattern.from_stencils(
-            self.kinematics.n_dofs, [self.kinematics.stencil]
-        )
+        kind = P1Kinematics if self.mesh.order == 1 else P2Kinematics
+        self.kinematics = kind.from_mesh(self.mesh)
         self.backend, self.backend_reason = resolve_backend(self.backend)
-        self.elastic = ElasticEnergy(
-            self.kinematics, self.material, stencil_id=0, backend=self.backend
+        if self.formulation == "displacement":
+            self.elastic = ElasticEnergy(
+                self.kinematics, self.material, stencil_id=0, backend=self.backend
+            )
+            extra = None
+        elif self.formulation == "mean_dilatation":
+            self.elastic = MeanDilatationEnergy(self.kinematics, self.material)
+            extra = self.elastic.extra_entries()
+        else:
+            raise InputError(
+                f"formulation must be 'displacement' or 'mean_dilatation', not "
+                f"{short(self.formulation)}"
+            )
+        self.pattern = SparsityPattern.from_stencils(
+            self.kinematics.n_dofs, [self.kinematics.cell_stencil], extra
         )
+        if extra is not None:
+            self.elastic.set_pattern(self.pattern)
         self.mass = MassMatrix.build(self.kinematics, self.density, self.pattern, self.mass_kind)
         self.set_conditions(self.conditions)
 

@@ -238,9 +238,17 @@ class Simulation(SetupCalls, BodyResults):
         *,
         density: float | np.ndarray = 1000.0,
         mass: MassKind = "consistent",
+        order: int | None = None,
+        formulation: str = "displacement",
     ) -> FemBody:
         """A FEM body: a triangle or tetrahedral mesh (``mesh.box``, ``mesh.ellipsoid``,
-        ``read_mesh``) of one material; density kg/m^3 (scalar or one per element)."""
+        ``read_mesh``) of one material; density kg/m^3 (scalar or one per element).
+
+        order: None (the mesh's), 1, or 2 (a linear mesh gets a node at every edge's midpoint;
+        vertex indices are kept, point sets gain the midside nodes between their vertices).
+        formulation: "displacement", or "mean_dilatation" for nearly incompressible laws
+        (nu >= 0.45): the lambda term on element (P2) or vertex-patch (P1) volume averages,
+        free of volumetric locking (``energies/mean_dilatation.py``)."""
         name = self._new_name(name, "body")
         if self.tissue is not None:
             raise InputError("add the organs before the tissue that connects them")
@@ -252,6 +260,19 @@ class Simulation(SetupCalls, BodyResults):
                 f"{validate.short(material)}"
             )
         validate.choice(mass, "mass", ("consistent", "lumped"))
+        validate.choice(formulation, "formulation", ("displacement", "mean_dilatation"))
+        if order is not None:
+            if isinstance(order, bool) or order not in (1, 2):
+                raise InputError(f"order must be 1 or 2, not {validate.short(order)}")
+            if order == 2 and mesh.order == 1:
+                from tissuesim.mesh.quadratic import elevate_mesh
+
+                mesh = elevate_mesh(mesh)
+            elif order == 1 and mesh.order == 2:
+                raise InputError(
+                    f"add_body {name!r}: order 1 was asked for but {mesh.source} has quadratic "
+                    "elements; give a linear mesh or order = 2"
+                )
         if self.explicit:
             mass = "lumped"  # the explicit update inverts the mass: it must be diagonal
         body = FemBody(
@@ -260,6 +281,7 @@ class Simulation(SetupCalls, BodyResults):
             material,
             density=density,
             mass=mass,
+            formulation=formulation,
             backend=self.backend,
             claim_name=self._claim_force_name,
             changed=functools.partial(self._changed, name),

@@ -105,7 +105,7 @@ class BodyResults:
         s, gap = self.system, 0.0
         for a in s.attachments:
             organ = s.bodies[a.organ]
-            y = a.organ_positions(organ.mesh.cells, s.body_config(self._state.x, a.organ))
+            y = a.organ_positions(organ.mesh.simplices, s.body_config(self._state.x, a.organ))
             p = a.tissue.positions(s.body_config(self._state.x, a.tissue_body))
             gap = max(gap, float(np.linalg.norm(p - y, axis=1).max()))
         return gap
@@ -122,7 +122,7 @@ class BodyResults:
         for name, sign, i in self._named_attachments:
             a = s.attachments[i]
             organ = s.bodies[a.organ]
-            y = a.organ_positions(organ.mesh.cells, s.body_config(self._state.x, a.organ))
+            y = a.organ_positions(organ.mesh.simplices, s.body_config(self._state.x, a.organ))
             p = a.tissue.positions(s.body_config(self._state.x, a.tissue_body))
             # the frames pull the FEM body's points towards p: sign -1 reports the force on
             # the frame body instead
@@ -194,7 +194,7 @@ class BodyResults:
             rows += np.asarray(abs(K).sum(axis=1)).ravel()
         for a in s.attachments:
             organ = s.bodies[a.organ]
-            B = a.organ_matrix(organ.mesh.cells, organ.mesh.n_points)
+            B = a.organ_matrix(organ.mesh.simplices, organ.mesh.n_points)
             K = abs(B.T @ sp.diags(a.stiffness) @ B)
             per_vertex = np.asarray(K.sum(axis=1)).ravel()
             start = s.tangent_slices[a.organ].start

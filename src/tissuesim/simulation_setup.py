@@ -273,7 +273,7 @@ class SetupCalls:
 def _median_boundary_edge(mesh: Mesh) -> float:
     from tissuesim.mesh.boundary import boundary_facets
 
-    P = mesh.points[boundary_facets(mesh.cells)]
+    P = mesh.points[boundary_facets(mesh.simplices)]
     return float(np.median(np.linalg.norm(P - np.roll(P, 1, axis=1), axis=2)))
 
 

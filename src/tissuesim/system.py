@@ -98,7 +98,8 @@ class System:
         self._tie_matrices = [self._tie_matrix(t) for t in self.ties]
         self._build_pattern()
         self.organ_hessians = [
-            OrganSide.hessian(a, self.bodies[a.organ].pattern) for a in self.attachments
+            OrganSide.hessian(a, self.bodies[a.organ].pattern, self.bodies[a.organ].mesh.simplices)
+            for a in self.attachments
         ]
         self.set_prescribed()
 
@@ -157,7 +158,7 @@ class System:
     def _tie_matrix(self, tie):
         """G over the configuration (for G c) and over the tangent DOFs (gradient, Hessian)."""
         ja, jb = self.index(tie.a), self.index(tie.b)
-        A, B = self.bodies[ja].mesh.cells, self.bodies[jb].mesh.cells
+        A, B = self.bodies[ja].mesh.simplices, self.bodies[jb].mesh.simplices
         sc, st = self.config_slices, self.tangent_slices
         return (
             tie.matrix(A, B, sc[ja].start, sc[jb].start, self.n_config),
@@ -174,7 +175,7 @@ class System:
     def _cross_pairs(self, a: Attachment, j: int):
         organ, tissue = self.bodies[a.organ], self.bodies[j]
         t = tissue.frame_type.tangent_size
-        B = a.organ_matrix(organ.mesh.cells, organ.mesh.n_points)
+        B = a.organ_matrix(organ.mesh.simplices, organ.mesh.n_points)
         C = (B.T @ sp.diags(a.stiffness) @ a.tissue.matrix).tocoo()  # (vertices, 4 frames)
         n_frames = tissue.n_frames
         key = C.row.astype(np.int64) * n_frames + C.col // 4
@@ -276,12 +277,12 @@ class System:
         for i, a in enumerate(self.attachments):
             organ, j = self.bodies[a.organ], self._tissue_of[i]
             tissue = self.bodies[j]
-            y = a.organ_positions(organ.mesh.cells, c[self.config_slices[a.organ]])
+            y = a.organ_positions(organ.mesh.simplices, c[self.config_slices[a.organ]])
             p = a.tissue.positions(c[self.config_slices[j]])
             r = p - y
             acc.add_value("attachment", 0.5 * float(np.sum(a.stiffness[:, None] * r * r)))
             if order >= 1:
-                parts[a.organ].append(OrganSide(a, organ.mesh.cells, p, self.organ_hessians[i]))
+                parts[a.organ].append(OrganSide(a, organ.mesh.simplices, p, self.organ_hessians[i]))
                 parts[j].append(TissueSide(a, y, tissue.attachment_hessians[self._slot[i]]))
         for j, body in enumerate(self.bodies):
             part = body.evaluate(c[self.config_slices[j]], order, project, parts[j])

@@ -135,11 +135,15 @@ def test_surface_mesh_rejected(tmp_path):
         read_mesh(tmp_path / "surf.vtu")
 
 
-def test_quadratic_only_rejected(tmp_path):
-    p = np.array([[0.0, 0], [1, 0], [0, 1], [0.5, 0], [0.5, 0.5], [0, 0.5]])
-    meshio.Mesh(p, [("triangle6", np.arange(6)[None])]).write(tmp_path / "q.vtu")
-    with pytest.raises(MeshError, match="cell types found: triangle6"):
-        read_mesh(tmp_path / "q.vtu")
+def test_quadratic_triangles_read_and_mixed_orders_rejected(tmp_path):
+    p = np.array([[0.0, 0], [1, 0], [0, 1], [0.5, 0], [0.5, 0.5], [0, 0.5], [1, 1]])
+    meshio.Mesh(p[:6], [("triangle6", np.arange(6)[None])]).write(tmp_path / "q.vtu")
+    mesh = read_mesh(tmp_path / "q.vtu")
+    assert mesh.order == 2 and mesh.cells.shape == (1, 6)
+    blocks = [("triangle6", np.arange(6)[None]), ("triangle", np.array([[1, 6, 2]]))]
+    meshio.Mesh(p, blocks).write(tmp_path / "mixed.vtu")
+    with pytest.raises(MeshError, match="mixes triangle6 with other elements"):
+        read_mesh(tmp_path / "mixed.vtu")
 
 
 def test_inverted_cell_in_file_reoriented(tmp_path):

@@ -38,9 +38,18 @@ class SparsityPattern:
         return int(self.indices.shape[0])
 
     @classmethod
-    def from_stencils(cls, n: int, stencils: list[np.ndarray]) -> SparsityPattern:
+    def from_stencils(
+        cls, n: int, stencils: list[np.ndarray], extra: tuple[np.ndarray, np.ndarray] | None = None
+    ) -> SparsityPattern:
+        """The union of the stencils' blocks, the diagonal and ``extra`` (rows, cols) entries
+        (for energies whose blocks are not rectangular stencils, found with ``positions``)."""
         rows = [np.repeat(s, s.shape[1], axis=1).ravel() for s in stencils]
         cols = [np.tile(s, (1, s.shape[1])).ravel() for s in stencils]
+        n_extra = 0
+        if extra is not None:
+            rows.append(np.asarray(extra[0], dtype=np.int64))
+            cols.append(np.asarray(extra[1], dtype=np.int64))
+            n_extra = rows[-1].size
         diag = np.arange(n, dtype=np.int64)
         rows.append(diag)
         cols.append(diag)
@@ -54,6 +63,7 @@ class SparsityPattern:
             size = s.shape[0] * s.shape[1] ** 2
             scatters.append(inverse[start : start + size].reshape(s.shape[0], -1))
             start += size
+        start += n_extra
         diagonal = inverse[start : start + n]
         return cls(n, indptr, indices.astype(np.int32), diagonal, tuple(scatters))
 

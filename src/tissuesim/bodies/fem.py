@@ -95,9 +95,10 @@ class FemBody:
         backend: str,
         claim_name: Callable[[str], str],
         changed: Callable[[], None],
+        formulation: str = "displacement",
     ) -> None:
         self.name = name
-        self.model = Model(mesh, material, density, mass, backend=backend)
+        self.model = Model(mesh, material, density, mass, backend=backend, formulation=formulation)
         self._claim, self._changed = claim_name, changed
         self.conditions: list[tuple[str, DirichletCondition]] = []
         self.graspers: list[Grasper] = []
@@ -227,6 +228,16 @@ class FemBody:
         facets = ids.reshape(np.shape(facets)) if ids.size else ids.reshape(0, self.dim)
         if facets.ndim != 2 or facets.shape[1] != self.dim:
             raise InputError(f"add_traction: facets must be (k, {self.dim}) vertex indices")
+        if self.mesh.order == 2 and facets.size:
+            from tissuesim.mesh.quadratic import quadratic_facets
+
+            missing = (quadratic_facets(self.mesh, facets) < 0).any(axis=1)
+            if missing.any():
+                raise InputError(
+                    f"add_traction: facet {facets[missing][0].tolist()} of body {self.name!r} is "
+                    "not an edge/face of its quadratic elements; give boundary facets by their "
+                    "corner vertices (mesh.facet_sets, facets_where)"
+                )
         field = as_field(traction, "add_traction: traction (N/m or Pa)", self.dim)
         self.model.loads.append(Traction(facets, field))
 
@@ -311,9 +322,10 @@ class FemBody:
 
     def cell_fields(self, x: np.ndarray) -> dict[str, np.ndarray]:
         """Per element: J, green_strain, cauchy_stress, von_mises, energy_density
-        (``materials/measures.py``)."""
-        F = self.model.kinematics.deformation_gradients(x)
-        return continuum_fields(self.model.material, F)
+        (``materials/measures.py``); for P2 the volume averages over each element's points."""
+        K = self.model.kinematics
+        fields = continuum_fields(self.model.material, K.deformation_gradients(x))
+        return {k: K.cell_average(v) for k, v in fields.items()}
 
     def min_J(self, x: np.ndarray) -> float:
         return float(self.model.elastic.jacobians(x).min())

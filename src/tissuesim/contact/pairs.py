@@ -53,7 +53,7 @@ def contact_facets(name: str, mesh, surface) -> np.ndarray:
     from tissuesim.mesh.boundary import boundary_facets
 
     if surface is None:
-        return boundary_facets(mesh.cells)
+        return boundary_facets(mesh.simplices)
     if isinstance(surface, str):
         if surface not in mesh.facet_sets:
             known = ", ".join(sorted(mesh.facet_sets)) or "none"

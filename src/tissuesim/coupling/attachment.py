@@ -97,16 +97,19 @@ class OrganSide:
             acc.hessian += self.hessian_data
 
     @staticmethod
-    def hessian(attachment: Attachment, pattern) -> np.ndarray:
-        """B^T K B (x) I_3 on an organ's P1 pattern (stencil 0: the 12 DOFs of each cell)."""
+    def hessian(attachment: Attachment, pattern, organ_cells: np.ndarray) -> np.ndarray:
+        """B^T K B (x) I_3 on an organ's pattern; ``organ_cells`` the organ's simplices (the
+        cells of a P1 organ, the linear subdivision of a P2 one: their 4 nodes lie in one
+        element, so every entry is in the pattern)."""
         b, k = attachment.barycentric, attachment.stiffness
         bb = k[:, None, None] * b[:, :, None] * b[:, None, :]  # (S, 4, 4)
         blocks = np.einsum("sab,ij->saibj", bb, np.eye(3)).reshape(-1, 12, 12)
+        dofs = (organ_cells[attachment.cells][:, :, None] * 3 + np.arange(3)).reshape(-1, 12)
+        rows = np.repeat(dofs, 12, axis=1)
+        cols = np.tile(dofs, (1, 12))
         data = np.zeros(pattern.nnz)
         data += np.bincount(
-            pattern.scatters[0][attachment.cells].ravel(),
-            weights=blocks.ravel(),
-            minlength=pattern.nnz,
+            pattern.positions(rows, cols).ravel(), weights=blocks.ravel(), minlength=pattern.nnz
         )
         return data
 

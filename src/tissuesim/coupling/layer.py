@@ -47,7 +47,7 @@ def _meshes(func: str, meshes) -> list[Mesh]:
             raise InputError(
                 f"{func}: meshes[{i}] must be a tissuesim Mesh, got {type(m).__name__}"
             )
-        if m.dim != 3 or m.cells.shape[1] != 4:
+        if m.dim != 3 or m.simplices.shape[1] != 4:
             raise InputError(
                 f"{func}: meshes[{i}] ({m.source}) is a {m.dim}D mesh; organs must be tetrahedral "
                 f"meshes (tissuesim.mesh.box, ellipsoid or a tetrahedral mesh file)"
@@ -229,7 +229,7 @@ class _Layer:
         for i, li in enumerate(self.locators):
             for j, lj in enumerate(self.locators):
                 if i != j:
-                    v = lj.mesh.points[np.unique(boundary_facets(lj.mesh.cells))]
+                    v = lj.mesh.points[np.unique(boundary_facets(lj.mesh.simplices))]
                     g = float(li.distance(v).min())
                     if bool(li.inside(v).any()):
                         g = 0.0
@@ -327,7 +327,7 @@ def contact_facets(mesh: Mesh, points: np.ndarray, distance: float) -> np.ndarra
     the order of ``boundary_facets``: where the layer touches the organ, so where to attach it.
     """
     func = "contact_facets"
-    if not isinstance(mesh, Mesh) or mesh.dim != 3 or mesh.cells.shape[1] != 4:
+    if not isinstance(mesh, Mesh) or mesh.dim != 3 or mesh.simplices.shape[1] != 4:
         what = mesh.source if isinstance(mesh, Mesh) else type(mesh).__name__
         raise InputError(f"{func}: mesh must be a tetrahedral (3D) tissuesim Mesh, got {what}")
     distance = _positive(func, "distance", distance, "give the largest centroid-point distance")
@@ -337,7 +337,7 @@ def contact_facets(mesh: Mesh, points: np.ndarray, distance: float) -> np.ndarra
         raise InputError(f"{func}: points must be a (q, 3) array of numbers: {exc}") from exc
     if p.ndim != 2 or p.shape[1] != 3 or not np.isfinite(p).all():
         raise InputError(f"{func}: points must be a (q, 3) array of finite numbers, got {p.shape}")
-    facets = boundary_facets(mesh.cells)
+    facets = boundary_facets(mesh.simplices)
     if len(p) == 0:
         return facets[:0]
     centroids = mesh.points[facets].mean(axis=1)

@@ -82,7 +82,7 @@ def tie_bodies(
     for mesh, who in ((mesh_a, a), (mesh_b, b)):
         if mesh.dim != 3:
             raise InputError(f"attach: body {who!r} is {mesh.dim}D; ties join 3D bodies")
-    facets = boundary_facets(mesh_a.cells)
+    facets = boundary_facets(mesh_a.simplices)
     near = distance_to_boundary(mesh_b, mesh_a.points) <= distance
     touching = facets[near[facets].all(axis=1)]
     if not len(touching):

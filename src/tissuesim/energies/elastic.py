@@ -17,12 +17,12 @@ import numpy as np
 
 from tissuesim.energies.accumulator import Accumulator
 from tissuesim.errors import InvertedElementError
-from tissuesim.kinematics.nodal import NodalKinematics
+from tissuesim.kinematics.nodal import NodalKinematics, local_hessians
 from tissuesim.materials._common import det
 from tissuesim.materials.base import Material
 from tissuesim.materials.psd import project_tangent_psd
 
-__all__ = ["ElasticEnergy"]
+__all__ = ["ElasticEnergy", "scatter_point_hessians"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -74,14 +74,31 @@ class ElasticEnergy:
             A = response.tangent
             if acc.project:
                 A = project_tangent_psd(A)
-            acc.pattern.accumulate(
-                acc.hessian, self.stencil_id, self.kinematics.tangent_to_hessian(A)
-            )
+            scatter_point_hessians(self.kinematics, A, acc, self.stencil_id)
 
     def _accumulate_fused(self, x: np.ndarray, acc: Accumulator) -> None:
+        K, empty = self.kinematics, np.empty(0)
+        if K.points_per_cell > 1:
+            from tissuesim.assembly.fused_quadrature import assemble_points
+
+            energy, bad = assemble_points(
+                self._law,
+                float(self.material.mu),
+                float(self.material.lam),
+                np.ascontiguousarray(x, dtype=float).ravel(),
+                K.cells,
+                K.grads,
+                K.weights,
+                K.points_per_cell,
+                min(acc.order, 2),
+                acc.pattern.scatters[self.stencil_id],
+                acc.gradient if acc.order >= 1 else empty,
+                acc.hessian if acc.order >= 2 else empty,
+            )
+            acc.add_value("elastic", float(np.inf) if bad >= 0 else float(energy))
+            return
         from tissuesim.assembly.fused_p1 import assemble_p1
 
-        K, empty = self.kinematics, np.empty(0)
         energy, bad = assemble_p1(
             self._law,
             float(self.material.mu),
@@ -98,7 +115,7 @@ class ElasticEnergy:
         acc.add_value("elastic", float(np.inf) if bad >= 0 else float(energy))
 
     def jacobians(self, x: np.ndarray) -> np.ndarray:
-        """Per-element J = det F at positions x, (m,)."""
+        """J = det F at every integration point at positions x, (q,) (P1: per element)."""
         if self.backend == "numba":
             from tissuesim.assembly.fused_p1 import element_jacobians
 
@@ -108,10 +125,32 @@ class ElasticEnergy:
         return det(self.kinematics.deformation_gradients(x))
 
     def cell_fields(self, x: np.ndarray) -> dict[str, np.ndarray]:
-        """Per-element J and energy density psi (J/m^3) at positions x."""
-        F = self.kinematics.deformation_gradients(x)
+        """Per-element J and energy density psi (J/m^3) at positions x (P2: the element's
+        volume averages over its quadrature points)."""
+        K = self.kinematics
+        F = K.deformation_gradients(x)
         psi = self.material.evaluate(F, 0).energy
-        return {"J": det(F), "energy_density": psi}
+        return {"J": K.cell_average(det(F)), "energy_density": K.cell_average(psi)}
+
+
+def scatter_point_hessians(K: NodalKinematics, A: np.ndarray, acc: Accumulator, stencil_id: int):
+    """Local Hessians from tangents A (q, d, d, d, d), summed per element, scattered; in
+    chunks of elements so that P2's (q, 30, 30) blocks never fill memory at once."""
+    nq = K.points_per_cell
+    if nq == 1:
+        acc.pattern.accumulate(acc.hessian, stencil_id, K.tangent_to_hessian(A))
+        return
+    scatter = acc.pattern.scatters[stencil_id]
+    m = scatter.shape[0]
+    chunk = max(1, 2_000_000 // scatter.shape[1])
+    for start in range(0, m, chunk):  # a loop over chunks of elements, not elements
+        stop = min(m, start + chunk)
+        pts = slice(start * nq, stop * nq)
+        part = local_hessians(K.grads[pts], K.weights[pts], A[pts])
+        blocks = part.reshape(stop - start, nq, *part.shape[1:]).sum(axis=1)
+        acc.hessian += np.bincount(
+            scatter[start:stop].ravel(), weights=blocks.ravel(), minlength=acc.pattern.nnz
+        )
 
 
 def _registered_class(material: Material):

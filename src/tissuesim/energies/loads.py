@@ -55,6 +55,30 @@ def traction_nodal_forces(
     return out
 
 
+def quadratic_traction_nodal_forces(
+    points: np.ndarray, facets: np.ndarray, traction_at_nodes: np.ndarray
+) -> np.ndarray:
+    """Nodal forces (n, d) of a traction on quadratic facets (k, 3 or 6), given at the facet's
+    nodes (k, nf, d) and interpolated quadratically: f^a = int N^a N^b dA h^b, by a degree-5
+    rule on the (possibly curved) facet, dA = |dX/dxi| (2D) or |dX/dxi_1 x dX/dxi_2| (3D)."""
+    from tissuesim.mesh.reference import facet_quadrature, shape_functions
+
+    n, d = points.shape
+    xi, w = facet_quadrature(d, 5)
+    N, dN = shape_functions(d - 1, 2, xi)  # (q, nf), (q, nf, d-1)
+    T = np.einsum("kai,qaj->kqij", points[facets], dN)  # (k, q, d, d-1) tangents
+    if d == 2:
+        dA = np.linalg.norm(T[..., 0], axis=-1)
+    else:
+        dA = np.linalg.norm(np.cross(T[..., 0], T[..., 1]), axis=-1)
+    hq = np.einsum("qb,kbi->kqi", N, traction_at_nodes)  # traction at the points
+    local = np.einsum("q,kq,qa,kqi->kai", w, dA, N, hq)
+    out = np.zeros((n, d))
+    for i in range(d):  # d components, not a loop over facets
+        out[:, i] = np.bincount(facets.ravel(), weights=local[:, :, i].ravel(), minlength=n)
+    return out
+
+
 ForceField = Callable[[np.ndarray, float], np.ndarray]
 
 
@@ -75,13 +99,14 @@ def as_field(value, what: str = "load", dim: int | None = None) -> ForceField:
 
 @dataclass(frozen=True, eq=False)
 class Gravity:
-    """Weight rho g per unit volume: nodal forces are the lumped masses times g (exact for P1)."""
+    """Weight rho g per unit volume: nodal forces int rho N^a g, the consistent mass's row sums
+    times g (for P1 also the lumped masses)."""
 
     acceleration: np.ndarray  # (d,) m/s^2
 
     def nodal_forces(self, model, t: float) -> np.ndarray:
         d = model.mesh.dim
-        return model.mass.lumped.reshape(-1, d) * np.asarray(self.acceleration, dtype=float)
+        return model.mass.row_sums.reshape(-1, d) * np.asarray(self.acceleration, dtype=float)
 
 
 @dataclass(frozen=True, eq=False)
@@ -104,10 +129,18 @@ class Traction:
     traction: ForceField
 
     def nodal_forces(self, model, t: float) -> np.ndarray:
-        X = model.mesh.points[self.facets]  # (k, d, d) [facet, vertex, coord]
+        mesh = model.mesh
+        facets = self.facets
+        if mesh.order == 2:
+            from tissuesim.mesh.quadratic import quadratic_facets
+
+            facets = quadratic_facets(mesh, facets)
+        X = mesh.points[facets]  # (k, nf, d) [facet, node, coord]
         h = np.asarray(self.traction(X.reshape(-1, X.shape[-1]), t), dtype=float)
         h = np.broadcast_to(h, (X.shape[0] * X.shape[1], X.shape[2])).reshape(X.shape)
-        return traction_nodal_forces(model.mesh.points, self.facets, h)
+        if mesh.order == 2:
+            return quadratic_traction_nodal_forces(mesh.points, facets, h)
+        return traction_nodal_forces(mesh.points, facets, h)
 
 
 @dataclass(frozen=True, eq=False)

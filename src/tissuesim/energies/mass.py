@@ -5,6 +5,12 @@ Consistent mass of a simplex with rest measure V and density rho (notes, eq. 10)
 i.e. V/12 [2 1 1; 1 2 1; 1 1 2] for triangles and V/20 (1 + delta_ab) for tetrahedra.
 Lumped mass: each vertex gets rho V / (d + 1) (the row sums of the consistent matrix).
 
+P2 elements integrate rho N^a N^b with a degree-4 rule over the (possibly curved) element. Their
+consistent row sums are not all positive (a 10-node tetrahedron's corners get -V/20), so the
+lumped mass is HRZ's (Hinton, Rock & Zienkiewicz 1976): the consistent diagonal scaled to the
+element's mass, positive for every node; for P1 it equals the row sums. Gravity uses the
+consistent row sums (``row_sums``), which are exact for either order.
+
 Inertia energy of Backward Euler with x_pred = x_n + h v_n (Gast et al. 2015):
     E(x) = 1/(2 h^2) (x - x_pred)^T M (x - x_pred).
 """
@@ -20,7 +26,8 @@ import scipy.sparse as sp
 from tissuesim.assembly.pattern import SparsityPattern
 from tissuesim.energies.accumulator import Accumulator
 from tissuesim.errors import InputError
-from tissuesim.kinematics.p1 import P1Kinematics
+from tissuesim.kinematics.nodal import NodalKinematics
+from tissuesim.kinematics.p2 import shape_values
 from tissuesim.validate import short
 
 __all__ = ["MassMatrix", "Inertia", "MassKind"]
@@ -30,40 +37,55 @@ MassKind = Literal["consistent", "lumped"]
 
 @dataclass(frozen=True, eq=False)
 class MassMatrix:
-    """M over the model's sparsity pattern: ``data`` (nnz,), ``lumped`` (n_dofs,) row sums."""
+    """M over the model's sparsity pattern: ``data`` (nnz,), ``lumped`` (n_dofs,) the diagonal
+    mass (P1: row sums; P2: HRZ), ``row_sums`` (n_dofs,) the consistent matrix's row sums."""
 
     kind: MassKind
     pattern: SparsityPattern
     data: np.ndarray
     lumped: np.ndarray
+    row_sums: np.ndarray
 
     @classmethod
     def build(
         cls,
-        kinematics: P1Kinematics,
+        kinematics: NodalKinematics,
         density: np.ndarray,
         pattern: SparsityPattern,
         kind: MassKind = "consistent",
         stencil_id: int = 0,
     ) -> MassMatrix:
-        d = kinematics.dim
-        nv = d + 1
-        element_mass = density * kinematics.weights  # (m,)
-        ref = (np.ones((nv, nv)) + np.eye(nv)) / (nv * (nv + 1))  # sums to 1
-        if kind == "lumped":
-            ref = np.diag(ref.sum(axis=1))
-        elif kind != "consistent":
+        if kind not in ("consistent", "lumped"):
             raise InputError(f"mass must be 'consistent' or 'lumped', not {short(kind)}")
-        local = np.kron(ref, np.eye(d))  # ((a,i),(b,k)) = ref_ab delta_ik
-        blocks = element_mass[:, None, None] * local[None]
+        d = kinematics.dim
+        stencil = kinematics.cell_stencil
+        nv = stencil.shape[1] // d
+        if nv == d + 1:
+            element_mass = density * kinematics.cell_weights  # (m,)
+            ref = (np.ones((nv, nv)) + np.eye(nv)) / (nv * (nv + 1))  # sums to 1
+            scalar = element_mass[:, None, None] * ref[None]
+        else:  # P2: rho N^a N^b by a degree-4 rule on the curved element
+            mesh = kinematics.mesh
+            N, w = shape_values(mesh.points, mesh.cells, 2, 4)  # (q, nv), (m, q)
+            scalar = np.einsum("mq,qa,qb->mab", density[:, None] * w, N, N)
+        row = scalar.sum(axis=2)  # (m, nv) consistent row sums
+        diag = np.einsum("maa->ma", scalar)
+        if nv == d + 1:
+            diagonal = row
+        else:  # HRZ: positive, the same total
+            diagonal = diag * (row.sum(axis=1) / diag.sum(axis=1))[:, None]
+        if kind == "lumped":
+            scalar = diagonal[:, :, None] * np.eye(nv)[None]
+        local = np.einsum("mab,ik->maibk", scalar, np.eye(d)).reshape(-1, nv * d, nv * d)
         data = np.zeros(pattern.nnz)
-        pattern.accumulate(data, stencil_id, blocks)
-        lumped = np.bincount(
-            kinematics.stencil.ravel(),
-            weights=blocks.sum(axis=2).ravel(),
-            minlength=pattern.n,
-        )
-        return cls(kind, pattern, data, lumped)
+        pattern.accumulate(data, stencil_id, local)
+
+        def per_dof(values: np.ndarray) -> np.ndarray:  # (m, nv) -> (n_dofs,)
+            return np.bincount(
+                stencil.ravel(), weights=np.repeat(values, d, axis=1).ravel(), minlength=pattern.n
+            )
+
+        return cls(kind, pattern, data, per_dof(diagonal), per_dof(row))
 
     def matrix(self) -> sp.csr_matrix:
         return self.pattern.matrix(self.data)

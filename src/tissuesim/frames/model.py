@@ -225,9 +225,8 @@ class FrameModel:
             nodes = self._lumped_nodes()
         Mz = sp.kron(nodes, sp.identity(3), format="csr")
         data = gather(self.assembly.z_pattern, Mz)
-        self.mass = MassMatrix(
-            self.mass_kind, self.assembly.z_pattern, data, np.asarray(Mz.sum(axis=1)).ravel()
-        )
+        rows = np.asarray(Mz.sum(axis=1)).ravel()
+        self.mass = MassMatrix(self.mass_kind, self.assembly.z_pattern, data, rows, rows)
         self._spring_hessians = [self._spring_hessian(s) for s in self.springs]
         self.attachment_hessians = [self._spring_hessian(s) for s in self.attachments]
         self.elimination = Elimination.build(self.assembly.q_pattern, self.prescribed_dofs)

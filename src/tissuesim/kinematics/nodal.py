@@ -16,7 +16,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["NodalKinematics"]
+__all__ = ["NodalKinematics", "local_hessians"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -28,6 +28,8 @@ class NodalKinematics:
     weights: (q,) integration weights (rest areas / volumes).
     grads:   (q, nv, d) constant gradients G^a.
     n_nodes: number of nodes; DOF of node a, component k is a * d + k.
+    points_per_cell: consecutive points that share one element's stencil (P2: its quadrature
+        points); the Hessian is summed over them and scattered once per element.
     """
 
     cells: np.ndarray
@@ -35,10 +37,35 @@ class NodalKinematics:
     weights: np.ndarray
     grads: np.ndarray
     n_nodes: int
+    points_per_cell: int = 1
 
     @staticmethod
     def dof_stencil(cells: np.ndarray, d: int) -> np.ndarray:
         return (cells[:, :, None] * d + np.arange(d)).reshape(cells.shape[0], -1)
+
+    @property
+    def cell_stencil(self) -> np.ndarray:
+        """(m, nv*d) the stencil once per element (the sparsity pattern's stencil)."""
+        return self.stencil[:: self.points_per_cell]
+
+    @property
+    def cell_weights(self) -> np.ndarray:
+        """(m,) rest measure of each element (the sum of its points' weights)."""
+        return self.per_cell_sum(self.weights)
+
+    def per_cell_sum(self, values: np.ndarray) -> np.ndarray:
+        """Sum of per-point values (q, ...) over each element's points: (m, ...)."""
+        nq = self.points_per_cell
+        if nq == 1:
+            return values
+        return values.reshape(-1, nq, *values.shape[1:]).sum(axis=1)
+
+    def cell_average(self, values: np.ndarray) -> np.ndarray:
+        """Weighted mean of per-point values (q, ...) over each element: (m, ...)."""
+        if self.points_per_cell == 1:
+            return values
+        w = self.weights.reshape(-1, *([1] * (values.ndim - 1)))
+        return self.per_cell_sum(values * w) / self.per_cell_sum(w)
 
     @property
     def dim(self) -> int:
@@ -67,12 +94,15 @@ class NodalKinematics:
 
         H[(a,i),(b,k)] = w sum_{j,l} A[i,j,k,l] G^a_j G^b_l.
         """
-        m, d = A.shape[0], self.dim
-        G = self.grads  # (q, nv, d)
-        nv = G.shape[1]
-        # contract j with G^a, then l with G^b; batched matmuls, no Python loop over points
-        T = np.matmul(G[:, None, :, :], A.reshape(m, d, d, d * d))  # (m, i, a, (k,l))
-        T = T.reshape(m, d, nv, d, d)  # [m, i, a, k, l]
-        H = np.matmul(T, np.swapaxes(G, 1, 2)[:, None, None, :, :])  # (m, i, a, k, b)
-        H = H.transpose(0, 2, 1, 4, 3).reshape(m, nv * d, nv * d)
-        return H * self.weights[:, None, None]
+        return local_hessians(self.grads, self.weights, A)
+
+
+def local_hessians(G: np.ndarray, w: np.ndarray, A: np.ndarray) -> np.ndarray:
+    """w sum_{j,l} A[i,j,k,l] G^a_j G^b_l as (q, nv*d, nv*d), for G (q, nv, d), w (q,)."""
+    m, nv, d = G.shape
+    # contract j with G^a, then l with G^b; batched matmuls, no Python loop over points
+    T = np.matmul(G[:, None, :, :], A.reshape(m, d, d, d * d))  # (m, i, a, (k,l))
+    T = T.reshape(m, d, nv, d, d)  # [m, i, a, k, l]
+    H = np.matmul(T, np.swapaxes(G, 1, 2)[:, None, None, :, :])  # (m, i, a, k, b)
+    H = H.transpose(0, 2, 1, 4, 3).reshape(m, nv * d, nv * d)
+    return H * w[:, None, None]

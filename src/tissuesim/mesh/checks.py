@@ -14,6 +14,10 @@ from tissuesim.mesh.mesh import Mesh
 __all__ = ["validate_mesh", "signed_volumes", "edge_lengths"]
 
 _KIND = {2: "triangles", 3: "tetrahedra"}
+#: the permutation that swaps the last two corners (and, for quadratic cells, the midside nodes
+#: with them): triangle6 (0 2 1 | 20 12 01), tetra10 (0 1 3 2 | 01 13 30 02 12 32)
+_REORIENT_LINEAR = {2: [0, 2, 1], 3: [0, 1, 3, 2]}
+_REORIENT = {2: [0, 2, 1, 5, 4, 3], 3: [0, 1, 3, 2, 4, 8, 7, 6, 5, 9]}
 
 
 def signed_volumes(points: np.ndarray, cells: np.ndarray) -> np.ndarray:
@@ -165,11 +169,14 @@ def validate_mesh(
             f"({int((~finite).sum())} such vertices); fix or remove them in the mesh file"
         )
     c = _index_array(cells, source, "cells", f"(m, {d + 1})")
-    if c.ndim != 2 or c.shape[1] != d + 1:
+    nq = (d + 1) * (d + 2) // 2
+    if c.ndim != 2 or c.shape[1] not in (d + 1, nq):
         raise MeshError(
             f"{source}: cells have shape {c.shape}; {d}D points need (m, {d + 1}) cells "
-            f"({_KIND[d]}, one row of {d + 1} vertex indices per element)"
+            f"({_KIND[d]}, one row of {d + 1} vertex indices per element) or (m, {nq}) "
+            f"quadratic cells (corners, then midside nodes)"
         )
+    quadratic = c.shape[1] == nq
     m = c.shape[0]
     if m == 0:
         raise MeshError(f"{source}: the mesh has no cells; it needs at least one of the {_KIND[d]}")
@@ -192,8 +199,8 @@ def validate_mesh(
             f"({int(repeated.sum())} such elements); remove these collapsed elements"
         )
 
-    vol = signed_volumes(pts, c)
-    h = edge_lengths(pts, c).mean(axis=1)
+    vol = signed_volumes(pts, c[:, : d + 1])
+    h = edge_lengths(pts, c[:, : d + 1]).mean(axis=1)
     degenerate = np.abs(vol) <= 1e-12 * h**d
     if degenerate.any():
         e = _first(degenerate)
@@ -205,7 +212,8 @@ def validate_mesh(
         )
     flipped = np.flatnonzero(vol < 0)
     if flipped.size:
-        c[flipped, -2:] = c[flipped, -1:-3:-1]
+        # swap the last two corners; a quadratic cell's midside nodes follow their edges
+        c[flipped] = c[flipped][:, _REORIENT[d] if quadratic else _REORIENT_LINEAR[d]]
         warnings.warn(
             f"{source}: reoriented {flipped.size} negatively oriented element(s) by swapping their "
             f"last two vertices (first: {flipped[:5].tolist()})",
@@ -230,7 +238,11 @@ def validate_mesh(
         )
     pts, c, point_sets, facet_sets = _drop_unused(pts, c, point_sets, facet_sets, source)
     n = pts.shape[0]
-    table = facet_table(c)
+    if quadratic:
+        from tissuesim.mesh.quadratic_checks import check_quadratic
+
+        check_quadratic(pts, c, source)
+    table = facet_table(c[:, : d + 1])
     facets, first, inverse, counts = table
     if (counts > 2).any():
         u = _first(counts > 2)

@@ -83,6 +83,7 @@ def rectangle(
     upper: Sequence[float] = (1.0, 1.0),
     divisions: Sequence[int] = (10, 10),
     pattern: str = "alternate",
+    order: int = 1,
 ) -> Mesh:
     """Triangle mesh of the rectangle [lower, upper] with divisions (nx, ny) quads.
 
@@ -90,6 +91,8 @@ def rectangle(
     other diagonal), "alternate" (the two in a checkerboard, avoiding directional bias), "cross"
     (4 triangles around an added centre vertex). Points (n, 2); cells (m, 3) counter-clockwise.
     Sets: "left", "right", "bottom", "top" and the aliases "xmin", "xmax", "ymin", "ymax".
+    order: 1 (3-node triangles) or 2 (6-node triangles, a node at every edge's midpoint; the
+    point sets then hold the midside nodes on their sides too).
     """
     lo, hi, (nx, ny) = _arguments("rectangle", lower, upper, divisions, 2)
     if pattern not in PATTERNS:
@@ -132,6 +135,32 @@ def rectangle(
     psets, fsets = _side_sets(cells, (gx, gy), names)
     for alias, name in (("xmin", "left"), ("xmax", "right"), ("ymin", "bottom"), ("ymax", "top")):
         psets[alias], fsets[alias] = psets[name], fsets[name]
+    return _finish(points, cells, source, psets, fsets, order)
+
+
+def _order(order) -> int:
+    if isinstance(order, bool) or order not in (1, 2):
+        raise MeshError(
+            f"order must be 1 (linear elements) or 2 (quadratic elements), got {short(order)}"
+        )
+    return int(order)
+
+
+def _finish(points, cells, source, psets, fsets, order, projection=None) -> Mesh:
+    """Validate the mesh; for order 2 first add the midside nodes (``projection`` moves those
+    on the boundary onto a curved surface) and put those on each facet set's facets into the
+    point set of the same name."""
+    order = _order(order)
+    if order == 2:
+        from tissuesim.mesh.quadratic import EDGES, elevate, midside_lookup
+
+        points, cells = elevate(points, cells, projection)
+        lookup = midside_lookup(cells, points.shape[1])
+        psets = dict(psets)
+        for name, facets in fsets.items():
+            mids = lookup(facets[:, EDGES[points.shape[1] - 1]]).ravel()
+            psets[name] = np.union1d(psets.get(name, np.zeros(0, np.int64)), mids)
+        source = source[:-1] + ", order=2)"
     return validate_mesh(points, cells, source=source, point_sets=psets, facet_sets=fsets)
 
 
@@ -180,6 +209,7 @@ def box(
     upper: Sequence[float] = (1.0, 1.0, 1.0),
     divisions: Sequence[int] = (4, 4, 4),
     grading: Sequence[float] = (1.0, 1.0, 1.0),
+    order: int = 1,
 ) -> Mesh:
     """Tetrahedral mesh of the box [lower, upper] with divisions (nx, ny, nz) hexahedra.
 
@@ -190,6 +220,7 @@ def box(
     (cells shrink towards ``lower``); -p at 1 - (1 - s)^p (finer
     towards ``upper``), e.g. to resolve a contact on a face. Cells stay positive (each hexahedron
     maps to a box).
+    order: 1 (4-node tetrahedra) or 2 (10-node tetrahedra, midside nodes in the side sets).
     """
     lo, hi, (nx, ny, nz) = _arguments("box", lower, upper, divisions, 3)
     exponents = _grading(grading)
@@ -208,7 +239,7 @@ def box(
     cells = _kuhn_cells(nx, ny, nz)
     names = (("xmin", "xmax"), ("ymin", "ymax"), ("zmin", "zmax"))
     psets, fsets = _side_sets(cells, (gx, gy, gz), names)
-    return validate_mesh(points, cells, source=source, point_sets=psets, facet_sets=fsets)
+    return _finish(points, cells, source, psets, fsets, order)
 
 
 def _grading(grading) -> tuple[float, float, float]:
@@ -237,6 +268,7 @@ def ellipsoid(
     center: Sequence[float] = (0.0, 0.0, 0.0),
     radii: Sequence[float] = (1.0, 1.0, 1.0),
     divisions: int = 8,
+    order: int = 1,
 ) -> Mesh:
     """Tetrahedral mesh of the solid ellipsoid sum(((x - center) / radii)^2) <= 1.
 
@@ -248,6 +280,8 @@ def ellipsoid(
     (to rounding), so the polyhedron is inscribed: its volume is below 4/3 pi a b c (by about 1.6%
     at divisions 8, 0.7% at 12). Points ((divisions + 1)^3, 3); cells (6 divisions^3, 4),
     positive. Sets: point set and facet set "surface" (the boundary vertices and triangles).
+    order 2: 10-node tetrahedra whose boundary midside nodes are moved onto the ellipsoid, so
+    the surface is curved (its volume error falls to about 0.02 % at divisions 8).
     """
     func = "ellipsoid"
     values = {}
@@ -282,4 +316,9 @@ def ellipsoid(
     surface = boundary_facets(cells)
     psets = {"surface": np.unique(surface)}
     fsets = {"surface": surface}
-    return validate_mesh(points, cells, source=source, point_sets=psets, facet_sets=fsets)
+
+    def onto_surface(p: np.ndarray) -> np.ndarray:
+        u = (p - c) / r
+        return c + r * u / np.linalg.norm(u, axis=1, keepdims=True)
+
+    return _finish(points, cells, source, psets, fsets, order, onto_surface)

@@ -1,6 +1,8 @@
 """Read and write mesh files through meshio, and summarise a Mesh.
 
-read_mesh takes linear tetrahedra (3D) or triangles (2D) and turns tags into named sets: meshio
+read_mesh takes tetrahedra (3D) or triangles (2D), linear or quadratic (meshio's tetra10 and
+triangle6, e.g. Gmsh second order; meshio converts Gmsh's node order to VTK's, which tissuesim
+uses), and turns tags into named sets: meshio
 cell sets and gmsh physical groups ("gmsh:physical" with names from $PhysicalNames). Tagged facets
 (lines in 2D, triangles in 3D) become facet sets, tagged volume cells cell sets, tagged lower-
 dimensional cells (vertices, edges in 3D) point sets. Everything is then checked by validate_mesh.
@@ -26,8 +28,18 @@ from tissuesim.validate import short
 __all__ = ["read_mesh", "write_mesh", "describe_mesh"]
 
 _VOLUME = {3: "tetra", 2: "triangle"}
+_VOLUME2 = {3: "tetra10", 2: "triangle6"}  # quadratic
 _FACET = {3: "triangle", 2: "line"}
-_CELL_DIM = {"vertex": 0, "line": 1, "triangle": 2, "tetra": 3}
+_FACETS = {3: ("triangle", "triangle6"), 2: ("line", "line3")}
+_CELL_DIM = {
+    "vertex": 0,
+    "line": 1,
+    "line3": 1,
+    "triangle": 2,
+    "triangle6": 2,
+    "tetra": 3,
+    "tetra10": 3,
+}
 
 
 def _block_dim(block) -> int:
@@ -61,21 +73,22 @@ def _choose_cells(path: str, m) -> tuple[np.ndarray, int, str]:
         found[b.type] += len(b.data)
     listing = ", ".join(f"{k} ({v})" for k, v in found.items()) or "none"
     points = np.asarray(m.points, dtype=np.float64)
-    if found.get("tetra"):
+    if found.get("tetra") or found.get("tetra10"):
         d = 3
-    elif found.get("triangle"):
+    elif found.get("triangle") or found.get("triangle6"):
         d = 2
     else:
         raise MeshError(
-            f"{path}: no linear tetrahedra or triangles; cell types found: {listing}. "
-            f"tissuesim needs linear 'tetra' (3D) or 'triangle' (2D) elements: re-export with "
-            f"element order 1 and simplices only"
+            f"{path}: no tetrahedra or triangles; cell types found: {listing}. tissuesim needs "
+            f"'tetra' / 'tetra10' (3D) or 'triangle' / 'triangle6' (2D) elements: re-export with "
+            f"element order 1 or 2 and simplices only"
         )
-    others = sorted({b.type for b in m.cells if b.type != _VOLUME[d] and _block_dim(b) >= d})
+    vtype = _VOLUME2[d] if found.get(_VOLUME2[d]) else _VOLUME[d]
+    others = sorted({b.type for b in m.cells if b.type != vtype and _block_dim(b) >= d})
     if others:
         raise MeshError(
-            f"{path}: mixes {_VOLUME[d]} with other elements of dimension >= {d} ({others}); "
-            f"cell types found: {listing}. Remesh with {_VOLUME[d]} only"
+            f"{path}: mixes {vtype} with other elements of dimension >= {d} ({others}); "
+            f"cell types found: {listing}. Remesh with {vtype} only (one element order)"
         )
     if d == 3 and points.shape[1] != 3:
         raise MeshError(f"{path}: tetrahedra need 3D points, got points of shape {points.shape}")
@@ -89,7 +102,7 @@ def _choose_cells(path: str, m) -> tuple[np.ndarray, int, str]:
                 f"surface (e.g. gmsh -3), or give a 2D mesh with constant z"
             )
         points = points[:, :2]
-    return points, d, _VOLUME[d]
+    return points, d, vtype
 
 
 def _tagged_sets(m, d: int, vtype: str):
@@ -109,8 +122,8 @@ def _tagged_sets(m, d: int, vtype: str):
         b = m.cells[block_index]
         if b.type == vtype:
             cell_sets[name].append(offsets[block_index] + rows)
-        elif b.type == _FACET[d]:
-            facet_sets[name].append(np.asarray(b.data)[rows])
+        elif b.type in _FACETS[d]:  # quadratic facets by their corners
+            facet_sets[name].append(np.asarray(b.data)[rows][:, :d])
         elif _block_dim(b) < d - 1 or b.type == "vertex":
             point_sets[name].append(np.asarray(b.data)[rows].reshape(-1))
 
@@ -129,7 +142,9 @@ def _tagged_sets(m, d: int, vtype: str):
 
 
 def read_mesh(path: str | os.PathLike[str], *, merge_coincident: bool = False) -> Mesh:
-    """Read a linear tetrahedral (3D) or triangle (2D) mesh file; points in the file's units.
+    """Read a tetrahedral (3D) or triangle (2D) mesh file, linear or quadratic (tetra10,
+    triangle6: their midside nodes are checked, ``mesh/quadratic_checks.py``); points in the
+    file's units.
 
     Any format meshio reads (.vtu, .msh gmsh 2.2/4.1, .mesh medit, .xdmf, ...). Raises MeshError
     naming the file for a missing, unreadable (a FIFO or device is refused before it is opened),
@@ -156,7 +171,7 @@ def read_mesh(path: str | os.PathLike[str], *, merge_coincident: bool = False) -
         point_sets[name] = np.concatenate([point_sets.get(name, []), np.asarray(v).reshape(-1)])
     facet_sets = {k: np.concatenate(v).astype(np.int64) for k, v in fsets.items()}
     if facet_sets:
-        facets, first, inverse, counts = facet_table(cells)
+        facets, first, inverse, counts = facet_table(cells[:, : d + 1])
         boundary = facets[first[counts == 1]]
         for name in list(facet_sets):
             on = match_facets(boundary, facet_sets[name]) >= 0
@@ -196,7 +211,7 @@ def write_mesh(mesh: Mesh, path: str | os.PathLike[str], file_format: str | None
     points = np.column_stack([mesh.points, np.zeros(mesh.n_points)]) if d == 2 else mesh.points
     if file_format is None and path.lower().endswith(".msh"):
         file_format = "gmsh22"
-    blocks = [(_VOLUME[d], mesh.cells)]
+    blocks = [((_VOLUME if mesh.order == 1 else _VOLUME2)[d], mesh.cells)]
     kwargs = {}
     if file_format == "gmsh22":
         volume_tags = np.zeros(mesh.n_cells, dtype=np.int32)
@@ -242,7 +257,7 @@ def describe_mesh(mesh: Mesh) -> dict:
     quality is the radius ratio d * inradius / circumradius of each element: 1 for the regular
     simplex, tending to 0 as an element degenerates; quality_min is the worst element's.
     """
-    p, c, d = mesh.points, mesh.cells, mesh.dim
+    p, c, d = mesh.points, mesh.corners, mesh.dim  # quality of the straight-sided simplices
     vol = signed_volumes(p, c)
     edges = edge_lengths(p, c)
     faces = all_facets(c)
@@ -258,6 +273,7 @@ def describe_mesh(mesh: Mesh) -> dict:
         "dim": d,
         "n_points": mesh.n_points,
         "n_cells": mesh.n_cells,
+        "order": mesh.order,
         "n_boundary_facets": int(len(_boundary(mesh))),
         "bounding_box": (lo.tolist(), hi.tolist()),
         "total_volume": float(vol.sum()),

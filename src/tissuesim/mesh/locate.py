@@ -275,7 +275,9 @@ class TriangleSoup:
 class ClosestPoints:
     """Closest points of a mesh's boundary to query points (q of them).
 
-    cells (q,) int64: the tetrahedron owning the boundary triangle the closest point lies on.
+    cells (q,) int64: the tetrahedron owning the boundary triangle the closest point lies on
+        (an index into ``mesh.simplices``: for quadratic meshes a tetrahedron of the linear
+        subdivision).
     barycentric (q, 4): the closest point's coordinates in that tetrahedron (>= 0, summing to
     1, 0 at the vertex opposite the triangle), so it moves with the mesh as
     sum_a barycentric[:, a] * x[cells[:, a]]. positions (q, 3): the closest points.
@@ -300,7 +302,7 @@ class MeshLocator:
     def __init__(self, mesh: Mesh, func: str = "MeshLocator") -> None:
         if not isinstance(mesh, Mesh):
             raise InputError(f"{func}: mesh must be a tissuesim Mesh, got {type(mesh).__name__}")
-        if mesh.dim != 3 or mesh.cells.shape[1] != 4:
+        if mesh.dim != 3 or mesh.simplices.shape[1] != 4:
             raise InputError(
                 f"{func}: {mesh.source} is a {mesh.dim}D mesh; tetrahedra are needed: use "
                 f"tissuesim.mesh.box, ellipsoid or a tetrahedral mesh file"
@@ -311,7 +313,7 @@ class MeshLocator:
 
     def _boundary(self) -> TriangleSoup:
         if self._soup is None:
-            table = facet_table(self.mesh.cells)
+            table = facet_table(self.mesh.simplices)
             facets, first, _, counts = table
             which = np.sort(first[counts == 1])  # index into the (m * 4) cell facets
             self.facets = boundary_from_table(*table)  # (k, 3) outward boundary triangles
@@ -342,7 +344,7 @@ class MeshLocator:
     def _tet_index(self) -> tuple[cKDTree, np.ndarray, np.ndarray, np.ndarray]:
         """(tree of centroids, radii (n,), inverse edge matrices (n, 3, 3), first vertices)."""
         if self._tets is None:
-            x = self.mesh.points[self.mesh.cells]  # (n, 4, 3)
+            x = self.mesh.points[self.mesh.simplices]  # (n, 4, 3)
             centroids = x.mean(axis=1)
             radii = np.sqrt(((x - centroids[:, None]) ** 2).sum(axis=2).max(axis=1))
             # rows of inv are the gradients of barycentric coordinates 1..3
@@ -354,7 +356,7 @@ class MeshLocator:
         """See ``inside_mesh``."""
         p = _points("inside_mesh", points)
         tree, radii, inv, x0 = self._tet_index()
-        n = self.mesh.n_cells
+        n = self.mesh.simplices.shape[0]
         result = np.zeros(len(p), dtype=bool)
         # a tetrahedron containing x has its centroid within its radius of x
         upper = float(radii.max()) * (1.0 + 1e-9)

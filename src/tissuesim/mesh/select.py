@@ -71,7 +71,7 @@ def _boundary(mesh: Mesh) -> np.ndarray:
     """Read-only boundary facets of ``mesh``, computed once per mesh."""
     facets = _BOUNDARY_CACHE.get(mesh)
     if facets is None:
-        facets = boundary_facets(mesh.cells)
+        facets = boundary_facets(mesh.corners)
         facets.flags.writeable = False
         _BOUNDARY_CACHE[mesh] = facets
     return facets
@@ -83,8 +83,14 @@ def all_boundary_facets(mesh: Mesh) -> np.ndarray:
 
 
 def boundary_vertices(mesh: Mesh) -> np.ndarray:
-    """Sorted ids (k,) of the vertices on the boundary of ``mesh``."""
-    return _nonempty(np.unique(_boundary(mesh)), mesh, "boundary vertices")
+    """Sorted ids (k,) of the vertices on the boundary of ``mesh`` (with the midside nodes of
+    boundary facets for quadratic meshes)."""
+    facets = _boundary(mesh)
+    if mesh.order == 2:
+        from tissuesim.mesh.quadratic import quadratic_facets
+
+        facets = quadratic_facets(mesh, facets)
+    return _nonempty(np.unique(facets), mesh, "boundary vertices")
 
 
 def vertices_on_plane(

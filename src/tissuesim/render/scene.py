@@ -106,7 +106,7 @@ def _merged_mesh(bodies):
     points, cells, offset = [], [], 0
     for b in bodies:
         points.append(b.mesh.points)
-        cells.append(b.mesh.cells + offset)
+        cells.append(b.mesh.simplices + offset)
         offset += b.mesh.n_points
     return Mesh(np.concatenate(points), np.concatenate(cells), source="scene")
 
@@ -116,9 +116,9 @@ def _cell_values_2d(bodies, data, field) -> np.ndarray:
     for b in bodies:
         d = data[b.name]
         if field == "displacement":  # per triangle: the mean of its vertices' |u|
-            out.append(np.linalg.norm(d["displacement"], axis=1)[b.mesh.cells].mean(axis=1))
+            out.append(np.linalg.norm(d["displacement"], axis=1)[b.mesh.simplices].mean(axis=1))
         else:
-            out.append(_values(d, field, "cells"))
+            out.append(b.mesh.per_simplex(_values(d, field, "cells")))
     return np.concatenate(out)
 
 
@@ -170,7 +170,7 @@ def _range(values: list[np.ndarray], field: str) -> tuple[float, float]:
 # -- 3D: PyVista ------------------------------------------------------------------------------
 def _vertex_values(b, cell_values: np.ndarray) -> np.ndarray:
     """Cell values averaged to the vertices (volume-weighted)."""
-    w = b.model.kinematics.weights
+    w = b.model.kinematics.cell_weights
     n = b.mesh.n_points
     num = np.bincount(b.mesh.cells.ravel(), np.repeat(w * cell_values, b.mesh.cells.shape[1]), n)
     den = np.bincount(b.mesh.cells.ravel(), np.repeat(w, b.mesh.cells.shape[1]), n)
@@ -251,7 +251,7 @@ def _render_pyvista(sim, bodies, frames, directory, field, label) -> str:
     from tissuesim.mesh.boundary import boundary_facets
     from tissuesim.render.pyvista3d import GifWriter, render_frame_png
 
-    surfaces = {b.name: boundary_facets(b.mesh.cells) for b in bodies if b.kind == "fem"}
+    surfaces = {b.name: boundary_facets(b.mesh.simplices) for b in bodies if b.kind == "fem"}
     wall = sum(r.wall_time_s for r in sim.history)
     picked = [frames[i] for i in _subsample(len(frames), gif_frames_3d(wall))]
     clim = _range([v for f in picked for v in _field_values(bodies, f[1], field)], field)
@@ -274,14 +274,14 @@ def _render_matplotlib_3d(b, frames, directory, field, label) -> str:
 
         def vals(d):
             if field == "displacement":
-                return np.linalg.norm(d["displacement"], axis=1)[b.mesh.cells].mean(axis=1)
-            return _values(d, field, "cells")
+                return np.linalg.norm(d["displacement"], axis=1)[b.mesh.simplices].mean(axis=1)
+            return b.mesh.per_simplex(_values(d, field, "cells"))
 
         series = [(t, data[b.name]["positions"], vals(data[b.name])) for t, data, _, _ in picked]
         lo, hi = _range([v for _, _, v in series], field)
         t, x, v = series[-1]
         render_frame_png_3d(
-            b.mesh,
+            b.mesh.linear_view,
             x,
             v,
             directory / "final.png",
@@ -291,7 +291,9 @@ def _render_matplotlib_3d(b, frames, directory, field, label) -> str:
             vmax=hi,
         )
         if len(series) > 1:
-            render_gif_3d(b.mesh, series, directory / "run.gif", label=label, vmin=lo, vmax=hi)
+            render_gif_3d(
+                b.mesh.linear_view, series, directory / "run.gif", label=label, vmin=lo, vmax=hi
+            )
         return f"final.png, run.gif (matplotlib, coloured by {field}; PyVista not installed)"
     from tissuesim.render.points3d import render_points_gif, render_points_png
 

@@ -14,5 +14,7 @@ def critical_time_step(model) -> float:
     w = model.kinematics.weights
     grads = model.kinematics.grads
     heights = 1.0 / np.max(np.linalg.norm(grads, axis=2), axis=1)  # 1/|grad N| = height
+    nq = model.kinematics.points_per_cell
+    heights = heights.reshape(-1, nq).min(axis=1)  # P2: the smallest over an element's points
     c = np.sqrt((model.material.lam + 2 * model.material.mu) / model.density)
     return float(np.min(heights / c)) if w.size else np.inf

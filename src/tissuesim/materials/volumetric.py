@@ -1,0 +1,86 @@
+"""The volumetric part of each law, psi(F) = psi_rest(F) + U(theta(F)), for the mean-dilatation
+formulation (``energies/mean_dilatation.py``).
+
+theta is the law's measure of volume change and U its lambda term, the part that locks:
+
+    neo_hookean          theta = J             U = lam/2 (ln theta)^2
+    course_neo_hookean   theta = J             U = lam/2 r(theta)^2, r the cubic of ln
+    fixed_corotated      theta = J             U = lam/2 (theta - 1)^2
+    linear               theta = tr F - d      U = lam/2 theta^2        (tr eps)
+    stvk                 theta = (|F|^2 - d)/2 U = lam/2 theta^2        (tr E)
+
+psi_rest keeps every mu term, so its bulk stiffness is of order mu and does not lock. Shapes:
+F (q, d, d) -> theta (q,), dtheta/dF (q, d, d), d2theta/dF2 (q, d, d, d, d).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from tissuesim.errors import InputError
+from tissuesim.materials._common import IDENTITY, cofactor, det, det_hessian
+from tissuesim.materials.base import Material
+
+__all__ = ["VolumetricPart", "volumetric_part", "VOLUMETRIC_LAWS"]
+
+#: law name -> (theta kind, U kind)
+VOLUMETRIC_LAWS = {
+    "neo_hookean": ("J", "log"),
+    "course_neo_hookean": ("J", "cubic_log"),
+    "fixed_corotated": ("J", "quadratic_J"),
+    "linear": ("trace", "quadratic"),
+    "stvk": ("green_trace", "quadratic"),
+}
+
+
+@dataclass(frozen=True)
+class VolumetricPart:
+    theta_kind: str
+    u_kind: str
+    lam: float
+
+    def theta(self, F: np.ndarray, order: int):
+        """(theta, dtheta/dF or None, d2theta/dF2 or None) up to ``order``."""
+        d = F.shape[-1]
+        if self.theta_kind == "J":
+            cof = cofactor(F)
+            t = det(F, cof)
+            return t, cof if order >= 1 else None, det_hessian(F) if order >= 2 else None
+        if self.theta_kind == "trace":
+            t = np.trace(F, axis1=1, axis2=2) - d
+            dt = np.broadcast_to(np.eye(d), F.shape) if order >= 1 else None
+            return t, dt, np.zeros((F.shape[0],) + (d,) * 4) if order >= 2 else None
+        t = 0.5 * (np.einsum("qij,qij->q", F, F) - d)
+        ddt = np.broadcast_to(IDENTITY[d], (F.shape[0],) + (d,) * 4) if order >= 2 else None
+        return t, F if order >= 1 else None, ddt
+
+    def energy(self, theta: np.ndarray, order: int):
+        """(U, U', U'') at theta (q,); U = +inf (and U', U'' nan) where the law is undefined."""
+        lam = self.lam
+        if self.u_kind == "log":
+            ok = theta > 0.0
+            ln = np.log(np.where(ok, theta, 1.0))
+            U = np.where(ok, 0.5 * lam * ln**2, np.inf)
+            dU = np.where(ok, lam * ln / np.where(ok, theta, 1.0), np.nan)
+            ddU = np.where(ok, lam * (1.0 - ln) / np.where(ok, theta, 1.0) ** 2, np.nan)
+            return U, dU, ddU
+        if self.u_kind == "cubic_log":
+            x = theta - 1.0
+            r, dr, ddr = x - x**2 / 2.0 + x**3 / 3.0, 1.0 - x + x**2, 2.0 * x - 1.0
+            return 0.5 * lam * r**2, lam * r * dr, lam * (dr**2 + r * ddr)
+        x = theta - 1.0 if self.u_kind == "quadratic_J" else theta
+        return 0.5 * lam * x**2, lam * x, np.full_like(theta, lam)
+
+
+def volumetric_part(material: Material, what: str = "formulation") -> VolumetricPart:
+    name = getattr(material, "name", "")
+    if name not in VOLUMETRIC_LAWS:
+        raise InputError(
+            f"{what} 'mean_dilatation' needs a law with a known volumetric part "
+            f"({', '.join(VOLUMETRIC_LAWS)}); {name or type(material).__name__!r} has none: use "
+            f"formulation = 'displacement'"
+        )
+    theta, u = VOLUMETRIC_LAWS[name]
+    return VolumetricPart(theta, u, float(material.lam))
