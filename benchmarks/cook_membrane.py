@@ -46,9 +46,15 @@ def cook_mesh(n: int):
     return validate_mesh(p, r.cells, source=f"cook({n})", facet_sets={})
 
 
-def tip_deflection(n: int, order: int, formulation: str, nu: float, force: float, steps: int):
-    mesh = cook_mesh(n)
-    material = make_material("neo_hookean", youngs_modulus=2 * MU * (1 + nu), poisson_ratio=nu)
+def solve(mesh, material, formulation: str, force: float, steps: int) -> np.ndarray:
+    """Positions (n, 2) of the loaded membrane."""
+    sim = _simulation(mesh, material, None, formulation, force, steps)[0]
+    for _ in range(steps):
+        sim.step()
+    return sim.positions
+
+
+def _simulation(mesh, material, order, formulation, force, steps):
     sim = Simulation(
         integrator="quasistatic",
         time_step=1.0 / steps,
@@ -60,6 +66,13 @@ def tip_deflection(n: int, order: int, formulation: str, nu: float, force: float
     body.add_traction(
         facets_on_plane(body.mesh, 0, 48.0), lambda X, t: np.array([0.0, traction * min(t, 1.0)])
     )
+    return sim, body
+
+
+def tip_deflection(n: int, order: int, formulation: str, nu: float, force: float, steps: int):
+    mesh = cook_mesh(n)
+    material = make_material("neo_hookean", youngs_modulus=2 * MU * (1 + nu), poisson_ratio=nu)
+    sim, body = _simulation(mesh, material, order, formulation, force, steps)
     tip = int(np.argmin(np.linalg.norm(body.mesh.points - [48.0, 60.0], axis=1)))
     start = time.perf_counter()
     iterations = 0

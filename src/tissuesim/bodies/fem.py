@@ -325,6 +325,14 @@ class FemBody:
         (``materials/measures.py``); for P2 the volume averages over each element's points."""
         K = self.model.kinematics
         fields = continuum_fields(self.model.material, K.deformation_gradients(x))
+        if self.model.formulation == "mean_dilatation":  # the patch pressure, not the point's
+            from tissuesim.materials.measures import von_mises
+
+            fields["cauchy_stress"] = fields[
+                "cauchy_stress"
+            ] + self.model.elastic.cauchy_correction(x)
+            fields["von_mises"] = von_mises(fields["cauchy_stress"])
+            fields["energy_density"] = self.model.elastic.point_energy_density(x)
         return {k: K.cell_average(v) for k, v in fields.items()}
 
     def min_J(self, x: np.ndarray) -> float:

@@ -186,15 +186,31 @@ class MeanDilatationEnergy:
     def jacobians(self, x: np.ndarray) -> np.ndarray:
         return det(self.kinematics.deformation_gradients(x))
 
-    def stresses(self, x: np.ndarray) -> np.ndarray:
-        """First Piola stress per point with the patch pressure in place of the point's."""
-        F, resp, th, dth, _, U, dU, _, thb, Ub, dUb, _ = self._state(x, 1)
+    def cauchy_correction(self, x: np.ndarray) -> np.ndarray:
+        """What the patch pressure changes in the law's Cauchy stress at each point, (q, 3, 3):
+        (p - U'(theta)) dtheta/dF F^T / J, embedded in 3D (for theta = J, (p - U') I, the
+        out-of-plane component included in plane strain)."""
+        F, _, th, dth, _, U, dU, _, thb, Ub, dUb, _ = self._state(x, 1)
         p = (self.CT @ dUb) / self.kinematics.weights
-        return resp.stress + bcast(p - dU, 3) * dth
+        J = det(F)
+        d = F.shape[-1]
+        c = (p - dU) / J
+        out = np.zeros((F.shape[0], 3, 3))
+        out[:, :d, :d] = bcast(c, 3) * (dth @ np.swapaxes(F, 1, 2))
+        if d == 2 and self.volumetric.theta_kind == "J":
+            out[:, 2, 2] = p - dU  # J of the embedded F = J of the plane part
+        return out
+
+    def point_energy_density(self, x: np.ndarray) -> np.ndarray:
+        """(q,) J/m^3: the point's part plus its share of the patches' energies (so that
+        sum_q w_q psi_q is the energy)."""
+        _, resp, _, _, _, U, _, _, _, Ub, _, _ = self._state(x, 0)
+        return resp.energy - U + (self.CT @ Ub) / self.kinematics.weights
 
     def cell_fields(self, x: np.ndarray) -> dict[str, np.ndarray]:
         K = self.kinematics
-        F, resp, th, _, _, U, _, _, thb, Ub, _, _ = self._state(x, 0)
-        # the point's part plus its share of the patches' energies (weights sum to the total)
-        psi = resp.energy - U + (self.CT @ Ub) / K.weights
-        return {"J": K.cell_average(det(F)), "energy_density": K.cell_average(psi)}
+        J = det(K.deformation_gradients(x))
+        return {
+            "J": K.cell_average(J),
+            "energy_density": K.cell_average(self.point_energy_density(x)),
+        }

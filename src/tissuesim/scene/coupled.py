@@ -72,7 +72,7 @@ from tissuesim.validate import short
 __all__ = ["build_bodies_scene", "COUPLED_SCENE_KEYS"]
 
 COUPLED_SIMULATION_KEYS = ("integrator", "time_step", "max_step_halvings", "start_time", "backend")
-ORGAN_KEYS = ("name", "mesh", "material", "density", "mass", "fix")
+ORGAN_KEYS = ("name", "mesh", "material", "density", "mass", "order", "formulation", "fix")
 GRASPER_KEYS = ("body", "organ", "name", "vertices", "displacement", "stiffness", "release")
 ATTACHMENT_KEYS = ("body", "to", "distance", "stiffness", "name")
 TISSUE_KEYS = (
@@ -151,7 +151,7 @@ def build_bodies_scene(data: dict, base_dir: Path, source: str, name: str) -> Sc
     newton = _newton(data, source)
     sim_where = f"{source} [simulation]"
     sim_table = _table(data, "simulation", source)
-    for key in ("density", "mass"):
+    for key in ("density", "mass", "order", "formulation"):
         if key in sim_table:
             raise SceneError(
                 f"{sim_where}: {key} is set per body in a scene of several bodies: write "
@@ -265,8 +265,12 @@ def _organ(sim, item: dict, base_dir: Path, where: str) -> None:
                 f"{where}: mass must be 'consistent' or 'lumped', not {item['mass']!r}"
             )
         options["mass"] = item["mass"]
+    for key in ("order", "formulation"):
+        if key in item:
+            options[key] = item[key]
     with _context(where):
         sim.add_body(name, mesh, material, **options)
+    mesh = sim.body(name).mesh  # order = 2 adds midside nodes
     if "fix" in item:
         vertices = _vertices(mesh, name, item["fix"], where, "fix")
         with _context(f"{where} fix"):
@@ -294,7 +298,9 @@ def _body(sim, item: dict, base_dir: Path, source: str, i: int) -> None:
             f"(frames = {{...}} with region = {{...}}: meshless); give exactly one"
         )
     if kinds == ["mesh"]:
-        _unknown(item, ("name", "density", "mass", "fix", *FEM_BODY_KEYS), where)
+        _unknown(
+            item, ("name", "density", "mass", "order", "formulation", "fix", *FEM_BODY_KEYS), where
+        )
         add_fem_body(sim, name, item, base_dir, source, label)
     else:
         _unknown(item, ("name", "density", "mass", *FRAME_BODY_KEYS), where)

@@ -58,6 +58,9 @@ from tissuesim.validate import short
 
 __all__ = ["build_frame_scene", "FRAME_SCENE_KEYS"]
 
+#: element order and formulation are FEM options: a frame body has neither
+FRAME_SIMULATION_KEYS = tuple(k for k in SIMULATION_KEYS if k not in ("order", "formulation"))
+
 FRAMES_KEYS = {
     "type": "rigid (6 DOF per frame) or affine (12 DOF)",
     "shape": "wendland (compact support) or shepard (global)",
@@ -80,7 +83,7 @@ FRAME_SCENE_KEYS: dict[str, Any] = {
     "frames": set(FRAMES_KEYS),
     "region": set(REGION_KEYS),
     "material": None,  # checked by make_material
-    "simulation": set(SIMULATION_KEYS),
+    "simulation": set(FRAME_SIMULATION_KEYS),
     "newton": None,  # checked against NewtonOptions
     "gravity": {"acceleration"},
     "fixed_frames": {"frames", "name"},
@@ -132,7 +135,7 @@ def build_frame_scene(data: dict, base_dir: Path, source: str, name: str) -> Sce
     newton = _newton(data, source)
     sim_where = f"{source} [simulation]"
     sim_table = dict(_table(data, "simulation", source))
-    _unknown(sim_table, SIMULATION_KEYS, sim_where)
+    _unknown(sim_table, FRAME_SIMULATION_KEYS, sim_where)
     _check_simulation(sim_table, sim_where)
     body = {k: sim_table.pop(k) for k in ("density", "mass") if k in sim_table}
     with _context(sim_where):

@@ -69,7 +69,11 @@ SIMULATION_KEYS = (
     "max_step_halvings",
     "start_time",
     "backend",
+    "order",
+    "formulation",
 )
+#: the FEM body options a [simulation] table (short form) or a [[bodies]] table may set
+FEM_BODY_OPTIONS = ("density", "mass", "order", "formulation")
 RUN_KEYS = ("steps", "every", "render", "field")
 SELECTORS = {
     "vertices": {"on_plane", "in_box", "tagged", "boundary", "where"},
@@ -227,7 +231,7 @@ def _build(data: dict, base_dir: Path, source: str, name: str) -> Scene:
     newton = _newton(data, source)
     sim_table = dict(_table(data, "simulation", source))
     _unknown(sim_table, SIMULATION_KEYS, f"{source} [simulation]")
-    body = {k: sim_table.pop(k) for k in ("density", "mass") if k in sim_table}
+    body = {k: sim_table.pop(k) for k in FEM_BODY_OPTIONS if k in sim_table}
     with _context(f"{source} [simulation]"):
         sim = Simulation(newton=newton, **sim_table)
     tables = {k: data[k] for k in FEM_BODY_KEYS if k in data}
@@ -278,17 +282,19 @@ def body_label(source: str, array: str, n: int):
 def add_fem_body(
     sim, name: str, item: dict, base_dir: Path, source: str, label, options_where=None
 ) -> None:
-    """A FEM body from its tables: mesh, material (required), density, mass, fix (a vertex
-    selector), dirichlet, traction, body_force, nodal_forces (arrays of tables), initial."""
+    """A FEM body from its tables: mesh, material (required), density, mass, order,
+    formulation, fix (a vertex selector), dirichlet, traction, body_force, nodal_forces (arrays
+    of tables), initial."""
     if "mesh" not in item:
         raise SceneError(f"{label('mesh')}: missing: give a mesh = {{ generator = ... }} table")
     with _context(label("mesh")):
         mesh = _mesh(_table(item, "mesh", source), base_dir, label("mesh"))
     d = mesh.dim
     material = _material(item, source, label("material"))
-    options = {k: item[k] for k in ("density", "mass") if k in item}
+    options = {k: item[k] for k in FEM_BODY_OPTIONS if k in item}
     with _context(options_where or label()):
         sim.add_body(name, mesh, material, **options)
+    mesh = sim.body(name).mesh  # order = 2 adds midside nodes: select on the body's mesh
     if "fix" in item:
         vertices = _select(mesh, "vertices", item["fix"], label("fix"))
         with _context(label("fix")):
