@@ -48,7 +48,7 @@ def compress(n: int, order: int, formulation: str, nu: float, steps: int) -> dic
     return {
         "cells": mesh.n_cells,
         "dofs": body.model.n_dofs,
-        "force": float(sim.forces()["block.top"][2]),
+        "force": float(sim.forces()["top"][2]),
         "iterations": iterations,
         "wall_s": time.perf_counter() - start,
     }

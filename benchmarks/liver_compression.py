@@ -55,7 +55,7 @@ def press(n: int, order: int, formulation: str, nu: float, steps: int) -> dict:
     return {
         "cells": mesh.n_cells,
         "dofs": body.model.n_dofs,
-        "force": -float(sim.forces()["liver.indenter"][2]),
+        "force": -float(sim.forces()["indenter"][2]),
         "bulge": float(sim.displacement[probe, 0]),
         "iterations": iterations,
         "wall_s": time.perf_counter() - start,

@@ -100,13 +100,15 @@ def as_field(value, what: str = "load", dim: int | None = None) -> ForceField:
 @dataclass(frozen=True, eq=False)
 class Gravity:
     """Weight rho g per unit volume: nodal forces int rho N^a g, the consistent mass's row sums
-    times g (for P1 also the lumped masses)."""
+    times g; with a lumped mass the lumped masses times g (the same for P1; for P2 the HRZ
+    masses, so that a lumped body falls freely without deforming)."""
 
     acceleration: np.ndarray  # (d,) m/s^2
 
     def nodal_forces(self, model, t: float) -> np.ndarray:
         d = model.mesh.dim
-        return model.mass.row_sums.reshape(-1, d) * np.asarray(self.acceleration, dtype=float)
+        mass = model.mass.lumped if model.mass.kind == "lumped" else model.mass.row_sums
+        return mass.reshape(-1, d) * np.asarray(self.acceleration, dtype=float)
 
 
 @dataclass(frozen=True, eq=False)
