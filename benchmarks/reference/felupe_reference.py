@@ -179,23 +179,47 @@ def newton(items, field, dof0, dof1, ext0=None, solver=None):
     return res
 
 
-def richardson(values, ratio=2.0):
-    """Richardson extrapolation from the last three values of a ratio-2 sequence."""
+def richardson(values, h=None):
+    """Richardson extrapolation v(h) = v_inf + C h^p from the last three levels.
+
+    ``h`` are the mesh sizes (default: a ratio-2 sequence); the order p is solved for by
+    bisection, so any refinement ratios are allowed."""
     if len(values) < 3:
         return None
     v1, v2, v3 = values[-3:]
-    d1, d2 = v2 - v1, v3 - v2
+    h1, h2, h3 = (4.0, 2.0, 1.0) if h is None else tuple(h[-3:])
+    d1, d2 = v1 - v2, v2 - v3
     if d2 == 0.0:
         return {"p": math.inf, "value": v3, "err": 0.0}
-    r = d1 / d2
-    if r <= 1.0:
+    q = d1 / d2
+    lo, hi = 1e-3, 12.0
+
+    def g(p):
+        return (h1**p - h2**p) / (h2**p - h3**p) - q
+
+    if q <= 0.0 or g(lo) * g(hi) > 0.0:
         return {"p": float("nan"), "value": float("nan"), "err": abs(d2)}
-    p = math.log(r) / math.log(ratio)
-    ext = v3 + d2 / (r - 1.0)
+    for _ in range(200):
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if g(lo) * g(mid) > 0.0 else (lo, mid)
+    p = 0.5 * (lo + hi)
+    ext = v3 - d2 * h3**p / (h2**p - h3**p)
     return {"p": p, "value": ext, "err": abs(ext - v3)}
 
 
-def fmt_table(rows, cols, key):
+def attempt(fn, *args, notes=None, label="", **kwargs):
+    """Run one level; a Newton failure is reported (stderr and the table notes), not raised."""
+    try:
+        return fn(*args, **kwargs)
+    except Exception as exc:  # felupe.NewtonConvergenceError and friends
+        msg = f"{label}: FAILED ({type(exc).__name__}: {str(exc)[:160]})"
+        print(msg, file=sys.stderr, flush=True)
+        if notes is not None:
+            notes.append(msg)
+        return None
+
+
+def fmt_table(rows, cols, key, level="N"):
     out = ["| " + " | ".join(c for c, _ in cols) + " | change vs previous |",
            "|" + "---|" * (len(cols) + 1)]
     prev = None
@@ -204,7 +228,7 @@ def fmt_table(rows, cols, key):
         ch = "" if prev is None else f"{100.0 * (v - prev) / abs(v):+.4f} %"
         prev = v
         out.append("| " + " | ".join(fm.format(r[c]) for c, fm in cols) + f" | {ch} |")
-    ext = richardson([r[key] for r in rows])
+    ext = richardson([r[key] for r in rows], [1.0 / r[level] for r in rows])
     if ext is not None:
         out.append("")
         out.append(
@@ -280,6 +304,40 @@ def run_cook(N, mu, lam, traction, energy="tissuesim", element="quad9", formulat
     }
 
 
+def run_cook_slab(N, mu, lam, traction, energy="dealii", g=2.0, steps=4, solver=None):
+    """Cook's membrane as a 3D slab 1 mm thick, one Hex27 through the thickness, z free
+    (only the face x = 0 is clamped): what the deal.II code-gallery program computes, see the
+    results file.  Mixed u-p-J, discontinuous trilinear p and J."""
+    f = _felupe()
+    t0 = time.perf_counter()
+    m = f.Rectangle(a=(0.0, 0.0), b=(1.0, 1.0), n=(N + 1, N + 1))
+    xi, eta = grade(m.points[:, 0], g), grade(m.points[:, 1], g)
+    x = 48.0 * xi
+    y_low, y_up = 44.0 / 48.0 * x, 44.0 + 16.0 / 48.0 * x
+    m = f.Mesh(np.column_stack([x, y_low + eta * (y_up - y_low)]), m.cells, m.cell_type)
+    m = m.expand(n=2, z=1.0)
+    m = m.add_midpoints_edges().add_midpoints_faces().add_midpoints_volumes()
+    field = f.FieldsMixed(f.RegionTriQuadraticHexahedron(m), n=3)
+    solid = f.SolidBody(material(energy, mu, lam, "mixed"), field)
+    dof0, dof1 = f.dof.partition(field, {"left": f.Boundary(field[0], fx=0.0)})
+    end = np.flatnonzero(np.isclose(m.points[:, 0], 48.0))
+    ys = np.unique(np.round(m.points[end, 1], 10))
+    zs = np.unique(np.round(m.points[end, 2], 10))
+    w = (simpson_weights(ys)[np.searchsorted(ys, np.round(m.points[end, 1], 10))]
+         * simpson_weights(zs)[np.searchsorted(zs, np.round(m.points[end, 2], 10))])
+    assert abs(w.sum() - 16.0) < 1e-9
+    values = np.zeros((len(end), 3))
+    values[:, 1] = traction * w
+    load = f.PointLoad(field, end, values)
+    for lf in np.linspace(1.0 / steps, 1.0, steps):
+        load.update(lf * values)
+        field = newton([solid, load], field, dof0, dof1, solver=solver).x
+    tip = np.isclose(m.points[:, 0], 48.0) & np.isclose(m.points[:, 1], 60.0)
+    tip &= np.isclose(m.points[:, 2], 0.5)  # mid-thickness node
+    return {"N": N, "cells": m.ncells, "dofs": int(np.sum(field.fieldsizes)),
+            "uy": float(field[0].values[tip][0, 1]), "time": time.perf_counter() - t0}
+
+
 COOK_MU = 80.194
 COOK_T = 100.0 / 16.0
 
@@ -299,19 +357,23 @@ def task_cook(args, out):
         lv = levels if not (element == "tri6" or form == "disp") else levels[:-1] or levels
         if args.levels:
             lv = args.levels
-        rows = []
+        rows, notes = [], []
         for N in lv:
-            r = run_cook(N, COOK_MU, lam, COOK_T, "tissuesim", element, form, args.grading,
-                         solver=solver)
+            r = attempt(run_cook, N, COOK_MU, lam, COOK_T, "tissuesim", element, form,
+                        args.grading, steps=args.steps, solver=solver, notes=notes,
+                        label=f"N={N}")
+            if r is None:
+                continue
             rows.append(r)
             print(f"cook nu={nu} {element} {form} N={N}: uy={r['uy']:.6f} "
                   f"dofs={r['dofs']} {r['time']:.1f}s", file=sys.stderr, flush=True)
         out.append(f"\n### Cook, tissuesim neo_hookean, nu = {nu}, {element}, {form}\n")
         out.append(f"mu = {COOK_MU} MPa, lam = {lam:.6g} MPa, t_y = {COOK_T} MPa (total 100 N "
-                   f"per mm thickness), grading g = {args.grading}\n")
+                   f"per mm thickness), grading g = {args.grading}, {args.steps} load steps\n")
         out.append(fmt_table(rows, [("N", "{}"), ("cells", "{}"), ("dofs", "{}"),
                                     ("uy", "{:.6f}"), ("ux", "{:.6f}"), ("iters", "{}"),
                                     ("time", "{:.1f}")], "uy"))
+        out.extend_notes(notes)
 
 
 def task_cook_published(args, out):
@@ -335,9 +397,12 @@ def task_cook_published(args, out):
          COOK_T, "dealii"),
     ]
     for label, mu, lam, t, energy in cases:
-        rows = []
+        rows, notes = [], []
         for N in levels:
-            r = run_cook(N, mu, lam, t, energy, "quad9", "mixed", args.grading, solver=solver)
+            r = attempt(run_cook, N, mu, lam, t, energy, "quad9", "mixed", args.grading,
+                        steps=args.steps, solver=solver, notes=notes, label=f"N={N}")
+            if r is None:
+                continue
             rows.append(r)
             print(f"cook-published {label} N={N}: uy={r['uy']:.6f} {r['time']:.1f}s",
                   file=sys.stderr, flush=True)
@@ -346,6 +411,26 @@ def task_cook_published(args, out):
                    f"`{energy}`, quad9 mixed, grading g = {args.grading}\n")
         out.append(fmt_table(rows, [("N", "{}"), ("dofs", "{}"), ("uy", "{:.6f}"),
                                     ("time", "{:.1f}")], "uy"))
+        out.extend_notes(notes)
+    for energy in ["dealii", "tissuesim"]:
+        rows, notes = [], []
+        for N in (args.levels or [8, 16, 32]):
+            r = attempt(run_cook_slab, N, 0.4225, lame(0.4225, 0.3), 1.0 / 16.0, energy,
+                        args.grading, steps=args.steps, solver=solver, notes=notes,
+                        label=f"N={N}")
+            if r is None:
+                continue
+            rows.append(r)
+            print(f"cook-published slab {energy} N={N}: uy={r['uy']:.6f} {r['time']:.1f}s",
+                  file=sys.stderr, flush=True)
+        out.append(f"\n### Cook, deal.II gallery params, 3D slab 1 mm thick, z free, energy "
+                   f"`{energy}`\n")
+        out.append("mu = 0.4225 MPa, nu = 0.3, total force 1 N (t_y = 1/16 MPa), one Hex27 "
+                   f"through the thickness, mixed, grading g = {args.grading}, u_y at "
+                   "(48, 60, 0.5)\n")
+        out.append(fmt_table(rows, [("N", "{}"), ("dofs", "{}"), ("uy", "{:.6f}"),
+                                    ("time", "{:.1f}")], "uy"))
+        out.extend_notes(notes)
 
 
 # ----------------------------------------------------------------------------------------
@@ -431,10 +516,13 @@ def task_block(args, out):
     for nu in args.nu or [0.45, 0.49]:
         for element in args.element or ["hex27"]:
             levels = args.levels or [2, 4, 8, 12 if element == "tet10" else 16]
-            rows = []
+            rows, notes = [], []
             for n in levels:
-                r = run_block(n, nu, element, args.block_model, args.block_grading,
-                              formulation=(args.formulation or ["mixed"])[0], solver=solver)
+                r = attempt(run_block, n, nu, element, args.block_model, args.block_grading,
+                            formulation=(args.formulation or ["mixed"])[0], solver=solver,
+                            notes=notes, label=f"n={n}")
+                if r is None:
+                    continue
                 rows.append(r)
                 print(f"block nu={nu} {element} n={n}: Fz={r['Fz']:.6f} dofs={r['dofs']} "
                       f"{r['time']:.1f}s", file=sys.stderr, flush=True)
@@ -443,7 +531,8 @@ def task_block(args, out):
             out.append(f"mu = 1000 Pa, lam = {lame(1000.0, nu):.6g} Pa, top moved -0.2 m\n")
             out.append(fmt_table(rows, [("n", "{}"), ("cells", "{}"), ("dofs", "{}"),
                                         ("Fz", "{:.6f}"), ("Jmin", "{:.4f}"),
-                                        ("iters", "{}"), ("time", "{:.1f}")], "Fz"))
+                                        ("iters", "{}"), ("time", "{:.1f}")], "Fz", "n"))
+            out.extend_notes(notes)
 
 
 # ----------------------------------------------------------------------------------------
@@ -461,10 +550,15 @@ def beam_theory(E=1e5, nu=0.0, L=2.0, b=0.4, h=0.4, P=1.0):
             "timoshenko_5/6": eb + P * L / (5.0 / 6.0 * G * A), "kappa": kappa}
 
 
-def run_cantilever(n, nu, E=1e5, solver=None):
+def run_cantilever(n, nu, E=1e5, g=1.0, solver=None):
+    """g > 1: power grading of the vertices towards the clamped face (x = 2 xi^g) and
+    two-sided towards the faces y, z = 0, 0.4 (the singular clamped edges)."""
     f = _felupe()
     t0 = time.perf_counter()
-    m = f.Cube(a=(0.0, 0.0, 0.0), b=(2.0, 0.4, 0.4), n=(5 * n + 1, n + 1, n + 1))
+    m = f.Cube(a=(0.0, 0.0, 0.0), b=(1.0, 1.0, 1.0), n=(5 * n + 1, n + 1, n + 1))
+    p = m.points
+    m = f.Mesh(np.column_stack([2.0 * p[:, 0] ** g, 0.4 * grade(p[:, 1], g),
+                                0.4 * grade(p[:, 2], g)]), m.cells, m.cell_type)
     m = m.add_midpoints_edges().add_midpoints_faces().add_midpoints_volumes()
     region = f.RegionTriQuadraticHexahedron(m)
     field = f.FieldContainer([f.Field(region, dim=3)])
@@ -498,24 +592,37 @@ def task_cantilever(args, out):
     for nu in args.nu or [0.0, 0.3]:
         rows = []
         for n in levels:
-            r = run_cantilever(n, nu, solver=solver)
+            r = run_cantilever(n, nu, g=args.cant_grading, solver=solver)
             rows.append(r)
             print(f"cantilever nu={nu} n={n}: mean={r['mean_uz']:.8e} centre="
                   f"{r['centre_uz']:.8e} {r['time']:.1f}s", file=sys.stderr, flush=True)
         bt = beam_theory(nu=nu)
-        out.append(f"\n### Cantilever, nu = {nu}, Hex27 (E = 1e5 Pa)\n")
+        out.append(f"\n### Cantilever, nu = {nu}, Hex27 (E = 1e5 Pa), grading g = "
+                   f"{args.cant_grading}\n")
         out.append("Beam theory (deflection magnitude, downwards): Euler-Bernoulli "
                    f"{bt['euler_bernoulli']:.6e} m; Timoshenko (Cowper kappa = "
                    f"{bt['kappa']:.4f}) {bt['timoshenko']:.6e} m; Timoshenko (kappa = 5/6) "
                    f"{bt['timoshenko_5/6']:.6e} m\n")
         cols = [("n", "{}"), ("cells", "{}"), ("dofs", "{}"), ("mean_uz", "{:.8e}"),
                 ("centre_uz", "{:.8e}"), ("time", "{:.1f}")]
-        out.append(fmt_table(rows, cols, "mean_uz"))
+        out.append(fmt_table(rows, cols, "mean_uz", "n"))
         out.append("")
-        out.append(fmt_table(rows, cols, "centre_uz"))
+        out.append(fmt_table(rows, cols, "centre_uz", "n"))
 
 
 # ----------------------------------------------------------------------------------------
+
+
+class _Out(list):
+    """Prints every table as soon as it is complete (a later failure loses nothing)."""
+
+    def append(self, text):
+        super().append(text)
+        print(text, flush=True)
+
+    def extend_notes(self, notes):
+        for note in notes:
+            self.append(f"\nNote: {note}")
 
 
 def main(argv=None):
@@ -530,9 +637,13 @@ def main(argv=None):
     ap.add_argument("--formulation", nargs="+", default=None, choices=["mixed", "disp"])
     ap.add_argument("--grading", type=float, default=2.0,
                     help="Cook: two-sided power grading exponent of the mesh (1 = uniform)")
+    ap.add_argument("--steps", type=int, default=4,
+                    help="Cook: number of equal load steps")
     ap.add_argument("--block-model", default="eighth", choices=["eighth", "quarter"])
     ap.add_argument("--block-grading", type=float, default=1.0,
                     help="block: power grading towards the bonded edges (1 = uniform)")
+    ap.add_argument("--cant-grading", type=float, default=1.0,
+                    help="cantilever: power grading towards the clamped edges (1 = uniform)")
     ap.add_argument("--quick", action="store_true", help="coarse levels only (smoke test)")
     args = ap.parse_args(argv)
     if args.quick and args.levels is None:
@@ -541,8 +652,9 @@ def main(argv=None):
     warnings.simplefilter("ignore", DeprecationWarning)
     f = _felupe()
     _, solver_name = _solver()
-    out = [f"FElupe {f.__version__}, numpy {np.__version__}, linear solver {solver_name}, "
-           f"check |psi_felupe - 3mu/2 - psi_tissuesim| = {check_energy():.2e}"]
+    out = _Out()
+    out.append(f"FElupe {f.__version__}, numpy {np.__version__}, linear solver {solver_name}, "
+           f"check |psi_felupe - 3mu/2 - psi_tissuesim| = {check_energy():.2e}")
     tasks = {"cook": task_cook, "cook-published": task_cook_published, "block": task_block,
              "cantilever": task_cantilever}
     chosen = list(tasks) if args.task == "all" else [args.task]
@@ -555,7 +667,6 @@ def main(argv=None):
     else:
         for name in chosen:
             tasks[name](args, out)
-    print("\n".join(out))
 
 
 if __name__ == "__main__":

@@ -506,11 +506,20 @@ class Simulation(SetupCalls, BodyResults):
             s = self.system
             dims = {b.dim for b in self._active()}
             single = len(s.bodies) == 1 and self._active()[0].kind == "fem"
+            ratio = max(
+                (
+                    b.model.material.lam / b.model.material.mu
+                    for b in self._active()
+                    if b.kind == "fem"
+                ),
+                default=0.0,
+            )
             self._solver, self.solver_reason = make_linear_solver(
                 self.newton.linear_solver,
                 s.n_dofs,
                 max(dims),
                 self._active()[0].mesh.points if single else None,
+                volumetric_ratio=ratio,
             )
         return self._solver
 

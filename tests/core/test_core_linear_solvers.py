@@ -149,6 +149,11 @@ def test_automatic_choice_and_its_reason(monkeypatch):
     assert solver.name == "cg+amg" and "pyamg" in reason
     solver, reason = make_linear_solver("auto", 6_000, 3, vertices)
     assert solver.name == "cg+amg" and "beats SuperLU" in reason
+    # nearly incompressible (nu = 0.49: lambda/mu = 49): CG would crawl, a direct solver at any size
+    solver, reason = make_linear_solver("auto", 10**5, 3, vertices, volumetric_ratio=49.0)
+    assert solver.name == "splu" and "nearly incompressible" in reason
+    solver, reason = make_linear_solver("auto", 10**5, 3, vertices, volumetric_ratio=9.0)
+    assert solver.name == "cg+amg"  # nu = 0.45: lambda/mu = 9, CG still fine
     with pytest.raises(ValueError, match="linear_solver must be one of"):
         make_linear_solver("umfpack", 10, 2)
     with pytest.raises(ValueError, match=r"tissuesim\[fast\]"):

@@ -59,6 +59,11 @@ AMG_MIN_DOFS_3D = 30_000
 #: one thread, per iteration: 1,029 DOFs SuperLU 0.009 s, AMG-CG 0.010 s, Jacobi-CG 0.011 s;
 #: 3,000 DOFs 0.121 / 0.036 / 0.042 s; 20,577 DOFs 4.68 / 0.21 / 0.51 s).
 SPLU_MAX_DOFS_3D = 1_500
+#: lambda / mu above which "auto" keeps to direct solvers: CG's iterations grow with the
+#: condition number, which grows with lambda / mu (nu = 0.4545 at 10). Measured: a P2
+#: mean-dilatation ellipsoid at nu = 0.49 (2,187 DOFs) took 3 s per AMG-CG solve, SuperLU 0.02 s
+#: (benchmarks/liver_compression.py).
+NEARLY_INCOMPRESSIBLE_RATIO = 10.0
 
 
 class NotPositiveDefiniteError(RuntimeError):
@@ -369,11 +374,17 @@ class CGSolver(LinearSolver):
 
 
 def make_linear_solver(
-    name: str, n_dofs: int, dim: int, points: np.ndarray | None = None
+    name: str,
+    n_dofs: int,
+    dim: int,
+    points: np.ndarray | None = None,
+    volumetric_ratio: float = 0.0,
 ) -> tuple[LinearSolver, str]:
     """Build the solver called ``name`` (see ``LINEAR_SOLVERS``); returns (solver, reason).
 
-    points: rest positions (n, d), used by AMG for the rigid-body near-null space."""
+    points: rest positions (n, d), used by AMG for the rigid-body near-null space.
+    volumetric_ratio: the largest lambda / mu of the bodies; above NEARLY_INCOMPRESSIBLE_RATIO
+    "auto" chooses a direct solver at any size."""
     if name not in LINEAR_SOLVERS:
         raise InputError(f"linear_solver must be one of {LINEAR_SOLVERS}, not {short(name)}")
     if name == "pardiso":
@@ -400,6 +411,20 @@ def make_linear_solver(
     # auto (benchmarks/solvers.py): AMG-CG for large 3D; else a direct solver, PARDISO first in
     # 2D (fastest factorisation) and CHOLMOD first in 3D (PARDISO's 3D factorisation is slower).
     large_3d = dim == 3 and n_dofs > AMG_MIN_DOFS_3D
+    if volumetric_ratio > NEARLY_INCOMPRESSIBLE_RATIO:
+        for label, available, cls in (
+            ("pardiso", has_pardiso, PardisoSolver),
+            ("cholmod", has_cholmod, CholmodSolver),
+        ):
+            if available():
+                return (
+                    cls(),
+                    f"auto: {label}, nearly incompressible (lambda/mu {volumetric_ratio:.3g})",
+                )
+        return SuperLUSolver(), (
+            f"auto: SciPy SuperLU, nearly incompressible (lambda/mu {volumetric_ratio:.3g} > "
+            f"{NEARLY_INCOMPRESSIBLE_RATIO:g}: CG converges slowly there)"
+        )
     if large_3d and has_pyamg():
         return CGSolver("amg", points=points), (
             f"auto: 3D with {n_dofs} DOFs > {AMG_MIN_DOFS_3D}, pyamg available"
