@@ -520,6 +520,7 @@ class Simulation(SetupCalls, BodyResults):
                 max(dims),
                 self._active()[0].mesh.points if single else None,
                 volumetric_ratio=ratio,
+                quadratic=any(b.kind == "fem" and b.mesh.order == 2 for b in self._active()),
             )
         return self._solver
 

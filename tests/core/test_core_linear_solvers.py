@@ -154,6 +154,8 @@ def test_automatic_choice_and_its_reason(monkeypatch):
     assert solver.name == "splu" and "nearly incompressible" in reason
     solver, reason = make_linear_solver("auto", 10**5, 3, vertices, volumetric_ratio=9.0)
     assert solver.name == "cg+amg"  # nu = 0.45: lambda/mu = 9, CG still fine
+    solver, reason = make_linear_solver("auto", 10**5, 3, vertices, quadratic=True)
+    assert solver.name == "splu" and "quadratic" in reason
     with pytest.raises(ValueError, match="linear_solver must be one of"):
         make_linear_solver("umfpack", 10, 2)
     with pytest.raises(ValueError, match=r"tissuesim\[fast\]"):
