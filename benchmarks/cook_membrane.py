@@ -48,17 +48,17 @@ def cook_mesh(n: int):
 
 def solve(mesh, material, formulation: str, force: float, steps: int) -> np.ndarray:
     """Positions (n, 2) of the loaded membrane."""
-    sim = _simulation(mesh, material, None, formulation, force, steps)[0]
+    sim = _simulation(mesh, material, None, formulation, force, steps, 1e-8)[0]
     for _ in range(steps):
         sim.step()
     return sim.positions
 
 
-def _simulation(mesh, material, order, formulation, force, steps):
+def _simulation(mesh, material, order, formulation, force, steps, tolerance):
     sim = Simulation(
         integrator="quasistatic",
         time_step=1.0 / steps,
-        newton=NewtonOptions(max_iterations=60),
+        newton=NewtonOptions(max_iterations=60, gradient_tolerance=tolerance),
     )
     body = sim.add_body("cook", mesh, material, density=1.0, order=order, formulation=formulation)
     body.fix(vertices_on_plane(body.mesh, 0, 0.0), name="clamp")
@@ -69,10 +69,18 @@ def _simulation(mesh, material, order, formulation, force, steps):
     return sim, body
 
 
-def tip_deflection(n: int, order: int, formulation: str, nu: float, force: float, steps: int):
+def tip_deflection(
+    n: int,
+    order: int,
+    formulation: str,
+    nu: float,
+    force: float,
+    steps: int,
+    tolerance: float = 1e-8,
+):
     mesh = cook_mesh(n)
     material = make_material("neo_hookean", youngs_modulus=2 * MU * (1 + nu), poisson_ratio=nu)
-    sim, body = _simulation(mesh, material, order, formulation, force, steps)
+    sim, body = _simulation(mesh, material, order, formulation, force, steps, tolerance)
     tip = int(np.argmin(np.linalg.norm(body.mesh.points - [48.0, 60.0], axis=1)))
     start = time.perf_counter()
     iterations = 0
@@ -94,13 +102,15 @@ def main(argv=None) -> int:
     ap.add_argument("--divisions", type=int, nargs="+", default=[4, 8, 16, 32])
     ap.add_argument("--force", type=float, default=100.0, help="N per unit thickness")
     ap.add_argument("--steps", type=int, default=4, help="load steps")
+    ap.add_argument("--gradient-tolerance", type=float, default=1e-8, help="Newton's (relative)")
     ap.add_argument("--out", default=str(ROOT / "benchmarks/results/cook_membrane_last_run.md"))
     args = ap.parse_args(argv)
     lines = [
         "# Cook's membrane, plane strain neo-Hookean: u_y (mm) at (48, 60)",
         "",
         f"`python3 benchmarks/cook_membrane.py --nu {' '.join(map(str, args.nu))} --divisions "
-        f"{' '.join(map(str, args.divisions))} --force {args.force:g} --steps {args.steps}`",
+        f"{' '.join(map(str, args.divisions))} --force {args.force:g} --steps {args.steps} "
+        f"--gradient-tolerance {args.gradient_tolerance:g}`",
         "",
         f"mu = {MU} MPa, total vertical force {args.force:g} N per unit thickness.",
         "",
@@ -114,7 +124,9 @@ def main(argv=None) -> int:
         ]
         for label, order, form in VARIANTS:
             for n in args.divisions:
-                r = tip_deflection(n, order, form, nu, args.force, args.steps)
+                r = tip_deflection(
+                    n, order, form, nu, args.force, args.steps, args.gradient_tolerance
+                )
                 row = (
                     f"| {label} | {n} | {r['dofs']} | {r['uy']:.5f} | {r['iterations']} | "
                     f"{r['wall_s']:.2f} |"

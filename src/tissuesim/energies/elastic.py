@@ -78,28 +78,7 @@ class ElasticEnergy:
 
     def _accumulate_fused(self, x: np.ndarray, acc: Accumulator) -> None:
         K, empty = self.kinematics, np.empty(0)
-        if K.points_per_cell > 1:
-            from tissuesim.assembly.fused_quadrature import assemble_points
-
-            energy, bad = assemble_points(
-                self._law,
-                float(self.material.mu),
-                float(self.material.lam),
-                np.ascontiguousarray(x, dtype=float).ravel(),
-                K.cells,
-                K.grads,
-                K.weights,
-                K.points_per_cell,
-                min(acc.order, 2),
-                acc.pattern.scatters[self.stencil_id],
-                acc.gradient if acc.order >= 1 else empty,
-                acc.hessian if acc.order >= 2 else empty,
-            )
-            acc.add_value("elastic", float(np.inf) if bad >= 0 else float(energy))
-            return
-        from tissuesim.assembly.fused_p1 import assemble_p1
-
-        energy, bad = assemble_p1(
+        args = [
             self._law,
             float(self.material.mu),
             float(self.material.lam),
@@ -107,6 +86,15 @@ class ElasticEnergy:
             K.cells,
             K.grads,
             K.weights,
+        ]
+        if K.points_per_cell > 1:  # P2: an element's points summed before the scatter
+            from tissuesim.assembly.fused_quadrature import assemble_points as assemble
+
+            args.append(K.points_per_cell)
+        else:
+            from tissuesim.assembly.fused_p1 import assemble_p1 as assemble
+        energy, bad = assemble(
+            *args,
             min(acc.order, 2),
             acc.pattern.scatters[self.stencil_id],
             acc.gradient if acc.order >= 1 else empty,

@@ -32,6 +32,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from tissuesim.energies.accumulator import Accumulator
+from tissuesim.energies.elastic import scatter_point_hessians
 from tissuesim.errors import InvertedElementError
 from tissuesim.kinematics.nodal import NodalKinematics
 from tissuesim.materials._common import bcast, det, outer
@@ -91,39 +92,37 @@ class MeanDilatationEnergy:
 
     fused = False
 
+    def _patch_pairs(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(i, j, vertex): every pair of entries of every vertex patch, as indices into the
+        ragged patch_dofs, and the patch's vertex (P1 only)."""
+        dofs, offsets, _ = self._vertex
+        sizes = np.diff(offsets)
+        first, second, node = [], [], []
+        for size in np.unique(sizes):  # a loop over patch sizes (a few dozen), not vertices
+            which = np.flatnonzero(sizes == size)
+            idx = offsets[which][:, None] + np.arange(size)  # (k, size) into patch_dofs
+            first.append(np.repeat(idx, size, axis=1).ravel())
+            second.append(np.tile(idx, (1, size)).ravel())
+            node.append(np.repeat(which, size * size))
+        return tuple(np.concatenate(a) for a in (first, second, node))
+
     def extra_entries(self) -> tuple[np.ndarray, np.ndarray] | None:
         """(rows, cols) the Hessian needs beyond the element stencil (P1's vertex patches)."""
         if self._vertex is None:
             return None
-        dofs, offsets, _ = self._vertex
-        rows, cols = [], []
-        sizes = np.diff(offsets)
-        for size in np.unique(sizes):  # a loop over patch sizes (a few dozen), not vertices
-            which = np.flatnonzero(sizes == size)
-            block = dofs[offsets[which][:, None] + np.arange(size)]  # (k, size)
-            rows.append(np.repeat(block, size, axis=1).ravel())
-            cols.append(np.tile(block, (1, size)).ravel())
-        return np.concatenate(rows), np.concatenate(cols)
+        i, j, _ = self._patch_pairs()
+        dofs = self._vertex[0]
+        return dofs[i], dofs[j]
 
     def set_pattern(self, pattern) -> None:
         """Precompute where the vertex patches' rank-one blocks go in ``pattern``."""
         if self._vertex is None:
             return
-        dofs, offsets, _ = self._vertex
-        sizes = np.diff(offsets)
-        pos, first, second, node = [], [], [], []
-        keys = pattern.keys()
-        for size in np.unique(sizes):
-            which = np.flatnonzero(sizes == size)
-            idx = offsets[which][:, None] + np.arange(size)  # (k, size) into patch_dofs
-            i = np.repeat(idx, size, axis=1).ravel()
-            j = np.tile(idx, (1, size)).ravel()
-            pos.append(pattern.positions(dofs[i], dofs[j], keys))
-            first.append(i)
-            second.append(j)
-            node.append(np.repeat(which, size * size))
-        index = np.int32 if dofs.size < 2**31 else np.int64
-        self._rank_one = tuple(np.concatenate(a).astype(index) for a in (pos, first, second, node))
+        dofs = self._vertex[0]
+        i, j, node = self._patch_pairs()
+        pos = pattern.positions(dofs[i], dofs[j])
+        index = np.int32 if max(pattern.nnz, dofs.size) < 2**31 else np.int64
+        self._rank_one = tuple(a.astype(index) for a in (pos, i, j, node))
 
     # -- evaluation -----------------------------------------------------------------------------
     def _state(self, x: np.ndarray, order: int):
@@ -160,8 +159,6 @@ class MeanDilatationEnergy:
         A = resp.tangent - bcast(ddU, 5) * outer(dth, dth) + bcast(c, 5) * ddth
         if acc.project:
             A = project_tangent_psd(A)
-        from tissuesim.energies.elastic import scatter_point_hessians
-
         scatter_point_hessians(K, A, acc, self.stencil_id)
         b = K.stress_to_gradient(dth)  # (q, nloc): w_q B_q^T theta'_q
         D = ddUb / self.volumes

@@ -18,8 +18,6 @@ import numpy as np
 
 __all__ = [
     "EDGES",
-    "element_order",
-    "corner_count",
     "elevate",
     "subdivide",
     "midside_lookup",
@@ -51,19 +49,6 @@ _SUB = {
         ]
     ),
 }
-
-
-def corner_count(dim: int) -> int:
-    return dim + 1
-
-
-def element_order(dim: int, nodes_per_cell: int) -> int:
-    """1 for d+1 nodes per cell, 2 for 6 (2D) or 10 (3D); 0 for anything else."""
-    if nodes_per_cell == dim + 1:
-        return 1
-    if nodes_per_cell == (dim + 1) * (dim + 2) // 2:
-        return 2
-    return 0
 
 
 def subdivide(points: np.ndarray, cells: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
