@@ -113,6 +113,39 @@ def _run(
     return 0
 
 
+def _play(args) -> int:
+    """``tissuesim play``: the live window (render/live.py); off-screen, frames as PNG."""
+    from tissuesim.render.live import LiveSession
+    from tissuesim.scene.loader import load_scene
+
+    scene = load_scene(_resolve_scene(args.scene))
+    sim = scene.simulation
+    if sim.integrator not in ("backward_euler", "quasistatic"):
+        from tissuesim.errors import InputError
+
+        raise InputError("play needs an implicit scene (contact): integrator = backward_euler")
+    off = args.off_screen is not None
+    session = LiveSession(sim, args.obstacle, budget_s=args.budget, off_screen=off)
+    if off:
+        records = session.run_off_screen(args.frames or 10, Path(args.off_screen))
+        print(
+            json.dumps(
+                {
+                    "frames": len(records),
+                    "obstacle": session.name,
+                    "force_N": session.last_force.tolist(),
+                    "real_time_factor": session.real_time_factor,
+                    "early_stops": session.early_stops,
+                    "pictures": args.off_screen,
+                },
+                indent=2,
+            )
+        )
+        return 0
+    session.run_window(args.frames)
+    return 0
+
+
 def _steps(text: str) -> int:
     try:
         value = int(text)
@@ -160,6 +193,20 @@ def main(argv: list[str] | None = None) -> int:
     p_demo.add_argument("--no-render", action="store_true", help="skip the PNG and GIF")
     p_demo.add_argument("--quiet", action="store_true")
     p_demo.add_argument("--field", choices=fields, help="what colours the pictures (default J)")
+    p_play = sub.add_parser(
+        "play",
+        parents=common,
+        help="run a scene live in a window, an instrument driven by the keys or the mouse",
+    )
+    p_play.add_argument("scene")
+    p_play.add_argument("--obstacle", help="the obstacle to drive (default the first)")
+    p_play.add_argument("--budget", type=float, help="wall-clock budget per step (s)")
+    p_play.add_argument("--frames", type=_steps, help="stop after this many frames")
+    p_play.add_argument(
+        "--off-screen",
+        metavar="DIR",
+        help="no window: run --frames frames (default 10) and save them as PNG in DIR",
+    )
     p_info = sub.add_parser("info", parents=common, help="describe a mesh file and check it")
     p_info.add_argument("mesh")
     sub.add_parser("examples", parents=common, help="list the shipped example scenes")
@@ -235,6 +282,8 @@ def _dispatch(args) -> int:
         return _run(
             example_path(DEMO), args.out, args.steps, not args.no_render, args.quiet, args.field
         )
+    if args.command == "play":
+        return _play(args)
     if args.command == "info":
         from tissuesim.mesh import describe_mesh, read_mesh
 

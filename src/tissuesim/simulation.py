@@ -522,6 +522,11 @@ class Simulation(SetupCalls, BodyResults):
                 volumetric_ratio=ratio,
                 quadratic=any(b.kind == "fem" and b.mesh.order == 2 for b in self._active()),
             )
+            from tissuesim.solve.reuse import ReusedFactorSolver, is_direct
+
+            if self.newton.reuse_factorization and is_direct(self._solver):
+                self._solver = ReusedFactorSolver(self._solver)
+                self.solver_reason += "; factorisation reused (CG on the last factor)"
         return self._solver
 
     def step_energies(self, t: float, c_pred: np.ndarray | None, h: float) -> list[list]:
@@ -576,9 +581,26 @@ class Simulation(SetupCalls, BodyResults):
                 stacklevel=3,
             )
 
-    def step(self) -> StepRecord:
+    def step(
+        self, *, budget_s: float | None = None, budget_iterations: int | None = None
+    ) -> StepRecord:
         """Advance one time step (halving on failure; ConvergenceError if it cannot), then
-        apply cuts and tearing. Returns the step's record (also appended to ``history``)."""
+        apply cuts and tearing. Returns the step's record (also appended to ``history``).
+
+        budget_s / budget_iterations: for interactive loops, Newton stops when the step has
+        run this long (wall-clock seconds) or this many iterations, after at least one; the
+        state reached (intersection-free, as every iterate) is accepted and the record says
+        ``extra["early_stop"]`` True. Without a budget a step runs to convergence."""
+        budget = None
+        if budget_s is not None or budget_iterations is not None:
+            budget = {}
+            if budget_s is not None:
+                seconds = validate.real(budget_s, "budget_s", low=0.0, low_open=True, unit="s")
+                budget["deadline"] = wallclock.perf_counter() + seconds
+            if budget_iterations is not None:
+                budget["iterations"] = validate.integer(
+                    budget_iterations, "budget_iterations", low=1, high=10_000
+                )
         from tissuesim.time.steps import explicit_step, implicit_step
 
         tol = 1e-9 * self.time_step  # a release at t_n counts for the step from t_n
@@ -593,12 +615,18 @@ class Simulation(SetupCalls, BodyResults):
             self._stability_checked = s
         start = wallclock.perf_counter()
         t0 = self.time
+        explicit_gradient: dict = {}
         if self.explicit:
             solver = None
 
             def step_fn(system, state, h, solver, options):
                 return explicit_step(
-                    system, state, h, energies=self.step_energies, limit=self.critical_time_step
+                    system,
+                    state,
+                    h,
+                    energies=self.step_energies,
+                    limit=self.critical_time_step,
+                    keep=explicit_gradient,
                 )
         else:
             solver = self._linear_solver()
@@ -606,6 +634,7 @@ class Simulation(SetupCalls, BodyResults):
                 implicit_step,
                 dynamic=self.integrator == "backward_euler",
                 energies=self.step_energies,
+                budget=budget,
             )
         self._state, records, substeps = advance(
             step_fn,
@@ -617,8 +646,18 @@ class Simulation(SetupCalls, BodyResults):
             self.max_step_halvings,
             self._end_time(),
         )
-        self._last_gradient = records[-1].gradient if records else self._static_gradient()
+        if records:
+            self._last_gradient = records[-1].gradient
+        elif "gradient" in explicit_gradient:
+            # the explicit step's own gradient (at its start): the reactions one step behind,
+            # without a second evaluation per step (it cost a third of an explicit step)
+            self._last_gradient = explicit_gradient["gradient"]
+        else:
+            self._last_gradient = self._static_gradient()
         extra: dict[str, Any] = {"forces": self.forces()}
+        if hasattr(solver, "take_stats"):
+            extra["linear"] = solver.take_stats()
+        extra["early_stop"] = any(getattr(r, "budget_stop", False) for r in records)
         if s.contact is not None:
             extra["contact"] = self._contact_report(s.contact, self._state.x)
         if self.tissue is not None:

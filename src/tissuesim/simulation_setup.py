@@ -108,6 +108,43 @@ class SetupCalls:
         self._changed()
         return name
 
+    def drive_obstacle(
+        self, name: str, translation: Sequence[float] | None = None, rotation=None
+    ) -> None:
+        """Drive obstacle ``name`` live: its ``translation`` (m, from its rest place) and / or
+        ``rotation`` (a rotation vector about its rest centroid, rad) at the end of the next
+        step, reached on a straight line from where it is now. Call it between steps (from a
+        haptic device, the mouse, a script); the next ``step()`` returns the obstacle's force
+        in ``extra["forces"][name]``. The first call replaces the motion given to
+        ``add_obstacle`` by a live one (contact/obstacles.py DrivenMotion)."""
+        from dataclasses import replace
+
+        from tissuesim.contact.obstacles import DrivenMotion
+
+        names = [ob.name for ob in self.obstacles]
+        if name not in names:
+            known = ", ".join(names) or "none"
+            raise InputError(f"drive_obstacle: no obstacle {name!r} (obstacles: {known})")
+        k = names.index(name)
+        ob = self.obstacles[k]
+        t0, t1 = self.time, self.time + self.time_step
+        changes = {}
+        for key, value in (("translation", translation), ("rotation", rotation)):
+            if value is None:
+                continue
+            motion = getattr(ob, key)
+            if not isinstance(motion, DrivenMotion):
+                now = np.zeros(3) if motion is None else np.asarray(motion(t0), dtype=float)
+                motion = DrivenMotion(now)
+                changes[key] = motion
+            motion.set(value, t0, t1)
+        if changes:
+            ob = replace(ob, **changes)
+            self.obstacles[k] = ob
+            contact = None if self._system is None else self._system.contact
+            if contact is not None:  # the built model keeps its mesh; only the motion changes
+                contact.obstacles[k] = ob
+
     def attach(
         self,
         body: str,

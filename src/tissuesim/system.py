@@ -267,11 +267,15 @@ class System:
     ) -> Accumulator:
         """Phi at c: every body's energies (``energies[j]``: the extra energies of body j in
         its configuration space) plus the coupling, over the tangent DOFs; ``contact`` False
-        leaves the contact energy out (contact/kinematic.py adds its own)."""
+        leaves the contact energy out (contact/kinematic.py adds its own). ``project``: False
+        (exact Hessians), True (every part projected to PSD) or "contact" (only the contact
+        energy's, per collision as IPC does)."""
         energies = energies if energies is not None else [() for _ in self.bodies]
+        contact_project = bool(project)
+        project = project is True
         if self.single:
             acc = self.bodies[0].evaluate(c, order, project, energies[0])
-            return self._add_contact(acc, c) if contact else acc
+            return self._add_contact(acc, c, contact_project) if contact else acc
         acc = Accumulator(self.pattern, order, project)
         parts = [list(e) for e in energies]
         for i, a in enumerate(self.attachments):
@@ -298,13 +302,13 @@ class System:
             for i, cross in enumerate(self.cross):
                 j = self._tissue_of[i]
                 self._add_cross(cross, self.bodies[j], c[self.config_slices[j]], acc.hessian)
-        return self._add_contact(acc, c) if contact else acc
+        return self._add_contact(acc, c, contact_project) if contact else acc
 
-    def _add_contact(self, acc: Accumulator, c: np.ndarray) -> Accumulator:
+    def _add_contact(self, acc: Accumulator, c: np.ndarray, project: bool) -> Accumulator:
         """The barrier contact energy (contact/model.py) on top of everything else."""
         if self.contact is None:
             return acc
-        value, grad, hess = self.contact.evaluate(c, acc.order)
+        value, grad, hess = self.contact.evaluate(c, acc.order, project)
         acc.add_value("contact", value)
         if grad is not None and acc.order >= 1:
             acc.gradient += grad

@@ -78,7 +78,7 @@ class _Augmented:
         r = y - self.target
         acc.add_value("obstacle_penalty", 0.5 * self.penalty * float(r @ r))
         acc.add_value("obstacle_multiplier", -float(self.multiplier @ r))
-        value, grad, hess = self.contact.evaluate_augmented(c, y, order, project)
+        value, grad, hess = self.contact.evaluate_augmented(c, y, order, bool(project))
         acc.add_value("contact", value)
         n = self.system.n_dofs
         if order >= 1:
@@ -120,7 +120,9 @@ def _solver_for(problem: _Augmented, contact, solver, options):
     return cached[1]
 
 
-def solve_with_moving_obstacles(system, c0, t0, t1, energies, solver, options, y0=None):
+def solve_with_moving_obstacles(
+    system, c0, t0, t1, energies, solver, options, y0=None, budget=None
+):
     """Newton over the bodies and the obstacles (see the module docstring); returns (c1, the
     obstacles' final coordinates, NewtonResult of the last solve, all results)."""
     contact = system.contact
@@ -145,9 +147,13 @@ def solve_with_moving_obstacles(system, c0, t0, t1, energies, solver, options, y
             max_step=problem.max_step,
             reference_rows=slice(0, system.n_dofs),
             path_free=None if contact.linear else problem.path_free,
+            contact_projection=True,
+            physical_default=True,
+            deadline=(budget or {}).get("deadline"),
+            budget_iterations=(budget or {}).get("iterations"),
         )
         results.append(record)
-        if not record.converged:
+        if not record.converged or record.budget_stop:
             break
         c, y = problem.split(z)
         lag = np.abs(y - problem.target).max(initial=0.0)

@@ -67,6 +67,7 @@ class ContactStats:
     evaluations: int = 0
     ccd_calls: int = 0
     friction_solves: int = 0  # Newton solves with the friction lagged (0 without friction)
+    candidate_builds: int = 0  # candidate sets built (once per step unless a vertex left it)
 
 
 @dataclass(eq=False)
@@ -347,10 +348,69 @@ class ContactModel:
                 V[self.slices[ob.name][0]] = ob.positions(t)
         return np.asfortranarray(V)
 
+    # -- the candidate set, built once per step and reused ------------------------------------
+    def begin_step(self, c: np.ndarray, motion: np.ndarray) -> None:
+        """A new step from c, its bodies expected to move by about ``motion`` (tangent DOFs,
+        h v_n): the candidate set is built at the first evaluation with bounds inflated by a
+        margin (the largest expected vertex motion, the obstacles' motion in the step, at
+        least dhat) and reused by every evaluation and CCD sweep whose vertices stay within
+        the margin of where it was built; a vertex that leaves it rebuilds the set."""
+        self._candidates = None
+        expected = 0.0
+        if motion.size and np.any(motion):
+            expected = float(np.max(np.abs(self.selection(c) @ motion), initial=0.0))
+        if self.moving:
+            y0 = self.obstacle_state
+            y0 = self.obstacle_positions(self.time) if y0 is None else y0
+            moved = np.abs(self.obstacle_positions(self.time) - y0)
+            expected = max(expected, float(np.max(moved, initial=0.0)))
+        # past a quarter of an edge, a body's own neighbouring facets all become candidates
+        self.margin = max(self.dhat, min(1.5 * expected, 0.25 * self.edge_length))
+
+    @property
+    def edge_length(self) -> float:
+        """The median edge length (m) of the bodies' contact surfaces."""
+        if getattr(self, "_edge_length", None) is None:
+            E = self.mesh.edges
+            E = E[E.max(axis=1) < self.n_deformable] if self.n_deformable else E
+            lengths = np.linalg.norm(self.rest[E[:, 0]] - self.rest[E[:, 1]], axis=1)
+            self._edge_length = float(np.median(lengths)) if len(lengths) else self.dhat
+        return self._edge_length
+
+    def _candidate_set(self, *V: np.ndarray):
+        """The cached candidates, valid for vertices V (rebuilt at V[0] when one leaves the
+        margin); None when caching is off (no step begun)."""
+        margin = getattr(self, "margin", None)
+        if margin is None:
+            return None
+        cached = getattr(self, "_candidates", None)
+        if cached is not None:
+            base, candidates = cached
+            if all(np.max(np.abs(v - base), initial=0.0) <= self.margin_used for v in V):
+                return candidates
+        start = time.perf_counter()
+        low = np.minimum.reduce(V) if len(V) > 1 else V[0]
+        high = np.maximum.reduce(V) if len(V) > 1 else V[0]
+        base = np.asfortranarray(0.5 * (low + high))
+        spread = float(np.max(high - low, initial=0.0)) * 0.5
+        candidates = self._ipctk.Candidates()
+        candidates.build(
+            self.mesh, base, 0.5 * self.dhat + margin + spread, broad_phase=self.broad_phase
+        )
+        self.margin_used = margin + spread
+        self._candidates = (base, candidates)
+        self.stats.candidate_builds += 1
+        self.stats.candidates_s += time.perf_counter() - start
+        return candidates
+
     def _collisions(self, V: np.ndarray):
         col = self._ipctk.NormalCollisions()
         col.use_area_weighting = True
-        col.build(self.mesh, V, self.dhat, broad_phase=self.broad_phase)
+        candidates = self._candidate_set(V)
+        if candidates is None:
+            col.build(self.mesh, V, self.dhat, broad_phase=self.broad_phase)
+        else:
+            col.build(candidates, self.mesh, V, self.dhat)
         return col
 
     # -- the energy -------------------------------------------------------------------------------
@@ -428,9 +488,14 @@ class ContactModel:
         return bool(self._sweep(self._ipctk.is_step_collision_free, V0, V1))
 
     def _sweep(self, query, V0: np.ndarray, V1: np.ndarray):
-        """One CCD query over the straight move V0 -> V1, timed into the step's stats."""
+        """One CCD query over the straight move V0 -> V1, timed into the step's stats; from the
+        step's candidate set when both ends lie within its margin."""
         start = time.perf_counter()
-        out = query(self.mesh, V0, V1, broad_phase=self.broad_phase, narrow_phase_ccd=self.ccd)
+        candidates = self._candidate_set(V0, V1)
+        if candidates is not None:
+            out = getattr(candidates, query.__name__)(self.mesh, V0, V1, 0.0, self.ccd)
+        else:
+            out = query(self.mesh, V0, V1, broad_phase=self.broad_phase, narrow_phase_ccd=self.ccd)
         self.stats.ccd_s += time.perf_counter() - start
         self.stats.ccd_calls += 1
         return out

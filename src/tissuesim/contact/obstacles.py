@@ -21,7 +21,15 @@ from tissuesim.errors import InputError
 from tissuesim.frames.sampling import Surface, ellipsoid_surface
 from tissuesim.validate import real, vector
 
-__all__ = ["Obstacle", "ShapeSurface", "capsule", "cylinder", "plane", "sphere"]
+__all__ = [
+    "DrivenMotion",
+    "Obstacle",
+    "ShapeSurface",
+    "capsule",
+    "cylinder",
+    "plane",
+    "sphere",
+]
 
 Motion = Callable[[float], Sequence[float]]
 
@@ -164,6 +172,31 @@ def _revolve(a, b, z, rho, segments: int, source: str) -> Surface:
     if volume < 0:
         T = T[:, ::-1]
     return Surface(P, np.ascontiguousarray(T), source)
+
+
+class DrivenMotion:
+    """A motion set live by the caller (a device, the mouse, a script) rather than a function
+    of t: ``set(target, t0, t1)`` asks for ``target`` (m, or a rotation vector in rad) at the
+    end of the step t0 -> t1, moving on a straight line from where the motion was at t0; it
+    stays at the target until set again. Called with t like any motion."""
+
+    def __init__(self, value: Sequence[float] = (0.0, 0.0, 0.0)) -> None:
+        self.start = np.array(value, dtype=float)
+        self.target = self.start.copy()
+        self.start_time = self.end_time = 0.0
+
+    def set(self, target: Sequence[float], t0: float, t1: float) -> None:
+        self.start = self(t0)
+        self.target = vector(target, "driven motion target", 3)
+        self.start_time, self.end_time = float(t0), float(t1)
+
+    def __call__(self, t: float) -> np.ndarray:
+        if t >= self.end_time or self.end_time <= self.start_time:
+            return self.target.copy()
+        if t <= self.start_time:
+            return self.start.copy()
+        s = (t - self.start_time) / (self.end_time - self.start_time)
+        return self.start + s * (self.target - self.start)
 
 
 def _rotation(r: np.ndarray) -> np.ndarray:

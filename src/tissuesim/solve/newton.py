@@ -14,14 +14,29 @@ Definiteness, ``hessian_projection``:
               tenfold per failure from 1e-6, shrinks tenfold per success, and past 1e4 one
               projected iteration is taken instead). Near a stable solution s returns to zero
               and convergence is quadratic.
-Convergence: ||g_free|| <= gradient_tolerance * ||g_free at start|| + absolute_tolerance *
-force_scale, with force_scale a model force (mu * volume / length). If a step moves no DOF by
-more than step_tolerance * length_scale while ||g_free|| is within 1e3 of the target, the
-iteration is at round-off and counts as converged.
+With contact (``contact_projection``) a failed exact Hessian is next tried with only the
+contact part projected per collision (IPC's projection), the elasticity kept exact: the
+barrier's exact Hessian is indefinite where a surface rotates under a point, and shifting the
+whole matrix for it (the old path) turned Newton into 100+ iterations of gradient descent.
+Convergence, either of (``criterion``: "auto" uses both in steps with contact, where a
+relative gradient is ill-posed next to the barrier's forces, and the relative one alone
+elsewhere; "physical" / "relative" force one):
+  physical (in the model's units, as IPC and FEBio stop): after a full step
+      (alpha = 1), max |g_free| <= force_tolerance * force_scale and the estimated remaining
+      motion max |dx| * ||g_new|| / ||g_old|| (the next Newton step, from the contraction of
+      the last) <= displacement_tolerance * length_scale; force_scale a model force
+      (mu * volume / length), length_scale the bodies' size;
+  relative: ||g_free|| <= gradient_tolerance * ||g_free at start|| + absolute_tolerance *
+      force_scale (gradient_tolerance 1e-8: tight, for references and tests).
+If a step moves no DOF by more than step_tolerance * length_scale while ||g_free|| is within
+1e3 of the target, the iteration is at round-off and counts as converged.
+``relag(x)``: lagged terms (friction) re-lagged at a converged point inside the same solve;
+the solve goes on until a point converges with the lag unchanged (or the relags run out).
 """
 
 from __future__ import annotations
 
+import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Literal
@@ -36,6 +51,7 @@ from tissuesim.solve.linear import LinearSolver, NotPositiveDefiniteError
 __all__ = ["NewtonOptions", "NewtonResult", "minimize"]
 
 Projection = Literal["auto", "always", "never"]
+Criterion = Literal["auto", "physical", "relative"]
 
 
 @dataclass(frozen=True)
@@ -46,8 +62,14 @@ class NewtonOptions:
     gradient_tolerance: float = 1e-8
     absolute_tolerance: float = 1e-10
     step_tolerance: float = 1e-12
+    # the physical criterion (module docstring), used by steps with contact under "auto"
+    criterion: Criterion = "auto"
+    force_tolerance: float = 1e-5
+    displacement_tolerance: float = 1e-5
     hessian_projection: Projection = "auto"
     linear_solver: str = "auto"
+    # a direct solver's factor kept as the preconditioner of CG on later matrices (solve/reuse)
+    reuse_factorization: bool = True
     max_line_search: int = 40
     armijo: float = 1e-4
 
@@ -55,14 +77,31 @@ class NewtonOptions:
         from tissuesim import validate
 
         validate.choice(self.hessian_projection, "hessian_projection", ("auto", "always", "never"))
+        validate.choice(self.criterion, "criterion", ("auto", "physical", "relative"))
         validate.integer(self.max_iterations, "max_iterations", low=1, high=10_000)
         validate.integer(self.max_line_search, "max_line_search", low=1, high=200)
         validate.real(self.armijo, "armijo", low=0.0, high=1.0, low_open=True, high_open=True)
         for key in ("gradient_tolerance", "absolute_tolerance", "step_tolerance"):
             validate.real(getattr(self, key), key, low=0.0, low_open=True)
+        for key in ("force_tolerance", "displacement_tolerance"):
+            validate.real(getattr(self, key), key, low=0.0)
+        if not isinstance(self.reuse_factorization, bool):
+            raise InputError("reuse_factorization must be true or false")
         if not isinstance(self.linear_solver, str):
             given = validate.short(self.linear_solver)
             raise InputError(f"linear_solver must be a name such as 'auto', not {given}")
+
+    def tighter(self, factor: float) -> NewtonOptions:
+        """These options with every tolerance divided by ``factor`` (accuracy checks)."""
+        from dataclasses import replace
+
+        return replace(
+            self,
+            gradient_tolerance=self.gradient_tolerance / factor,
+            absolute_tolerance=self.absolute_tolerance / factor,
+            force_tolerance=self.force_tolerance / factor,
+            displacement_tolerance=self.displacement_tolerance / factor,
+        )
 
 
 @dataclass
@@ -77,6 +116,9 @@ class NewtonResult:
     step_lengths: list[float] = field(default_factory=list)  # alpha per iteration
     energies: list[float] = field(default_factory=list)  # Phi per iterate
     projected: list[bool] = field(default_factory=list)  # Hessian projected per iteration
+    contact_projected: list[bool] = field(default_factory=list)  # only contact's projected
+    relags: int = 0  # lagged terms (friction) re-lagged inside the solve
+    budget_stop: bool = False  # stopped by an interactive budget before converging
     energy_terms: dict[str, float] = field(default_factory=dict)  # at the solution
     # the full gradient of Phi at the solution, prescribed DOFs included (their reactions);
     # not in as_dict: it is one vector per solve, kept for whoever reports forces
@@ -92,8 +134,14 @@ class NewtonResult:
             "step_lengths": self.step_lengths,
             "energies": self.energies,
             "projected": self.projected,
+            "contact_projected": self.contact_projected,
+            "relags": self.relags,
+            "budget_stop": self.budget_stop,
         }
 
+
+#: iterations after an indefinite exact Hessian that go straight to the contact projection
+EXACT_RETRY = 3
 
 Evaluate = Callable[[np.ndarray, int, bool], Accumulator]
 Retract = Callable[[np.ndarray, np.ndarray], np.ndarray]
@@ -116,10 +164,17 @@ def minimize(
     max_step: Callable[[np.ndarray, np.ndarray], float] | None = None,
     reference_rows: slice | None = None,
     path_free: Callable[[np.ndarray, np.ndarray], bool] | None = None,
+    contact_projection: bool = False,
+    relag: Callable[[np.ndarray], bool] | None = None,
+    max_relags: int = 0,
+    deadline: float | None = None,
+    budget_iterations: int | None = None,
+    physical_default: bool = False,
 ) -> tuple[np.ndarray, NewtonResult]:
     """Minimise Phi from x0 (prescribed DOFs already at their values) over the free DOFs.
 
-    evaluate(x, order, project) -> Accumulator with value / gradient / Hessian data.
+    evaluate(x, order, project) -> Accumulator with value / gradient / Hessian data; project
+    is False (exact), True (every part projected to PSD) or "contact" (only the contact part).
     retract(x, dx) -> the point reached from x by the step dx: x + dx (the default) for vector
     DOFs; frame rotations are updated multiplicatively, R <- exp(dtheta^) R, so the
     configuration x and the step dx (a tangent vector) may even differ in size. The gradient and
@@ -129,9 +184,15 @@ def minimize(
     path_free(x, y) -> whether the straight move x -> y is free of intersection: checked for
     every line-search trial when ``retract`` does not move the surfaces on straight lines
     (rigid frames rotate their points on arcs), so no accepted iterate intersects.
-    reference_rows: the gradient rows whose starting norm sets the relative tolerance (default
-    all): the moving-obstacle solve leaves out its obstacles' rows, whose penalty forces at the
-    start dwarf the bodies' and would end Newton while the bodies are far from balance.
+    reference_rows: the gradient rows whose starting norm sets the relative tolerance and
+    whose values the physical criterion checks (default all): the moving-obstacle solve leaves
+    out its obstacles' rows, whose penalty forces at the start dwarf the bodies'.
+    contact_projection: try "contact" before shifting an indefinite exact Hessian.
+    physical_default: whether criterion "auto" uses the physical criterion (contact steps).
+    relag(x) -> whether re-lagging at x changed Phi (then up to ``max_relags`` times).
+    deadline (time.perf_counter() value) / budget_iterations: an interactive step's budget;
+    when it runs out after at least one iteration the solve stops with ``budget_stop`` set
+    (every iterate is intersection-free, so the caller may accept it as an early stop).
     Returns the final x and the record. x0 must give a finite Phi.
     """
     result = NewtonResult()
@@ -140,28 +201,73 @@ def minimize(
     current = evaluate(x, 1, False)
     free = np.ones(current.gradient.size, dtype=bool)
     free[elimination.dofs] = False
+    checked = free.copy()
+    if reference_rows is not None:
+        checked[: reference_rows.start] = False
+        checked[reference_rows.stop :] = False
     if not np.isfinite(current.value):
         result.reason = "the starting point has infinite energy (an inverted element?)"
         return x, result
     g0 = float(np.linalg.norm(current.gradient[free]))
-    g_ref = g0
-    if reference_rows is not None:
-        g_ref = float(np.linalg.norm(current.gradient[reference_rows][free[reference_rows]]))
-    target = options.gradient_tolerance * g_ref + options.absolute_tolerance * force_scale
+    target = (
+        options.gradient_tolerance * float(np.linalg.norm(current.gradient[checked]))
+        + options.absolute_tolerance * force_scale
+    )
+    use_physical = options.criterion == "physical" or (
+        options.criterion == "auto" and physical_default
+    )
+    force_target = options.force_tolerance * force_scale if use_physical else 0.0
+    motion_target = options.displacement_tolerance * length_scale if use_physical else 0.0
     result.gradient_norms.append(g0)
     result.energies.append(current.value)
     shift = 0.0  # Levenberg-Marquardt shift of "auto", kept between iterations
+    exact_failed = -10  # the last iteration whose exact Hessian was not positive definite
     # round-off of Phi: relative to the model's energy scale (force x length), not to |Phi|,
     # which can be tiny next to the terms it sums (a small net energy of large parts)
     noise_scale = force_scale * length_scale
-    for iteration in range(options.max_iterations):
+
+    def physical(alpha: float, step: float, g_old: float, g_new: float, acc) -> bool:
+        if force_target <= 0.0 or motion_target <= 0.0 or alpha < 1.0:
+            return False
+        if np.max(np.abs(acc.gradient[checked]), initial=0.0) > force_target:
+            return False
+        return step * g_new / max(g_old, 1e-300) <= motion_target
+
+    def converged_at(x, acc, reason: str) -> tuple[bool, object]:
+        """The lag re-set at a converged x; True when nothing changed (or no relag left)."""
+        if relag is None or result.relags >= max_relags or not relag(x):
+            result.converged, result.reason = True, reason
+            return True, acc
+        result.relags += 1
+        acc = evaluate(x, 1, False)
+        result.gradient_norms[-1] = float(np.linalg.norm(acc.gradient[free]))
+        result.energies[-1] = acc.value
+        if force_target > 0.0 and np.max(np.abs(acc.gradient[checked])) <= force_target:
+            result.converged, result.reason = True, reason  # the new lag is balanced too
+            return True, acc
+        return False, acc
+
+    iteration = 0
+    while True:
         gnorm = result.gradient_norms[-1]
         if gnorm <= target:
-            result.converged, result.reason = True, "gradient"
+            done, current = converged_at(x, current, "gradient")
+            if done:
+                break
+            continue
+        if iteration >= 1 and (
+            (deadline is not None and time.perf_counter() >= deadline)
+            or (budget_iterations is not None and iteration >= budget_iterations)
+        ):
+            result.budget_stop = True
+            result.reason = "stopped by the step's budget before converging"
+            break
+        if iteration >= options.max_iterations:
+            result.reason = f"no convergence in {options.max_iterations} iterations"
             break
         system = {}  # the assembled (eliminated) system at x, built at most once per kind
 
-        def attempt(project: bool, s: float, x=x, system=system):
+        def attempt(project, s: float, x=x, system=system):
             if project not in system:
                 acc = evaluate(x, 2, project)
                 elimination.apply(acc.hessian, acc.gradient)
@@ -183,16 +289,27 @@ def minimize(
 
         if options.hessian_projection == "always":
             accepted = attempt(True, 0.0)
+        elif options.hessian_projection == "never":
+            accepted = attempt(False, 0.0)
         else:
-            accepted = attempt(False, shift)
-            while accepted is None and options.hessian_projection == "auto":
+            kind = False
+            # after an indefinite exact Hessian, "contact" first for a few iterations (each
+            # failed try costs a factorisation)
+            if contact_projection and iteration - exact_failed <= EXACT_RETRY:
+                kind = "contact"
+            accepted = attempt(kind, shift)
+            if accepted is None and kind is False and contact_projection and shift == 0.0:
+                exact_failed = iteration
+                kind = "contact"
+                accepted = attempt(kind, 0.0)
+            while accepted is None:
                 shift = max(10.0 * shift, 1e-6)
                 if shift > 1e4:  # the shifted Hessian is nearly a scaled gradient: project
                     accepted = attempt(True, 0.0)
                     shift = 1e-3
                     break
-                accepted = attempt(False, shift)
-            if accepted is not None and not accepted[0]:
+                accepted = attempt(kind, shift)
+            if accepted is not None and accepted[0] is not True:
                 shift = shift / 10.0 if shift > 1e-6 else 0.0
         if accepted is None:
             result.reason = "no descent step found (line search failed)"
@@ -200,25 +317,30 @@ def minimize(
         project, dx, alpha, new = accepted
         x = retract(x, alpha * dx)
         current = new
-        result.iterations = iteration + 1
-        result.projected.append(project)
+        iteration += 1
+        result.iterations = iteration
+        result.projected.append(project is True)
+        result.contact_projected.append(project == "contact")
         result.step_lengths.append(alpha)
         result.step_norms.append(float(np.max(np.abs(alpha * dx))))
         result.gradient_norms.append(float(np.linalg.norm(current.gradient[free])))
         result.energies.append(current.value)
-        if result.gradient_norms[-1] <= target:
-            result.converged, result.reason = True, "gradient"
-            break
+        g_old, g_new = result.gradient_norms[-2], result.gradient_norms[-1]
+        if g_new <= target:
+            continue  # the loop's head converges (and re-lags)
+        if physical(alpha, result.step_norms[-1], g_old, g_new, current):
+            done, current = converged_at(x, current, "physical")
+            if done:
+                break
+            continue
         if result.step_norms[-1] <= options.step_tolerance * length_scale:
-            if result.gradient_norms[-1] <= 1e3 * target:
-                result.converged, result.reason = True, "round-off (step below step_tolerance)"
-            else:
-                result.reason = "stagnated: steps below step_tolerance, gradient still large"
+            if g_new <= 1e3 * target:
+                done, current = converged_at(x, current, "round-off (step below step_tolerance)")
+                if done:
+                    break
+                continue
+            result.reason = "stagnated: steps below step_tolerance, gradient still large"
             break
-    else:
-        result.reason = f"no convergence in {options.max_iterations} iterations"
-    if not result.converged and not result.reason:
-        result.reason = f"no convergence in {options.max_iterations} iterations"
     result.energy_terms = dict(current.terms)
     result.gradient = current.gradient
     return x, result

@@ -46,75 +46,111 @@ def implicit_step(
     *,
     dynamic: bool,
     energies: EnergyBuilder,
+    budget: dict | None = None,
 ) -> StepOutcome:
+    """One implicit step; ``budget`` ({"deadline": perf_counter value, "iterations": n}) ends
+    Newton early for interactive loops: the state reached is accepted and flagged."""
     t1 = state.time + h
     c_pred = system.retract(state.x, h * state.v) if dynamic else None
     body_energies = energies(t1, c_pred, h)
 
-    def evaluate(c: np.ndarray, order: int, project: bool):
+    def evaluate(c: np.ndarray, order: int, project):
         return system.evaluate(c, order, project, body_energies)
 
     candidates = (c_pred, state.x) if dynamic else (state.x,)
     contact = system.contact
     max_step = None
-    if contact is not None and contact.moving:
-        return _step_with_moving_obstacles(
-            system, state, h, solver, options, dynamic, body_energies, candidates, evaluate
-        )
     if contact is not None:
         contact.time = t1
-        # Newton must start where the bodies can get from x_n without crossing a surface,
-        # the obstacles and prescribed vertices moving to their t1 places on the way
-        candidates = tuple(
-            c
-            for c in candidates
-            if contact.reachable(state.x, state.time, system.apply_prescribed(c, t1), t1)
-        )
-        if not candidates:
+        contact.begin_step(state.x, h * (state.v if dynamic else 0.0 * state.v))
+        y0, y1 = None, None
+        if contact.moving:
+            y0 = contact.obstacle_state
+            if y0 is None:
+                y0 = contact.obstacle_positions(state.time)
+            y1 = contact.obstacle_positions(t1)
+        # Newton must start where the bodies can get from x_n without crossing a surface, the
+        # obstacles and prescribed vertices moving to their t1 places on the way: with moving
+        # obstacles the prediction c_n + h v_n carries the surface under an instrument along
+        # with it, so the obstacles can sit at their targets from the start (one solve)
+        starts = []
+        for c in candidates:
+            c = system.apply_prescribed(c, t1)
+            if contact.moving:
+                ok = contact.path_free(state.x, c, y0, y1)
+            else:
+                ok = contact.reachable(state.x, state.time, c, t1)
+            if ok:
+                starts.append(c)
+        if not starts and contact.moving:  # an instrument runs into a body at rest: pull it in
+            return _step_with_moving_obstacles(
+                system,
+                state,
+                h,
+                solver,
+                options,
+                dynamic,
+                body_energies,
+                candidates,
+                evaluate,
+                budget,
+            )
+        if not starts:
             return StepOutcome(
                 None,
                 False,
                 [],
                 "the obstacles' or prescribed motion in this step crosses a surface",
             )
+        if contact.moving:
+            contact.obstacle_state = y1
+        candidates = tuple(starts)
         max_step = contact.max_step
     c0 = choose_start(evaluate, candidates, lambda c: system.apply_prescribed(c, t1))
+    relag, max_relags = None, 0
     if contact is not None:
         _initialize_stiffness(system, c0, body_energies)
-    solves = 1
-    if contact is not None and contact.has_friction:
-        V_start = contact.vertices(state.x, t=state.time)
-        contact.lag_friction(V_start, V_start, h)
-        solves = contact.settings.friction_iterations
-    records = []
-    for k in range(solves):
-        if k:  # friction lagged at the last solution (IPC): normal forces, tangent bases
-            contact.lag_friction(V_start, contact.vertices(c0), h)
-        c0, record = minimize(
-            evaluate,
-            c0,
-            system.elimination,
-            solver,
-            options,
-            force_scale=system.force_scale,
-            length_scale=system.length_scale,
-            retract=system.retract,
-            max_step=max_step,
-            path_free=None if contact is None or contact.linear else contact.path_free,
-        )
-        records.append(record)
-        if not record.converged:
-            break
-    c1 = c0
+        if contact.has_friction:
+            V_start = contact.vertices(state.x, obstacle=y0)
+            contact.lag_friction(V_start, V_start, h)
+            max_relags = contact.settings.friction_iterations - 1
+
+            def relag(c: np.ndarray) -> bool:
+                # friction lagged at the last solution (IPC): normal forces, tangent bases
+                contact.lag_friction(V_start, contact.vertices(c), h)
+                return True
+
+    c1, record = minimize(
+        evaluate,
+        c0,
+        system.elimination,
+        solver,
+        options,
+        force_scale=system.force_scale,
+        length_scale=system.length_scale,
+        retract=system.retract,
+        max_step=max_step,
+        path_free=None if contact is None or contact.linear else contact.path_free,
+        contact_projection=contact is not None,
+        physical_default=contact is not None,
+        relag=relag,
+        max_relags=max_relags,
+        deadline=(budget or {}).get("deadline"),
+        budget_iterations=(budget or {}).get("iterations"),
+    )
     if contact is not None:
         contact.clear_friction()
-        contact.stats.friction_solves += len(records) if solves > 1 else 0
-    if not record.converged:
-        return StepOutcome(None, False, records, record.reason)
+        contact.stats.friction_solves += record.relags + 1 if contact.has_friction else 0
+        if not record.converged and not record.budget_stop and contact.moving:
+            contact.obstacle_state = y0  # the halved step starts where this one did
+    if not record.converged and not record.budget_stop:
+        return StepOutcome(None, False, [record], record.reason)
     if contact is not None:
+        if record.budget_stop and contact.moving:
+            contact.obstacle_state = y1
         contact.update_stiffness(c1)
     v1 = system.difference(c1, state.x) / h if dynamic else np.zeros(system.n_dofs)
-    return StepOutcome(State(t1, c1, v1), True, records)
+    return StepOutcome(State(t1, c1, v1), True, [record])
 
 
 def _initialize_stiffness(system, c0, body_energies, obstacle=None) -> None:
@@ -127,10 +163,11 @@ def _initialize_stiffness(system, c0, body_energies, obstacle=None) -> None:
 
 
 def _step_with_moving_obstacles(
-    system, state, h, solver, options, dynamic, body_energies, candidates, evaluate
+    system, state, h, solver, options, dynamic, body_energies, candidates, evaluate, budget=None
 ) -> StepOutcome:
     """Implicit step in which Newton moves the obstacles too (contact/kinematic.py): the start
-    must only be reachable with the obstacles where they are."""
+    must only be reachable with the obstacles where they are. Under a budget that runs out the
+    obstacles stay where Newton got them (short of their targets, like a haptic proxy)."""
     from tissuesim.contact.kinematic import solve_with_moving_obstacles
 
     contact, t1 = system.contact, state.time + h
@@ -157,15 +194,15 @@ def _step_with_moving_obstacles(
         if k:
             contact.lag_friction(V_start, contact.vertices(c0, obstacle=y_k), h)
         c0, y_k, record, part = solve_with_moving_obstacles(
-            system, c0, state.time, t1, body_energies, solver, options, y0=y_k
+            system, c0, state.time, t1, body_energies, solver, options, y0=y_k, budget=budget
         )
         results += part
-        if not record.converged:
+        if not record.converged or record.budget_stop:
             break
     contact.clear_friction()
     contact.stats.friction_solves += solves if solves > 1 else 0
     c1, y1 = c0, y_k
-    if not record.converged:
+    if not record.converged and not record.budget_stop:
         return StepOutcome(None, False, results, record.reason)
     contact.obstacle_state = y1
     contact.update_stiffness(c1)
@@ -174,12 +211,21 @@ def _step_with_moving_obstacles(
 
 
 def explicit_step(
-    system, state: State, h: float, *, energies: EnergyBuilder, limit: Callable
+    system,
+    state: State,
+    h: float,
+    *,
+    energies: EnergyBuilder,
+    limit: Callable,
+    keep: dict | None = None,
 ) -> StepOutcome:
     """``energies(t_n, None, h)``: loads and springs at t_n; ``limit()`` the stability estimate
-    (s) quoted when a step blows up."""
+    (s) quoted when a step blows up; ``keep``: gets the gradient at x_n ("gradient": the
+    prescribed DOFs' reactions at t_n, for the forces report)."""
     t0, t1 = state.time, state.time + h
     acc = system.evaluate(state.x, 1, False, energies(t0, None, h))
+    if keep is not None:
+        keep["gradient"] = acc.gradient
     a = np.zeros(system.n_dofs)
     for j, body in enumerate(system.bodies):
         sc, st = system.config_slices[j], system.tangent_slices[j]
