@@ -111,13 +111,13 @@ def test_a_driven_probe_presses_the_block_and_its_force_grows_with_depth():
     assert "linear" in records[-1].extra  # factorisations, back-solves, CG iterations
 
 
-def test_the_default_stopping_criterion_is_within_its_bound_of_a_tight_solve():
+def test_the_physical_stopping_criterion_is_within_its_bound_of_a_tight_solve():
     """Positions within 1e-3 of the largest displacement and the probe's force within 1 % of
     the same run with every tolerance 1e4 times tighter."""
     depths = [3e-4, 6e-4, 9e-4]
-    loose = pressed_block(friction=0.2)
+    loose = pressed_block(ts.NewtonOptions(criterion="physical"), friction=0.2)
     _press(loose, depths)
-    tight = pressed_block(ts.NewtonOptions().tighter(1e4), friction=0.2)
+    tight = pressed_block(ts.NewtonOptions(criterion="physical").tighter(1e4), friction=0.2)
     _press(tight, depths)
     u = tight.state.x - tight.system.bodies[0].rest_config()
     largest = np.max(np.linalg.norm(u.reshape(-1, 3), axis=1))

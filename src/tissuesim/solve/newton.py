@@ -18,14 +18,15 @@ With contact (``contact_projection``) a failed exact Hessian is next tried with 
 contact part projected per collision (IPC's projection), the elasticity kept exact: the
 barrier's exact Hessian is indefinite where a surface rotates under a point, and shifting the
 whole matrix for it (the old path) turned Newton into 100+ iterations of gradient descent.
-Convergence, either of (``criterion``: "auto" uses both in steps with contact, where a
-relative gradient is ill-posed next to the barrier's forces, and the relative one alone
-elsewhere; "physical" / "relative" force one):
+Convergence (``criterion``: "relative", the default, the relative one alone; "physical" either
+of the two; "auto" the physical one too in steps with contact). The physical criterion is
+experimental: its force part is relative to the model's force scale, far above a small contact
+force (the Hertz example stopped with its probe force 4x too large), so it is not the default:
   physical (in the model's units, as IPC and FEBio stop): after a full step
       (alpha = 1), max |g_free| <= force_tolerance * force_scale and the estimated remaining
       motion max |dx| * ||g_new|| / ||g_old|| (the next Newton step, from the contraction of
-      the last) <= displacement_tolerance * length_scale; force_scale a model force
-      (mu * volume / length), length_scale the bodies' size;
+      the last) <= displacement_tolerance * the motion of this solve so far (the sum of its
+      steps' largest DOF moves); force_scale a model force (mu * volume / length);
   relative: ||g_free|| <= gradient_tolerance * ||g_free at start|| + absolute_tolerance *
       force_scale (gradient_tolerance 1e-8: tight, for references and tests).
 If a step moves no DOF by more than step_tolerance * length_scale while ||g_free|| is within
@@ -62,10 +63,12 @@ class NewtonOptions:
     gradient_tolerance: float = 1e-8
     absolute_tolerance: float = 1e-10
     step_tolerance: float = 1e-12
-    # the physical criterion (module docstring), used by steps with contact under "auto"
-    criterion: Criterion = "auto"
+    # the stopping criterion (module docstring): "relative" (the default), "physical" or
+    # "auto" (physical in contact steps). The physical one is experimental: on the Hertz
+    # example it stopped with the block out of balance (probe force 4x too large)
+    criterion: Criterion = "relative"
     force_tolerance: float = 1e-5
-    displacement_tolerance: float = 1e-5
+    displacement_tolerance: float = 1e-3
     hessian_projection: Projection = "auto"
     linear_solver: str = "auto"
     # a direct solver's factor kept as the preconditioner of CG on later matrices (solve/reuse)
@@ -231,7 +234,10 @@ def minimize(
             return False
         if np.max(np.abs(acc.gradient[checked]), initial=0.0) > force_target:
             return False
-        return step * g_new / max(g_old, 1e-300) <= motion_target
+        # relative to how far this solve has moved the DOFs (a probe's 50 um step and a
+        # stroke's millimetre get the same relative accuracy), never below round-off
+        moved = max(sum(result.step_norms), 1e-9 * length_scale)
+        return step * g_new / max(g_old, 1e-300) <= options.displacement_tolerance * moved
 
     def converged_at(x, acc, reason: str) -> tuple[bool, object]:
         """The lag re-set at a converged x; True when nothing changed (or no relag left)."""
