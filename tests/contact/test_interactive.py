@@ -157,18 +157,19 @@ def test_the_step_candidate_set_gives_the_barrier_of_a_fresh_build():
     x = sim.state.x
     contact.begin_step(x, np.zeros_like(x))
     rng = np.random.default_rng(5)
-    for scale in (0.0, 0.3 * contact.margin, 3.0 * contact.margin):  # the last rebuilds
+    cache = contact.candidates
+    for scale in (0.0, 0.3 * cache.margin, 3.0 * cache.margin):  # the last rebuilds
         y = x + scale * rng.uniform(-1, 1, x.size)
         builds = contact.stats.candidate_builds
         cached = contact.evaluate(y, 1)
-        margin = contact.margin
-        contact.margin = None  # off: a fresh broad phase for each evaluation
+        margin = cache.margin
+        cache.margin = None  # off: a fresh broad phase for each evaluation
         fresh = contact.evaluate(y, 1)
-        contact.margin = margin
+        cache.margin = margin
         assert cached[0] == pytest.approx(fresh[0], rel=1e-12, abs=1e-300)
         if fresh[1] is not None:
             assert np.allclose(cached[1], fresh[1], rtol=1e-12, atol=0)
-        if scale > contact.margin:
+        if scale > cache.margin:
             assert contact.stats.candidate_builds == builds + 1
 
 

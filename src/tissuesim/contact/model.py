@@ -29,6 +29,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.sparse as sp
 
+from tissuesim.contact.candidates import StepCandidates
 from tissuesim.contact.stiffness import AdaptiveStiffness
 from tissuesim.contact.surfaces import FemSurface
 from tissuesim.errors import InputError
@@ -156,6 +157,7 @@ class ContactModel:
         self._reported_friction = None  # the last step's, for obstacle_forces
         self.broad_phase = ipctk.LBVH()
         self.ccd = ipctk.AdditiveCCD()
+        self.candidates = StepCandidates(ipctk, self.mesh, self.broad_phase, self.dhat, self.stats)
 
     # -- the barrier's stiffness (fixed, or IPC's adaptive one: contact/stiffness.py) -------------
     def set_stiffness(self, kappa: float) -> None:
@@ -297,6 +299,7 @@ class ContactModel:
 
     def reset_stats(self) -> None:
         self.stats = ContactStats()
+        self.candidates.stats = self.stats
 
     def describe(self) -> dict:
         return {
@@ -354,8 +357,8 @@ class ContactModel:
         h v_n): the candidate set is built at the first evaluation with bounds inflated by a
         margin (the largest expected vertex motion, the obstacles' motion in the step, at
         least dhat) and reused by every evaluation and CCD sweep whose vertices stay within
-        the margin of where it was built; a vertex that leaves it rebuilds the set."""
-        self._candidates = None
+        the margin of where it was built; a vertex that leaves it rebuilds the set
+        (contact/candidates.py)."""
         expected = 0.0
         if motion.size and np.any(motion):
             expected = float(np.max(np.abs(self.selection(c) @ motion), initial=0.0))
@@ -365,7 +368,7 @@ class ContactModel:
             moved = np.abs(self.obstacle_positions(self.time) - y0)
             expected = max(expected, float(np.max(moved, initial=0.0)))
         # past a quarter of an edge, a body's own neighbouring facets all become candidates
-        self.margin = max(self.dhat, min(1.5 * expected, 0.25 * self.edge_length))
+        self.candidates.begin(max(self.dhat, min(1.5 * expected, 0.25 * self.edge_length)))
 
     @property
     def edge_length(self) -> float:
@@ -377,36 +380,10 @@ class ContactModel:
             self._edge_length = float(np.median(lengths)) if len(lengths) else self.dhat
         return self._edge_length
 
-    def _candidate_set(self, *V: np.ndarray):
-        """The cached candidates, valid for vertices V (rebuilt at V[0] when one leaves the
-        margin); None when caching is off (no step begun)."""
-        margin = getattr(self, "margin", None)
-        if margin is None:
-            return None
-        cached = getattr(self, "_candidates", None)
-        if cached is not None:
-            base, candidates = cached
-            if all(np.max(np.abs(v - base), initial=0.0) <= self.margin_used for v in V):
-                return candidates
-        start = time.perf_counter()
-        low = np.minimum.reduce(V) if len(V) > 1 else V[0]
-        high = np.maximum.reduce(V) if len(V) > 1 else V[0]
-        base = np.asfortranarray(0.5 * (low + high))
-        spread = float(np.max(high - low, initial=0.0)) * 0.5
-        candidates = self._ipctk.Candidates()
-        candidates.build(
-            self.mesh, base, 0.5 * self.dhat + margin + spread, broad_phase=self.broad_phase
-        )
-        self.margin_used = margin + spread
-        self._candidates = (base, candidates)
-        self.stats.candidate_builds += 1
-        self.stats.candidates_s += time.perf_counter() - start
-        return candidates
-
     def _collisions(self, V: np.ndarray):
         col = self._ipctk.NormalCollisions()
         col.use_area_weighting = True
-        candidates = self._candidate_set(V)
+        candidates = self.candidates.get(V)
         if candidates is None:
             col.build(self.mesh, V, self.dhat, broad_phase=self.broad_phase)
         else:
@@ -491,7 +468,7 @@ class ContactModel:
         """One CCD query over the straight move V0 -> V1, timed into the step's stats; from the
         step's candidate set when both ends lie within its margin."""
         start = time.perf_counter()
-        candidates = self._candidate_set(V0, V1)
+        candidates = self.candidates.get(V0, V1)
         if candidates is not None:
             out = getattr(candidates, query.__name__)(self.mesh, V0, V1, 0.0, self.ccd)
         else:
