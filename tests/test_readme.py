@@ -138,3 +138,12 @@ def test_nearly_incompressible_python_example_runs(tmp_path):
     # benchmarks/liver_compression.py: 6.996 N at these 4 divisions (7.05 at 3, 6.95 converged)
     assert -7.1 < force < -6.9
     assert (tmp_path / "out/liver/liver.pvd").is_file()
+
+
+def test_interactive_python_example_drives_the_probe(tmp_path):
+    code = block("python", "drive_obstacle")
+    result = subprocess.run(
+        [sys.executable, "-c", code], cwd=tmp_path, capture_output=True, text=True, timeout=600
+    )
+    assert result.returncode == 0, result.stderr
+    assert result.stdout.split()[-2:] == ["True", "False"]  # pressing down, no intersection

@@ -352,7 +352,9 @@ class ContactModel:
         return np.asfortranarray(V)
 
     # -- the candidate set, built once per step and reused ------------------------------------
-    def begin_step(self, c: np.ndarray, motion: np.ndarray) -> None:
+    def begin_step(
+        self, c: np.ndarray, motion: np.ndarray, obstacles_start: np.ndarray | None = None
+    ) -> None:
         """A new step from c, its bodies expected to move by about ``motion`` (tangent DOFs,
         h v_n): the candidate set is built at the first evaluation with bounds inflated by a
         margin (the largest expected vertex motion, the obstacles' motion in the step, at
@@ -362,10 +364,8 @@ class ContactModel:
         expected = 0.0
         if motion.size and np.any(motion):
             expected = float(np.max(np.abs(self.selection(c) @ motion), initial=0.0))
-        if self.moving:
-            y0 = self.obstacle_state
-            y0 = self.obstacle_positions(self.time) if y0 is None else y0
-            moved = np.abs(self.obstacle_positions(self.time) - y0)
+        if self.moving and obstacles_start is not None:  # self.time: the step's end
+            moved = np.abs(self.obstacle_positions(self.time) - obstacles_start)
             expected = max(expected, float(np.max(moved, initial=0.0)))
         # past a quarter of an edge, a body's own neighbouring facets all become candidates
         self.candidates.begin(max(self.dhat, min(1.5 * expected, 0.25 * self.edge_length)))
