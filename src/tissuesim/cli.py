@@ -146,6 +146,16 @@ def _play(args) -> int:
     return 0
 
 
+def _seconds(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        value = -1.0
+    if not 0.0 < value < float("inf"):
+        raise argparse.ArgumentTypeError(f"must be a number of seconds > 0, not {text!r}")
+    return value
+
+
 def _steps(text: str) -> int:
     try:
         value = int(text)
@@ -200,7 +210,7 @@ def main(argv: list[str] | None = None) -> int:
     )
     p_play.add_argument("scene")
     p_play.add_argument("--obstacle", help="the obstacle to drive (default the first)")
-    p_play.add_argument("--budget", type=float, help="wall-clock budget per step (s)")
+    p_play.add_argument("--budget", type=_seconds, help="wall-clock budget per step (s)")
     p_play.add_argument("--frames", type=_steps, help="stop after this many frames")
     p_play.add_argument(
         "--off-screen",

@@ -149,8 +149,7 @@ def solve_with_moving_obstacles(
             path_free=None if contact.linear else problem.path_free,
             contact_projection=True,
             physical_default=True,
-            deadline=(budget or {}).get("deadline"),
-            budget_iterations=(budget or {}).get("iterations"),
+            budget=budget,
         )
         results.append(record)
         if not record.converged or record.budget_stop:

@@ -170,8 +170,7 @@ def minimize(
     contact_projection: bool = False,
     relag: Callable[[np.ndarray], bool] | None = None,
     max_relags: int = 0,
-    deadline: float | None = None,
-    budget_iterations: int | None = None,
+    budget: dict | None = None,
     physical_default: bool = False,
 ) -> tuple[np.ndarray, NewtonResult]:
     """Minimise Phi from x0 (prescribed DOFs already at their values) over the free DOFs.
@@ -193,9 +192,9 @@ def minimize(
     contact_projection: try "contact" before shifting an indefinite exact Hessian.
     physical_default: whether criterion "auto" uses the physical criterion (contact steps).
     relag(x) -> whether re-lagging at x changed Phi (then up to ``max_relags`` times).
-    deadline (time.perf_counter() value) / budget_iterations: an interactive step's budget;
-    when it runs out after at least one iteration the solve stops with ``budget_stop`` set
-    (every iterate is intersection-free, so the caller may accept it as an early stop).
+    budget: an interactive step's {"deadline": time.perf_counter() value, "iterations": n}
+    (either may be left out); when it runs out after at least one iteration the solve stops
+    with ``budget_stop`` set (every iterate is intersection-free: the caller may accept it).
     Returns the final x and the record. x0 must give a finite Phi.
     """
     result = NewtonResult()
@@ -220,7 +219,6 @@ def minimize(
         options.criterion == "auto" and physical_default
     )
     force_target = options.force_tolerance * force_scale if use_physical else 0.0
-    motion_target = options.displacement_tolerance * length_scale if use_physical else 0.0
     result.gradient_norms.append(g0)
     result.energies.append(current.value)
     shift = 0.0  # Levenberg-Marquardt shift of "auto", kept between iterations
@@ -230,7 +228,7 @@ def minimize(
     noise_scale = force_scale * length_scale
 
     def physical(alpha: float, step: float, g_old: float, g_new: float, acc) -> bool:
-        if force_target <= 0.0 or motion_target <= 0.0 or alpha < 1.0:
+        if not use_physical or alpha < 1.0:
             return False
         if np.max(np.abs(acc.gradient[checked]), initial=0.0) > force_target:
             return False
@@ -261,10 +259,7 @@ def minimize(
             if done:
                 break
             continue
-        if iteration >= 1 and (
-            (deadline is not None and time.perf_counter() >= deadline)
-            or (budget_iterations is not None and iteration >= budget_iterations)
-        ):
+        if iteration >= 1 and _budget_spent(budget, iteration):
             result.budget_stop = True
             result.reason = "stopped by the step's budget before converging"
             break
@@ -350,6 +345,16 @@ def minimize(
     result.energy_terms = dict(current.terms)
     result.gradient = current.gradient
     return x, result
+
+
+def _budget_spent(budget: dict | None, iteration: int) -> bool:
+    """Whether an interactive budget ({"deadline", "iterations"}) has run out."""
+    if not budget:
+        return False
+    deadline, iterations = budget.get("deadline"), budget.get("iterations")
+    return (deadline is not None and time.perf_counter() >= deadline) or (
+        iterations is not None and iteration >= iterations
+    )
 
 
 def _try_direction(

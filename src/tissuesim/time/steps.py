@@ -135,8 +135,7 @@ def implicit_step(
         physical_default=contact is not None,
         relag=relag,
         max_relags=max_relags,
-        deadline=(budget or {}).get("deadline"),
-        budget_iterations=(budget or {}).get("iterations"),
+        budget=budget,
     )
     if contact is not None:
         contact.clear_friction()
