@@ -12,7 +12,8 @@ and below in 0.2 s, then lift 10 mm at 30 mm/s, friction 0.5.
 
 Per run: Newton iterations per contact step (mean, max, first touching step), halved steps,
 the time per step with the instrument against the organ alone (the same steps), steps per
-second and the real-time factor (h / wall time per step), factorisations / back-solves / CG
+second and the real-time factor (h / wall time per step), the haptic linearisation's time
+(``Simulation.instrument_linearization`` after each step), factorisations / back-solves / CG
 iterations per step, and the split of a step (contact candidates + barrier, CCD, the rest);
 accuracy: the largest position difference / the largest displacement and the instrument's
 force difference / its force, against the 100x tighter run. Threads: each count in its own
@@ -107,6 +108,9 @@ def run(scene: str, divisions: int, tight: bool) -> dict:
         record = sim.step()
         wall = time.perf_counter() - start
         start = time.perf_counter()
+        sim.instrument_linearization(instrument)  # what a haptic loop asks between steps
+        linearization = time.perf_counter() - start
+        start = time.perf_counter()
         alone_record = alone.step()
         wall_alone = time.perf_counter() - start
         contact = record.extra["contact"]
@@ -115,6 +119,7 @@ def run(scene: str, divisions: int, tight: bool) -> dict:
             {
                 "wall_s": wall,
                 "wall_alone_s": wall_alone,
+                "linearization_s": linearization,
                 "iterations": record.newton_iterations,
                 "iterations_alone": alone_record.newton_iterations,
                 "substeps": record.substeps,
@@ -164,6 +169,8 @@ def summarise(default: dict, tight: dict | None) -> dict:
         "alone_step_s_median": statistics.median(alone),
         "ratio": statistics.median(walls) / statistics.median(alone),
         "steps_per_s": 1.0 / statistics.median(walls),
+        "linearization_ms_median": 1e3
+        * statistics.median(r["linearization_s"] for r in touching[1:] or rows),
         "real_time_factor": (1 / 30) / statistics.median(walls),
         "alone_iterations_mean": statistics.mean(r["iterations_alone"] for r in rows[1:]),
         "factorizations_per_step": statistics.mean(x.get("factorizations", 0) for x in lin),
@@ -217,6 +224,7 @@ COLUMNS = [
     ("ratio", "ratio", "{:.2f}"),
     ("steps_per_s", "steps / s", "{:.1f}"),
     ("real_time_factor", "real-time factor", "{:.2f}"),
+    ("linearization_ms_median", "haptic linearisation ms", "{:.1f}"),
     ("factorizations_per_step", "factorisations / step", "{:.2f}"),
     ("back_solves_per_step", "back-solves / step", "{:.1f}"),
     ("cg_per_step", "CG / step", "{:.1f}"),

@@ -3,6 +3,8 @@ energies, the stability limit (name the body with ``body=`` when there are sever
 
 from __future__ import annotations
 
+import copy
+
 import numpy as np
 
 from tissuesim.mesh.mesh import Mesh
@@ -133,6 +135,41 @@ class BodyResults:
                 out[name] = force.tolist()
             s.contact.time = t0
         return out
+
+    def instrument_linearization(self, name: str):
+        """Obstacle ``name``'s force at the last step's end and its stiffness for a small
+        further translation (``contact/haptics.py`` InstrumentLinearization: ``force`` N,
+        ``stiffness`` N/m, ``force_at(d)``), from the last step's matrix through the kept
+        factorisation: a haptic loop renders ``-force_at(d)`` at 1 kHz between steps."""
+        from tissuesim.contact.haptics import linearize_instrument
+        from tissuesim.errors import InputError
+
+        s = self.system
+        names = [ob.name for ob in self.obstacles]
+        if s.contact is None or name not in names:
+            known = ", ".join(names) or "none"
+            raise InputError(f"instrument_linearization: no obstacle {name!r} (obstacles: {known})")
+        if self.explicit:
+            raise InputError(
+                "instrument_linearization needs an implicit integrator (backward_euler or "
+                "quasistatic): explicit steps have no step matrix"
+            )
+        if s.last_step_energies is None:
+            raise InputError(
+                "instrument_linearization: take a step() first (it linearises the last one)"
+            )
+        solver = self._linear_solver()
+        # its solves are not the next step's: the step's counts (record.extra["linear"]) stay
+        kept = copy.copy(getattr(solver, "stats", None))
+        t0, s.contact.time = s.contact.time, self.time
+        try:
+            return linearize_instrument(
+                s, self._state.x, name, s.last_step_energies, solver, self.time
+            )
+        finally:
+            s.contact.time = t0
+            if kept is not None:
+                solver.stats = kept
 
     def energies(self) -> dict[str, float]:
         """Energies (J) at the current state: elastic, kinetic, load_potential (-f . x) and the

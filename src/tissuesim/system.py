@@ -65,6 +65,9 @@ class System:
     attachments: Sequence[Attachment] = ()
     ties: Sequence = ()  # coupling/tie.py: FEM bodies glued where they touch
     contact: object = None  # contact/model.py ContactModel, or None
+    # the last implicit step's body energies (inertia about its prediction, loads): its Phi,
+    # for the instrument linearisation (contact/haptics.py)
+    last_step_energies: list | None = None
 
     def __post_init__(self) -> None:
         self.bodies, self.names = list(self.bodies), list(self.names)

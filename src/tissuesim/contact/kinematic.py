@@ -121,10 +121,11 @@ def _solver_for(problem: _Augmented, contact, solver, options):
 
 
 def solve_with_moving_obstacles(
-    system, c0, t0, t1, energies, solver, options, y0=None, budget=None
+    system, c0, t0, t1, energies, solver, options, y0=None, budget=None, relag=None, max_relags=0
 ):
     """Newton over the bodies and the obstacles (see the module docstring); returns (c1, the
-    obstacles' final coordinates, NewtonResult of the last solve, all results)."""
+    obstacles' final coordinates, NewtonResult of the last solve, all results). ``relag(c, y)``
+    re-lags friction inside the solves (``minimize``'s relag), ``max_relags`` times in all."""
     contact = system.contact
     problem = _Augmented(system, contact, energies)
     solver = _solver_for(problem, contact, solver, options)
@@ -134,6 +135,7 @@ def solve_with_moving_obstacles(
         y = contact.obstacle_positions(t0)
     z = np.concatenate([c0, y])
     results = []
+    relags_left = max_relags
     for _ in range(MAX_UPDATES):
         z, record = minimize(
             problem.evaluate,
@@ -150,7 +152,10 @@ def solve_with_moving_obstacles(
             contact_projection=True,
             physical_default=True,
             budget=budget,
+            relag=None if relag is None else (lambda z: relag(*problem.split(z))),
+            max_relags=relags_left,
         )
+        relags_left -= record.relags
         results.append(record)
         if not record.converged or record.budget_stop:
             break

@@ -24,6 +24,7 @@ move on arcs, not on CCD's straight lines) every trial is also checked (``path_f
 from __future__ import annotations
 
 import time
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -280,6 +281,15 @@ class ContactModel:
         """End of a step: the lagged friction is dropped, kept only to report its forces."""
         self._reported_friction, self._friction = self._friction, None
 
+    @contextmanager
+    def last_step_lag(self):
+        """Within: the friction lagged as in the last step (its forces and Hessian)."""
+        kept, self._friction = self._friction, self._friction or self._reported_friction
+        try:
+            yield
+        finally:
+            self._friction = kept
+
     def _friction_terms(self, V: np.ndarray, order: int, project: bool):
         """(value, dD/dV, d2D/dV2) of the lagged friction potential D (zeros when none)."""
         if self._friction is None or len(self._friction[0]) == 0:
@@ -409,6 +419,13 @@ class ContactModel:
 
     def _terms(self, c, V, order: int, project: bool, augmented: bool):
         """Barrier + lagged friction over the vertices, then through the surfaces' maps."""
+        value, g_V, H_V = self.vertex_terms(V, order, project)
+        grad, hess = self._to_dofs(c, order, g_V, H_V, augmented)
+        return value, grad, hess
+
+    def vertex_terms(self, V: np.ndarray, order: int, project: bool):
+        """(value, gradient, sparse Hessian) of barrier + lagged friction over the collision
+        vertices V (bodies' and obstacles'); None where absent or not asked for."""
         start = time.perf_counter()
         col = self._collisions(V)
         self.stats.candidates_s += time.perf_counter() - start
@@ -430,8 +447,7 @@ class ContactModel:
             g_V = f_grad if g_V is None else g_V + f_grad
         if f_hess is not None:
             H_V = f_hess if H_V is None else H_V + f_hess
-        grad, hess = self._to_dofs(c, order, g_V, H_V, augmented)
-        return value, grad, hess
+        return value, g_V, H_V
 
     def max_step(
         self,

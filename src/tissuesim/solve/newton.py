@@ -145,6 +145,8 @@ class NewtonResult:
 
 #: iterations after an indefinite exact Hessian that go straight to the contact projection
 EXACT_RETRY = 3
+#: lagged terms are re-lagged when the residual is below this fraction of the start's
+RELAG_AT = 1e-3
 
 Evaluate = Callable[[np.ndarray, int, bool], Accumulator]
 Retract = Callable[[np.ndarray, np.ndarray], np.ndarray]
@@ -251,9 +253,20 @@ def minimize(
             return True, acc
         return False, acc
 
+    # lagged terms are re-lagged once the solve is loosely converged, not at the tight target:
+    # the lag only needs the point to about RELAG_AT of the start's residual, and re-lagging
+    # there saves the iterations from it to the target (they are redone after the re-lag)
+    relag_target = max(target, RELAG_AT * float(np.linalg.norm(current.gradient[checked])))
     iteration = 0
     while True:
         gnorm = result.gradient_norms[-1]
+        if relag is not None and result.relags < max_relags and gnorm <= relag_target:
+            result.relags += 1
+            if relag(x):
+                current = evaluate(x, 1, False)
+                result.gradient_norms[-1] = float(np.linalg.norm(current.gradient[free]))
+                result.energies[-1] = current.value
+                gnorm = result.gradient_norms[-1]
         if gnorm <= target:
             done, current = converged_at(x, current, "gradient")
             if done:

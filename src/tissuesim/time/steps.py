@@ -148,6 +148,7 @@ def implicit_step(
         if record.budget_stop and contact.moving:
             contact.obstacle_state = y1
         contact.update_stiffness(c1)
+    system.last_step_energies = body_energies  # the step's Phi, for haptics.py's linearisation
     v1 = system.difference(c1, state.x) / h if dynamic else np.zeros(system.n_dofs)
     return StepOutcome(State(t1, c1, v1), True, [record])
 
@@ -183,28 +184,38 @@ def _step_with_moving_obstacles(
         return StepOutcome(None, False, [], "the prescribed motion of this step crosses a surface")
     c0 = choose_start(evaluate, starts, lambda c: c)
     _initialize_stiffness(system, c0, body_energies, y)
-    solves = 1
+    relag, max_relags = None, 0
     if contact.has_friction:
         V_start = contact.vertices(state.x, obstacle=y)
         contact.lag_friction(V_start, V_start, h)
-        solves = contact.settings.friction_iterations
-    results, y_k = [], y
-    for k in range(solves):
-        if k:
-            contact.lag_friction(V_start, contact.vertices(c0, obstacle=y_k), h)
-        c0, y_k, record, part = solve_with_moving_obstacles(
-            system, c0, state.time, t1, body_energies, solver, options, y0=y_k, budget=budget
-        )
-        results += part
-        if not record.converged or record.budget_stop:
-            break
+        max_relags = contact.settings.friction_iterations - 1
+
+        def relag(c: np.ndarray, y_now: np.ndarray) -> bool:
+            # inside the solves, as in implicit_step: the lag at the loosely converged point
+            contact.lag_friction(V_start, contact.vertices(c, obstacle=y_now), h)
+            return True
+
+    c1, y1, record, results = solve_with_moving_obstacles(
+        system,
+        c0,
+        state.time,
+        t1,
+        body_energies,
+        solver,
+        options,
+        y0=y,
+        budget=budget,
+        relag=relag,
+        max_relags=max_relags,
+    )
     contact.clear_friction()
-    contact.stats.friction_solves += solves if solves > 1 else 0
-    c1, y1 = c0, y_k
+    if contact.has_friction:
+        contact.stats.friction_solves += 1 + sum(r.relags for r in results)
     if not record.converged and not record.budget_stop:
         return StepOutcome(None, False, results, record.reason)
     contact.obstacle_state = y1
     contact.update_stiffness(c1)
+    system.last_step_energies = body_energies
     v1 = system.difference(c1, state.x) / h if dynamic else np.zeros(system.n_dofs)
     return StepOutcome(State(t1, c1, v1), True, [*results[:-1], record])
 
