@@ -721,8 +721,10 @@ class Simulation(SetupCalls, BodyResults):
             j = self.system.index(tissue.name)
             z = self.system.body_config(self._state.x, j)
 
-            def rebuild() -> np.ndarray:
+            def rebuild() -> np.ndarray | None:
                 self._build()
+                if tissue.model is None:  # all of it torn or cut: no longer in the system
+                    return None
                 return self.system.body_config(self._state.x, self.system.index(tissue.name))
 
             events = tissue.topology(z, t0, self.time, rebuild)

@@ -191,6 +191,23 @@ def test_tearing_removes_overstretched_points_and_continues():
     assert f["max_principal_strain"].max() < 1.0
 
 
+def test_tearing_all_the_tissue_leaves_the_organs_going_on_alone():
+    """A threshold every stretched point passes: the tissue tears away step by step and, once
+    the last point is gone, the organs step on without it (it crashed: 'tissue' not in list)."""
+    sim = two_boxes(gravity=None, lift=0.3, peel=True)
+    sim.set_tearing(1e-6)
+    records = [sim.step() for _ in range(4)]
+    assert sim.tissue.dissection.alive.sum() == 0
+    assert sim.tissue.model is None and "tissue" not in sim.system.names
+    assert all(r.converged for r in records)
+    assert records[-1].extra["tissue_points"] == 0
+    assert records[-1].extra["attachment_gap"] == 0.0
+    before = sim.body_positions("upper").copy()
+    record = sim.step()  # the organs alone: the lifted one follows its grasper
+    assert record.converged and np.all(np.isfinite(sim.body_positions("upper")))
+    assert not np.array_equal(before, sim.body_positions("upper"))
+
+
 def test_errors_name_what_is_wrong():
     sim = Simulation()
     with pytest.raises(ValueError, match="add the organs"):

@@ -312,8 +312,8 @@ class TissueBody:
     def topology(self, z: np.ndarray, t0: float, t1: float, rebuild: Callable[[], np.ndarray]):
         """Cuts swept during (t0, t1] and tearing at t1. ``rebuild()`` remakes the tissue's
         model and the system when something changed and returns the tissue's configuration
-        (unchanged: frames stay where they are, only who acts where changes). Returns the
-        step's events."""
+        (unchanged: frames stay where they are, only who acts where changes; None when no
+        point is left). Returns the step's events."""
         d = self.dissection
         events = []
         for tool in self.cuts:
@@ -368,6 +368,8 @@ class TissueBody:
             report = {k: report.get(k, 0) + v for k, v in more.items()}
             self.model = self._build_model()
             z = rebuild()
+            if self.model is None:  # every point is gone: the organs go on alone
+                break
             # renormalised weights change F at once; a point they leave inverted (at the lips
             # of a cut) has no finite neo-Hookean energy: it is removed like the kerf
             f = self.point_fields(z)
