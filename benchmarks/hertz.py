@@ -10,7 +10,7 @@ contact point, growing linearly at ``--growth`` per metre of distance to L / 8. 
 ``--step`` per step (quasistatic, moving obstacle).
 
 Hertz for a rigid sphere on a half-space: F = 4/3 E* sqrt(R) d^(3/2), E* = E / (1 - nu^2); the
-quarter carries F / 4. d is the probe's depth below the rest surface minus the barrier gap (the
+quarter carries F / 4. d is the probe's travel since it touched the block minus the barrier gap (the
 surface stays ``min_distance`` away from the sphere). Prints and writes the table of F / F_Hertz
 per depth for each h0 (``results/hertz_<material>_last_run.md``; the README's table,
 collected from several runs, is ``results/hertz_linear.md``).

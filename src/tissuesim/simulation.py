@@ -41,6 +41,7 @@ import numpy as np
 
 from tissuesim import validate
 from tissuesim.bodies.fem import FemBody
+from tissuesim.contact.indentation import IndentationTracker
 from tissuesim.energies.mass import MassKind
 from tissuesim.errors import InputError
 from tissuesim.materials.base import Material
@@ -131,6 +132,7 @@ class Simulation(SetupCalls, BodyResults):
         self._solver = None
         self.solver_reason = ""
         self._last_gradient: np.ndarray | None = None
+        self._indentation = IndentationTracker()  # probes' touch points, across rebuilds
         if self.newton.linear_solver != "auto" and not self.explicit:
             make_linear_solver(self.newton.linear_solver, 1, 3)  # unavailable: fail now
         if mesh is not None:
@@ -659,7 +661,7 @@ class Simulation(SetupCalls, BodyResults):
             extra["linear"] = solver.take_stats()
         extra["early_stop"] = any(getattr(r, "budget_stop", False) for r in records)
         if s.contact is not None:
-            extra["contact"] = self._contact_report(s.contact, self._state.x)
+            extra["contact"] = self._contact_report(s.contact, self._state.x, extra["forces"])
         if self.tissue is not None:
             extra.update(self._tissue_step(t0))
         record = StepRecord.build(
@@ -676,10 +678,11 @@ class Simulation(SetupCalls, BodyResults):
         self.history.append(record)
         return record
 
-    @staticmethod
-    def _contact_report(contact, x: np.ndarray) -> dict[str, Any]:
+    def _contact_report(self, contact, x: np.ndarray, forces: dict) -> dict[str, Any]:
         """The step's contact figures, and the time split since the last report."""
         stats = contact.stats
+        bodies = contact.vertices(x)[: contact.n_deformable]
+        rest = contact.rest[: contact.n_deformable]
         distance, pairs = contact.proximity(x)
         report = {
             "min_distance": distance,
@@ -691,7 +694,9 @@ class Simulation(SetupCalls, BodyResults):
             "ccd_calls": stats.ccd_calls,
             "friction_solves": stats.friction_solves,
             "stiffness_Pa": contact.kappa,
-            "indentation_depth": contact.indentation_depths(),
+            "indentation_depth": self._indentation.depths(
+                contact.obstacles, bodies, rest, self.time, forces
+            ),
         }
         contact.reset_stats()
         return report

@@ -508,17 +508,6 @@ class ContactModel:
     def min_distance(self, c: np.ndarray) -> float:
         return self.proximity(c)[0]
 
-    def indentation_depths(self) -> dict[str, float]:
-        """Per sphere or plane obstacle, how deep (m) it reaches below the bodies' rest
-        surfaces at the current time (``Obstacle.indentation_depth``)."""
-        rest = self.rest[: self.n_deformable]
-        out = {}
-        for ob in self.obstacles:
-            depth = ob.indentation_depth(rest, self.time)
-            if depth is not None:
-                out[ob.name] = depth
-        return out
-
     def obstacle_forces(self, c: np.ndarray) -> dict[str, np.ndarray]:
         """Force (N, 3-vector) each obstacle exerts on the bodies, as ``name``, and with
         friction its parts ``name.normal`` (the barrier's gradient with respect to the

@@ -37,8 +37,8 @@ Motion = Callable[[float], Sequence[float]]
 @dataclass(frozen=True, eq=False)
 class ShapeSurface(Surface):
     """A Surface that remembers the exact shape it approximates (``kind`` "sphere": params
-    center, radius; "plane": point, normal), so an obstacle can report its indentation depth
-    exactly rather than from facets."""
+    center, radius; "plane": point, normal; "capsule": start, end, radius), so a probe's
+    indentation depth is measured from its exact shape rather than from facets."""
 
     kind: str = ""
     params: dict = field(default_factory=dict)
@@ -233,30 +233,10 @@ class Obstacle:
             return X
         return self._moved(X, t)
 
-    def indentation_depth(self, rest_points: np.ndarray, t: float) -> float | None:
-        """How deep (m) the obstacle at time t reaches below the bodies' rest surface
-        ``rest_points``: for a sphere R - min |X - c(t)|, for a capsule R - the smallest
-        distance to its axis segment, for a plane the largest distance of a rest point behind
-        it (0 when it does not reach); None for other surfaces."""
-        kind = getattr(self.surface, "kind", "")
-        if kind == "sphere":
-            p = self.surface.params
-            c = self._moved(p["center"][None, :], t)[0]
-            gap = float(np.min(np.linalg.norm(rest_points - c, axis=1)))
-            return max(0.0, p["radius"] - gap)
-        if kind == "capsule":
-            p = self.surface.params
-            a, b = self._moved(np.stack([p["start"], p["end"]]), t)
-            ab = b - a
-            s = np.clip((rest_points - a) @ ab / (ab @ ab), 0.0, 1.0)
-            gap = np.linalg.norm(rest_points - (a + s[:, None] * ab), axis=1)
-            return max(0.0, p["radius"] - float(gap.min()))
-        if kind == "plane":
-            p = self.surface.params
-            point = self._moved(p["point"][None, :], t)[0]
-            n = p["normal"] if self.rotation is None else self._rotate(p["normal"], t)
-            return max(0.0, float(np.max(-(rest_points - point) @ n)))
-        return None
+    def sphere_center(self, t: float) -> np.ndarray:
+        """A sphere obstacle's centre at time t (its exact shape's, not its facets' centroid:
+        an open cap's differ)."""
+        return self._moved(np.asarray(self.surface.params["center"], float)[None, :], t)[0]
 
     def _moved(self, points: np.ndarray, t: float) -> np.ndarray:
         c = self.surface.points.mean(axis=0)

@@ -1,6 +1,6 @@
 """Forces per step as a table: ``forces.csv`` (time, then x, y, z columns per named force, N) and
 ``forces.png`` (the force curves: one panel per force, its components and magnitude against
-time, units on both axes; for an obstacle with an indentation depth, a sphere or a plane, also
+time, units on both axes; for a sphere probe (an obstacle with an indentation depth), also
 its force's magnitude against that depth)."""
 
 from __future__ import annotations
