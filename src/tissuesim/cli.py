@@ -6,6 +6,7 @@ from __future__ import annotations
 import argparse
 import contextlib
 import json
+import os
 import signal
 import sys
 import warnings
@@ -183,6 +184,9 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(
         prog="tissuesim", description=__doc__, parents=[_options()], epilog=EXIT_CODES
     )
+    from tissuesim import __version__
+
+    parser.add_argument("--version", action="version", version=f"tissuesim {__version__}")
     common = [_options(debug_default=True)]
     sub = parser.add_subparsers(dest="command", required=True)
     p_run = sub.add_parser(
@@ -224,7 +228,14 @@ def main(argv: list[str] | None = None) -> int:
     with warnings.catch_warnings():
         warnings.showwarning = _show_warning
         try:
-            return _dispatch(args)
+            code = _dispatch(args)
+            sys.stdout.flush()  # here, so a closed pipe is caught below, not at exit
+            return code
+        except BrokenPipeError:
+            # the reader stopped reading (`tissuesim info mesh | head`): end quietly, as Unix
+            # tools do; stdout goes to devnull so the interpreter's last flush cannot fail
+            os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+            return 0
         except KeyboardInterrupt:
             if args.debug:
                 raise

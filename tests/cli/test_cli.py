@@ -100,6 +100,24 @@ def test_info_prints_mesh_json(tmp_path, capsys):
     assert info["total_volume"] == pytest.approx(1.0)
 
 
+def test_info_into_a_pipe_closed_early_ends_quietly(tmp_path):
+    """`tissuesim info mesh | head`: the reader stops reading; no "Broken pipe" error."""
+    path = tmp_path / "m.vtu"
+    write_mesh(ts.box(divisions=(2, 1, 1)), path)
+    cmd = [sys.executable, "-m", "tissuesim", "info", str(path)]
+    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    proc.stdout.close()  # before the child writes: its first write meets a closed pipe
+    err = proc.stderr.read().decode()
+    assert proc.wait(timeout=120) == 0 and err == ""
+
+
+def test_version_is_the_package_version(capsys):
+    with pytest.raises(SystemExit) as exit_:
+        main(["--version"])
+    assert exit_.value.code == 0
+    assert capsys.readouterr().out.strip() == f"tissuesim {ts.__version__}"
+
+
 def test_info_on_a_missing_mesh(tmp_path, capsys):
     assert main(["info", str(tmp_path / "none.vtu")]) == 2
     assert "none.vtu" in capsys.readouterr().err

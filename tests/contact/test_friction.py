@@ -62,7 +62,9 @@ def test_friction_gradient_matches_finite_differences():
     for _ in range(5):
         d = rng.standard_normal(x.size)
         fd = (friction(x + h * d, 0)[0] - friction(x - h * d, 0)[0]) / (2 * h)
-        assert fd == pytest.approx(grad @ d, rel=1e-5)
+        # relative to |grad| |d|: a direction nearly normal to the gradient has a small
+        # derivative next to the curvature's O(h^2) term
+        assert abs(fd - grad @ d) <= 1e-6 * np.linalg.norm(grad) * np.linalg.norm(d)
 
 
 def test_a_block_sticks_below_the_friction_angle():

@@ -194,7 +194,7 @@ def test_tearing_removes_overstretched_points_and_continues():
 def test_tearing_all_the_tissue_leaves_the_organs_going_on_alone():
     """A threshold every stretched point passes: the tissue tears away step by step and, once
     the last point is gone, the organs step on without it (it crashed: 'tissue' not in list)."""
-    sim = two_boxes(gravity=None, lift=0.3, peel=True)
+    sim = two_boxes(gravity=None, lift=0.6, ramp=2.0, peel=True)  # still lifting at t = 1.25
     sim.set_tearing(1e-6)
     records = [sim.step() for _ in range(4)]
     assert sim.tissue.dissection.alive.sum() == 0

@@ -56,7 +56,7 @@ def test_mirrored_pattern_beats_plain_box_pattern():
         return (signed_volumes(points, cells) / (rms**3 / (6 * np.sqrt(2)))).min()
 
     m = ellipsoid(divisions=8)
-    b = box((-1, -1, -1), (1, 1, 1), (8, 8, 8))  # same grid, plain Kuhn pattern
+    b = box((-1, -1, -1), (1, 1, 1), (8, 8, 8), pattern="uniform")  # same grid, plain Kuhn
     assert worst(m.points, m.cells) > 5 * worst(_cube_to_ball(b.points), b.cells)
 
 

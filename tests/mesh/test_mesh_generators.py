@@ -35,15 +35,42 @@ def test_alternate_uses_both_diagonals():
     assert not np.array_equal(np.sort(m.cells, axis=1), np.sort(r.cells, axis=1))
 
 
-def test_box_counts_volume_conforming():
+@pytest.mark.parametrize("pattern", ["mirrored", "uniform"])
+def test_box_counts_volume_conforming(pattern):
     nx, ny, nz = 2, 3, 4
-    m = box((0, 0, 0), (2.0, 1.0, 0.5), (nx, ny, nz))
+    m = box((0, 0, 0), (2.0, 1.0, 0.5), (nx, ny, nz), pattern=pattern)
     assert m.points.shape == ((nx + 1) * (ny + 1) * (nz + 1), 3)
     assert m.cells.shape == (6 * nx * ny * nz, 4)
     vol = signed_volumes(m.points, m.cells)
     assert (vol > 0).all()
     assert vol.sum() == pytest.approx(1.0)
     assert_conforming(m, 4 * (nx * ny + ny * nz + nx * nz))
+
+
+def _mirror_map(mesh, axis: int):
+    """The cells of ``mesh`` reflected about its mid-plane normal to ``axis``, as sorted vertex
+    tuples (None when the points do not map onto points)."""
+    lo, hi = mesh.points[:, axis].min(), mesh.points[:, axis].max()
+    P = mesh.points.copy()
+    P[:, axis] = lo + hi - P[:, axis]
+    index = {tuple(np.round(p, 12)): i for i, p in enumerate(mesh.points)}
+    image = [index.get(tuple(np.round(p, 12))) for p in P]
+    if None in image:
+        return None
+    return {tuple(sorted(np.asarray(image)[c])) for c in mesh.cells}
+
+
+def test_the_default_box_is_mirror_symmetric_about_its_mid_planes():
+    """A centred press must meet no mesh-made lateral force: the default split is mirrored
+    (even divisions: exactly symmetric); the uniform Kuhn split is not."""
+    m = box((0, 0, 0), (2.0, 1.0, 0.5), (4, 2, 2))
+    u = box((0, 0, 0), (2.0, 1.0, 0.5), (4, 2, 2), pattern="uniform")
+    for axis in range(3):
+        assert _mirror_map(m, axis) == {tuple(sorted(c)) for c in m.cells}
+        assert _mirror_map(u, axis) != {tuple(sorted(c)) for c in u.cells}
+    assert "pattern='uniform'" in u.source and "pattern" not in m.source
+    with pytest.raises(MeshError, match="pattern must be 'mirrored' or 'uniform', got 'crossed'"):
+        box(pattern="crossed")
 
 
 def test_rectangle_side_sets():

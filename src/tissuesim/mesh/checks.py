@@ -141,6 +141,7 @@ def validate_mesh(
     facet_sets: Mapping[str, np.ndarray] | None = None,
     cell_sets: Mapping[str, np.ndarray] | None = None,
     merge_coincident: bool = False,
+    surface_projection=None,
 ) -> Mesh:
     """Check raw arrays and build a Mesh; raises MeshError naming ``source`` and the bad element.
 
@@ -282,4 +283,5 @@ def validate_mesh(
         facet_sets=fsets,
         cell_sets=csets,
         source=source,
+        surface_projection=surface_projection,
     )

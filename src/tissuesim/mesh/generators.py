@@ -10,6 +10,7 @@ import itertools
 import math
 import numbers
 from collections.abc import Sequence
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -149,7 +150,8 @@ def _order(order) -> int:
 def _finish(points, cells, source, psets, fsets, order, projection=None) -> Mesh:
     """Validate the mesh; for order 2 first add the midside nodes (``projection`` moves those
     on the boundary onto a curved surface) and put those on each facet set's facets into the
-    point set of the same name."""
+    point set of the same name. The mesh keeps ``projection`` (its ``surface_projection``) (a later
+    elevation to order 2, e.g. a scene's ``order = 2``, curves it the same way)."""
     order = _order(order)
     if order == 2:
         from tissuesim.mesh.quadratic import EDGES, elevate, midside_lookup
@@ -161,7 +163,27 @@ def _finish(points, cells, source, psets, fsets, order, projection=None) -> Mesh
             mids = lookup(facets[:, EDGES[points.shape[1] - 1]]).ravel()
             psets[name] = np.union1d(psets.get(name, np.zeros(0, np.int64)), mids)
         source = source[:-1] + ", order=2)"
-    return validate_mesh(points, cells, source=source, point_sets=psets, facet_sets=fsets)
+    return validate_mesh(
+        points,
+        cells,
+        source=source,
+        point_sets=psets,
+        facet_sets=fsets,
+        surface_projection=projection,
+    )
+
+
+@dataclass(frozen=True)
+class OntoEllipsoid:
+    """Projection of points onto the ellipsoid sum(((x - center) / radii)^2) = 1 along the
+    rays from its centre (a class, not a closure, so meshes pickle)."""
+
+    center: np.ndarray
+    radii: np.ndarray
+
+    def __call__(self, p: np.ndarray) -> np.ndarray:
+        u = (p - self.center) / self.radii
+        return self.center + self.radii * u / np.linalg.norm(u, axis=1, keepdims=True)
 
 
 def _kuhn_template() -> np.ndarray:
@@ -210,11 +232,17 @@ def box(
     divisions: Sequence[int] = (4, 4, 4),
     grading: Sequence[float] = (1.0, 1.0, 1.0),
     order: int = 1,
+    pattern: str = "mirrored",
 ) -> Mesh:
     """Tetrahedral mesh of the box [lower, upper] with divisions (nx, ny, nz) hexahedra.
 
-    Each hexahedron is split into 6 tetrahedra around its main diagonal (Kuhn/Freudenthal), the
-    same way in every hexahedron, so faces conform. Points (n, 3); cells (6 nx ny nz, 4) positive.
+    Each hexahedron is split into 6 tetrahedra around a main diagonal (Kuhn/Freudenthal); faces
+    conform. Points (n, 3); cells (6 nx ny nz, 4) positive.
+    pattern: "mirrored" (the default) reflects the split about the box's mid-planes (every main
+    diagonal points away from the centre), so the mesh is mirror-symmetric about them when the
+    divisions are even (odd: all but the middle layer of hexahedra) and a centred press meets no
+    mesh-made lateral force; "uniform" splits every hexahedron the same way (a one-way bias: a
+    centred vertical press of a sphere reports a lateral force of several % of the normal one).
     Sets: "xmin", "xmax", "ymin", "ymax", "zmin", "zmax".
     grading (gx, gy, gz): per axis, 1 uniform; p > 1 places the grid planes at s^p of the way
     (cells shrink towards ``lower``); -p at 1 - (1 - s)^p (finer
@@ -236,7 +264,11 @@ def box(
         elif p < -1.0:
             s[:, axis] = 1.0 - (1.0 - s[:, axis]) ** (-p)
     points = np.asarray(lo) + (np.asarray(hi) - np.asarray(lo)) * s
-    cells = _kuhn_cells(nx, ny, nz)
+    if pattern not in ("mirrored", "uniform"):
+        raise MeshError(f"box: pattern must be 'mirrored' or 'uniform', got {short(pattern)}")
+    if pattern != "mirrored":
+        source = source[:-1] + f", pattern={pattern!r})"
+    cells = _kuhn_cells(nx, ny, nz, mirrored=pattern == "mirrored")
     names = (("xmin", "xmax"), ("ymin", "ymax"), ("zmin", "zmax"))
     psets, fsets = _side_sets(cells, (gx, gy, gz), names)
     return _finish(points, cells, source, psets, fsets, order)
@@ -317,8 +349,4 @@ def ellipsoid(
     psets = {"surface": np.unique(surface)}
     fsets = {"surface": surface}
 
-    def onto_surface(p: np.ndarray) -> np.ndarray:
-        u = (p - c) / r
-        return c + r * u / np.linalg.norm(u, axis=1, keepdims=True)
-
-    return _finish(points, cells, source, psets, fsets, order, onto_surface)
+    return _finish(points, cells, source, psets, fsets, order, OntoEllipsoid(c, r))

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from functools import cached_property
 
@@ -23,6 +23,10 @@ class Mesh:
     facet_sets: name -> (k, d) boundary facets (edges in 2D, triangles in 3D) as corner indices.
     cell_sets: name -> (k,) cell indices.
     source: where the mesh came from (a file path or a generator), used in error messages.
+    surface_projection: the exact curved surface the boundary approximates, as a projection
+        of points onto it ((k, d) -> (k, d)), when a generator knows it (``ellipsoid``);
+        elevating the mesh to order 2 puts the boundary's midside nodes on it. None (files,
+        boxes): edges stay straight.
 
     Build meshes with the generators in ``tissuesim.mesh`` or ``read_mesh``; both validate.
     """
@@ -33,6 +37,7 @@ class Mesh:
     facet_sets: Mapping[str, np.ndarray] = field(default_factory=dict)
     cell_sets: Mapping[str, np.ndarray] = field(default_factory=dict)
     source: str = "<arrays>"
+    surface_projection: Callable[[np.ndarray], np.ndarray] | None = None
 
     def __repr__(self) -> str:
         kind = {2: "triangles", 3: "tetrahedra"}.get(self.dim, "cells")

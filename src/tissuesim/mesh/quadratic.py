@@ -132,14 +132,16 @@ def quadratic_facets(mesh, facets: np.ndarray) -> np.ndarray:
 
 
 def elevate_mesh(mesh):
-    """A linear Mesh as a quadratic one (straight edges): the same vertices first, a midside
-    node per edge; a point set gains the midside nodes of edges with both ends in it; facet
-    and cell sets are unchanged (facets are named by their corners)."""
+    """A linear Mesh as a quadratic one: the same vertices first, a midside node per edge (on
+    the mesh's exact surface, ``surface_projection``, where a generator gave one, so an
+    ellipsoid stays curved; else at the edge's midpoint); a point set gains the midside nodes
+    of edges with both ends in it; facet and cell sets are unchanged (facets are named by their
+    corners)."""
     from tissuesim.mesh.checks import validate_mesh
 
     if mesh.order == 2:
         return mesh
-    points, cells = elevate(mesh.points, mesh.cells)
+    points, cells = elevate(mesh.points, mesh.cells, mesh.surface_projection)
     d = mesh.dim
     pairs = np.sort(cells[:, EDGES[d]], axis=2).reshape(-1, 2)
     mids = cells[:, d + 1 :].reshape(-1)
@@ -154,4 +156,5 @@ def elevate_mesh(mesh):
         point_sets=psets,
         facet_sets=dict(mesh.facet_sets),
         cell_sets=dict(mesh.cell_sets),
+        surface_projection=mesh.surface_projection,
     )

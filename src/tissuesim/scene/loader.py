@@ -57,7 +57,7 @@ MESH_KEYS = {
     "lower": "generator: lower corner",
     "upper": "generator: upper corner",
     "divisions": "generator: cells per axis",
-    "pattern": "rectangle: triangle pattern",
+    "pattern": "rectangle: triangle pattern; box: tetrahedral split (mirrored or uniform)",
     "grading": "box: per-axis grading exponents (1 uniform, p finer towards lower, -p upper)",
     "merge_coincident": "file: merge vertices that coincide (an unwelded seam) instead of refusing",
 }
@@ -417,7 +417,7 @@ def _field(value, d: int, where: str):
 
 MESH_GENERATORS = {
     "rectangle": ("lower", "upper", "divisions", "pattern"),
-    "box": ("lower", "upper", "divisions", "grading"),
+    "box": ("lower", "upper", "divisions", "grading", "pattern"),
     "ellipsoid": ("center", "radii", "divisions"),
 }
 
