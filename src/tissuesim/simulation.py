@@ -131,6 +131,7 @@ class Simulation(SetupCalls, BodyResults):
         self._state: State | None = None
         self._solver = None
         self.solver_reason = ""
+        self.run_time_split: dict[str, float] = {}  # the last run()'s wall time split (s)
         self._last_gradient: np.ndarray | None = None
         self._indentation = IndentationTracker()  # probes' touch points, across rebuilds
         if self.newton.linear_solver != "auto" and not self.explicit:
@@ -760,6 +761,7 @@ class Simulation(SetupCalls, BodyResults):
         from tissuesim.io.run_output import RunOutput
 
         writer = RunOutput(self, output, every=every, render=render, field=field, metadata=metadata)
+        self.run_time_split = writer.time_split  # filled in as the run goes (s)
         return writer.run(steps, progress=progress)
 
     def linear_solver_info(self) -> dict[str, Any]:

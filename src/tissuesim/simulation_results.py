@@ -133,6 +133,8 @@ class BodyResults:
             t0, s.contact.time = s.contact.time, self.time
             for name, force in s.contact.obstacle_forces(self._state.x).items():
                 out[name] = force.tolist()
+            for name, force in s.contact.body_forces(self._state.x).items():
+                out[name] = force.tolist()
             s.contact.time = t0
         return out
 

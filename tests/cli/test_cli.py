@@ -29,6 +29,13 @@ def test_run_course_stretch_writes_the_full_output(tmp_path, capsys):
     report = json.loads(capsys.readouterr().out)
     assert report["steps"] == 4 and report["output"] == str(out)
     assert report["end_time"] == pytest.approx(4 * 0.031415926535897934)
+    # the real elapsed time and its split (the solver's own time was all it reported)
+    split = report["time_split_s"]
+    assert set(split) == {"load_scene", "setup", "steps", "output", "pictures", "solver"}
+    assert all(v >= 0 for v in split.values()) and split["pictures"] > 0  # forces.png, final.png
+    assert split["solver"] <= split["steps"]
+    parts = sum(v for k, v in split.items() if k != "solver")
+    assert parts <= report["wall_time_s"] <= parts + 5.0  # only the report itself is left out
 
     summary = json.loads((out / "summary.json").read_text())
     assert summary["status"] == "completed" and summary["error"] is None

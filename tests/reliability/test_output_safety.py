@@ -142,6 +142,52 @@ def test_summary_exists_before_the_model_is_assembled(tmp_path, monkeypatch):
     assert final["status"] == "failed" and "MemoryError" in final["error"]
 
 
+def test_a_manifest_exists_whenever_a_summary_does(tmp_path, monkeypatch):
+    """A kill right after the first summary.json must find a manifest too (in a fresh
+    directory the manifest is written first)."""
+    from tissuesim.io import atomic, manifest, run_output
+
+    order = []
+    original = atomic.write_json_atomic
+
+    def recording(path, obj, **kwargs):
+        order.append(Path(path).name)
+        return original(path, obj, **kwargs)
+
+    for module in (run_output, manifest):
+        monkeypatch.setattr(module, "write_json_atomic", recording)
+    _run_into(tmp_path / "fresh", "body", render=False)
+    assert order[0] == "manifest.json" and order.index("summary.json") > 0
+
+
+@pytest.mark.parametrize("ratio", [0.0, 1e9])
+def test_the_summary_is_rewritten_by_its_cost_and_always_at_the_end(tmp_path, monkeypatch, ratio):
+    """Rewriting summary.json (O(steps)) after every step made long runs O(steps^2): it is
+    rewritten once SUMMARY_COST_RATIO times its last write's cost has passed (0: after every
+    step; huge: only at the start and the end), and the final one holds every step."""
+    from tissuesim.io import run_output
+
+    writes = []
+    original = run_output.write_json_atomic
+
+    def counting(path, obj, **kwargs):
+        writes.append(Path(path).name)
+        return original(path, obj, **kwargs)
+
+    monkeypatch.setattr(run_output, "write_json_atomic", counting)
+    monkeypatch.setattr(run_output, "SUMMARY_COST_RATIO", ratio)
+    _run_into(tmp_path / "out", "body", steps=12, render=False)
+    count = writes.count("summary.json")
+    if ratio == 0.0:
+        assert count >= 12 + 2  # the start, after every step, the end (and the pictures)
+    else:
+        assert count <= 4  # the start, the end, after forces.png
+    summary = assert_consistent(tmp_path / "out")
+    assert summary["status"] == "completed" and summary["totals"]["steps"] == 12
+    rows = (tmp_path / "out" / "forces.csv").read_text().strip().splitlines()
+    assert len(rows) == 1 + 12
+
+
 def test_an_interrupt_skips_the_pictures_and_says_interrupted(tmp_path, monkeypatch):
     sim = ts.Simulation(rectangle(), MATERIAL, time_step=0.01)
     sim.fix("body", [0, 1, 2])

@@ -20,6 +20,8 @@ This module imports numba at import time; import it only where ``backend.numba_a
 
 from __future__ import annotations
 
+import os
+
 import numpy as np
 from numba import njit
 
@@ -45,7 +47,32 @@ def assemble_p1(law, mu, lam, x, cells, grads, weights, order, scatter, gradient
         kernel = _assemble_nodes_3d  # frames: 4 virtual nodes per frame in the stencil
     else:
         raise InputError(f"no fused kernel for {nv} nodes per point in {d}D")
+    if not kernel.signatures:
+        _announce_compilation(kernel)
     return kernel(law, mu, lam, x, cells, grads, weights, order, scatter, gradient, hessian)
+
+
+_announced = False
+
+
+def _announce_compilation(kernel) -> None:
+    """Say once per process that numba compiles, when its cache holds no kernel yet (the first
+    run on a machine or after an upgrade: 25-35 s with nothing else on the screen)."""
+    global _announced
+    if _announced:
+        return
+    try:
+        cached = os.path.exists(kernel._cache._cache_file._index_path)
+    except AttributeError:  # numba's cache internals changed: say nothing rather than guess
+        cached = True
+    if not cached:
+        from tissuesim.io.progress import note
+
+        _announced = True
+        note(
+            "compiling the assembly kernels with numba, once (about 30 s; later runs load "
+            "them from numba's cache)"
+        )
 
 
 # d as a literal constant per entry point: after inlining, LLVM unrolls the small loops

@@ -156,6 +156,7 @@ class ContactModel:
         self.set_stiffness(self.settings.stiffness if fixed else default)
         self._friction = None  # (TangentialCollisions, vertices at the step's start), lagged
         self._reported_friction = None  # the last step's, for obstacle_forces
+        self._friction_lag_at = None  # the vertices the friction was last lagged at
         self.broad_phase = ipctk.LBVH()
         self.ccd = ipctk.AdditiveCCD()
         self.candidates = StepCandidates(ipctk, self.mesh, self.broad_phase, self.dhat, self.stats)
@@ -254,16 +255,21 @@ class ContactModel:
         if not self.has_friction:
             self._friction = None
             return 0
-        ipctk = self._ipctk
-        col = self._collisions(V_lag)
-        tangential = ipctk.TangentialCollisions()
+        tangential = self.tangential_collisions(V_lag, self._collisions(V_lag))
+        potential = self._ipctk.FrictionPotential(self.settings.eps_v * h)
+        self._friction = (tangential, np.asfortranarray(V_start), potential)
+        self._friction_lag_at = np.asfortranarray(V_lag)
+        return len(tangential)
+
+    def tangential_collisions(self, V_lag: np.ndarray, col):
+        """The friction's collisions lagged at V_lag from the normal collisions ``col`` there:
+        normal forces, tangent bases and each pair's mu."""
+        tangential = self._ipctk.TangentialCollisions()
         mu = self.table.uniform_mu
         tangential.build(self.mesh, V_lag, col, self.barrier, 0.0 if mu is None else mu)
         if mu is None:
             self._pair_friction(tangential)
-        potential = ipctk.FrictionPotential(self.settings.eps_v * h)
-        self._friction = (tangential, np.asfortranarray(V_start), potential)
-        return len(tangential)
+        return tangential
 
     def _pair_friction(self, tangential) -> None:
         """Each collision's mu from its pair of groups (the first and last vertex of a stencil
@@ -507,6 +513,17 @@ class ContactModel:
 
     def min_distance(self, c: np.ndarray) -> float:
         return self.proximity(c)[0]
+
+    def body_forces(self, c: np.ndarray) -> dict[str, np.ndarray]:
+        """Per enabled pair of bodies, the contact force each receives from the other
+        (``contact/body_forces.py``)."""
+        from tissuesim.contact.body_forces import body_contact_forces
+
+        state = self._friction or self._reported_friction
+        lag = None
+        if self.has_friction and state is not None and len(state[0]):
+            lag = (self._friction_lag_at, state[1], state[2])
+        return body_contact_forces(self, self.vertices(c), lag)
 
     def obstacle_forces(self, c: np.ndarray) -> dict[str, np.ndarray]:
         """Force (N, 3-vector) each obstacle exerts on the bodies, as ``name``, and with

@@ -85,6 +85,14 @@ def contact_facets(name: str, mesh, surface) -> np.ndarray:
     return tri.astype(np.int64)
 
 
+def _not_both_in(ipctk, group: np.ndarray, groups: list[int]):
+    """A filter that accepts a vertex pair unless both its vertices are in ``groups`` (their
+    vertices share one patch label, every other vertex its own)."""
+    labels = np.arange(1, len(group) + 1, dtype=np.int32)
+    labels[np.isin(group, groups)] = 0
+    return ipctk.make_vertex_patches_filter(labels.reshape(-1, 1))
+
+
 class PairTable:
     """Per pair of groups (bodies first, then obstacles): enabled and mu; see the module
     docstring."""
@@ -130,26 +138,34 @@ class PairTable:
         nb = len(self.names) - self._n_obstacles
         first_obstacle = int(np.searchsorted(group, nb)) if self._n_obstacles else n_vertices
         result = ipctk.make_static_obstacle_filter(first_obstacle)
-
-        def same_patch_blocked(groups) -> object:
-            labels = np.arange(1, n_vertices + 1, dtype=np.int32)
-            labels[np.isin(group, groups)] = 0
-            return ipctk.make_vertex_patches_filter(labels.reshape(-1, 1))
-
         for i in range(nb):
             for j in range(i, len(self.names)):
                 if self.enabled[i, j]:
                     continue
                 if i == j:
-                    result = result & same_patch_blocked([i])
+                    result = result & _not_both_in(ipctk, group, [i])
                 else:
                     allowed = (
-                        same_patch_blocked([i, j])
-                        | ~same_patch_blocked([i])
-                        | ~same_patch_blocked([j])
+                        _not_both_in(ipctk, group, [i, j])
+                        | ~_not_both_in(ipctk, group, [i])
+                        | ~_not_both_in(ipctk, group, [j])
                     )
                     result = result & allowed
         return result
+
+    def pair_filter(self, ipctk, group: np.ndarray, i: int, j: int):
+        """An ipctk CollisionFilter that accepts only vertex pairs between groups i and j
+        (i != j): the collisions through which one body pushes another."""
+        return (
+            ~_not_both_in(ipctk, group, [i, j])
+            & _not_both_in(ipctk, group, [i])
+            & _not_both_in(ipctk, group, [j])
+        )
+
+    def body_pairs(self) -> list[tuple[int, int]]:
+        """The enabled pairs (i < j) of two different bodies (no obstacle)."""
+        nb = len(self.names) - self._n_obstacles
+        return [(i, j) for i in range(nb) for j in range(i + 1, nb) if self.enabled[i, j]]
 
     @property
     def uniform_mu(self) -> float | None:

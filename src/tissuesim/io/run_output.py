@@ -1,21 +1,24 @@
-"""Running a Simulation with output, the same for every scene: per body a VTU series + PVD on
-rest positions (``io/body_series.py``), the cut surface, summary.json, forces.csv and
-forces.png, a progress bar and the pictures (``render/scene.py``).
+"""Running a Simulation with output, the same for every scene: per body a VTU series + PVD on rest
+positions (``io/body_series.py``), the cut surface, summary.json, forces.csv and forces.png, a
+progress bar and the pictures (``render/scene.py``).
 
 The directory is checked before anything is written (``io/manifest.py``). summary.json is
-written the moment the run starts (before the model is assembled) and rewritten atomically
-after every step, so a run stopped at any point (a crash, a ConvergenceError, Ctrl-C, SIGTERM)
-leaves a valid summary whose "status" says how it ended, and every frame listed in a .pvd
-exists and is complete. What an earlier run into the same directory wrote (its manifest.json)
-is removed when the new run starts, so nothing stale sits beside the new output. Interrupts
-(one Ctrl-C or several, SIGTERM) end the run with status "interrupted" and skip the pictures;
-while the final summary is written further interrupts wait.
+written the moment the run starts (before the model is assembled), rewritten atomically after a
+step once 20 times its last write's cost has passed (a rewrite costs O(steps): after every
+step, long runs spent most of their time writing) and when the run ends however it ends, so a
+run stopped at any point (a crash, a ConvergenceError, Ctrl-C, SIGTERM) leaves a valid summary
+whose "status" says how it ended (a SIGKILL: the steps up to its last write), and every frame
+listed in a .pvd exists and is complete. What an earlier run into the same directory wrote (its
+manifest.json) is removed when the new run starts, so nothing stale sits beside the new output.
+Interrupts (one Ctrl-C or several, SIGTERM) end the run with status "interrupted" and skip the
+pictures; while the final summary is written further interrupts wait.
 """
 
 from __future__ import annotations
 
 import os
 import sys
+import time
 from dataclasses import asdict
 from typing import Any
 
@@ -25,12 +28,14 @@ from tissuesim.errors import InputError, TissueSimError
 from tissuesim.io.atomic import write_json_atomic
 from tissuesim.io.body_series import series_for
 from tissuesim.io.interrupts import deferred_interrupts, interrupts_as_keyboard_interrupt
-from tissuesim.io.manifest import Manifest, prepare_directory
+from tissuesim.io.manifest import MANIFEST, Manifest, prepare_directory
 
 __all__ = ["RunOutput", "OBSTACLES"]
 
 #: the key of a frame's data under which the obstacles' (positions, triangles) are kept
 OBSTACLES = "__obstacles__"
+#: summary.json is rewritten once this many times its last write's cost has passed
+SUMMARY_COST_RATIO = 20.0
 
 
 class RunOutput:
@@ -71,8 +76,15 @@ class RunOutput:
         self.render_time = 0.0  # s spent drawing final.png and run.gif
         self.description = None
         self.directory = None if directory is None else prepare_directory(directory)
+        self._last_write = (0.0, 0.0)  # (perf_counter at the summary's last write, its cost)
+        self._created = time.perf_counter()
+        # where the run's wall time went (s): assembling the model, the steps, writing the
+        # frames and summaries, drawing forces.png / final.png / run.gif
+        self.time_split = {"setup_s": 0.0, "steps_s": 0.0, "output_s": 0.0, "pictures_s": 0.0}
         if self.directory is not None:
             self.manifest = Manifest(self.directory)
+            if not (self.directory / MANIFEST).exists():
+                self.manifest.write()  # a manifest exists whenever a summary does
             self._write_summary()  # replaces the previous run's summary first
             self.manifest.remove_previous()
             self.manifest.add(file="summary.json")
@@ -83,6 +95,7 @@ class RunOutput:
         except BaseException as exc:
             self._fail(exc)
             raise
+        self.time_split["setup_s"] = time.perf_counter() - self._created
 
     # -- series -------------------------------------------------------------------------------
     def _open_series(self) -> None:
@@ -169,6 +182,8 @@ class RunOutput:
                 "min_J": float(min((r.min_J for r in history), default=np.nan)),
                 "wall_time_s": float(sum(r.wall_time_s for r in history)),
                 "render_wall_time_s": self.render_time,
+                "elapsed_s": time.perf_counter() - self._created,
+                "time_split_s": dict(self.time_split),
             },
             "forces": [{"time": r.time, **r.extra.get("forces", {})} for r in history],
             "pictures": self.pictures,
@@ -180,10 +195,23 @@ class RunOutput:
             return
         from tissuesim.io.forces import write_forces_csv
 
+        start = time.perf_counter()
         write_json_atomic(self.directory / "summary.json", self._summary())
         if self.sim.history and self.sim.history[-1].extra.get("forces"):
             write_forces_csv(self.directory / "forces.csv", self.sim.history)
             self.manifest.add(file="forces.csv")
+        now = time.perf_counter()
+        self._last_write = (now, now - start)
+
+    def _write_summary_after_a_step(self) -> None:
+        """Rewrite summary.json and forces.csv once the time since their last write is
+        SUMMARY_COST_RATIO times what that write cost: a rewrite costs O(steps), and after
+        every step a long run spent most of its time writing (O(steps^2)); so writing stays
+        under 1 / SUMMARY_COST_RATIO of the run at any length, and a kill loses at most the
+        steps since the last write (the frames are written as before)."""
+        at, cost = self._last_write
+        if time.perf_counter() - at >= SUMMARY_COST_RATIO * cost:
+            self._write_summary()
 
     def _fail(self, exc: BaseException) -> None:
         """Record how the run ended in the summary (any exception; an interrupt included)."""
@@ -200,8 +228,7 @@ class RunOutput:
     def run(self, steps: int, progress: bool = True) -> list:
         """Step ``steps`` times, writing every ``every``-th frame, the last, and the summary;
         return the simulation's history. The summary's status records how the run ended."""
-        from tqdm import tqdm
-
+        from tissuesim.io.progress import progress_bar
         from tissuesim.simulation import check_time_resolution
 
         try:
@@ -210,21 +237,28 @@ class RunOutput:
             steps = integer(steps, "steps", low=0)
             h = self.sim.time_step
             check_time_resolution(self.sim.time + steps * h, h, "the end time")
+            start = time.perf_counter()
             if self.directory is not None:
                 self._open_series()
                 self._write_summary()
             self._write_frame()
+            self.time_split["output_s"] += time.perf_counter() - start
         except BaseException as exc:
             self._fail(exc)
             raise
-        bar = tqdm(total=steps, disable=not progress, file=sys.stderr, unit="step")
+        bar = progress_bar(steps, progress)
         with interrupts_as_keyboard_interrupt():  # one interrupt stops; more are ignored
             try:
+                split = self.time_split
                 for k in range(steps):
+                    start = time.perf_counter()
                     record = self.sim.step()
+                    stepped = time.perf_counter()
                     if (k + 1) % self.every == 0 or k + 1 == steps:
                         self._write_frame()
-                    self._write_summary()
+                    self._write_summary_after_a_step()
+                    split["steps_s"] += stepped - start
+                    split["output_s"] += time.perf_counter() - stepped
                     bar.set_postfix(
                         t=f"{record.time:.4g}",
                         newton=record.newton_iterations,
@@ -258,12 +292,18 @@ class RunOutput:
             self._write_summary()
 
     def _pictures(self, progress: bool) -> None:
+        start = time.perf_counter()
+        try:
+            self._draw(progress)
+        finally:
+            self.time_split["pictures_s"] += time.perf_counter() - start
+        self._write_summary()
+
+    def _draw(self, progress: bool) -> None:
         from tissuesim.io.forces import render_forces_png
 
         render_forces_png(self.directory / "forces.png", self.sim.history)  # none: no file
         if self.render and self.frames:
-            import time
-
             from tissuesim.render.scene import MAX_GIF_FRAMES, gif_frames_3d, render_run
 
             if progress:
@@ -281,7 +321,6 @@ class RunOutput:
         for name in ("forces.png", "final.png", "run.gif"):
             if (self.directory / name).is_file():
                 self.manifest.add(file=name)
-        self._write_summary()
 
 
 def _promote_contact(step: dict) -> dict:
