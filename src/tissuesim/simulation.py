@@ -41,7 +41,7 @@ import numpy as np
 
 from tissuesim import validate
 from tissuesim.bodies.fem import FemBody
-from tissuesim.contact.indentation import IndentationTracker
+from tissuesim.contact.indentation import IndentationTracker, is_probe
 from tissuesim.energies.mass import MassKind
 from tissuesim.errors import InputError
 from tissuesim.materials.base import Material
@@ -682,8 +682,11 @@ class Simulation(SetupCalls, BodyResults):
     def _contact_report(self, contact, x: np.ndarray, forces: dict) -> dict[str, Any]:
         """The step's contact figures, and the time split since the last report."""
         stats = contact.stats
-        bodies = contact.vertices(x)[: contact.n_deformable]
-        rest = contact.rest[: contact.n_deformable]
+        depths = {}
+        if any(is_probe(ob) for ob in contact.obstacles):  # the bodies' vertices only then
+            n = contact.n_deformable
+            bodies, rest = contact.vertices(x)[:n], contact.rest[:n]
+            depths = self._indentation.depths(contact.obstacles, bodies, rest, self.time, forces)
         distance, pairs = contact.proximity(x)
         report = {
             "min_distance": distance,
@@ -695,9 +698,7 @@ class Simulation(SetupCalls, BodyResults):
             "ccd_calls": stats.ccd_calls,
             "friction_solves": stats.friction_solves,
             "stiffness_Pa": contact.kappa,
-            "indentation_depth": self._indentation.depths(
-                contact.obstacles, bodies, rest, self.time, forces
-            ),
+            "indentation_depth": depths,
         }
         contact.reset_stats()
         return report

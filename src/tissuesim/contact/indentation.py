@@ -24,7 +24,7 @@ from collections.abc import Iterable, Mapping
 
 import numpy as np
 
-__all__ = ["IndentationTracker", "probe_gap"]
+__all__ = ["IndentationTracker", "is_probe", "probe_gap"]
 
 
 def probe_gap(obstacle, points: np.ndarray, t: float) -> tuple[float, np.ndarray, np.ndarray]:
