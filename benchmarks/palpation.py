@@ -23,6 +23,7 @@ process (set before NumPy loads).
     python3 benchmarks/palpation.py --divisions 12 --threads 1
     PALPATION_CRITERION=auto python3 benchmarks/palpation.py   # the physical criterion
     PALPATION_FRICTION_ITERATIONS=1 python3 benchmarks/palpation.py
+    PALPATION_GRADIENT_TOLERANCE=1e-5 python3 benchmarks/palpation.py   # a looser Newton
 """
 
 from __future__ import annotations
@@ -34,6 +35,7 @@ import statistics
 import subprocess
 import sys
 import time
+from dataclasses import replace
 from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
@@ -41,6 +43,8 @@ FRICTION_ITERATIONS = int(os.environ.get("PALPATION_FRICTION_ITERATIONS", "2"))
 #: Newton's stopping criterion ("relative", the default; "auto": the experimental physical one
 #: in contact steps), from the environment so the per-thread children see it
 CRITERION = os.environ.get("PALPATION_CRITERION", "relative")
+#: Newton's relative gradient tolerance (empty: the default)
+GRADIENT_TOLERANCE = os.environ.get("PALPATION_GRADIENT_TOLERANCE", "")
 
 
 def organ(divisions: int, newton=None):
@@ -99,6 +103,8 @@ def run(scene: str, divisions: int, tight: bool) -> dict:
     import tissuesim as ts
 
     newton = ts.NewtonOptions(criterion=CRITERION)
+    if GRADIENT_TOLERANCE:
+        newton = replace(newton, gradient_tolerance=float(GRADIENT_TOLERANCE))
     newton = newton.tighter(100.0) if tight else newton
     sim, instrument, steps = SCENES[scene](divisions, newton)
     alone = organ(divisions)
