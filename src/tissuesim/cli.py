@@ -1,5 +1,6 @@
-"""Command line: ``tissuesim run SCENE``, ``tissuesim demo``, ``tissuesim info MESH``,
-``tissuesim examples``. Thin: everything it does is one call into the library."""
+"""Simulate soft tissue from the command line: run a TOML scene (or a shipped example by
+name), the demo, a live window; describe a mesh; list the examples. Each subcommand has its
+own --help."""
 
 from __future__ import annotations
 
@@ -205,27 +206,37 @@ def main(argv: list[str] | None = None) -> int:
     p_run = sub.add_parser(
         "run", parents=common, help="run a TOML scene file (or a shipped example by name)"
     )
-    p_run.add_argument("scene")
+    p_run.add_argument(
+        "scene", help="a scene file (.toml) or a shipped example's name (tissuesim examples)"
+    )
     p_run.add_argument("--out", help="output directory (default out/<scene name>)")
     p_run.add_argument("--steps", type=_steps, help="number of time steps (overrides [run] steps)")
     p_run.add_argument("--no-render", action="store_true", help="skip the PNG and GIF")
-    p_run.add_argument("--quiet", action="store_true", help="no progress bar")
+    p_run.add_argument(
+        "--quiet", action="store_true", help="no progress lines (the final report is printed)"
+    )
     from tissuesim.render.scene import FIELDS
 
     fields = tuple(FIELDS)
     p_run.add_argument("--field", choices=fields, help="what colours the pictures (default J)")
     p_demo = sub.add_parser("demo", parents=common, help=f"run the course's example ({DEMO})")
-    p_demo.add_argument("--out", default="out/demo")
-    p_demo.add_argument("--steps", type=_steps)
+    p_demo.add_argument("--out", default="out/demo", help="output directory (default out/demo)")
+    p_demo.add_argument(
+        "--steps", type=_steps, help="number of time steps (default the example's 200)"
+    )
     p_demo.add_argument("--no-render", action="store_true", help="skip the PNG and GIF")
-    p_demo.add_argument("--quiet", action="store_true")
+    p_demo.add_argument(
+        "--quiet", action="store_true", help="no progress lines (the final report is printed)"
+    )
     p_demo.add_argument("--field", choices=fields, help="what colours the pictures (default J)")
     p_play = sub.add_parser(
         "play",
         parents=common,
         help="run a scene live in a window, an instrument driven by the keys or the mouse",
     )
-    p_play.add_argument("scene")
+    p_play.add_argument(
+        "scene", help="a scene file (.toml) or a shipped example's name, with an obstacle"
+    )
     p_play.add_argument("--obstacle", help="the obstacle to drive (default the first)")
     p_play.add_argument("--budget", type=_seconds, help="wall-clock budget per step (s)")
     p_play.add_argument("--frames", type=_steps, help="stop after this many frames")
@@ -235,7 +246,7 @@ def main(argv: list[str] | None = None) -> int:
         help="no window: run --frames frames (default 10) and save them as PNG in DIR",
     )
     p_info = sub.add_parser("info", parents=common, help="describe a mesh file and check it")
-    p_info.add_argument("mesh")
+    p_info.add_argument("mesh", help="a mesh file (.msh, .vtu, .vtk, .inp, ... as meshio reads)")
     sub.add_parser("examples", parents=common, help="list the shipped example scenes")
     args = parser.parse_args(argv)
     with warnings.catch_warnings():

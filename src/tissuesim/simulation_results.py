@@ -7,6 +7,7 @@ import copy
 
 import numpy as np
 
+from tissuesim.errors import InputError
 from tissuesim.mesh.mesh import Mesh
 
 __all__ = ["BodyResults"]
@@ -16,14 +17,28 @@ class BodyResults:
     """Mixed into ``Simulation``."""
 
     # -- results of one body (name it with body= when there are several) ---------------------
+    def _only(self, prop: str, kinds: tuple[str, ...], method: str):
+        """The only body (of ``kinds``) for a one-body property; with several, an error that
+        names the method taking body=."""
+        try:
+            return self.body(None, kinds)
+        except InputError:
+            names = [b.name for b in self.bodies.values() if not kinds or b.kind in kinds]
+            what = f"{'/'.join(kinds)} " if kinds else ""
+            raise InputError(
+                f"sim.{prop} is for a simulation with one {what}body; this one has "
+                f"{len(names)} ({names}): use sim.{method}(body=...)"
+            ) from None
+
     @property
     def model(self):
-        """The only body's model (``Model`` or ``FrameModel``)."""
-        return self.body(None).model
+        """The only body's model (``Model`` or ``FrameModel``); several: ``body(name).model``."""
+        return self._only("model", (), "body").model
 
     @property
     def mesh(self) -> Mesh:
-        return self.body(None, ("fem",)).mesh
+        """The only FEM body's rest mesh; several bodies: ``body(name).mesh``."""
+        return self._only("mesh", ("fem",), "body").mesh
 
     def body_positions(self, body: str | None = None) -> np.ndarray:
         """Current positions: FEM vertices (n, d); frame bodies: integration points (q, 3)."""
@@ -32,19 +47,33 @@ class BodyResults:
             return x.reshape(b.mesh.points.shape)
         return b.model.point_map.positions(x)
 
+    def body_displacement(self, body: str | None = None) -> np.ndarray:
+        """Current displacement of a FEM body's vertices from their rest places (n, d), m."""
+        b = self.body(body, ("fem",))
+        return self.body_positions(b.name) - b.mesh.points
+
+    def body_velocity(self, body: str | None = None) -> np.ndarray:
+        """Current velocity of a FEM body's vertices (n, d), m/s."""
+        b, _, v = self.body_state(body, ("fem",))
+        return v.reshape(b.mesh.points.shape)
+
     @property
     def positions(self) -> np.ndarray:
-        """Current vertex positions (n, d) of the only FEM body (m)."""
-        return self.body_positions(self.body(None, ("fem",)).name)
+        """Current vertex positions (n, d) of the only FEM body (m); several bodies:
+        ``body_positions(body=...)``."""
+        return self.body_positions(self._only("positions", ("fem",), "body_positions").name)
 
     @property
     def displacement(self) -> np.ndarray:
-        return self.positions - self.mesh.points
+        """Displacement (n, d) of the only FEM body (m); several: ``body_displacement``."""
+        return self.body_displacement(
+            self._only("displacement", ("fem",), "body_displacement").name
+        )
 
     @property
     def velocity(self) -> np.ndarray:
-        b, _, v = self.body_state(None, ("fem",))
-        return v.reshape(b.mesh.points.shape)
+        """Velocity (n, d) of the only FEM body (m/s); several: ``body_velocity``."""
+        return self.body_velocity(self._only("velocity", ("fem",), "body_velocity").name)
 
     def cell_fields(self, body: str | None = None) -> dict[str, np.ndarray]:
         """Per element of a FEM body: J, green_strain, cauchy_stress, von_mises,

@@ -228,10 +228,25 @@ class SetupCalls:
             vertices, displacement, components, name=name
         )
 
-    def fix(self, body: str, vertices, name: str | None = None) -> str:
+    def fix(self, *args, body: str | None = None, name: str | None = None) -> str:
+        """Clamp vertices of a FEM body (every component held at its rest place); returns the
+        support's name, under which its reaction force is reported.
+
+        ``sim.fix(vertices, body="organ", name="table")``, like every per-body call (``body``
+        may be left out when there is one FEM body); ``sim.fix("organ", vertices)``, the
+        body first, is accepted too."""
+        body, (vertices,) = _body_first("fix", args, 1, body)
         return self.body(body, ("fem",)).fix(vertices, name)
 
-    def grasp(self, body: str, vertices, displacement, *, stiffness=None, name=None, release=None):
+    def grasp(self, *args, body: str | None = None, stiffness=None, name=None, release=None):
+        """Move vertices of a FEM body by ``displacement`` (a vector, m, or a function of t):
+        prescribed (``stiffness`` None) or pulled through springs of ``stiffness`` (N/m per
+        vertex), letting go at ``release`` (s; None: never). Returns the grasper; its force
+        on the body is reported under its name.
+
+        ``sim.grasp(vertices, displacement, body="organ")`` (``body`` may be left out when
+        there is one FEM body); ``sim.grasp("organ", vertices, displacement)`` too."""
+        body, (vertices, displacement) = _body_first("grasp", args, 2, body)
         return self.body(body, ("fem",)).grasp(
             vertices, displacement, stiffness=stiffness, name=name, release=release
         )
@@ -350,3 +365,18 @@ def _pairs(pairs) -> tuple:
             )
         out.append(ContactPair(names[0], names[1], item.get("enabled", True), item.get("friction")))
     return tuple(out)
+
+
+def _body_first(method: str, args: tuple, n: int, body: str | None) -> tuple[str | None, tuple]:
+    """(body, the n other arguments) of a call given as (args...) or (body, args...)."""
+    if len(args) == n + 1 and isinstance(args[0], str):
+        if body is not None:
+            raise InputError(f"{method}: the body is named twice ({args[0]!r} and body={body!r})")
+        return args[0], args[1:]
+    if len(args) != n:
+        what = "vertices" if n == 1 else "vertices, displacement"
+        raise InputError(
+            f"{method}({what}, body=..., name=...) takes {n} positional argument"
+            f"{'s' if n > 1 else ''} (or the body's name first), not {len(args)}"
+        )
+    return body, args

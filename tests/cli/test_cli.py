@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import json
+import os
+import re
 import subprocess
 import sys
 import xml.etree.ElementTree as ET
@@ -217,3 +219,42 @@ def test_entry_point_runs_as_a_module(tmp_path):
     )
     assert result.returncode == 0, result.stderr
     assert "course_stretch" in result.stdout
+
+
+def test_quiet_3d_run_with_pictures_writes_nothing_to_stderr(tmp_path):
+    """Off-screen VTK logs "bad X server connection" before falling back to EGL/OSMesa: with
+    --quiet (and without) that warning must not reach stderr. VTK writes to the process's
+    stderr directly, so the run is a child process."""
+    pytest.importorskip("pyvista")
+    env = {k: v for k, v in os.environ.items() if k != "DISPLAY"}
+    out = tmp_path / "o"
+    command = [sys.executable, "-m", "tissuesim", "run", "beam_3d_gravity", "--steps", "1"]
+    done = subprocess.run(
+        [*command, "--out", str(out), "--quiet"], env=env, capture_output=True, text=True
+    )
+    assert done.returncode == 0, done.stderr
+    assert (out / "final.png").is_file()
+    assert done.stderr == ""
+
+
+def _help(capsys, *args) -> str:
+    with pytest.raises(SystemExit) as exit_info:
+        main([*args, "--help"])
+    assert exit_info.value.code == 0
+    return capsys.readouterr().out
+
+
+def test_every_argument_of_every_subcommand_has_help_for_users(capsys):
+    top = _help(capsys)
+    commands = top.split("{", 1)[1].split("}", 1)[0].split(",")
+    assert {"run", "demo", "play", "info", "examples"} <= set(commands)
+    for text in [top] + [_help(capsys, c) for c in commands]:
+        for pattern in (r"``", r"\bissue \d", r"\bsession \d", r"field notes", r"FIELD-NOTES"):
+            assert not re.search(pattern, text, re.IGNORECASE), (pattern, text)
+        lines = text.splitlines()
+        for i, line in enumerate(lines):
+            body = line[2:]
+            # an argument listed alone on its line must have its help on the next, indented
+            if line.startswith("  ") and not line.startswith("   ") and " " not in body.strip():
+                follow = lines[i + 1] if i + 1 < len(lines) else ""
+                assert follow.startswith("    ") and follow.strip(), (line, text)

@@ -66,7 +66,20 @@ def _import_pyvista():
     except ImportError as exc:
         raise ImportError(_MISSING) from exc
     pv.OFF_SCREEN = True
+    _quiet_vtk_warnings()
     return pv
+
+
+def _quiet_vtk_warnings() -> None:
+    """Keep VTK's warnings off stderr when rendering to files: off-screen, VTK first tries an X
+    server and logs "bad X server connection" before it falls back to EGL/OSMesa, which says
+    nothing about the picture. VTK's errors still reach stderr."""
+    try:
+        from vtkmodules.vtkCommonCore import vtkLogger, vtkObject
+    except ImportError:  # an old VTK: its own defaults
+        return
+    vtkLogger.SetStderrVerbosity(vtkLogger.VERBOSITY_ERROR)
+    vtkObject.GlobalWarningDisplayOff()
 
 
 def _frozen_array(a: Any, dtype, what: str) -> np.ndarray:
