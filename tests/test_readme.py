@@ -1,4 +1,6 @@
-"""The README's promises: a two-command quick start, and its Python and TOML examples run."""
+"""The README's and the manual's promises: a two-command quick start, every Python example of
+the README and of docs/ runs as shown, the TOML examples are the shipped scenes, and the user
+pages speak to users."""
 
 from __future__ import annotations
 
@@ -14,16 +16,35 @@ import numpy as np
 from tissuesim.cli import example_path
 from tissuesim.scene.loader import build_scene
 
-README = Path(__file__).resolve().parents[1] / "README.md"
+ROOT = Path(__file__).resolve().parents[1]
+README = ROOT / "README.md"
+DOCS = ROOT / "docs"
+#: every page whose code blocks are checked: the README and every page of the manual
+PAGES = [README, *sorted(DOCS.rglob("*.md"))]
+#: the pages written for users (the developer pages design.md, performance.md and the method
+#: pages may cite commits and measurements)
+USER_PAGES = [
+    README,
+    DOCS / "index.md",
+    DOCS / "getting-started.md",
+    DOCS / "examples.md",
+    *sorted((DOCS / "guide").glob("*.md")),
+    *sorted((DOCS / "reference").glob("*.md")),
+]
 
 
-def blocks(language: str) -> list[str]:
-    return re.findall(rf"```{language}\n(.*?)```", README.read_text(), flags=re.S)
+def blocks(language: str, pages: list[Path] = PAGES) -> list[str]:
+    """Every ``language`` fenced block of ``pages`` (default: the README and docs/)."""
+    return [
+        b
+        for page in pages
+        for b in re.findall(rf"```{language}\n(.*?)```", page.read_text(), flags=re.S)
+    ]
 
 
-def block(language: str, marker: str) -> str:
-    """The one ``language`` block of the README that contains ``marker``."""
-    (found,) = [b for b in blocks(language) if marker in b]
+def block(language: str, marker: str, pages: list[Path] = PAGES) -> str:
+    """The one ``language`` block of ``pages`` that contains ``marker``."""
+    (found,) = [b for b in blocks(language, pages) if marker in b]
     return found
 
 
@@ -38,7 +59,8 @@ def test_quick_start_has_exactly_two_commands():
 
 
 def test_python_example_runs(tmp_path):
-    code = blocks("python")[0]
+    """Getting started's first script: the course's square, 20 steps."""
+    code = block("python", "import tissuesim as ts\nfrom tissuesim.mesh import select")
     result = subprocess.run(
         [sys.executable, "-c", code], cwd=tmp_path, capture_output=True, text=True, timeout=300
     )
@@ -67,7 +89,7 @@ def test_frames_python_example_runs(tmp_path):
 
 
 def test_toml_example_is_the_shipped_beam_scene():
-    readme_scene = tomllib.loads(block("toml", "[mesh]"))
+    readme_scene = tomllib.loads(block("toml", '[mesh]\ngenerator = "box"'))
     shipped = tomllib.loads(example_path("beam_3d_gravity").read_text())
     assert readme_scene == shipped
     scene = build_scene(readme_scene, name="readme_beam")
@@ -123,7 +145,9 @@ def test_the_scene_key_table_names_every_table_the_loaders_accept():
     from tissuesim.scene.frames import FRAME_SCENE_KEYS
     from tissuesim.scene.loader import SCENE_KEYS
 
-    section = README.read_text().split("Every key of every scene:", 1)[1].split("**Selectors**")[0]
+    page = DOCS / "reference" / "scene-keys.md"
+    section = page.read_text().split("Every key of every scene:", 1)[1].split("\n## ")[0]
+    assert section.count("\n| `") > 20  # the table itself, not a mention
     for table in {*SCENE_KEYS, *FRAME_SCENE_KEYS, *COUPLED_SCENE_KEYS}:
         assert f"[{table}]" in section or f"`{table}`" in section, table
 
@@ -148,3 +172,90 @@ def test_interactive_python_example_drives_the_probe(tmp_path):
     assert result.returncode == 0, result.stderr
     # pressing down, no intersection; the linearised force grows with a further press
     assert result.stdout.split()[-3:] == ["True", "False", "True"]
+
+
+def test_contact_python_example_runs_as_shown(tmp_path):
+    """The README's contact snippet, standalone: the probe presses on the clamped block."""
+    code = block("python", "sim.set_contact(dhat=0.005")
+    result = subprocess.run(
+        [sys.executable, "-c", code], cwd=tmp_path, capture_output=True, text=True, timeout=600
+    )
+    assert result.returncode == 0, result.stderr
+    summary = json.loads((tmp_path / "out/probe/summary.json").read_text())
+    assert summary["status"] == "completed"
+    last = summary["forces"][-1]
+    assert last["probe"][2] < 0.0  # the probe pushes the block down
+    np.testing.assert_allclose(
+        np.add(last["probe"], last["body.support"]), 0.0, atol=1e-6 * abs(last["probe"][2])
+    )
+
+
+def test_save_and_load_python_example_is_bit_identical(tmp_path):
+    code = block("python", 'sim.save("beam.npz")')
+    result = subprocess.run(
+        [sys.executable, "-c", code], cwd=tmp_path, capture_output=True, text=True, timeout=300
+    )
+    assert result.returncode == 0, result.stderr
+    assert result.stdout.split() == ["True"]
+    assert (tmp_path / "beam.npz").is_file()
+
+
+def test_toml_two_bodies_example_is_the_shipped_scene():
+    shown = tomllib.loads(block("toml", "[[attachments]]"))
+    assert shown == tomllib.loads(example_path("two_blocks_tied").read_text())
+
+
+def test_every_toml_block_parses():
+    for code in blocks("toml"):
+        tomllib.loads(code)
+
+
+#: words about how the project was made, not about what it does: not for users' pages
+INTERNAL = re.compile(
+    r"\bissues? \d+|\bsessions? \d+|\bsession's\b|field notes|field-notes|"
+    r"the issue's|\bthe issue\b",
+    flags=re.I,
+)
+
+
+def test_user_pages_speak_to_users():
+    assert len(USER_PAGES) > 10
+    for page in USER_PAGES:
+        found = [m.group(0) for m in INTERNAL.finditer(page.read_text())]
+        assert not found, f"{page.relative_to(ROOT)}: {found}"
+
+
+def test_user_pages_check_catches_internal_words():
+    for text in (
+        "see issue 14",
+        "fixed in session 7",
+        "FIELD-NOTES",
+        "the field notes",
+        "the issue's goals",
+        "an earlier session's figure",
+    ):
+        assert INTERNAL.search(text), text
+    for text in ("connective tissue", "tissues", "Problem Session IV"):
+        assert not INTERNAL.search(text), text
+
+
+#: each Python block of the README and docs/ and the test that runs it (by a text only it
+#: contains)
+TESTED_PYTHON_BLOCKS = {
+    "import tissuesim as ts\nfrom tissuesim.mesh import select": "test_python_example_runs",
+    'sim.attach("fat", "muscle"': "test_several_bodies_python_example_runs",
+    "Simulation.from_frames": "test_frames_python_example_runs",
+    "sim.set_contact(dhat=0.005": "test_contact_python_example_runs_as_shown",
+    "drive_obstacle": "test_interactive_python_example_drives_the_probe",
+    "add_tissue": "test_coupled_python_example_runs",
+    'formulation="mean_dilatation"': "test_nearly_incompressible_python_example_runs",
+    'sim.save("beam.npz")': "test_save_and_load_python_example_is_bit_identical",
+}
+
+
+def test_every_python_block_of_the_readme_and_the_docs_is_run_by_a_test():
+    assert blocks("python"), "no Python examples found"
+    for code in blocks("python"):
+        owners = [test for marker, test in TESTED_PYTHON_BLOCKS.items() if marker in code]
+        assert len(owners) == 1, code
+        assert owners[0] in globals(), owners[0]

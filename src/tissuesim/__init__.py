@@ -5,8 +5,7 @@ The names users need most are re-exported here; each lives in one module (see do
 
 from __future__ import annotations
 
-__version__ = "0.1.0"
-
+from tissuesim._version import __version__
 from tissuesim.errors import (
     ConvergenceError,
     InputError,
@@ -28,7 +27,7 @@ from tissuesim.materials import (
     StVenantKirchhoff,
     make_material,
 )
-from tissuesim.mesh import Mesh, box, ellipsoid, read_mesh, rectangle, select
+from tissuesim.mesh import Mesh, box, ellipsoid, mesh_surface, read_mesh, rectangle, select
 from tissuesim.simulation import Simulation
 from tissuesim.solve.newton import NewtonOptions
 
@@ -56,6 +55,7 @@ __all__ = [
     "box",
     "ellipsoid",
     "make_material",
+    "mesh_surface",
     "read_mesh",
     "rectangle",
     "select",

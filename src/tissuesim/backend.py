@@ -4,7 +4,11 @@
              ``tissuesim[fast]``); 12-17x faster (docs/performance.md), compiled once, cached.
     "numpy": ``kinematics/p1.py`` + ``material.evaluate`` batched over all elements; always
              available, and the reference the Numba path is tested against.
-    "auto":  numba when it is installed, else numpy.
+    "auto":  numba when it is installed and the mesh is not small, else numpy: below
+             SMALL_MESH_CELLS cells NumPy is faster over a whole run, because Numba's fixed
+             cost per process (importing it and loading its cached kernels, 0.6-1.7 s) takes
+             thousands of evaluations of a small mesh to repay
+             (``benchmarks/results/backend_threshold.md``).
 
 The environment variable ``TISSUESIM_BACKEND`` overrides "auto" (e.g. to time or test the
 fallback). Laws without a Numba kernel (fixed_corotated, user-defined ones) and evaluations
@@ -20,18 +24,26 @@ from typing import Literal
 from tissuesim.errors import InputError
 from tissuesim.validate import short
 
-__all__ = ["BACKENDS", "Backend", "numba_available", "resolve_backend"]
+__all__ = ["BACKENDS", "Backend", "SMALL_MESH_CELLS", "numba_available", "resolve_backend"]
 
 Backend = Literal["auto", "numba", "numpy"]
 BACKENDS = ("auto", "numba", "numpy")
+#: cells per dimension below which "auto" takes NumPy: there Numba saves under 3 ms per
+#: evaluation (measured: 1.3 ms at 512 triangles, 0.5 ms at 162 tetrahedra, 12.6 ms at 4,050
+#: triangles, 20 ms at 1,296 tetrahedra), so a run of a few hundred evaluations does not repay
+#: its fixed cost of about 1.5 s
+SMALL_MESH_CELLS = {2: 1000, 3: 500}
 
 
 def numba_available() -> bool:
     return importlib.util.find_spec("numba") is not None
 
 
-def resolve_backend(requested: str = "auto") -> tuple[str, str]:
-    """The backend to use for ``requested`` and the reason, e.g. ("numba", "auto: ...")."""
+def resolve_backend(
+    requested: str = "auto", cells: int | None = None, dim: int | None = None
+) -> tuple[str, str]:
+    """The backend to use for ``requested`` and the reason, e.g. ("numba", "auto: ...");
+    ``cells`` and ``dim``: the mesh's size, so that "auto" keeps small meshes on NumPy."""
     if requested not in BACKENDS:
         raise InputError(f"backend must be one of {BACKENDS}, not {short(requested)}")
     reason = "requested"
@@ -44,6 +56,12 @@ def resolve_backend(requested: str = "auto") -> tuple[str, str]:
             )
         if env != "auto":
             requested, reason = env, "TISSUESIM_BACKEND"
+        elif numba_available() and cells is not None and cells < SMALL_MESH_CELLS.get(dim, 0):
+            requested = "numpy"
+            reason = (
+                f"auto: a small mesh ({cells} cells < {SMALL_MESH_CELLS[dim]}), faster with "
+                "NumPy than with Numba's fixed cost per run"
+            )
         elif numba_available():
             requested, reason = "numba", "auto: numba installed"
         else:

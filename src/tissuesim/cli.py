@@ -10,24 +10,15 @@ import json
 import os
 import signal
 import sys
+import textwrap
 import warnings
-from importlib import resources
 from pathlib import Path
 
-__all__ = ["main"]
+from tissuesim.scene.examples import example_path, list_examples
+
+__all__ = ["main", "example_path", "list_examples"]
 
 DEMO = "course_stretch"
-
-
-def example_path(name: str) -> Path:
-    """Path of a shipped example scene by name (``tissuesim examples`` lists them)."""
-    root = resources.files("tissuesim") / "examples"
-    return Path(str(root / f"{name}.toml"))
-
-
-def list_examples() -> list[str]:
-    root = resources.files("tissuesim") / "examples"
-    return sorted(p.name[:-5] for p in root.iterdir() if p.name.endswith(".toml"))
 
 
 def _resolve_scene(scene: str) -> Path:
@@ -71,9 +62,11 @@ def _run(
     render: bool,
     quiet: bool,
     field: str | None = None,
+    resume: bool = False,
 ) -> int:
     import time
 
+    from tissuesim.io.checkpoint import completed_steps, scene_hash
     from tissuesim.scene.loader import load_scene
 
     started = time.perf_counter()
@@ -92,18 +85,27 @@ def _run(
     if not quiet:
         print(
             f"tissuesim: {scene.name}: {_body(sim)}, {sim.integrator}, "
-            f"time_step {sim.time_step:g} s, {run['steps']} steps -> {directory}/",
+            f"time_step {sim.time_step:g} s, {run['steps']} steps -> {directory}/"
+            + (" (resuming)" if resume else ""),
             file=sys.stderr,
         )
     from tissuesim.io.progress import set_quiet
 
     set_quiet(quiet)
+    complete = resume and completed_steps(directory) == run["steps"]
     history = sim.run(
         output=directory,
         progress=not quiet,
-        metadata={"scene": str(scene_path)},
+        metadata={"scene": str(scene_path), "scene_sha256": scene_hash(scene_path)},
+        resume=resume,
         **run,
     )
+    if complete:
+        print(
+            f"tissuesim: {directory}: the run is already complete ({run['steps']} steps); "
+            f"nothing was written (give --steps above {run['steps']} to continue it)",
+            file=sys.stderr,
+        )
     iters = [r.newton_iterations for r in history]
     report = {
         "output": str(directory),
@@ -161,6 +163,76 @@ def _play(args) -> int:
     return 0
 
 
+def _add_mesh_parser(sub, common) -> None:
+    """``tissuesim mesh SURFACE -o VOLUME``: tetrahedralise a surface (mesh/tetrahedralize.py)."""
+    from tissuesim.mesh.meshers import MESHERS
+
+    p = sub.add_parser(
+        "mesh",
+        parents=common,
+        help="tetrahedralise a closed surface (STL, OBJ, PLY, ...) into a volume mesh",
+        description="Mesh the solid a triangle surface encloses with tetrahedra, check the "
+        "result, write it and print a quality summary (JSON). The default mesher, "
+        "pytetwild (fTetWild), comes with tissuesim.",
+    )
+    p.add_argument("surface", help="the surface file, in metres (any format meshio reads)")
+    p.add_argument(
+        "-o",
+        "--output",
+        required=True,
+        metavar="VOLUME",
+        help="the volume mesh to write (.vtu, .msh, .xdmf, ...: format from the extension); "
+        "written atomically: an existing file is replaced only when meshing succeeds",
+    )
+    p.add_argument(
+        "--size",
+        type=_length,
+        help="target tetrahedron edge length in metres (default 0.05 of the surface's "
+        "bounding-box diagonal)",
+    )
+    p.add_argument(
+        "--mesher",
+        choices=("auto", *MESHERS),
+        default="auto",
+        help="auto (default): pytetwild if installed, else tetgen, else gmsh; pytetwild also "
+        "meshes surfaces with holes, flipped triangles or touching parts (docs/meshing.md)",
+    )
+
+
+def _mesh(args) -> int:
+    """``tissuesim mesh``: tetrahedralise, write atomically, print the quality summary."""
+    from tissuesim.errors import OutputError
+    from tissuesim.io.atomic import atomic_output
+    from tissuesim.mesh import write_mesh
+    from tissuesim.mesh.tetrahedralize import tetrahedralize
+
+    out = Path(args.output)
+    if out.is_dir() or not out.parent.is_dir():
+        why = "it is a directory" if out.is_dir() else f"no directory {out.parent}"
+        raise OutputError(
+            f"{out}: cannot write the volume mesh there ({why}); give -o a file path in an "
+            "existing directory, e.g. -o organ.vtu"
+        )
+    result = tetrahedralize(args.surface, args.size, mesher=args.mesher)
+    with atomic_output(out) as tmp:
+        write_mesh(result.mesh, tmp)
+    r = result.report
+    keys = ("mesher", "size", "n_tets", "n_points", "min_dihedral_deg", "radius_ratio_min")
+    keys += ("volume", "surface_volume", "volume_ratio", "surface", "seconds")
+    print(json.dumps({"output": str(out), **{k: r[k] for k in keys}}, indent=2))
+    return 0
+
+
+def _length(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        value = -1.0
+    if not 0.0 < value < float("inf"):
+        raise argparse.ArgumentTypeError(f"must be a length in metres > 0, not {text!r}")
+    return value
+
+
 def _seconds(text: str) -> float:
     try:
         value = float(text)
@@ -198,7 +270,7 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(
         prog="tissuesim", description=__doc__, parents=[_options()], epilog=EXIT_CODES
     )
-    from tissuesim import __version__
+    from tissuesim._version import __version__
 
     parser.add_argument("--version", action="version", version=f"tissuesim {__version__}")
     common = [_options(debug_default=True)]
@@ -214,6 +286,12 @@ def main(argv: list[str] | None = None) -> int:
     p_run.add_argument("--no-render", action="store_true", help="skip the PNG and GIF")
     p_run.add_argument(
         "--quiet", action="store_true", help="no progress lines (the final report is printed)"
+    )
+    p_run.add_argument(
+        "--resume",
+        action="store_true",
+        help="continue the run in --out from its checkpoint (killed or finished: give a larger "
+        "--steps, which counts the whole run), bit-identical to an uninterrupted run",
     )
     from tissuesim.render.scene import FIELDS
 
@@ -247,7 +325,15 @@ def main(argv: list[str] | None = None) -> int:
     )
     p_info = sub.add_parser("info", parents=common, help="describe a mesh file and check it")
     p_info.add_argument("mesh", help="a mesh file (.msh, .vtu, .vtk, .inp, ... as meshio reads)")
-    sub.add_parser("examples", parents=common, help="list the shipped example scenes")
+    _add_mesh_parser(sub, common)
+    p_examples = sub.add_parser(
+        "examples",
+        parents=common,
+        help="list the shipped example scenes: what each shows, needs and takes",
+    )
+    p_examples.add_argument(
+        "--json", action="store_true", help="print the list as JSON (for scripts)"
+    )
     args = parser.parse_args(argv)
     with warnings.catch_warnings():
         warnings.showwarning = _show_warning
@@ -322,6 +408,7 @@ def _dispatch(args) -> int:
             not args.no_render,
             args.quiet,
             args.field,
+            args.resume,
         )
     if args.command == "demo":
         return _run(
@@ -329,13 +416,31 @@ def _dispatch(args) -> int:
         )
     if args.command == "play":
         return _play(args)
+    if args.command == "mesh":
+        return _mesh(args)
     if args.command == "info":
         from tissuesim.mesh import describe_mesh, read_mesh
 
         print(json.dumps(describe_mesh(read_mesh(args.mesh)), indent=2))
         return 0
-    for name in list_examples():  # "examples"
-        print(f"{name}\t{example_path(name)}")
+    return _examples(args.json)
+
+
+def _examples(as_json: bool) -> int:
+    from tissuesim.scene.examples import RUNTIME_NOTE, describe_example
+
+    described = [describe_example(name) for name in list_examples()]
+    if as_json:
+        print(json.dumps(described, indent=2))
+        return 0
+    print(f"# {RUNTIME_NOTE}")
+    for e in described:
+        runtime = f"; about {e['runtime']}" if e["runtime"] else ""
+        print(f"{e['name']}  ({e['made_of']}{runtime})")
+        print(textwrap.fill(e["shows"], 96, initial_indent="    ", subsequent_indent="    "))
+        for need in e["needs"]:
+            print(f"    {need}")
+        print(f"    tissuesim run {e['name']}    # {e['path']}")
     return 0
 
 

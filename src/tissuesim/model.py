@@ -56,7 +56,9 @@ class Model:
         self.density = positive_field(self.density, "density", self.mesh.n_cells, "kg/m^3")
         kind = P1Kinematics if self.mesh.order == 1 else P2Kinematics
         self.kinematics = kind.from_mesh(self.mesh)
-        self.backend, self.backend_reason = resolve_backend(self.backend)
+        self.backend, self.backend_reason = resolve_backend(
+            self.backend, self.mesh.n_cells, self.mesh.dim
+        )
         if self.formulation == "displacement":
             self.elastic = ElasticEnergy(
                 self.kinematics, self.material, stencil_id=0, backend=self.backend

@@ -15,8 +15,8 @@ Many bodies:
     sim = Simulation(integrator="quasistatic", time_step=0.1, gravity=(0, 0, -9.81))
     sim.add_body("liver", ellipsoid(...), make_material(...), density=1050)
     sim.add_body("gallbladder", ...)
-    sim.fix("liver", vertices)                                        # a support
-    sim.grasp("gallbladder", vertices, lambda t: (0, 0, 0.01 * t))     # retraction
+    sim.fix(vertices, body="liver")                                   # a support
+    sim.grasp(vertices, lambda t: (0, 0, 0.01 * t), body="gallbladder")  # retraction
     sim.add_tissue(make_material(...), thickness=0.006, spacing=0.002, frames=30)
     sim.add_cut(blade, start=1.0, end=2.0)
     sim.run(150, "out")
@@ -29,9 +29,7 @@ and spring set has a name; its force (N) is reported per step in ``history[k].ex
 from __future__ import annotations
 
 import functools
-import re
 import time as wallclock
-import warnings
 from collections.abc import Sequence
 from dataclasses import asdict
 from pathlib import Path
@@ -41,16 +39,19 @@ import numpy as np
 
 from tissuesim import validate
 from tissuesim.bodies.fem import FemBody
-from tissuesim.contact.indentation import IndentationTracker, is_probe
+from tissuesim.contact.indentation import IndentationTracker
 from tissuesim.energies.mass import MassKind
 from tissuesim.errors import InputError
 from tissuesim.materials.base import Material
 from tissuesim.mesh.mesh import Mesh
 from tissuesim.records import StepRecord
+from tissuesim.simulation_bodies import RESERVED_NAMES, BodyCalls
+from tissuesim.simulation_checks import StepChecks
 from tissuesim.simulation_results import BodyResults
 from tissuesim.simulation_setup import SetupCalls
 from tissuesim.solve.linear import make_linear_solver
 from tissuesim.solve.newton import NewtonOptions
+from tissuesim.time.grid import check_time_resolution
 from tissuesim.time.retry import advance, validate_stepping
 from tissuesim.time.state import State
 
@@ -59,30 +60,15 @@ if TYPE_CHECKING:  # frames and the system pull in scipy.spatial: imported when 
     from tissuesim.coupling.tissue import TissueBody
     from tissuesim.system import System
 
-__all__ = ["Simulation", "StepRecord", "INTEGRATORS"]
+__all__ = ["Simulation", "StepRecord", "INTEGRATORS", "RESERVED_NAMES", "check_time_resolution"]
 
 Integrator = Literal["backward_euler", "quasistatic", "explicit", "symplectic_euler"]
 #: "symplectic_euler" is the FEM name of the explicit scheme; both step every body explicitly
 INTEGRATORS = ("backward_euler", "quasistatic", "explicit", "symplectic_euler")
 EXPLICIT = ("explicit", "symplectic_euler")
-_NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9_.-]*")
-#: series the output writes besides the bodies'; no body may take these names
-RESERVED_NAMES = ("cut", "summary", "forces", "manifest")
-#: explicit time steps above this multiple of the stability estimate are refused
-STABILITY_MARGIN = 1.5
 
 
-def check_time_resolution(t: float, h: float, what: str) -> None:
-    """Refuse a time so large that steps of h are lost to round-off (t + h == t, or h
-    resolved to worse than 1e-3 of itself): every frame would carry the same time."""
-    if abs(t) * 2.0**-52 > 1e-3 * h:
-        raise InputError(
-            f"{what} {t:g} s is too large for time_step {h:g} s: a double cannot resolve steps of "
-            f"{h:g} s at t = {t:g} s; count time from 0 (start_time = 0)"
-        )
-
-
-class Simulation(SetupCalls, BodyResults):
+class Simulation(BodyCalls, SetupCalls, StepChecks, BodyResults):
     """Bodies, their interactions and a time integrator; see the module docstring.
 
     mesh, material (optional): the short form, one FEM body named ``name`` with ``density``
@@ -175,205 +161,8 @@ class Simulation(SetupCalls, BodyResults):
 
     @property
     def explicit(self) -> bool:
+        """True when the integrator is explicit (``"explicit"`` or ``"symplectic_euler"``)."""
         return self.integrator in EXPLICIT
-
-    # -- bodies -------------------------------------------------------------------------------
-    def _new_name(self, name: str, what: str, kind: str = "fem") -> str:
-        """A body name that is valid as a file stem and clashes with no other body's output
-        series (``<name>``, ``<name>_frames``, ``<name>_surface``, ``<name>_points``)."""
-        from tissuesim.io.body_series import series_names
-
-        if not isinstance(name, str) or not _NAME.fullmatch(name):
-            raise InputError(
-                f"{what} name {validate.short(name)} must be letters, digits, '_', '-' or '.', "
-                "starting with a letter or digit (it names output files)"
-            )
-        taken = name in self.bodies or name in {o.name for o in self.obstacles}
-        if taken or name in RESERVED_NAMES or (name == "tissue" != what):
-            raise InputError(f"{what} name {name!r} is taken; choose another")
-        mine = set(series_names(name, kind))
-        for other in self.bodies.values():
-            clash = mine & set(series_names(other.name, other.kind))
-            if clash:
-                raise InputError(
-                    f"{what} name {name!r} would write the series {sorted(clash)[0]!r} that "
-                    f"body {other.name!r} writes; choose another name"
-                )
-        if self._system is not None and self.history:
-            raise RuntimeError(f"add {what}s before the first step")
-        return name
-
-    def _claim_force_name(self, name: str | None, default: str = "") -> str:
-        """``name`` if it is new (else an error); None: ``default``, numbered if taken."""
-        if name is None:
-            name, k = default, 1
-            while name in self._force_names:
-                name, k = f"{default}_{k}", k + 1
-        elif name in self._force_names:
-            raise InputError(
-                f"a support, grasper or spring set named {name!r} exists; give another name"
-            )
-        self._force_names.add(name)
-        return name
-
-    def _changed(self, body: str = "", what: str = "structure") -> None:
-        """A body's set-up changed: ``structure`` rebuilds the system before the next step;
-        ``prescribed`` / ``velocity`` also update the body's part of the state."""
-        known = self._system is not None and body in self._system.names
-        if self._state is not None and known and what in ("prescribed", "velocity"):
-            j = self._system.index(body)
-            b = self.bodies[body]
-            x, v = self._state.x.copy(), self._state.v.copy()
-            sc, st = self._system.config_slices[j], self._system.tangent_slices[j]
-            if what == "prescribed":
-                x[sc] = b.model.apply_prescribed(x[sc], self.time)
-            else:
-                v[st] = b.velocity
-            self._state = State(self.time, x, v)
-        if what != "velocity":  # a new velocity changes the state, not the system
-            self._system_dirty = True
-
-    def add_body(
-        self,
-        name: str,
-        mesh: Mesh,
-        material: Material,
-        *,
-        density: float | np.ndarray = 1000.0,
-        mass: MassKind = "consistent",
-        order: int | None = None,
-        formulation: str = "displacement",
-    ) -> FemBody:
-        """A FEM body: a triangle or tetrahedral mesh (``mesh.box``, ``mesh.ellipsoid``,
-        ``read_mesh``) of one material; density kg/m^3 (scalar or one per element).
-
-        order: None (the mesh's), 1, or 2 (a linear mesh gets a node at every edge's midpoint;
-        vertex indices are kept, point sets gain the midside nodes between their vertices).
-        formulation: "displacement", or "mean_dilatation" for nearly incompressible laws
-        (nu >= 0.45): the lambda term on element (P2) or vertex-patch (P1) volume averages,
-        free of volumetric locking (``energies/mean_dilatation.py``)."""
-        name = self._new_name(name, "body")
-        if self.tissue is not None:
-            raise InputError("add the organs before the tissue that connects them")
-        if not isinstance(mesh, Mesh):
-            raise InputError(f"add_body: mesh must be a tissuesim Mesh, not {validate.short(mesh)}")
-        if not isinstance(material, Material):
-            raise InputError(
-                f"add_body: material must be a tissuesim material (make_material), not "
-                f"{validate.short(material)}"
-            )
-        validate.choice(mass, "mass", ("consistent", "lumped"))
-        validate.choice(formulation, "formulation", ("displacement", "mean_dilatation"))
-        if order is not None:
-            if isinstance(order, bool) or order not in (1, 2):
-                raise InputError(f"order must be 1 or 2, not {validate.short(order)}")
-            if order == 2 and mesh.order == 1:
-                from tissuesim.mesh.quadratic import elevate_mesh
-
-                mesh = elevate_mesh(mesh)
-            elif order == 1 and mesh.order == 2:
-                raise InputError(
-                    f"add_body {name!r}: order 1 was asked for but {mesh.source} has quadratic "
-                    "elements; give a linear mesh or order = 2"
-                )
-        if self.explicit:
-            mass = "lumped"  # the explicit update inverts the mass: it must be diagonal
-        body = FemBody(
-            name,
-            mesh,
-            material,
-            density=density,
-            mass=mass,
-            formulation=formulation,
-            backend=self.backend,
-            claim_name=self._claim_force_name,
-            changed=functools.partial(self._changed, name),
-        )
-        for g in self.gravity:
-            body.add_gravity(g)
-        self.bodies[name] = body
-        self._changed()
-        return body
-
-    def add_frame_body(self, name: str, frames: np.ndarray, samples, material: Material, **kw):
-        """A meshless body: frame origins (n, 3) (``grid_frames``, ``farthest_point_frames``),
-        integration points with volumes (``sample_box``, ``sample_surface``, ...), any
-        material; keywords of ``bodies.frames.FrameBody`` (density, frame_type "rigid" or
-        "affine", shape "wendland" or "shepard", radius, radius_factor, min_frames,
-        rotations, mass "full" or "lumped")."""
-        from tissuesim.bodies.frames import FrameBody
-
-        name = self._new_name(name, "body", "frames")
-        body = FrameBody(
-            name,
-            frames,
-            samples,
-            material,
-            backend=self.backend,
-            claim_name=self._claim_force_name,
-            changed=functools.partial(self._changed, name),
-            time=lambda: self.time,
-            **kw,
-        )
-        for g in self.gravity:
-            body.add_gravity(g)
-        self.bodies[name] = body
-        self._changed()
-        return body
-
-    def add_tissue(self, material: Material, *, name: str = "tissue", **kw) -> TissueBody:
-        """The connective tissue between the FEM bodies (``coupling/tissue.py``): integration
-        points ``samples=``, or sampled between the organs (``thickness``, ``spacing``,
-        ``region``); ``frames`` a count or (n, 3) origins; ``frame_type`` "affine" (default)
-        or "rigid"; attached to every organ it touches (``attach_distance``,
-        ``attachment_stiffness`` N/m per m^2)."""
-        from tissuesim.coupling.tissue import TissueBody
-
-        if self.tissue is not None:
-            raise InputError("the scene has a tissue already; one tissue body per scene")
-        name = self._new_name(name, "tissue", "tissue")
-        organs = [(n, b.mesh) for n, b in self.bodies.items() if b.kind == "fem"]
-        if any(m.dim != 3 for _, m in organs):
-            raise InputError("the tissue joins 3D organs; a 2D body cannot take part")
-        tissue = TissueBody(name, organs, material, backend=self.backend, **kw)
-        for g in self.gravity:
-            tissue.add_gravity(g)
-        self.bodies[name] = self.tissue = tissue
-        self._changed()
-        return tissue
-
-    def remove_body(self, name: str) -> None:
-        """Take a body (and, for the tissue, its attachments and cuts) out, before the first
-        step (e.g. to measure a scene without its tissue)."""
-        if self.history:
-            raise RuntimeError("remove_body must come before the first step")
-        body = self.body(name)
-        del self.bodies[name]
-        if body is self.tissue:
-            self.tissue = None
-        self._state = None
-        self._system = None
-        self._changed()
-
-    def body(self, name: str | None = None, kinds: tuple[str, ...] = ()):
-        """The body called ``name``; None: the only body (of ``kinds``, if given)."""
-        if name is not None:
-            if name not in self.bodies:
-                raise InputError(
-                    f"unknown body {validate.short(name)}; bodies: {list(self.bodies)}"
-                )
-            b = self.bodies[name]
-            if kinds and b.kind not in kinds:
-                raise InputError(f"body {name!r} is a {b.kind} body; this needs {kinds}")
-            return b
-        candidates = [b for b in self.bodies.values() if not kinds or b.kind in kinds]
-        if len(candidates) != 1:
-            what = f"{'/'.join(kinds)} " if kinds else ""
-            raise InputError(
-                f"the simulation has {len(candidates)} {what}bodies "
-                f"({[b.name for b in candidates]}); name one with body="
-            )
-        return candidates[0]
 
     # -- the assembled system and the state ---------------------------------------------------
     _system_dirty = True
@@ -492,6 +281,7 @@ class Simulation(SetupCalls, BodyResults):
 
     @property
     def time(self) -> float:
+        """The current simulated time (s): ``start_time`` plus the steps taken."""
         return self.start_time if self._state is None else self._state.time
 
     def body_state(self, name: str | None = None, kinds=()) -> tuple[Any, np.ndarray, np.ndarray]:
@@ -542,47 +332,6 @@ class Simulation(SetupCalls, BodyResults):
             )
             for j, name in enumerate(s.names)
         ]
-
-    def _check_supported(self) -> None:
-        """A quasistatic solve that nothing holds has no solution (SciPy would return finite
-        garbage): refuse it."""
-        s = self.system
-        if len(s.bodies) == 1 and self._active()[0].kind == "fem":
-            from tissuesim.time.quasistatic import check_supported
-
-            check_supported(s.bodies[0])
-            return
-        springs = any(b.kind == "frames" and b.model.springs for b in self._active())
-        spring_graspers = any(b.kind == "fem" and b.spring_graspers for b in self._active())
-        if not (s.prescribed_dofs.size or springs or spring_graspers):
-            raise InputError(
-                "a quasistatic solve needs supports, fixed or prescribed frames, or springs, to "
-                "hold the bodies against rigid motions; add fix(...) / fix_frames(...) or use "
-                "backward_euler"
-            )
-
-    _stability_checked = None  # the system whose explicit stability limit was checked
-
-    def _check_stability(self) -> None:
-        """Explicit steps far above the stability limit blow up: refuse them before the first
-        step. The estimate is within 21 % of the true limit 2 / omega_max on the test meshes
-        (benchmarks/results/explicit_limit.md), so above STABILITY_MARGIN times it no run is
-        stable; between 1 and that a warning, and the blow-up check of each step stands."""
-        limit = self.critical_time_step()
-        h = self.time_step
-        if h > STABILITY_MARGIN * limit:
-            raise InputError(
-                f"time_step {h:g} s is {h / limit:.3g} x the explicit stability limit (estimate "
-                f"{limit:.3g} s); explicit steps would blow up: use time_step <= "
-                f"{0.9 * limit:.3g} s, or integrator = backward_euler"
-            )
-        if h > limit:
-            warnings.warn(
-                f"time_step {h:g} s is above the explicit stability estimate {limit:.3g} s; the "
-                "run stops if the energy grows without bound",
-                UserWarning,
-                stacklevel=3,
-            )
 
     def step(
         self, *, budget_s: float | None = None, budget_iterations: int | None = None
@@ -679,30 +428,6 @@ class Simulation(SetupCalls, BodyResults):
         self.history.append(record)
         return record
 
-    def _contact_report(self, contact, x: np.ndarray, forces: dict) -> dict[str, Any]:
-        """The step's contact figures, and the time split since the last report."""
-        stats = contact.stats
-        depths = {}
-        if any(is_probe(ob) for ob in contact.obstacles):  # the bodies' vertices only then
-            n = contact.n_deformable
-            bodies, rest = contact.vertices(x)[:n], contact.rest[:n]
-            depths = self._indentation.depths(contact.obstacles, bodies, rest, self.time, forces)
-        distance, pairs = contact.proximity(x)
-        report = {
-            "min_distance": distance,
-            "active_pairs": pairs,
-            "candidates_and_barrier_s": stats.candidates_and_barrier_s,
-            "candidates_s": stats.candidates_s,
-            "ccd_s": stats.ccd_s,
-            "barrier_evaluations": stats.evaluations,
-            "ccd_calls": stats.ccd_calls,
-            "friction_solves": stats.friction_solves,
-            "stiffness_Pa": contact.kappa,
-            "indentation_depth": depths,
-        }
-        contact.reset_stats()
-        return report
-
     def _end_time(self) -> float:
         """start + (k + 1) h for a state at start + k h (no running sum: ten steps of 0.1 end
         at 1.0); a state off that grid (set by hand, or a changed time_step) steps to t + h."""
@@ -711,38 +436,6 @@ class Simulation(SetupCalls, BodyResults):
         if abs(self.start_time + k * h - t) <= 1e-9 * h:
             return self.start_time + (k + 1) * h
         return t + h
-
-    def _static_gradient(self) -> np.ndarray | None:
-        """Explicit steps have no Newton gradient: the reactions come from the static balance
-        at the new state (one gradient evaluation, only when there are forces to report)."""
-        if not self._force_names:
-            return None
-        s = self.system
-        energies = self.step_energies(self.time, None, self.time_step)
-        return s.evaluate(self._state.x, 1, False, energies).gradient
-
-    def _tissue_step(self, t0: float) -> dict[str, Any]:
-        tissue = self.tissue
-        events = []
-        if tissue.model is not None:
-            j = self.system.index(tissue.name)
-            z = self.system.body_config(self._state.x, j)
-
-            def rebuild() -> np.ndarray | None:
-                self._build()
-                if tissue.model is None:  # all of it torn or cut: no longer in the system
-                    return None
-                return self.system.body_config(self._state.x, self.system.index(tissue.name))
-
-            events = tissue.topology(z, t0, self.time, rebuild)
-            if tissue.model is None:  # all tissue gone: the organs go on alone
-                self._build()
-        return {
-            "attachment_gap": self.attachment_gap() if tissue.model is not None else 0.0,
-            "tissue_points": int(tissue.dissection.alive.sum()),
-            "attachments": int(sum(a.n for a in self.system.attachments)),
-            "events": events,
-        }
 
     def run(
         self,
@@ -754,22 +447,49 @@ class Simulation(SetupCalls, BodyResults):
         render: bool = True,
         field: str = "J",
         metadata: dict | None = None,
+        resume: bool = False,
     ) -> list[StepRecord]:
         """Run ``steps`` time steps; with ``output``, write per body a VTU series on rest
         positions, summary.json, forces.csv / forces.png and (``render``) final.png and run.gif
         coloured by ``field`` ("J", "von_mises", "displacement", "green_strain";
-        ``io/run_output.py``)."""
+        ``io/run_output.py``), and checkpoint.npz at every frame. Returns this run's step
+        records. Steps taken before by ``step()`` are not part of the run's output: its series,
+        summary.json and forces.csv all start at the state the run starts from.
+
+        resume: continue the run in ``output`` from its checkpoint (this simulation set up the
+        same way, not stepped yet); ``steps`` then counts the whole run, the steps done
+        included. A complete run is left as it is."""
         from tissuesim.io.run_output import RunOutput
 
-        writer = RunOutput(self, output, every=every, render=render, field=field, metadata=metadata)
+        writer = RunOutput(
+            self, output, every=every, render=render, field=field, metadata=metadata, resume=resume
+        )
         self.run_time_split = writer.time_split  # filled in as the run goes (s)
         return writer.run(steps, progress=progress)
+
+    def save(self, path: str | Path) -> Path:
+        """Write the state, history and linear solver's state to ``path`` (.npz, atomically;
+        ``io/checkpoint.py``); ``load`` continues from it bit-identically."""
+        from tissuesim.io.checkpoint import save_simulation
+
+        return save_simulation(self, path)
+
+    def load(self, path: str | Path) -> Simulation:
+        """Restore a ``save``-d state into this simulation, set up as the saved one was and not
+        stepped yet (InputError naming what differs otherwise); returns the simulation."""
+        from tissuesim.io.checkpoint import load_simulation
+
+        load_simulation(self, path)
+        return self
 
     def linear_solver_info(self) -> dict[str, Any]:
         """The linear solver in use (None before the first implicit step) and why."""
         return {"name": getattr(self._solver, "name", None), "reason": self.solver_reason}
 
     def describe(self) -> dict[str, Any]:
+        """A JSON-ready description of the simulation: integrator, time step, gravity, every
+        body's description, the number of DOFs and prescribed DOFs, the Newton options, the
+        linear solver and the contact settings (``summary.json``'s ``simulation``)."""
         s = self.system
         return {
             "integrator": self.integrator,

@@ -95,32 +95,42 @@ class BodyResults:
 
     @property
     def frame_positions(self) -> np.ndarray:
+        """Current origins (n, 3) of the only frame body's frames (m); several frame bodies:
+        ``body_state(name)``."""
         b, z, _ = self.body_state(None, ("frames",))
         return b.model.frame_type.split(z)[0].copy()
 
     @property
     def frame_rotations(self) -> np.ndarray:
+        """Current rotation matrices (n, 3, 3) of the only frame body's frames (affine frames:
+        the rotation of their polar decomposition)."""
         b, z, _ = self.body_state(None, ("frames",))
         return b.model.rotations(z)
 
     @property
     def rest_frames(self) -> np.ndarray:
+        """Rest origins (n, 3) of the only frame body's frames (m)."""
         return self.body(None, ("frames",)).rest_frames
 
     @property
     def n_frames(self) -> int:
+        """Number of frames of the only frame body."""
         return self.body(None, ("frames",)).n_frames
 
     @property
     def surface(self):
+        """The only frame body's embedded display surface (``embed_surface``), or None."""
         return self.body(None, ("frames",)).surface
 
     @property
     def embedded(self) -> dict:
+        """The only frame body's embedded point sets by name (``embed``, ``embed_surface``:
+        "surface"); their current positions: ``embedded_positions(name)``."""
         return self.body(None, ("frames",)).embedded
 
     @property
     def graspers(self) -> list:
+        """Every grasper of every FEM body (``grasp``), in the order they were added."""
         return [g for b in self.bodies.values() if b.kind == "fem" for g in b.graspers]
 
     def tissue_fields(self) -> dict[str, np.ndarray]:
@@ -221,6 +231,8 @@ class BodyResults:
         return out
 
     def min_J(self) -> float:
+        """The smallest volume ratio J = det F over every element and integration point of
+        every body at the current state: below 0, some element is inverted."""
         s = self.system
         return float(
             min(

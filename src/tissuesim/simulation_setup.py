@@ -224,6 +224,18 @@ class SetupCalls:
 
     # -- set-up on one body (see bodies/fem.py, bodies/frames.py, coupling/tissue.py) ---------
     def add_dirichlet(self, vertices, displacement=None, components=None, *, body=None, name=None):
+        """Prescribe the displacement u = g(X, t) (m) of vertices of a FEM body.
+
+        ``vertices``: vertex indices (e.g. ``select.vertices_on_plane(mesh, axis=0,
+        value=-1.0)`` or ``mesh.point_sets["left"]``). ``displacement``: None clamps them, a
+        vector (d,) holds a constant offset, a callable ``g(X, t)`` maps their rest positions
+        (k, d) and the time (s) to displacements (k, d). ``components`` restricts the
+        condition to some axes (``(0,)``: x only; the others stay free). Returns the name
+        under which its reaction force (N) is reported per step (default
+        ``"<body>.dirichlet_<k>"``, or ``name``).
+
+        ``sim.add_dirichlet(left, lambda X, t: np.stack([0.1 * t + 0 * X[:, 0], 0 * X[:, 1]],
+        axis=1))`` pulls the vertices ``left`` along x at 0.1 m/s."""
         return self.body(body, ("fem",)).add_dirichlet(
             vertices, displacement, components, name=name
         )
@@ -252,12 +264,24 @@ class SetupCalls:
         )
 
     def add_traction(self, facets, traction, *, body=None) -> None:
+        """A dead traction on boundary facets of a FEM body: N/m on edges in 2D, Pa on
+        triangles in 3D. ``facets``: (k, d) vertex indices of boundary facets (e.g.
+        ``mesh.facet_sets["right"]`` or ``select.facets_on_plane``); ``traction``: a vector
+        (d,) or a callable ``(X (k, d), t) -> (k, d)`` evaluated at the facets' vertices.
+        ``sim.add_traction(mesh.facet_sets["zmax"], (0, 0, -100.0))`` presses the top face
+        down at 100 Pa."""
         self.body(body, ("fem",)).add_traction(facets, traction)
 
     def add_nodal_forces(self, vertices, force, *, body=None) -> None:
+        """Dead point loads (N) on vertices of a FEM body: a vector (d,) on each vertex, (k, d)
+        per vertex, or a callable ``t -> (k, d)``. ``sim.add_nodal_forces(tip, (0, 0, -0.1))``
+        hangs 0.1 N on every vertex of ``tip``."""
         self.body(body, ("fem",)).add_nodal_forces(vertices, force)
 
     def add_body_force(self, force_density, *, body=None) -> None:
+        """A body force per unit rest volume (N/m^3) on a FEM body: a vector (d,) or a callable
+        ``(X (n, d), t) -> (n, d)``. For gravity use ``add_gravity`` (m/s^2, scaled by the
+        density)."""
         self.body(body, ("fem",)).add_body_force(force_density)
 
     def add_gravity(self, acceleration: Sequence[float], *, body: str | None = None) -> None:
@@ -290,24 +314,51 @@ class SetupCalls:
             )
 
     def fix_frames(self, frames, *, body=None, name=None) -> str:
+        """Clamp frames of a frame body at their rest position and orientation. ``frames``:
+        frame indices (``sim.frames_where(lambda X: X[:, 2] < 1e-9)``). Returns the name its
+        reaction force (N) is reported under (default ``"<body>.fixed_frames"``). The frames'
+        weights do not interpolate: to clamp a face, ``add_spring`` on its points holds it
+        better than fixing the frames nearest to it."""
         return self.body(body, ("frames",)).fix_frames(frames, name)
 
     def prescribe_frames(self, frames, motion, *, body=None, name=None) -> str:
+        """Move frames of a frame body: ``motion(t)`` (t in s) returns (displacement (3,) or
+        (k, 3) in m, rotation vector (3,) or (k, 3) in rad), about each frame's own origin and
+        relative to rest; None clamps them. Returns the name its reaction force (N) is
+        reported under. ``sim.prescribe_frames(top, lambda t: ((0, 0, 0.01 * t), (0, 0, 0)))``
+        lifts the frames ``top`` at 10 mm/s."""
         return self.body(body, ("frames",)).prescribe_frames(frames, motion, name=name)
 
     def frames_where(self, predicate: Callable, *, body=None) -> np.ndarray:
+        """Indices of the frames of a frame body whose rest origins satisfy ``predicate``, a
+        function of the rest origins (n, 3) returning a boolean (n,):
+        ``sim.frames_where(lambda X: X[:, 2] < 1e-9)`` picks the frames on z = 0."""
         return self.body(body, ("frames",)).frames_where(predicate)
 
     def embed(self, name: str, points: np.ndarray, *, body=None):
+        """Carry points (k, 3) (m; markers, sensor positions) with the frames of a frame body,
+        by the frames' weights at their rest places. Their current positions are
+        ``sim.embedded_positions(name)``. Returns the embedding."""
         return self.body(body, ("frames",)).embed(name, points)
 
     def embed_surface(self, surface, *, body=None):
+        """A triangle surface (``frames.sampling.box_surface``, ``read_surface``) carried by the
+        frames of a frame body: written as ``<body>_surface.pvd``, drawn as the body, and its
+        contact surface when contact is on. Returns the embedding."""
         return self.body(body, ("frames",)).embed_surface(surface)
 
     def add_spring(self, points, stiffness, target=None, *, body=None, name=None):
+        """Zero-length springs (``stiffness`` N/m each, a number or one per point) from points
+        (k, 3) carried by the frames of a frame body to ``target(t) -> (k, 3)`` (m; None:
+        their rest positions): a soft clamp, or an attachment to a moving organ or a
+        grasper. Their pull (N) is reported per step as ``name``. Returns the spring set.
+        ``sim.add_spring(root_points, 1e3)`` clamps a face softly."""
         return self.body(body, ("frames",)).add_spring(points, stiffness, target, name=name)
 
     def add_point_forces(self, points, force, *, body=None):
+        """Dead forces (N) on points (k, 3) carried by the frames of a frame body: a vector
+        (3,), one per point (k, 3), or a callable ``t -> (k, 3)``. Returns the embedding of
+        the points."""
         return self.body(body, ("frames",)).add_point_forces(points, force)
 
     def _tissue(self, what: str) -> TissueBody:
@@ -316,9 +367,20 @@ class SetupCalls:
         return self.tissue
 
     def add_cut(self, blade, start: float, end: float, *, kerf=None, name: str = "cut"):
+        """Dissect the connective tissue (``add_tissue`` first): ``blade(t)`` returns a
+        polyline (k, 3) of k >= 2 points (m) that sweeps through the tissue from ``start`` to
+        ``end`` (s); the tissue points within ``kerf`` (m; default half the tissue's sample
+        spacing) of the swept surface are removed and frames stop acting across the cut.
+        The swept surface is written as the series ``name``. Returns the cutting tool.
+
+        ``sim.add_cut(lambda t: np.array([[t - 1, -0.2, 0.15], [t - 1, 1.2, 0.15]]),
+        start=1.0, end=2.0)`` sweeps a straight blade along x."""
         return self._tissue("add_cut").add_cut(blade, start, end, kerf=kerf, name=name)
 
     def set_tearing(self, threshold: float) -> None:
+        """Let the connective tissue tear (``add_tissue`` first): after each step, tissue
+        points whose largest principal Green strain exceeds ``threshold`` (dimensionless,
+        e.g. 0.5) are removed."""
         self._tissue("set_tearing").set_tearing(threshold)
 
 

@@ -133,12 +133,27 @@ def test_info_on_a_missing_mesh(tmp_path, capsys):
 
 
 def test_examples_lists_the_shipped_scenes(capsys):
-    assert main(["examples"]) == 0
-    lines = capsys.readouterr().out.splitlines()
-    names = {line.split("\t")[0] for line in lines}
+    assert main(["examples", "--json"]) == 0
+    described = json.loads(capsys.readouterr().out)
+    names = {e["name"] for e in described}
     assert {"course_stretch", "course_literal", "beam_3d_gravity"} <= names
-    for line in lines:
-        assert line.split("\t")[1].endswith(".toml")
+    for e in described:
+        assert e["path"].endswith(f"{e['name']}.toml")
+        assert e["shows"].endswith(".") and len(e["shows"]) > 20
+        assert re.fullmatch(r"\d+ s", e["runtime"] or "")  # each scene says
+    by_name = {e["name"]: e for e in described}
+    assert by_name["palpation"]["shows"].startswith("Palpation: a rigid sphere probe")
+    assert by_name["palpation"]["made_of"] == "3D, 1 body, contact, 26 steps"
+    assert by_name["course_stretch"]["made_of"] == "2D, 1 body, 200 steps"
+    assert by_name["course_stretch"]["needs"] == []
+    parts = by_name["organs_rest_after_cut"]["made_of"]
+    assert parts.startswith("3D, 2 bodies, connective tissue, contact, cutting")
+    assert "PyVista" in by_name["organs_rest_after_cut"]["needs"][0]
+    assert main(["examples"]) == 0
+    text = capsys.readouterr().out
+    assert text.startswith("# run times: the plain install")
+    for name in names:
+        assert f"tissuesim run {name}    # " in text
 
 
 def test_bad_scene_exits_2_naming_the_file(tmp_path, capsys):

@@ -117,8 +117,8 @@ def test_small_coupled_scene_with_a_cut_and_pictures(tmp_path, capsys):
 
 
 def test_examples_lists_the_coupled_example(capsys):
-    assert main(["examples"]) == 0
-    names = {line.split("\t")[0] for line in capsys.readouterr().out.splitlines()}
+    assert main(["examples", "--json"]) == 0
+    names = {e["name"] for e in json.loads(capsys.readouterr().out)}
     assert "organs_retraction_cut" in names
 
 

@@ -54,8 +54,8 @@ def test_run_frames_example_writes_its_output(tmp_path, capsys):
 
 
 def test_examples_lists_the_frames_example(capsys):
-    assert main(["examples"]) == 0
-    names = {line.split("\t")[0] for line in capsys.readouterr().out.splitlines()}
+    assert main(["examples", "--json"]) == 0
+    names = {e["name"] for e in json.loads(capsys.readouterr().out)}
     assert "frames_block_sag" in names
 
 

@@ -121,6 +121,32 @@ def test_backend_resolution(monkeypatch):
 
 
 @needs_numba
+def test_auto_keeps_small_meshes_on_numpy(monkeypatch):
+    """Numba's fixed cost per run (about 1.5 s) is not repaid on a small mesh
+    (benchmarks/backend_threshold.py): "auto" takes NumPy there, Numba from the threshold."""
+    from tissuesim.backend import SMALL_MESH_CELLS
+
+    monkeypatch.delenv("TISSUESIM_BACKEND", raising=False)
+    for dim, limit in SMALL_MESH_CELLS.items():
+        name, reason = resolve_backend("auto", limit - 1, dim)
+        assert name == "numpy" and "small mesh" in reason
+        assert resolve_backend("auto", limit, dim)[0] == "numba"
+        assert resolve_backend("numba", 1, dim) == ("numba", "requested")
+    small = Model(
+        rectangle((0, 0), (1, 1), (4, 4)), NeoHookean(youngs_modulus=1e3, poisson_ratio=0.3), 1.0
+    )
+    assert small.backend == "numpy"
+    large = Model(
+        rectangle((0, 0), (1, 1), (30, 30)), NeoHookean(youngs_modulus=1e3, poisson_ratio=0.3), 1.0
+    )
+    assert large.backend == "numba"
+    monkeypatch.setenv("TISSUESIM_BACKEND", "numba")
+    assert Model(
+        rectangle((0, 0), (1, 1), (4, 4)), NeoHookean(youngs_modulus=1e3, poisson_ratio=0.3), 1.0
+    ).backend == ("numba")
+
+
+@needs_numba
 def test_fused_jacobians_equal_numpy_determinants(mesh):
     material = NeoHookean(youngs_modulus=1000.0, poisson_ratio=0.3)
     fused = Model(mesh, material, 1.0, backend="numba")

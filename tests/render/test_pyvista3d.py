@@ -10,10 +10,10 @@ pv = pytest.importorskip("pyvista")
 from PIL import Image, ImageSequence  # noqa: E402
 
 from tissuesim.render import pyvista3d  # noqa: E402
+from tissuesim.render.gif3d import GifWriter  # noqa: E402
 from tissuesim.render.pyvista3d import (  # noqa: E402
     Camera,
     Frame3D,
-    GifWriter,
     PointLayer,
     SurfaceLayer,
     render_frame_png,

@@ -128,3 +128,14 @@ def test_wrong_shapes_raise(tmp_path):
     with pytest.raises(ValueError, match="3D mesh"):
         render_frame_png_3d(mesh, mesh.points, np.ones(2), tmp_path / "x.png")
     assert not (tmp_path / "x.png").exists()
+
+
+def test_3d_picture_of_a_smooth_body_without_feature_edges(tmp_path):
+    """A generated ellipsoid has no sharp edges: the rest outline is empty, which matplotlib
+    refused (the plain install's palpation example ended in an internal error)."""
+    from tissuesim.mesh.generators import ellipsoid
+
+    mesh = ellipsoid((0.0, 0.0, 0.0), (0.06, 0.04, 0.03), 6)
+    x = mesh.points * 1.01
+    out = render_frame_png_3d(mesh, x, np.ones(mesh.n_cells), tmp_path / "e.png", title="smooth")
+    assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"

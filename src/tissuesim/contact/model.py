@@ -24,13 +24,14 @@ move on arcs, not on CCD's straight lines) every trial is also checked (``path_f
 from __future__ import annotations
 
 import time
-from contextlib import contextmanager
 from dataclasses import dataclass, field
 
 import numpy as np
 import scipy.sparse as sp
 
 from tissuesim.contact.candidates import StepCandidates
+from tissuesim.contact.ccd_queries import CollisionQueries
+from tissuesim.contact.friction_lag import FrictionLag
 from tissuesim.contact.stiffness import AdaptiveStiffness
 from tissuesim.contact.surfaces import FemSurface
 from tissuesim.errors import InputError
@@ -73,7 +74,7 @@ class ContactStats:
 
 
 @dataclass(eq=False)
-class ContactModel:
+class ContactModel(FrictionLag, CollisionQueries):
     """See the module docstring. ``surfaces``: every body's contact surface
     (``contact/surfaces.py``: FEM boundaries, frame bodies' embedded surfaces); ``obstacles``:
     the Obstacle list; ``n_dofs``: the system's tangent DOFs."""
@@ -249,70 +250,6 @@ class ContactModel:
     def has_friction(self) -> bool:
         return self.table.has_friction
 
-    def lag_friction(self, V_start: np.ndarray, V_lag: np.ndarray, h: float) -> int:
-        """Fix the friction's normal forces and tangent bases at V_lag (the step's start, then
-        each Newton solution) for displacements from V_start; returns the active pairs."""
-        if not self.has_friction:
-            self._friction = None
-            return 0
-        tangential = self.tangential_collisions(V_lag, self._collisions(V_lag))
-        potential = self._ipctk.FrictionPotential(self.settings.eps_v * h)
-        self._friction = (tangential, np.asfortranarray(V_start), potential)
-        self._friction_lag_at = np.asfortranarray(V_lag)
-        return len(tangential)
-
-    def tangential_collisions(self, V_lag: np.ndarray, col):
-        """The friction's collisions lagged at V_lag from the normal collisions ``col`` there:
-        normal forces, tangent bases and each pair's mu."""
-        tangential = self._ipctk.TangentialCollisions()
-        mu = self.table.uniform_mu
-        tangential.build(self.mesh, V_lag, col, self.barrier, 0.0 if mu is None else mu)
-        if mu is None:
-            self._pair_friction(tangential)
-        return tangential
-
-    def _pair_friction(self, tangential) -> None:
-        """Each collision's mu from its pair of groups (the first and last vertex of a stencil
-        lie on its two sides)."""
-        E, F = self.mesh.edges, self.mesh.faces
-        group, mu = self.group, self.table.mu
-        for k in range(len(tangential)):
-            c = tangential[k]
-            ids = [i for i in c.vertex_ids(E, F) if i >= 0]
-            value = float(mu[group[ids[0]], group[ids[-1]]])
-            # the potential reads the lagged effective coefficients, set at build time
-            c.mu_s = c.mu_k = c.mu_s_effective_lagged = c.mu_k_effective_lagged = value
-
-    def clear_friction(self) -> None:
-        """End of a step: the lagged friction is dropped, kept only to report its forces."""
-        self._reported_friction, self._friction = self._friction, None
-
-    @contextmanager
-    def last_step_lag(self):
-        """Within: the friction lagged as in the last step (its forces and Hessian)."""
-        kept, self._friction = self._friction, self._friction or self._reported_friction
-        try:
-            yield
-        finally:
-            self._friction = kept
-
-    def _friction_terms(self, V: np.ndarray, order: int, project: bool):
-        """(value, dD/dV, d2D/dV2) of the lagged friction potential D (zeros when none)."""
-        if self._friction is None or len(self._friction[0]) == 0:
-            return 0.0, None, None
-        tangential, V_start, potential = self._friction
-        U = np.asfortranarray(V - V_start)
-        value = float(potential(tangential, self.mesh, U))
-        grad = potential.gradient(tangential, self.mesh, U) if order >= 1 else None
-        hess = None
-        if order >= 2:
-            method = self._ipctk.PSDProjectionMethod
-            H = potential.hessian(
-                tangential, self.mesh, U, method.CLAMP if project else method.NONE
-            )
-            hess = sp.csr_matrix(H)
-        return value, grad, hess
-
     def reset_stats(self) -> None:
         self.stats = ContactStats()
         self.candidates.stats = self.stats
@@ -454,53 +391,6 @@ class ContactModel:
         if f_hess is not None:
             H_V = f_hess if H_V is None else H_V + f_hess
         return value, g_V, H_V
-
-    def max_step(
-        self,
-        c0: np.ndarray,
-        c1: np.ndarray,
-        y0: np.ndarray | None = None,
-        y1: np.ndarray | None = None,
-    ) -> float:
-        """The largest fraction of the straight move c0 -> c1 (obstacles y0 -> y1, or where
-        they are) free of intersection (CCD)."""
-        V0, V1 = self.vertices(c0, obstacle=y0), self.vertices(c1, obstacle=y1)
-        return float(self._sweep(self._ipctk.compute_collision_free_stepsize, V0, V1))
-
-    def path_free(
-        self,
-        c0: np.ndarray,
-        c1: np.ndarray,
-        y0: np.ndarray | None = None,
-        y1: np.ndarray | None = None,
-    ) -> bool:
-        """Whether the straight move of the vertices from c0 to c1 (obstacles y0 -> y1, or
-        where they are) is free of intersection: Newton's check of each line-search trial when
-        rigid frames move points on arcs (``linear`` False)."""
-        V0, V1 = self.vertices(c0, obstacle=y0), self.vertices(c1, obstacle=y1)
-        return bool(self._sweep(self._ipctk.is_step_collision_free, V0, V1))
-
-    def reachable(self, c0: np.ndarray, t0: float, c1: np.ndarray, t1: float) -> bool:
-        """Whether the straight move from (c0, obstacles at t0) to (c1, obstacles at t1) is
-        free of intersection: the start of a step's Newton solve must be reached so."""
-        V0, V1 = self.vertices(c0, t0), self.vertices(c1, t1)
-        return bool(self._sweep(self._ipctk.is_step_collision_free, V0, V1))
-
-    def _sweep(self, query, V0: np.ndarray, V1: np.ndarray):
-        """One CCD query over the straight move V0 -> V1, timed into the step's stats; from the
-        step's candidate set when both ends lie within its margin."""
-        start = time.perf_counter()
-        candidates = self.candidates.get(V0, V1)
-        if candidates is not None:
-            out = getattr(candidates, query.__name__)(self.mesh, V0, V1, 0.0, self.ccd)
-        else:
-            out = query(self.mesh, V0, V1, broad_phase=self.broad_phase, narrow_phase_ccd=self.ccd)
-        self.stats.ccd_s += time.perf_counter() - start
-        self.stats.ccd_calls += 1
-        return out
-
-    def intersecting(self, c: np.ndarray, t: float | None = None) -> bool:
-        return bool(self._ipctk.has_intersections(self.mesh, self.vertices(c, t)))
 
     def proximity(self, c: np.ndarray) -> tuple[float, int]:
         """(the smallest distance (m) between surface elements within dhat, inf if none; the

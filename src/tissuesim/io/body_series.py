@@ -33,6 +33,10 @@ def _vertices(n: int) -> tuple[str, np.ndarray]:
     return "vertex", np.arange(n, dtype=np.int64)[:, None]
 
 
+def _kept(keep: dict | None, name: str) -> list | None:
+    return None if keep is None else keep.get(name)
+
+
 def _fields(fields: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
     return {k: fields[k] for k in FIELD_NAMES}
 
@@ -47,13 +51,14 @@ def series_names(name: str, kind: str) -> list[str]:
 
 
 class BodySeries:
-    """Base: ``open(directory)`` once, then ``write(sim, time)`` per written frame."""
+    """Base: ``open(directory)`` once, then ``write(sim, time)`` per written frame. ``keep``
+    (series name -> (time, file) of the frames so far): continue a resumed run's series."""
 
     def __init__(self, body) -> None:
         self.body = body
         self.writers: list[VTUSeriesWriter] = []
 
-    def open(self, directory: Path) -> None:
+    def open(self, directory: Path, keep: dict | None = None) -> None:
         raise NotImplementedError
 
     def write(self, sim, t: float) -> dict[str, Any]:
@@ -61,8 +66,9 @@ class BodySeries:
 
 
 class FemSeries(BodySeries):
-    def open(self, directory: Path) -> None:
-        self.writers = [VTUSeriesWriter(directory, self.body.mesh, self.body.name)]
+    def open(self, directory: Path, keep: dict | None = None) -> None:
+        name = self.body.name
+        self.writers = [VTUSeriesWriter(directory, self.body.mesh, name, keep=_kept(keep, name))]
 
     def write(self, sim, t: float) -> dict[str, Any]:
         b = self.body
@@ -82,13 +88,26 @@ class FemSeries(BodySeries):
 
 
 class FrameSeries(BodySeries):
-    def open(self, directory: Path) -> None:
+    def open(self, directory: Path, keep: dict | None = None) -> None:
         b = self.body
         n_points, n_frames = b.model.samples.n, b.n_frames
+        frames = f"{b.name}_frames"
         self.writers = [
-            VTUSeriesWriter(directory, None, b.name, cells=_vertices(n_points), n_points=n_points),
             VTUSeriesWriter(
-                directory, None, f"{b.name}_frames", cells=_vertices(n_frames), n_points=n_frames
+                directory,
+                None,
+                b.name,
+                cells=_vertices(n_points),
+                n_points=n_points,
+                keep=_kept(keep, b.name),
+            ),
+            VTUSeriesWriter(
+                directory,
+                None,
+                frames,
+                cells=_vertices(n_frames),
+                n_points=n_frames,
+                keep=_kept(keep, frames),
             ),
         ]
         if b.surface is not None:
@@ -99,6 +118,7 @@ class FrameSeries(BodySeries):
                     f"{b.name}_surface",
                     cells=("triangle", b.surface.triangles),
                     n_points=len(b.surface.points),
+                    keep=_kept(keep, f"{b.name}_surface"),
                 )
             )
         else:  # a surface series left by an earlier run must not pass for this run's
@@ -161,7 +181,7 @@ class TissueSeries(BodySeries):
         self._strain = np.zeros(s.n)
         self._velocity = np.zeros_like(s.points)
 
-    def open(self, directory: Path) -> None:
+    def open(self, directory: Path, keep: dict | None = None) -> None:
         n = self.body.samples.n
         self.writers = [
             VTUSeriesWriter(

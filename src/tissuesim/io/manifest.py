@@ -26,6 +26,7 @@ __all__ = ["prepare_directory", "Manifest", "OUTPUT_FILES", "MANIFEST"]
 MANIFEST = "manifest.json"
 #: plain files a run may write besides its series
 OUTPUT_FILES = ("summary.json", MANIFEST, "forces.csv", "forces.png", "final.png", "run.gif")
+OUTPUT_FILES += ("checkpoint.npz", "checkpoint_history.jsonl")  # io/checkpoint.py
 _PLAIN = re.compile(r"[A-Za-z0-9][A-Za-z0-9_.-]*")
 
 
@@ -110,7 +111,7 @@ class Manifest:
             self.write()
 
     def write(self) -> None:
-        from tissuesim import __version__
+        from tissuesim._version import __version__
 
         write_json_atomic(
             self.directory / MANIFEST,

@@ -12,6 +12,9 @@ listed in a .pvd exists and is complete. What an earlier run into the same direc
 manifest.json) is removed when the new run starts, so nothing stale sits beside the new output.
 Interrupts (one Ctrl-C or several, SIGTERM) end the run with status "interrupted" and skip the
 pictures; while the final summary is written further interrupts wait.
+
+After every frame the checkpoint (``io/checkpoint.py``) is written; ``resume`` continues the run
+in the directory from it: its series, summary.json and forces.csv go on with the whole history.
 """
 
 from __future__ import annotations
@@ -27,6 +30,7 @@ import numpy as np
 from tissuesim.errors import InputError, TissueSimError
 from tissuesim.io.atomic import write_json_atomic
 from tissuesim.io.body_series import series_for
+from tissuesim.io.checkpoint import CHECKPOINT, HISTORY, RunCheckpoint, restore
 from tissuesim.io.interrupts import deferred_interrupts, interrupts_as_keyboard_interrupt
 from tissuesim.io.manifest import MANIFEST, Manifest, prepare_directory
 
@@ -54,6 +58,7 @@ class RunOutput:
         render: bool = True,
         field: str = "J",
         metadata: dict | None = None,
+        resume: bool = False,
     ) -> None:
         from tissuesim.render.scene import field_label
         from tissuesim.validate import integer, short
@@ -76,6 +81,13 @@ class RunOutput:
         self.render_time = 0.0  # s spent drawing final.png and run.gif
         self.description = None
         self.directory = None if directory is None else prepare_directory(directory)
+        self.resume = bool(resume)
+        if self.resume and self.directory is None:
+            raise InputError("resume needs the output directory of the run to continue")
+        self.checkpoint = None
+        self._kept_series: dict | None = None  # resume: series name -> its frames so far
+        self._first_step = len(sim.history)  # the run's steps count from here
+        self._previous_status = None  # resume: the status the summary.json found says
         self._last_write = (0.0, 0.0)  # (perf_counter at the summary's last write, its cost)
         self._created = time.perf_counter()
         # where the run's wall time went (s): assembling the model, the steps, writing the
@@ -83,26 +95,57 @@ class RunOutput:
         self.time_split = {"setup_s": 0.0, "steps_s": 0.0, "output_s": 0.0, "pictures_s": 0.0}
         if self.directory is not None:
             self.manifest = Manifest(self.directory)
+            self.checkpoint = RunCheckpoint(self.directory, self.metadata.get("scene_sha256"))
+        if self.directory is not None and not self.resume:
             if not (self.directory / MANIFEST).exists():
                 self.manifest.write()  # a manifest exists whenever a summary does
             self._write_summary()  # replaces the previous run's summary first
             self.manifest.remove_previous()
+            (self.directory / CHECKPOINT).unlink(missing_ok=True)  # never another run's
             self.manifest.add(file="summary.json")
         try:
             sim.build()
             self.series = [series_for(b) for b in sim.bodies.values()]
+            if self.resume:
+                self._restore()  # reads and checks the checkpoint; writes nothing
             self.description = sim.describe()  # once: ~1 s for meshes of 1e5 cells
         except BaseException as exc:
-            self._fail(exc)
+            if not self.resume:  # a resume that fails here leaves the directory as it was
+                self._fail(exc)
             raise
         self.time_split["setup_s"] = time.perf_counter() - self._created
+
+    # -- resuming -----------------------------------------------------------------------------
+    def _restore(self) -> None:
+        """Load the directory's checkpoint into the simulation (InputError, the directory
+        untouched, if it is missing, damaged or of another set-up)."""
+        import json
+
+        meta, arrays, history = self.checkpoint.read(self.sim)
+        self._first_step = meta["run"]["first_step"]
+        self._kept_series = meta["series"]
+        try:
+            text = (self.directory / "summary.json").read_text(encoding="utf-8")
+            self._previous_status = json.loads(text).get("status")
+        except (OSError, ValueError, AttributeError):
+            self._previous_status = None
+        restore(self.sim, meta, arrays, history, self.checkpoint.path)
+        self.metadata["resumed_at_step"] = len(history) - self._first_step
+
+    def _start_resumed(self) -> None:
+        """Go on writing into the resumed run's directory: its files stay listed."""
+        self.checkpoint.resumed()
+        self.manifest.files = list(self.manifest.previous["files"])
+        self.manifest.series = list(self.manifest.previous["series"])
+        self.manifest.add(file="summary.json")
 
     # -- series -------------------------------------------------------------------------------
     def _open_series(self) -> None:
         from tissuesim.io.vtu_series import VTUSeriesWriter, remove_series
 
+        keep = self._kept_series
         for s in self.series:
-            s.open(self.directory)
+            s.open(self.directory, keep)
         for ob in self.sim.obstacles:  # rest surface + displacement, like the bodies
             writer = VTUSeriesWriter(
                 self.directory,
@@ -110,6 +153,7 @@ class RunOutput:
                 ob.name,
                 cells=("triangle", ob.triangles),
                 n_points=len(ob.rest),
+                keep=None if keep is None else keep.get(ob.name),
             )
             self.obstacle_series.append((ob, writer))
         tissue = self.sim.tissue
@@ -119,8 +163,9 @@ class RunOutput:
             )
         else:
             remove_series(self.directory, "cut")
-        for stale in ("final.png", "run.gif", "forces.png", "forces.csv"):
-            (self.directory / stale).unlink(missing_ok=True)  # from a run without a manifest
+        if not self.resume:
+            for stale in ("final.png", "run.gif", "forces.png", "forces.csv"):
+                (self.directory / stale).unlink(missing_ok=True)  # from a run without a manifest
 
     def _write_frame(self) -> None:
         sim = self.sim
@@ -149,23 +194,41 @@ class RunOutput:
             suffix = f"   {graspers[0]} force {force:.3g} N"
         self.frames.append((t, data, cut.copy(), suffix))
 
+    def _writers(self) -> list:
+        writers = [w for s in self.series for w in s.writers]
+        writers += [w for _, w in self.obstacle_series]
+        return writers + ([self.cut_series] if self.cut_series is not None else [])
+
     def _record_series(self) -> None:
         """List in the manifest every series that has written its index (a series opened but
         not yet written, e.g. the cut before the blade starts, is not listed)."""
         if self.directory is None:
             return
-        writers = [w for s in self.series for w in s.writers]
-        writers += [w for _, w in self.obstacle_series]
-        writers += [self.cut_series] if self.cut_series is not None else []
-        for w in writers:
+        for w in self._writers():
             if w.pvd_path.is_file():
                 self.manifest.add(series=w.name)
 
+    def _write_checkpoint(self, steps: int) -> None:
+        """After a frame: the checkpoint of the state it shows (io/checkpoint.py)."""
+        if self.checkpoint is None or self.sim.tissue is not None:
+            return
+        self.manifest.add(file=CHECKPOINT)  # listed before it exists: the next run removes it
+        self.manifest.add(file=HISTORY)
+        series = {w.name: [[t, p.name] for t, p in w.frames] for w in self._writers() if w.frames}
+        run = {"first_step": self._first_step, "steps": steps, "every": self.every}
+        self.checkpoint.write(self.sim, series, run)
+
+    def window(self) -> list:
+        """The records of this run's steps: steps taken before it (``Simulation.step`` by hand)
+        are not in its output, whose series starts at the state the run started from; a
+        resumed run's window is the whole run, the steps before the kill included."""
+        return self.sim.history[self._first_step :]
+
     # -- summary ------------------------------------------------------------------------------
     def _summary(self) -> dict:
-        from tissuesim import __version__
+        from tissuesim._version import __version__
 
-        history = self.sim.history
+        history = self.window()
         steps = [_promote_contact(asdict(r)) for r in history]
         iters = [r.newton_iterations for r in history]
         return {
@@ -197,8 +260,9 @@ class RunOutput:
 
         start = time.perf_counter()
         write_json_atomic(self.directory / "summary.json", self._summary())
-        if self.sim.history and self.sim.history[-1].extra.get("forces"):
-            write_forces_csv(self.directory / "forces.csv", self.sim.history)
+        history = self.window()
+        if history and history[-1].extra.get("forces"):
+            write_forces_csv(self.directory / "forces.csv", history)
             self.manifest.add(file="forces.csv")
         now = time.perf_counter()
         self._last_write = (now, now - start)
@@ -227,35 +291,51 @@ class RunOutput:
     # -- the run --------------------------------------------------------------------------------
     def run(self, steps: int, progress: bool = True) -> list:
         """Step ``steps`` times, writing every ``every``-th frame, the last, and the summary;
-        return the simulation's history. The summary's status records how the run ended."""
+        return the run's records (``window``). The summary's status records how it ended."""
         from tissuesim.io.progress import progress_bar
-        from tissuesim.simulation import check_time_resolution
+        from tissuesim.time.grid import check_time_resolution
+        from tissuesim.validate import integer
 
+        steps = integer(steps, "steps", low=0)
+        done = len(self.sim.history) - self._first_step  # resumed: the steps already run
+        if self.resume:
+            if done > steps:
+                raise InputError(
+                    f"{self.directory} holds a run of {done} steps, more than the {steps} asked "
+                    f"for; when resuming, steps counts the whole run: ask for {done} or more"
+                )
+            if done == steps and self._previous_status == "completed":
+                self.status = "completed"  # nothing to do: the directory is left as it is
+                return self.window()
+            self._start_resumed()
+        remaining = steps - done if self.resume else steps
+        end = done + remaining  # frames: every ``every``-th step of the run, and the last
         try:
-            from tissuesim.validate import integer
-
-            steps = integer(steps, "steps", low=0)
             h = self.sim.time_step
-            check_time_resolution(self.sim.time + steps * h, h, "the end time")
+            check_time_resolution(self.sim.time + remaining * h, h, "the end time")
             start = time.perf_counter()
             if self.directory is not None:
                 self._open_series()
                 self._write_summary()
-            self._write_frame()
+            if not self.resume:  # a resumed run's frames so far are there
+                self._write_frame()
+                self._write_checkpoint(end)
             self.time_split["output_s"] += time.perf_counter() - start
         except BaseException as exc:
             self._fail(exc)
             raise
-        bar = progress_bar(steps, progress)
+        bar = progress_bar(remaining, progress)
         with interrupts_as_keyboard_interrupt():  # one interrupt stops; more are ignored
             try:
                 split = self.time_split
-                for k in range(steps):
+                for k in range(remaining):
                     start = time.perf_counter()
                     record = self.sim.step()
                     stepped = time.perf_counter()
-                    if (k + 1) % self.every == 0 or k + 1 == steps:
+                    n = done + k + 1
+                    if n % self.every == 0 or n == end:
                         self._write_frame()
+                        self._write_checkpoint(end)
                     self._write_summary_after_a_step()
                     split["steps_s"] += stepped - start
                     split["output_s"] += time.perf_counter() - stepped
@@ -282,7 +362,7 @@ class RunOutput:
                     self.pictures = "skipped (interrupted while drawing)"
                     self._write_summary()
                     raise
-        return self.sim.history
+        return self.window()
 
     def _pictures_of_a_failed_run(self, progress: bool) -> None:
         try:
@@ -302,13 +382,13 @@ class RunOutput:
     def _draw(self, progress: bool) -> None:
         from tissuesim.io.forces import render_forces_png
 
-        render_forces_png(self.directory / "forces.png", self.sim.history)  # none: no file
+        render_forces_png(self.directory / "forces.png", self.window())  # none: no file
         if self.render and self.frames:
             from tissuesim.render.scene import MAX_GIF_FRAMES, gif_frames_3d, render_run
 
             if progress:
                 flat = all(b.dim == 2 for b in self.sim.bodies.values())
-                wall = sum(r.wall_time_s for r in self.sim.history)
+                wall = sum(r.wall_time_s for r in self.window())
                 n = min(len(self.frames), MAX_GIF_FRAMES if flat else gif_frames_3d(wall))
                 print(
                     f"tissuesim: drawing final.png and run.gif ({n} frames, coloured by "

@@ -10,7 +10,7 @@ from __future__ import annotations
 import math
 import os
 import re
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 from xml.sax.saxutils import quoteattr
 
@@ -108,7 +108,9 @@ class VTUSeriesWriter:
 
     Opening a directory that already holds a series of the same ``name`` starts afresh: the old
     ``{name}.pvd`` and every ``{name}_NNNNN.vtu`` are deleted at construction (series with other
-    names are left alone), so the index never mixes frames of two runs.
+    names are left alone), so the index never mixes frames of two runs. ``keep``: (time, file
+    name) of the first frames, to continue a resumed run's series instead: those are kept,
+    later frames deleted, and the index rewritten.
     """
 
     def __init__(
@@ -119,6 +121,7 @@ class VTUSeriesWriter:
         *,
         cells: tuple[str, np.ndarray] | None = None,
         n_points: int | None = None,
+        keep: Sequence[tuple[float, str]] | None = None,
     ) -> None:
         if (mesh is None) == (cells is None):
             raise InputError("VTUSeriesWriter needs either a mesh or cells=(cell_type, ids)")
@@ -146,8 +149,21 @@ class VTUSeriesWriter:
         self.n_cells = int(block[1].shape[0])
         self._frames: list[tuple[float, Path]] = []
         self.directory.mkdir(parents=True, exist_ok=True)
-        remove_series(self.directory, name)
         self._cells = [block]
+        if keep:
+            self._continue(keep)
+        else:
+            remove_series(self.directory, name)
+
+    def _continue(self, keep: Sequence[tuple[float, str]]) -> None:
+        """Adopt the frames ``keep`` (time, file name) of a resumed run; drop later ones."""
+        self._frames = [(float(t), self.directory / file) for t, file in keep]
+        write_text_atomic(self.pvd_path, self._pvd_text())  # first: it never lists a lost frame
+        pattern = re.compile(rf"{re.escape(self.name)}_(\d{{5,}})\.vtu")
+        for old in self.directory.iterdir():
+            match = pattern.fullmatch(old.name)
+            if match and int(match.group(1)) >= len(keep):
+                old.unlink()
 
     @property
     def frames(self) -> list[tuple[float, Path]]:

@@ -45,6 +45,12 @@ class Material:
     lam: float
 
     def evaluate(self, F: np.ndarray, order: int = 2) -> MaterialResponse:
+        """The law at deformation gradients ``F`` (q, d, d): a ``MaterialResponse`` with the
+        energy density psi (q,) in J/m^3, and for ``order`` >= 1 the first Piola-Kirchhoff
+        stress P (q, d, d) in Pa, for ``order`` 2 also the tangent dP/dF (q, d, d, d, d) in Pa.
+
+        ``NeoHookean(youngs_modulus=1e4, poisson_ratio=0.3).evaluate(np.eye(3)[None], 1)``
+        gives zero energy and stress at rest."""
         raise NotImplementedError
 
     def energy_density(self, F: np.ndarray) -> np.ndarray:

@@ -10,6 +10,7 @@ from tissuesim.mesh.checks import signed_volumes, validate_mesh
 from tissuesim.mesh.generators import box, ellipsoid, rectangle
 from tissuesim.mesh.io import describe_mesh, read_mesh, write_mesh
 from tissuesim.mesh.mesh import Mesh
+from tissuesim.mesh.tetrahedralize import mesh_surface
 
 __all__ = [
     "Mesh",
@@ -24,5 +25,6 @@ __all__ = [
     "read_mesh",
     "write_mesh",
     "describe_mesh",
+    "mesh_surface",
     "select",
 ]

@@ -54,14 +54,17 @@ class Mesh:
 
     @property
     def dim(self) -> int:
+        """The space dimension, 2 (triangles) or 3 (tetrahedra)."""
         return int(self.points.shape[1])
 
     @property
     def n_points(self) -> int:
+        """The number of nodes (vertices, and midside nodes of a quadratic mesh)."""
         return int(self.points.shape[0])
 
     @property
     def n_cells(self) -> int:
+        """The number of elements (triangles or tetrahedra)."""
         return int(self.cells.shape[0])
 
     @property

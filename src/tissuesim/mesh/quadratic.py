@@ -22,7 +22,6 @@ __all__ = [
     "subdivide",
     "midside_lookup",
     "quadratic_facets",
-    "elevate_mesh",
 ]
 
 #: the local corner pairs of the midside nodes, in node order after the corners
@@ -129,32 +128,3 @@ def quadratic_facets(mesh, facets: np.ndarray) -> np.ndarray:
     facets = np.asarray(facets, dtype=np.int64)
     mids = mesh.midside(facets[:, EDGES[d - 1]])  # (k, d(d-1)/2 or 1)
     return np.concatenate([facets, mids.reshape(facets.shape[0], -1)], axis=1)
-
-
-def elevate_mesh(mesh):
-    """A linear Mesh as a quadratic one: the same vertices first, a midside node per edge (on
-    the mesh's exact surface, ``surface_projection``, where a generator gave one, so an
-    ellipsoid stays curved; else at the edge's midpoint); a point set gains the midside nodes
-    of edges with both ends in it; facet and cell sets are unchanged (facets are named by their
-    corners)."""
-    from tissuesim.mesh.checks import validate_mesh
-
-    if mesh.order == 2:
-        return mesh
-    points, cells = elevate(mesh.points, mesh.cells, mesh.surface_projection)
-    d = mesh.dim
-    pairs = np.sort(cells[:, EDGES[d]], axis=2).reshape(-1, 2)
-    mids = cells[:, d + 1 :].reshape(-1)
-    psets = {}
-    for name, ids in mesh.point_sets.items():
-        inside = np.isin(pairs, ids).all(axis=1)
-        psets[name] = np.union1d(ids, mids[inside])
-    return validate_mesh(
-        points,
-        cells,
-        source=f"{mesh.source} (order 2)",
-        point_sets=psets,
-        facet_sets=dict(mesh.facet_sets),
-        cell_sets=dict(mesh.cell_sets),
-        surface_projection=mesh.surface_projection,
-    )

@@ -111,6 +111,8 @@ def _rest_outline(ax, points: np.ndarray, faces: np.ndarray) -> None:
     from mpl_toolkits.mplot3d.art3d import Line3DCollection
 
     segs = points[_feature_edges(points, faces)]
+    if len(segs) == 0:  # a smooth surface (an ellipsoid) has no feature edges to outline
+        return
     ax.add_collection3d(
         Line3DCollection(segs, colors="0.4", linewidths=0.8, linestyles="--", zorder=2)
     )

@@ -11,9 +11,9 @@ small x-y-z axes marker. White background.
 
 Without a ``Camera``, the view looks from above the front right (azimuth -55 degrees, elevation
 22 degrees, as the matplotlib renderers), z up, with the scene's points fitted into the free part
-of the window with a small margin (4 % of the scene's size). ``GifWriter`` fits that view once,
-to the first frame enlarged by 15 % of its size on every side (or takes the ``camera`` given),
-so motion shows as motion rather than as a re-centred picture.
+of the window with a small margin (4 % of the scene's size). ``gif3d.GifWriter`` fits that view
+once, to the first frame enlarged by 15 % of its size on every side (or takes the ``camera``
+given), so motion shows as motion rather than as a re-centred picture.
 
 PyVista is an optional dependency (``pip install 'tissuesim[pyvista]'``), imported only when a
 picture is made. Rendering is off-screen (``pyvista.OFF_SCREEN``); PNG and GIF files are written
@@ -25,10 +25,7 @@ points (q, 3), scalars (q,); each cut (m, 3, 3) triangle corners.
 
 from __future__ import annotations
 
-import math
 import os
-from collections.abc import Sequence
-from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -36,18 +33,22 @@ import numpy as np
 
 from tissuesim.errors import InputError
 from tissuesim.io.atomic import atomic_output
+from tissuesim.render.layers3d import (  # re-exported: the picture's types
+    _VIEW_ANGLE,
+    Camera,
+    Frame3D,
+    PointLayer,
+    SurfaceLayer,
+    _fit_camera,
+    _scene_points,
+)
 
-__all__ = ["Camera", "Frame3D", "GifWriter", "PointLayer", "SurfaceLayer", "render_frame_png"]
+__all__ = ["Camera", "Frame3D", "PointLayer", "SurfaceLayer", "render_frame_png"]
 
 _MISSING = "3D pictures of coupled scenes need PyVista: pip install 'tissuesim[pyvista]'"
 
-_ELEV, _AZIM = 22.0, -55.0  # default view direction in degrees, as plot3d / points3d
-_VIEW_ANGLE = 30.0  # VTK's default vertical view angle in degrees
 _PNG_PAD = 0.04  # PNG: bounds enlarged by this fraction of their largest size on every side
 _GIF_PAD = 0.15  # GIF: bounds of the first frame enlarged by this fraction on every side
-# free part of the window for the scene, in normalised window coordinates (x0, y0, x1, y1):
-# the right-hand column holds the legend and colour bars, the top strip the title
-_SCENE_BOX = (0.03, 0.04, 0.79, 0.90)
 _COLUMN_X = 0.80  # left edge of the right-hand column: legend on top, colour bars, axes
 _BAR_BOX = (0.84, 0.20, 0.99, 0.62)  # colour bars (x0, y0, x1, y1)
 _AXES_BOX = (0.84, 0.0, 0.99, 0.16)  # the small x-y-z axes
@@ -82,227 +83,10 @@ def _quiet_vtk_warnings() -> None:
     vtkObject.GlobalWarningDisplayOff()
 
 
-def _frozen_array(a: Any, dtype, what: str) -> np.ndarray:
-    try:
-        x = np.array(a, dtype=dtype)  # a copy: later changes to the caller's array do not leak in
-    except (TypeError, ValueError) as exc:
-        raise InputError(f"{what} must be a numeric array: {exc}") from exc
-    x.flags.writeable = False
-    return x
-
-
 # ---- scene data ---------------------------------------------------------------------------
 
 
-@dataclass(frozen=True, eq=False)
-class SurfaceLayer:
-    """An organ's triangle surface: points (n, 3), triangles (m, 3) ids into points.
-
-    Drawn smooth-shaded in ``color`` (any colour name or hex string VTK knows) with
-    ``opacity``; with ``scalars`` (n,) it is coloured by them instead (viridis, one colour bar
-    titled ``name``). Arrays are copied and made read-only.
-    """
-
-    name: str
-    points: np.ndarray
-    triangles: np.ndarray
-    color: str = "lightgrey"
-    opacity: float = 1.0
-    scalars: np.ndarray | None = None
-    scalar_name: str = ""  # the colour bar's title (layers sharing it share one bar)
-    clim: tuple[float, float] | None = None
-
-    @property
-    def bar_title(self) -> str:
-        return self.scalar_name or self.name
-
-    def __post_init__(self) -> None:
-        x = _frozen_array(self.points, float, f"surface {self.name!r} points")
-        tri = _frozen_array(self.triangles, np.int64, f"surface {self.name!r} triangles")
-        if x.ndim != 2 or x.shape[1] != 3:
-            raise InputError(f"surface {self.name!r} points have shape {x.shape}; expected (n, 3)")
-        if tri.size == 0:
-            tri = np.zeros((0, 3), dtype=np.int64)
-        if tri.ndim != 2 or tri.shape[1] != 3:
-            raise InputError(
-                f"surface {self.name!r} triangles have shape {tri.shape}; expected (m, 3)"
-            )
-        if len(tri) and (tri.min() < 0 or tri.max() >= len(x)):
-            raise InputError(f"surface {self.name!r} triangles must be ids in [0, {len(x)})")
-        if not 0.0 <= float(self.opacity) <= 1.0:
-            raise InputError(f"surface {self.name!r} opacity must be in [0, 1], got {self.opacity}")
-        object.__setattr__(self, "points", x)
-        object.__setattr__(self, "triangles", tri)
-        object.__setattr__(self, "opacity", float(self.opacity))
-        if self.scalars is not None:
-            s = _frozen_array(self.scalars, float, f"surface {self.name!r} scalars")
-            if s.shape != (len(x),):
-                raise InputError(
-                    f"surface {self.name!r} scalars have shape {s.shape}; expected ({len(x)},)"
-                )
-            object.__setattr__(self, "scalars", s)
-
-
-@dataclass(frozen=True, eq=False)
-class PointLayer:
-    """Points (q, 3), e.g. a tissue's integration points, coloured by ``scalars`` (q,).
-
-    ``scalar_name`` titles the colour bar (layers sharing it share one bar and one colour
-    range); ``clim`` (lo, hi) fixes the colour range, else it is the data's range (in a GIF: the
-    range of every frame added so far). Without scalars the points are dark grey.
-    ``point_size`` is in pixels. q may be 0. Arrays are copied and made read-only.
-    """
-
-    name: str
-    points: np.ndarray
-    scalars: np.ndarray | None = None
-    scalar_name: str = ""
-    cmap: str = "viridis"
-    clim: tuple[float, float] | None = None
-    point_size: float = 7.0
-
-    def __post_init__(self) -> None:
-        x = _frozen_array(self.points, float, f"point layer {self.name!r} points")
-        if x.size == 0:
-            x = _frozen_array(np.zeros((0, 3)), float, "points")
-        if x.ndim != 2 or x.shape[1] != 3:
-            raise InputError(f"point layer {self.name!r} points have shape {x.shape}; (q, 3)")
-        object.__setattr__(self, "points", x)
-        if self.scalars is not None:
-            s = _frozen_array(self.scalars, float, f"point layer {self.name!r} scalars")
-            if s.shape != (len(x),):
-                raise InputError(
-                    f"point layer {self.name!r} scalars have shape {s.shape}; expected ({len(x)},)"
-                )
-            object.__setattr__(self, "scalars", s)
-        if self.clim is not None:
-            lo, hi = (float(c) for c in self.clim)
-            if not (math.isfinite(lo) and math.isfinite(hi) and lo <= hi):
-                raise InputError(f"point layer {self.name!r} clim must be finite lo <= hi")
-            object.__setattr__(self, "clim", (lo, hi))
-        if not float(self.point_size) > 0:
-            raise InputError(f"point layer {self.name!r} point_size must be > 0")
-        object.__setattr__(self, "point_size", float(self.point_size))
-
-    @property
-    def bar_title(self) -> str:
-        return self.scalar_name or self.name
-
-
-@dataclass(frozen=True, eq=False)
-class Frame3D:
-    """One moment of a coupled scene: organ surfaces, point layers, cuts and a title.
-
-    ``cuts`` is a sequence of (m, 3, 3) arrays of triangle corners (a single (m, 3, 3) array is
-    taken as one cut); any of the three sequences may be empty. Stored as tuples.
-    """
-
-    surfaces: Sequence[SurfaceLayer] = ()
-    points: Sequence[PointLayer] = ()
-    cuts: Sequence[np.ndarray] = ()
-    title: str = ""
-
-    def __post_init__(self) -> None:
-        for what, items, kind in (
-            ("surfaces", self.surfaces, SurfaceLayer),
-            ("points", self.points, PointLayer),
-        ):
-            bad = [type(s).__name__ for s in items if not isinstance(s, kind)]
-            if bad:
-                raise TypeError(f"Frame3D.{what} must hold {kind.__name__}s, got {bad[0]}")
-        cuts = self.cuts
-        if isinstance(cuts, np.ndarray) and cuts.ndim == 3:
-            cuts = [cuts]
-        arrays = []
-        for i, c in enumerate(cuts):
-            a = _frozen_array(c, float, f"cut {i}")
-            if a.size == 0:
-                continue
-            if a.ndim != 3 or a.shape[1:] != (3, 3):
-                raise InputError(f"cut {i} has shape {a.shape}; expected (m, 3, 3)")
-            arrays.append(a)
-        object.__setattr__(self, "surfaces", tuple(self.surfaces))
-        object.__setattr__(self, "points", tuple(self.points))
-        object.__setattr__(self, "cuts", tuple(arrays))
-        object.__setattr__(self, "title", str(self.title))
-
-
-def _scene_points(frame: Frame3D) -> np.ndarray:
-    """(k, 3) every point of the scene: surface vertices, layer points, cut corners."""
-    arrays = [s.points for s in frame.surfaces] + [p.points for p in frame.points]
-    arrays += [c.reshape(-1, 3) for c in frame.cuts]
-    return np.concatenate([np.zeros((0, 3)), *arrays])
-
-
-@dataclass(frozen=True)
-class Camera:
-    """A fixed view: camera position, the point it looks at, and the up direction (world)."""
-
-    position: tuple[float, float, float]
-    focal_point: tuple[float, float, float]
-    view_up: tuple[float, float, float]
-
-    def __post_init__(self) -> None:
-        for name in ("position", "focal_point", "view_up"):
-            v = tuple(float(c) for c in getattr(self, name))
-            if len(v) != 3 or not all(math.isfinite(c) for c in v):
-                raise InputError(f"Camera.{name} must be 3 finite numbers, got {v}")
-            object.__setattr__(self, name, v)
-
-
 # ---- camera ---------------------------------------------------------------------------------
-
-
-def _fit_camera(points: np.ndarray, window_size: tuple[int, int], pad: float) -> Camera:
-    """Default view of ``points`` (k, 3) scaled about their bounding box's centre by 1 + 2 pad.
-
-    The points are fitted (perspective, VTK's 30 degree view angle) into ``_SCENE_BOX`` of the
-    window and centred in it; the camera is shifted sideways for that, so the view direction
-    stays the default one.
-    """
-    pts = np.asarray(points, dtype=float).reshape(-1, 3)
-    pts = pts[np.isfinite(pts).all(axis=1)]
-    if not len(pts):
-        pts = np.array([[0.0, 0.0, 0.0], [1.0, 1.0, 1.0]])
-    lo, hi = pts.min(axis=0), pts.max(axis=0)
-    centre = 0.5 * (lo + hi)
-    big = float((hi - lo).max())
-    if big <= 0.0:  # a single point: show a box of size about 1 (or |point|) around it
-        big = max(1.0, float(np.abs(centre).max()))
-        pts = centre + 0.5 * big * np.array([[-1.0, -1.0, -1.0], [1.0, 1.0, 1.0]])
-    if len(pts) > 20_000:  # plenty for the framing
-        pts = pts[np.linspace(0, len(pts) - 1, 20_000).astype(np.int64)]
-    rel = (pts - centre) * (1.0 + 2.0 * pad)
-
-    e, a = np.radians(_ELEV), np.radians(_AZIM)
-    back = np.array([np.cos(e) * np.cos(a), np.cos(e) * np.sin(a), np.sin(e)])  # to the camera
-    right = np.cross(-back, [0.0, 0.0, 1.0])
-    right /= np.linalg.norm(right)
-    up = np.cross(right, -back)
-
-    w, h = window_size
-    tan_v = math.tan(math.radians(_VIEW_ANGLE) / 2)
-    tan_h = tan_v * w / h
-    x0, y0, x1, y1 = _SCENE_BOX
-    # the scene box in normalised device coordinates [-1, 1]: its half sizes and centre
-    sx, sy = x1 - x0, y1 - y0
-    cx, cy = x0 + x1 - 1.0, y0 + y1 - 1.0
-    xr, yu, zb = rel @ right, rel @ up, rel @ back
-    ox = oy = 0.0  # sideways offset of the focal point, centring the picture of the points
-    for _ in range(3):
-        # a point at depth zb (towards the camera) fits if |xr - ox| <= (dist - zb) tan_h sx
-        dist = float(
-            np.max(np.maximum(np.abs(xr - ox) / (tan_h * sx), np.abs(yu - oy) / (tan_v * sy)) + zb)
-        )
-        px, py = (xr - ox) / (dist - zb), (yu - oy) / (dist - zb)
-        ox += 0.5 * (px.min() + px.max()) * dist
-        oy += 0.5 * (py.min() + py.max()) * dist
-    dist = float(
-        np.max(np.maximum(np.abs(xr - ox) / (tan_h * sx), np.abs(yu - oy) / (tan_v * sy)) + zb)
-    )
-    # shift the camera (and focal point) so the picture's centre lands at (cx, cy)
-    focal = centre + (ox - cx * dist * tan_h) * right + (oy - cy * dist * tan_v) * up
-    return Camera(tuple(focal + dist * back), tuple(focal), tuple(up))
 
 
 def _apply_camera(plotter, camera: Camera) -> None:
@@ -619,163 +403,3 @@ def render_frame_png(
 
 
 # ---- GIF ------------------------------------------------------------------------------------
-
-
-def _to_palette(img: np.ndarray, keys: np.ndarray):
-    """Pillow 256-colour ("P") image of img (h, w, 3), with its own palette, not dithered.
-
-    Median cut spends colours on the picture's big areas, so small ones (a colour bar, legend
-    squares) come out banded or wrong; the key colours keys (k, 3) are appended as a strip
-    weighing ``_KEY_WEIGHT`` of the picture while the palette is made. Dithering would make every
-    frame differ everywhere (large files, flicker).
-    """
-    from PIL import Image
-
-    h, w = img.shape[:2]
-    stack = img
-    if len(keys):
-        strip = np.repeat(keys, max(1, round(_KEY_WEIGHT * h * w / len(keys))), axis=0)
-        rows = -(-len(strip) // w)
-        strip = np.concatenate([strip, np.repeat(strip[-1:], rows * w - len(strip), axis=0)])
-        stack = np.concatenate([img, strip.reshape(rows, w, 3)])
-    pal = Image.fromarray(stack).quantize(
-        256, method=Image.Quantize.MEDIANCUT, dither=Image.Dither.NONE
-    )
-    return pal.crop((0, 0, w, h)) if len(keys) else pal
-
-
-class GifWriter:
-    """Collect frames of a run into an animated GIF (looping forever), written by ``close()``.
-
-    One off-screen plotter lives from the first ``add`` to ``close``; each added frame replaces
-    the scene, is screenshot and kept as a 256-colour image. The camera is fixed over the run
-    (``camera``, or fitted to the first frame's bounds enlarged by 15 % of their size on every
-    side). Point colour ranges are fixed where a layer gives ``clim``; otherwise a colour bar
-    covers every value added so far (it can only grow).
-
-    Frame budget: at most ``max_frames`` frames are kept. Frames are kept with a stride k
-    (a power of two, starting at 1): frame i is kept when i % k == 0; whenever the kept frames
-    would exceed ``max_frames``, k doubles and the kept frames that are not multiples of the
-    new k are dropped. So a long run ends up with every k-th frame, evenly spaced, and frames
-    that will not be kept are never rendered. The last frame added is always shown (rendered
-    by ``close()``, replacing the last kept one if the budget is full). As with any GIF writer,
-    pixel-identical consecutive frames are merged into one longer frame. Kept frames are held
-    in memory until ``close()``, about width x height bytes each (96 MB for 200 at 800 x 600).
-
-    Use as a context manager (``with GifWriter(p) as gif: gif.add(f)``): on a normal exit the
-    GIF is written, after an exception nothing is written and the plotter is released.
-    """
-
-    def __init__(
-        self,
-        path: str | os.PathLike[str],
-        *,
-        window_size: tuple[int, int] = (800, 600),
-        fps: int = 8,
-        camera: Camera | None = None,
-        max_frames: int = 200,
-    ) -> None:
-        self._pv = _import_pyvista()
-        if fps < 1:
-            raise InputError(f"fps must be >= 1, got {fps}")
-        if max_frames < 1:
-            raise InputError(f"max_frames must be >= 1, got {max_frames}")
-        self.path = Path(path)
-        self.window_size = _check_window(window_size)
-        self.fps = int(fps)
-        self.max_frames = int(max_frames)
-        self._camera = camera
-        self._plotter = None
-        self._n_added = 0
-        self._stride = 1
-        self._kept: list[tuple[int, Any]] = []  # (index of the frame, palette image)
-        self._pending: Frame3D | None = None  # the last frame added, if it was not rendered
-        self._seen: dict[str, tuple[float, float]] = {}  # colour bar -> data range so far
-        self._closed = False
-
-    @property
-    def camera(self) -> Camera | None:
-        """The fixed camera (None until the first frame is added, unless one was given)."""
-        return self._camera
-
-    @property
-    def n_added(self) -> int:
-        """Frames added so far (kept or not)."""
-        return self._n_added
-
-    def add(self, frame: Frame3D) -> None:
-        """Add the next frame of the run (rendered now if it is one the budget keeps)."""
-        if self._closed:
-            raise RuntimeError("GifWriter is closed")
-        if not isinstance(frame, Frame3D):
-            raise TypeError(f"frame must be a Frame3D, got {type(frame).__name__}")
-        for title, g in _scalar_groups(frame).items():
-            if g["data"] is not None:
-                self._seen[title] = _union(self._seen.get(title), g["data"])
-        i = self._n_added
-        self._n_added += 1
-        if i % self._stride:
-            self._pending = frame
-            return
-        self._pending = None
-        self._kept.append((i, self._render(frame)))
-        if len(self._kept) > self.max_frames:
-            self._stride *= 2
-            self._kept = [(j, im) for j, im in self._kept if j % self._stride == 0]
-
-    def close(self) -> Path:
-        """Write the GIF (atomically) and release the plotter; returns the path.
-
-        Raises ValueError if no frame was added. Calling it again does nothing.
-        """
-        if self._closed:
-            return self.path
-        try:
-            if self._pending is not None:
-                last = (self._n_added - 1, self._render(self._pending))
-                if len(self._kept) < self.max_frames:
-                    self._kept.append(last)
-                else:
-                    self._kept[-1] = last
-                self._pending = None
-            if not self._kept:
-                raise InputError("GifWriter needs at least one frame")
-            images = [im for _, im in self._kept]
-            with atomic_output(self.path) as tmp:
-                images[0].save(
-                    tmp,
-                    format="GIF",
-                    save_all=True,
-                    append_images=images[1:],
-                    duration=max(20, round(1000 / self.fps)),
-                    loop=0,
-                )
-        finally:
-            self._release()
-        return self.path
-
-    def _release(self) -> None:
-        self._closed = True
-        self._kept = []
-        self._pending = None
-        if self._plotter is not None:
-            self._plotter.close()
-            self._plotter = None
-
-    def __enter__(self) -> GifWriter:
-        return self
-
-    def __exit__(self, exc_type, exc, tb) -> None:
-        if exc_type is None:
-            self.close()
-        else:
-            self._release()
-
-    def _render(self, frame: Frame3D):
-        if self._plotter is None:
-            self._plotter = _new_plotter(self._pv, self.window_size)
-        if self._camera is None:
-            self._camera = _fit_camera(_scene_points(frame), self.window_size, _GIF_PAD)
-        clims = _clims(_scalar_groups(frame), self._seen)
-        keys = _draw(self._pv, self._plotter, frame, clims, self._camera)
-        return _to_palette(_screenshot(self._plotter), keys)

@@ -12,7 +12,7 @@ on one colour range for the whole run, with a labelled colour bar; the title giv
 seconds (and the first grasper's force). A GIF holds at most ``MAX_GIF_FRAMES`` (2D) frames,
 or in 3D as many as the simulation's own wall time pays for at ``SECONDS_PER_3D_FRAME`` (6 to
 ``MAX_GIF_FRAMES_3D``), evenly subsampled, so drawing costs about what the simulation cost
-(measured in the README; PyVista's fixed cost, about 2 s, remains).
+(measured in docs/performance.md; PyVista's fixed cost, about 2 s, remains).
 
 A frame (what ``io/body_series.py`` returns per written step) is
 (time, {body name: data}, cut triangles (m, 3, 3), title suffix).
@@ -249,7 +249,8 @@ def _field_values(bodies, data, field) -> list[np.ndarray]:
 
 def _render_pyvista(sim, bodies, frames, directory, field, label) -> str:
     from tissuesim.mesh.boundary import boundary_facets
-    from tissuesim.render.pyvista3d import GifWriter, render_frame_png
+    from tissuesim.render.gif3d import GifWriter
+    from tissuesim.render.pyvista3d import render_frame_png
 
     surfaces = {b.name: boundary_facets(b.mesh.simplices) for b in bodies if b.kind == "fem"}
     wall = sum(r.wall_time_s for r in sim.history)

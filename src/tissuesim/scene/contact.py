@@ -1,7 +1,7 @@
 """The scene tables of contact: ``[contact]`` (switch it on, its parameters) and
 ``[[obstacles]]`` (kinematic rigid surfaces and their motion), for every scene (the one-body
 [mesh] and [frames] short forms and ``[[bodies]]``). Each key is an argument of
-``Simulation.set_contact`` / ``Simulation.add_obstacle`` (README, "Contact").
+``Simulation.set_contact`` / ``Simulation.add_obstacle`` (docs/guide/contact.md).
 
     [contact]
     dhat = 0.001          # m, activation distance (default 1e-3 of the scene's size)
@@ -54,7 +54,7 @@ OBSTACLE_KEYS = {"name", "translation", "rotation", "friction", *SHAPES}
 
 def add_contact_tables(sim, data: dict, base_dir: Path, source: str) -> None:
     """Read [contact] and [[obstacles]] of a parsed scene into ``sim``."""
-    from tissuesim.scene.loader import _context, _table, _unknown
+    from tissuesim.scene.common import _context, _table, _unknown
 
     contact = _table(data, "contact", source)
     obstacles = _table(data, "obstacles", source, array=True)
@@ -81,7 +81,7 @@ def add_contact_tables(sim, data: dict, base_dir: Path, source: str) -> None:
 def _obstacle(sim, item: dict, base_dir: Path, where: str) -> None:
     from tissuesim.contact.obstacles import capsule, cylinder, plane, sphere
     from tissuesim.frames.sampling import box_surface, read_surface
-    from tissuesim.scene.loader import _context, _unknown, of_time
+    from tissuesim.scene.common import _context, _unknown, of_time
 
     _unknown(item, OBSTACLE_KEYS, where)
     name = item.get("name")

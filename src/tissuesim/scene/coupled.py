@@ -50,23 +50,24 @@ from typing import Any
 import numpy as np
 
 from tissuesim.errors import SceneError
-from tissuesim.scene.contact import CONTACT_KEYS, OBSTACLE_KEYS
-from tissuesim.scene.frames import _is_number, _required, _vector3
-from tissuesim.scene.loader import (
+from tissuesim.scene.common import (
     RUN_KEYS,
     SELECTORS,
     Scene,
     _context,
+    _is_number,
     _material,
-    _mesh,
     _newton,
+    _required,
     _run_table,
-    _select,
     _table,
     _unknown,
+    _vector3,
     of_time,
 )
-from tissuesim.scene.loader import condition as _condition
+from tissuesim.scene.common import condition as _condition
+from tissuesim.scene.contact import CONTACT_KEYS, OBSTACLE_KEYS
+from tissuesim.scene.fem_body import _mesh, _select
 from tissuesim.validate import short
 
 __all__ = ["build_bodies_scene", "COUPLED_SCENE_KEYS"]
@@ -281,8 +282,9 @@ def _body(sim, item: dict, base_dir: Path, source: str, i: int) -> None:
     """One [[bodies]] table: a FEM body (with mesh = {...}) or a frame body (with
     frames = {...} and region = {...}); its conditions are arrays of tables inside it
     ([[bodies.dirichlet]], [[bodies.fixed_frames]], ...)."""
+    from tissuesim.scene.common import body_label
+    from tissuesim.scene.fem_body import FEM_BODY_KEYS, add_fem_body
     from tissuesim.scene.frames import FRAME_BODY_KEYS, add_frame_body_tables
-    from tissuesim.scene.loader import FEM_BODY_KEYS, add_fem_body, body_label
 
     label = body_label(source, "bodies", i)
     where = label()

@@ -34,25 +34,35 @@ Errors are SceneErrors naming the file, the table (``[[fixed_frames]] #2``) and 
 
 from __future__ import annotations
 
-import numbers
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from tissuesim.errors import SceneError
-from tissuesim.scene.contact import CONTACT_KEYS, OBSTACLE_KEYS
-from tissuesim.scene.expressions import compile_vector
-from tissuesim.scene.loader import (
+from tissuesim.scene.common import (
     RUN_KEYS,
     SIMULATION_KEYS,
     Scene,
     _context,
+    _is_number,
     _material,
     _newton,
+    _required,
     _run_table,
     _table,
     _unknown,
+    _vector3,
+)
+from tissuesim.scene.contact import CONTACT_KEYS, OBSTACLE_KEYS
+from tissuesim.scene.expressions import compile_vector
+from tissuesim.scene.frame_regions import (
+    REGION_KEYS,
+    _frame_positions,
+    _points,
+    _region,
+    _scale,
+    _select_frames,
 )
 from tissuesim.validate import short
 
@@ -70,14 +80,6 @@ FRAMES_KEYS = {
     "radius": "support radius of every frame (default: automatic)",
     "radius_factor": "scales the automatic radii",
     "min_frames": "frames each integration point must see",
-}
-PLACEMENTS = ("grid", "count", "positions")
-REGION_KEYS = ("box", "ellipsoid", "surface", "mesh", "spacing", "subsamples", "display")
-REGIONS = {
-    "box": "box = { lower = [x, y, z], upper = [x, y, z] }",
-    "ellipsoid": "ellipsoid = { center = [x, y, z], semi_axes = [a, b, c] }",
-    "surface": "surface = 'organ.stl' (a closed triangle surface)",
-    "mesh": "mesh = 'organ.msh' (a tetrahedral mesh)",
 }
 FRAME_SCENE_KEYS: dict[str, Any] = {
     "frames": set(FRAMES_KEYS),
@@ -104,20 +106,13 @@ MESH_ONLY = {
     "traction": "load display-surface points with [[point_forces]]",
     "body_force": "use [gravity] or [[point_forces]]",
 }
-FRAME_SELECTORS = ("on_plane", "in_box", "indices", "where")
-POINT_SELECTORS = ("surface_on_plane", "surface_in_box")
-SELECTOR_ARGS = {
-    "on_plane": ("axis", "value", "tolerance"),
-    "in_box": ("lower", "upper", "tolerance"),
-}
-_AXES = "xyz"
 FRAME_INTEGRATORS = ("backward_euler", "quasistatic", "explicit", "symplectic_euler")
 
 
 def build_frame_scene(data: dict, base_dir: Path, source: str, name: str) -> Scene:
     """Build a Scene whose simulation holds one frame body ("body") from parsed TOML
     ``data`` (the short form: the body's tables at the top level)."""
-    from tissuesim.scene.loader import _short_label
+    from tissuesim.scene.common import _short_label
     from tissuesim.simulation import Simulation
 
     if "mesh" in data:
@@ -251,34 +246,6 @@ def add_frame_body_tables(
 # -- values -------------------------------------------------------------------------------------
 
 
-def _is_number(value) -> bool:
-    return isinstance(value, numbers.Real) and not isinstance(value, bool)
-
-
-def _required(table: dict, key: str, where: str):
-    if key not in table:
-        raise SceneError(f"{where}: missing key {key!r}")
-    return table[key]
-
-
-def _vector3(value, where: str) -> np.ndarray:
-    """Three finite numbers (a TOML array), e.g. an acceleration or a corner."""
-    if not (isinstance(value, list) and len(value) == 3 and all(_is_number(v) for v in value)):
-        raise SceneError(f"{where}: expected 3 numbers [x, y, z], got {short(value)}")
-    v = np.asarray(value, dtype=float)
-    if not np.all(np.isfinite(v)):
-        raise SceneError(f"{where}: expected 3 finite numbers, got {short(value)}")
-    return v
-
-
-def _point_list(value, where: str) -> np.ndarray:
-    """A non-empty list of [x, y, z] points as a (k, 3) array."""
-    ok = isinstance(value, list) and value and all(isinstance(p, list) for p in value)
-    if not ok:
-        raise SceneError(f"{where}: expected a list of points [[x, y, z], ...], got {short(value)}")
-    return np.array([_vector3(p, f"{where}[{i}]") for i, p in enumerate(value)])
-
-
 def _of_time(f, points: np.ndarray):
     """t -> f(points, t): an expression vector evaluated at fixed rest points."""
     points = np.array(points, dtype=float)
@@ -337,211 +304,4 @@ def _check_simulation(table: dict, where: str) -> None:
 # -- region and frames ---------------------------------------------------------------------------
 
 
-def _region(table: dict, base_dir: Path, where: str):
-    """(integration points, display surface or None) from [region]."""
-    from tissuesim.frames import sampling
-    from tissuesim.mesh import read_mesh
-
-    _unknown(table, REGION_KEYS, where)
-    kinds = [k for k in REGIONS if k in table]
-    if len(kinds) != 1:
-        choices = "; ".join(REGIONS.values())
-        got = f"got {kinds}" if kinds else "got none"
-        raise SceneError(f"{where}: give exactly one of {choices} ({got})")
-    (kind,) = kinds
-    spacing = table.get("spacing")
-    if spacing is None and kind != "mesh":
-        raise SceneError(
-            f"{where}: missing key 'spacing' (distance between integration points, e.g. 0.1)"
-        )
-    display = table.get("display", True)
-    if not isinstance(display, bool):
-        raise SceneError(f"{where}: display must be true or false, not {short(display)}")
-    extra = {}
-    if "subsamples" in table:
-        if kind not in ("ellipsoid", "surface"):
-            raise SceneError(f"{where}: subsamples applies to ellipsoid and surface, not {kind}")
-        extra["subsamples"] = table["subsamples"]
-    spec = table[kind]
-    here = f"{where} {kind}"
-    if kind in ("box", "ellipsoid"):
-        keys = ("lower", "upper") if kind == "box" else ("center", "semi_axes")
-        if not isinstance(spec, dict):
-            raise SceneError(f"{where}: write {REGIONS[kind]}")
-        _unknown(spec, keys, here)
-        a, b = (_vector3(_required(spec, key, here), f"{here} {key}") for key in keys)
-        with _context(here):
-            if kind == "box":
-                samples = sampling.sample_box(a, b, spacing)
-                divisions = tuple(int(n) for n in np.maximum(1, np.round((b - a) / spacing)))
-                surface = sampling.box_surface(a, b, divisions) if display else None
-            else:
-                samples = sampling.sample_ellipsoid(a, b, spacing, **extra)
-                surface = sampling.ellipsoid_surface(a, b) if display else None
-        return samples, surface
-    if not isinstance(spec, str):
-        raise SceneError(f"{where}: write {REGIONS[kind]}, a path relative to the scene file")
-    path = Path(spec) if Path(spec).is_absolute() else base_dir / spec
-    with _context(here):
-        if kind == "surface":
-            closed = sampling.read_surface(path)
-            samples = sampling.sample_surface(closed, spacing, **extra)
-            return samples, closed if display else None
-        mesh = read_mesh(path)
-        samples = sampling.sample_mesh(mesh, spacing)
-        return samples, sampling.surface_from_mesh(mesh) if display else None
-
-
-def _frame_positions(table: dict, samples, where: str) -> np.ndarray:
-    """Rest frame origins (n, 3) from exactly one of grid, count, positions."""
-    from tissuesim.frames.placement import farthest_point_frames, grid_frames
-
-    given = [k for k in PLACEMENTS if k in table]
-    if len(given) != 1:
-        raise SceneError(
-            f"{where}: give exactly one of grid = {{ lower, upper, counts }}, count = N "
-            f"(farthest-point sampling of the integration points) or positions = "
-            f"[[x, y, z], ...] (got {given or 'none'})"
-        )
-    (how,) = given
-    value = table[how]
-    if how == "grid":
-        here = f"{where} grid"
-        if not isinstance(value, dict):
-            raise SceneError(
-                f"{where}: write grid = {{ lower = [...], upper = [...], counts = [...] }}"
-            )
-        _unknown(value, ("lower", "upper", "counts"), here)
-        lower = _vector3(_required(value, "lower", here), f"{here} lower")
-        upper = _vector3(_required(value, "upper", here), f"{here} upper")
-        counts = _required(value, "counts", here)
-        ok = isinstance(counts, list) and len(counts) == 3
-        if not (ok and all(isinstance(c, int) and not isinstance(c, bool) for c in counts)):
-            raise SceneError(f"{here}: counts must be 3 integers >= 1, got {short(counts)}")
-        with _context(here):
-            return grid_frames(lower, upper, counts)
-    if how == "count":
-        if not (isinstance(value, int) and not isinstance(value, bool) and value >= 1):
-            raise SceneError(f"{where}: count must be an integer >= 1, got {short(value)}")
-        if value > samples.n:
-            raise SceneError(
-                f"{where}: count = {value} frames but the region has only {samples.n} "
-                f"integration points; use fewer frames or a smaller [region] spacing"
-            )
-        return farthest_point_frames(samples.points, value)
-    return _point_list(value, f"{where} positions")
-
-
 # -- selectors ------------------------------------------------------------------------------------
-
-
-def _scale(*arrays) -> float:
-    """Bounding-box diagonal of the body (integration points, frames, display surface)."""
-    pts = np.concatenate([getattr(a, "points", a) for a in arrays if a is not None])
-    return float(np.linalg.norm(np.ptp(pts, axis=0)))
-
-
-def _bbox(points: np.ndarray) -> str:
-    lo, hi = points.min(axis=0), points.max(axis=0)
-    return " x ".join(f"[{a:.6g}, {b:.6g}]" for a, b in zip(lo, hi, strict=True))
-
-
-def _match(points: np.ndarray, how: str, args, scale: float, where: str) -> tuple[np.ndarray, str]:
-    """Mask of ``points`` on a plane / in a box (tissuesim.mesh.select's rules) and its text."""
-    if not isinstance(args, dict):
-        raise SceneError(
-            f"{where}: {how} takes a table of arguments "
-            f"{{ {', '.join(f'{a} = ...' for a in SELECTOR_ARGS[how][:2])} }}"
-        )
-    _unknown(args, SELECTOR_ARGS[how], where)
-    tol = args.get("tolerance")
-    if tol is None:
-        tol = 1e-6 * scale
-    elif not (_is_number(tol) and tol >= 0):
-        raise SceneError(f"{where}: tolerance must be a number >= 0, not {short(tol)}")
-    if how == "on_plane":
-        axis = _required(args, "axis", where)
-        if not (isinstance(axis, int) and not isinstance(axis, bool) and 0 <= axis <= 2):
-            raise SceneError(f"{where}: axis must be 0, 1 or 2 (x, y or z), not {short(axis)}")
-        value = _required(args, "value", where)
-        if not _is_number(value):
-            raise SceneError(f"{where}: value must be a number, not {short(value)}")
-        mask = np.abs(points[:, axis] - value) <= tol
-        return mask, f"on the plane {_AXES[axis]} = {value} (tolerance {tol:.3g})"
-    lo = _vector3(_required(args, "lower", where), f"{where} lower")
-    hi = _vector3(_required(args, "upper", where), f"{where} upper")
-    mask = ((points >= lo - tol) & (points <= hi + tol)).all(axis=1)
-    return mask, f"in the box {lo.tolist()} to {hi.tolist()} (tolerance {tol:.3g})"
-
-
-def _one_selector(selector, kinds: tuple[str, ...], key: str, example: str, where: str):
-    if not isinstance(selector, dict) or len(selector) != 1:
-        raise SceneError(
-            f"{where}: {key} must be a table with one selector out of {list(kinds)}, "
-            f"e.g. {key} = {example}"
-        )
-    ((how, args),) = selector.items()
-    _unknown([how], kinds, f"{where} {key}")
-    return how, args
-
-
-def _select_frames(body, selector, scale: float, where: str) -> np.ndarray:
-    """Sorted frame indices picked by on_plane / in_box / where (rest origins) or indices."""
-    how, args = _one_selector(
-        selector, FRAME_SELECTORS, "frames", "{ on_plane = { axis = 2, value = 0.0 } }", where
-    )
-    X = body.rest_frames
-    here = f"{where} frames {how}"
-    if how == "where":  # a condition on the frames' rest origins, as for mesh vertices
-        from tissuesim.scene.loader import condition
-
-        ids = np.flatnonzero(condition(args, here)(X))
-        if not ids.size:
-            raise SceneError(
-                f"{here}: {args!r} selects no frame; the {len(X)} frames' rest origins span "
-                f"{_bbox(X)}"
-            )
-        return ids
-    if how == "indices":
-        n = len(X)
-        ok = isinstance(args, list) and args
-        if not (ok and all(isinstance(i, int) and not isinstance(i, bool) for i in args)):
-            raise SceneError(
-                f"{here}: expected a list of frame indices, e.g. [0, 1], got {short(args)}"
-            )
-        bad = [i for i in args if not 0 <= i < n]
-        if bad:
-            raise SceneError(f"{here}: frame indices must be in 0..{n - 1}, got {bad}")
-        return np.unique(np.asarray(args, dtype=np.int64))
-    mask, text = _match(X, how, args, scale, here)
-    if not mask.any():
-        raise SceneError(
-            f"{here}: no frames {text}; the {len(X)} frames' rest origins span {_bbox(X)}"
-        )
-    return np.flatnonzero(mask)
-
-
-def _points(body, spec, scale: float, where: str) -> np.ndarray:
-    """(k, 3) rest points: an explicit list, or display-surface vertices picked by a selector."""
-    if isinstance(spec, list):
-        return _point_list(spec, f"{where} points")
-    how, args = _one_selector(
-        spec,
-        POINT_SELECTORS,
-        "points",
-        "[[x, y, z], ...] or { surface_on_plane = { axis = 2, value = 2.0 } }",
-        where,
-    )
-    here = f"{where} points {how}"
-    if body.surface is None:
-        raise SceneError(
-            f"{here}: selects display-surface vertices but the body has no display surface; "
-            f"set display = true in [region], or list the points as [[x, y, z], ...]"
-        )
-    P = body.surface.points
-    mask, text = _match(P, how.removeprefix("surface_"), args, scale, here)
-    if not mask.any():
-        raise SceneError(
-            f"{here}: no display-surface vertices {text}; the surface spans {_bbox(P)}"
-        )
-    return P[mask]

@@ -312,6 +312,7 @@ class CGSolver(LinearSolver):
         self.rebuild_growth = rebuild_growth
         self._M = None
         self._reference_iterations: int | None = None  # iterations right after a rebuild
+        self.amg_matrix: sp.csr_matrix | None = None  # the hierarchy's matrix (checkpoints)
 
     def factorize(self, A: sp.csr_matrix) -> None:
         self._A = A
@@ -341,6 +342,7 @@ class CGSolver(LinearSolver):
         finally:
             np.random.set_state(state)  # noqa: NPY002
         self._M = ml.aspreconditioner(cycle="V")
+        self.amg_matrix = self._A
         self._reference_iterations = None
         self.stats.setups += 1
 

@@ -45,6 +45,7 @@ class ReusedFactorSolver(LinearSolver):
         self._A: sp.csr_matrix | None = None
         self._factored = False
         self._fresh = False  # the factor is of the current A
+        self.factored_matrix: sp.csr_matrix | None = None  # the factor's matrix (checkpoints)
 
     def factorize(self, A: sp.csr_matrix) -> None:
         self._A = A
@@ -54,6 +55,7 @@ class ReusedFactorSolver(LinearSolver):
         """Factorise the current matrix now (raises NotPositiveDefiniteError)."""
         self._factored = False
         self.direct.factorize(self._A)
+        self.factored_matrix = self._A
         self.stats.factorizations += 1
         self._factored = self._fresh = True
 

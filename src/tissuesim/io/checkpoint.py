@@ -1,0 +1,484 @@
+"""Checkpoints: a simulation's whole dynamic state in one file, so a run continues where it
+stopped, bit-identical to a run that never stopped.
+
+What is kept (``capture``): the state (time, configuration, velocity), Newton's last gradient
+(the reactions), the step history, the contact model's state between steps (the obstacles'
+lagged positions, the adaptive barrier stiffness and its history), the sphere probes' touch
+points, live-driven obstacle motions, and the linear solver's state: the matrix the kept
+factor was made from (``solve/reuse.py`` uses it as CG preconditioner in later steps), SuperLU's
+fill-reducing order and the matrix of a lagged AMG hierarchy, so that on load the factor is made
+again from the same matrix with the same ordering (a fresh factor takes other iterates). The
+set-up (meshes, materials, supports, motions) is not kept: it is code and data the user
+already has. A checkpoint is loaded into a simulation set up the same way, checked by a
+``fingerprint`` (integrator, Newton options, each body's mesh / material / density, contact and
+obstacles; the command line adds the scene file's hash).
+
+Files: ``Simulation.save(path)`` writes one ``.npz`` (history included). A run with output keeps
+``checkpoint.npz`` in its directory, rewritten atomically after every frame, and the history
+in ``checkpoint_history.jsonl``, appended (one JSON line per step) and fsynced before the
+``.npz`` that counts its lines is replaced: a kill at any moment leaves a checkpoint consistent
+with itself, and with frames up to those it lists (later frames are dropped on resume).
+
+Not supported: a tissue (tearing and cuts change the model's topology, which a checkpoint does
+not carry); ``refuse_unsupported`` says so in one line.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+from dataclasses import asdict
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import scipy.sparse as sp
+
+from tissuesim.errors import InputError
+from tissuesim.io.atomic import atomic_output, write_text_atomic
+
+__all__ = [
+    "CHECKPOINT",
+    "HISTORY",
+    "fingerprint",
+    "refuse_unsupported",
+    "save_simulation",
+    "load_simulation",
+    "RunCheckpoint",
+]
+
+CHECKPOINT = "checkpoint.npz"
+HISTORY = "checkpoint_history.jsonl"
+FORMAT = 1
+_FIX = "run without --resume to start afresh, or resume with the original scene"
+
+
+def refuse_unsupported(sim) -> None:
+    """InputError for a simulation whose state a checkpoint cannot carry (a tissue)."""
+    if sim.tissue is not None:
+        raise InputError(
+            "resume and Simulation.save/load do not support a tissue (its tearing and cuts change "
+            "the model's topology, which a checkpoint does not carry); rerun the scene from the "
+            "start"
+        )
+
+
+# -- the fingerprint of the set-up ------------------------------------------------------------
+def _digest(*arrays) -> str:
+    h = hashlib.sha256()
+    for a in arrays:
+        a = np.ascontiguousarray(a)
+        h.update(str((a.dtype.str, a.shape)).encode())
+        h.update(a.tobytes())
+    return h.hexdigest()[:16]
+
+
+def fingerprint(sim, scene: str | None = None) -> dict[str, str]:
+    """Readable parts of the set-up a checkpoint must match (one per setting group and body);
+    ``scene``: the scene file's hash, when run from one."""
+    parts = {
+        "simulation settings": (
+            f"{sim.integrator}, time_step {sim.time_step!r} s, start_time {sim.start_time!r} s, "
+            f"max_step_halvings {sim.max_step_halvings}, "
+            f"gravity {[g.tolist() for g in sim.gravity]}"
+        ),
+        "newton options": json.dumps(asdict(sim.newton), sort_keys=True),
+        "bodies": ", ".join(sim.bodies),
+    }
+    for name, b in sim.bodies.items():
+        material = repr(b.model.material) if b.model is not None else ""
+        if b.kind == "fem":
+            m = b.model
+            data = _digest(b.mesh.points, b.mesh.cells, np.asarray(m.density, float))
+            what = f"{b.mesh.n_points} points, {b.mesh.n_cells} cells, {m.mass_kind} mass"
+        elif b.kind == "frames":
+            data = _digest(b.config, b.model.samples.points, b.model.samples.volumes)
+            what = f"{b.model.n_frames} frames, {b.model.samples.n} points"
+        else:
+            data, what = _digest(b.samples.points), f"{b.samples.n} points"
+        parts[f"body {name!r}"] = f"{b.kind}: {what}, {material}, data {data}"
+    if sim.contact is not None:
+        parts["contact"] = repr(sim.contact)
+    for ob in sim.obstacles:
+        parts[f"obstacle {ob.name!r}"] = f"surface {_digest(ob.rest, ob.triangles)}"
+    if scene:
+        parts["scene file (all but [run])"] = scene
+    return parts
+
+
+def _check_fingerprint(saved: dict, now: dict, path: Path) -> None:
+    for key in sorted(set(saved) | set(now)):
+        if key.startswith("scene file") and (key not in saved or key not in now):
+            continue  # a run from a scene file resumed from Python, or the other way round
+        if saved.get(key) != now.get(key):
+            old = _clip(saved.get(key, "none")) if key in saved else "absent"
+            new = _clip(now.get(key, "none")) if key in now else "absent"
+            raise InputError(
+                f"{path} was written for a different scene; {key}: checkpoint {old}, now {new}; "
+                f"{_FIX}"
+            )
+
+
+def _clip(text: str, n: int = 120) -> str:
+    return text if len(text) <= n else text[: n - 3] + "..."
+
+
+# -- history: one JSON line per StepRecord ----------------------------------------------------
+def _plain(obj: Any) -> Any:
+    if isinstance(obj, np.ndarray):
+        return obj.tolist()
+    if isinstance(obj, np.generic):
+        return obj.item()
+    raise TypeError(f"cannot keep {type(obj).__name__} in a checkpoint")
+
+
+def encode_record(record) -> str:
+    """One history record as a JSON line (non-finite floats kept: NaN, Infinity)."""
+    return json.dumps(asdict(record), default=_plain, allow_nan=True)
+
+
+def decode_record(line: str):
+    from tissuesim.records import StepRecord
+
+    return StepRecord(**json.loads(line))
+
+
+# -- the linear solvers' state ----------------------------------------------------------------
+class _Shape:
+    """Stands for a SuperLU factor where only its shape is read (before the next factorize)."""
+
+    def __init__(self, shape) -> None:
+        self.shape = tuple(int(n) for n in shape)
+
+
+def _put_matrix(arrays: dict, key: str, A: sp.csr_matrix) -> None:
+    arrays[f"{key}.data"], arrays[f"{key}.indices"] = A.data, A.indices
+    arrays[f"{key}.indptr"], arrays[f"{key}.shape"] = A.indptr, np.asarray(A.shape)
+
+
+def _get_matrix(arrays, key: str) -> sp.csr_matrix:
+    shape = tuple(int(n) for n in arrays[f"{key}.shape"])
+    parts = (arrays[f"{key}.data"], arrays[f"{key}.indices"], arrays[f"{key}.indptr"])
+    return sp.csr_matrix(tuple(np.array(p) for p in parts), shape=shape)
+
+
+def _solver_state(solver, key: str, arrays: dict) -> dict | None:
+    """The state of ``solver`` between steps (descriptor; arrays under ``key``)."""
+    from tissuesim.solve.linear import CGSolver, SuperLUSolver
+    from tissuesim.solve.reuse import ReusedFactorSolver
+
+    if solver is None:
+        return None
+    meta: dict[str, Any] = {"type": type(solver).__name__, "name": solver.name}
+    if isinstance(solver, ReusedFactorSolver):
+        A = getattr(solver, "factored_matrix", None) if solver._factored else None
+        meta["factored"] = A is not None
+        if A is not None:
+            _put_matrix(arrays, f"{key}.factored", A)
+        meta["direct"] = _solver_state(solver.direct, f"{key}.direct", arrays)
+    elif isinstance(solver, SuperLUSolver) and solver._lu is not None:
+        meta["ordered"] = solver._perm is not None
+        if solver._perm is not None:
+            arrays[f"{key}.perm"] = solver._perm
+            meta["analysed_nnz"] = int(solver._analysed_nnz)
+            meta["permuted"] = bool(solver._permuted)
+            meta["shape"] = list(solver._lu.shape)
+    elif isinstance(solver, CGSolver) and getattr(solver, "amg_matrix", None) is not None:
+        _put_matrix(arrays, f"{key}.amg", solver.amg_matrix)
+        meta["reference_iterations"] = solver._reference_iterations
+    return meta
+
+
+def _restore_solver(solver, meta: dict, arrays, key: str, A: sp.csr_matrix | None = None) -> None:
+    """Make ``solver`` (fresh, of the type saved) what it was; ``A``: refactorise this matrix."""
+    from tissuesim.solve.linear import CGSolver, SuperLUSolver
+    from tissuesim.solve.reuse import LinearStats, ReusedFactorSolver
+
+    if isinstance(solver, ReusedFactorSolver):
+        A = _get_matrix(arrays, f"{key}.factored") if meta["factored"] else None
+        _restore_solver(solver.direct, meta["direct"], arrays, f"{key}.direct", A)
+        if A is not None:
+            solver._A = solver.factored_matrix = A
+            solver._factored, solver._fresh = True, False
+        solver.stats = LinearStats()
+    elif isinstance(solver, SuperLUSolver):
+        if meta.get("ordered"):
+            solver._perm = np.array(arrays[f"{key}.perm"])
+            solver._analysed_nnz = meta["analysed_nnz"]
+            solver._permuted = meta["permuted"]
+            solver._lu = _Shape(meta["shape"])
+            if A is not None:
+                if not meta["permuted"]:  # the factor that made the order: make both again
+                    solver._perm = None
+                solver._factorize(A)
+        elif A is not None:
+            solver.factorize(A)
+    elif isinstance(solver, CGSolver):
+        if f"{key}.amg.data" in arrays:
+            solver._A = _get_matrix(arrays, f"{key}.amg")
+            solver._build_amg()
+            solver._reference_iterations = meta["reference_iterations"]
+        solver.stats = type(solver.stats)()
+    elif A is not None:  # PARDISO, CHOLMOD: the analysis depends on the pattern only
+        solver.factorize(A)
+
+
+def _same_solver(solver, meta: dict | None) -> bool:
+    if meta is None or solver is None:
+        return meta is None and solver is None
+    if type(solver).__name__ != meta["type"] or solver.name != meta["name"]:
+        return False
+    direct = getattr(solver, "direct", None)
+    return direct is None or _same_solver(direct, meta.get("direct"))
+
+
+# -- capture and restore ----------------------------------------------------------------------
+def capture(sim) -> tuple[dict, dict[str, np.ndarray]]:
+    """(meta, arrays): everything of ``sim`` that changes from step to step, history aside."""
+    from tissuesim.contact.obstacles import DrivenMotion
+
+    refuse_unsupported(sim)
+    s, state = sim.system, sim.state
+    arrays: dict[str, np.ndarray] = {"x": state.x, "v": state.v, "time": np.float64(state.time)}
+    meta: dict[str, Any] = {"time": float(state.time), "steps": len(sim.history)}
+    if sim._last_gradient is not None:
+        arrays["last_gradient"] = sim._last_gradient
+    meta["solver"] = _solver_state(sim._solver, "solver", arrays)
+    contact = s.contact
+    if contact is not None:
+        meta["kappa"] = contact.kappa
+        meta["adaptive"] = None if contact.adaptive is None else asdict(contact.adaptive)
+        if contact.obstacle_state is not None:
+            arrays["contact.obstacle_state"] = contact.obstacle_state
+        cached = contact.augmented_cache.get("solver")
+        if cached is not None:
+            meta["augmented_solver"] = [cached[0], _solver_state(cached[1], "augmented", arrays)]
+    tracker = sim._indentation
+    meta["indentation"] = {"free": {}, "touch": {}}
+    for kind, table in (("free", tracker._free), ("touch", tracker._touch)):
+        for name, items in table.items():
+            meta["indentation"][kind][name] = len(items)
+            for i, item in enumerate(items):
+                arrays[f"indentation.{kind}.{name}.{i}"] = np.asarray(item)
+    driven = {}
+    for ob in sim.obstacles:
+        for which in ("translation", "rotation"):
+            motion = getattr(ob, which)
+            if isinstance(motion, DrivenMotion):
+                driven[f"{ob.name}.{which}"] = [motion.start_time, motion.end_time]
+                arrays[f"driven.{ob.name}.{which}.start"] = motion.start
+                arrays[f"driven.{ob.name}.{which}.target"] = motion.target
+    meta["driven"] = driven
+    return meta, arrays
+
+
+def restore(sim, meta: dict, arrays, history: list, path: Path) -> None:
+    """Put a captured state into ``sim`` (set up the same way, not stepped yet)."""
+    import warnings
+
+    from tissuesim.contact.stiffness import AdaptiveStiffness
+    from tissuesim.time.state import State
+
+    sim.history[:] = history
+    if history:  # graspers let go at the last step's start (as step() did), then the system
+        start = history[-2].time if len(history) >= 2 else sim.start_time
+        for body in sim.bodies.values():
+            if body.kind == "fem":
+                body.release_graspers(start + 1e-9 * sim.time_step)
+    s = sim.system
+    x, v = np.array(arrays["x"]), np.array(arrays["v"])
+    if x.shape != sim.state.x.shape or v.shape != sim.state.v.shape:
+        raise InputError(f"{path} holds a state of another size; {_FIX}")
+    sim._state = State(float(arrays["time"]), x, v)
+    sim._last_gradient = np.array(arrays["last_gradient"]) if "last_gradient" in arrays else None
+    if meta["solver"] is not None and not sim.explicit:
+        solver = sim._linear_solver()
+        if _same_solver(solver, meta["solver"]):
+            _restore_solver(solver, meta["solver"], arrays, "solver")
+        else:
+            warnings.warn(
+                f"{path} was written with the linear solver {meta['solver']['name']}, this run "
+                f"uses {solver.name}: it continues, but not bit-identical to an uninterrupted "
+                "run (set newton linear_solver to pin one)",
+                UserWarning,
+                stacklevel=3,
+            )
+    contact = s.contact
+    if contact is not None:
+        contact.set_stiffness(meta["kappa"])
+        if meta["adaptive"] is not None and contact.adaptive is not None:
+            contact.adaptive = AdaptiveStiffness(**meta["adaptive"])
+        if "contact.obstacle_state" in arrays:
+            contact.obstacle_state = np.array(arrays["contact.obstacle_state"])
+        if meta.get("augmented_solver"):
+            from tissuesim.solve.linear import make_linear_solver
+
+            n, saved = meta["augmented_solver"]
+            made, _ = make_linear_solver(sim.newton.linear_solver, n, 3, None)
+            if _same_solver(made, saved):
+                _restore_solver(made, saved, arrays, "augmented")
+                contact.augmented_cache["solver"] = (n, made)
+    tracker = sim._indentation
+    for kind, table in (("free", tracker._free), ("touch", tracker._touch)):
+        for name, count in meta["indentation"][kind].items():
+            items = [np.array(arrays[f"indentation.{kind}.{name}.{i}"]) for i in range(count)]
+            table[name] = tuple(float(a) if a.ndim == 0 else a for a in items)
+    for key, (t0, t1) in meta["driven"].items():
+        name, which = key.rsplit(".", 1)
+        ob = next(o for o in sim.obstacles if o.name == name)
+        motion = getattr(ob, which)
+        motion.start = np.array(arrays[f"driven.{key}.start"])
+        motion.target = np.array(arrays[f"driven.{key}.target"])
+        motion.start_time, motion.end_time = t0, t1
+
+
+# -- files ----------------------------------------------------------------------------------
+def _write_npz(path: Path, meta: dict, arrays: dict) -> None:
+    text = json.dumps(meta, allow_nan=True, default=_plain)
+    with atomic_output(path) as tmp, open(tmp, "wb") as f:
+        np.savez(f, __meta__=np.array(text), **arrays)
+        f.flush()
+
+
+def _read_npz(path: Path) -> tuple[dict, dict[str, np.ndarray]]:
+    if not path.is_file():
+        raise InputError(
+            f"no checkpoint {path} (the run was stopped before its first frame, was run by a "
+            "version without checkpoints, or the file was removed); run without --resume to "
+            "start afresh"
+        )
+    try:
+        with np.load(path, allow_pickle=False) as data:
+            arrays = {k: data[k] for k in data.files}
+        meta = json.loads(str(arrays.pop("__meta__")))
+        if not isinstance(meta, dict) or meta.get("format") != FORMAT:
+            raise ValueError("unknown format")
+    except Exception as exc:  # zip, npy or JSON errors: a torn or foreign file
+        raise InputError(
+            f"{path} is not a readable tissuesim checkpoint ({type(exc).__name__}); it may be "
+            "damaged: run without --resume to start afresh"
+        ) from None
+    return meta, arrays
+
+
+def save_simulation(sim, path: str | os.PathLike[str]) -> Path:
+    """``Simulation.save``: the state and history of ``sim`` into one .npz, atomically."""
+    from tissuesim._version import __version__
+
+    path = Path(path)
+    meta, arrays = capture(sim)
+    meta.update(format=FORMAT, tissuesim_version=__version__, fingerprint=fingerprint(sim))
+    arrays["history"] = np.array([encode_record(r) for r in sim.history], dtype=str)
+    _write_npz(path, meta, arrays)
+    return path
+
+
+def load_simulation(sim, path: str | os.PathLike[str]) -> None:
+    """``Simulation.load``: restore a ``save``-d state into ``sim``, set up the same way."""
+    path = Path(path)
+    refuse_unsupported(sim)
+    if sim.history:
+        raise InputError(
+            "Simulation.load needs a simulation that has not stepped yet: set it up again the "
+            "same way, then load"
+        )
+    meta, arrays = _read_npz(path)
+    _check_fingerprint(meta["fingerprint"], fingerprint(sim), path)
+    if "history" not in arrays:
+        raise InputError(f"{path} is a run's checkpoint: resume it with run(..., resume=True)")
+    history = [decode_record(line) for line in arrays["history"].tolist()]
+    restore(sim, meta, arrays, history, path)
+
+
+class RunCheckpoint:
+    """The checkpoint of a run with output (``checkpoint.npz`` + ``checkpoint_history.jsonl``
+    in ``directory``); see the module docstring. ``scene``: the scene file's hash."""
+
+    def __init__(self, directory: Path, scene: str | None = None) -> None:
+        self.path, self.history_path = directory / CHECKPOINT, directory / HISTORY
+        self.scene = scene
+        self._logged = 0  # history lines in the file
+        self._fingerprint: dict | None = None
+        self.meta: dict = {}
+
+    def read(self, sim) -> tuple[dict, dict, list]:
+        """(meta, arrays, history) of the directory's checkpoint; an InputError if there is
+        none, it is damaged, or it was written for another set-up than ``sim``'s. Reads only."""
+        refuse_unsupported(sim)
+        meta, arrays = _read_npz(self.path)
+        self._fingerprint = fingerprint(sim, self.scene)
+        _check_fingerprint(meta["fingerprint"], self._fingerprint, self.path)
+        n = meta["steps"]
+        try:
+            with open(self.history_path, encoding="utf-8") as f:
+                lines = [f.readline() for _ in range(n)]
+            history = [decode_record(line) for line in lines]
+        except (OSError, ValueError, TypeError) as exc:
+            raise InputError(
+                f"{self.history_path} does not hold the {n} steps {self.path} counts "
+                f"({type(exc).__name__}); it may be damaged: run without --resume to start afresh"
+            ) from None
+        for name, frames in meta["series"].items():
+            for _, file in frames:
+                if not (self.path.parent / file).is_file():
+                    raise InputError(
+                        f"{self.path.parent / file} (frame of the series {name!r} the checkpoint "
+                        "lists) is missing; run without --resume to start afresh"
+                    )
+        self.meta = meta
+        self._lines = lines
+        return meta, arrays, history
+
+    def resumed(self) -> None:
+        """Drop history lines after the checkpoint's (a step logged before a kill)."""
+        write_text_atomic(self.history_path, "".join(self._lines))
+        self._logged = len(self._lines)
+
+    def write(self, sim, series: dict[str, list], run: dict) -> None:
+        """Append the new history lines (fsynced), then replace checkpoint.npz atomically."""
+        from tissuesim._version import __version__
+
+        if sim.tissue is not None:
+            return  # not resumable (refuse_unsupported): no checkpoint
+        if self._fingerprint is None:
+            self._fingerprint = fingerprint(sim, self.scene)
+        mode = "a" if self._logged else "w"  # the first write starts the file afresh
+        with open(self.history_path, mode, encoding="utf-8") as f:
+            for record in sim.history[self._logged :]:
+                f.write(encode_record(record) + "\n")
+            f.flush()
+            os.fsync(f.fileno())
+        self._logged = len(sim.history)
+        meta, arrays = capture(sim)
+        meta.update(
+            format=FORMAT,
+            tissuesim_version=__version__,
+            fingerprint=self._fingerprint,
+            series=series,
+            run=run,
+        )
+        _write_npz(self.path, meta, arrays)
+
+
+def scene_hash(path: str | os.PathLike[str]) -> str:
+    """The hash of a scene file's tables except [run] (steps, every, render, field may change
+    between a run and its resume)."""
+    import tomllib
+
+    data = tomllib.loads(Path(path).read_text(encoding="utf-8"))
+    data.pop("run", None)
+    text = json.dumps(data, sort_keys=True, default=str)
+    return hashlib.sha256(text.encode()).hexdigest()[:16]
+
+
+def completed_steps(directory: str | os.PathLike[str]) -> int | None:
+    """The steps of the run in ``directory`` if it completed (its summary says so and its
+    checkpoint is there), else None; reads only."""
+    d = Path(directory)
+    try:
+        status = json.loads((d / "summary.json").read_text(encoding="utf-8")).get("status")
+        meta, _ = _read_npz(d / CHECKPOINT)
+        return meta["steps"] - meta["run"]["first_step"] if status == "completed" else None
+    except (OSError, ValueError, AttributeError, KeyError, InputError):
+        return None

@@ -1,0 +1,120 @@
+"""What a ``Simulation`` checks before stepping and reports after a step (a mixin, like
+``simulation_setup.SetupCalls``): a quasistatic solve must be held, explicit steps must be
+below the stability limit; the step's contact figures, the explicit steps' reactions and the
+tissue's topology events."""
+
+from __future__ import annotations
+
+import warnings
+from typing import Any
+
+import numpy as np
+
+from tissuesim.contact.indentation import is_probe
+from tissuesim.errors import InputError
+
+__all__ = ["StepChecks", "STABILITY_MARGIN"]
+
+#: explicit time steps above this multiple of the stability estimate are refused
+STABILITY_MARGIN = 1.5
+
+
+class StepChecks:
+    """Mixed into ``Simulation``."""
+
+    def _check_supported(self) -> None:
+        """A quasistatic solve that nothing holds has no solution (SciPy would return finite
+        garbage): refuse it."""
+        s = self.system
+        if len(s.bodies) == 1 and self._active()[0].kind == "fem":
+            from tissuesim.time.quasistatic import check_supported
+
+            check_supported(s.bodies[0])
+            return
+        springs = any(b.kind == "frames" and b.model.springs for b in self._active())
+        spring_graspers = any(b.kind == "fem" and b.spring_graspers for b in self._active())
+        if not (s.prescribed_dofs.size or springs or spring_graspers):
+            raise InputError(
+                "a quasistatic solve needs supports, fixed or prescribed frames, or springs, to "
+                "hold the bodies against rigid motions; add fix(...) / fix_frames(...) or use "
+                "backward_euler"
+            )
+
+    _stability_checked = None  # the system whose explicit stability limit was checked
+
+    def _check_stability(self) -> None:
+        """Explicit steps far above the stability limit blow up: refuse them before the first
+        step. The estimate is within 21 % of the true limit 2 / omega_max on the test meshes
+        (benchmarks/results/explicit_limit.md), so above STABILITY_MARGIN times it no run is
+        stable; between 1 and that a warning, and the blow-up check of each step stands."""
+        limit = self.critical_time_step()
+        h = self.time_step
+        if h > STABILITY_MARGIN * limit:
+            raise InputError(
+                f"time_step {h:g} s is {h / limit:.3g} x the explicit stability limit (estimate "
+                f"{limit:.3g} s); explicit steps would blow up: use time_step <= "
+                f"{0.9 * limit:.3g} s, or integrator = backward_euler"
+            )
+        if h > limit:
+            warnings.warn(
+                f"time_step {h:g} s is above the explicit stability estimate {limit:.3g} s; the "
+                "run stops if the energy grows without bound",
+                UserWarning,
+                stacklevel=3,
+            )
+
+    def _contact_report(self, contact, x: np.ndarray, forces: dict) -> dict[str, Any]:
+        """The step's contact figures, and the time split since the last report."""
+        stats = contact.stats
+        depths = {}
+        if any(is_probe(ob) for ob in contact.obstacles):  # the bodies' vertices only then
+            n = contact.n_deformable
+            bodies, rest = contact.vertices(x)[:n], contact.rest[:n]
+            depths = self._indentation.depths(contact.obstacles, bodies, rest, self.time, forces)
+        distance, pairs = contact.proximity(x)
+        report = {
+            "min_distance": distance,
+            "active_pairs": pairs,
+            "candidates_and_barrier_s": stats.candidates_and_barrier_s,
+            "candidates_s": stats.candidates_s,
+            "ccd_s": stats.ccd_s,
+            "barrier_evaluations": stats.evaluations,
+            "ccd_calls": stats.ccd_calls,
+            "friction_solves": stats.friction_solves,
+            "stiffness_Pa": contact.kappa,
+            "indentation_depth": depths,
+        }
+        contact.reset_stats()
+        return report
+
+    def _static_gradient(self) -> np.ndarray | None:
+        """Explicit steps have no Newton gradient: the reactions come from the static balance
+        at the new state (one gradient evaluation, only when there are forces to report)."""
+        if not self._force_names:
+            return None
+        s = self.system
+        energies = self.step_energies(self.time, None, self.time_step)
+        return s.evaluate(self._state.x, 1, False, energies).gradient
+
+    def _tissue_step(self, t0: float) -> dict[str, Any]:
+        tissue = self.tissue
+        events = []
+        if tissue.model is not None:
+            j = self.system.index(tissue.name)
+            z = self.system.body_config(self._state.x, j)
+
+            def rebuild() -> np.ndarray | None:
+                self._build()
+                if tissue.model is None:  # all of it torn or cut: no longer in the system
+                    return None
+                return self.system.body_config(self._state.x, self.system.index(tissue.name))
+
+            events = tissue.topology(z, t0, self.time, rebuild)
+            if tissue.model is None:  # all tissue gone: the organs go on alone
+                self._build()
+        return {
+            "attachment_gap": self.attachment_gap() if tissue.model is not None else 0.0,
+            "tissue_points": int(tissue.dissection.alive.sum()),
+            "attachments": int(sum(a.n for a in self.system.attachments)),
+            "events": events,
+        }
