@@ -360,8 +360,7 @@ class Simulation(BodyCalls, SetupCalls, StepChecks, BodyResults):
             if body.kind == "fem":
                 body.release_graspers(self.time + tol)
         s = self.system
-        if self.integrator == "quasistatic":
-            self._check_supported()
+        by_contact = self.integrator == "quasistatic" and self._check_supported()
         if self.explicit and self._stability_checked is not s:
             self._check_stability()
             self._stability_checked = s
@@ -388,6 +387,12 @@ class Simulation(BodyCalls, SetupCalls, StepChecks, BodyResults):
                 energies=self.step_energies,
                 budget=budget,
             )
+            if by_contact:  # quasistatics of bodies only contact holds: rest in pseudo-time
+                from tissuesim.time.pseudo_time import pseudo_time_step
+
+                step_fn = functools.partial(
+                    pseudo_time_step, energies=self.step_energies, budget=budget
+                )
         self._state, records, substeps = advance(
             step_fn,
             s,

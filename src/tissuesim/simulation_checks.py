@@ -22,23 +22,54 @@ STABILITY_MARGIN = 1.5
 class StepChecks:
     """Mixed into ``Simulation``."""
 
-    def _check_supported(self) -> None:
+    def _check_supported(self) -> bool:
         """A quasistatic solve that nothing holds has no solution (SciPy would return finite
-        garbage): refuse it."""
+        garbage): refuse it, unless contact can hold the bodies; returns whether the step must
+        then come to rest in pseudo-time (``time/pseudo_time.py``)."""
+        held_by_contact = self._held_by_contact()
+        if held_by_contact and not self.system.contact.has_friction:
+            raise InputError(
+                "a quasistatic body held only by contact needs friction: without it, it is "
+                "free to slide and turn on what it rests on, and its equilibrium is not unique "
+                "(the solve drifts); give the contact a friction > 0 ([contact] friction), "
+                "supports (fix), or use backward_euler"
+            )
+        return held_by_contact
+
+    def _held_by_contact(self) -> bool:
+        from tissuesim.time.quasistatic import check_supported
+
         s = self.system
         if len(s.bodies) == 1 and self._active()[0].kind == "fem":
-            from tissuesim.time.quasistatic import check_supported
-
-            check_supported(s.bodies[0])
-            return
+            try:
+                check_supported(s.bodies[0])
+            except InputError as exc:
+                if s.contact is None:
+                    raise InputError(
+                        f"{exc} A body that rests on an obstacle or another body is held by "
+                        "contact: set_contact(...) ([contact]) with friction makes it come to "
+                        "rest there."
+                    ) from None
+                return True
+            return False
         springs = any(b.kind == "frames" and b.model.springs for b in self._active())
         spring_graspers = any(b.kind == "fem" and b.spring_graspers for b in self._active())
+        if s.contact is not None and not (s.ties or s.attachments):
+            for b in self._active():
+                if b.kind == "fem" and not b.spring_graspers:
+                    try:
+                        check_supported(b.model)
+                    except InputError:
+                        return True  # a free body: contact must hold it
         if not (s.prescribed_dofs.size or springs or spring_graspers):
+            if s.contact is not None:
+                return True
             raise InputError(
                 "a quasistatic solve needs supports, fixed or prescribed frames, or springs, to "
-                "hold the bodies against rigid motions; add fix(...) / fix_frames(...) or use "
-                "backward_euler"
+                "hold the bodies against rigid motions; add fix(...) / fix_frames(...), contact "
+                "with something they rest on (set_contact), or use backward_euler"
             )
+        return False
 
     _stability_checked = None  # the system whose explicit stability limit was checked
 

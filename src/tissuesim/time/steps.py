@@ -47,10 +47,18 @@ def implicit_step(
     dynamic: bool,
     energies: EnergyBuilder,
     budget: dict | None = None,
+    t_end: float | None = None,
+    friction_from: np.ndarray | None = None,
+    friction_h: float | None = None,
 ) -> StepOutcome:
     """One implicit step; ``budget`` ({"deadline": perf_counter value, "iterations": n}) ends
-    Newton early for interactive loops: the state reached is accepted and flagged."""
-    t1 = state.time + h
+    Newton early for interactive loops: the state reached is accepted and flagged.
+
+    For pseudo-time steps (``time/pseudo_time.py``): ``t_end`` the time of the loads, the
+    prescribed values and the obstacles (default state.time + h, while h sets the inertia);
+    ``friction_from`` the contact vertices friction's slip is measured from (default the
+    state's) and ``friction_h`` the step its smoothing velocity scales with (default h)."""
+    t1 = state.time + h if t_end is None else t_end
     c_pred = system.retract(state.x, h * state.v) if dynamic else None
     body_energies = energies(t1, c_pred, h)
 
@@ -94,6 +102,9 @@ def implicit_step(
                 candidates,
                 evaluate,
                 budget,
+                t1,
+                friction_from,
+                friction_h,
             )
         if not starts:
             return StepOutcome(
@@ -111,13 +122,15 @@ def implicit_step(
     if contact is not None:
         _initialize_stiffness(system, c0, body_energies)
         if contact.has_friction:
-            V_start = contact.vertices(state.x, obstacle=y0)
-            contact.lag_friction(V_start, V_start, h)
+            V_here = contact.vertices(state.x, obstacle=y0)
+            V_start = V_here if friction_from is None else friction_from
+            h_f = h if friction_h is None else friction_h
+            contact.lag_friction(V_start, V_here, h_f)
             max_relags = contact.settings.friction_iterations - 1
 
             def relag(c: np.ndarray) -> bool:
                 # friction lagged at the last solution (IPC): normal forces, tangent bases
-                contact.lag_friction(V_start, contact.vertices(c), h)
+                contact.lag_friction(V_start, contact.vertices(c), h_f)
                 return True
 
     c1, record = minimize(
@@ -163,14 +176,28 @@ def _initialize_stiffness(system, c0, body_energies, obstacle=None) -> None:
 
 
 def _step_with_moving_obstacles(
-    system, state, h, solver, options, dynamic, body_energies, candidates, evaluate, budget=None
+    system,
+    state,
+    h,
+    solver,
+    options,
+    dynamic,
+    body_energies,
+    candidates,
+    evaluate,
+    budget=None,
+    t1=None,
+    friction_from=None,
+    friction_h=None,
 ) -> StepOutcome:
     """Implicit step in which Newton moves the obstacles too (contact/kinematic.py): the start
     must only be reachable with the obstacles where they are. Under a budget that runs out the
-    obstacles stay where Newton got them (short of their targets, like a haptic proxy)."""
+    obstacles stay where Newton got them (short of their targets, like a haptic proxy).
+    ``t1``, ``friction_from``, ``friction_h``: as ``implicit_step``'s t_end and friction."""
     from tissuesim.contact.kinematic import solve_with_moving_obstacles
 
-    contact, t1 = system.contact, state.time + h
+    contact = system.contact
+    t1 = state.time + h if t1 is None else t1
     if contact.obstacle_state is None:
         contact.obstacle_state = contact.obstacle_positions(state.time)
     y = contact.obstacle_state
@@ -186,13 +213,15 @@ def _step_with_moving_obstacles(
     _initialize_stiffness(system, c0, body_energies, y)
     relag, max_relags = None, 0
     if contact.has_friction:
-        V_start = contact.vertices(state.x, obstacle=y)
-        contact.lag_friction(V_start, V_start, h)
+        V_here = contact.vertices(state.x, obstacle=y)
+        V_start = V_here if friction_from is None else friction_from
+        h_f = h if friction_h is None else friction_h
+        contact.lag_friction(V_start, V_here, h_f)
         max_relags = contact.settings.friction_iterations - 1
 
         def relag(c: np.ndarray, y_now: np.ndarray) -> bool:
             # inside the solves, as in implicit_step: the lag at the loosely converged point
-            contact.lag_friction(V_start, contact.vertices(c, obstacle=y_now), h)
+            contact.lag_friction(V_start, contact.vertices(c, obstacle=y_now), h_f)
             return True
 
     c1, y1, record, results = solve_with_moving_obstacles(
