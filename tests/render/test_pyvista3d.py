@@ -172,3 +172,62 @@ def test_default_camera_frames_the_scene():
     assert d[2] > 0 and abs(np.dot(d, cam.view_up)) < 1e-9 * np.linalg.norm(d)  # from above
     empty = pyvista3d._fit_camera(np.zeros((0, 3)), (800, 600), 0.04)
     assert np.isfinite(empty.position).all()
+
+
+def test_the_view_frames_the_bodies_not_a_large_floor_under_them():
+    """A 10 m floor under a 0.1 m block: framed on the floor the block was a speck; the floor
+    is context, so only its part near the block counts for the view."""
+    block, tri = sphere((0.0, 0.0, 0.05), 0.05)
+    floor = np.array([[-5.0, -5.0, 0.0], [5.0, -5.0, 0.0], [5.0, 5.0, 0.0], [-5.0, 5.0, 0.0]])
+    floor_tri = np.array([[0, 1, 2], [0, 2, 3]])
+    frame = Frame3D(
+        surfaces=[
+            SurfaceLayer("floor", floor, floor_tri, context=True),
+            SurfaceLayer("block", block, tri, scalars=block[:, 2], scalar_name="z (m)"),
+        ]
+    )
+    framed = pyvista3d._scene_points(frame)
+    assert np.abs(framed).max() <= 0.1 + 1e-6  # the floor's far corners left out
+    plain = Frame3D(surfaces=[SurfaceLayer("floor", floor, floor_tri), frame.surfaces[1]])
+    assert np.abs(pyvista3d._scene_points(plain)).max() == 5.0  # not context: all of it
+    near = pyvista3d._fit_camera(framed, (800, 600), 0.04)
+    far = pyvista3d._fit_camera(pyvista3d._scene_points(plain), (800, 600), 0.04)
+    distance = np.linalg.norm(np.subtract(near.position, near.focal_point))
+    assert distance < 0.05 * np.linalg.norm(np.subtract(far.position, far.focal_point))
+    only_floor = Frame3D(surfaces=[SurfaceLayer("floor", floor, floor_tri, context=True)])
+    assert len(pyvista3d._scene_points(only_floor)) == 4  # no body: the floor is the scene
+
+
+def test_colour_bar_labels_have_the_digits_their_range_needs():
+    assert pyvista3d._label_format(0.998, 1.0) == "%.5g"  # 0.9985 apart from 0.998
+    assert pyvista3d._label_format(0.0, 1000.0) == "%.3g"
+    assert pyvista3d._label_format(1.0, 1.0) == "%.3g"  # a constant field
+    assert pyvista3d._label_format(1.0, 1.0 + 1e-12) == "%.8g"  # capped
+    labels = {pyvista3d._label_format(0.998, 1.0) % v for v in np.linspace(0.998, 1.0, 5)}
+    assert len(labels) == 5
+
+
+def test_long_colour_bar_titles_wrap_between_words_instead_of_being_cut():
+    title = "liver\nlargest principal Green strain (-)"
+    wrapped = pyvista3d._wrap_title(title, room=150.0, letter=6.0)  # 25 letters a line
+    lines = wrapped.split("\n")
+    assert lines == ["liver", "largest principal Green", "strain (-)"]
+    assert ".." not in wrapped
+    cut = pyvista3d._wrap_title("a b c d e f g h", room=18.0, letter=6.0, max_lines=2)
+    assert len(cut.split("\n")) == 2 and cut.endswith("..")
+
+
+def test_several_bodies_get_their_own_colour_bars_and_one_heading(tmp_path):
+    a, ta = sphere((-1.5, 0.0, 0.0))
+    b, tb = sphere((1.5, 0.0, 0.0))
+    frame = Frame3D(
+        surfaces=[
+            SurfaceLayer("liver", a, ta, scalars=a[:, 0], scalar_name="liver", clim=(-2.5, -0.5)),
+            SurfaceLayer("gallbladder", b, tb, scalars=b[:, 0], scalar_name="gallbladder"),
+        ],
+        title="t = 1 s",
+        bar_heading="largest principal Green strain (-)",
+    )
+    out = tmp_path / "two.png"
+    render_frame_png(out, frame, window_size=(800, 600))
+    assert out.read_bytes()[:8] == PNG_MAGIC

@@ -53,6 +53,9 @@ class SurfaceLayer:
     scalars: np.ndarray | None = None
     scalar_name: str = ""  # the colour bar's title (layers sharing it share one bar)
     clim: tuple[float, float] | None = None
+    # context (an obstacle: a floor, a ramp): drawn, but the view is framed on the bodies and
+    # takes in only the part of it near them, so a large plane does not shrink them to a speck
+    context: bool = False
 
     @property
     def bar_title(self) -> str:
@@ -143,6 +146,8 @@ class Frame3D:
     points: Sequence[PointLayer] = ()
     cuts: Sequence[np.ndarray] = ()
     title: str = ""
+    # what the colour bars show, written once above them when each bar is titled by its body
+    bar_heading: str = ""
 
     def __post_init__(self) -> None:
         for what, items, kind in (
@@ -169,11 +174,27 @@ class Frame3D:
         object.__setattr__(self, "title", str(self.title))
 
 
+#: context layers count for the view within this fraction of the bodies' size around them
+CONTEXT_MARGIN = 0.5
+
+
 def _scene_points(frame: Frame3D) -> np.ndarray:
-    """(k, 3) every point of the scene: surface vertices, layer points, cut corners."""
-    arrays = [s.points for s in frame.surfaces] + [p.points for p in frame.points]
+    """(k, 3) the points the view is fitted to: the bodies' surface vertices, layer points and
+    cut corners, and of context layers (obstacles) the points within CONTEXT_MARGIN of the
+    bodies' size around their box (all of them when there is no body)."""
+    arrays = [s.points for s in frame.surfaces if not s.context] + [p.points for p in frame.points]
     arrays += [c.reshape(-1, 3) for c in frame.cuts]
-    return np.concatenate([np.zeros((0, 3)), *arrays])
+    own = np.concatenate([np.zeros((0, 3)), *arrays])
+    context = [s.points for s in frame.surfaces if s.context]
+    if not context:
+        return own
+    context = np.concatenate(context)
+    if len(own) == 0:
+        return context
+    lo, hi = own.min(axis=0), own.max(axis=0)
+    margin = CONTEXT_MARGIN * float(np.max(hi - lo))
+    near = np.all((context >= lo - margin) & (context <= hi + margin), axis=1)
+    return np.concatenate([own, context[near]])
 
 
 @dataclass(frozen=True)

@@ -25,6 +25,7 @@ points (q, 3), scalars (q,); each cut (m, 3, 3) triangle corners.
 
 from __future__ import annotations
 
+import math
 import os
 from pathlib import Path
 from typing import Any
@@ -271,7 +272,8 @@ def _draw(
     bar_font = round(1.5 * label_size)  # VTK's scalar bar font sizes are about pixels
     shown: set[str] = set()
     for i, (title, mapper) in enumerate(mappers.items()):
-        name = _fit_text(title, (1.0 - _COLUMN_X) * w - 4, 0.45 * (bar_font + 2))
+        room, letter = (1.0 - _COLUMN_X) * w - 4, 0.45 * (bar_font + 2)
+        name = _wrap_title(title, room, letter)
         while name in shown:  # PyVista merges bars of equal titles
             name += " "
         shown.add(name)
@@ -284,7 +286,7 @@ def _draw(
             width=min(0.05, 0.3 * (x1 - x0)),
             height=slot - 0.02,
             n_labels=5 if slot > 0.25 else 3,
-            fmt="%.3g",
+            fmt=_label_format(*mapper.scalar_range),
             color="black",
             title_font_size=bar_font + 2,
             label_font_size=bar_font,
@@ -292,6 +294,19 @@ def _draw(
             render=False,
         )
         bar.SetVerticalTitleSeparation(round(0.8 * label_size))
+    if frame.bar_heading and mappers:
+        font = max(6, round(0.62 * bar_font))
+        # PyVista text: letters about 0.95 font size wide (as the title's)
+        lines = _wrap_title(frame.bar_heading, (1.0 - _COLUMN_X) * w - 8, 0.95 * font)
+        lines = lines.split("\n")
+        for k, line in enumerate(lines):  # bottom line just above the first bar's title
+            plotter.add_text(
+                line,
+                position=(_COLUMN_X * w, (y1 + 0.045) * h + (len(lines) - 1 - k) * 1.9 * font),
+                font_size=font,
+                color="black",
+                render=False,
+            )
     _add_legend(plotter, legend, label_size)
     if frame.title:
         # shrink a long title to fit the width (PyVista text: letters about 0.95 size wide)
@@ -310,6 +325,28 @@ def _draw(
         table = pv.convert_array(m.lookup_table.GetTable())[:, :3]
         keys.append(table[np.linspace(0, len(table) - 1, 32).astype(np.int64)].astype(np.uint8))
     return np.concatenate(keys)
+
+
+def _label_format(lo: float, hi: float) -> str:
+    """A printf format whose significant digits tell a colour bar's labels apart: 0.998 to 1
+    needs 5 (0.9985), 0 to 1000 three; at most 8."""
+    span, size = abs(hi - lo), max(abs(lo), abs(hi))
+    if not (span > 0.0 and math.isfinite(span) and size > 0.0):
+        return "%.3g"
+    digits = math.ceil(math.log10(size / span)) + 2
+    return f"%.{min(8, max(3, digits))}g"
+
+
+def _wrap_title(title: str, room: float, letter: float, max_lines: int = 3) -> str:
+    """A colour bar's title in lines of about ``room`` pixels, broken between words ("liver"
+    over "largest principal Green" over "strain (-)"); past ``max_lines`` the last is cut."""
+    import textwrap
+
+    fits = max(3, int(room / letter))
+    lines = [part for line in title.split("\n") for part in textwrap.wrap(line, fits) or [""]]
+    if len(lines) > max_lines:
+        lines = lines[: max_lines - 1] + [_fit_text(" ".join(lines[max_lines - 1 :]), room, letter)]
+    return "\n".join(_fit_text(line, room, letter) for line in lines)
 
 
 def _fit_text(text: str, room: float, letter: float) -> str:

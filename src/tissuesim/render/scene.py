@@ -182,8 +182,12 @@ def _frame3d(bodies, frame, field, label, clim, surfaces):
 
     t, data, cut, suffix = frame
     layers, points = [], []
+
+    def bar(b) -> str:  # one colour bar per body when there are several
+        return label if len(bodies) == 1 else b.name
+
     for name, (x, tri) in data.get("__obstacles__", {}).items():  # io/run_output.py OBSTACLES
-        layers.append(SurfaceLayer(name, x, tri, color="silver", opacity=0.45))
+        layers.append(SurfaceLayer(name, x, tri, color="silver", opacity=0.45, context=True))
     for j, b in enumerate(bodies):
         d = data[b.name]
         if b.kind == "fem":
@@ -197,8 +201,8 @@ def _frame3d(bodies, frame, field, label, clim, surfaces):
                     d["positions"],
                     surfaces[b.name],
                     scalars=vals,
-                    scalar_name=label,
-                    clim=clim,
+                    scalar_name=bar(b),
+                    clim=clim[b.name],
                 )
             )
         elif b.kind == "frames" and d["surface"] is not None and field == "displacement":
@@ -209,8 +213,8 @@ def _frame3d(bodies, frame, field, label, clim, surfaces):
                     d["surface"],
                     b.surface.triangles,
                     scalars=vals,
-                    scalar_name=label,
-                    clim=clim,
+                    scalar_name=bar(b),
+                    clim=clim[b.name],
                 )
             )
         else:
@@ -230,11 +234,12 @@ def _frame3d(bodies, frame, field, label, clim, surfaces):
                     b.name if b.kind == "tissue" else f"{b.name} points",
                     d["positions"][alive],
                     _values(d, field, "points")[alive],
-                    scalar_name=label,
-                    clim=clim,
+                    scalar_name=bar(b),
+                    clim=clim[b.name],
                 )
             )
-    return Frame3D(layers, points, [cut] if len(cut) else [], f"t = {t:.4g} s{suffix}")
+    heading = label if len(bodies) > 1 else ""  # the bars are titled by their bodies then
+    return Frame3D(layers, points, [cut] if len(cut) else [], f"t = {t:.4g} s{suffix}", heading)
 
 
 def _field_values(bodies, data, field) -> list[np.ndarray]:
@@ -255,7 +260,12 @@ def _render_pyvista(sim, bodies, frames, directory, field, label) -> str:
     surfaces = {b.name: boundary_facets(b.mesh.simplices) for b in bodies if b.kind == "fem"}
     wall = sum(r.wall_time_s for r in sim.history)
     picked = [frames[i] for i in _subsample(len(frames), gif_frames_3d(wall))]
-    clim = _range([v for f in picked for v in _field_values(bodies, f[1], field)], field)
+    # each body its own colour range and bar: a stiff organ's small strains are not washed
+    # out by a soft one's (or the tissue's) large ones
+    clim = {
+        b.name: _range([v for f in picked for v in _field_values([b], f[1], field)], field)
+        for b in bodies
+    }
     camera = render_frame_png(
         directory / "final.png", _frame3d(bodies, frames[-1], field, label, clim, surfaces)
     )
