@@ -75,3 +75,45 @@ def test_mesh_help_documents_every_option(capsys):
     text = " ".join(capsys.readouterr().out.split())
     for option in ("--output", "--size", "--mesher", "metres", "pytetwild"):
         assert option in text
+
+
+#: a sitecustomize that makes PyVista unimportable, as on a plain install (no [pyvista] extra)
+NO_PYVISTA = """
+import sys
+
+
+class _NoPyVista:
+    def find_spec(self, name, path=None, target=None):
+        if name == "pyvista" or name.startswith("pyvista."):
+            raise ModuleNotFoundError(f"No module named {name!r}", name=name)
+        return None
+
+
+sys.meta_path.insert(0, _NoPyVista())
+"""
+
+
+@pytest.mark.skipif(
+    "pytetwild" not in meshers.available_meshers(),
+    reason="pytetwild (the default mesher, a dependency) is not installed: pip install pytetwild",
+)
+def test_mesh_works_without_pyvista_as_on_a_plain_install(tmp_path, stl):
+    """pytetwild imports PyVista for an accessor that meshing does not use; PyVista is an
+    optional extra, so a plain install failed with 'mesher pytetwild is not installed'."""
+    import os
+    import subprocess
+    import sys
+
+    site = tmp_path / "site"
+    site.mkdir()
+    (site / "sitecustomize.py").write_text(NO_PYVISTA)
+    env = dict(
+        os.environ, PYTHONPATH=os.pathsep.join([str(site), os.environ.get("PYTHONPATH", "")])
+    )
+    check = [sys.executable, "-c", "import pyvista"]
+    assert subprocess.run(check, env=env, capture_output=True).returncode != 0  # hidden
+    out = tmp_path / "organ.vtu"
+    command = [sys.executable, "-m", "tissuesim", "mesh", str(stl), "-o", str(out)]
+    done = subprocess.run([*command, "--size", "0.01"], env=env, capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    assert ts.read_mesh(out).n_cells > 100

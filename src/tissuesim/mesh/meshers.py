@@ -60,7 +60,17 @@ def _import(name: str):
 
 #: the child that runs fTetWild: it reads surface.npz and writes volume.npz in its directory
 _PYTETWILD_CHILD = """
-import numpy as np, pytetwild
+import sys, types
+import numpy as np
+try:
+    import pytetwild
+except ModuleNotFoundError as exc:  # pytetwild's PyVista accessor; tetrahedralize needs none
+    if exc.name != "pyvista":
+        raise
+    sys.modules["pyvista"] = types.ModuleType("pyvista")
+    for name in [m for m in sys.modules if m.startswith("pytetwild")]:
+        del sys.modules[name]
+    import pytetwild
 d = np.load("surface.npz")
 v, t = pytetwild.tetrahedralize(d["points"], d["faces"], edge_length_abs=float(d["size"]),
                                 quiet=True)
@@ -75,7 +85,10 @@ def _pytetwild(points: np.ndarray, faces: np.ndarray, size: float) -> tuple:
     import subprocess
     import sys
 
-    _import("pytetwild")
+    # not imported here: pytetwild imports PyVista (an optional extra) for an accessor that
+    # its tetrahedralize does not use; the child stands in for PyVista when it is missing
+    if importlib.util.find_spec(_PACKAGE["pytetwild"]) is None:
+        raise InputError(f"mesher 'pytetwild' is not installed; install it with {INSTALL_HINT}")
     with tempfile.TemporaryDirectory(prefix="tissuesim-tetwild-") as tmp:
         # edge_length_abs: the target edge length; the envelope (epsilon, 1e-3 of the
         # bounding-box diagonal) bounds how far the boundary may lie from the input surface
@@ -162,8 +175,8 @@ def run_mesher(
     reported as a MeshError naming ``source`` and suggesting another mesher.
     """
     adapter = _ADAPTERS[name]
-    module = _import(name)  # a missing mesher is an install problem, not a meshing failure
-    del module
+    if name != "pytetwild":  # (pytetwild is imported by its child process only)
+        _import(name)  # a missing mesher is an install problem, not a meshing failure
     try:
         v, t = adapter(np.ascontiguousarray(points), np.ascontiguousarray(faces), size)
     except InputError:
