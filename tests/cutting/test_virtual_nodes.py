@@ -1,0 +1,101 @@
+"""The virtual node algorithm's core (mesh/virtual_nodes.py): which cells a cut crosses, the
+copies and their volume fractions, node duplication where the material separates."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import tissuesim as ts
+from tissuesim.errors import InputError
+from tissuesim.mesh.checks import signed_volumes
+from tissuesim.mesh.virtual_nodes import PlanarCut, cut_cells, virtual_node_cut
+
+
+def plane_x(x0: float, y=(-1.0, 2.0), z=(-1.0, 2.0)) -> PlanarCut:
+    """The plane x = x0, bounded by the rectangle y0..y1, z0..z1."""
+    (y0, y1), (z0, z1) = y, z
+    poly = np.array([[x0, y0, z0], [x0, y1, z0], [x0, y1, z1], [x0, y0, z1]])
+    return PlanarCut(np.array([x0, 0.0, 0.0]), np.array([1.0, 0.0, 0.0]), poly)
+
+
+def volumes(points, cells) -> np.ndarray:
+    return np.abs(signed_volumes(points, cells))
+
+
+@pytest.fixture
+def block():
+    return ts.box((0.0, 0.0, 0.0), (1.0, 0.5, 0.5), (6, 3, 3))
+
+
+def test_a_through_cut_parts_the_block_and_keeps_every_volume(block):
+    cut = plane_x(0.47)  # through cells, off the mesh planes (x = k / 6)
+    out = virtual_node_cut(block.points, block.cells, [cut])
+    v0 = volumes(block.points, block.cells)
+    v = volumes(out.points, out.cells) * out.fraction  # copies keep their parents' shape
+    assert v.sum() == pytest.approx(v0.sum(), rel=1e-12)
+    assert out.n_pieces == 2
+    hit = cut_cells(block.points, block.cells, cut)
+    assert hit.size > 0 and np.all(out.side[np.isin(out.parent, hit)] != 0)
+    for e in hit:  # each cut cell: two copies whose fractions add up to one
+        mine = out.fraction[out.parent == e]
+        assert len(mine) == 2 and mine.sum() == pytest.approx(1.0, abs=1e-12)
+    # the side x < 0.47 holds 0.47 of the block: its copies and the whole cells left of it
+    v = volumes(out.points, out.cells) * out.fraction
+    centre_x = out.points[out.cells].mean(axis=1)[:, 0]
+    left = (out.side == -1) | ((out.side == 0) & (centre_x < 0.47))
+    assert v[left].sum() == pytest.approx(0.47 * 0.25, rel=1e-12)
+    # duplicated nodes sit where their originals are; the cut cells' nodes were duplicated
+    np.testing.assert_array_equal(out.points, block.points[out.origin])
+    assert len(out.points) > block.n_points and np.all(
+        out.origin[: block.n_points] == np.arange(block.n_points)
+    )
+
+
+def test_a_notch_duplicates_nodes_but_leaves_one_piece(block):
+    cut = plane_x(0.47, z=(-1.0, 0.3))  # the blade went down 0.2 of the 0.5 depth
+    out = virtual_node_cut(block.points, block.cells, [cut])
+    assert out.n_pieces == 1
+    assert len(out.points) > block.n_points  # the notch's faces have their own nodes
+    v = volumes(out.points, out.cells) * out.fraction
+    assert v.sum() == pytest.approx(0.25, rel=1e-12)
+
+
+def test_cells_the_blade_is_still_inside_stay_whole(block):
+    full = cut_cells(block.points, block.cells, plane_x(0.47))
+    part = cut_cells(block.points, block.cells, plane_x(0.47, z=(-1.0, 0.3)))
+    assert 0 < part.size < full.size and set(part) <= set(full)
+    centres = block.points[block.cells[part]].mean(axis=1)
+    assert centres[:, 2].max() < 0.3 + 1e-12  # only cells under the blade's reach
+
+
+def test_a_cut_along_mesh_faces_parts_the_block(block):
+    out = virtual_node_cut(block.points, block.cells, [plane_x(0.5)])  # x = 3 / 6: mesh faces
+    assert out.n_pieces == 2 and np.all(out.fraction == 1.0)
+    assert cut_cells(block.points, block.cells, plane_x(0.5)).size == 0
+
+
+def test_a_2d_strip_cut_across():
+    strip = ts.rectangle((0.0, 0.0), (1.0, 0.2), (10, 2))
+    cut = plane_x(0.53)
+    out = virtual_node_cut(strip.points, strip.cells, [cut])
+    assert out.n_pieces == 2
+    area = volumes(out.points, out.cells)  # signed_volumes gives triangle areas in 2D
+    assert (area * out.fraction).sum() == pytest.approx(0.2, rel=1e-12)
+
+
+def test_a_cell_cut_twice_is_refused(block):
+    with pytest.raises(InputError, match="crossed by two cuts"):
+        virtual_node_cut(block.points, block.cells, [plane_x(0.47), plane_x(0.48)])
+
+
+def test_a_blade_swept_down_through_the_block_is_a_planar_cut(block):
+    cut = PlanarCut.swept_segment(
+        (0.47, -1, 1.0), (0.47, 2, 1.0), (0.47, -1, -1.0), (0.47, 2, -1.0)
+    )
+    assert np.allclose(np.abs(cut.normal), [1.0, 0.0, 0.0])
+    assert virtual_node_cut(block.points, block.cells, [cut]).n_pieces == 2
+    with pytest.raises(InputError, match="not planar"):
+        PlanarCut.swept_segment((0, 0, 0), (1, 0, 0), (0, 1, 0), (1, 1, 1))
+    with pytest.raises(InputError, match="no area"):
+        PlanarCut.swept_segment((0, 0, 0), (1, 0, 0), (2, 0, 0), (3, 0, 0))
