@@ -55,6 +55,8 @@ class P1Kinematics(NodalKinematics):
     @classmethod
     def from_mesh(cls, mesh: Mesh) -> P1Kinematics:
         grads, measure = shape_gradients(mesh.points, mesh.cells)
+        if mesh.cell_fractions is not None:  # virtual-node copies integrate their part only
+            measure = measure * mesh.cell_fractions
         return cls(
             cells=mesh.cells,
             stencil=cls.dof_stencil(mesh.cells, mesh.dim),

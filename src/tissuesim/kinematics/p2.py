@@ -47,6 +47,10 @@ class P2Kinematics(NodalKinematics):
 
     @classmethod
     def from_mesh(cls, mesh: Mesh) -> P2Kinematics:
+        if mesh.cell_fractions is not None:
+            from tissuesim.errors import InputError
+
+            raise InputError("a virtual-node cut applies to linear (P1) cells; this is order 2")
         d = mesh.dim
         xi, w = quadrature(d, stiffness_degree(2))
         _, dN = shape_functions(d, 2, xi)  # (nq, nv, d)

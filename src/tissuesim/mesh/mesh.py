@@ -23,6 +23,8 @@ class Mesh:
     facet_sets: name -> (k, d) boundary facets (edges in 2D, triangles in 3D) as corner indices.
     cell_sets: name -> (k,) cell indices.
     source: where the mesh came from (a file path or a generator), used in error messages.
+    cell_fractions: (m,) the part of each cell's volume that is material (a virtual-node cut's
+        copies, ``mesh/virtual_nodes.py``), weighting its energy, mass and body loads; None: 1.
     surface_projection: the exact curved surface the boundary approximates, as a projection
         of points onto it ((k, d) -> (k, d)), when a generator knows it (``ellipsoid``);
         elevating the mesh to order 2 puts the boundary's midside nodes on it. None (files,
@@ -38,6 +40,9 @@ class Mesh:
     cell_sets: Mapping[str, np.ndarray] = field(default_factory=dict)
     source: str = "<arrays>"
     surface_projection: Callable[[np.ndarray], np.ndarray] | None = None
+    # the fraction of each cell's volume that holds material (m,): cells copied by a
+    # virtual-node cut (``mesh/virtual_nodes.py``) stand for their side only; None: all of it
+    cell_fractions: np.ndarray | None = None
 
     def __repr__(self) -> str:
         kind = {2: "triangles", 3: "tetrahedra"}.get(self.dim, "cells")

@@ -98,6 +98,36 @@ class VirtualNodeMesh:
         """Connected pieces of material (cells joined through shared points)."""
         return _components(self.cells, len(self.points))
 
+    def to_mesh(self, mesh):
+        """The cut as a ``Mesh`` of the original ``mesh``: its point sets hold every copy of
+        their nodes, its cell sets the copies of their cells, its facet sets the boundary
+        facets over copies of their nodes; ``cell_fractions`` weights the copies."""
+        from tissuesim.mesh.boundary import boundary_facets
+        from tissuesim.mesh.mesh import Mesh
+
+        point_sets = {
+            name: np.flatnonzero(np.isin(self.origin, ids)) for name, ids in mesh.point_sets.items()
+        }
+        cell_sets = {
+            name: np.flatnonzero(np.isin(self.parent, ids)) for name, ids in mesh.cell_sets.items()
+        }
+        facets = boundary_facets(self.cells)
+        keys = np.sort(self.origin[facets], axis=1)
+        facet_sets = {}
+        for name, ids in mesh.facet_sets.items():
+            wanted = {tuple(f) for f in np.sort(np.asarray(ids), axis=1)}
+            mine = np.array([tuple(k) in wanted for k in keys], dtype=bool)
+            facet_sets[name] = facets[mine]
+        return Mesh(
+            self.points,
+            self.cells,
+            point_sets=point_sets,
+            facet_sets=facet_sets,
+            cell_sets=cell_sets,
+            source=f"{mesh.source} (cut)",
+            cell_fractions=self.fraction,
+        )
+
 
 def _distances(points: np.ndarray, cells: np.ndarray, cut: PlanarCut) -> np.ndarray:
     """Signed distances (m, d+1) of the cells' vertices to the cut's plane, snapped to 0
