@@ -210,6 +210,13 @@ class Simulation(BodyCalls, SetupCalls, StepChecks, BodyResults):
         x, v = [], []
         for b in bodies:
             c0, v0 = parts.get(b.name) or (self._initial_config(b), b.velocity)
+            origin = getattr(b, "pending_origin", None)
+            if origin is not None and b.name in parts:  # a cut: each new node continues its old
+                d = b.dim
+                c0 = c0.reshape(-1, d)[origin].ravel()
+                v0 = v0.reshape(-1, d)[origin].ravel()
+            if origin is not None:
+                b.pending_origin = None
             x.append(c0)
             v.append(v0)
         t = self.start_time if state is None else state.time

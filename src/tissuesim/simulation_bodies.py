@@ -195,6 +195,41 @@ class BodyCalls:
         self._changed()
         return tissue
 
+    def cut_body(self, cut, *, body: str | None = None) -> dict:
+        """Cut a FEM body now along ``cut`` (a ``mesh.virtual_nodes.PlanarCut`` in world
+        coordinates: the blade cuts the body where it is) by the virtual node algorithm: the
+        cells it crosses completely become copies per side with their volume fractions, nodes
+        are duplicated where the material separates, positions and velocities carry over, and
+        supports and graspers hold every copy of their vertices. Returns what changed:
+        {"cells_cut", "new_nodes", "pieces", "origin": (n_new,) the old node each node
+        continues}. Not yet with contact or a tissue attached (the
+        copies overlap in space; their contact surfaces are embedded ones, still to come)."""
+        from tissuesim.mesh.virtual_nodes import virtual_node_cut
+
+        b = self.body(body, ("fem",))
+        if b.mesh.order != 1:
+            raise InputError(f"cut_body: body {b.name!r} is quadratic; cuts apply to P1 cells")
+        if self.contact is not None:
+            raise InputError(
+                f"cut_body: body {b.name!r} has contact on; cut bodies take no part in contact "
+                "yet (their copies overlap in space): cut without contact"
+            )
+        if self.tissue is not None:
+            raise InputError("cut_body: a scene with a tissue cannot cut its organs yet")
+        current = self.body_positions(b.name) if self._state is not None else b.mesh.points
+        before = b.mesh.n_points
+        result = virtual_node_cut(b.mesh.points, b.mesh.cells, [cut], current=current)
+        cells_cut = int(np.count_nonzero(result.side > 0))
+        report = {
+            "cells_cut": cells_cut,
+            "new_nodes": len(result.points) - before,
+            "pieces": result.n_pieces,
+            "origin": result.origin,
+        }
+        if len(result.points) > before:  # else nothing parted: the mesh stays as it is
+            b.apply_cut(result)
+        return report
+
     def remove_body(self, name: str) -> None:
         """Take a body (and, for the tissue, its attachments and cuts) out, before the first
         step (e.g. to measure a scene without its tissue)."""

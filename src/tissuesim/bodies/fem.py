@@ -289,6 +289,47 @@ class FemBody:
         self.velocity = v.ravel().copy()
         self._changed("velocity")
 
+    # -- cutting (mesh/virtual_nodes.py) ---------------------------------------------------------
+    def apply_cut(self, cut) -> None:
+        """Take the mesh of a virtual-node cut (``VirtualNodeMesh`` of this body's mesh): a new
+        model on it (the copies' densities their parents', the same loads), every support and
+        grasper on all copies of its vertices; ``pending_origin`` tells the simulation which
+        old node each new one continues (its position and velocity)."""
+        old = self.model
+        mesh = cut.to_mesh(old.mesh)
+        model = Model(
+            mesh,
+            old.material,
+            old.density[cut.parent],
+            old.mass_kind,
+            backend=old.backend,
+            formulation=old.formulation,
+        )
+        model.loads = list(old.loads)  # nodal loads and tractions keep each node's first copy
+
+        def copies(vertices: np.ndarray) -> np.ndarray:
+            return np.flatnonzero(np.isin(cut.origin, vertices))
+
+        self.conditions = [
+            (name, DirichletCondition(copies(c.vertices), c.displacement, c.components, c.name))
+            for name, c in self.conditions
+        ]
+        graspers = []
+        for g in self.graspers:
+            graspers.append(
+                Grasper(g.name, g.body, copies(g.vertices), g.displacement, g.stiffness, g.release)
+            )
+        self.graspers = graspers
+        self.spring_graspers = [
+            (g, g.springs(mesh.points)) for g in graspers if g.stiffness is not None
+        ]
+        self.velocity = self.velocity.reshape(-1, self.dim)[cut.origin].ravel()
+        self.model = model
+        self.pending_origin = cut.origin
+        self._set_conditions()
+
+    pending_origin: np.ndarray | None = None  # set by apply_cut, taken by the next rebuild
+
     # -- what the system and the output ask of a body -------------------------------------------
     def step_energies(self, t: float, x_pred: np.ndarray | None, h: float) -> list:
         """Inertia (when x_pred is given), the dead loads at t and the spring graspers."""

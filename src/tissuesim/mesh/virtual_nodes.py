@@ -165,15 +165,18 @@ def _inside_polygon(q: np.ndarray, cut: PlanarCut, tol: float) -> bool:
     return True
 
 
-def cut_cells(points: np.ndarray, cells: np.ndarray, cut: PlanarCut) -> np.ndarray:
+def cut_cells(
+    points: np.ndarray, cells: np.ndarray, cut: PlanarCut, current: np.ndarray | None = None
+) -> np.ndarray:
     """Indices of the cells the cut crosses completely: its plane has vertices strictly on
-    both sides and its section of the cell lies inside the cut's polygon."""
-    points = _as3d(points)
-    d = _distances(points, cells, cut)
+    both sides and its section of the cell lies inside the cut's polygon. ``current``: the
+    points where they are now (default ``points``): the blade cuts the body as it is."""
+    x_now = _as3d(points if current is None else current)
+    d = _distances(x_now, cells, cut)
     crossed = np.flatnonzero((d.max(axis=1) > 0.0) & (d.min(axis=1) < 0.0))
     out = []
     for e in crossed:
-        x = points[cells[e]]
+        x = x_now[cells[e]]
         tol = 1e-9 * float(np.linalg.norm(x.max(axis=0) - x.min(axis=0)))
         if _inside_polygon(_section(x, d[e]), cut, tol):
             out.append(e)
@@ -231,15 +234,17 @@ def _clip(poly: np.ndarray, d: np.ndarray, side: int) -> tuple[np.ndarray, np.nd
 
 
 def _face_part(face: np.ndarray, constraints: list) -> float:
-    """Area of a face (3, 3) (2D: the length of an edge (2, 3)) inside every (cut, side)."""
+    """Area of a face (3, 3) (2D: the length of an edge (2, 3)) where every constraint
+    (distances of its points to a cut (3,), side) holds; the distances are linear on the face."""
     poly = face
-    for cut, side in constraints:
-        d = (poly - cut.point) @ cut.normal
-        size = float(np.linalg.norm(face.max(axis=0) - face.min(axis=0)))
-        d[np.abs(d) <= PLANE_TOLERANCE * size] = 0.0
-        poly, _ = _clip(poly, d, side)
-        if len(poly) == 0:
+    dists = [np.asarray(d, dtype=float) for d, _ in constraints]
+    for k, (_, side) in enumerate(constraints):
+        carried = np.column_stack([poly, *[dd[:, None] for dd in dists]])
+        clipped, _ = _clip(carried, dists[k], side)
+        if len(clipped) == 0:
             return 0.0
+        poly = clipped[:, :3]
+        dists = [clipped[:, 3 + j] for j in range(len(dists))]
     if face.shape[0] == 2:  # an edge of a triangle mesh: the length of what is left
         if len(poly) < 2:
             return 0.0
@@ -247,12 +252,13 @@ def _face_part(face: np.ndarray, constraints: list) -> float:
     return _measure(poly)
 
 
-def _face_on_cut(face: np.ndarray, cut: PlanarCut) -> bool:
-    """Whether a mesh face (3, 3) (2D: an edge) lies in the cut's plane, inside its polygon."""
-    size = float(np.linalg.norm(face.max(axis=0) - face.min(axis=0)))
-    if np.any(np.abs((face - cut.point) @ cut.normal) > PLANE_TOLERANCE * size):
+def _face_on_cut(face_now: np.ndarray, cut: PlanarCut) -> bool:
+    """Whether a mesh face (3, 3) (2D: an edge), where it is now, lies in the cut's plane
+    inside its polygon."""
+    size = float(np.linalg.norm(face_now.max(axis=0) - face_now.min(axis=0)))
+    if np.any(np.abs((face_now - cut.point) @ cut.normal) > PLANE_TOLERANCE * size):
         return False
-    return _inside_polygon(face, cut, 1e-9 * size)
+    return _inside_polygon(face_now, cut, 1e-9 * size)
 
 
 def _components(cells: np.ndarray, n_points: int) -> int:
@@ -268,13 +274,23 @@ def _components(cells: np.ndarray, n_points: int) -> int:
 
 
 def virtual_node_cut(
-    points: np.ndarray, cells: np.ndarray, cuts: list[PlanarCut]
+    points: np.ndarray,
+    cells: np.ndarray,
+    cuts: list[PlanarCut],
+    current: np.ndarray | None = None,
 ) -> VirtualNodeMesh:
-    """Cut a P1 mesh (points (n, d), cells (m, d+1), d = 2 or 3) by ``cuts``: every cell one
-    of them crosses completely (``cut_cells``) becomes a copy per side holding material; nodes
-    are duplicated where the material around them separates (see the module docstring)."""
+    """Cut a P1 mesh (rest points (n, d), cells (m, d+1), d = 2 or 3) by ``cuts``: every cell
+    one of them crosses completely (``cut_cells``) becomes a copy per side holding material;
+    nodes are duplicated where the material around them separates (see the module docstring).
+
+    ``current`` (n, d): where the points are now (default the rest points). The blade cuts the
+    body as it is: a node's side is its signed distance to the cut's plane now, which is linear
+    in each element, so each cell's cut is the plane in its rest shape where that distance is
+    zero, and the fractions and face parts are of rest volume (mass)."""
     cells = np.asarray(cells, dtype=np.int64)
     x3 = _as3d(points)
+    x_now = x3 if current is None else _as3d(current)
+    node_d = [_distances(x_now, cells, cut) for cut in cuts]  # per cut: (m, d+1)
     dim = np.asarray(points).shape[1]
     if cells.shape[1] != dim + 1:
         raise InputError(
@@ -282,7 +298,7 @@ def virtual_node_cut(
         )
     owner = np.full(len(cells), -1)
     for k, cut in enumerate(cuts):
-        hit = cut_cells(x3, cells, cut)
+        hit = cut_cells(x3, cells, cut, x_now)
         twice = hit[owner[hit] >= 0]
         if twice.size:
             raise InputError(
@@ -298,9 +314,8 @@ def virtual_node_cut(
             side.append(0)
             fraction.append(1.0)
             continue
-        cut = cuts[owner[e]]
         x = x3[cells[e]]
-        d = _distances(x3, cells[e : e + 1], cut)[0]
+        d = node_d[owner[e]][e]
         f_plus = _side_fraction(x, d, +1)
         for s, f in ((+1, f_plus), (-1, 1.0 - f_plus)):
             if f > EMPTY:
@@ -321,8 +336,13 @@ def virtual_node_cut(
             a = slot_parent[a]
         return a
 
-    def constraints(c: int) -> list:
-        return [] if side[c] == 0 else [(cuts[owner[parent[c]]], int(side[c]))]
+    def constraints(c: int, key: tuple) -> list:
+        """(distances of the face's points to the copy's cut, its side), or none."""
+        if side[c] == 0:
+            return []
+        e = int(parent[c])
+        local = [int(np.flatnonzero(cells[e] == v)[0]) for v in key]
+        return [(node_d[owner[e]][e][local], int(side[c]))]
 
     by_cell: dict[int, list[int]] = {}
     for c, e in enumerate(parent):
@@ -337,12 +357,13 @@ def virtual_node_cut(
             continue  # a boundary face
         e1, e2 = shared
         face = x3[list(key)]
-        if any(_face_on_cut(face, cut) for cut in cuts):
+        if any(_face_on_cut(x_now[list(key)], cut) for cut in cuts):
             continue  # the cut runs along this face: its two cells part there
         whole = _face_part(face, [])
         for c1 in by_cell[e1]:
             for c2 in by_cell[e2]:
-                if _face_part(face, constraints(c1) + constraints(c2)) <= EMPTY * whole:
+                parts = constraints(c1, key) + constraints(c2, key)
+                if _face_part(face, parts) <= EMPTY * whole:
                     continue  # their material does not meet on this face
                 for v in key:
                     i1 = c1 * k + int(np.flatnonzero(cells[e1] == v)[0])

@@ -1,0 +1,90 @@
+"""Cutting a FEM body during a run (Simulation.cut_body): the state carries over, a piece cut
+off falls with g, the support then carries only what stays attached, mass is kept."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import tissuesim as ts
+from tissuesim.errors import InputError
+from tissuesim.mesh.virtual_nodes import PlanarCut
+
+G = 9.81
+
+
+def through(x0: float) -> PlanarCut:
+    """The plane x = x0 across the whole beam (a blade swept down through it)."""
+    return PlanarCut.swept_segment(
+        (x0, -1.0, 1.0), (x0, 2.0, 1.0), (x0, -1.0, -1.0), (x0, 2.0, -1.0)
+    )
+
+
+def cantilever() -> ts.Simulation:
+    mesh = ts.box((0.0, 0.0, 0.0), (1.0, 0.2, 0.2), (10, 2, 2))
+    material = ts.make_material("neo_hookean", youngs_modulus=1e6, poisson_ratio=0.3)
+    sim = ts.Simulation(
+        mesh,
+        material,
+        density=1000.0,
+        integrator="backward_euler",
+        time_step=0.01,
+        gravity=(0.0, 0.0, -G),
+    )
+    sim.fix(np.flatnonzero(mesh.points[:, 0] < 1e-9), name="wall")
+    return sim
+
+
+def pieces(cells: np.ndarray, n: int) -> np.ndarray:
+    """The connected piece (a label) of every node."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    k = cells.shape[1]
+    rows = np.repeat(cells[:, 0], k)
+    graph = coo_matrix((np.ones(cells.size), (rows, cells.ravel())), shape=(n, n))
+    return connected_components(graph, directed=False)[1]
+
+
+def test_the_cut_carries_positions_and_velocities_to_every_copy():
+    sim = cantilever()
+    for _ in range(3):
+        sim.step()
+    x, v = sim.positions.copy(), sim.velocity.copy()
+    report = sim.cut_body(through(0.47))
+    assert report["new_nodes"] > 0 and len(report["origin"]) == len(x) + report["new_nodes"]
+    np.testing.assert_array_equal(sim.positions, x[report["origin"]])
+    np.testing.assert_array_equal(sim.velocity, v[report["origin"]])
+    assert sim.time == pytest.approx(0.03)
+
+
+def test_a_piece_cut_off_falls_with_g_and_the_wall_then_carries_the_rest():
+    sim = cantilever()
+    for _ in range(5):
+        sim.step()
+    mass = sim.model.mass.lumped.sum() / 3
+    report = sim.cut_body(through(0.47))
+    assert report["pieces"] == 2 and report["cells_cut"] > 0
+    body = sim.bodies["body"]
+    assert body.model.mass.lumped.sum() / 3 == pytest.approx(mass, rel=1e-12)  # no gram lost
+    label = pieces(body.mesh.cells, body.mesh.n_points)
+    clamped = body.mesh.points[:, 0] < 1e-9
+    free = label != label[np.flatnonzero(clamped)[0]]
+    assert free.any() and not free[clamped].any()
+    m = body.model.mass.lumped.reshape(-1, 3)[:, 0]
+    # 0.47 of the mass, as the blade cut the sagged beam where it was now (to 1e-4: the sag)
+    assert m[~free].sum() == pytest.approx(0.47 * mass, rel=1e-3)
+    z = []
+    for _ in range(5):
+        sim.step()
+        z.append((m[free] @ sim.positions[free, 2]) / m[free].sum())
+    np.testing.assert_allclose(np.diff(z, 2) / sim.time_step**2, -G, rtol=1e-2)
+    # the wall carries the part still attached to it, oscillating about its weight
+    assert 0.0 < sim.forces()["wall"][2] < 3.0 * m[~free].sum() * G
+
+
+def test_cut_body_refuses_what_it_cannot_do_yet():
+    sim = cantilever()
+    sim.set_contact(dhat=1e-3)
+    with pytest.raises(InputError, match="contact"):
+        sim.cut_body(through(0.47))
