@@ -88,3 +88,20 @@ def test_cut_body_refuses_what_it_cannot_do_yet():
     sim.set_contact(dhat=1e-3)
     with pytest.raises(InputError, match="contact"):
         sim.cut_body(through(0.47))
+
+
+def test_the_run_after_a_cut_writes_the_cut_mesh_with_its_material_fractions(tmp_path):
+    import meshio
+
+    sim = cantilever()
+    sim.run(2, tmp_path / "before", progress=False, render=False)
+    report = sim.cut_body(through(0.47))
+    sim.run(2, tmp_path / "after", progress=False, render=False)
+    frame = meshio.read(tmp_path / "after" / "body_00002.vtu")
+    n = 99 + report["new_nodes"]  # the 10 x 2 x 2 box has 99 vertices
+    assert frame.points.shape == (n, 3) and frame.point_data["displacement"].shape == (n, 3)
+    fraction = np.concatenate(frame.cell_data["material_fraction"])
+    body = sim.bodies["body"]
+    np.testing.assert_array_equal(fraction, body.mesh.cell_fractions)
+    assert fraction.min() > 0.0 and np.count_nonzero(fraction < 1.0) == 2 * report["cells_cut"]
+    assert "material_fraction" not in meshio.read(tmp_path / "before" / "body_00002.vtu").cell_data

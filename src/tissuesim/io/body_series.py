@@ -78,11 +78,14 @@ class FemSeries(BodySeries):
         u = x - rest
         fields = b.cell_fields(c)
         if self.writers:
+            cell_data = _fields(fields)
+            if b.mesh.cell_fractions is not None:  # a cut body: the copies' part of their cell
+                cell_data["material_fraction"] = np.asarray(b.mesh.cell_fractions)
             self.writers[0].write(
                 t,
                 rest,
                 point_data={"displacement": u, "velocity": v.reshape(rest.shape)},
-                cell_data=_fields(fields),
+                cell_data=cell_data,
             )
         return {"kind": "fem", "positions": x.copy(), "cells": fields, "displacement": u}
 
