@@ -84,16 +84,16 @@ def main() -> None:
         "One thread; medians of 3 fresh processes (evaluation: median of 5 calls after the "
         "first); order-2 evaluation (energy, gradient, Hessian) of a Neo-Hookean P1 mesh.",
         "",
-        "| dim | cells | numpy first call s | numba first call s | numpy eval ms "
-        "| numba eval ms | saving per eval ms | evaluations to repay numba's first call |",
-        "| --- | --- | --- | --- | --- | --- | --- | --- |",
+        "| dim | cells | numba's fixed cost s (import + first call, over NumPy's) "
+        "| numpy eval ms | numba eval ms | saving per eval ms | evaluations to repay it |",
+        "| --- | --- | --- | --- | --- | --- | --- |",
     ]
     for a, b in zip(rows[0::2], rows[1::2], strict=True):
         saving = a["evaluation_s"] - b["evaluation_s"]
-        extra = b["first_call_s"] - a["first_call_s"]
-        repay = f"{extra / saving:.0f}" if saving > 0 else "never"
+        extra = (b["setup_s"] + b["first_call_s"]) - (a["setup_s"] + a["first_call_s"])
+        repay = f"{max(extra, 0.0) / saving:.0f}" if saving > 0 else "never"
         lines.append(
-            f"| {a['dim']} | {a['cells']:,} | {a['first_call_s']:.3f} | {b['first_call_s']:.3f} "
+            f"| {a['dim']} | {a['cells']:,} | {extra:.3f} "
             f"| {1e3 * a['evaluation_s']:.3f} | {1e3 * b['evaluation_s']:.3f} "
             f"| {1e3 * saving:.3f} | {repay} |"
         )

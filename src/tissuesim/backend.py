@@ -5,9 +5,9 @@
     "numpy": ``kinematics/p1.py`` + ``material.evaluate`` batched over all elements; always
              available, and the reference the Numba path is tested against.
     "auto":  numba when it is installed and the mesh is not small, else numpy: below
-             SMALL_MESH_CELLS cells NumPy is faster over a whole run, because Numba's fixed
-             cost per process (importing it and loading its cached kernels, 0.6-1.7 s) takes
-             thousands of evaluations of a small mesh to repay
+             SMALL_MESH_CELLS cells NumPy is faster over a short run, because Numba's fixed
+             cost per process (importing it and loading its cached kernels, 0.4-0.5 s) takes
+             more than about 250 evaluations of such a mesh to repay
              (``benchmarks/results/backend_threshold.md``).
 
 The environment variable ``TISSUESIM_BACKEND`` overrides "auto" (e.g. to time or test the
@@ -28,10 +28,11 @@ __all__ = ["BACKENDS", "Backend", "SMALL_MESH_CELLS", "numba_available", "resolv
 
 Backend = Literal["auto", "numba", "numpy"]
 BACKENDS = ("auto", "numba", "numpy")
-#: cells per dimension below which "auto" takes NumPy: there Numba saves under 3 ms per
-#: evaluation (measured: 1.3 ms at 512 triangles, 0.5 ms at 162 tetrahedra, 12.6 ms at 4,050
-#: triangles, 20 ms at 1,296 tetrahedra), so a run of a few hundred evaluations does not repay
-#: its fixed cost of about 1.5 s
+#: cells per dimension below which "auto" takes NumPy (measured on a quiet 2-core machine,
+#: ``benchmarks/results/backend_threshold.md``): Numba's fixed cost per process is 0.4-0.5 s and
+#: it saves 1.0 ms per evaluation at 512 triangles, 0.8 ms at 162 tetrahedra, 5.9 ms at 4,050
+#: triangles, 4.8 ms at 1,296 tetrahedra; at these thresholds about 250 evaluations (20-50
+#: Newton steps) repay it, below them more: a short run of a small scene is faster on NumPy
 SMALL_MESH_CELLS = {2: 1000, 3: 500}
 
 

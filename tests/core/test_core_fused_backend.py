@@ -122,7 +122,7 @@ def test_backend_resolution(monkeypatch):
 
 @needs_numba
 def test_auto_keeps_small_meshes_on_numpy(monkeypatch):
-    """Numba's fixed cost per run (about 1.5 s) is not repaid on a small mesh
+    """Numba's fixed cost per run (0.4-0.5 s) takes over 250 evaluations to repay on a small mesh
     (benchmarks/backend_threshold.py): "auto" takes NumPy there, Numba from the threshold."""
     from tissuesim.backend import SMALL_MESH_CELLS
 
