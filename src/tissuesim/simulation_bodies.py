@@ -203,7 +203,8 @@ class BodyCalls:
         supports and graspers hold every copy of their vertices. Returns what changed:
         {"cells_cut", "new_nodes", "pieces", "origin": (n_new,) the old node each node
         continues}. Not yet with contact or a tissue attached (the
-        copies overlap in space; their contact surfaces are embedded ones, still to come)."""
+        copies overlap in space; their contact surfaces are embedded ones, still to come), nor
+        a second cut of the same body."""
         from tissuesim.mesh.virtual_nodes import virtual_node_cut
 
         b = self.body(body, ("fem",))
@@ -216,6 +217,12 @@ class BodyCalls:
             )
         if self.tissue is not None:
             raise InputError("cut_body: a scene with a tissue cannot cut its organs yet")
+        if b.mesh.cell_fractions is not None:
+            # a second cut would have to keep the first one's copies (their sides) apart
+            raise InputError(
+                f"cut_body: body {b.name!r} has been cut already; one cut per body for now "
+                "(give the whole cut at once, or cut it before the first step)"
+            )
         current = self.body_positions(b.name) if self._state is not None else b.mesh.points
         before = b.mesh.n_points
         result = virtual_node_cut(b.mesh.points, b.mesh.cells, [cut], current=current)

@@ -88,6 +88,12 @@ def test_cut_body_refuses_what_it_cannot_do_yet():
     sim.set_contact(dhat=1e-3)
     with pytest.raises(InputError, match="contact"):
         sim.cut_body(through(0.47))
+    sim = cantilever()
+    sim.cut_body(through(0.47))
+    mass = sim.model.mass.lumped.sum()
+    with pytest.raises(InputError, match="cut already"):  # it would lose the first's fractions
+        sim.cut_body(through(0.83))
+    assert sim.model.mass.lumped.sum() == mass
 
 
 def test_the_run_after_a_cut_writes_the_cut_mesh_with_its_material_fractions(tmp_path):
