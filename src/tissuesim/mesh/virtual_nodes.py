@@ -273,6 +273,79 @@ def _components(cells: np.ndarray, n_points: int) -> int:
     return len(np.unique(labels[:m]))
 
 
+def _node_groups(x3, x_now, cells, cuts, owner, node_d, parent, side) -> np.ndarray:
+    """The group (a label) of every node slot (copy, local node), (copies * (d+1),): slots of
+    two copies sharing a face are joined when their material meets on it; a face the cut runs
+    along joins nothing. Whole cells on both sides of a face join at once; faces next to a cut
+    cell are looked at one by one (there are few)."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    from tissuesim.mesh.boundary import facet_table
+
+    m, k = cells.shape
+    copies = len(parent)
+    facets, _, inverse, counts = facet_table(cells)
+    # the two (cell, local facet) entries of every interior facet
+    by_facet = np.argsort(inverse, kind="stable")
+    shared = counts[inverse[by_facet]] == 2
+    pairs = by_facet[shared].reshape(-1, 2)
+    cell_a, cell_b = pairs[:, 0] // k, pairs[:, 1] // k
+    face_nodes = facets[pairs[:, 0]]  # (f, d) global nodes of each interior facet
+    # faces a cut runs along: every vertex on its plane (where the body is now), in its polygon
+    on_cut = np.zeros(len(pairs), dtype=bool)
+    size = np.linalg.norm(np.ptp(x_now[face_nodes], axis=1), axis=1)
+    for cut in cuts:  # a vectorised plane test first: few faces lie in the plane
+        dist = np.abs((x_now[face_nodes] - cut.point) @ cut.normal)
+        for f in np.flatnonzero(np.all(dist <= PLANE_TOLERANCE * size[:, None], axis=1)):
+            on_cut[f] = on_cut[f] or _face_on_cut(x_now[face_nodes[f]], cut)
+    copy_of_whole = np.full(m, -1)
+    whole = np.flatnonzero(side == 0)
+    copy_of_whole[parent[whole]] = whole
+    by_cell: dict[int, list[int]] = {}
+    for c in np.flatnonzero(side != 0):
+        by_cell.setdefault(int(parent[c]), []).append(int(c))
+    rows, cols = [], []
+
+    def slots(c: np.ndarray, e: np.ndarray, nodes: np.ndarray) -> np.ndarray:
+        """Slot ids (f, d) of ``nodes`` (f, d) in copies c (f,) of cells e (f,)."""
+        where = np.argmax(cells[e][:, :, None] == nodes[:, None, :], axis=1)  # (f, d)
+        return c[:, None] * k + where
+
+    plain = (copy_of_whole[cell_a] >= 0) & (copy_of_whole[cell_b] >= 0) & ~on_cut
+    if plain.any():
+        rows.append(slots(copy_of_whole[cell_a[plain]], cell_a[plain], face_nodes[plain]).ravel())
+        cols.append(slots(copy_of_whole[cell_b[plain]], cell_b[plain], face_nodes[plain]).ravel())
+
+    def constraints(c: int, nodes: np.ndarray) -> list:
+        """(distances of the face's points to the copy's cut, its side), or none."""
+        if side[c] == 0:
+            return []
+        e = int(parent[c])
+        where = [int(np.flatnonzero(cells[e] == v)[0]) for v in nodes]
+        return [(node_d[owner[e]][e][where], int(side[c]))]
+
+    for f in np.flatnonzero(~plain & ~on_cut):  # faces next to a cut cell
+        nodes = face_nodes[f]
+        face = x3[nodes]
+        area = _face_part(face, [])
+        ea, eb = int(cell_a[f]), int(cell_b[f])
+        for ca in by_cell.get(ea, [copy_of_whole[ea]]):
+            for cb in by_cell.get(eb, [copy_of_whole[eb]]):
+                if (
+                    _face_part(face, constraints(ca, nodes) + constraints(cb, nodes))
+                    <= EMPTY * area
+                ):
+                    continue  # their material does not meet on this face
+                rows.append(slots(np.array([ca]), np.array([ea]), nodes[None]).ravel())
+                cols.append(slots(np.array([cb]), np.array([eb]), nodes[None]).ravel())
+    n = copies * k
+    r = np.concatenate([np.zeros(0, dtype=np.int64), *rows])
+    c = np.concatenate([np.zeros(0, dtype=np.int64), *cols])
+    graph = coo_matrix((np.ones(len(r)), (r, c)), shape=(n, n))
+    return connected_components(graph, directed=False)[1]
+
+
 def virtual_node_cut(
     points: np.ndarray,
     cells: np.ndarray,
@@ -306,90 +379,38 @@ def virtual_node_cut(
                 "cuts a cell once: keep cuts apart by an element or merge them into one plane"
             )
         owner[hit] = k
-    # the copies: (parent cell, side, fraction)
-    parent, side, fraction = [], [], []
-    for e in range(len(cells)):
-        if owner[e] < 0:
-            parent.append(e)
-            side.append(0)
-            fraction.append(1.0)
-            continue
-        x = x3[cells[e]]
+    # the copies: every uncut cell once, then one per side holding material of each cut cell
+    cut_ids = np.flatnonzero(owner >= 0)
+    parent, side, fraction = [np.flatnonzero(owner < 0)], [], []
+    extra_parent = []
+    for e in cut_ids:
         d = node_d[owner[e]][e]
-        f_plus = _side_fraction(x, d, +1)
-        for s, f in ((+1, f_plus), (-1, 1.0 - f_plus)):
+        f_plus = _side_fraction(x3[cells[e]], d, +1)
+        for s_, f in ((+1, f_plus), (-1, 1.0 - f_plus)):
             if f > EMPTY:
-                parent.append(e)
-                side.append(s)
+                extra_parent.append(e)
+                side.append(s_)
                 fraction.append(f)
-    parent = np.array(parent, dtype=np.int64)
-    side = np.array(side, dtype=np.int64)
-    fraction = np.array(fraction)
-    copies = len(parent)
-    k = dim + 1
-    # node slots (copy, local node) merged through shared faces where the material meets
-    slot_parent = np.arange(copies * k)
-
-    def find(a: int) -> int:
-        while slot_parent[a] != a:
-            slot_parent[a] = slot_parent[slot_parent[a]]
-            a = slot_parent[a]
-        return a
-
-    def constraints(c: int, key: tuple) -> list:
-        """(distances of the face's points to the copy's cut, its side), or none."""
-        if side[c] == 0:
-            return []
-        e = int(parent[c])
-        local = [int(np.flatnonzero(cells[e] == v)[0]) for v in key]
-        return [(node_d[owner[e]][e][local], int(side[c]))]
-
-    by_cell: dict[int, list[int]] = {}
-    for c, e in enumerate(parent):
-        by_cell.setdefault(int(e), []).append(c)
-    faces: dict[tuple, list[int]] = {}
-    for e, cell in enumerate(cells):
-        for drop in range(k):
-            key = tuple(sorted(np.delete(cell, drop)))
-            faces.setdefault(key, []).append(e)
-    for key, shared in faces.items():
-        if len(shared) != 2:
-            continue  # a boundary face
-        e1, e2 = shared
-        face = x3[list(key)]
-        if any(_face_on_cut(x_now[list(key)], cut) for cut in cuts):
-            continue  # the cut runs along this face: its two cells part there
-        whole = _face_part(face, [])
-        for c1 in by_cell[e1]:
-            for c2 in by_cell[e2]:
-                parts = constraints(c1, key) + constraints(c2, key)
-                if _face_part(face, parts) <= EMPTY * whole:
-                    continue  # their material does not meet on this face
-                for v in key:
-                    i1 = c1 * k + int(np.flatnonzero(cells[e1] == v)[0])
-                    i2 = c2 * k + int(np.flatnonzero(cells[e2] == v)[0])
-                    r1, r2 = find(i1), find(i2)
-                    if r1 != r2:
-                        slot_parent[max(r1, r2)] = min(r1, r2)
-    # a slot's node: the original node for the first group of each node, a duplicate after
-    roots = np.array([find(i) for i in range(copies * k)])
+    n_whole = len(parent[0])
+    parent = np.concatenate([parent[0], np.array(extra_parent, dtype=np.int64)])
+    side = np.concatenate([np.zeros(n_whole, dtype=np.int64), np.array(side, dtype=np.int64)])
+    fraction = np.concatenate([np.ones(n_whole), np.array(fraction)])
+    copies, k = len(parent), dim + 1
+    labels = _node_groups(x3, x_now, cells, cuts, owner, node_d, parent, side)
+    # a slot's node: the original node for its first group, a new (duplicate) node after
     slot_node = cells[parent].ravel()
-    new_cells = np.empty(copies * k, dtype=np.int64)
-    origin = list(range(len(x3)))
-    node_of_root: dict[int, int] = {}
-    used: set[int] = set()
-    for i in np.argsort(roots, kind="stable"):
-        r = int(roots[i])
-        if r not in node_of_root:
-            v = int(slot_node[i])
-            if v in used:
-                node_of_root[r] = len(origin)
-                origin.append(v)
-            else:
-                node_of_root[r] = v
-                used.add(v)
-        new_cells[i] = node_of_root[r]
-    origin = np.array(origin, dtype=np.int64)
+    pairs, first, group = np.unique(
+        np.column_stack([slot_node, labels]), axis=0, return_index=True, return_inverse=True
+    )
+    order = np.lexsort((first, pairs[:, 0]))  # by node, then by where the group first appears
+    is_first = np.ones(len(pairs), dtype=bool)
+    is_first[order[1:]] = pairs[order[1:], 0] != pairs[order[:-1], 0]
+    node = np.empty(len(pairs), dtype=np.int64)
+    node[is_first] = pairs[is_first, 0]
+    dup = order[~is_first[order]]
+    node[dup] = len(x3) + np.arange(len(dup))
+    origin = np.concatenate([np.arange(len(x3)), pairs[dup, 0]])
+    new_cells = node[group.reshape(-1)]
     pts = np.asarray(points, dtype=float)[origin]
     return VirtualNodeMesh(
         points=pts,

@@ -122,16 +122,12 @@ def implicit_step(
     if contact is not None:
         _initialize_stiffness(system, c0, body_energies)
         if contact.has_friction:
-            V_here = contact.vertices(state.x, obstacle=y0)
-            V_start = V_here if friction_from is None else friction_from
-            h_f = h if friction_h is None else friction_h
-            contact.lag_friction(V_start, V_here, h_f)
+            relag_at = _start_friction(contact, state.x, y0, h, friction_from, friction_h)
             max_relags = contact.settings.friction_iterations - 1
 
             def relag(c: np.ndarray) -> bool:
                 # friction lagged at the last solution (IPC): normal forces, tangent bases
-                contact.lag_friction(V_start, contact.vertices(c), h_f)
-                return True
+                return relag_at(c, None)
 
     c1, record = minimize(
         evaluate,
@@ -164,6 +160,23 @@ def implicit_step(
     system.last_step_energies = body_energies  # the step's Phi, for haptics.py's linearisation
     v1 = system.difference(c1, state.x) / h if dynamic else np.zeros(system.n_dofs)
     return StepOutcome(State(t1, c1, v1), True, [record])
+
+
+def _start_friction(contact, x0, y0, h, friction_from=None, friction_h=None):
+    """Lag friction at the step's start (the configuration x0, obstacles at y0): slip measured
+    from ``friction_from`` (default those vertices), smoothed with ``friction_h`` (default h).
+    Returns relag(c, y) that re-lags it at c (obstacles at y, or where they are) and says it
+    changed, for Newton's ``relag``."""
+    V_here = contact.vertices(x0, obstacle=y0)
+    V_start = V_here if friction_from is None else friction_from
+    h_f = h if friction_h is None else friction_h
+    contact.lag_friction(V_start, V_here, h_f)
+
+    def relag(c: np.ndarray, y: np.ndarray | None) -> bool:
+        contact.lag_friction(V_start, contact.vertices(c, obstacle=y), h_f)
+        return True
+
+    return relag
 
 
 def _initialize_stiffness(system, c0, body_energies, obstacle=None) -> None:
@@ -213,16 +226,9 @@ def _step_with_moving_obstacles(
     _initialize_stiffness(system, c0, body_energies, y)
     relag, max_relags = None, 0
     if contact.has_friction:
-        V_here = contact.vertices(state.x, obstacle=y)
-        V_start = V_here if friction_from is None else friction_from
-        h_f = h if friction_h is None else friction_h
-        contact.lag_friction(V_start, V_here, h_f)
+        # inside the solves, as in implicit_step: the lag at the loosely converged point
+        relag = _start_friction(contact, state.x, y, h, friction_from, friction_h)
         max_relags = contact.settings.friction_iterations - 1
-
-        def relag(c: np.ndarray, y_now: np.ndarray) -> bool:
-            # inside the solves, as in implicit_step: the lag at the loosely converged point
-            contact.lag_friction(V_start, contact.vertices(c, obstacle=y_now), h_f)
-            return True
 
     c1, y1, record, results = solve_with_moving_obstacles(
         system,
