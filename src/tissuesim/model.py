@@ -31,8 +31,25 @@ __all__ = ["Model"]
 
 
 #: bytes a model needs per cell before any factorisation (measured: 2.7 KB per triangle,
-#: 9.8 KB per tetrahedron with its sparsity pattern and scatter maps); keys (dim, order)
-MODEL_BYTES_PER_CELL = {(2, 1): 2500, (3, 1): 9000, (2, 2): 8000, (3, 2): 40000}
+#: 9.8 KB per tetrahedron with its sparsity pattern and scatter maps); keys (dim, order), and
+#: the cell type for Q1 cells (estimated from their arrays, not measured: a hexahedron has 8
+#: points of 8 x 3 gradients and a 24 x 24 scatter)
+MODEL_BYTES_PER_CELL = {
+    (2, 1): 2500,
+    (3, 1): 9000,
+    (2, 2): 8000,
+    (3, 2): 40000,
+    "quad": 6000,
+    "hexahedron": 30000,
+}
+
+
+def _kinematics(mesh: Mesh):
+    if not mesh.simplicial:
+        from tissuesim.kinematics.q1 import Q1Kinematics
+
+        return Q1Kinematics.from_mesh(mesh)
+    return (P1Kinematics if mesh.order == 1 else P2Kinematics).from_mesh(mesh)
 
 
 @dataclass(eq=False)
@@ -48,14 +65,14 @@ class Model:
 
     def __post_init__(self) -> None:
         cells = self.mesh.n_cells
+        key = (self.mesh.dim, self.mesh.order) if self.mesh.simplicial else self.mesh.cell_type
         check_memory(
-            cells * MODEL_BYTES_PER_CELL[self.mesh.dim, self.mesh.order],
+            cells * MODEL_BYTES_PER_CELL[key],
             f"a model of {self.mesh.source} ({cells} cells)",
             "Use a coarser mesh.",
         )
         self.density = positive_field(self.density, "density", self.mesh.n_cells, "kg/m^3")
-        kind = P1Kinematics if self.mesh.order == 1 else P2Kinematics
-        self.kinematics = kind.from_mesh(self.mesh)
+        self.kinematics = _kinematics(self.mesh)
         self.backend, self.backend_reason = resolve_backend(
             self.backend, self.mesh.n_cells, self.mesh.dim
         )

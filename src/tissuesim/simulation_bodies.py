@@ -120,6 +120,11 @@ class BodyCalls:
         if order is not None:
             if isinstance(order, bool) or order not in (1, 2):
                 raise InputError(f"order must be 1 or 2, not {validate.short(order)}")
+            if order == 2 and not mesh.simplicial:
+                raise InputError(
+                    f"add_body {name!r}: order 2 of {mesh.cell_type} cells is not available; "
+                    "give a tetrahedral / triangle mesh for order 2, or order 1"
+                )
             if order == 2 and mesh.order == 1:
                 from tissuesim.mesh.elevate import elevate_mesh
 
@@ -208,8 +213,9 @@ class BodyCalls:
         from tissuesim.mesh.virtual_nodes import virtual_node_cut
 
         b = self.body(body, ("fem",))
-        if b.mesh.order != 1:
-            raise InputError(f"cut_body: body {b.name!r} is quadratic; cuts apply to P1 cells")
+        if b.mesh.order != 1 or not b.mesh.simplicial:
+            kind = "quadratic" if b.mesh.order != 1 else f"made of {b.mesh.cell_type} cells"
+            raise InputError(f"cut_body: body {b.name!r} is {kind}; cuts apply to P1 cells")
         if self.contact is not None:
             raise InputError(
                 f"cut_body: body {b.name!r} has contact on; cut bodies take no part in contact "

@@ -31,7 +31,7 @@ def test_bad_shapes():
     with pytest.raises(MeshError, match=r"\(n, 2\) or \(n, 3\)"):
         validate_mesh(np.zeros((4, 4)), TRIS, source="s")
     with pytest.raises(MeshError, match=r"need \(m, 3\) cells"):
-        validate_mesh(SQUARE, [[0, 1, 2, 3]], source="s")
+        validate_mesh(SQUARE, [[0, 1, 2, 3, 0]], source="s")  # (m, 4): quadrilaterals
     with pytest.raises(MeshError, match="no cells"):
         validate_mesh(SQUARE, np.zeros((0, 3), dtype=int), source="s")
 

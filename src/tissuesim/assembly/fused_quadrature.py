@@ -1,4 +1,5 @@
-"""Fused assembly with Numba for elements of several quadrature points (P2).
+"""Fused assembly with Numba for elements of several quadrature points (P2, Q1 quadrilaterals
+and hexahedra).
 
 The same sums as ``fused_p1.py`` (F, the law's point kernel, w G^T P, w G^T A G), but an
 element's nq points are summed into one local Hessian before it is scattered: a P2 tetrahedron
@@ -24,8 +25,7 @@ def assemble_points(law, mu, lam, x, cells, grads, weights, nq, order, scatter, 
     cells (m*nq, nv) and grads (m*nq, nv, d) per point, element-major; weights (m*nq,);
     scatter (m, nloc*nloc) per element. Returns (energy, bad) as ``assemble_p1``.
     """
-    d = grads.shape[2]
-    kernel = _points_2d if d == 2 else _points_3d
+    kernel = _KERNELS[grads.shape[2], grads.shape[1]]
     return kernel(law, mu, lam, x, cells, grads, weights, nq, order, scatter, gradient, hessian)
 
 
@@ -40,6 +40,20 @@ def _points_2d(law, mu, lam, x, cells, grads, weights, nq, order, scatter, gradi
 def _points_3d(law, mu, lam, x, cells, grads, weights, nq, order, scatter, gradient, hessian):
     return _points(
         3, 10, law, mu, lam, x, cells, grads, weights, nq, order, scatter, gradient, hessian
+    )
+
+
+@njit(cache=True)
+def _points_q4(law, mu, lam, x, cells, grads, weights, nq, order, scatter, gradient, hessian):
+    return _points(
+        2, 4, law, mu, lam, x, cells, grads, weights, nq, order, scatter, gradient, hessian
+    )
+
+
+@njit(cache=True)
+def _points_h8(law, mu, lam, x, cells, grads, weights, nq, order, scatter, gradient, hessian):
+    return _points(
+        3, 8, law, mu, lam, x, cells, grads, weights, nq, order, scatter, gradient, hessian
     )
 
 
@@ -109,3 +123,8 @@ def _points(d, nv, law, mu, lam, x, cells, grads, weights, nq, order, scatter, g
                     hess[row[r * nloc + c]] += H[r, c]
                     hess[row[c * nloc + r]] += H[r, c]
     return energy, -1
+
+
+#: (dimension, nodes per element) -> the compiled loop: P2 triangles and tetrahedra, Q1
+#: quadrilaterals and hexahedra
+_KERNELS = {(2, 6): _points_2d, (3, 10): _points_3d, (2, 4): _points_q4, (3, 8): _points_h8}

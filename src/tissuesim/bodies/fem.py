@@ -222,12 +222,14 @@ class FemBody:
 
     # -- loads -----------------------------------------------------------------------------------
     def add_traction(self, facets, traction) -> None:
-        """Dead traction (N/m in 2D, Pa in 3D) on boundary facets (k, d): a vector or a
-        callable (X (k, d), t) -> (k, d) evaluated at the facets' vertices."""
+        """Dead traction (N/m in 2D, Pa in 3D) on boundary facets (k, d) (hexahedra: quad
+        faces (k, 4)): a vector or a callable (X (k, d), t) -> (k, d) evaluated at the facets'
+        vertices."""
         ids = indices(facets, "add_traction: facets", self.mesh.n_points)
-        facets = ids.reshape(np.shape(facets)) if ids.size else ids.reshape(0, self.dim)
-        if facets.ndim != 2 or facets.shape[1] != self.dim:
-            raise InputError(f"add_traction: facets must be (k, {self.dim}) vertex indices")
+        width = self.mesh.facet_nodes  # d; 4 for the quad faces of hexahedra
+        facets = ids.reshape(np.shape(facets)) if ids.size else ids.reshape(0, width)
+        if facets.ndim != 2 or facets.shape[1] != width:
+            raise InputError(f"add_traction: facets must be (k, {width}) vertex indices")
         if self.mesh.order == 2 and facets.size:
             from tissuesim.mesh.quadratic import quadratic_facets
 

@@ -49,7 +49,7 @@ class ContactPair:
 def contact_facets(name: str, mesh, surface) -> np.ndarray:
     """The boundary facets (k, d: triangles in 3D, edges in 2D) of body ``name`` that take part
     in contact: its whole boundary (``surface`` None), a facet set of its mesh by name, or a
-    (k, d) array of vertex indices."""
+    (k, d) array of vertex indices; a hexahedral mesh's quad faces (k, 4) are split in two."""
     from tissuesim.mesh.boundary import boundary_facets
 
     if surface is None:
@@ -65,7 +65,8 @@ def contact_facets(name: str, mesh, surface) -> np.ndarray:
     else:
         try:
             tri = np.asarray(surface)
-            ok = tri.ndim == 2 and tri.shape[1] == mesh.dim and tri.dtype.kind in "iu"
+            width = (mesh.dim, mesh.facet_nodes)
+            ok = tri.ndim == 2 and tri.shape[1] in width and tri.dtype.kind in "iu"
         except (TypeError, ValueError):
             ok = False
         if not ok:
@@ -79,6 +80,10 @@ def contact_facets(name: str, mesh, surface) -> np.ndarray:
             )
     if len(tri) == 0:
         raise InputError(f"contact surface of {name!r} has no triangles")
+    if mesh.facet_nodes == 4 and tri.shape[1] == 4:  # quad faces of hexahedra: 2 triangles each
+        from tissuesim.mesh.tensor import split_faces
+
+        tri = split_faces(tri)
     if tri.shape[1] != mesh.dim:
         kind = "triangles (a 3D mesh's facets)" if mesh.dim == 3 else "edges (a 2D mesh's facets)"
         raise InputError(f"contact surface of {name!r} must be {kind}")

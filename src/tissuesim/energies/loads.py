@@ -5,6 +5,7 @@ vertices of boundary facets and interpolated linearly, so (notes, eq. 6b)
     f^a = sum_b (int_facet N^a N^b) h^b,  int N^a N^b = A (1 + delta_ab) / (d (d + 1))
 for a facet of measure A with d vertices. Body forces b (force per unit rest volume) are
 integrated the same way over the elements with the unit-density consistent mass matrix.
+Quad faces of hexahedra interpolate h bilinearly (``quad_traction_nodal_forces``).
 """
 
 from __future__ import annotations
@@ -79,6 +80,28 @@ def quadratic_traction_nodal_forces(
     return out
 
 
+def quad_traction_nodal_forces(
+    points: np.ndarray, faces: np.ndarray, traction_at_nodes: np.ndarray
+) -> np.ndarray:
+    """Nodal forces (n, 3) of a traction on quad faces (k, 4) of hexahedra, given at the faces'
+    nodes (k, 4, 3) and interpolated bilinearly: f^a = int N^a N^b dA h^b with
+    dA = |dX/dxi_1 x dX/dxi_2| dxi, by 3 x 3 Gauss points (exact on a flat parallelogram, where
+    dA is constant and N^a N^b of degree 2 per variable)."""
+    from tissuesim.mesh.tensor import gauss_rule, shape_functions
+
+    n = points.shape[0]
+    xi, w = gauss_rule(2, 3)
+    N, dN = shape_functions(2, xi)  # (q, 4), (q, 4, 2)
+    T = np.einsum("kai,qaj->kqij", points[faces], dN)  # (k, q, 3, 2) tangents
+    dA = np.linalg.norm(np.cross(T[..., 0], T[..., 1]), axis=-1)
+    hq = np.einsum("qb,kbi->kqi", N, traction_at_nodes)
+    local = np.einsum("q,kq,qa,kqi->kai", w, dA, N, hq)
+    out = np.zeros((n, 3))
+    for i in range(3):  # 3 components, not a loop over faces
+        out[:, i] = np.bincount(faces.ravel(), weights=local[:, :, i].ravel(), minlength=n)
+    return out
+
+
 ForceField = Callable[[np.ndarray, float], np.ndarray]
 
 
@@ -125,7 +148,8 @@ class BodyForce:
 
 @dataclass(frozen=True, eq=False)
 class Traction:
-    """Neumann traction h(X, t) (N/m in 2D, Pa in 3D) on boundary facets (k, d)."""
+    """Neumann traction h(X, t) (N/m in 2D, Pa in 3D) on boundary facets (k, d) ((k, 4) quad
+    faces of hexahedra, interpolated bilinearly)."""
 
     facets: np.ndarray
     traction: ForceField
@@ -142,6 +166,8 @@ class Traction:
         h = np.broadcast_to(h, (X.shape[0] * X.shape[1], X.shape[2])).reshape(X.shape)
         if mesh.order == 2:
             return quadratic_traction_nodal_forces(mesh.points, facets, h)
+        if facets.shape[1] == 4 and mesh.dim == 3:  # quad faces of hexahedra
+            return quad_traction_nodal_forces(mesh.points, facets, h)
         return traction_nodal_forces(mesh.points, facets, h)
 
 

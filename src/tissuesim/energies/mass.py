@@ -8,8 +8,10 @@ Lumped mass: each vertex gets rho V / (d + 1) (the row sums of the consistent ma
 P2 elements integrate rho N^a N^b with a degree-4 rule over the (possibly curved) element. Their
 consistent row sums are not all positive (a 10-node tetrahedron's corners get -V/20), so the
 lumped mass is HRZ's (Hinton, Rock & Zienkiewicz 1976): the consistent diagonal scaled to the
-element's mass, positive for every node; for P1 it equals the row sums. Gravity uses the
-consistent row sums (``row_sums``), which are exact for either order.
+element's mass, positive for every node; for P1 it equals the row sums. Q1 quadrilaterals and
+hexahedra integrate with 3 Gauss points per direction; their row sums are positive, so their
+lumped mass is the row sums. Gravity uses the consistent row sums (``row_sums``), which are
+exact for every element.
 
 Inertia energy of Backward Euler with x_pred = x_n + h v_n (Gast et al. 2015):
     E(x) = 1/(2 h^2) (x - x_pred)^T M (x - x_pred).
@@ -64,13 +66,12 @@ class MassMatrix:
             element_mass = density * kinematics.cell_weights  # (m,)
             ref = (np.ones((nv, nv)) + np.eye(nv)) / (nv * (nv + 1))  # sums to 1
             scalar = element_mass[:, None, None] * ref[None]
-        else:  # P2: rho N^a N^b by a degree-4 rule on the curved element
-            mesh = kinematics.mesh
-            N, w = shape_values(mesh.points, mesh.cells, 2, 4)  # (q, nv), (m, q)
+        else:  # P2 / Q1: rho N^a N^b by a rule exact on the element's rest map
+            N, w = _element_rule(kinematics.mesh)  # (q, nv), (m, q)
             scalar = np.einsum("mq,qa,qb->mab", density[:, None] * w, N, N)
         row = scalar.sum(axis=2)  # (m, nv) consistent row sums
         diag = np.einsum("maa->ma", scalar)
-        if nv == d + 1:
+        if nv == d + 1 or not kinematics.mesh.simplicial:  # Q1 row sums are positive
             diagonal = row
         else:  # HRZ: positive, the same total
             diagonal = diag * (row.sum(axis=1) / diag.sum(axis=1))[:, None]
@@ -88,10 +89,21 @@ class MassMatrix:
         return cls(kind, pattern, data, per_dof(diagonal), per_dof(row))
 
     def matrix(self) -> sp.csr_matrix:
+        """M as a CSR matrix over the model's pattern (sharing ``data``)."""
         return self.pattern.matrix(self.data)
 
     def dot(self, v: np.ndarray) -> np.ndarray:
         return self.matrix() @ v
+
+
+def _element_rule(mesh) -> tuple[np.ndarray, np.ndarray]:
+    """N (q, nv) and weights (m, q) integrating N^a N^b exactly: a degree-4 rule for P2; for Q1
+    3 Gauss points per direction (N^a N^b det J is of degree 4 in each variable)."""
+    if not mesh.simplicial:
+        from tissuesim.kinematics.q1 import q1_shape_values
+
+        return q1_shape_values(mesh.points, mesh.cells, 3)
+    return shape_values(mesh.points, mesh.cells, 2, 4)
 
 
 @dataclass(frozen=True, eq=False)

@@ -23,7 +23,6 @@ from tissuesim.mesh.mesh import Mesh
 __all__ = ["VTUSeriesWriter", "remove_series"]
 
 _CELL_TYPE = {2: "triangle", 3: "tetra"}
-_QUADRATIC_TYPE = {2: "triangle6", 3: "tetra10"}  # VTK node order, as mesh/quadratic.py
 # vertices per cell of the meshio cell types accepted with ``cells=``
 _NODES_PER_CELL = {
     "vertex": 1,
@@ -130,7 +129,7 @@ class VTUSeriesWriter:
                 raise InputError("n_points is taken from the mesh; give it only with cells=")
             if mesh.dim not in _CELL_TYPE:
                 raise InputError(f"VTUSeriesWriter supports 2D and 3D meshes, got dim {mesh.dim}")
-            kind = _CELL_TYPE[mesh.dim] if mesh.order == 1 else _QUADRATIC_TYPE[mesh.dim]
+            kind = mesh.cell_type  # meshio's name: triangle(6), tetra(10), quad, hexahedron
             block = (kind, np.asarray(mesh.cells, dtype=np.int64))
             self.dim, self.n_points = mesh.dim, mesh.n_points
             self._mesh_based = True

@@ -93,7 +93,7 @@ def _weld(pts, c, point_sets, facet_sets, source: str, merge: bool):
         f"{source}: merged {merged} coincident vertices (within {tol:.3g}) into their "
         "neighbours (merge_coincident)",
         UserWarning,
-        stacklevel=3,
+        stacklevel=4,
     )
     c = target[c]
     point_sets = {k: target[v] for k, v in point_sets.items()}
@@ -114,7 +114,7 @@ def _drop_unused(pts, c, point_sets, facet_sets, source: str):
         f"{dropped[:5].tolist()}); the indices of later vertices shift down by as many: select "
         "vertices by position or tag rather than by index",
         UserWarning,
-        stacklevel=3,
+        stacklevel=4,
     )
     point_sets = {k: new[v[used[v]]] for k, v in point_sets.items()}
     fsets = {}
@@ -171,13 +171,15 @@ def validate_mesh(
         )
     c = _index_array(cells, source, "cells", f"(m, {d + 1})")
     nq = (d + 1) * (d + 2) // 2
-    if c.ndim != 2 or c.shape[1] not in (d + 1, nq):
+    if c.ndim != 2 or c.shape[1] not in (d + 1, nq, 2**d):
         raise MeshError(
             f"{source}: cells have shape {c.shape}; {d}D points need (m, {d + 1}) cells "
-            f"({_KIND[d]}, one row of {d + 1} vertex indices per element) or (m, {nq}) "
-            f"quadratic cells (corners, then midside nodes)"
+            f"({_KIND[d]}, one row of {d + 1} vertex indices per element), (m, {nq}) "
+            f"quadratic cells (corners, then midside nodes) or (m, {2**d}) "
+            f"{'quadrilaterals' if d == 2 else 'hexahedra'}"
         )
     quadratic = c.shape[1] == nq
+    tensor = c.shape[1] == 2**d
     m = c.shape[0]
     if m == 0:
         raise MeshError(f"{source}: the mesh has no cells; it needs at least one of the {_KIND[d]}")
@@ -200,6 +202,42 @@ def validate_mesh(
             f"({int(repeated.sum())} such elements); remove these collapsed elements"
         )
 
+    if tensor:
+        from tissuesim.mesh.tensor_checks import REORIENT, check_tensor_cells
+
+        flipped = check_tensor_cells(pts, c, source)
+        reorder, how = REORIENT[d], "mirroring their vertex order"
+    else:
+        flipped = _check_simplices(pts, c, source, d)
+        reorder = _REORIENT[d] if quadratic else _REORIENT_LINEAR[d]
+        how = "swapping their last two vertices"
+    if flipped.size:
+        # swap the last two corners; a quadratic cell's midside nodes follow their edges
+        c[flipped] = c[flipped][:, reorder]
+        warnings.warn(
+            f"{source}: reoriented {flipped.size} negatively oriented element(s) by {how} "
+            f"(first: {flipped[:5].tolist()})",
+            UserWarning,
+            stacklevel=2,
+        )
+    return _finish_checks(
+        pts,
+        c,
+        d,
+        m,
+        quadratic,
+        tensor,
+        source,
+        point_sets,
+        facet_sets,
+        cell_sets,
+        merge_coincident,
+        surface_projection,
+    )
+
+
+def _check_simplices(pts, c, source: str, d: int) -> np.ndarray:
+    """MeshError for a degenerate simplex; the negatively oriented ones' indices."""
     vol = signed_volumes(pts, c[:, : d + 1])
     h = edge_lengths(pts, c[:, : d + 1]).mean(axis=1)
     degenerate = np.abs(vol) <= 1e-12 * h**d
@@ -211,16 +249,25 @@ def validate_mesh(
             f"{int(degenerate.sum())} such elements); its vertices are "
             f"{'collinear' if d == 2 else 'coplanar'}: remesh or remove these elements"
         )
-    flipped = np.flatnonzero(vol < 0)
-    if flipped.size:
-        # swap the last two corners; a quadratic cell's midside nodes follow their edges
-        c[flipped] = c[flipped][:, _REORIENT[d] if quadratic else _REORIENT_LINEAR[d]]
-        warnings.warn(
-            f"{source}: reoriented {flipped.size} negatively oriented element(s) by swapping their "
-            f"last two vertices (first: {flipped[:5].tolist()})",
-            UserWarning,
-            stacklevel=2,
-        )
+    return np.flatnonzero(vol < 0)
+
+
+def _finish_checks(
+    pts,
+    c,
+    d,
+    m,
+    quadratic,
+    tensor,
+    source,
+    point_sets,
+    facet_sets,
+    cell_sets,
+    merge_coincident,
+    surface_projection,
+) -> Mesh:
+    """The checks after the cells' own: sets, coincident and unused vertices, shared facets."""
+    n = pts.shape[0]
     point_sets = {
         k: _index_array(v, source, f"point set {k!r}", "(k,)").reshape(-1)
         for k, v in (point_sets or {}).items()
@@ -243,11 +290,18 @@ def validate_mesh(
         from tissuesim.mesh.quadratic_checks import check_quadratic
 
         check_quadratic(pts, c, source)
-    table = facet_table(c[:, : d + 1])
+    if tensor:
+        from tissuesim.mesh.tensor import face_table
+
+        table = face_table(c, d)
+        nf, per_cell = (4 if d == 3 else 2), 2 * d
+    else:
+        table = facet_table(c[:, : d + 1])
+        nf, per_cell = d, d + 1
     facets, first, inverse, counts = table
     if (counts > 2).any():
         u = _first(counts > 2)
-        owners = (np.flatnonzero(inverse == u) // (d + 1)).tolist()
+        owners = (np.flatnonzero(inverse == u) // per_cell).tolist()
         raise MeshError(
             f"{source}: facet {np.sort(facets[first[u]]).tolist()} is shared by elements {owners}; "
             f"a facet belongs to at most 2 elements: remove duplicate or overlapping elements"
@@ -263,17 +317,18 @@ def validate_mesh(
     fsets = {}
     boundary = boundary_from_table(*table) if facet_sets else None
     for name, v in (facet_sets or {}).items():
-        a = _index_array(v, source, f"facet set {name!r}", f"(k, {d})")
+        a = _index_array(v, source, f"facet set {name!r}", f"(k, {nf})")
         if a.size == 0:
-            a = a.reshape(0, d)
-        if a.ndim != 2 or a.shape[1] != d:
-            raise MeshError(f"{source}: facet set {name!r} has shape {a.shape}; expected (k, {d})")
+            a = a.reshape(0, nf)
+        if a.ndim != 2 or a.shape[1] != nf:
+            raise MeshError(f"{source}: facet set {name!r} has shape {a.shape}; expected (k, {nf})")
         row = match_facets(boundary, a)
         if (row < 0).any():
             k = _first(row < 0)
             raise MeshError(
                 f"{source}: facet set {name!r} row {k} {a[k].tolist()} is not a boundary facet "
-                f"of the mesh; facet sets must list boundary {'edges' if d == 2 else 'triangles'}"
+                f"of the mesh; facet sets must list boundary "
+                f"{'edges' if d == 2 else 'quad faces' if tensor else 'triangles'}"
             )
         fsets[str(name)] = boundary[np.unique(row)]
     return Mesh(

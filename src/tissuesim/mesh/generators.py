@@ -67,9 +67,15 @@ def check_mesh_size(what: str, cells: int, d: int) -> None:
     )
 
 
-def _side_sets(cells, grid_index, names):
-    """Point sets from grid indices and the boundary facets whose vertices all lie on each side."""
-    bf = boundary_facets(cells)
+def _side_sets(cells, grid_index, names, tensor: bool = False):
+    """Point sets from grid indices and the boundary facets whose vertices all lie on each side
+    (``tensor``: the cells are Q1 quadrilaterals / hexahedra, facets edges / quad faces)."""
+    if tensor:
+        from tissuesim.mesh.tensor import boundary_faces
+
+        bf = boundary_faces(cells, len(names))
+    else:
+        bf = boundary_facets(cells)
     point_sets, facet_sets = {}, {}
     for axis, (low_name, high_name) in enumerate(names):
         for name, k in ((low_name, 0), (high_name, -1)):
@@ -85,8 +91,12 @@ def rectangle(
     divisions: Sequence[int] = (10, 10),
     pattern: str = "alternate",
     order: int = 1,
+    element: str = "triangle",
 ) -> Mesh:
     """Triangle mesh of the rectangle [lower, upper] with divisions (nx, ny) quads.
+
+    element: "triangle" (the default) or "quad": the (nx, ny) Q1 quadrilaterals themselves
+    (counter-clockwise, VTK's node order; ``pattern`` does not apply, order must be 1).
 
     pattern: how each quad is split: "right" (diagonal bottom-left to top-right), "left" (the
     other diagonal), "alternate" (the two in a checkerboard, avoiding directional bias), "cross"
@@ -96,6 +106,8 @@ def rectangle(
     point sets then hold the midside nodes on their sides too).
     """
     lo, hi, (nx, ny) = _arguments("rectangle", lower, upper, divisions, 2)
+    if _element("rectangle", element, ("triangle", "quad")) == "quad":
+        return _quad_rectangle(lo, hi, nx, ny, order)
     if pattern not in PATTERNS:
         raise MeshError(f"rectangle: pattern must be one of {PATTERNS}, got {short(pattern)}")
     source = f"rectangle(lower={lo}, upper={hi}, divisions={(nx, ny)}, pattern={pattern!r})"
@@ -137,6 +149,39 @@ def rectangle(
     for alias, name in (("xmin", "left"), ("xmax", "right"), ("ymin", "bottom"), ("ymax", "top")):
         psets[alias], fsets[alias] = psets[name], fsets[name]
     return _finish(points, cells, source, psets, fsets, order)
+
+
+def _element(name: str, element, allowed: tuple[str, str]) -> str:
+    if not isinstance(element, str) or element not in allowed:
+        raise MeshError(
+            f"{name}: element must be {allowed[0]!r} or {allowed[1]!r}, got {short(element)}"
+        )
+    return element
+
+
+def _quad_rectangle(lo, hi, nx: int, ny: int, order) -> Mesh:
+    """Q1 quadrilaterals of the rectangle, sets as ``rectangle``'s."""
+    if _order(order) != 1:
+        raise MeshError("rectangle: element = 'quad' takes order 1 (Q1 quadrilaterals)")
+    source = f"rectangle(lower={lo}, upper={hi}, divisions={(nx, ny)}, element='quad')"
+    gy, gx = (g.ravel() for g in np.mgrid[0 : ny + 1, 0 : nx + 1])
+    points = np.column_stack([lo[0] + (hi[0] - lo[0]) * gx / nx, lo[1] + (hi[1] - lo[1]) * gy / ny])
+    qy, qx = (g.ravel() for g in np.mgrid[0:ny, 0:nx])
+    v00 = qy * (nx + 1) + qx
+    cells = np.stack([v00, v00 + 1, v00 + nx + 2, v00 + nx + 1], axis=1)
+    psets, fsets = _side_sets(cells, (gx, gy), (("left", "right"), ("bottom", "top")), True)
+    for alias, name in (("xmin", "left"), ("xmax", "right"), ("ymin", "bottom"), ("ymax", "top")):
+        psets[alias], fsets[alias] = psets[name], fsets[name]
+    return validate_mesh(points, cells, source=source, point_sets=psets, facet_sets=fsets)
+
+
+def _hex_cells(nx: int, ny: int, nz: int) -> np.ndarray:
+    """(nx ny nz, 8) hexahedra of an (nx + 1, ny + 1, nz + 1) vertex grid (x fastest), in VTK's
+    node order."""
+    qz, qy, qx = (g.ravel() for g in np.mgrid[0:nz, 0:ny, 0:nx])
+    v0 = (qz * (ny + 1) + qy) * (nx + 1) + qx
+    bottom = np.stack([v0, v0 + 1, v0 + nx + 2, v0 + nx + 1], axis=1)
+    return np.concatenate([bottom, bottom + (nx + 1) * (ny + 1)], axis=1)
 
 
 def _order(order) -> int:
@@ -233,8 +278,12 @@ def box(
     grading: Sequence[float] = (1.0, 1.0, 1.0),
     order: int = 1,
     pattern: str = "mirrored",
+    element: str = "tet",
 ) -> Mesh:
     """Tetrahedral mesh of the box [lower, upper] with divisions (nx, ny, nz) hexahedra.
+
+    element: "tet" (the default) or "hex": the (nx, ny, nz) Q1 hexahedra themselves (VTK's node
+    order; ``pattern`` does not apply, order must be 1; facet sets hold quad faces (k, 4)).
 
     Each hexahedron is split into 6 tetrahedra around a main diagonal (Kuhn/Freudenthal); faces
     conform. Points (n, 3); cells (6 nx ny nz, 4) positive.
@@ -268,8 +317,15 @@ def box(
         raise MeshError(f"box: pattern must be 'mirrored' or 'uniform', got {short(pattern)}")
     if pattern != "mirrored":
         source = source[:-1] + f", pattern={pattern!r})"
-    cells = _kuhn_cells(nx, ny, nz, mirrored=pattern == "mirrored")
     names = (("xmin", "xmax"), ("ymin", "ymax"), ("zmin", "zmax"))
+    if _element("box", element, ("tet", "hex")) == "hex":
+        if _order(order) != 1:
+            raise MeshError("box: element = 'hex' takes order 1 (Q1 hexahedra)")
+        cells = _hex_cells(nx, ny, nz)
+        psets, fsets = _side_sets(cells, (gx, gy, gz), names, tensor=True)
+        source = source[:-1] + ", element='hex')"
+        return validate_mesh(points, cells, source=source, point_sets=psets, facet_sets=fsets)
+    cells = _kuhn_cells(nx, ny, nz, mirrored=pattern == "mirrored")
     psets, fsets = _side_sets(cells, (gx, gy, gz), names)
     return _finish(points, cells, source, psets, fsets, order)
 

@@ -2,7 +2,8 @@
 
 read_mesh takes tetrahedra (3D) or triangles (2D), linear or quadratic (meshio's tetra10 and
 triangle6, e.g. Gmsh second order; meshio converts Gmsh's node order to VTK's, which tissuesim
-uses), and turns tags into named sets: meshio
+uses), or Q1 hexahedra (3D, tagged quad faces become facet sets) and quadrilaterals (2D), and
+turns tags into named sets: meshio
 cell sets and gmsh physical groups ("gmsh:physical" with names from $PhysicalNames). Tagged facets
 (lines in 2D, triangles in 3D) become facet sets, tagged volume cells cell sets, tagged lower-
 dimensional cells (vertices, edges in 3D) point sets. Everything is then checked by validate_mesh.
@@ -37,9 +38,13 @@ _CELL_DIM = {
     "line3": 1,
     "triangle": 2,
     "triangle6": 2,
+    "quad": 2,
     "tetra": 3,
     "tetra10": 3,
+    "hexahedron": 3,
 }
+#: Q1 volume cells and the facet type (and its corner count) that tags their boundary
+_TENSOR_FACET = {"hexahedron": ("quad", 4), "quad": ("line", 2)}
 
 
 def _block_dim(block) -> int:
@@ -75,15 +80,24 @@ def _choose_cells(path: str, m) -> tuple[np.ndarray, int, str]:
     points = np.asarray(m.points, dtype=np.float64)
     if found.get("tetra") or found.get("tetra10"):
         d = 3
+    elif found.get("hexahedron"):
+        d = 3
     elif found.get("triangle") or found.get("triangle6"):
+        d = 2
+    elif found.get("quad"):
         d = 2
     else:
         raise MeshError(
-            f"{path}: no tetrahedra or triangles; cell types found: {listing}. tissuesim needs "
-            f"'tetra' / 'tetra10' (3D) or 'triangle' / 'triangle6' (2D) elements: re-export with "
-            f"element order 1 or 2 and simplices only"
+            f"{path}: no tetrahedra, hexahedra, triangles or quadrilaterals; cell types found: "
+            f"{listing}. tissuesim needs 'tetra' / 'tetra10' / 'hexahedron' (3D) or 'triangle' "
+            f"/ 'triangle6' / 'quad' (2D) elements: re-export with element order 1 or 2 "
+            f"(order 1 for hexahedra and quadrilaterals)"
         )
-    vtype = _VOLUME2[d] if found.get(_VOLUME2[d]) else _VOLUME[d]
+    simplex = found.get(_VOLUME[d]) or found.get(_VOLUME2[d])
+    if simplex:
+        vtype = _VOLUME2[d] if found.get(_VOLUME2[d]) else _VOLUME[d]
+    else:
+        vtype = "hexahedron" if d == 3 else "quad"
     others = sorted({b.type for b in m.cells if b.type != vtype and _block_dim(b) >= d})
     if others:
         raise MeshError(
@@ -91,7 +105,7 @@ def _choose_cells(path: str, m) -> tuple[np.ndarray, int, str]:
             f"cell types found: {listing}. Remesh with {vtype} only (one element order)"
         )
     if d == 3 and points.shape[1] != 3:
-        raise MeshError(f"{path}: tetrahedra need 3D points, got points of shape {points.shape}")
+        raise MeshError(f"{path}: {vtype} cells need 3D points, got points of shape {points.shape}")
     if d == 2 and points.shape[1] == 3:
         z = points[:, 2]
         scale = float(np.linalg.norm(np.ptp(points, axis=0))) or 1.0
@@ -117,13 +131,16 @@ def _tagged_sets(m, d: int, vtype: str):
         if v.size >= 2:
             names[(int(v[1]), int(v[0]))] = str(name)
     point_sets, facet_sets, cell_sets = defaultdict(list), defaultdict(list), defaultdict(list)
+    facet_types, nf = _FACETS[d], d
+    if vtype in _TENSOR_FACET:
+        facet_types, nf = (_TENSOR_FACET[vtype][0],), _TENSOR_FACET[vtype][1]
 
     def add(block_index: int, name: str, rows: np.ndarray) -> None:
         b = m.cells[block_index]
         if b.type == vtype:
             cell_sets[name].append(offsets[block_index] + rows)
-        elif b.type in _FACETS[d]:  # quadratic facets by their corners
-            facet_sets[name].append(np.asarray(b.data)[rows][:, :d])
+        elif b.type in facet_types:  # quadratic facets by their corners
+            facet_sets[name].append(np.asarray(b.data)[rows][:, :nf])
         elif _block_dim(b) < d - 1 or b.type == "vertex":
             point_sets[name].append(np.asarray(b.data)[rows].reshape(-1))
 
@@ -171,7 +188,12 @@ def read_mesh(path: str | os.PathLike[str], *, merge_coincident: bool = False) -
         point_sets[name] = np.concatenate([point_sets.get(name, []), np.asarray(v).reshape(-1)])
     facet_sets = {k: np.concatenate(v).astype(np.int64) for k, v in fsets.items()}
     if facet_sets:
-        facets, first, inverse, counts = facet_table(cells[:, : d + 1])
+        if vtype in _TENSOR_FACET:
+            from tissuesim.mesh.tensor import face_table
+
+            facets, first, inverse, counts = face_table(cells, d)
+        else:
+            facets, first, inverse, counts = facet_table(cells[:, : d + 1])
         boundary = facets[first[counts == 1]]
         for name in list(facet_sets):
             on = match_facets(boundary, facet_sets[name]) >= 0
@@ -211,14 +233,15 @@ def write_mesh(mesh: Mesh, path: str | os.PathLike[str], file_format: str | None
     points = np.column_stack([mesh.points, np.zeros(mesh.n_points)]) if d == 2 else mesh.points
     if file_format is None and path.lower().endswith(".msh"):
         file_format = "gmsh22"
-    blocks = [((_VOLUME if mesh.order == 1 else _VOLUME2)[d], mesh.cells)]
+    blocks = [(mesh.cell_type, mesh.cells)]
+    facet_type = _TENSOR_FACET[mesh.cell_type][0] if not mesh.simplicial else _FACET[d]
     kwargs = {}
     if file_format == "gmsh22":
         volume_tags = np.zeros(mesh.n_cells, dtype=np.int32)
         physical, field_data, tag = [], {}, 0
         for name, facets in mesh.facet_sets.items():
             tag += 1
-            blocks.append((_FACET[d], np.asarray(facets)))
+            blocks.append((facet_type, np.asarray(facets)))
             physical.append(np.full(len(facets), tag, dtype=np.int32))
             field_data[name] = np.array([tag, d - 1])
         for name, ids in mesh.point_sets.items():
@@ -258,15 +281,22 @@ def describe_mesh(mesh: Mesh) -> dict:
     simplex, tending to 0 as an element degenerates; quality_min is the worst element's.
     """
     p, c, d = mesh.points, mesh.corners, mesh.dim  # quality of the straight-sided simplices
-    vol = signed_volumes(p, c)
-    edges = edge_lengths(p, c)
-    faces = all_facets(c)
-    surface = facet_measures(p, faces.reshape(-1, d)).reshape(len(c), d + 1).sum(axis=1)
-    inradius = d * vol / surface
-    x = p[c]
-    e = x[:, 1:] - x[:, :1]  # (m, d, d)
-    centre = np.linalg.solve(2.0 * e, (e**2).sum(axis=2)[..., None])[..., 0]
-    quality = d * inradius / np.linalg.norm(centre, axis=1)
+    if mesh.simplicial:
+        vol = signed_volumes(p, c)
+        edges = edge_lengths(p, c)
+        faces = all_facets(c)
+        surface = facet_measures(p, faces.reshape(-1, d)).reshape(len(c), d + 1).sum(axis=1)
+        inradius = d * vol / surface
+        x = p[c]
+        e = x[:, 1:] - x[:, :1]  # (m, d, d)
+        centre = np.linalg.solve(2.0 * e, (e**2).sum(axis=2)[..., None])[..., 0]
+        quality = d * inradius / np.linalg.norm(centre, axis=1)
+        measure = "radius ratio d * inradius / circumradius (1 = regular simplex)"
+    else:
+        from tissuesim.mesh.tensor_checks import tensor_quality
+
+        vol, edges, quality = tensor_quality(p, c)
+        measure = "scaled Jacobian: min over nodes of det J / product of edge lengths (1 = box)"
     lo, hi = p.min(axis=0), p.max(axis=0)
     return {
         "source": mesh.source,
@@ -282,7 +312,7 @@ def describe_mesh(mesh: Mesh) -> dict:
         "measure_mean": float(vol.mean()),
         "edge_min": float(edges.min()),
         "edge_max": float(edges.max()),
-        "quality_measure": "radius ratio d * inradius / circumradius (1 = regular simplex)",
+        "quality_measure": measure,
         "quality_min": float(quality.min()),
         "quality_mean": float(quality.mean()),
         "worst_cell": int(np.argmin(quality)),

@@ -1,4 +1,5 @@
-"""The Mesh: rest positions and simplices, plus named vertex, facet and cell sets."""
+"""The Mesh: rest positions and cells (simplices, quadrilaterals or hexahedra), plus named
+vertex, facet and cell sets."""
 
 from __future__ import annotations
 
@@ -8,19 +9,33 @@ from functools import cached_property
 
 import numpy as np
 
-__all__ = ["Mesh"]
+__all__ = ["Mesh", "CELL_TYPES"]
+
+#: (dimension, nodes per cell) -> meshio's cell type name (VTK node order for every one)
+CELL_TYPES = {
+    (2, 3): "triangle",
+    (3, 4): "tetra",
+    (2, 6): "triangle6",
+    (3, 10): "tetra10",
+    (2, 4): "quad",
+    (3, 8): "hexahedron",
+}
 
 
 @dataclass(frozen=True, eq=False)
 class Mesh:
-    """A simplicial mesh in its rest configuration.
+    """A mesh in its rest configuration.
 
-    points: (n, d) float64 rest positions, d = 2 (triangles) or 3 (tetrahedra).
+    points: (n, d) float64 rest positions, d = 2 (triangles, quadrilaterals) or 3 (tetrahedra,
+        hexahedra).
     cells: (m, d + 1) int64 vertex indices, positively oriented (det of edge vectors > 0);
         quadratic meshes (order 2): (m, 6) triangles or (m, 10) tetrahedra, the corners first,
-        then the midside nodes (``mesh/quadratic.py``).
+        then the midside nodes (``mesh/quadratic.py``); Q1 quadrilaterals (m, 4) in 2D and
+        hexahedra (m, 8) in 3D in VTK's node order, with a positive rest Jacobian at every
+        Gauss point (``mesh/tensor.py``).
     point_sets: name -> (k,) vertex indices.
-    facet_sets: name -> (k, d) boundary facets (edges in 2D, triangles in 3D) as corner indices.
+    facet_sets: name -> (k, d) boundary facets (edges in 2D, triangles in 3D) as corner indices;
+        (k, 4) quad faces for hexahedra (``facet_nodes``).
     cell_sets: name -> (k,) cell indices.
     source: where the mesh came from (a file path or a generator), used in error messages.
     cell_fractions: (m,) the part of each cell's volume that is material (a virtual-node cut's
@@ -46,7 +61,9 @@ class Mesh:
 
     def __repr__(self) -> str:
         kind = {2: "triangles", 3: "tetrahedra"}.get(self.dim, "cells")
-        if self.order == 2:
+        if not self.simplicial:
+            kind = "quadrilaterals" if self.dim == 2 else "hexahedra"
+        elif self.order == 2:
             kind = f"quadratic {kind}"
         lo, hi = self.points.min(axis=0), self.points.max(axis=0)
         sets = f", sets {sorted({*self.point_sets, *self.facet_sets, *self.cell_sets})}"
@@ -73,17 +90,42 @@ class Mesh:
         return int(self.cells.shape[0])
 
     @property
+    def cell_type(self) -> str:
+        """meshio's name of the cells: "triangle", "tetra", "triangle6", "tetra10", "quad" or
+        "hexahedron"."""
+        return CELL_TYPES[self.dim, int(self.cells.shape[1])]
+
+    @property
+    def simplicial(self) -> bool:
+        """True for triangles and tetrahedra (linear or quadratic), False for Q1 quadrilaterals
+        and hexahedra."""
+        d, nv = self.dim, int(self.cells.shape[1])
+        return nv in (d + 1, (d + 1) * (d + 2) // 2)
+
+    @property
     def order(self) -> int:
-        """1 for linear simplices, 2 for 6-node triangles / 10-node tetrahedra."""
-        return 1 if self.cells.shape[1] == self.dim + 1 else 2
+        """1 for linear simplices and Q1 cells, 2 for 6-node triangles / 10-node tetrahedra."""
+        d, nv = self.dim, int(self.cells.shape[1])
+        return 2 if nv == (d + 1) * (d + 2) // 2 else 1
+
+    @property
+    def facet_nodes(self) -> int:
+        """Corner nodes of a boundary facet: d (edges, triangles), 4 for hexahedra' quad faces."""
+        return 4 if (self.dim, int(self.cells.shape[1])) == (3, 8) else self.dim
 
     @property
     def corners(self) -> np.ndarray:
-        """(m, d + 1) the corner vertices of every cell."""
+        """(m, d + 1) the corner vertices of every cell ((m, 2^d) for Q1 cells: all nodes)."""
+        if not self.simplicial:
+            return self.cells
         return self.cells[:, : self.dim + 1]
 
     @cached_property
     def _subdivision(self) -> tuple[np.ndarray, np.ndarray]:
+        if not self.simplicial:
+            from tissuesim.mesh.tensor import subdivide as split
+
+            return split(self.points, self.cells)
         if self.order == 1:
             return self.cells, np.arange(self.n_cells)
         from tissuesim.mesh.quadratic import subdivide
@@ -93,7 +135,8 @@ class Mesh:
     @property
     def simplices(self) -> np.ndarray:
         """Linear simplices (k, d + 1) over all nodes: the cells themselves for order 1, the
-        linear subdivision of each quadratic cell (4 triangles, 8 tetrahedra) for order 2.
+        linear subdivision of each quadratic cell (4 triangles, 8 tetrahedra) for order 2, the
+        split of each Q1 cell (2 triangles, 6 tetrahedra; ``mesh/tensor.py``).
         Geometry (boundary, location, contact, pictures) works on these."""
         return self._subdivision[0]
 
@@ -106,13 +149,15 @@ class Mesh:
     def linear_view(self) -> Mesh:
         """This mesh as linear simplices (``simplices``) on the same points; itself for order 1.
         Its cells are the sub-simplices, so per-cell values map through ``simplex_parent``."""
-        if self.order == 1:
+        if self.order == 1 and self.simplicial:
             return self
         return Mesh(self.points, self.simplices, source=f"{self.source} (linear subdivision)")
 
     def per_simplex(self, cell_values: np.ndarray) -> np.ndarray:
         """Per-cell values (m, ...) repeated onto ``simplices`` (k, ...)."""
-        return cell_values if self.order == 1 else cell_values[self.simplex_parent]
+        if self.order == 1 and self.simplicial:
+            return cell_values
+        return cell_values[self.simplex_parent]
 
     @cached_property
     def midside(self):

@@ -1,8 +1,9 @@
 """Select vertices and boundary facets of a Mesh by plane, box or tag.
 
 Vertex selections return sorted unique (k,) int64 vertex ids; facet selections return (k, d) int64
-boundary facets oriented outward. An empty selection raises MeshError stating what was asked and
-the mesh's bounding box. Default tolerances are 1e-6 times the bounding-box diagonal.
+boundary facets oriented outward ((k, 4) quad faces for hexahedra). An empty selection raises
+MeshError stating what was asked and the mesh's bounding box. Default tolerances are 1e-6 times
+the bounding-box diagonal.
 """
 
 from __future__ import annotations
@@ -71,7 +72,12 @@ def _boundary(mesh: Mesh) -> np.ndarray:
     """Read-only boundary facets of ``mesh``, computed once per mesh."""
     facets = _BOUNDARY_CACHE.get(mesh)
     if facets is None:
-        facets = boundary_facets(mesh.corners)
+        if mesh.simplicial:
+            facets = boundary_facets(mesh.corners)
+        else:  # Q1 cells: edges of quadrilaterals, quad faces (k, 4) of hexahedra
+            from tissuesim.mesh.tensor import boundary_faces
+
+            facets = boundary_faces(mesh.cells, mesh.dim)
         facets.flags.writeable = False
         _BOUNDARY_CACHE[mesh] = facets
     return facets
@@ -154,7 +160,7 @@ def facets_in_box(
 def facets_tagged(mesh: Mesh, tag: str) -> np.ndarray:
     """Facet set ``tag`` (k, d), else boundary facets with all vertices in point set ``tag``."""
     if tag in mesh.facet_sets:
-        facets = np.asarray(mesh.facet_sets[tag], dtype=np.int64).reshape(-1, mesh.dim)
+        facets = np.asarray(mesh.facet_sets[tag], dtype=np.int64).reshape(-1, mesh.facet_nodes)
     elif tag in mesh.point_sets:
         bf = _boundary(mesh)
         facets = bf[np.isin(bf, mesh.point_sets[tag]).all(axis=1)]

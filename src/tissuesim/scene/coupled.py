@@ -108,7 +108,7 @@ COUPLED_SCENE_KEYS: dict[str, Any] = {
 ARRAYS = ("organs", "bodies", "graspers", "attachments", "cuts", "obstacles")
 MESH_GENERATORS = {
     "ellipsoid": ("center", "radii", "divisions"),
-    "box": ("lower", "upper", "divisions"),
+    "box": ("lower", "upper", "divisions", "element"),
 }
 MESH_EXAMPLE = (
     'mesh = { generator = "ellipsoid", center = [0, 0, 0], radii = [0.06, 0.04, 0.02], '

@@ -48,6 +48,7 @@ MESH_KEYS = {
     "divisions": "generator: cells per axis",
     "pattern": "rectangle: triangle pattern; box: tetrahedral split (mirrored or uniform)",
     "grading": "box: per-axis grading exponents (1 uniform, p finer towards lower, -p upper)",
+    "element": "box: tet (default) or hex; rectangle: triangle (default) or quad",
     "merge_coincident": "file: merge vertices that coincide (an unwelded seam) instead of refusing",
 }
 
@@ -130,8 +131,8 @@ def add_fem_body(
 
 
 MESH_GENERATORS = {
-    "rectangle": ("lower", "upper", "divisions", "pattern"),
-    "box": ("lower", "upper", "divisions", "grading", "pattern"),
+    "rectangle": ("lower", "upper", "divisions", "pattern", "element"),
+    "box": ("lower", "upper", "divisions", "grading", "pattern", "element"),
     "ellipsoid": ("center", "radii", "divisions"),
 }
 
