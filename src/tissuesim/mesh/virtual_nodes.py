@@ -36,6 +36,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from tissuesim.errors import InputError
+from tissuesim.mesh.plane_split import positive_fraction, sections_inside
 
 __all__ = ["PlanarCut", "VirtualNodeMesh", "cut_cells", "virtual_node_cut"]
 
@@ -139,17 +140,6 @@ def _distances(points: np.ndarray, cells: np.ndarray, cut: PlanarCut) -> np.ndar
     return d
 
 
-def _section(x: np.ndarray, d: np.ndarray) -> np.ndarray:
-    """The points where the plane crosses the edges of one simplex (x (d+1, 3), distances d)."""
-    out = [x[i] for i in range(len(d)) if d[i] == 0.0]
-    for i in range(len(d)):
-        for j in range(i + 1, len(d)):
-            if d[i] * d[j] < 0.0:
-                t = d[i] / (d[i] - d[j])
-                out.append(x[i] + t * (x[j] - x[i]))
-    return np.array(out).reshape(-1, x.shape[1])
-
-
 def _inside_polygon(q: np.ndarray, cut: PlanarCut, tol: float) -> bool:
     """Whether points q (k, 3) in the cut's plane lie in its convex polygon (within tol)."""
     poly = cut.polygon
@@ -174,13 +164,8 @@ def cut_cells(
     x_now = _as3d(points if current is None else current)
     d = _distances(x_now, cells, cut)
     crossed = np.flatnonzero((d.max(axis=1) > 0.0) & (d.min(axis=1) < 0.0))
-    out = []
-    for e in crossed:
-        x = x_now[cells[e]]
-        tol = 1e-9 * float(np.linalg.norm(x.max(axis=0) - x.min(axis=0)))
-        if _inside_polygon(_section(x, d[e]), cut, tol):
-            out.append(e)
-    return np.array(out, dtype=np.int64)
+    inside = sections_inside(x_now[cells[crossed]], d[crossed], cut.polygon, cut.normal)
+    return crossed[inside].astype(np.int64)
 
 
 def _as3d(points: np.ndarray) -> np.ndarray:
@@ -206,14 +191,6 @@ def _measure(points: np.ndarray) -> float:
         return float(ConvexHull(centred @ vt[:rank].T).volume)
     except QhullError:  # flat within round-off
         return 0.0
-
-
-def _side_fraction(x: np.ndarray, d: np.ndarray, side: int) -> float:
-    """The fraction of simplex x (d+1, 3) on ``side`` (+1: d > 0) of the plane."""
-    keep = x[side * d >= 0.0]
-    part = _measure(np.concatenate([keep, _section(x, d)]))
-    whole = _measure(x)
-    return min(1.0, part / whole) if whole > 0.0 else 0.0
 
 
 def _clip(poly: np.ndarray, d: np.ndarray, side: int) -> tuple[np.ndarray, np.ndarray]:
@@ -273,6 +250,46 @@ def _components(cells: np.ndarray, n_points: int) -> int:
     return len(np.unique(labels[:m]))
 
 
+def _face_parts(x3, cells, cuts, owner, node_d, parent, side, nodes, ca, cb) -> np.ndarray:
+    """The fraction (f,) of each face (its global ``nodes`` (f, d)) where the material of copy
+    ca and of copy cb both lie: 1 for two whole cells, the face's part on the side of the one
+    cut copy, or on the common side of two copies of one cut (none on opposite sides); faces
+    between copies of two different cuts are clipped one by one (a cell is cut once, so these
+    are few)."""
+
+    def face_d(c: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The signed distances (f, d) of the face's nodes to copy c's cut, times its side."""
+        e = parent[c]
+        where = np.argmax(cells[e][:, :, None] == nodes[:, None, :], axis=1)
+        cut = np.maximum(owner[e], 0)
+        dist = np.stack(node_d)[cut[:, None], e[:, None], where] if node_d else 0.0 * where
+        return dist * side[c][:, None], cut
+
+    part = np.ones(len(nodes))
+    if not len(nodes):
+        return part
+    da, ka = face_d(ca)
+    db, kb = face_d(cb)
+    cut_a, cut_b = side[ca] != 0, side[cb] != 0
+    only_a, only_b = cut_a & ~cut_b, cut_b & ~cut_a
+    part[only_a] = positive_fraction(da[only_a])
+    part[only_b] = positive_fraction(db[only_b])
+    same = cut_a & cut_b & (ka == kb)
+    flat = np.all(da == 0.0, axis=1) | np.all(db == 0.0, axis=1)
+    agree = same & (side[ca] == side[cb]) & ~flat
+    part[agree] = np.minimum(positive_fraction(da[agree]), positive_fraction(db[agree]))
+    part[same & (side[ca] != side[cb]) & ~flat] = 0.0
+    for i in np.flatnonzero(cut_a & cut_b & (~same | flat)):  # two cuts meet on this face
+        face = x3[nodes[i]]
+        constraints = []
+        for c in (ca[i], cb[i]):
+            e = int(parent[c])
+            where = [int(np.flatnonzero(cells[e] == v)[0]) for v in nodes[i]]
+            constraints.append((node_d[owner[e]][e][where], int(side[c])))
+        part[i] = _face_part(face, constraints) / max(_face_part(face, []), 1e-300)
+    return part
+
+
 def _node_groups(x3, x_now, cells, cuts, owner, node_d, parent, side) -> np.ndarray:
     """The group (a label) of every node slot (copy, local node), (copies * (d+1),): slots of
     two copies sharing a face are joined when their material meets on it; a face the cut runs
@@ -302,9 +319,6 @@ def _node_groups(x3, x_now, cells, cuts, owner, node_d, parent, side) -> np.ndar
     copy_of_whole = np.full(m, -1)
     whole = np.flatnonzero(side == 0)
     copy_of_whole[parent[whole]] = whole
-    by_cell: dict[int, list[int]] = {}
-    for c in np.flatnonzero(side != 0):
-        by_cell.setdefault(int(parent[c]), []).append(int(c))
     rows, cols = [], []
 
     def slots(c: np.ndarray, e: np.ndarray, nodes: np.ndarray) -> np.ndarray:
@@ -316,29 +330,25 @@ def _node_groups(x3, x_now, cells, cuts, owner, node_d, parent, side) -> np.ndar
     if plain.any():
         rows.append(slots(copy_of_whole[cell_a[plain]], cell_a[plain], face_nodes[plain]).ravel())
         cols.append(slots(copy_of_whole[cell_b[plain]], cell_b[plain], face_nodes[plain]).ravel())
-
-    def constraints(c: int, nodes: np.ndarray) -> list:
-        """(distances of the face's points to the copy's cut, its side), or none."""
-        if side[c] == 0:
-            return []
-        e = int(parent[c])
-        where = [int(np.flatnonzero(cells[e] == v)[0]) for v in nodes]
-        return [(node_d[owner[e]][e][where], int(side[c]))]
-
-    for f in np.flatnonzero(~plain & ~on_cut):  # faces next to a cut cell
-        nodes = face_nodes[f]
-        face = x3[nodes]
-        area = _face_part(face, [])
-        ea, eb = int(cell_a[f]), int(cell_b[f])
-        for ca in by_cell.get(ea, [copy_of_whole[ea]]):
-            for cb in by_cell.get(eb, [copy_of_whole[eb]]):
-                if (
-                    _face_part(face, constraints(ca, nodes) + constraints(cb, nodes))
-                    <= EMPTY * area
-                ):
-                    continue  # their material does not meet on this face
-                rows.append(slots(np.array([ca]), np.array([ea]), nodes[None]).ravel())
-                cols.append(slots(np.array([cb]), np.array([eb]), nodes[None]).ravel())
+    # faces next to a cut cell: every pair (copy of one cell, copy of the other) whose material
+    # meets on the face, all at once; the copies of a cell are consecutive in ``parent``
+    todo = np.flatnonzero(~plain & ~on_cut)
+    by_parent = np.argsort(parent, kind="stable")
+    first = np.searchsorted(parent[by_parent], np.arange(m))
+    count = np.bincount(parent, minlength=m)
+    fa, ca, cb = [], [], []
+    for i in range(2):  # at most two copies per cell
+        for j in range(2):
+            ok = (count[cell_a[todo]] > i) & (count[cell_b[todo]] > j)
+            f = todo[ok]
+            fa.append(f)
+            ca.append(by_parent[first[cell_a[f]] + i])
+            cb.append(by_parent[first[cell_b[f]] + j])
+    f, ca, cb = np.concatenate(fa), np.concatenate(ca), np.concatenate(cb)
+    part = _face_parts(x3, cells, cuts, owner, node_d, parent, side, face_nodes[f], ca, cb)
+    meet = part > EMPTY
+    rows.append(slots(ca[meet], cell_a[f[meet]], face_nodes[f[meet]]).ravel())
+    cols.append(slots(cb[meet], cell_b[f[meet]], face_nodes[f[meet]]).ravel())
     n = copies * k
     r = np.concatenate([np.zeros(0, dtype=np.int64), *rows])
     c = np.concatenate([np.zeros(0, dtype=np.int64), *cols])
@@ -381,20 +391,19 @@ def virtual_node_cut(
         owner[hit] = k
     # the copies: every uncut cell once, then one per side holding material of each cut cell
     cut_ids = np.flatnonzero(owner >= 0)
-    parent, side, fraction = [np.flatnonzero(owner < 0)], [], []
-    extra_parent = []
-    for e in cut_ids:
-        d = node_d[owner[e]][e]
-        f_plus = _side_fraction(x3[cells[e]], d, +1)
-        for s_, f in ((+1, f_plus), (-1, 1.0 - f_plus)):
-            if f > EMPTY:
-                extra_parent.append(e)
-                side.append(s_)
-                fraction.append(f)
+    parent = [np.flatnonzero(owner < 0)]
+    # each cut cell's fraction on the + side, in closed form (plane_split.py): the distances
+    # are linear in the element, so the rest-shape fraction is that of the vertex values
+    d_cut = np.stack(node_d)[owner[cut_ids], cut_ids] if len(cut_ids) else np.zeros((0, dim + 1))
+    f_plus = positive_fraction(d_cut) if len(cut_ids) else np.zeros(0)
+    f_both = np.column_stack([f_plus, 1.0 - f_plus]).ravel()  # + then - per cell
+    keep = f_both > EMPTY
     n_whole = len(parent[0])
-    parent = np.concatenate([parent[0], np.array(extra_parent, dtype=np.int64)])
-    side = np.concatenate([np.zeros(n_whole, dtype=np.int64), np.array(side, dtype=np.int64)])
-    fraction = np.concatenate([np.ones(n_whole), np.array(fraction)])
+    parent = np.concatenate([parent[0], np.repeat(cut_ids, 2)[keep]])
+    side = np.concatenate(
+        [np.zeros(n_whole, dtype=np.int64), np.tile(np.array([1, -1]), len(cut_ids))[keep]]
+    )
+    fraction = np.concatenate([np.ones(n_whole), f_both[keep]])
     copies, k = len(parent), dim + 1
     labels = _node_groups(x3, x_now, cells, cuts, owner, node_d, parent, side)
     # a slot's node: the original node for its first group, a new (duplicate) node after

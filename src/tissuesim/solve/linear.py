@@ -23,6 +23,7 @@ solver uses to shift the Hessian (CG raises it when it does not converge).
 
 from __future__ import annotations
 
+import functools
 import importlib.util
 import weakref
 from dataclasses import dataclass
@@ -92,6 +93,15 @@ def has_pardiso() -> bool:
     return importlib.util.find_spec("pypardiso") is not None
 
 
+@functools.cache
+def _mkl_pardiso():
+    """MKL's pardiso function, located once per process: pypardiso finds mkl_rt by globbing
+    the whole environment (0.2-0.5 s each time), and a new solver is made after every cut."""
+    import pypardiso  # locates mkl_rt; we call PARDISO ourselves to control the phases
+
+    return pypardiso.PyPardisoSolver().libmkl.pardiso
+
+
 class PardisoSolver(LinearSolver):
     """MKL PARDISO, real symmetric positive definite mode, with explicit phases."""
 
@@ -101,10 +111,8 @@ class PardisoSolver(LinearSolver):
     def __init__(self) -> None:
         import ctypes
 
-        import pypardiso  # locates mkl_rt; we call PARDISO ourselves to control the phases
-
         self._ct = ctypes
-        self._pardiso = pypardiso.PyPardisoSolver().libmkl.pardiso
+        self._pardiso = _mkl_pardiso()
         i32 = ctypes.POINTER(ctypes.c_int32)
         self._pardiso.argtypes = [ctypes.POINTER(ctypes.c_int64), i32, i32, i32, i32, i32,
                                   ctypes.c_void_p, i32, i32, i32, i32, i32, i32,

@@ -1,0 +1,106 @@
+"""What a cut event costs on an organ: the virtual node cut (topology, fractions, duplicated
+nodes), the body's rebuild and the next step's new sparsity analysis and factorisation, against
+an ordinary implicit step of the same organ.
+
+The organ of ``benchmarks/palpation.py`` (ellipsoid 120 x 80 x 60 mm, E = 5 kPa, nu = 0.45,
+fixed on its lowest 4 mm, gravity, Backward Euler at h = 1/30 s) at ``--divisions`` (12: 10,368
+tetrahedra), cut by a plane across it (x = 11 mm, through the whole body: two pieces) after a
+few steps. Per repeat (a fresh simulation each): the median of the steps before the cut, the
+cut itself (``Simulation.cut_body``), the first step after it (which re-analyses the pattern)
+and the median of the steps after; the cut event's cost is the cut plus the first step's excess
+over the later ones. Medians over ``--repeats``.
+
+    python3 benchmarks/cut_cost.py                   # 10,368 tetrahedra, 3 repeats
+    python3 benchmarks/cut_cost.py --divisions 8 12 17
+"""
+
+from __future__ import annotations
+
+import argparse
+import statistics
+import time
+from pathlib import Path
+
+import numpy as np
+
+import tissuesim as ts
+from tissuesim.mesh.virtual_nodes import PlanarCut
+
+HERE = Path(__file__).resolve().parent
+
+
+def organ(divisions: int) -> ts.Simulation:
+    mesh = ts.ellipsoid((0.0, 0.0, 0.03), (0.06, 0.04, 0.03), divisions)
+    material = ts.make_material("neo_hookean", youngs_modulus=5e3, poisson_ratio=0.45)
+    sim = ts.Simulation(integrator="backward_euler", time_step=1 / 30, gravity=(0, 0, -9.81))
+    sim.add_body("organ", mesh, material, density=1000.0)
+    sim.fix(np.flatnonzero(mesh.points[:, 2] < 0.004), body="organ", name="table")
+    return sim
+
+
+def once(divisions: int, before: int = 4, after: int = 4) -> dict:
+    sim = organ(divisions)
+    walls = []
+    for _ in range(before):
+        start = time.perf_counter()
+        sim.step()
+        walls.append(time.perf_counter() - start)
+    x = 0.011
+    blade = PlanarCut(
+        np.array([x, 0.0, 0.0]),
+        np.array([1.0, 0.0, 0.0]),
+        np.array([[x, -1, -1], [x, 1, -1], [x, 1, 1], [x, -1, 1]], dtype=float),
+    )
+    start = time.perf_counter()
+    report = sim.cut_body(blade, body="organ")
+    cut_s = time.perf_counter() - start
+    after_walls = []
+    for _ in range(after):
+        start = time.perf_counter()
+        sim.step()
+        after_walls.append(time.perf_counter() - start)
+    step_after = statistics.median(after_walls[1:])
+    return {
+        "tetrahedra": int(organ(divisions).bodies["organ"].mesh.n_cells),
+        "cells_cut": report["cells_cut"],
+        "pieces": report["pieces"],
+        "step_s": statistics.median(walls[1:]),
+        "cut_s": cut_s,
+        "first_step_after_s": after_walls[0],
+        "step_after_s": step_after,
+        "event_s": cut_s + max(after_walls[0] - step_after, 0.0),
+    }
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--divisions", type=int, nargs="+", default=[12])
+    parser.add_argument("--repeats", type=int, default=3)
+    parser.add_argument("--out", type=Path, default=HERE / "results" / "cut_cost.md")
+    args = parser.parse_args()
+    lines = [
+        "# Cost of a cut event (benchmarks/cut_cost.py)",
+        "",
+        f"`python3 benchmarks/cut_cost.py --divisions {' '.join(map(str, args.divisions))}`; "
+        f"medians of {args.repeats} repeats, each a fresh simulation; this machine, one process.",
+        "",
+        "| tetrahedra | cells cut | pieces | step (s) | cut (s) | first step after (s) "
+        "| step after (s) | cut event (s) | event / step |",
+        "| --- | --- | --- | --- | --- | --- | --- | --- | --- |",
+    ]
+    for divisions in args.divisions:
+        runs = [once(divisions) for _ in range(args.repeats)]
+        med = {k: statistics.median(r[k] for r in runs) for k in runs[0]}
+        lines.append(
+            f"| {med['tetrahedra']:,} | {med['cells_cut']} | {med['pieces']} "
+            f"| {med['step_s']:.3f} | {med['cut_s']:.3f} | {med['first_step_after_s']:.3f} "
+            f"| {med['step_after_s']:.3f} | {med['event_s']:.3f} "
+            f"| {med['event_s'] / med['step_s']:.2f} |"
+        )
+        print(lines[-1], flush=True)
+    args.out.parent.mkdir(parents=True, exist_ok=True)
+    args.out.write_text("\n".join(lines) + "\n")
+
+
+if __name__ == "__main__":
+    main()
