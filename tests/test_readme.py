@@ -250,7 +250,18 @@ TESTED_PYTHON_BLOCKS = {
     "add_tissue": "test_coupled_python_example_runs",
     'formulation="mean_dilatation"': "test_nearly_incompressible_python_example_runs",
     'sim.save("beam.npz")': "test_save_and_load_python_example_is_bit_identical",
+    'element="hex"': "test_hexahedra_python_example_runs",
 }
+
+
+def test_hexahedra_python_example_runs(tmp_path):
+    """The elements page's Q1/P0 cantilever: the deflection it prints (plain Q1 locks: half)."""
+    code = block("python", 'element="hex"')
+    result = subprocess.run(
+        [sys.executable, "-c", code], cwd=tmp_path, capture_output=True, text=True, timeout=300
+    )
+    assert result.returncode == 0, result.stderr
+    assert float(result.stdout.split()[-1]) == -0.0121
 
 
 def test_every_python_block_of_the_readme_and_the_docs_is_run_by_a_test():

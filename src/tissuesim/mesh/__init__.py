@@ -1,4 +1,5 @@
-"""Simplicial meshes: generators, file I/O, validation, boundary facets and selections.
+"""Meshes of simplices or Q1 cells: generators, file I/O, validation, boundary facets and
+selections.
 
 Use ``from tissuesim.mesh import select`` for vertex and facet selections
 (``select.vertices_on_plane(mesh, 0, 0.0)``).
