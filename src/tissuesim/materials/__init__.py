@@ -1,14 +1,20 @@
 """Hyperelastic material laws: psi(F), P(F) and dP/dF, batched over integration points."""
 
+from tissuesim.materials.arruda_boyce import ArrudaBoyce, CoupledArrudaBoyce
 from tissuesim.materials.base import Material, MaterialResponse
 from tissuesim.materials.corotated import FixedCorotated
 from tissuesim.materials.course_neo_hookean import CourseNeoHookean
+from tissuesim.materials.fitting import FitResult, fit_material, nominal_stress
 from tissuesim.materials.lame import lame_parameters
 from tissuesim.materials.linear import LinearElastic
+from tissuesim.materials.mooney_rivlin import CoupledMooneyRivlin, MooneyRivlin
 from tissuesim.materials.neo_hookean import NeoHookean
+from tissuesim.materials.ogden import Ogden, OgdenUnconstrained
 from tissuesim.materials.psd import project_psd, project_tangent_psd
-from tissuesim.materials.registry import MATERIALS, make_material
+from tissuesim.materials.registry import ALIASES, MATERIALS, SOFT_TISSUE_LAWS, make_material
 from tissuesim.materials.stvk import StVenantKirchhoff
+from tissuesim.materials.veronda_westmann import CoupledVerondaWestmann, VerondaWestmann
+from tissuesim.materials.yeoh import CoupledYeoh, Yeoh
 
 __all__ = [
     "Material",
@@ -18,9 +24,24 @@ __all__ = [
     "StVenantKirchhoff",
     "LinearElastic",
     "FixedCorotated",
+    "MooneyRivlin",
+    "CoupledMooneyRivlin",
+    "Ogden",
+    "OgdenUnconstrained",
+    "Yeoh",
+    "CoupledYeoh",
+    "VerondaWestmann",
+    "CoupledVerondaWestmann",
+    "ArrudaBoyce",
+    "CoupledArrudaBoyce",
     "lame_parameters",
     "project_psd",
     "project_tangent_psd",
     "MATERIALS",
+    "ALIASES",
+    "SOFT_TISSUE_LAWS",
     "make_material",
+    "fit_material",
+    "FitResult",
+    "nominal_stress",
 ]
