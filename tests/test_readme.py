@@ -239,6 +239,20 @@ def test_user_pages_check_catches_internal_words():
         assert not INTERNAL.search(text), text
 
 
+def test_fitting_python_example_recovers_the_parameters(tmp_path):
+    """The materials guide's fitting example, as shown: the two-term Ogden law comes back, the
+    Mooney-Rivlin law fits worse."""
+    code = block("python", 'ts.fit_material("ogden"')
+    result = subprocess.run(
+        [sys.executable, "-c", code], cwd=tmp_path, capture_output=True, text=True, timeout=300
+    )
+    assert result.returncode == 0, result.stderr
+    ogden, mooney = result.stdout.splitlines()
+    assert ogden.replace(" ", "").startswith("[1200.-300.][7.-2.]")
+    assert float(ogden.split()[-1]) < 1e-10
+    assert 0.01 < float(mooney.split()[-1]) < 0.2
+
+
 #: each Python block of the README and docs/ and the test that runs it (by a text only it
 #: contains)
 TESTED_PYTHON_BLOCKS = {
@@ -250,6 +264,7 @@ TESTED_PYTHON_BLOCKS = {
     "add_tissue": "test_coupled_python_example_runs",
     'formulation="mean_dilatation"': "test_nearly_incompressible_python_example_runs",
     'sim.save("beam.npz")': "test_save_and_load_python_example_is_bit_identical",
+    'ts.fit_material("ogden"': "test_fitting_python_example_recovers_the_parameters",
     'element="hex"': "test_hexahedra_python_example_runs",
 }
 
