@@ -37,7 +37,6 @@ from tissuesim.materials._common import (
     cofactor,
     det,
     det_hessian,
-    outer,
 )
 from tissuesim.materials.base import Material, MaterialResponse
 from tissuesim.validate import real, short
@@ -233,24 +232,30 @@ class InvariantLaw(HyperelasticMaterial):
             return MaterialResponse(psi, P)
         WJJ = k * (1.0 - lnJ) / J**2 + (W[8] if self.uncoupled else self._rest_slope / J**2)
         W11, W1J = np.broadcast_to(W[3], J.shape), np.broadcast_to(W[6], J.shape)
-        A = 2.0 * bcast(W1, 5) * IDENTITY[d] + bcast(WJ, 5) * det_hessian(F)
-        h1 = bcast(W11, 3) * g1 + bcast(W1J, 3) * cof  # sum_b W_1b dI_b (without I2)
+        q, n = F.shape[0], d * d
+        # sum_ab W_ab dI_a (x) dI_b as one batched product G^T H, G = rows dI_a, H = sum_b W_ab dI_b
+        h1 = bcast(W11, 3) * g1 + bcast(W1J, 3) * cof
         hJ = bcast(W1J, 3) * g1 + bcast(WJJ, 3) * cof
+        iso = 2.0 * W1  # coefficient of delta_ik delta_jl
         if self.uses_i2:
             W12, W22 = np.broadcast_to(W[4], J.shape), np.broadcast_to(W[5], J.shape)
             W2J = np.broadcast_to(W[7], J.shape)
-            h1 = h1 + bcast(W12, 3) * g2
+            # the 4 W2 F (x) F of W2 d2I2 is W2 g1 (x) g1: it joins h1
+            h1 = h1 + bcast(W12, 3) * g2 + bcast(W2, 3) * g1
             hJ = hJ + bcast(W2J, 3) * g2
             h2 = bcast(W12, 3) * g1 + bcast(W22, 3) * g2 + bcast(W2J, 3) * cof
-            B = F @ np.swapaxes(F, 1, 2)
+            G, H = np.stack([g1, g2, cof], 1), np.stack([h1, h2, hJ], 1)
+            iso = iso + 2.0 * W2 * I1
+        else:
+            G, H = np.stack([g1, cof], 1), np.stack([h1, hJ], 1)
+        A = (np.swapaxes(G.reshape(q, -1, n), 1, 2) @ H.reshape(q, -1, n)).reshape(q, d, d, d, d)
+        A += bcast(iso, 5) * IDENTITY[d] + bcast(WJ, 5) * det_hessian(F)
+        if self.uses_i2:
+            # the rest of W2 d2I2: -2 W2 (delta_ik C_lj + F_il F_kj + B_ik delta_jl)
             I = np.eye(d)
-            d2I2 = 2.0 * (
-                2.0 * outer(F, F)
-                + bcast(I1, 5) * IDENTITY[d]
-                - np.einsum("ik,qlj->qijkl", I, C)
-                - np.einsum("qil,qkj->qijkl", F, F)
-                - np.einsum("qik,jl->qijkl", B, I)
-            )
-            A = A + bcast(W2, 5) * d2I2 + outer(g2, h2)
-        A = A + outer(g1, h1) + outer(cof, hJ)
+            B = F @ np.swapaxes(F, 1, 2)
+            rest = I[None, :, None, :, None] * C[:, None, :, None, :]
+            rest = rest + F[:, :, None, None, :] * np.swapaxes(F, 1, 2)[:, None, :, :, None]
+            rest = rest + B[:, :, None, :, None] * I[None, None, :, None, :]
+            A -= bcast(2.0 * W2, 5) * rest
         return MaterialResponse(psi, P, A)

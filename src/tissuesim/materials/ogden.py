@@ -35,7 +35,6 @@ from tissuesim.materials._common import (
     cofactor,
     det,
     det_hessian,
-    outer,
 )
 from tissuesim.materials._hyperelastic import (
     HyperelasticMaterial,
@@ -130,24 +129,35 @@ class _OgdenBase(HyperelasticMaterial):
         psi = np.where(ok, psi, np.inf)
         if order == 0:
             return MaterialResponse(psi)
-        g1 = np.einsum("qn,n,qna->qa", w, p, X)  # g'(x_a)
-        S = 2.0 * np.einsum("qia,qa,qja->qij", V, g1, V)
+        g1 = np.einsum("qn,qna->qa", w * p, X)  # g'(x_a)
+        S = 2.0 * (V * g1[:, None, :]) @ np.swapaxes(V, 1, 2)  # 2 V diag(g') V^T
         P = F @ S + bcast(psi_J, 3) * cof
         if order == 1:
             return MaterialResponse(psi, P)
         xa, xb = x[:, None, :, None], x[:, None, None, :]
         D = power_divided_difference(xa, xb, p[None, :, None, None] - 1.0)  # (q, N, d, d)
-        G = np.einsum("qn,n,qnab->qab", w, p, D)
+        G = np.einsum("qn,qnab->qab", w * p, D)
         G = 0.5 * (G + np.swapaxes(G, 1, 2))
-        q = F.shape[0]
-        Tm = np.einsum("qia,qjb->qabij", f, V).reshape(q, d * d, d * d)  # rows ab, cols ij
-        Ts = np.einsum("qia,qjb->qbaij", f, V).reshape(q, d * d, d * d)  # rows ab: T_ba
-        A = 2.0 * np.swapaxes(Tm, 1, 2) @ (G.reshape(q, d * d, 1) * (Tm + Ts))
-        A = A.reshape(q, d, d, d, d) + np.einsum("ik,qlj->qijkl", np.eye(d), S)
-        A = A + bcast(psi_JJ, 5) * outer(cof, cof) + bcast(psi_J, 5) * det_hessian(F)
-        if v is not None:
-            Pv = 2.0 * np.einsum("qia,qa,qja->qij", f, np.einsum("qn,n,qna->qa", v, p, X), V)
-            A = A + outer(Pv, cof) + outer(cof, Pv)
+        q, n = F.shape[0], d * d
+        # T[q, a, b, i, j] = f_ia V_jb; A = sum_ab T_ab (x) 2 G_ab (T_ab + T_ba) + the J terms,
+        # all as one batched product of (rows) x (rows)
+        T = f.transpose(0, 2, 1)[:, :, None, :, None] * V.transpose(0, 2, 1)[:, None, :, None, :]
+        Tm = T.reshape(q, n, n)  # rows (a, b), columns (i, j)
+        Ts = np.swapaxes(T, 1, 2).reshape(q, n, n)  # row (a, b) holds T_ba
+        hJ = bcast(psi_JJ, 3) * cof
+        rows, cols = [Tm, cof.reshape(q, 1, n)], [2.0 * G.reshape(q, n, 1) * (Tm + Ts)]
+        if v is not None:  # d2psi/dT_i dJ: Pv (x) cof + cof (x) Pv
+            gv = np.einsum("qn,qna->qa", v * p, X)
+            Pv = 2.0 * (f * gv[:, None, :]) @ np.swapaxes(V, 1, 2)
+            rows.append(Pv.reshape(q, 1, n))
+            hJ = hJ + Pv
+            cols += [hJ.reshape(q, 1, n), cof.reshape(q, 1, n)]
+        else:
+            cols.append(hJ.reshape(q, 1, n))
+        A = np.swapaxes(np.concatenate(rows, 1), 1, 2) @ np.concatenate(cols, 1)
+        A = A.reshape(q, d, d, d, d)
+        A += np.eye(d)[None, :, None, :, None] * np.swapaxes(S, 1, 2)[:, None, :, None, :]
+        A += bcast(psi_J, 5) * det_hessian(F)
         return MaterialResponse(psi, P, A)
 
     def _term_parameters(self) -> dict[str, object]:
