@@ -8,8 +8,12 @@ theta is the law's measure of volume change and U its lambda term, the part that
     fixed_corotated      theta = J             U = lam/2 (theta - 1)^2
     linear               theta = tr F - d      U = lam/2 theta^2        (tr eps)
     stvk                 theta = (|F|^2 - d)/2 U = lam/2 theta^2        (tr E)
+    mooney_rivlin, yeoh, veronda_westmann, arruda_boyce (and their coupled_*), ogden
+                         theta = J             U = k/2 (ln theta)^2     (FEBio's bulk term)
+    ogden_unconstrained  theta = J             U = cp/2 (theta - 1)^2
 
-psi_rest keeps every mu term, so its bulk stiffness is of order mu and does not lock. Shapes:
+psi_rest keeps every mu term (for the uncoupled soft-tissue laws: the deviatoric energy), so its
+bulk stiffness is of order mu and does not lock. Shapes:
 F (q, d, d) -> theta (q,), dtheta/dF (q, d, d), d2theta/dF2 (q, d, d, d, d).
 """
 
@@ -21,6 +25,7 @@ import numpy as np
 
 from tissuesim.errors import InputError
 from tissuesim.materials._common import IDENTITY, cofactor, det, det_hessian
+from tissuesim.materials._hyperelastic import HyperelasticMaterial
 from tissuesim.materials.base import Material
 
 __all__ = ["VolumetricPart", "volumetric_part", "VOLUMETRIC_LAWS"]
@@ -32,6 +37,13 @@ VOLUMETRIC_LAWS = {
     "fixed_corotated": ("J", "quadratic_J"),
     "linear": ("trace", "quadratic"),
     "stvk": ("green_trace", "quadratic"),
+    **{
+        name: ("J", "log")
+        for law in ("mooney_rivlin", "yeoh", "veronda_westmann", "arruda_boyce")
+        for name in (law, f"coupled_{law}")
+    },
+    "ogden": ("J", "log"),
+    "ogden_unconstrained": ("J", "quadratic_J"),
 }
 
 
@@ -83,4 +95,6 @@ def volumetric_part(material: Material, what: str = "formulation") -> Volumetric
             f"formulation = 'displacement'"
         )
     theta, u = VOLUMETRIC_LAWS[name]
-    return VolumetricPart(theta, u, float(material.lam))
+    # the soft-tissue laws' bulk term has its own coefficient k (cp), not lambda
+    coefficient = material.k if isinstance(material, HyperelasticMaterial) else material.lam
+    return VolumetricPart(theta, u, float(coefficient))
