@@ -7,6 +7,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from tissuesim.errors import MaterialError
 from tissuesim.materials import SOFT_TISSUE_LAWS, make_material
 from tissuesim.materials.volumetric import VOLUMETRIC_LAWS, volumetric_part
 from tissuesim.mesh import box, rectangle
@@ -71,3 +72,60 @@ def test_mean_dilatation_energy_matches_finite_differences(name, mesh):
     assert (plus.value - minus.value) / (2 * eps) == pytest.approx(acc.gradient @ dx, rel=1e-6)
     fd_H = (plus.gradient - minus.gradient) / (2 * eps)
     np.testing.assert_allclose(fd_H, H @ dx, rtol=0, atol=1e-6 * np.abs(H @ dx).max())
+
+
+UNCOUPLED = ["mooney_rivlin", "ogden", "yeoh", "veronda_westmann", "arruda_boyce"]
+#: FEBio's pressure_model -> U(J) / k, by hand
+BULK = {
+    "default": lambda J: 0.5 * np.log(J) ** 2,
+    "NIKE3D": lambda J: 0.25 * (J**2 - 2 * np.log(J) - 1),
+    "Abaqus": lambda J: 0.5 * (J - 1) ** 2,
+    "Abaqus (GOH)": lambda J: 0.5 * ((J**2 - 1) / 2 - np.log(J)),
+}
+
+
+@pytest.mark.parametrize("name", UNCOUPLED)
+@pytest.mark.parametrize("model", sorted(BULK))
+def test_febio_pressure_models(name, model):
+    k = 4000.0
+    base = make_material(name, **PARAMS[name], k=k)
+    law = make_material(name, **PARAMS[name], k=k, pressure_model=model)
+    rng = np.random.default_rng(8)
+    F = np.eye(3) + 0.3 * rng.standard_normal((12, 3, 3))
+    F = F[np.linalg.det(F) > 0.3]
+    J = np.linalg.det(F)
+    # only the bulk term changes
+    expected = base.energy_density(F) + k * (BULK[model](J) - BULK["default"](J))
+    np.testing.assert_allclose(law.energy_density(F), expected, rtol=1e-11)
+    # consistent derivatives, the same small-strain moduli, stress-free at rest
+    res = law.evaluate(F, 2)
+    h = 1e-6
+    for i, j in ((0, 0), (1, 2), (2, 1)):
+        E = np.zeros((3, 3))
+        E[i, j] = h
+        fd = (law.energy_density(F + E) - law.energy_density(F - E)) / (2 * h)
+        np.testing.assert_allclose(res.stress[:, i, j], fd, rtol=1e-6, atol=1e-6 * k)
+        fd = (law.stress(F + E) - law.stress(F - E)) / (2 * h)
+        np.testing.assert_allclose(res.tangent[:, :, :, i, j], fd, rtol=1e-6, atol=1e-6 * k)
+    assert (law.mu, law.lam) == pytest.approx((base.mu, base.lam), rel=1e-14)
+    assert np.abs(law.stress(np.eye(3)[None])).max() < 1e-12 * k
+    # by its integer too, the parameters give it back, and mean dilatation averages that term
+    same = make_material(name, **law.parameters())
+    np.testing.assert_allclose(same.energy_density(F), law.energy_density(F), rtol=1e-15)
+    index = ["default", "NIKE3D", "Abaqus", "Abaqus (GOH)"].index(model)
+    by_int = make_material(name, **PARAMS[name], k=k, pressure_model=index)
+    np.testing.assert_allclose(by_int.energy_density(F), law.energy_density(F), rtol=1e-15)
+    part = volumetric_part(law)
+    U = part.energy(J, 0)[0]
+    np.testing.assert_allclose(U, k * BULK[model](J), rtol=1e-12, atol=1e-12 * k)
+
+
+def test_pressure_model_errors():
+    with pytest.raises(MaterialError, match="pressure_model must be one of"):
+        make_material("mooney_rivlin", c1=1.0, k=10.0, pressure_model="abaqus-ish")
+    with pytest.raises(MaterialError, match="pressure_model must be one of"):
+        make_material("ogden", c=[1.0], m=[2.0], k=10.0, pressure_model=4)
+    with pytest.raises(MaterialError, match="coupled_yeoh has no pressure_model"):
+        make_material("coupled_yeoh", c1=1.0, k=10.0, pressure_model="Abaqus")
+    with pytest.raises(MaterialError, match="unknown parameter 'pressure_model'"):
+        make_material("coupled_mooney_rivlin", c1=1.0, k=10.0, pressure_model="Abaqus")

@@ -11,11 +11,19 @@ Invariants of C = F^T F (2D: plane strain, the 3D invariants of diag(F, 1)):
 
 so P = W1 dI1 + W2 dI2 + WJ dJ and A = W1 d2I1 + W2 d2I2 + WJ d2J + sum_ab W_ab dI_a (x) dI_b.
 
-Uncoupled (FEBio's ``FEUncoupledMaterial``) laws are W = w(I1b, I2b) + k/2 (ln J)^2 on the
+Uncoupled (FEBio's ``FEUncoupledMaterial``) laws are W = w(I1b, I2b) + U(J) on the
 isochoric invariants I1b = J^(-2/3) I1, I2b = J^(-4/3) I2; the chain rule through I1b(I1, J),
 I2b(I2, J) gives the derivatives in (I1, I2, J) (``isochoric_derivatives``). Coupled laws are
 W = w(I1, I2) - 2 (w1 + 2 w2)|_rest ln J + k/2 (ln J)^2: the ln J term makes the rest state
 stress-free (FEBio's coupled Mooney-Rivlin and coupled Veronda-Westmann are exactly this).
+
+U(J) is FEBio's ``pressure_model`` of its uncoupled laws (``bulk_energy``):
+
+    "default"                      U = k/2 (ln J)^2
+    "NIKE3D" and "Abaqus (GOH)"    U = k/4 (J^2 - 1 - 2 ln J)     (the same function)
+    "Abaqus"                       U = k/2 (J - 1)^2
+
+all with U(1) = U'(1) = 0, U''(1) = k: the small-strain bulk modulus is k for each.
 
 Small-strain moduli of w about I1 = I2 = 3 (derivatives there): mu = 2 (w1 + w2); uncoupled
 lam = k - 2 mu / 3; coupled lam = k + 4 w2 + 4 w11 + 16 w12 + 16 w22.
@@ -42,6 +50,9 @@ from tissuesim.materials.base import Material, MaterialResponse
 from tissuesim.validate import real, short
 
 __all__ = [
+    "PRESSURE_MODELS",
+    "pressure_model",
+    "bulk_energy",
     "HyperelasticMaterial",
     "InvariantLaw",
     "Derivatives",
@@ -72,6 +83,34 @@ def parameter(
         unit_text = f" {unit}" if unit else ""
         raise MaterialError(f"{law}: {key}{what} must be > 0{unit_text}, got {x!r}")
     return x
+
+
+#: FEBio's pressure_model names, by its integer value; the volumetric kind of each
+PRESSURE_MODELS = ("default", "NIKE3D", "Abaqus", "Abaqus (GOH)")
+BULK_KINDS = ("log", "goh", "quadratic_J", "goh")
+
+
+def pressure_model(law: str, value: object) -> str:
+    """FEBio's pressure_model (its name, any case, or its integer 0..3) as the bulk kind."""
+    if isinstance(value, (int, np.integer)) and not isinstance(value, bool) and 0 <= value <= 3:
+        return BULK_KINDS[int(value)]
+    key = str(value).strip().lower() if isinstance(value, str) else None
+    names = [name.lower() for name in PRESSURE_MODELS]
+    if key not in names:
+        raise MaterialError(
+            f"{law}: pressure_model must be one of {', '.join(map(repr, PRESSURE_MODELS))} "
+            f"(or 0..3), not {short(value)}"
+        )
+    return BULK_KINDS[names.index(key)]
+
+
+def bulk_energy(kind: str, k: float, J: np.ndarray, lnJ: np.ndarray) -> tuple:
+    """(U, U', U'') of the bulk term ``kind`` (``BULK_KINDS``) at J > 0."""
+    if kind == "log":
+        return 0.5 * k * lnJ**2, k * lnJ / J, k * (1.0 - lnJ) / J**2
+    if kind == "goh":
+        return 0.25 * k * (J**2 - 1.0 - 2.0 * lnJ), 0.5 * k * (J - 1.0 / J), 0.5 * k * (1.0 + J**-2)
+    return 0.5 * k * (J - 1.0) ** 2, k * (J - 1.0), np.full_like(J, k)
 
 
 def parameter_list(law: str, key: str, value: object, *, unit: str = "Pa") -> list[float]:
@@ -105,10 +144,18 @@ class HyperelasticMaterial(Material):
     #: FEBio's name of the law (its ``type`` in a .feb file)
     febio_name: str = ""
     k: float
+    #: the bulk term U(J) (``BULK_KINDS``): FEBio's pressure_model of an uncoupled law
+    bulk_kind: str = "log"
 
     def parameters(self) -> dict[str, object]:
         """The law's parameters by keyword, as ``make_material`` takes them."""
         raise NotImplementedError
+
+    def _bulk_parameter(self) -> dict[str, object]:
+        """{"pressure_model": name} when it is not FEBio's default, else {}."""
+        if self.bulk_kind == "log":
+            return {}
+        return {"pressure_model": PRESSURE_MODELS[BULK_KINDS.index(self.bulk_kind, 1)]}
 
     def __repr__(self) -> str:
         args = ", ".join(f"{key}={value!r}" for key, value in self.parameters().items())
@@ -174,8 +221,13 @@ class InvariantLaw(HyperelasticMaterial):
         """w and, up to ``order``, its derivatives at the invariants (arrays (q,))."""
         raise NotImplementedError
 
-    def _set_moduli(self, k: float) -> None:
+    def _set_moduli(self, k: float, model: object = "default") -> None:
         self.k = k
+        if not self.uncoupled and model != "default":
+            raise MaterialError(
+                f"{self.name} has no pressure_model: it is a parameter of FEBio's uncoupled laws"
+            )
+        self.bulk_kind = pressure_model(self.name, model)
         three = np.array([3.0])
         r = self.w(three, three, 2)
         w1, w2 = float(np.asarray(r.w1).ravel()[0]), float(np.asarray(r.w2).ravel()[0])
@@ -208,19 +260,21 @@ class InvariantLaw(HyperelasticMaterial):
         if self.uncoupled:
             I1b, I2b = I1 * Js ** (-2.0 / 3.0), I2 * Js ** (-4.0 / 3.0)
             r = self.w(I1b, I2b, order)
-            psi = r.w + 0.5 * k * lnJ**2
+            U, dU, ddU = bulk_energy(self.bulk_kind, k, Js, lnJ)
+            psi = r.w + U
         else:
             r = self.w(I1, I2, order)
-            psi = r.w - self._rest_slope * lnJ + 0.5 * k * lnJ**2
+            U, dU, ddU = bulk_energy("log", k, Js, lnJ)
+            psi = r.w - self._rest_slope * lnJ + U
         psi = np.where(ok, psi, np.inf)
         if order == 0:
             return MaterialResponse(psi)
         if self.uncoupled:
             W = isochoric_derivatives(r, I1b, I2b, J, order)
-            WJ = W[2] + k * lnJ / J
+            WJ = W[2] + dU
         else:
             W = (r.w1, r.w2, 0.0, r.w11, r.w12, r.w22, 0.0, 0.0, 0.0)
-            WJ = (k * lnJ - self._rest_slope) / J
+            WJ = dU - self._rest_slope / J
         W1, W2 = np.broadcast_to(W[0], J.shape), np.broadcast_to(W[1], J.shape)
         g1 = 2.0 * F
         P = bcast(W1, 3) * g1 + bcast(WJ, 3) * cof
@@ -230,7 +284,7 @@ class InvariantLaw(HyperelasticMaterial):
             P = P + bcast(W2, 3) * g2
         if order == 1:
             return MaterialResponse(psi, P)
-        WJJ = k * (1.0 - lnJ) / J**2 + (W[8] if self.uncoupled else self._rest_slope / J**2)
+        WJJ = ddU + (W[8] if self.uncoupled else self._rest_slope / J**2)
         W11, W1J = np.broadcast_to(W[3], J.shape), np.broadcast_to(W[6], J.shape)
         q, n = F.shape[0], d * d
         # sum_ab W_ab dI_a (x) dI_b as one batched product G^T H, G = rows dI_a, H = sum_b W_ab dI_b

@@ -40,15 +40,20 @@ class ArrudaBoyce(InvariantLaw):
     uses_i2 = False
 
     def __init__(
-        self, *, mu: float | None = None, N: float | None = None, k: float | None = None
+        self,
+        *,
+        mu: float | None = None,
+        N: float | None = None,
+        k: float | None = None,
+        pressure_model: str | int = "default",
     ) -> None:
         self.initial_modulus = parameter(self.name, "mu", mu, positive=True)
         self.N = parameter(self.name, "N", N, positive=True, unit="", meaning="links")
         k = parameter(self.name, "k", k, positive=True, meaning="bulk modulus")
-        self._set_moduli(k)
+        self._set_moduli(k, pressure_model)
 
     def parameters(self) -> dict[str, object]:
-        return {"mu": self.initial_modulus, "N": self.N, "k": self.k}
+        return {"mu": self.initial_modulus, "N": self.N, "k": self.k, **self._bulk_parameter()}
 
     def w(self, I1: np.ndarray, I2: np.ndarray, order: int) -> Derivatives:
         m, N = self.initial_modulus, self.N

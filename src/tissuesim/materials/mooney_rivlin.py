@@ -20,7 +20,8 @@ __all__ = ["MooneyRivlin", "CoupledMooneyRivlin"]
 
 
 class MooneyRivlin(InvariantLaw):
-    """FEBio's (uncoupled) Mooney-Rivlin: c1 (I1b - 3) + c2 (I2b - 3) + k/2 (ln J)^2, in Pa.
+    """FEBio's (uncoupled) Mooney-Rivlin: c1 (I1b - 3) + c2 (I2b - 3) + k/2 (ln J)^2, in Pa
+    (FEBio's ``pressure_model`` picks another bulk term U(J)).
 
     ``c2 = 0`` is the uncoupled neo-Hookean with shear modulus 2 c1."""
 
@@ -28,15 +29,22 @@ class MooneyRivlin(InvariantLaw):
     febio_name = "Mooney-Rivlin"
     uncoupled = True
 
-    def __init__(self, *, c1: float | None = None, c2: float = 0.0, k: float | None = None) -> None:
+    def __init__(
+        self,
+        *,
+        c1: float | None = None,
+        c2: float = 0.0,
+        k: float | None = None,
+        pressure_model: str | int = "default",
+    ) -> None:
         self.c1 = parameter(self.name, "c1", c1)
         self.c2 = parameter(self.name, "c2", c2)
         k = parameter(self.name, "k", k, positive=True, meaning="bulk modulus")
         self.uses_i2 = self.c2 != 0.0  # c2 = 0: skip the second invariant
-        self._set_moduli(k)
+        self._set_moduli(k, pressure_model)
 
     def parameters(self) -> dict[str, object]:
-        return {"c1": self.c1, "c2": self.c2, "k": self.k}
+        return {"c1": self.c1, "c2": self.c2, "k": self.k, **self._bulk_parameter()}
 
     def w(self, I1: np.ndarray, I2: np.ndarray, order: int) -> Derivatives:
         return Derivatives(self.c1 * (I1 - 3.0) + self.c2 * (I2 - 3.0), self.c1, self.c2)

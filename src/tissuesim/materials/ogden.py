@@ -38,10 +38,12 @@ from tissuesim.materials._common import (
 )
 from tissuesim.materials._hyperelastic import (
     HyperelasticMaterial,
+    bulk_energy,
     inverted_error,
     parameter,
     parameter_list,
 )
+from tissuesim.materials._hyperelastic import pressure_model as _pressure_model
 from tissuesim.materials.base import MaterialResponse
 
 __all__ = ["Ogden", "OgdenUnconstrained", "power_divided_difference"]
@@ -190,27 +192,30 @@ class Ogden(_OgdenBase):
         m4: float | None = None,
         m5: float | None = None,
         m6: float | None = None,
+        pressure_model: str | int = "default",
     ) -> None:
         indexed = dict(c1=c1, c2=c2, c3=c3, c4=c4, c5=c5, c6=c6)
         indexed.update(m1=m1, m2=m2, m3=m3, m4=m4, m5=m5, m6=m6)
         self._init_terms(c, m, indexed)
         self.k = parameter(self.name, "k", k, positive=True, meaning="bulk modulus")
+        self.bulk_kind = _pressure_model(self.name, pressure_model)
         self.lam = self.k - 2.0 * self.mu / 3.0
         self._check_moduli()
 
     def parameters(self) -> dict[str, object]:
-        return {**self._term_parameters(), "k": self.k}
+        return {**self._term_parameters(), "k": self.k, **self._bulk_parameter()}
 
     def _weights(self, J, T, lnJ, order):
         c, m, k = self.c, self.m, self.k
         e = J[:, None] ** (-m / 3.0)  # (q, N)
-        psi = (c / m**2 * (e * T - 3.0)).sum(axis=1) + 0.5 * k * lnJ**2
+        U, dU, ddU = bulk_energy(self.bulk_kind, k, J, lnJ)
+        psi = (c / m**2 * (e * T - 3.0)).sum(axis=1) + U
         w = c / m**2 * e
         cT = (c / (3.0 * m) * e * T).sum(axis=1)
-        psi_J = (k * lnJ - cT) / J
+        psi_J = dU - cT / J
         v = -c / (3.0 * m) * e / J[:, None]
         cTT = (c / (3.0 * m) * (m / 3.0 + 1.0) * e * T).sum(axis=1)
-        psi_JJ = (cTT + k * (1.0 - lnJ)) / J**2
+        psi_JJ = ddU + cTT / J**2
         return psi, w, psi_J, v, psi_JJ
 
 
@@ -220,6 +225,7 @@ class OgdenUnconstrained(_OgdenBase):
 
     name = "ogden_unconstrained"
     febio_name = "Ogden unconstrained"
+    bulk_kind = "quadratic_J"  # cp/2 (J - 1)^2
 
     def __init__(
         self,

@@ -31,15 +31,20 @@ class VerondaWestmann(InvariantLaw):
     uncoupled = True
 
     def __init__(
-        self, *, c1: float | None = None, c2: float | None = None, k: float | None = None
+        self,
+        *,
+        c1: float | None = None,
+        c2: float | None = None,
+        k: float | None = None,
+        pressure_model: str | int = "default",
     ) -> None:
         self.c1 = parameter(self.name, "c1", c1, positive=True)
         self.c2 = parameter(self.name, "c2", c2, positive=True, unit="")
         k = parameter(self.name, "k", k, positive=True, meaning="bulk modulus")
-        self._set_moduli(k)
+        self._set_moduli(k, pressure_model)
 
     def parameters(self) -> dict[str, object]:
-        return {"c1": self.c1, "c2": self.c2, "k": self.k}
+        return {"c1": self.c1, "c2": self.c2, "k": self.k, **self._bulk_parameter()}
 
     def w(self, I1: np.ndarray, I2: np.ndarray, order: int) -> Derivatives:
         c1, c2 = self.c1, self.c2

@@ -9,7 +9,9 @@ theta is the law's measure of volume change and U its lambda term, the part that
     linear               theta = tr F - d      U = lam/2 theta^2        (tr eps)
     stvk                 theta = (|F|^2 - d)/2 U = lam/2 theta^2        (tr E)
     mooney_rivlin, yeoh, veronda_westmann, arruda_boyce (and their coupled_*), ogden
-                         theta = J             U = k/2 (ln theta)^2     (FEBio's bulk term)
+                         theta = J             U = k/2 (ln theta)^2     (FEBio's bulk term;
+                         its pressure_model "NIKE3D"/"Abaqus (GOH)": k/4 (theta^2 - 1 - 2 ln
+                         theta), "Abaqus": k/2 (theta - 1)^2)
     ogden_unconstrained  theta = J             U = cp/2 (theta - 1)^2
 
 psi_rest keeps every mu term (for the uncoupled soft-tissue laws: the deviatoric energy), so its
@@ -25,7 +27,7 @@ import numpy as np
 
 from tissuesim.errors import InputError
 from tissuesim.materials._common import IDENTITY, cofactor, det, det_hessian
-from tissuesim.materials._hyperelastic import HyperelasticMaterial
+from tissuesim.materials._hyperelastic import HyperelasticMaterial, bulk_energy
 from tissuesim.materials.base import Material
 
 __all__ = ["VolumetricPart", "volumetric_part", "VOLUMETRIC_LAWS"]
@@ -78,6 +80,11 @@ class VolumetricPart:
             dU = np.where(ok, lam * ln / np.where(ok, theta, 1.0), np.nan)
             ddU = np.where(ok, lam * (1.0 - ln) / np.where(ok, theta, 1.0) ** 2, np.nan)
             return U, dU, ddU
+        if self.u_kind == "goh":
+            ok = theta > 0.0
+            safe = np.where(ok, theta, 1.0)
+            U, dU, ddU = bulk_energy("goh", lam, safe, np.log(safe))
+            return np.where(ok, U, np.inf), np.where(ok, dU, np.nan), np.where(ok, ddU, np.nan)
         if self.u_kind == "cubic_log":
             x = theta - 1.0
             r, dr, ddr = x - x**2 / 2.0 + x**3 / 3.0, 1.0 - x + x**2, 2.0 * x - 1.0
@@ -95,6 +102,7 @@ def volumetric_part(material: Material, what: str = "formulation") -> Volumetric
             f"formulation = 'displacement'"
         )
     theta, u = VOLUMETRIC_LAWS[name]
-    # the soft-tissue laws' bulk term has its own coefficient k (cp), not lambda
-    coefficient = material.k if isinstance(material, HyperelasticMaterial) else material.lam
-    return VolumetricPart(theta, u, float(coefficient))
+    if isinstance(material, HyperelasticMaterial):
+        # the soft-tissue laws' bulk term: its own kind (FEBio's pressure_model) and k (cp)
+        return VolumetricPart("J", material.bulk_kind, float(material.k))
+    return VolumetricPart(theta, u, float(material.lam))

@@ -41,18 +41,19 @@ class Yeoh(InvariantLaw):
         c5: float = 0.0,
         c6: float = 0.0,
         k: float | None = None,
+        pressure_model: str | int = "default",
     ) -> None:
         given = dict(c1=c1, c2=c2, c3=c3, c4=c4, c5=c5, c6=c6)
         self.c = [parameter(self.name, key, value) for key, value in given.items()]
         while len(self.c) > 1 and self.c[-1] == 0.0:
             self.c.pop()  # trailing zero terms cost nothing
         k = parameter(self.name, "k", k, positive=True, meaning="bulk modulus")
-        self._set_moduli(k)
+        self._set_moduli(k, pressure_model)
 
     def parameters(self) -> dict[str, object]:
         out: dict[str, object] = {f"c{i + 1}": c for i, c in enumerate(self.c)}
         out["k"] = self.k
-        return out
+        return {**out, **self._bulk_parameter()}
 
     def w(self, I1: np.ndarray, I2: np.ndarray, order: int) -> Derivatives:
         x = I1 - 3.0
