@@ -206,6 +206,8 @@ class Simulation(BodyCalls, SetupCalls, StepChecks, BodyResults):
         self._system = System([b.model for b in bodies], names, attachments, ties)
         if self.contact is not None:
             self._system.contact = self._contact_model()
+            if old is not None and old.contact is not None:
+                self._system.contact.carry_over(old.contact)
         self._system_dirty = False
         x, v = [], []
         for b in bodies:
@@ -232,11 +234,14 @@ class Simulation(BodyCalls, SetupCalls, StepChecks, BodyResults):
 
         s, settings = self._system, self.contact
         surfaces = []
+        dhat = self._contact_dhat()
         for j, name in enumerate(s.names):
             body, choice = self.bodies[name], settings.surfaces.get(name)
             config, tangent = s.config_slices[j], s.tangent_slices[j]
             if body.kind == "fem":
-                surfaces.append(fem_surface(name, s.bodies[j], config.start, tangent.start, choice))
+                surfaces.append(
+                    fem_surface(name, s.bodies[j], config.start, tangent.start, choice, dhat)
+                )
             elif body.kind == "frames" and body.surface is not None:
                 embedding = body.embedded["surface"]
                 surfaces.append(
@@ -268,6 +273,18 @@ class Simulation(BodyCalls, SetupCalls, StepChecks, BodyResults):
                 "simulation has none"
             )
         return ContactModel(surfaces, list(self.obstacles), settings, s.n_dofs)
+
+    def _contact_dhat(self) -> float:
+        """The barrier's dhat (m) as the contact model will take it: the scene's, else 1e-3 of
+        the diagonal of the bodies' and obstacles' bounding box."""
+        if self.contact.dhat is not None:
+            return float(self.contact.dhat)
+        pts = [b.mesh.points for b in self._active() if b.kind == "fem" and b.mesh.dim == 3]
+        pts += [ob.rest for ob in self.obstacles]
+        if not pts:
+            return 0.0
+        P = np.vstack(pts)
+        return 1e-3 * float(np.linalg.norm(np.ptp(P, axis=0)))
 
     @staticmethod
     def _initial_config(b) -> np.ndarray:

@@ -207,19 +207,20 @@ class BodyCalls:
         are duplicated where the material separates, positions and velocities carry over, and
         supports and graspers hold every copy of their vertices. Returns what changed:
         {"cells_cut", "new_nodes", "pieces", "origin": (n_new,) the old node each node
-        continues}. Not yet with contact or a tissue attached (the
-        copies overlap in space; their contact surfaces are embedded ones, still to come), nor
-        a second cut of the same body."""
+        continues}. With contact on, the cut body's contact surface becomes its cut boundary
+        (``contact/cut_surface.py``: each side's cut face a little inside it, so the two never
+        pass through each other). Not yet with a tissue attached, nor a second cut of the same
+        body, nor in 2D with contact."""
         from tissuesim.mesh.virtual_nodes import virtual_node_cut
 
         b = self.body(body, ("fem",))
         if b.mesh.order != 1 or not b.mesh.simplicial:
             kind = "quadratic" if b.mesh.order != 1 else f"made of {b.mesh.cell_type} cells"
             raise InputError(f"cut_body: body {b.name!r} is {kind}; cuts apply to P1 cells")
-        if self.contact is not None:
+        if self.contact is not None and b.dim != 3:
             raise InputError(
-                f"cut_body: body {b.name!r} has contact on; cut bodies take no part in contact "
-                "yet (their copies overlap in space): cut without contact"
+                f"cut_body: body {b.name!r} is 2D and has contact on; a cut body's contact "
+                "surface is built in 3D only so far: cut without contact, or in 3D"
             )
         if self.tissue is not None:
             raise InputError("cut_body: a scene with a tissue cannot cut its organs yet")

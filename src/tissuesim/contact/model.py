@@ -33,7 +33,7 @@ from tissuesim.contact.candidates import StepCandidates
 from tissuesim.contact.ccd_queries import CollisionQueries
 from tissuesim.contact.friction_lag import FrictionLag
 from tissuesim.contact.stiffness import AdaptiveStiffness
-from tissuesim.contact.surfaces import FemSurface
+from tissuesim.contact.surfaces import CutFemSurface, FemSurface
 from tissuesim.errors import InputError
 
 __all__ = ["ContactModel", "ContactSettings", "ContactStats"]
@@ -144,7 +144,7 @@ class ContactModel(FrictionLag, CollisionQueries):
         # rigid frames move points on arcs: line-search trials are checked by CCD (surfaces.py)
         self.linear = all(s.linear for s in self.surfaces)
         # dV/dq is constant (kept per augmented flag) when every surface is a FEM body's
-        self._constant = all(isinstance(s, FemSurface) for s in self.surfaces)
+        self._constant = all(isinstance(s, FemSurface | CutFemSurface) for s in self.surfaces)
         self._constant_selection: dict = {}
         self.obstacle_state: np.ndarray | None = None  # where the obstacles are (flat), if lagged
         diag = float(np.linalg.norm(np.ptp(self.rest, axis=0)))
@@ -161,6 +161,16 @@ class ContactModel(FrictionLag, CollisionQueries):
         self.broad_phase = ipctk.LBVH()
         self.ccd = ipctk.AdditiveCCD()
         self.candidates = StepCandidates(ipctk, self.mesh, self.broad_phase, self.dhat, self.stats)
+
+    def carry_over(self, old: ContactModel) -> None:
+        """Continue ``old``'s state after the system was rebuilt (a cut changes a body's
+        surface): the obstacles where they are, the barrier's stiffness and its adaptation,
+        the time. Friction is lagged afresh at the next step's start."""
+        self.obstacle_state = old.obstacle_state
+        self.time = old.time
+        if old.adaptive is not None and self.adaptive is not None:
+            self.adaptive = old.adaptive
+        self.set_stiffness(old.kappa)
 
     # -- the barrier's stiffness (fixed, or IPC's adaptive one: contact/stiffness.py) -------------
     def set_stiffness(self, kappa: float) -> None:

@@ -23,7 +23,7 @@ import scipy.sparse as sp
 
 from tissuesim.errors import InputError
 
-__all__ = ["FemSurface", "FrameSurface", "fem_surface", "frame_surface"]
+__all__ = ["CutFemSurface", "FemSurface", "FrameSurface", "fem_surface", "frame_surface"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -53,6 +53,36 @@ class FemSurface:
         """(row over 0..dk-1, system tangent column, value) of dV/dq."""
         rows = np.arange(self.tangent_rows.size)
         return rows, self.tangent_rows, np.ones(rows.size)
+
+    def curvature(self, c: np.ndarray, g_vertices: np.ndarray):
+        return None
+
+
+@dataclass(frozen=True, eq=False)
+class CutFemSurface:
+    """A cut FEM body's contact surface (``contact/cut_surface.py``): points embedded in its
+    element copies, V = W X with ``embedding`` W (k, n_points) over the body's node positions
+    X, ``rest`` (k, d), ``triangles`` (m, 3), the body's ``config`` and ``tangent`` slices."""
+
+    name: str
+    material: object
+    rest: np.ndarray
+    triangles: np.ndarray
+    embedding: sp.csr_matrix
+    config: slice
+    tangent: slice
+    linear = True
+    dim = 3
+
+    def positions(self, c: np.ndarray) -> np.ndarray:
+        return self.embedding @ c[self.config].reshape(-1, 3)
+
+    def jacobian(self, c: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(row over 0..3k-1, system tangent column, value) of dV/dq = W (x) I_3."""
+        E = self.embedding.tocoo()
+        rows = (3 * E.row[:, None] + np.arange(3)).ravel()
+        cols = (self.tangent.start + 3 * E.col[:, None] + np.arange(3)).ravel()
+        return rows, cols, np.repeat(E.data, 3)
 
     def curvature(self, c: np.ndarray, g_vertices: np.ndarray):
         return None
@@ -111,10 +141,34 @@ class FrameSurface:
         return rows.ravel(), cols.ravel(), K.ravel()
 
 
-def fem_surface(name: str, model, config_offset: int, tangent_offset: int, choice) -> FemSurface:
+def fem_surface(
+    name: str, model, config_offset: int, tangent_offset: int, choice, dhat: float = 0.0
+) -> FemSurface | CutFemSurface:
     """Body ``name``'s contact surface: its boundary (triangles in 3D, edges in 2D), or a
-    facet set / facets (``choice``)."""
+    facet set / facets (``choice``); a cut body's is embedded in its element copies, its cut
+    faces a little inside each side for a barrier of activation distance ``dhat`` (m;
+    ``contact/cut_surface.py``)."""
     from tissuesim.contact.pairs import contact_facets
+
+    if model.mesh.cell_levels is not None:
+        from tissuesim.contact.cut_surface import cut_surface
+
+        if choice is not None:
+            raise InputError(
+                f"contact surface of {name!r}: the body has been cut, and its contact surface "
+                "is its whole boundary with the cut faces; leave its surface out of [contact]"
+            )
+        W, tri = cut_surface(model.mesh, dhat)
+        n = model.mesh.n_points * 3
+        return CutFemSurface(
+            name,
+            model.material,
+            W @ model.mesh.points,
+            tri,
+            W,
+            slice(config_offset, config_offset + n),
+            slice(tangent_offset, tangent_offset + n),
+        )
 
     d = model.mesh.dim
     tri = contact_facets(name, model.mesh, choice)

@@ -40,6 +40,9 @@ class Mesh:
     source: where the mesh came from (a file path or a generator), used in error messages.
     cell_fractions: (m,) the part of each cell's volume that is material (a virtual-node cut's
         copies, ``mesh/virtual_nodes.py``), weighting its energy, mass and body loads; None: 1.
+    cell_levels: (m, d + 1) with ``cell_fractions``: each copy's material level at its
+        vertices (material where its linear interpolation is >= 0); whole cells next to the
+        cut carry their distance to its plane on their side, the others +inf.
     surface_projection: the exact curved surface the boundary approximates, as a projection
         of points onto it ((k, d) -> (k, d)), when a generator knows it (``ellipsoid``);
         elevating the mesh to order 2 puts the boundary's midside nodes on it. None (files,
@@ -58,6 +61,12 @@ class Mesh:
     # the fraction of each cell's volume that holds material (m,): cells copied by a
     # virtual-node cut (``mesh/virtual_nodes.py``) stand for their side only; None: all of it
     cell_fractions: np.ndarray | None = None
+    # (m, d+1) with cell_fractions: each copy's material level at its vertices, its signed
+    # distance to the cut's plane (where the body was when cut) times its side, so its material
+    # is where the level's linear interpolation is >= 0; whole cells next to the cut carry
+    # their distance on their side, others +inf rows. The cut faces' contact surfaces are level
+    # sets of it (contact/cut_surface.py)
+    cell_levels: np.ndarray | None = None
 
     def __repr__(self) -> str:
         kind = {2: "triangles", 3: "tetrahedra"}.get(self.dim, "cells")

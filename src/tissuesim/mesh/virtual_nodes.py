@@ -84,7 +84,9 @@ class VirtualNodeMesh:
     (uncut cells, then the copies of cut cells), ``fraction`` (m,) each cell's volume
     fraction (1 for uncut ones), ``parent`` (m,) the original cell of each, ``side`` (m,)
     0 uncut, +1 / -1 the side of its cut, ``cut`` (m,) the index of its cut (-1 uncut), and
-    ``origin`` (p,) the original node of each point."""
+    ``origin`` (p,) the original node of each point; ``level`` (m, d+1) each copy's signed
+    distance to its cut's plane at its vertices times its side (material where >= 0); whole
+    cells next to a cut carry their distance on their side, others +inf (``_levels``)."""
 
     points: np.ndarray
     cells: np.ndarray
@@ -93,6 +95,7 @@ class VirtualNodeMesh:
     side: np.ndarray
     cut: np.ndarray
     origin: np.ndarray
+    level: np.ndarray | None = None
 
     @property
     def n_pieces(self) -> int:
@@ -127,6 +130,7 @@ class VirtualNodeMesh:
             cell_sets=cell_sets,
             source=f"{mesh.source} (cut)",
             cell_fractions=self.fraction,
+            cell_levels=self.level,
         )
 
 
@@ -356,6 +360,36 @@ def _node_groups(x3, x_now, cells, cuts, owner, node_d, parent, side) -> np.ndar
     return connected_components(graph, directed=False)[1]
 
 
+def _levels(x_now, cells, cuts, node_d, owner, parent, side, origin) -> np.ndarray:
+    """Each copy's material level at its vertices (copies, d+1): a cut copy's signed distance
+    to its cut's plane times its side; a whole cell on one side of a cut that shares a node with
+    a cell it cuts, or a node it parts on its plane (a cut along faces), its distance on that
+    side (the cut faces' contact surfaces shave such cells where they come close to the plane:
+    contact/cut_surface.py); +inf else."""
+    copies, k = len(parent), cells.shape[1]
+    level = np.full((copies, k), np.inf)
+    if not node_d:
+        return level
+    d_all = np.stack(node_d)  # (cuts, m, k)
+    copied = side != 0
+    level[copied] = d_all[owner[parent[copied]], parent[copied]] * side[copied, None]
+    whole = np.flatnonzero(~copied)
+    parted = np.unique(origin[len(x_now) :])  # original nodes that have copies
+    size = float(np.linalg.norm(np.ptp(x_now, axis=0)))
+    for j, cut in enumerate(cuts):  # few cuts
+        near = np.zeros(len(x_now), dtype=bool)
+        near[cells[owner == j]] = True
+        on_plane = np.abs((x_now[parted] - cut.point) @ cut.normal) <= PLANE_TOLERANCE * size
+        near[parted[on_plane]] = True
+        e = parent[whole]
+        d = d_all[j][e]
+        pick = near[cells[e]].any(axis=1) & np.isinf(level[whole, 0])
+        up, down = pick & np.all(d >= 0.0, axis=1), pick & np.all(d <= 0.0, axis=1)
+        level[whole[up]] = d[up]
+        level[whole[down]] = -d[down]
+    return level
+
+
 def virtual_node_cut(
     points: np.ndarray,
     cells: np.ndarray,
@@ -421,7 +455,9 @@ def virtual_node_cut(
     origin = np.concatenate([np.arange(len(x3)), pairs[dup, 0]])
     new_cells = node[group.reshape(-1)]
     pts = np.asarray(points, dtype=float)[origin]
+    level = _levels(x_now, cells, cuts, node_d, owner, parent, side, origin)
     return VirtualNodeMesh(
+        level=level,
         points=pts,
         cells=new_cells.reshape(copies, k),
         fraction=fraction,

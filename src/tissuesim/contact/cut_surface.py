@@ -1,0 +1,382 @@
+"""The contact surface of a cut FEM body (virtual node cut, ``mesh/virtual_nodes.py``): its
+boundary embedded in the element copies, every surface point a fixed weighting of mesh nodes.
+
+The two faces of a fresh cut coincide, and IPC's barrier is infinite at zero distance. So each
+side's contact surface follows the level set ``level = gap`` (gap = GAP dhat) of its material
+level, the signed distance to the cut's plane where the body was cut, positive in its material
+(``Mesh.cell_levels``): a slab of half-width gap around the plane is left out of the contact
+surfaces, and the two sides start 2 gap apart, outside each other's barrier. The material
+itself is unchanged (mass and elasticity are the copies'); the faces of a cut can overlap by at
+most 2 gap before their barrier holds them, like the kerf of a blade that thick. A notch's
+slot ends in a cap across its front.
+
+The contact region is the union over cells of cell ∩ {level >= gap} (cells away from the cut:
+all of them). Its boundary, per face F of a copy c whose *partners* are the other copies
+holding the same face nodes (their material joins c's there):
+
+    exposed(c, F) = F ∩ {level_c >= gap} ∩ (for each partner p) {level_p < gap},
+
+plus, inside each copy its level set crosses, the section {level_c = gap}. Every constraint is
+a level set of one plane's distance, so clipped faces have their corners on mesh edges, and a
+corner is a node or a point on an edge: corners are merged by (edge, weight), and other
+polygons' points on an edge are inserted into the polygon edges along it (no T-junction), which
+makes the surface watertight. Faces are clipped all at once (Sutherland-Hodgman over the
+corners, vectorised over faces).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import scipy.sparse as sp
+
+from tissuesim.errors import InputError
+
+__all__ = ["cut_surface"]
+
+#: the cut faces' contact surfaces lie GAP dhat inside each side: the fresh faces start
+#: 2 GAP dhat apart, outside each other's barrier, and overlap by at most that when pressed
+GAP = 1.0
+#: node levels within SNAP_IN dhat above the level set (into the material) or SNAP_OUT dhat
+#: below it are put on it; the sides stay 2 (GAP - SNAP_OUT) dhat = 1.2 dhat apart at least
+SNAP_IN, SNAP_OUT = 1.0, 0.4
+#: surface points closer than MERGE dhat at rest are one point
+MERGE = 1.0
+#: outward local faces of a positively oriented tetrahedron
+_TET_FACES = np.array([[1, 2, 3], [0, 3, 2], [0, 1, 3], [0, 2, 1]])
+#: the edges of a tetrahedron, and the cyclic order of the four crossings of a 2-2 section
+_TET_EDGES = np.array([[0, 1], [0, 2], [0, 3], [1, 2], [1, 3], [2, 3]])
+#: weights below this are round-off (a point on an edge has two, a node one)
+_ZERO = 1e-12
+#: points on one mesh edge closer than this (in weight) are one point
+_MERGE = 1e-9
+
+
+def cut_surface(mesh, dhat: float) -> tuple[sp.csr_matrix, np.ndarray]:
+    """(W, triangles): the surface points as rows of node weights W (k, n_points), so that
+    V = W @ X for node positions X (n_points, 3), and the outward triangles (t, 3) over them,
+    of a cut 3D P1 mesh (``mesh.cell_levels`` set), for a barrier of activation distance
+    ``dhat`` (m): the cut faces GAP dhat inside each side; node levels within SNAP_IN dhat
+    above or SNAP_OUT dhat below that are taken as on it, so the level set passes through those
+    nodes instead of making tiny triangles next to them; points closer than MERGE dhat (at
+    rest) made one (``_cluster``). IPC's barrier acts between a surface's own primitives closer
+    than dhat, so the surface must have no feature that small."""
+    gap = GAP * dhat
+    if mesh.dim != 3 or mesh.cells.shape[1] != 4:
+        raise InputError(
+            "contact of a cut body: only 3D P1 tetrahedra are built so far; cut it without "
+            "contact, or simulate the cut in 3D"
+        )
+    cells, levels = mesh.cells, np.asarray(mesh.cell_levels, dtype=float)
+    snap = (levels >= gap - SNAP_OUT * dhat) & (levels <= gap + SNAP_IN * dhat)
+    levels = np.where(snap, gap, levels)
+    face_polys = _exposed_faces(cells, levels, gap)
+    cap_polys = _sections(mesh.points, cells, levels, gap)
+    K = max(face_polys[0].shape[1], cap_polys[0].shape[1])
+
+    def pad(a: np.ndarray) -> np.ndarray:
+        return np.concatenate([a, np.zeros((len(a), K - a.shape[1], 4), a.dtype)], axis=1)
+
+    nodes = np.concatenate([pad(face_polys[0]), pad(cap_polys[0])])  # (p, K, 4) corner nodes
+    weights = np.concatenate([pad(face_polys[1]), pad(cap_polys[1])])  # (p, K, 4)
+    count = np.concatenate([face_polys[2], cap_polys[2]])
+    W, tri = _assemble(mesh.n_points, nodes, weights, count)
+    return _cluster(W, tri, mesh.points, MERGE * dhat)
+
+
+def _exposed_faces(cells: np.ndarray, levels: np.ndarray, gap: float):
+    """Every copy face's exposed part as polygons: (nodes (p, K, 4), weights (p, K, 4),
+    corner counts (p,)) with weights over the face's three nodes (the fourth weight 0)."""
+    m = len(cells)
+    fnodes = cells[:, _TET_FACES].reshape(-1, 3)  # (4m, 3), outward order
+    flev = levels[:, _TET_FACES].reshape(-1, 3)
+    order = np.argsort(fnodes, axis=1)
+    snodes = np.take_along_axis(fnodes, order, axis=1)  # sorted: partners align node by node
+    slev = np.take_along_axis(flev, order, axis=1)
+    _, group, size = np.unique(snodes, axis=0, return_inverse=True, return_counts=True)
+    group = group.ravel()
+    # constraints per face, in the sorted node order: own level - gap >= 0, and for each
+    # partner gap - level_p >= 0; a whole partner (level +inf) covers the face entirely
+    by_group = np.argsort(group, kind="stable")
+    start = np.concatenate([[0], np.cumsum(size)])
+    most = int(size.max(initial=1))
+    constraints = [slev - gap]
+    covered = np.zeros(4 * m, dtype=bool)
+    for j in range(most):  # the j-th member of each face's group, skipping the face itself
+        has = j < size[group]
+        member = np.where(has, by_group[np.minimum(start[group] + j, len(by_group) - 1)], 0)
+        other = has & (member != np.arange(4 * m))
+        lev = np.where(other[:, None], slev[member], -np.inf)  # -inf: no constraint
+        covered |= other & np.all(np.isinf(lev) & (lev > 0), axis=1)
+        constraints.append(gap - lev)
+    live = ~covered & ~np.all(slev - gap < 0.0, axis=1)  # some of it can be exposed
+    idx = np.flatnonzero(live)
+    # the face's corners in outward order, as weights over its sorted nodes
+    inverse_order = np.argsort(order[idx], axis=1)  # outward corner i is sorted position
+    K = 3 + len(constraints)
+    W = np.zeros((len(idx), K, 3))
+    rows = np.arange(len(idx))[:, None]
+    W[rows, np.arange(3)[None, :], inverse_order] = 1.0
+    count = np.full(len(idx), 3)
+    for values in constraints:
+        v = values[idx]
+        v = np.where(np.isfinite(v), v, 1.0)  # +inf (no constraint) keeps everything
+        W, count = _clip(W, count, v)
+    keep = count >= 3
+    nodes = np.zeros((keep.sum(), K, 4), dtype=np.int64)
+    nodes[:, :, :3] = snodes[idx[keep]][:, None, :]
+    weights = np.zeros((keep.sum(), K, 4))
+    weights[:, :, :3] = W[keep]
+    return nodes, weights, count[keep]
+
+
+def _clip(W: np.ndarray, count: np.ndarray, values: np.ndarray):
+    """Convex polygons (corners as weights W (p, K, n) over n nodes, ``count`` (p,) corners)
+    clipped to where the linear function with node values ``values`` (p, n) is >= 0
+    (Sutherland-Hodgman, one corner slot at a time over all polygons)."""
+    p, K, n = W.shape
+    val = np.einsum("pkn,pn->pk", W, values)
+    out = np.zeros_like(W)
+    got = np.zeros(p, dtype=np.int64)
+    rows = np.arange(p)
+    for i in range(K):
+        active = i < count
+        nxt = np.where(i + 1 < count, i + 1, 0)
+        a, b = W[:, i], W[rows, nxt]
+        va, vb = val[:, i], val[rows, nxt]
+        inside = active & (va >= 0.0)
+        put = np.minimum(got, K - 1)
+        out[rows[inside], put[inside]] = a[inside]
+        got = got + inside
+        cross = active & ((va >= 0.0) != (vb >= 0.0))
+        t = np.where(cross, va / np.where(cross, va - vb, 1.0), 0.0)
+        put = np.minimum(got, K - 1)
+        out[rows[cross], put[cross]] = a[cross] + t[cross, None] * (b[cross] - a[cross])
+        got = got + cross
+    return out, np.minimum(got, K)
+
+
+def _sections(points: np.ndarray, cells: np.ndarray, levels: np.ndarray, gap: float):
+    """The level set {level = gap} inside each cell it crosses, oriented outward (towards
+    lower level): (nodes (p, 4, 4), weights (p, 4, 4), counts (p,) 3 or 4)."""
+    finite = np.all(np.isfinite(levels), axis=1)
+    v = levels - gap
+    crossed = finite & (v.max(axis=1) > 0.0) & (v.min(axis=1) < 0.0)
+    idx = np.flatnonzero(crossed)
+    v = v[idx]
+    a, b = _TET_EDGES[:, 0], _TET_EDGES[:, 1]
+    va, vb = v[:, a], v[:, b]
+    hit = va * vb < 0.0  # (c, 6)
+    t = np.where(hit, va / np.where(hit, va - vb, 1.0), 0.0)
+    # corner weights over the cell's 4 nodes, one per crossed edge, then the nodes on the
+    # level set (snapped there): a section has 3 or 4 of these
+    Wedge = np.zeros((len(idx), 10, 4))
+    r = np.arange(len(idx))[:, None]
+    Wedge[r, np.arange(6)[None, :], a[None, :]] = 1.0 - t
+    Wedge[r, np.arange(6)[None, :], b[None, :]] = t
+    Wedge[:, 6:, :] = np.eye(4)
+    hit = np.concatenate([hit, v == 0.0], axis=1)
+    # cyclic order: the crossed edges sorted by angle around their centroid in the plane
+    X = points[cells[idx]]  # (c, 4, 3)
+    P = np.einsum("cen,cnd->ced", Wedge, X)
+    n_hit = hit.sum(axis=1)
+    centre = np.einsum("ce,ced->cd", hit, P) / n_hit[:, None]
+    grad = _level_gradients(X, levels[idx])  # (c, 3), rest coordinates
+    normal = grad / np.linalg.norm(grad, axis=1, keepdims=True)
+    e1 = np.cross(normal, np.where(np.abs(normal[:, :1]) < 0.9, [[1.0, 0, 0]], [[0, 1.0, 0]]))
+    e1 /= np.linalg.norm(e1, axis=1, keepdims=True)
+    e2 = np.cross(normal, e1)
+    rel = P - centre[:, None, :]
+    # angles counter-clockwise about -normal (outward: towards lower level)
+    angle = np.arctan2(np.einsum("ced,cd->ce", rel, e1), np.einsum("ced,cd->ce", rel, e2))
+    angle = np.where(hit, angle, np.inf)
+    order = np.argsort(angle, axis=1)[:, :4]
+    W = np.take_along_axis(Wedge, order[:, :, None], axis=1)
+    count = n_hit
+    # orientation: the fan's normal must point along -grad (out of the region level >= gap)
+    Q = np.einsum("ckn,cnd->ckd", W, X)
+    fan_normal = np.cross(Q[:, 1] - Q[:, 0], Q[:, 2] - Q[:, 0])
+    flip = np.einsum("cd,cd->c", fan_normal, grad) > 0.0
+    if flip.any():
+        reversed_ = W[flip][:, ::-1]
+        # keep the padding (4th slot of triangles) at the end
+        tri = count[flip] == 3
+        reversed_[tri] = np.roll(reversed_[tri], -1, axis=1)
+        W[flip] = reversed_
+    nodes = np.broadcast_to(cells[idx][:, None, :], W.shape).copy()
+    return nodes, W, count
+
+
+def _level_gradients(X: np.ndarray, levels: np.ndarray) -> np.ndarray:
+    """The gradient (c, 3) of the linear function with vertex values ``levels`` (c, 4) over
+    tetrahedra X (c, 4, 3), in their (rest) coordinates."""
+    edges = X[:, 1:] - X[:, :1]  # (c, 3, 3)
+    rise = levels[:, 1:] - levels[:, :1]  # (c, 3)
+    return np.linalg.solve(edges, rise[:, :, None])[:, :, 0]
+
+
+def _assemble(n_points: int, nodes: np.ndarray, weights: np.ndarray, count: np.ndarray):
+    """Polygons (corners as weights over 4 nodes) -> merged surface points W (k, n_points) and
+    triangles (t, 3) over them. Corners on one mesh edge with the same weight (to _MERGE) are
+    one point. A polygon edge along a mesh edge that holds other polygons' points between its
+    ends gets them inserted (no T-junction: IPC would see a point at zero distance from a
+    triangle it is not a vertex of), and such a polygon is fanned from its centroid; the others
+    from their first corner."""
+    P, K, _ = weights.shape
+    weights = np.where(weights > _ZERO, weights, 0.0)
+    weights /= np.maximum(weights.sum(axis=2, keepdims=True), 1e-300)
+    # each corner: its (up to two) nodes and the weight of the larger-numbered one
+    big = np.argsort(-weights, axis=2)[:, :, :2]  # the two largest weights
+    w2 = np.take_along_axis(weights, big, axis=2)
+    n2 = np.take_along_axis(nodes, big, axis=2)
+    single = w2[:, :, 1] <= 0.0
+    n2[:, :, 1] = np.where(single, n2[:, :, 0], n2[:, :, 1])
+    lo, hi = n2.min(axis=2), n2.max(axis=2)
+    w_hi = np.where(single, 0.0, np.where(n2[:, :, 0] == hi, w2[:, :, 0], w2[:, :, 1]))
+    valid = np.arange(K)[None, :] < count[:, None]
+    vlo, vhi, vw = lo[valid], hi[valid], w_hi[valid]
+    # merge: sort by (edge, weight); a new point where the edge changes or the weight jumps
+    order = np.lexsort((vw, vhi, vlo))
+    new = np.ones(order.size, dtype=bool)
+    new[1:] = (
+        (vlo[order][1:] != vlo[order][:-1])
+        | (vhi[order][1:] != vhi[order][:-1])
+        | (np.diff(vw[order]) > _MERGE)
+    )
+    label = np.cumsum(new) - 1
+    point = np.empty(order.size, dtype=np.int64)
+    point[order] = label
+    corner = np.full((P, K), -1)
+    corner[valid] = point
+    first = order[new]
+    p_lo, p_hi, p_w = vlo[first], vhi[first], vw[first]
+    # corners that merged with their neighbour are one corner; a polygon left with fewer than
+    # three is empty (a face between copies whose regions only touch along a line)
+    prev = np.where(np.arange(K)[None, :] == 0, np.maximum(count[:, None] - 1, 0), np.arange(K) - 1)
+    repeat = valid & (corner == np.take_along_axis(corner, prev, axis=1))
+    keep_corner = valid & ~repeat
+    slot = np.cumsum(keep_corner, axis=1) - 1
+    packed = np.full((P, K), -1)
+    r, c = np.nonzero(keep_corner)
+    packed[r, slot[r, c]] = corner[r, c]
+    packed_lo, packed_hi = np.zeros((P, K), np.int64), np.zeros((P, K), np.int64)
+    packed_lo[r, slot[r, c]] = lo[r, c]
+    packed_hi[r, slot[r, c]] = hi[r, c]
+    count = keep_corner.sum(axis=1)
+    corner, lo, hi = packed, packed_lo, packed_hi
+    valid = np.arange(K)[None, :] < count[:, None]
+    corner[~valid] = -1
+    alive = count >= 3
+    k = len(first)
+    rows = [np.repeat(np.arange(k), 2)]
+    cols = [np.column_stack([p_lo, p_hi]).ravel()]
+    vals = [np.column_stack([1.0 - p_w, p_w]).ravel()]  # a node: lo == hi, 1 in all
+    # points strictly inside mesh edges, by edge: (lo, hi) -> [(w, point)], sorted
+    on_edge: dict[tuple[int, int], list] = {}
+    for j in np.flatnonzero(p_lo != p_hi):
+        on_edge.setdefault((int(p_lo[j]), int(p_hi[j])), []).append((float(p_w[j]), int(j)))
+    split = np.zeros((P, K), dtype=bool)  # polygon edge i -> i+1 lies along a split mesh edge
+    if on_edge:
+        keys = np.array(list(on_edge), dtype=np.int64)
+        split_keys = set((keys[:, 0] * n_points + keys[:, 1]).tolist())
+        nxt = np.where(np.arange(K)[None, :] + 1 < count[:, None], np.arange(K) + 1, 0)
+        b_lo = np.take_along_axis(lo, nxt, axis=1)
+        b_hi = np.take_along_axis(hi, nxt, axis=1)
+        ends = np.stack([lo, hi, b_lo, b_hi], axis=2)
+        e_lo, e_hi = ends.min(axis=2), ends.max(axis=2)
+        # along one mesh edge: both corners' nodes within {e_lo, e_hi}, and two nodes in all
+        along = np.all((ends == e_lo[..., None]) | (ends == e_hi[..., None]), axis=2)
+        along &= (e_lo != e_hi) & valid
+        ekey = e_lo * n_points + e_hi
+        split = along & np.isin(ekey, list(split_keys))
+    tris = []
+    extra = k
+    plain = ~split.any(axis=1) & alive
+    for i in range(1, K - 1):  # fans from the first corner
+        ok = plain & (i + 1 < count)
+        tris.append(np.column_stack([corner[ok, 0], corner[ok, i], corner[ok, i + 1]]))
+    for poly in np.flatnonzero(~plain & alive):  # few: polygons with a T-junction to mend
+        ring = []
+        n = int(count[poly])
+        for i in range(n):
+            a = int(corner[poly, i])
+            ring.append(a)
+            if not split[poly, i]:
+                continue
+            b = int(corner[poly, (i + 1) % n])
+            e0 = int(min(p_lo[a], p_lo[b]))
+            e1 = int(max(p_hi[a], p_hi[b]))
+            wa, wb = _along(a, e0, e1, p_lo, p_w), _along(b, e0, e1, p_lo, p_w)
+            inside = [
+                (w, j)
+                for w, j in on_edge.get((e0, e1), [])
+                if min(wa, wb) + _MERGE < w < max(wa, wb) - _MERGE
+            ]
+            inside.sort(reverse=bool(wa > wb))
+            ring.extend(j for _, j in inside)
+        # the centroid of the polygon's corners, a new point
+        W_poly = np.zeros(n_points)
+        for a in corner[poly, :n]:
+            W_poly[p_lo[a]] += (1.0 - p_w[a]) / n
+            W_poly[p_hi[a]] += p_w[a] / n
+        nz = np.flatnonzero(W_poly)
+        rows.append(np.full(nz.size, extra))
+        cols.append(nz)
+        vals.append(W_poly[nz])
+        m = len(ring)
+        tris.append(np.column_stack([np.full(m, extra), ring, np.roll(ring, -1)]))
+        extra += 1
+    W = sp.csr_matrix(
+        (np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
+        shape=(extra, n_points),
+    )
+    tri = np.concatenate(tris).astype(np.int64) if tris else np.zeros((0, 3), dtype=np.int64)
+    tri = tri[(tri[:, 0] != tri[:, 1]) & (tri[:, 1] != tri[:, 2]) & (tri[:, 0] != tri[:, 2])]
+    used = np.unique(tri)
+    local = np.full(extra, -1)
+    local[used] = np.arange(used.size)
+    return W[used], local[tri]
+
+
+def _along(j: int, e0: int, e1: int, p_lo: np.ndarray, p_w: np.ndarray) -> float:
+    """Where point j lies along mesh edge (e0, e1): 0 at node e0, 1 at node e1, else its
+    weight (a point inside that edge)."""
+    if p_w[j] == 0.0:  # a node
+        return 0.0 if p_lo[j] == e0 else 1.0
+    return float(p_w[j])
+
+
+def _cluster(W: sp.csr_matrix, tri: np.ndarray, rest: np.ndarray, merge: float):
+    """Surface points joined by an edge shorter than ``merge`` (at rest) made one, at their
+    mean (weights averaged): the level set passes within dhat of nodes near the cut's plane in
+    a star of points dhat apart, which IPC's barrier would push apart at rest. Where the body
+    was cut the level is an affine function of the node positions, so the mean keeps the level
+    exactly. Triangles that collapse, and pairs that become one face twice in opposite
+    orientations, are dropped."""
+    from scipy.sparse.csgraph import connected_components
+
+    if merge <= 0.0 or len(tri) == 0:
+        return W, tri
+    V = W @ rest
+    edges = np.unique(
+        np.sort(np.concatenate([tri[:, [0, 1]], tri[:, [1, 2]], tri[:, [2, 0]]]), 1), axis=0
+    )
+    short = np.linalg.norm(V[edges[:, 0]] - V[edges[:, 1]], axis=1) < merge
+    pairs = edges[short]
+    if len(pairs) == 0:
+        return W, tri
+    k = len(V)
+    graph = sp.coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(k, k))
+    n, label = connected_components(graph, directed=False)
+    size = np.bincount(label, minlength=n)
+    average = sp.csr_matrix((1.0 / size[label], (label, np.arange(k))), shape=(n, k))
+    W = (average @ W).tocsr()
+    tri = label[tri]
+    tri = tri[(tri[:, 0] != tri[:, 1]) & (tri[:, 1] != tri[:, 2]) & (tri[:, 0] != tri[:, 2])]
+    # a face and its reverse cancel (two sides of a collapsed sliver)
+    key = np.sort(tri, axis=1)
+    _, inverse, count = np.unique(key, axis=0, return_inverse=True, return_counts=True)
+    tri = tri[count[inverse.ravel()] == 1]
+    used = np.unique(tri)
+    local = np.full(n, -1)
+    local[used] = np.arange(used.size)
+    return W[used], local[tri]
