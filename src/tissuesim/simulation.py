@@ -120,6 +120,7 @@ class Simulation(BodyCalls, SetupCalls, StepChecks, BodyResults):
         self.run_time_split: dict[str, float] = {}  # the last run()'s wall time split (s)
         self._last_gradient: np.ndarray | None = None
         self._indentation = IndentationTracker()  # probes' touch points, across rebuilds
+        self.organ_cuts: list = []  # blades cutting FEM bodies (bodies/organ_cut.py)
         if self.newton.linear_solver != "auto" and not self.explicit:
             make_linear_solver(self.newton.linear_solver, 1, 3)  # unavailable: fail now
         if mesh is not None:
@@ -443,6 +444,8 @@ class Simulation(BodyCalls, SetupCalls, StepChecks, BodyResults):
             extra["contact"] = self._contact_report(s.contact, self._state.x, extra["forces"])
         if self.tissue is not None:
             extra.update(self._tissue_step(t0))
+        if self.organ_cuts:
+            extra.update(self._organ_cut_step(t0, extra["forces"]))
         record = StepRecord.build(
             len(self.history) + 1,
             self.time,

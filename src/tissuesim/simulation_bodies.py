@@ -200,23 +200,28 @@ class BodyCalls:
         self._changed()
         return tissue
 
-    def cut_body(self, cut, *, body: str | None = None) -> dict:
+    def cut_body(self, cut, *, body: str | None = None, name: str = "cut") -> dict:
         """Cut a FEM body now along ``cut`` (a ``mesh.virtual_nodes.PlanarCut`` in world
         coordinates: the blade cuts the body where it is) by the virtual node algorithm: the
         cells it crosses completely become copies per side with their volume fractions, nodes
         are duplicated where the material separates, positions and velocities carry over, and
-        supports and graspers hold every copy of their vertices. Returns what changed:
-        {"cells_cut", "new_nodes", "pieces", "origin": (n_new,) the old node each node
-        continues}. With contact on, the cut body's contact surface becomes its cut boundary
-        (``contact/cut_surface.py``: each side's cut face a little inside it, so the two never
-        pass through each other). Not yet with a tissue attached, nor a second cut of the same
-        body, nor in 2D with contact."""
-        from tissuesim.mesh.virtual_nodes import virtual_node_cut
+        supports and graspers hold every copy of their vertices. A body can be cut again: a
+        cut of the same ``name`` in the same plane with a larger polygon goes on (a blade
+        advancing step by step: each cell is cut once, where the body was when the blade
+        crossed it), another name is another cut. Returns what changed: {"cells_cut" (new),
+        "new_nodes", "pieces", "area_m2" (the rest area of this cut so far), "origin": (n,)
+        the node each node continues}. With contact on, the cut body's contact surface is its
+        cut boundary (``contact/cut_surface.py``: each side's cut face a little inside it, so
+        the two never pass through each other). Not yet with a tissue attached, nor in 2D
+        with contact; a cell crossed by two different cuts is refused."""
+        from tissuesim.bodies.cut_state import CutState, recut
 
         b = self.body(body, ("fem",))
         if b.mesh.order != 1 or not b.mesh.simplicial:
-            kind = "quadratic" if b.mesh.order != 1 else f"made of {b.mesh.cell_type} cells"
-            raise InputError(f"cut_body: body {b.name!r} is {kind}; cuts apply to P1 cells")
+            raise InputError(
+                f"cut_body: body {b.name!r} has {'quadratic' if b.mesh.order != 1 else 'Q1'} "
+                "cells; cuts apply to P1 triangles and tetrahedra"
+            )
         if self.contact is not None and b.dim != 3:
             raise InputError(
                 f"cut_body: body {b.name!r} is 2D and has contact on; a cut body's contact "
@@ -224,25 +229,53 @@ class BodyCalls:
             )
         if self.tissue is not None:
             raise InputError("cut_body: a scene with a tissue cannot cut its organs yet")
-        if b.mesh.cell_fractions is not None:
-            # a second cut would have to keep the first one's copies (their sides) apart
-            raise InputError(
-                f"cut_body: body {b.name!r} has been cut already; one cut per body for now "
-                "(give the whole cut at once, or cut it before the first step)"
-            )
+        if b.cut_state is None:
+            b.cut_state = CutState(b.mesh, density=np.asarray(b.model.density, dtype=float))
         current = self.body_positions(b.name) if self._state is not None else b.mesh.points
+        before_cells = int(np.count_nonzero(b.cut_state.vn.side > 0)) if b.cut_state.vn else 0
         before = b.mesh.n_points
-        result = virtual_node_cut(b.mesh.points, b.mesh.cells, [cut], current=current)
-        cells_cut = int(np.count_nonzero(result.side > 0))
-        report = {
-            "cells_cut": cells_cut,
-            "new_nodes": len(result.points) - before,
-            "pieces": result.n_pieces,
-            "origin": result.origin,
+        done = recut(b.cut_state, cut, name, current)
+        if done is None:  # no new cell crossed completely: nothing changes
+            vn, names = b.cut_state.vn, b.cut_state.names
+            area = 0.0
+            if vn is not None and name in names:
+                area = float(b.cut_state.areas(vn)[names.index(name)])
+            return {
+                "cells_cut": 0,
+                "new_nodes": 0,
+                "pieces": 1 if vn is None else vn.n_pieces,
+                "area_m2": area,
+                "origin": np.arange(before),
+            }
+        vn, carry, index = done
+        b.apply_cut(vn, carry, b.cut_state.original, b.cut_state.density)
+        return {
+            "cells_cut": int(np.count_nonzero(vn.side > 0)) - before_cells,
+            "new_nodes": len(vn.points) - before,
+            "pieces": vn.n_pieces,
+            "area_m2": float(b.cut_state.areas(vn)[index]),
+            "origin": carry,
         }
-        if len(result.points) > before:  # else nothing parted: the mesh stays as it is
-            b.apply_cut(result)
-        return report
+
+    def _organ_cut_step(self, t0: float, forces: dict) -> dict:
+        """After a step t0 -> now: each blade cutting a FEM body cuts what it has swept
+        (bodies/organ_cut.py); its cutting force joins ``forces``. Returns the step's
+        {"cuts": {name: {"area_m2", "new_area_m2", "cells_cut", "pieces"}}}."""
+        out = {}
+        for blade in self.organ_cuts:
+            cut = blade.swept(self.time)
+            report = {"area_m2": blade.area, "new_area_m2": 0.0, "cells_cut": 0}
+            if cut is not None and t0 < blade.end + 1e-9 * self.time_step:
+                done = self.cut_body(cut, body=blade.body, name=blade.name)
+                new = max(done["area_m2"] - blade.area, 0.0)
+                blade.area = done["area_m2"]
+                report = {"area_m2": blade.area, "new_area_m2": new,
+                          "cells_cut": done["cells_cut"], "pieces": done["pieces"]}  # fmt: skip
+                forces[blade.name] = blade.force(new, t0, self.time)
+            else:
+                forces[blade.name] = np.zeros(3)
+            out[blade.name] = report
+        return {"cuts": out}
 
     def remove_body(self, name: str) -> None:
         """Take a body (and, for the tissue, its attachments and cuts) out, before the first

@@ -301,6 +301,25 @@ class SetupCalls:
             b.add_gravity(g)
         self.gravity.append(g)
 
+    def set_damping(self, mass: float = 0.0, stiffness: float = 0.0, *, body=None) -> None:
+        """Rayleigh damping C = mass M + stiffness K (``mass`` alpha in 1/s, ``stiffness``
+        beta in s) on a FEM body, or with body None on every FEM body there is; each mode of
+        angular frequency omega gets the damping ratio alpha / (2 omega) + beta omega / 2.
+        Implicit integrators only (``energies/damping.py``); 0, 0 removes it."""
+        from tissuesim import validate
+
+        alpha = validate.real(mass, "damping mass (alpha)", low=0.0, unit="1/s")
+        beta = validate.real(stiffness, "damping stiffness (beta)", low=0.0, unit="s")
+        if self.explicit and (alpha or beta):
+            raise InputError(
+                "Rayleigh damping needs an implicit integrator (backward_euler or quasistatic): "
+                "it is a dissipation term of the step's minimisation"
+            )
+        bodies = [self.body(body, ("fem",))] if body is not None else self._active()
+        for b in bodies:
+            if b.kind == "fem":
+                b.model.damping = (alpha, beta) if alpha or beta else None
+
     def set_velocity(self, velocity=None, *, linear=None, angular=None, body=None) -> None:
         """Initial velocity: FEM bodies (n, d) or (d,) m/s; frame bodies ``linear`` (3,)
         (``velocity`` is taken as linear) and ``angular`` (3,) rad/s."""
@@ -366,15 +385,39 @@ class SetupCalls:
             raise InputError(f"{what} acts on the tissue: call add_tissue first")
         return self.tissue
 
-    def add_cut(self, blade, start: float, end: float, *, kerf=None, name: str = "cut"):
-        """Dissect the connective tissue (``add_tissue`` first): ``blade(t)`` returns a
-        polyline (k, 3) of k >= 2 points (m) that sweeps through the tissue from ``start`` to
-        ``end`` (s); the tissue points within ``kerf`` (m; default half the tissue's sample
-        spacing) of the swept surface are removed and frames stop acting across the cut.
-        The swept surface is written as the series ``name``. Returns the cutting tool.
+    def add_cut(
+        self,
+        blade,
+        start: float,
+        end: float,
+        *,
+        body: str | None = None,
+        kerf=None,
+        name: str = "cut",
+        toughness: float = 0.0,
+    ):
+        """A blade sweeping from ``start`` to ``end`` (s). Without ``body`` it dissects the
+        connective tissue (``add_tissue`` first): ``blade(t)`` returns a polyline (k, 3) of
+        k >= 2 points (m); the tissue points within ``kerf`` (m; default half the tissue's
+        sample spacing) of the swept surface are removed and frames stop acting across the
+        cut; the swept surface is written as the series ``name``. With ``body`` (a FEM body)
+        it cuts that body: ``blade(t)`` returns its straight edge (2, 3), moving in its own
+        plane; after each step the cells it has swept through completely are cut by the
+        virtual node algorithm (``cut_body``), mass kept; its cutting force (``toughness``,
+        J/m^2 of new surface) is reported as ``name`` and the cut's area per step under
+        ``extra["cuts"]``. Returns the cutting tool.
 
         ``sim.add_cut(lambda t: np.array([[t - 1, -0.2, 0.15], [t - 1, 1.2, 0.15]]),
         start=1.0, end=2.0)`` sweeps a straight blade along x."""
+        if body is not None:
+            from tissuesim.bodies.organ_cut import OrganCut
+
+            b = self.body(body, ("fem",))
+            if any(c.name == name for c in self.organ_cuts) or name in self.bodies:
+                raise InputError(f"add_cut: the name {name!r} is taken; give the cut its own")
+            tool = OrganCut(blade, float(start), float(end), b.name, name, float(toughness))
+            self.organ_cuts.append(tool)
+            return tool
         return self._tissue("add_cut").add_cut(blade, start, end, kerf=kerf, name=name)
 
     def set_tearing(self, threshold: float) -> None:

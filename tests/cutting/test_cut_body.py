@@ -93,9 +93,53 @@ def test_cut_body_refuses_what_it_cannot_do_yet():
     sim = cantilever()
     sim.cut_body(through(0.47))
     mass = sim.model.mass.lumped.sum()
-    with pytest.raises(InputError, match="cut already"):  # it would lose the first's fractions
+    with pytest.raises(InputError, match="keeps its plane"):  # one name, one plane
         sim.cut_body(through(0.83))
     assert sim.model.mass.lumped.sum() == mass
+    with pytest.raises(InputError, match="crossed by two cuts"):  # a cell is cut once
+        sim.cut_body(PlanarCut.swept_segment((0.3, -1, 0.1), (0.6, 2, 0.1), (0.3, -1, -1),
+                                             (0.6, 2, -1)), name="oblique")  # fmt: skip
+
+
+def test_a_second_cut_and_a_blade_going_on_step_by_step():
+    """Three pieces from two named cuts, mass kept; a blade going down through the beam in
+    three calls cuts the same cells with the same fractions as the whole cut at once (the body
+    at rest), each call only the cells it has newly crossed completely."""
+    sim = cantilever()
+    mass = sim.model.mass.lumped.sum()
+    sim.cut_body(through(0.47))
+    report = sim.cut_body(through(0.83), name="second")
+    assert report["pieces"] == 3
+    assert sim.model.mass.lumped.sum() == pytest.approx(mass, rel=1e-12)
+
+    def notch(depth: float) -> PlanarCut:  # from the top down to z = 0.2 - depth
+        z = 0.2 - depth
+        return PlanarCut.swept_segment((0.47, -1, 1), (0.47, 2, 1), (0.47, -1, z), (0.47, 2, z))
+
+    once = cantilever()
+    whole = once.cut_body(notch(0.2))
+    stepwise = cantilever()
+    cut = [stepwise.cut_body(notch(depth))["cells_cut"] for depth in (0.1, 0.15, 0.2)]
+    # the top layer once the blade is through it, then the cells of the next it has crossed
+    assert sum(cut) == whole["cells_cut"] and cut[0] > 0 and cut[2] > 0
+    a, b = once.bodies["body"].mesh, stepwise.bodies["body"].mesh
+    assert np.allclose(np.sort(a.cell_fractions), np.sort(b.cell_fractions), atol=1e-12)
+    assert a.n_points == b.n_points and b.cell_fractions.sum() == pytest.approx(240, rel=1e-12)
+    assert stepwise.cut_body(notch(0.2))["cells_cut"] == 0  # nothing new: no change
+
+
+def test_a_blade_going_on_while_the_beam_sags_cuts_each_cell_where_it_was():
+    sim = cantilever()
+    mass = sim.model.mass.lumped.sum()
+    for depth in (0.07, 0.14, 0.21):
+        sim.step()
+        z = 0.2 - depth
+        sim.cut_body(PlanarCut.swept_segment((0.47, -1, 1), (0.47, 2, 1), (0.47, -1, z),
+                                             (0.47, 2, z)))  # fmt: skip
+    assert sim.bodies["body"].cut_state.vn.n_pieces == 2
+    assert sim.model.mass.lumped.sum() == pytest.approx(mass, rel=1e-12)
+    for _ in range(3):
+        assert sim.step().converged
 
 
 def test_the_run_after_a_cut_writes_the_cut_mesh_with_its_material_fractions(tmp_path):
@@ -113,3 +157,41 @@ def test_the_run_after_a_cut_writes_the_cut_mesh_with_its_material_fractions(tmp
     np.testing.assert_array_equal(fraction, body.mesh.cell_fractions)
     assert fraction.min() > 0.0 and np.count_nonzero(fraction < 1.0) == 2 * report["cells_cut"]
     assert "material_fraction" not in meshio.read(tmp_path / "before" / "body_00002.vtu").cell_data
+
+
+def test_a_blade_moving_through_the_beam_cuts_it_step_by_step_and_reports_its_force():
+    """add_cut(body=...): a straight blade going down through the beam at x = 0.47 from t =
+    0.01 to 0.04 s; after each step the cells it has swept are cut; the beam parts on the last
+    step; the cut's area grows to the beam's section (0.04 m^2, rest) and the blade's force is
+    the toughness times the new area over its travel, upward (against its motion)."""
+    sim = cantilever()
+    mass = sim.model.mass.lumped.sum()
+    G_c = 500.0  # J/m^2
+
+    def blade(t):
+        z = 0.25 - 10.0 * (t - 0.01)  # from 5 cm above the beam down to 5 cm below it
+        return np.array([[0.47, -0.5, z], [0.47, 0.7, z]])
+
+    sim.add_cut(blade, 0.01, 0.04, body="body", name="scalpel", toughness=G_c)
+    records = [sim.step() for _ in range(5)]
+    cuts = [r.extra["cuts"]["scalpel"] for r in records]
+    assert [c["cells_cut"] for c in cuts][0] == 0  # t = 0.01: not started
+    # the section's rest area, cut where the sagging beam is (its plane a little tilted in rest)
+    assert cuts[-1]["pieces"] == 2 and cuts[-1]["area_m2"] == pytest.approx(0.04, rel=2e-3)
+    assert sum(c["new_area_m2"] for c in cuts) == pytest.approx(cuts[-1]["area_m2"], rel=1e-12)
+    for r, c in zip(records[1:4], cuts[1:4], strict=True):
+        force = r.extra["forces"]["scalpel"]
+        assert force[2] == pytest.approx(G_c * c["new_area_m2"] / 0.1, rel=1e-9)  # 0.1 m/step
+        assert force[0] == 0.0 and force[1] == 0.0
+    assert sim.model.mass.lumped.sum() == pytest.approx(mass, rel=1e-12)
+
+
+def test_add_cut_on_a_body_refuses_a_blade_that_leaves_its_plane():
+    sim = cantilever()
+    with pytest.raises(InputError, match="leaves its plane"):
+        sim.add_cut(
+            lambda t: np.array([[0.47 + t, -0.5, 0.3 - t], [0.47 - t, 0.7, 0.3 - t]]),
+            0.0, 0.5, body="body",
+        )  # fmt: skip
+    with pytest.raises(InputError, match="straight edge"):
+        sim.add_cut(lambda t: np.zeros((2, 2)), 0.0, 0.5, body="body")

@@ -292,17 +292,18 @@ class FemBody:
         self._changed("velocity")
 
     # -- cutting (mesh/virtual_nodes.py) ---------------------------------------------------------
-    def apply_cut(self, cut) -> None:
-        """Take the mesh of a virtual-node cut (``VirtualNodeMesh`` of this body's mesh): a new
-        model on it (the copies' densities their parents', the same loads), every support and
-        grasper on all copies of its vertices; ``pending_origin`` tells the simulation which
-        old node each new one continues (its position and velocity)."""
+    def apply_cut(self, cut, carry: np.ndarray, original, density: np.ndarray) -> None:
+        """Take the mesh of a virtual-node cut (``VirtualNodeMesh`` of the body's ``original``
+        mesh, whose cells had ``density``): a new model on it (the copies' densities their
+        parents', the same loads), every support and grasper on all copies of its vertices;
+        ``carry`` (new n_points,) the current node each new one continues, kept as
+        ``pending_origin`` for the simulation (positions and velocities)."""
         old = self.model
-        mesh = cut.to_mesh(old.mesh)
+        mesh = cut.to_mesh(original)
         model = Model(
             mesh,
             old.material,
-            old.density[cut.parent],
+            density[cut.parent],
             old.mass_kind,
             backend=old.backend,
             formulation=old.formulation,
@@ -310,7 +311,7 @@ class FemBody:
         model.loads = list(old.loads)  # nodal loads and tractions keep each node's first copy
 
         def copies(vertices: np.ndarray) -> np.ndarray:
-            return np.flatnonzero(np.isin(cut.origin, vertices))
+            return np.flatnonzero(np.isin(carry, vertices))
 
         self.conditions = [
             (name, DirichletCondition(copies(c.vertices), c.displacement, c.components, c.name))
@@ -325,12 +326,13 @@ class FemBody:
         self.spring_graspers = [
             (g, g.springs(mesh.points)) for g in graspers if g.stiffness is not None
         ]
-        self.velocity = self.velocity.reshape(-1, self.dim)[cut.origin].ravel()
+        self.velocity = self.velocity.reshape(-1, self.dim)[carry].ravel()
         self.model = model
-        self.pending_origin = cut.origin
+        self.pending_origin = carry
         self._set_conditions()
 
     pending_origin: np.ndarray | None = None  # set by apply_cut, taken by the next rebuild
+    cut_state = None  # bodies/cut_state.CutState once the body is cut
 
     # -- what the system and the output ask of a body -------------------------------------------
     def step_energies(self, t: float, x_pred: np.ndarray | None, h: float) -> list:

@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["positive_fraction", "sections_inside"]
+__all__ = ["positive_fraction", "section_measures", "sections_inside"]
 
 #: relative gap below which the 2-2 divided difference is taken as a derivative
 _CONFLUENT = 1e-5
@@ -103,3 +103,41 @@ def sections_inside(
         inward = inward / np.linalg.norm(inward)
         inside &= (points - a) @ inward >= -1e-9 * size[:, None]
     return np.all(inside | ~valid, axis=1)
+
+
+def section_measures(points: np.ndarray, cells: np.ndarray, values: np.ndarray) -> np.ndarray:
+    """The measure (m,) of the zero set of the linear function with vertex values ``values``
+    (m, d+1) in each simplex of ``cells`` (m, d+1) over ``points`` (n, d): the area of the
+    section polygon in 3D (fanned about its centroid, corners in angle order about the
+    function's gradient), its length in 2D."""
+    X = np.asarray(points, dtype=float)[cells]
+    m, k, d = X.shape
+    i, j = np.triu_indices(k, 1)
+    vi, vj = values[:, i], values[:, j]
+    crosses = vi * vj < 0.0
+    t = np.where(crosses, vi / np.where(crosses, vi - vj, 1.0), 0.0)
+    P = np.concatenate([X[:, i] + t[..., None] * (X[:, j] - X[:, i]), X], axis=1)
+    valid = np.concatenate([crosses, values == 0.0], axis=1)
+    if d == 2:  # a segment: its extent
+        lo = np.where(valid[..., None], P, np.inf).min(axis=1)
+        hi = np.where(valid[..., None], P, -np.inf).max(axis=1)
+        return np.where(valid.sum(axis=1) >= 2, np.linalg.norm(hi - lo, axis=1), 0.0)
+    count = valid.sum(axis=1)
+    centre = np.einsum("me,med->md", valid, P) / np.maximum(count, 1)[:, None]
+    edges = X[:, 1:] - X[:, :1]
+    grad = np.linalg.solve(edges, (values[:, 1:] - values[:, :1])[:, :, None])[:, :, 0]
+    n = grad / np.linalg.norm(grad, axis=1, keepdims=True)
+    helper = np.where(np.abs(n[:, :1]) < 0.9, [[1.0, 0.0, 0.0]], [[0.0, 1.0, 0.0]])
+    e1 = np.cross(n, helper)
+    e1 /= np.linalg.norm(e1, axis=1, keepdims=True)
+    e2 = np.cross(n, e1)
+    rel = P - centre[:, None, :]
+    angle = np.arctan2(np.einsum("med,md->me", rel, e2), np.einsum("med,md->me", rel, e1))
+    order = np.argsort(np.where(valid, angle, np.inf), axis=1)
+    Q = np.take_along_axis(rel, order[:, :, None], axis=1)
+    ok = np.take_along_axis(valid, order, axis=1)
+    nxt = np.where(np.arange(Q.shape[1])[None, :] + 1 < count[:, None], 1, 0)
+    nxt_index = np.where(nxt == 1, np.arange(Q.shape[1])[None, :] + 1, 0)
+    R = np.take_along_axis(Q, nxt_index[:, :, None], axis=1)
+    tri = 0.5 * np.linalg.norm(np.cross(Q, R), axis=2)
+    return np.where(count >= 3, np.where(ok, tri, 0.0).sum(axis=1), 0.0)

@@ -134,14 +134,41 @@ class VirtualNodeMesh:
         )
 
 
-def _distances(points: np.ndarray, cells: np.ndarray, cut: PlanarCut) -> np.ndarray:
-    """Signed distances (m, d+1) of the cells' vertices to the cut's plane, snapped to 0
-    within PLANE_TOLERANCE of the cell's size."""
-    x = points[cells]
-    d = (x - cut.point) @ cut.normal
-    size = np.linalg.norm(x - x[:, :1], axis=2).max(axis=1)
+def _distances(x_cell: np.ndarray, cut: PlanarCut) -> np.ndarray:
+    """Signed distances (m, d+1) of the cells' vertices (x_cell (m, d+1, 3), where each cell's
+    vertices are) to the cut's plane, snapped to 0 within PLANE_TOLERANCE of the cell's size."""
+    d = (x_cell - cut.point) @ cut.normal
+    size = np.linalg.norm(x_cell - x_cell[:, :1], axis=2).max(axis=1)
     d[np.abs(d) <= PLANE_TOLERANCE * size[:, None]] = 0.0
     return d
+
+
+def _per_cell(points: np.ndarray, cells: np.ndarray, current: np.ndarray | None) -> np.ndarray:
+    """Where each cell's vertices are now, (m, d+1, 3): ``current`` as node positions (n, d)
+    or per cell vertex (m, d+1, d) (a body already cut: each cell's own copies of its nodes),
+    default the rest ``points``."""
+    if current is None:
+        return _as3d(points)[cells]
+    current = np.asarray(current, dtype=float)
+    if current.ndim == 3:
+        if current.shape[2] == 2:
+            current = np.concatenate([current, np.zeros(current.shape[:2] + (1,))], axis=2)
+        return current
+    return _as3d(current)[cells]
+
+
+def cut_cells(
+    points: np.ndarray, cells: np.ndarray, cut: PlanarCut, current: np.ndarray | None = None
+) -> np.ndarray:
+    """Indices of the cells the cut crosses completely: its plane has vertices strictly on
+    both sides and its section of the cell lies inside the cut's polygon. ``current``: where
+    the points are now, as node positions (n, d) or per cell vertex (m, d+1, d) (default
+    ``points``): the blade cuts the body as it is."""
+    x_cell = _per_cell(points, cells, current)
+    d = _distances(x_cell, cut)
+    crossed = np.flatnonzero((d.max(axis=1) > 0.0) & (d.min(axis=1) < 0.0))
+    inside = sections_inside(x_cell[crossed], d[crossed], cut.polygon, cut.normal)
+    return crossed[inside].astype(np.int64)
 
 
 def _inside_polygon(q: np.ndarray, cut: PlanarCut, tol: float) -> bool:
@@ -157,19 +184,6 @@ def _inside_polygon(q: np.ndarray, cut: PlanarCut, tol: float) -> bool:
         if np.any((q - a) @ inward < -tol):
             return False
     return True
-
-
-def cut_cells(
-    points: np.ndarray, cells: np.ndarray, cut: PlanarCut, current: np.ndarray | None = None
-) -> np.ndarray:
-    """Indices of the cells the cut crosses completely: its plane has vertices strictly on
-    both sides and its section of the cell lies inside the cut's polygon. ``current``: the
-    points where they are now (default ``points``): the blade cuts the body as it is."""
-    x_now = _as3d(points if current is None else current)
-    d = _distances(x_now, cells, cut)
-    crossed = np.flatnonzero((d.max(axis=1) > 0.0) & (d.min(axis=1) < 0.0))
-    inside = sections_inside(x_now[cells[crossed]], d[crossed], cut.polygon, cut.normal)
-    return crossed[inside].astype(np.int64)
 
 
 def _as3d(points: np.ndarray) -> np.ndarray:
@@ -294,7 +308,7 @@ def _face_parts(x3, cells, cuts, owner, node_d, parent, side, nodes, ca, cb) -> 
     return part
 
 
-def _node_groups(x3, x_now, cells, cuts, owner, node_d, parent, side) -> np.ndarray:
+def _node_groups(x3, x_cell, cells, cuts, owner, node_d, parent, side) -> np.ndarray:
     """The group (a label) of every node slot (copy, local node), (copies * (d+1),): slots of
     two copies sharing a face are joined when their material meets on it; a face the cut runs
     along joins nothing. Whole cells on both sides of a face join at once; faces next to a cut
@@ -315,11 +329,13 @@ def _node_groups(x3, x_now, cells, cuts, owner, node_d, parent, side) -> np.ndar
     face_nodes = facets[pairs[:, 0]]  # (f, d) global nodes of each interior facet
     # faces a cut runs along: every vertex on its plane (where the body is now), in its polygon
     on_cut = np.zeros(len(pairs), dtype=bool)
-    size = np.linalg.norm(np.ptp(x_now[face_nodes], axis=1), axis=1)
+    where_a = np.argmax(cells[cell_a][:, :, None] == face_nodes[:, None, :], axis=1)
+    x_face = x_cell[cell_a[:, None], where_a]  # (f, d, 3) where cell a's face is now
+    size = np.linalg.norm(np.ptp(x_face, axis=1), axis=1)
     for cut in cuts:  # a vectorised plane test first: few faces lie in the plane
-        dist = np.abs((x_now[face_nodes] - cut.point) @ cut.normal)
+        dist = np.abs((x_face - cut.point) @ cut.normal)
         for f in np.flatnonzero(np.all(dist <= PLANE_TOLERANCE * size[:, None], axis=1)):
-            on_cut[f] = on_cut[f] or _face_on_cut(x_now[face_nodes[f]], cut)
+            on_cut[f] = on_cut[f] or _face_on_cut(x_face[f], cut)
     copy_of_whole = np.full(m, -1)
     whole = np.flatnonzero(side == 0)
     copy_of_whole[parent[whole]] = whole
@@ -360,7 +376,7 @@ def _node_groups(x3, x_now, cells, cuts, owner, node_d, parent, side) -> np.ndar
     return connected_components(graph, directed=False)[1]
 
 
-def _levels(x_now, cells, cuts, node_d, owner, parent, side, origin) -> np.ndarray:
+def _levels(x_cell, cells, cuts, node_d, owner, parent, side, origin) -> np.ndarray:
     """Each copy's material level at its vertices (copies, d+1): a cut copy's signed distance
     to its cut's plane times its side; a whole cell on one side of a cut that shares a node with
     a cell it cuts, or a node it parts on its plane (a cut along faces), its distance on that
@@ -374,12 +390,15 @@ def _levels(x_now, cells, cuts, node_d, owner, parent, side, origin) -> np.ndarr
     copied = side != 0
     level[copied] = d_all[owner[parent[copied]], parent[copied]] * side[copied, None]
     whole = np.flatnonzero(~copied)
-    parted = np.unique(origin[len(x_now) :])  # original nodes that have copies
-    size = float(np.linalg.norm(np.ptp(x_now, axis=0)))
+    n = int(cells.max()) + 1
+    x_node = np.zeros((n, 3))
+    x_node[cells] = x_cell  # a node's position in (one of) its cells
+    parted = np.unique(origin[n:])  # original nodes that have copies
+    size = float(np.linalg.norm(np.ptp(x_node, axis=0)))
     for j, cut in enumerate(cuts):  # few cuts
-        near = np.zeros(len(x_now), dtype=bool)
+        near = np.zeros(n, dtype=bool)
         near[cells[owner == j]] = True
-        on_plane = np.abs((x_now[parted] - cut.point) @ cut.normal) <= PLANE_TOLERANCE * size
+        on_plane = np.abs((x_node[parted] - cut.point) @ cut.normal) <= PLANE_TOLERANCE * size
         near[parted[on_plane]] = True
         e = parent[whole]
         d = d_all[j][e]
@@ -395,27 +414,40 @@ def virtual_node_cut(
     cells: np.ndarray,
     cuts: list[PlanarCut],
     current: np.ndarray | None = None,
+    prior: tuple[np.ndarray, np.ndarray] | None = None,
 ) -> VirtualNodeMesh:
     """Cut a P1 mesh (rest points (n, d), cells (m, d+1), d = 2 or 3) by ``cuts``: every cell
     one of them crosses completely (``cut_cells``) becomes a copy per side holding material;
     nodes are duplicated where the material around them separates (see the module docstring).
 
-    ``current`` (n, d): where the points are now (default the rest points). The blade cuts the
-    body as it is: a node's side is its signed distance to the cut's plane now, which is linear
-    in each element, so each cell's cut is the plane in its rest shape where that distance is
-    zero, and the fractions and face parts are of rest volume (mass)."""
+    ``current``: where the points are now, as node positions (n, d) or per cell vertex
+    (m, d+1, d) (default the rest points). The blade cuts the body as it is: a node's side is
+    its signed distance to the cut's plane now, which is linear in each element, so each
+    cell's cut is the plane in its rest shape where that distance is zero, and the fractions
+    and face parts are of rest volume (mass).
+
+    ``prior``: (cut index (m,), -1 for none; node distances (m, d+1)) of the cells an earlier
+    call cut: they keep that cut as it was made (a blade advancing step by step cuts each cell
+    once, where the body was when it crossed it), and are not cut again; a cell an earlier
+    cut took that another cut crosses now is refused."""
     cells = np.asarray(cells, dtype=np.int64)
     x3 = _as3d(points)
-    x_now = x3 if current is None else _as3d(current)
-    node_d = [_distances(x_now, cells, cut) for cut in cuts]  # per cut: (m, d+1)
+    x_cell = _per_cell(points, cells, current)
+    node_d = [_distances(x_cell, cut) for cut in cuts]  # per cut: (m, d+1)
+    prior_owner = np.full(len(cells), -1) if prior is None else np.asarray(prior[0])
+    for j in range(len(cuts)):
+        mine = prior_owner == j
+        if mine.any():
+            node_d[j][mine] = np.asarray(prior[1])[mine]
     dim = np.asarray(points).shape[1]
     if cells.shape[1] != dim + 1:
         raise InputError(
             f"virtual_node_cut takes P1 simplices ({dim + 1} nodes), not {cells.shape[1]}"
         )
-    owner = np.full(len(cells), -1)
+    owner = prior_owner.copy()
     for k, cut in enumerate(cuts):
-        hit = cut_cells(x3, cells, cut, x_now)
+        hit = cut_cells(x3, cells, cut, x_cell)
+        hit = hit[owner[hit] != k]  # cut by this cut before: kept as it was
         twice = hit[owner[hit] >= 0]
         if twice.size:
             raise InputError(
@@ -439,7 +471,7 @@ def virtual_node_cut(
     )
     fraction = np.concatenate([np.ones(n_whole), f_both[keep]])
     copies, k = len(parent), dim + 1
-    labels = _node_groups(x3, x_now, cells, cuts, owner, node_d, parent, side)
+    labels = _node_groups(x3, x_cell, cells, cuts, owner, node_d, parent, side)
     # a slot's node: the original node for its first group, a new (duplicate) node after
     slot_node = cells[parent].ravel()
     pairs, first, group = np.unique(
@@ -455,7 +487,7 @@ def virtual_node_cut(
     origin = np.concatenate([np.arange(len(x3)), pairs[dup, 0]])
     new_cells = node[group.reshape(-1)]
     pts = np.asarray(points, dtype=float)[origin]
-    level = _levels(x_now, cells, cuts, node_d, owner, parent, side, origin)
+    level = _levels(x_cell, cells, cuts, node_d, owner, parent, side, origin)
     return VirtualNodeMesh(
         level=level,
         points=pts,

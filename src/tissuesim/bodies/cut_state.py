@@ -1,0 +1,115 @@
+"""What a FEM body keeps of its cuts (virtual node algorithm, ``mesh/virtual_nodes.py``), so
+that it can be cut again, step after step, as a blade advances.
+
+Every cut is recomputed from the body's *original* mesh with all its cuts so far: the cells an
+earlier call cut keep their cut as it was made (``prior``: its index and the node distances
+where the body was then), new cells are cut where the body is now, and the node slots are
+grouped afresh. Each node of the new mesh continues a node of the current one (``carry``):
+its slot's copy in the current mesh (the same parent cell and side, or the parent's whole copy
+for a cell cut only now) names it, and positions, velocities, supports and graspers follow.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from tissuesim.errors import InputError
+from tissuesim.mesh.plane_split import section_measures
+from tissuesim.mesh.virtual_nodes import PlanarCut, VirtualNodeMesh, virtual_node_cut
+
+__all__ = ["CutState", "recut"]
+
+
+@dataclass
+class CutState:
+    """A cut body's ``original`` mesh and its cells' ``density``, the current cut (``vn``)
+    and its ``cuts`` by name."""
+
+    original: object
+    density: np.ndarray
+    vn: VirtualNodeMesh | None = None
+    cuts: list[PlanarCut] = field(default_factory=list)
+    names: list[str] = field(default_factory=list)
+
+    def prior(self) -> tuple[np.ndarray, np.ndarray] | None:
+        """(cut index per original cell, -1 none; its node distances then) of the cells cut."""
+        if self.vn is None:
+            return None
+        m, k = self.original.cells.shape
+        owner = np.full(m, -1)
+        dist = np.zeros((m, k))
+        cut = self.vn.side != 0
+        owner[self.vn.parent[cut]] = self.vn.cut[cut]
+        dist[self.vn.parent[cut]] = self.vn.level[cut] * self.vn.side[cut, None]
+        return owner, dist
+
+    def cell_positions(self, positions: np.ndarray) -> np.ndarray:
+        """Where each original cell's vertices are now (m, k, d): its first copy's nodes."""
+        if self.vn is None:
+            return positions[self.original.cells]
+        first = np.unique(self.vn.parent, return_index=True)[1]
+        return positions[self.vn.cells[first]]
+
+    def areas(self, vn: VirtualNodeMesh) -> np.ndarray:
+        """The rest area (2D: length) of each cut's surface in ``vn`` (per cut index)."""
+        plus = vn.side > 0
+        parent = vn.parent[plus]
+        measure = section_measures(
+            self.original.points, self.original.cells[parent], vn.level[plus]
+        )
+        return np.bincount(vn.cut[plus], weights=measure, minlength=len(self.cuts))
+
+
+def recut(state: CutState, cut: PlanarCut, name: str, positions: np.ndarray):
+    """Cut again: ``cut`` as the cut called ``name`` (a new one, or the same plane with its
+    swept polygon grown: a blade advancing), the body's nodes at ``positions`` now. Returns
+    (the new VirtualNodeMesh, the current node each new node continues, the cut's index), or
+    None when no new cell is cut."""
+    cuts = list(state.cuts)
+    if name in state.names:
+        index = state.names.index(name)
+        old = cuts[index]
+        same = abs(abs(float(old.normal @ cut.normal)) - 1.0) < 1e-9
+        size = float(np.linalg.norm(np.ptp(state.original.points, axis=0)))
+        if not same or abs(float((cut.point - old.point) @ old.normal)) > 1e-9 * size:
+            raise InputError(
+                f"cut {name!r}: a cut keeps its plane as it goes on (it moved out of it); give "
+                "a cut in another plane its own name"
+            )
+        cuts[index] = PlanarCut(old.point, old.normal, cut.polygon)
+    else:
+        index = len(cuts)
+        cuts.append(cut)
+    x_cell = state.cell_positions(positions)
+    vn = virtual_node_cut(
+        state.original.points, state.original.cells, cuts, current=x_cell, prior=state.prior()
+    )
+    before = 0 if state.vn is None else int(np.count_nonzero(state.vn.side))
+    if int(np.count_nonzero(vn.side)) == before:
+        return None
+    carry = _carry(state.vn, vn)
+    state.vn, state.cuts = vn, cuts
+    if name not in state.names:
+        state.names.append(name)
+    return vn, carry, index
+
+
+def _carry(old: VirtualNodeMesh | None, new: VirtualNodeMesh) -> np.ndarray:
+    """The node of the current mesh each node of the new one continues (new n_points,)."""
+    if old is None:
+        return new.origin
+    # the current copy standing for each new copy: same parent and side, else the whole one
+    key_old = old.parent * 3 + (old.side + 1)
+    order = np.argsort(key_old)
+    key_new = new.parent * 3 + (new.side + 1)
+    pos = np.minimum(np.searchsorted(key_old[order], key_new), len(order) - 1)
+    found = key_old[order][pos] == key_new
+    whole = new.parent * 3 + 1
+    pos_whole = np.minimum(np.searchsorted(key_old[order], whole), len(order) - 1)
+    source = np.where(found, order[pos], order[pos_whole])
+    old_node = old.cells[source]  # (copies, k): the current node of every new slot
+    carry = np.empty(len(new.points), dtype=np.int64)
+    carry[new.cells.ravel()] = old_node.ravel()
+    return carry
