@@ -66,11 +66,16 @@ def _run(
 ) -> int:
     import time
 
-    from tissuesim.io.checkpoint import completed_steps, scene_hash
+    from tissuesim.io.checkpoint import completed_steps
     from tissuesim.scene.loader import load_scene
 
     started = time.perf_counter()
-    scene = load_scene(scene_path)
+    if scene_path.suffix.lower() == ".feb":  # a FEBio model, run as its converted scene
+        from tissuesim.febio import load_febio
+
+        scene = load_febio(scene_path)
+    else:
+        scene = load_scene(scene_path)
     loaded = time.perf_counter()
     run = dict(scene.run)
     if steps is not None:
@@ -96,7 +101,7 @@ def _run(
     history = sim.run(
         output=directory,
         progress=not quiet,
-        metadata={"scene": str(scene_path), "scene_sha256": scene_hash(scene_path)},
+        metadata={"scene": str(scene_path), "scene_sha256": _scene_hash(scene_path)},
         resume=resume,
         **run,
     )
@@ -128,6 +133,17 @@ def _run(
     }
     print(json.dumps(report, indent=2))
     return 0
+
+
+def _scene_hash(path: Path) -> str:
+    """The scene's fingerprint for resume: its tables (TOML), or a FEBio model's bytes."""
+    if path.suffix.lower() == ".feb":
+        import hashlib
+
+        return hashlib.sha256(path.read_bytes()).hexdigest()[:16]
+    from tissuesim.io.checkpoint import scene_hash
+
+    return scene_hash(path)
 
 
 def _play(args) -> int:
@@ -276,10 +292,14 @@ def main(argv: list[str] | None = None) -> int:
     common = [_options(debug_default=True)]
     sub = parser.add_subparsers(dest="command", required=True)
     p_run = sub.add_parser(
-        "run", parents=common, help="run a TOML scene file (or a shipped example by name)"
+        "run",
+        parents=common,
+        help="run a TOML scene file, a FEBio model (.feb) or a shipped example by name",
     )
     p_run.add_argument(
-        "scene", help="a scene file (.toml) or a shipped example's name (tissuesim examples)"
+        "scene",
+        help="a scene file (.toml), a FEBio 3/4 model (.feb) or a shipped example's name "
+        "(tissuesim examples)",
     )
     p_run.add_argument("--out", help="output directory (default out/<scene name>)")
     p_run.add_argument("--steps", type=_steps, help="number of time steps (overrides [run] steps)")
@@ -323,6 +343,14 @@ def main(argv: list[str] | None = None) -> int:
         metavar="DIR",
         help="no window: run --frames frames (default 10) and save them as PNG in DIR",
     )
+    p_convert = sub.add_parser(
+        "convert",
+        parents=common,
+        help="write the tissuesim scene (and its mesh files) equivalent to a FEBio model",
+    )
+    p_convert.add_argument("model", help="a FEBio 3.0 / 4.0 model (.feb)")
+    p_convert.add_argument("scene", help="the scene to write (.toml); meshes go next to it")
+    p_convert.add_argument("--force", action="store_true", help="overwrite existing files")
     p_info = sub.add_parser("info", parents=common, help="describe a mesh file and check it")
     p_info.add_argument("mesh", help="a mesh file (.msh, .vtu, .vtk, .inp, ... as meshio reads)")
     _add_mesh_parser(sub, common)
@@ -418,6 +446,12 @@ def _dispatch(args) -> int:
         return _play(args)
     if args.command == "mesh":
         return _mesh(args)
+    if args.command == "convert":
+        from tissuesim.febio import convert_febio
+
+        written = convert_febio(args.model, args.scene, force=args.force)
+        print(json.dumps({"written": [str(p) for p in written]}, indent=2))
+        return 0
     if args.command == "info":
         from tissuesim.mesh import describe_mesh, read_mesh
 

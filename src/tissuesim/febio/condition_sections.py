@@ -1,0 +1,277 @@
+"""FEBio's ``<Boundary>``, ``<Loads>``, ``<LoadData>``, ``<Contact>``, ``<Globals>`` and
+``<Output>`` sections, in FEBio 3.0's and 4.0's spellings."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from tissuesim.febio.model import Curve, FebModel, Load, _flag, _floats, _unsupported
+from tissuesim.febio.xml import Node
+
+__all__ = ["SECTIONS", "CONTACT_TYPES", "INTERPOLATIONS"]
+
+AXES = {"x": 0, "y": 1, "z": 2}
+#: FEBio contact types that map onto tissuesim's barrier contact
+CONTACT_TYPES = ("sliding-elastic", "sliding-facet-on-facet", "sliding-node-on-facet", "rigid_wall")
+#: children of <contact> that tune FEBio's enforcement (penalty, augmentation, search):
+#: tissuesim's barrier keeps the surfaces apart by itself
+CONTACT_TUNING = {
+    "laugon", "tolerance", "gaptol", "penalty", "auto_penalty", "update_penalty", "two_pass",
+    "knmult", "search_tol", "symmetric_stiffness", "search_radius", "seg_up", "minaug",
+    "maxaug", "node_reloc", "smooth_aug", "flip_primary", "flip_secondary", "ktmult",
+}  # fmt: skip
+#: load curve interpolations tissuesim writes as expressions of t
+INTERPOLATIONS = ("LINEAR", "STEP", "SMOOTH", "SMOOTH STEP")
+
+
+def _node_set(model: FebModel, node: Node, attr: str = "node_set") -> str:
+    """The node set a condition names (FEBio 4's "@surface:name" too), checked."""
+    name = node.attrib.get(attr)
+    if name is None:
+        raise node.error(f"missing the {attr} attribute")
+    if name.startswith("@surface:"):
+        surface = name.removeprefix("@surface:")
+        if surface not in model.surfaces:
+            raise node.error(f"no Surface named {surface!r}")
+        model.node_sets.setdefault(name, np.unique(model.surfaces[surface][0]))
+    elif name not in model.node_sets:
+        raise node.error(f"no NodeSet named {name!r}")
+    return name
+
+
+def _load(model: FebModel, node: Node, count: int) -> Load:
+    """value * curve: the element's numbers and its lc attribute."""
+    curve = node.attrib.get("lc")
+    return Load(_floats(node, count), None if curve is None else int(curve))
+
+
+def _children(node: Node, allowed: set[str]) -> dict[str, Node]:
+    found = {}
+    for c in node.children:
+        if c.tag not in allowed:
+            raise _unsupported(c, f"this parameter of <{node.tag}> is not supported by tissuesim")
+        found[c.tag] = c
+    return found
+
+
+def _boundary(model: FebModel, section: Node) -> None:
+    for bc in section.children:
+        if bc.tag != "bc":
+            raise _unsupported(bc, "expected <bc>")
+        kind = bc.attrib.get("type", "")
+        name = bc.attrib.get("name")
+        if kind in ("zero displacement", "fix"):
+            nodes = _node_set(model, bc)
+            p = _children(bc, {"x_dof", "y_dof", "z_dof", "dofs"})
+            if "dofs" in p:
+                axes = [a.strip() for a in p["dofs"].text.split(",") if a.strip()]
+                bad = [a for a in axes if a not in AXES]
+                if bad:
+                    raise p["dofs"].error(f"dof {bad[0]!r}: tissuesim fixes x, y and z")
+                comps = sorted(AXES[a] for a in axes)
+            else:
+                comps = [AXES[t[0]] for t in ("x_dof", "y_dof", "z_dof") if t in p and _flag(p[t])]
+            if not comps:
+                raise bc.error("fixes no degree of freedom")
+            model.dirichlet.append((nodes, None if comps == [0, 1, 2] else comps, None, name))
+        elif kind == "prescribed displacement":
+            nodes = _node_set(model, bc)
+            p = _children(bc, {"dof", "value", "scale", "relative"})
+            if "dof" not in p or p["dof"].text not in AXES:
+                raise bc.error("needs <dof> x, y or z")
+            value = p.get("value", p.get("scale"))
+            if value is None:
+                raise bc.error("needs a <value> (FEBio 4) or <scale> (FEBio 3)")
+            if "relative" in p and _flag(p["relative"]) and model.steps > 1:
+                raise p["relative"].error("relative displacements across steps are not supported")
+            load = _load(model, value, 1)
+            model.dirichlet.append((nodes, [AXES[p["dof"].text]], load, name))
+        else:
+            raise bc.error(
+                f"boundary condition type {kind!r} is not supported by tissuesim; it runs "
+                "'zero displacement' (or 'fix') and 'prescribed displacement'"
+            )
+
+
+def _loads(model: FebModel, section: Node) -> None:
+    for load in section.children:
+        kind = load.attrib.get("type", "")
+        if load.tag == "nodal_load" and kind == "nodal_force":
+            nodes = _node_set(model, load)
+            p = _children(load, {"value", "relative", "shell_bottom"})
+            for flag in ("relative", "shell_bottom"):
+                if flag in p and _flag(p[flag]):
+                    raise _unsupported(p[flag], f"{flag} = 1")
+            if "value" not in p:
+                raise load.error("needs a <value> (the force vector)")
+            model.nodal.append((nodes, _load(model, p["value"], 3)))
+        elif load.tag == "nodal_load" and kind == "nodal_load":  # FEBio 3: one dof, scale
+            nodes = _node_set(model, load)
+            p = _children(load, {"dof", "scale", "relative"})
+            if "dof" not in p or p["dof"].text not in AXES or "scale" not in p:
+                raise load.error("needs <dof> x, y or z and a <scale>")
+            one = _load(model, p["scale"], 1)
+            value = np.zeros(3)
+            value[AXES[p["dof"].text]] = one.value[0]
+            model.nodal.append((nodes, Load(value, one.curve)))
+        elif load.tag == "surface_load" and kind in ("pressure", "traction"):
+            _surface_load(model, load, kind)
+        elif load.tag == "body_load" and kind == "const":  # FEBio 3: x, y, z
+            p = _children(load, {"x", "y", "z"})
+            curves = {c.attrib.get("lc") for c in p.values()}
+            if len(curves) > 1:
+                raise load.error("x, y and z must share one load curve (or none)")
+            value = np.array([_floats(p[a], 1)[0] if a in p else 0.0 for a in "xyz"])
+            curve = curves.pop() if curves else None
+            model.body_loads.append(Load(value, None if curve is None else int(curve)))
+        elif load.tag == "body_load" and kind == "body force":  # FEBio 4: force vector
+            p = _children(load, {"force"})
+            if "force" not in p:
+                raise load.error("needs a <force> (per unit mass)")
+            model.body_loads.append(_load(model, p["force"], 3))
+        else:
+            raise load.error(
+                f"<{load.tag}> type {kind!r} is not supported by tissuesim; it runs nodal_load "
+                "('nodal_force', 'nodal_load'), surface_load ('pressure', 'traction' with "
+                "<linear>1</linear>) and body_load ('const', 'body force')"
+            )
+        if "elem_set" in load.attrib:
+            raise _unsupported(load, "a body load on an element set")
+
+
+def _surface_load(model: FebModel, load: Node, kind: str) -> None:
+    surface = load.attrib.get("surface")
+    if surface not in model.surfaces:
+        raise load.error(f"no Surface named {surface!r}")
+    if kind == "pressure":
+        p = _children(load, {"pressure", "linear", "symmetric_stiffness", "shell_bottom"})
+        value = p.get("pressure")
+    else:
+        p = _children(load, {"traction", "scale", "linear", "shell_bottom"})
+        value = p.get("traction")
+    if value is None:
+        raise load.error(f"needs a <{kind}>")
+    if "shell_bottom" in p and _flag(p["shell_bottom"]):
+        raise _unsupported(p["shell_bottom"], "shell_bottom = 1")
+    if not ("linear" in p and _flag(p["linear"])):
+        where = p.get("linear", load)
+        raise where.error(
+            f"a {kind} on the deformed surface (FEBio's default, <linear>0</linear>) is not "
+            f"supported by tissuesim, whose surface loads are dead loads on the reference "
+            f"surface: write <linear>1</linear> for that"
+        )
+    if "symmetric_stiffness" in p:
+        model.note(p["symmetric_stiffness"], "not used: a dead pressure has no load stiffness")
+    if kind == "pressure":
+        model.tractions.append((surface, "pressure", _load(model, value, 1)))
+        return
+    vector = _load(model, value, 3)
+    if "scale" in p:
+        scale = _load(model, p["scale"], 1)
+        if scale.curve is not None and vector.curve is not None:
+            raise p["scale"].error("a curve on both <traction> and <scale>")
+        vector = Load(vector.value * scale.value[0], scale.curve or vector.curve)
+    model.tractions.append((surface, "traction", vector))
+
+
+def _load_data(model: FebModel, section: Node) -> None:
+    for lc in section.children:
+        if lc.tag not in ("load_controller", "loadcurve"):
+            raise _unsupported(lc, "expected <load_controller>")
+        kind = lc.attrib.get("type", "loadcurve")
+        if kind != "loadcurve":
+            raise lc.error(f"load controller type {kind!r}: tissuesim reads 'loadcurve' only")
+        if lc.tag == "loadcurve":  # FEBio 2.5 style inside 3.0 files: <point> children
+            p = {"points": lc}
+        else:
+            p = _children(lc, {"interpolate", "extend", "points"})
+        interpolate = p["interpolate"].text.upper() if "interpolate" in p else "LINEAR"
+        if interpolate not in INTERPOLATIONS:
+            raise p["interpolate"].error(
+                f"interpolate {interpolate!r}: tissuesim writes {', '.join(INTERPOLATIONS)}"
+            )
+        extend = p["extend"].text.upper() if "extend" in p else "CONSTANT"
+        if extend not in ("CONSTANT", "EXTRAPOLATE") or (
+            extend == "EXTRAPOLATE" and interpolate != "LINEAR"
+        ):
+            raise p["extend"].error(
+                f"extend {extend!r}: tissuesim writes CONSTANT (and EXTRAPOLATE for LINEAR)"
+            )
+        if "points" not in p:
+            raise lc.error("needs <points>")
+        rows = []
+        for pt in p["points"].children:
+            if pt.tag not in ("pt", "point"):
+                raise _unsupported(pt, "expected <pt>t,value</pt>")
+            rows.append(_floats(pt, 2))
+        points = np.array(rows).reshape(-1, 2)
+        if len(points) == 0 or np.any(np.diff(points[:, 0]) <= 0):
+            raise p["points"].error("a load curve needs points with increasing times")
+        model.curves[int(lc.attrib.get("id", len(model.curves) + 1))] = Curve(
+            points, interpolate, extend
+        )
+
+
+def _contact(model: FebModel, section: Node) -> None:
+    for c in section.children:
+        kind = c.attrib.get("type", "")
+        if c.tag != "contact" or kind not in CONTACT_TYPES:
+            raise c.error(
+                f"contact type {kind!r} is not supported by tissuesim; it maps "
+                f"{', '.join(CONTACT_TYPES)} onto its barrier contact"
+            )
+        allowed = CONTACT_TUNING | {"fric_coeff", "tension", "offset", "plane"}
+        p = _children(c, allowed)
+        item = {"type": kind, "node": c, "friction": 0.0}
+        if "fric_coeff" in p:
+            item["friction"] = float(_floats(p["fric_coeff"], 1)[0])
+        if "tension" in p and _flag(p["tension"]):
+            raise _unsupported(p["tension"], "contact in tension (tension = 1)")
+        if kind == "rigid_wall":
+            surface = c.attrib.get("surface")
+            if surface not in model.surfaces:
+                raise c.error(f"no Surface named {surface!r}")
+            if "plane" not in p:
+                raise c.error("a rigid_wall needs a <plane>a,b,c,d</plane>")
+            item["surfaces"] = (surface,)
+            item["plane"] = _floats(p["plane"], 4)
+            item["offset"] = _load(model, p["offset"], 1) if "offset" in p else Load(np.zeros(1))
+        else:
+            if "offset" in p and float(_floats(p["offset"], 1)[0]) != 0.0:
+                raise _unsupported(p["offset"], "a contact offset")
+            if "plane" in p:
+                raise _unsupported(p["plane"], "<plane> outside a rigid_wall")
+            pair = c.attrib.get("surface_pair")
+            if pair not in model.surface_pairs:
+                raise c.error(f"no SurfacePair named {pair!r}")
+            item["surfaces"] = model.surface_pairs[pair]
+        tuning = sorted(set(p) & CONTACT_TUNING)
+        if tuning:
+            model.note(c, f"FEBio's contact enforcement settings not used ({', '.join(tuning)}): "
+                       "tissuesim's barrier keeps the surfaces apart")  # fmt: skip
+        model.contacts.append(item)
+
+
+def _globals(model: FebModel, section: Node) -> None:
+    for c in section.children:
+        if c.tag != "Constants":
+            raise _unsupported(c, "this Globals element is not supported by tissuesim")
+        model.note(c, "physical constants (T, R, Fc, ...) are not used by solid mechanics")
+
+
+def _output(model: FebModel, section: Node) -> None:
+    for c in section.children:
+        if c.tag not in ("plotfile", "logfile"):
+            raise _unsupported(c, "this Output element is not supported by tissuesim")
+        model.note(c, "FEBio's own output file is not written: tissuesim writes its VTU series "
+                   "(displacement, J, stress, strain), forces.csv and summary.json")  # fmt: skip
+
+
+SECTIONS = {
+    "Boundary": _boundary,
+    "Loads": _loads,
+    "LoadData": _load_data,
+    "Contact": _contact,
+    "Globals": _globals,
+    "Output": _output,
+}

@@ -1,0 +1,75 @@
+"""FEBio load curves as tissuesim expressions of t, with FEBio's definitions
+(``FECore/PointCurve``): LINEAR, STEP (the next point's value on each interval), SMOOTH
+(the quadratic through three points on the end intervals, and between two such quadratics
+linearly inside), SMOOTH STEP (f0 + (f1 - f0) w^3 (10 - 15 w + 6 w^2)); extend CONSTANT,
+or EXTRAPOLATE with LINEAR."""
+
+from __future__ import annotations
+
+from tissuesim.febio.model import Curve
+
+__all__ = ["curve_expression"]
+
+
+def _r(x: float) -> str:
+    return repr(float(x))
+
+
+def _lerp(t0: float, f0: float, t1: float, f1: float) -> str:
+    return f"({_r(f0)} + ({_r(f1)} - {_r(f0)}) * (t - {_r(t0)}) / ({_r(t1)} - {_r(t0)}))"
+
+
+def _qerp(t0: float, f0: float, t1: float, f1: float, t2: float, f2: float) -> str:
+    """The quadratic through three points, Lagrange's form."""
+    terms = []
+    for (ti, fi), (ta, _), (tb, _) in (
+        ((t0, f0), (t1, f1), (t2, f2)),
+        ((t1, f1), (t0, f0), (t2, f2)),
+        ((t2, f2), (t0, f0), (t1, f1)),
+    ):
+        terms.append(
+            f"{_r(fi)} * (t - {_r(ta)}) * (t - {_r(tb)}) / "
+            f"(({_r(ti)} - {_r(ta)}) * ({_r(ti)} - {_r(tb)}))"
+        )
+    return "(" + " + ".join(terms) + ")"
+
+
+def _segment(curve: Curve, n: int) -> str:
+    """The curve on the interval [t_{n-1}, t_n) (1 <= n <= N)."""
+    p = curve.points
+    (t0, f0), (t1, f1) = p[n - 1], p[n]
+    if curve.interpolate == "LINEAR":
+        return _lerp(t0, f0, t1, f1)
+    if curve.interpolate == "STEP":
+        return _r(f1)
+    if curve.interpolate == "SMOOTH STEP":
+        w = f"((t - {_r(t0)}) / ({_r(t1)} - {_r(t0)}))"
+        return f"({_r(f0)} + ({_r(f1)} - {_r(f0)}) * {w}**3 * (10 - 15 * {w} + 6 * {w}**2))"
+    size = len(p)  # SMOOTH
+    if size == 2:
+        return _lerp(t0, f0, t1, f1)
+    if size == 3:
+        return _qerp(*p[0], *p[1], *p[2])
+    if n == 1:
+        return _qerp(*p[0], *p[1], *p[2])
+    if n == size - 1:
+        return _qerp(*p[n - 2], *p[n - 1], *p[n])
+    q1 = _qerp(*p[n - 2], *p[n - 1], *p[n])
+    q2 = _qerp(*p[n - 1], *p[n], *p[n + 1])
+    return f"({q1} + ({q2} - {q1}) * (t - {_r(t0)}) / ({_r(t1)} - {_r(t0)}))"
+
+
+def curve_expression(curve: Curve) -> str:
+    """The curve's value as an expression of t (nested ``where`` over its intervals)."""
+    p = curve.points
+    if len(p) == 1:
+        return _r(p[0, 1])
+    last = len(p) - 1
+    if curve.extend == "EXTRAPOLATE":  # LINEAR only (the reader refuses the others)
+        before, after = _lerp(*p[0], *p[1]), _lerp(*p[last - 1], *p[last])
+    else:
+        before, after = _r(p[0, 1]), _r(p[last, 1])
+    text = after
+    for n in range(last, 0, -1):
+        text = f"where(t < {_r(p[n, 0])}, {_segment(curve, n)}, {text})"
+    return f"where(t <= {_r(p[0, 0])}, {before}, {text})"

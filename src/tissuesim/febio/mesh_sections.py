@@ -1,0 +1,178 @@
+"""FEBio's ``<Mesh>`` (Nodes, Elements, NodeSet, Surface, ElementSet, SurfacePair) and
+``<MeshDomains>`` (SolidDomain) sections, in FEBio 3.0's and 4.0's spellings."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from tissuesim.febio.model import FebModel, _floats, _ints, _unsupported
+from tissuesim.febio.xml import Node
+
+__all__ = ["SECTIONS", "ELEMENTS", "FACETS"]
+
+#: FEBio element type -> (nodes per element, meshio's cell type); node orders agree with VTK's
+ELEMENTS = {"tet4": (4, "tetra"), "tet10": (10, "tetra10"), "hex8": (8, "hexahedron")}
+#: FEBio surface facet types -> corners kept (tissuesim's facets are corner lists)
+FACETS = {"tri3": 3, "tri6": 3, "quad4": 4}
+
+
+def _index(model: FebModel, node: Node, ids: list[int]) -> np.ndarray:
+    """FEBio node ids -> 0-based rows of model.nodes."""
+    lookup = model._node_index
+    try:
+        return np.array([lookup[i] for i in ids], dtype=np.int64)
+    except KeyError as exc:
+        raise node.error(f"node id {exc.args[0]} is not defined in <Nodes>") from None
+
+
+def _id_list(model: FebModel, node: Node) -> list[int]:
+    """A set's ids: FEBio 4's comma list, or FEBio 3's <n id=.../> / <node id=.../> / <e>."""
+    if node.children:
+        ids = []
+        for c in node.children:
+            if c.tag not in ("n", "node", "e", "elem") or "id" not in c.attrib:
+                raise _unsupported(c, "expected <n id=...> entries")
+            ids.append(int(c.attrib["id"]))
+        return ids
+    return _ints(node)
+
+
+def _mesh(model: FebModel, section: Node) -> None:
+    model._node_index = getattr(model, "_node_index", {})
+    model._element_index = getattr(model, "_element_index", {})
+    for node in section.children:
+        handler = MESH_PARTS.get(node.tag)
+        if handler is None:
+            raise _unsupported(node, "this Mesh element is not supported by tissuesim")
+        handler(model, node)
+
+
+def _nodes(model: FebModel, node: Node) -> None:
+    rows = []
+    for c in node.children:
+        if c.tag != "node" or "id" not in c.attrib:
+            raise _unsupported(c, "expected <node id=...>x,y,z</node>")
+        i = int(c.attrib["id"])
+        if i in model._node_index:
+            raise c.error(f"node id {i} is defined twice")
+        model._node_index[i] = len(model.nodes) + len(rows)
+        rows.append(_floats(c, 3))
+    if rows:
+        model.nodes = np.vstack([model.nodes, np.array(rows)])
+
+
+def _elements(model: FebModel, node: Node) -> None:
+    kind = node.attrib.get("type", "")
+    if kind not in ELEMENTS:
+        raise node.error(
+            f"element type {kind!r} is not supported by tissuesim; it runs "
+            f"{', '.join(ELEMENTS)} (hex20, hex27, penta6, shells and beams are not)"
+        )
+    nv, cell_type = ELEMENTS[kind]
+    name = node.attrib.get("name") or f"Part{len(model.parts) + 1}"
+    if name in model.parts:
+        raise node.error(f"a second <Elements> part named {name!r}")
+    cells, ids = [], []
+    for c in node.children:
+        if c.tag not in ("elem", kind) or "id" not in c.attrib:
+            raise _unsupported(c, f"expected <elem id=...> with {nv} node ids")
+        conn = _ints(c)
+        if len(conn) != nv:
+            raise c.error(f"a {kind} element has {nv} nodes, got {len(conn)}")
+        cells.append(_index(model, c, conn))
+        eid = int(c.attrib["id"])
+        if eid in model._element_index:
+            raise c.error(f"element id {eid} is defined twice")
+        model._element_index[eid] = (name, len(ids))
+        ids.append(eid)
+    if not cells:
+        raise node.error("no elements in this part")
+    model.parts[name] = (cell_type, np.array(cells, dtype=np.int64), np.array(ids), node)
+    if "mat" in node.attrib:  # FEBio 2.5 style: the material on the part
+        model.domains[name] = (node.attrib["mat"], None, node)
+
+
+def _node_set(model: FebModel, node: Node) -> None:
+    name = node.attrib.get("name")
+    if not name:
+        raise node.error("a NodeSet needs a name")
+    model.node_sets[name] = _index(model, node, _id_list(model, node))
+
+
+def _surface(model: FebModel, node: Node) -> None:
+    name = node.attrib.get("name")
+    if not name:
+        raise node.error("a Surface needs a name")
+    facets = []
+    for c in node.children:
+        if c.tag not in FACETS:
+            raise c.error(
+                f"surface facet type {c.tag!r} is not supported by tissuesim; it reads "
+                f"{', '.join(FACETS)}"
+            )
+        conn = _index(model, c, _ints(c))
+        facets.append(conn[: FACETS[c.tag]])
+    kinds = {len(f) for f in facets}
+    if len(kinds) != 1:
+        raise node.error("a surface must be all triangles or all quadrilaterals")
+    model.surfaces[name] = (np.array(facets, dtype=np.int64), node)
+
+
+def _element_set(model: FebModel, node: Node) -> None:
+    name = node.attrib.get("name")
+    if not name:
+        raise node.error("an ElementSet needs a name")
+    ids = _id_list(model, node)
+    missing = [i for i in ids if i not in model._element_index]
+    if missing:
+        raise node.error(f"element id {missing[0]} is not defined in <Elements>")
+    model.element_sets[name] = ([model._element_index[i] for i in ids], node)
+
+
+def _surface_pair(model: FebModel, node: Node) -> None:
+    pair = {}
+    for c in node.children:
+        if c.tag not in ("primary", "secondary", "master", "slave"):
+            raise _unsupported(c, "expected <primary> and <secondary>")
+        role = {"master": "secondary", "slave": "primary"}.get(c.tag, c.tag)
+        if c.text not in model.surfaces:
+            raise c.error(f"no Surface named {c.text!r}")
+        pair[role] = c.text
+    if set(pair) != {"primary", "secondary"}:
+        raise node.error("a SurfacePair needs a <primary> and a <secondary> surface")
+    model.surface_pairs[node.attrib.get("name", "")] = (pair["primary"], pair["secondary"])
+
+
+MESH_PARTS = {
+    "Nodes": _nodes,
+    "Elements": _elements,
+    "NodeSet": _node_set,
+    "Surface": _surface,
+    "ElementSet": _element_set,
+    "SurfacePair": _surface_pair,
+}
+
+#: SolidDomain type -> tissuesim formulation (None: FEBio's default for the law)
+DOMAIN_TYPES = {"elastic-solid": "displacement", "three-field-solid": "mean_dilatation"}
+
+
+def _mesh_domains(model: FebModel, section: Node) -> None:
+    for node in section.children:
+        if node.tag != "SolidDomain":
+            raise _unsupported(node, "tissuesim runs solid domains only")
+        name, mat = node.attrib.get("name"), node.attrib.get("mat")
+        if name not in model.parts:
+            raise node.error(f"no <Elements> part named {name!r}")
+        if mat not in model.materials:
+            raise node.error(f"no <material> named {mat!r}")
+        kind = node.attrib.get("type")
+        if kind is not None and kind not in DOMAIN_TYPES:
+            raise node.error(f"domain type {kind!r} is not supported by tissuesim")
+        extra = set(node.attrib) - {"name", "mat", "type"}
+        if extra or node.children:
+            what = sorted(extra)[0] if extra else f"<{node.children[0].tag}>"
+            raise node.error(f"{what}: domain options are not supported by tissuesim")
+        model.domains[name] = (mat, DOMAIN_TYPES.get(kind), node)
+
+
+SECTIONS = {"Mesh": _mesh, "MeshDomains": _mesh_domains}

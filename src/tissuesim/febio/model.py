@@ -1,0 +1,96 @@
+"""The plain data a FEBio model is read into (``FebModel``) and the helpers every section
+reader shares (numbers, integers and flags from element text, refusals)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from tissuesim.febio.xml import FebError, Node
+
+__all__ = ["Curve", "Load", "FebModel"]
+
+
+@dataclass
+class Curve:
+    """A FEBio load curve: points (t, y), interpolate and extend as FEBio names them."""
+
+    points: np.ndarray
+    interpolate: str = "LINEAR"
+    extend: str = "CONSTANT"
+
+
+@dataclass
+class Load:
+    """A scaled, possibly curve-driven quantity: value * curve(t) (curve None: constant)."""
+
+    value: np.ndarray
+    curve: int | None = None
+
+
+@dataclass
+class FebModel:
+    """What a FEBio model says, in tissuesim's terms (0-based node indices)."""
+
+    source: str
+    version: str
+    analysis: str = "static"
+    time_steps: int = 10
+    step_size: float = 0.1
+    nodes: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
+    #: name -> (cell type, (k, nv) node indices, FEBio element ids)
+    parts: dict = field(default_factory=dict)
+    #: material name -> (model, parameters, density, FEBio type)
+    materials: dict = field(default_factory=dict)
+    #: part name -> (material name, formulation or None)
+    domains: dict = field(default_factory=dict)
+    node_sets: dict = field(default_factory=dict)
+    surfaces: dict = field(default_factory=dict)
+    element_sets: dict = field(default_factory=dict)
+    surface_pairs: dict = field(default_factory=dict)
+    #: (node set, components or None for all, Load or None for clamped, name)
+    dirichlet: list = field(default_factory=list)
+    nodal: list = field(default_factory=list)  # (node set, Load (3,))
+    tractions: list = field(default_factory=list)  # (surface, "pressure"|"traction", Load)
+    body_loads: list = field(default_factory=list)  # Load (3,): force per unit mass
+    contacts: list = field(default_factory=list)  # dicts: type, surfaces, friction, wall...
+    curves: dict = field(default_factory=dict)
+    notes: list = field(default_factory=list)  # "file:line <tag>: what is not used"
+    steps: int = 1
+    _node_index: dict = field(default_factory=dict, repr=False)  # FEBio node id -> row
+    _element_index: dict = field(default_factory=dict, repr=False)  # id -> (part, row)
+
+    def note(self, node: Node, text: str) -> None:
+        """Keep a note about an accepted element that tissuesim does not use."""
+        self.notes.append(f"{node.where()}: {text}")
+
+
+def _floats(node: Node, count: int | None = None) -> np.ndarray:
+    try:
+        values = np.array([float(v) for v in node.text.replace(";", ",").split(",")])
+    except ValueError:
+        raise node.error(f"expected numbers separated by commas, got {node.text[:60]!r}") from None
+    if count is not None and values.size != count:
+        raise node.error(f"expected {count} numbers, got {values.size}")
+    if not np.all(np.isfinite(values)):
+        raise node.error("values must be finite")
+    return values
+
+
+def _ints(node: Node, text: str | None = None) -> list[int]:
+    try:
+        return [int(v) for v in (node.text if text is None else text).split(",") if v.strip()]
+    except ValueError:
+        raise node.error(f"expected integers separated by commas, got {node.text[:60]!r}") from None
+
+
+def _flag(node: Node) -> bool:
+    text = node.text.strip().lower()
+    if text not in ("0", "1", "true", "false"):
+        raise node.error(f"expected 0 or 1, got {node.text!r}")
+    return text in ("1", "true")
+
+
+def _unsupported(node: Node, what: str = "is not supported by tissuesim") -> FebError:
+    return node.error(f"{what} (see docs/guide/febio.md for what is)")

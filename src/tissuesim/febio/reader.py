@@ -1,0 +1,176 @@
+"""Read a FEBio 3.0 / 4.0 model (``.feb``) into plain data (``FebModel``): the parts
+tissuesim can run, each checked where it is read. Whatever has no tissuesim counterpart is
+refused with one line naming the XML element and its line; FEBio's solver tuning (which
+changes how FEBio reaches the answer, not the answer) and its own output files are kept as
+notes that ``run`` prints and ``convert`` writes into the scene."""
+
+from __future__ import annotations
+
+import os
+
+from tissuesim.febio.model import FebModel, Node, _floats, _ints, _unsupported
+from tissuesim.febio.xml import parse_feb
+
+__all__ = ["read_feb", "MATERIAL_TYPES", "UNCOUPLED"]
+
+#: FEBio material types tissuesim runs -> (model, FEBio parameter -> tissuesim keyword; None:
+#: the law takes FEBio's parameter names as they are)
+MATERIAL_TYPES = {
+    "neo-Hookean": ("neo_hookean", {"E": "youngs_modulus", "v": "poisson_ratio"}),
+    "isotropic elastic": ("stvk", {"E": "youngs_modulus", "v": "poisson_ratio"}),
+    **{
+        name: (name, None)
+        for name in (
+            "Mooney-Rivlin",
+            "coupled Mooney-Rivlin",
+            "Ogden",
+            "Ogden unconstrained",
+            "Yeoh",
+            "Veronda-Westmann",
+            "coupled Veronda-Westmann",
+            "Arruda-Boyce",
+        )
+    },
+}
+#: the uncoupled laws, which FEBio runs with its three-field (mean dilatation) hex8 / tet10
+UNCOUPLED = {"Mooney-Rivlin", "Ogden", "Yeoh", "Veronda-Westmann", "Arruda-Boyce"}
+#: Control children that tune FEBio's own solver or its output (notes)
+CONTROL_NOTES = {
+    "solver", "time_stepper", "plot_level", "output_level", "plot_stride", "plot_range",
+    "plot_zero_state", "output_stride", "adaptor_re_solve", "title", "optimize_bw",
+}  # fmt: skip
+
+
+def read_feb(path: str | os.PathLike[str]) -> FebModel:
+    """Read a FEBio 3.0 or 4.0 model; FebError (one line, element and line) for anything
+    tissuesim does not run."""
+    root = parse_feb(path)
+    version = root.attrib.get("version", "")
+    if version not in ("3.0", "4.0"):
+        raise root.error(f"febio_spec version {version!r}: tissuesim reads versions 3.0 and 4.0")
+    model = FebModel(source=os.fspath(path), version=version)
+    for section in root.children:
+        reader = SECTIONS.get(section.tag)
+        if reader is None:
+            raise _unsupported(section, "this section is not supported by tissuesim")
+        reader(model, section)
+    if not model.parts:
+        raise root.error("no <Elements>: the model has no solid elements")
+    for name, (_, _, _, node) in model.parts.items():
+        if name not in model.domains:
+            raise node.error(f"part {name!r} has no <SolidDomain> (no material)")
+    loads = [d[2] for d in model.dirichlet if d[2] is not None]
+    loads += [n[1] for n in model.nodal] + [t[2] for t in model.tractions] + model.body_loads
+    loads += [c["offset"] for c in model.contacts if "offset" in c]
+    for load in loads:
+        if load.curve is not None and load.curve not in model.curves:
+            raise root.error(f"load curve {load.curve} is used but not defined in <LoadData>")
+    return model
+
+
+def _step(model: FebModel, section: Node) -> None:
+    """<Step>: one <step>, whose Control and conditions hold for the whole run."""
+    steps = [c for c in section.children]
+    for c in steps:
+        if c.tag != "step":
+            raise _unsupported(c, "expected <step>")
+    if len(steps) > 1:
+        raise steps[1].error(
+            "a second <step>: tissuesim runs one step (put the conditions in one step and "
+            "drive them with load curves)"
+        )
+    for step in steps:
+        for child in step.children:
+            reader = STEP_SECTIONS.get(child.tag)
+            if reader is None:
+                raise _unsupported(child, "this step section is not supported by tissuesim")
+            reader(model, child)
+
+
+def _module(model: FebModel, node: Node) -> None:
+    kind = node.attrib.get("type", node.text or "solid")
+    if kind != "solid":
+        raise node.error(f"module {kind!r}: tissuesim runs the 'solid' module only")
+
+
+def _control(model: FebModel, node: Node) -> None:
+    for child in node.children:
+        tag = child.tag
+        if tag == "analysis":
+            kind = (child.attrib.get("type") or child.text).strip().lower()
+            if kind not in ("static", "dynamic"):
+                raise child.error(f"analysis {kind!r}: tissuesim runs STATIC and DYNAMIC")
+            model.analysis = kind
+            if kind == "dynamic":
+                model.note(
+                    child,
+                    "FEBio integrates DYNAMIC steps with Newmark / generalised-alpha; tissuesim "
+                    "with Backward Euler (same equilibrium, more numerical damping)",
+                )
+        elif tag == "time_steps":
+            model.time_steps = int(_ints(child)[0])
+        elif tag == "step_size":
+            model.step_size = float(_floats(child, 1)[0])
+            if not model.step_size > 0:
+                raise child.error("step_size must be > 0")
+        elif tag in CONTROL_NOTES:
+            names = ", ".join(c.tag for c in child.children) or child.text
+            model.note(child, f"FEBio's solver / output setting ({names}) not used: tissuesim's "
+                       "Newton converges to its own tolerances")  # fmt: skip
+        else:
+            raise _unsupported(child, "this Control setting is not supported by tissuesim")
+
+
+def _material(model: FebModel, node: Node) -> None:
+    from tissuesim.errors import TissueSimError
+    from tissuesim.materials import make_material
+
+    for mat in node.children:
+        if mat.tag != "material":
+            raise _unsupported(mat, "expected <material>")
+        kind = mat.attrib.get("type", "")
+        if kind not in MATERIAL_TYPES:
+            raise mat.error(
+                f"material type {kind!r} is not supported by tissuesim; it runs "
+                f"{', '.join(repr(k) for k in MATERIAL_TYPES)}"
+            )
+        model_name, rename = MATERIAL_TYPES[kind]
+        params, density = {}, 1.0
+        for p in mat.children:
+            if p.children or "lc" in p.attrib or p.attrib.get("type") not in (None, "const"):
+                raise _unsupported(p, "a material parameter that is a field, a curve or a table")
+            if p.tag == "density":
+                density = float(_floats(p, 1)[0])
+                continue
+            if p.tag == "pressure_model":
+                params[p.tag] = int(p.text) if p.text.isdigit() else p.text
+                continue
+            key = p.tag if rename is None else rename.get(p.tag)
+            if key is None:
+                raise p.error(f"parameter {p.tag!r} of {kind!r}: it takes {sorted(rename)}")
+            params[key] = float(_floats(p, 1)[0])
+        try:
+            make_material(model_name, **params)
+        except TissueSimError as exc:
+            raise mat.error(f"material {kind!r}: {exc}") from None
+        name = mat.attrib.get("name") or mat.attrib.get("id", "")
+        model.materials[name] = (model_name, params, density, kind)
+        if "id" in mat.attrib:
+            model.materials.setdefault(f"#{mat.attrib['id']}", model.materials[name])
+
+
+from tissuesim.febio.condition_sections import SECTIONS as _CONDITION_SECTIONS  # noqa: E402
+from tissuesim.febio.mesh_sections import SECTIONS as _MESH_SECTIONS  # noqa: E402
+
+STEP_SECTIONS = {
+    "Control": _control,
+    **{k: v for k, v in _CONDITION_SECTIONS.items() if k in ("Boundary", "Loads", "Contact")},
+}
+SECTIONS = {
+    "Module": _module,
+    "Step": _step,
+    "Control": _control,
+    "Material": _material,
+    **_MESH_SECTIONS,
+    **_CONDITION_SECTIONS,
+}

@@ -1,0 +1,350 @@
+"""A FEBio model (``FebModel``) as a tissuesim scene: the TOML tables and one mesh file per
+body, so that ``tissuesim run model.feb`` and ``tissuesim run`` on the converted scene build
+the same objects (``run`` converts into a temporary directory and loads that scene)."""
+
+from __future__ import annotations
+
+import os
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+from tissuesim.febio.curves import curve_expression
+from tissuesim.febio.model import FebModel, Load
+from tissuesim.febio.reader import UNCOUPLED, read_feb
+from tissuesim.febio.toml import dumps
+
+__all__ = ["febio_scene", "convert_febio", "load_febio"]
+
+INTEGRATORS = {"static": "quasistatic", "dynamic": "backward_euler"}
+
+
+def _times(load: Load, model: FebModel, k: int = 0) -> str:
+    """value[k] * curve(t) as an expression (a number string when there is no curve)."""
+    value = float(load.value[k])
+    if load.curve is None or value == 0.0:
+        return repr(value)
+    return f"{value!r} * ({curve_expression(model.curves[load.curve])})"
+
+
+def _bodies(model: FebModel) -> list[dict]:
+    """Parts joined by shared nodes make one body (one material, one cell type)."""
+    names = list(model.parts)
+    owner = np.full(len(model.nodes), -1)
+    parent = list(range(len(names)))
+
+    def root(i: int) -> int:
+        while parent[i] != i:
+            i = parent[i]
+        return i
+
+    for i, name in enumerate(names):
+        nodes = np.unique(model.parts[name][1])
+        for j in np.unique(owner[nodes][owner[nodes] >= 0]):
+            parent[root(int(j))] = root(i)
+        owner[nodes] = i
+    groups: dict[int, list[str]] = {}
+    for i, name in enumerate(names):
+        groups.setdefault(root(i), []).append(name)
+    bodies = []
+    for parts in groups.values():
+        first = model.parts[parts[0]][3]
+        materials = {_material_of(model, p) for p in parts}
+        if len(materials) > 1:
+            raise first.error(
+                f"parts {parts} share nodes but have different materials; tissuesim gives one "
+                "body one material (join them with a tie, or give them one material)"
+            )
+        types = {model.parts[p][0] for p in parts}
+        if len(types) > 1:
+            raise first.error(f"parts {parts} share nodes but mix element types {sorted(types)}")
+        cells = np.vstack([model.parts[p][1] for p in parts])
+        formulations = {model.domains[p][1] for p in parts}
+        if len(formulations) > 1:
+            raise first.error(f"parts {parts} share nodes but have different domain types")
+        bodies.append(
+            {
+                "parts": parts,
+                "material": materials.pop(),
+                "cell_type": types.pop(),
+                "cells": cells,
+                "formulation": formulations.pop(),
+                "node": first,
+            }
+        )
+    return bodies
+
+
+def _material_of(model: FebModel, part: str) -> str:
+    mat = model.domains[part][0]
+    return mat if mat in model.materials else f"#{mat}"
+
+
+def febio_scene(model: FebModel, stem: str) -> tuple[dict, dict]:
+    """(the scene's tables, {mesh file name: Mesh}) for a FEBio model; mesh files are named
+    after ``stem`` (one per body)."""
+    from tissuesim.mesh.checks import validate_mesh
+
+    bodies = _bodies(model)
+    tables_per_body, meshes, gravity = [], {}, np.zeros(3)
+    for body in bodies:
+        name = body["parts"][0] if len(bodies) > 1 else "body"
+        used = np.unique(body["cells"])
+        local = np.full(len(model.nodes), -1)
+        local[used] = np.arange(len(used))
+        point_sets, facet_sets, cell_sets = {}, {}, {}
+        for set_name, ids in model.node_sets.items():
+            mine = local[ids[local[ids] >= 0]]
+            if len(mine) and not set_name.startswith("@surface:"):
+                point_sets[_node_set_name(model, set_name)] = mine
+        for set_name, (facets, _) in model.surfaces.items():
+            inside = (local[facets] >= 0).all(axis=1)
+            if inside.any():
+                facet_sets[set_name] = local[facets[inside]]
+        for set_name, (members, _) in model.element_sets.items():
+            rows = _cell_rows(body, members, model)
+            if len(rows):
+                cell_sets[set_name] = rows
+        tables: dict = {}
+        for k, (surface, kind, load) in enumerate(model.tractions):
+            if surface not in facet_sets:
+                continue
+            if kind == "traction":
+                traction = [_times(load, model, i) for i in range(3)]
+                tables.setdefault("traction", []).append(
+                    {"facets": {"tagged": surface}, "traction": traction}
+                )
+                continue
+            groups = _by_normal(model.nodes[used], facet_sets[surface], model, surface)
+            for g, (normal, rows) in enumerate(groups):
+                set_name = surface if len(groups) == 1 else f"{surface}.pressure{k}_{g}"
+                facet_sets[set_name] = facet_sets[surface][rows]
+                traction = [
+                    _times(Load(-load.value[0] * normal, load.curve), model, i) for i in range(3)
+                ]
+                tables.setdefault("traction", []).append(
+                    {"facets": {"tagged": set_name}, "traction": traction}
+                )
+        mesh = validate_mesh(
+            model.nodes[used],
+            local[body["cells"]],
+            source=f"{model.source} part {body['parts'][0]}",
+            point_sets=point_sets,
+            facet_sets=facet_sets,
+            cell_sets=cell_sets,
+        )
+        file = f"{stem}.msh" if len(bodies) == 1 else f"{stem}.{name}.msh"
+        meshes[file] = mesh
+        model_name, params, density, kind = model.materials[body["material"]]
+        formulation = body["formulation"]
+        if formulation is None:
+            three_field = kind in UNCOUPLED and body["cell_type"] in ("hexahedron", "tetra10")
+            formulation = "mean_dilatation" if three_field else "displacement"
+        elif formulation == "mean_dilatation" and body["cell_type"] == "tetra":
+            raise body["node"].error("three-field-solid on tet4: tissuesim's P1 mean dilatation "
+                                     "is a vertex patch, not FEBio's element")  # fmt: skip
+        tables.update(
+            mesh={"file": file},
+            material={"model": model_name, **params},
+            density=density,
+            formulation=formulation,
+        )
+        for nodes, comps, load, bc_name in model.dirichlet:
+            if _local_set(model, nodes) not in mesh.point_sets | mesh.facet_sets:
+                continue
+            entry = {"vertices": {"tagged": _local_set(model, nodes)}}
+            if load is not None:
+                displacement = ["0.0"] * 3
+                displacement[comps[0]] = _times(load, model)
+                entry["displacement"] = displacement
+            if comps is not None:
+                entry["components"] = comps
+            if bc_name:
+                entry["name"] = bc_name
+            tables.setdefault("dirichlet", []).append(entry)
+        for nodes, load in model.nodal:
+            if _local_set(model, nodes) in mesh.point_sets | mesh.facet_sets:
+                force = [_times(load, model, i) for i in range(3)]
+                tables.setdefault("nodal_forces", []).append(
+                    {"vertices": {"tagged": _local_set(model, nodes)}, "force": force}
+                )
+        for load in model.body_loads:
+            if load.curve is None:
+                gravity += load.value / len(bodies)
+            else:
+                density_load = Load(density * load.value, load.curve)
+                force = [_times(density_load, model, i) for i in range(3)]
+                tables.setdefault("body_force", []).append({"force_density": force})
+        tables_per_body.append((name, tables))
+    sim = {
+        "integrator": INTEGRATORS[model.analysis],
+        "time_step": model.step_size,
+    }
+    data: dict = {}
+    if len(bodies) == 1:
+        ((_, tables),) = tables_per_body
+        for key in ("density", "formulation"):
+            sim[key] = tables.pop(key)
+        data["simulation"] = sim
+        data.update(tables)
+    else:
+        data["simulation"] = sim
+        data["bodies"] = [{"name": name, **tables} for name, tables in tables_per_body]
+    if gravity.any():
+        data["gravity"] = {"acceleration": (gravity * len(bodies)).tolist()}
+    data.update(_contact(model, [n for n, _ in tables_per_body], bodies, meshes))
+    data["run"] = {"steps": model.time_steps}
+    return data, meshes
+
+
+def _node_set_name(model: FebModel, name: str) -> str:
+    """A node set's name in the mesh file (gmsh names are unique: a node set named like a
+    surface gets a suffix)."""
+    return f"{name}.nodes" if name in model.surfaces else name
+
+
+def _local_set(model: FebModel, name: str) -> str:
+    if name.startswith("@surface:"):
+        return name.removeprefix("@surface:")
+    return _node_set_name(model, name)
+
+
+def _cell_rows(body: dict, members: list, model: FebModel) -> np.ndarray:
+    offsets, start = {}, 0
+    for p in body["parts"]:
+        offsets[p] = start
+        start += len(model.parts[p][1])
+    return np.array([offsets[p] + r for p, r in members if p in offsets], dtype=np.int64)
+
+
+def _by_normal(points: np.ndarray, facets: np.ndarray, model: FebModel, surface: str):
+    """Facets grouped by their unit normal (a dead pressure is one traction per flat group)."""
+    x = points[facets]
+    n = np.cross(x[:, 1] - x[:, 0], x[:, 2] - x[:, 0])
+    n /= np.linalg.norm(n, axis=1, keepdims=True)
+    if facets.shape[1] == 4:
+        off = np.abs(np.einsum("ij,ij->i", x[:, 3] - x[:, 0], n))
+        size = np.linalg.norm(x[:, 2] - x[:, 0], axis=1)
+        if np.any(off > 1e-9 * size):
+            raise model.surfaces[surface][1].error(
+                "a pressure on warped quadrilaterals: tissuesim's dead traction needs flat facets"
+            )
+    keys = np.round(n, 9)
+    groups = []
+    for key in np.unique(keys, axis=0):
+        rows = np.flatnonzero((keys == key).all(axis=1))
+        groups.append((n[rows].mean(axis=0), rows))
+    if len(groups) > 64:
+        raise model.surfaces[surface][1].error(
+            f"a pressure on a curved surface ({len(groups)} facet directions): tissuesim's dead "
+            "traction is written per flat group of facets, at most 64"
+        )
+    return groups
+
+
+def _contact(model: FebModel, names: list[str], bodies: list[dict], meshes: dict) -> dict:
+    if not model.contacts:
+        return {}
+    owner = {}
+    for name, mesh in zip(names, meshes.values(), strict=True):
+        for s in mesh.facet_sets:
+            owner.setdefault(s, name)
+    surfaces: dict[str, list[str]] = {}
+    pairs, obstacles = [], []
+    scale = float(np.linalg.norm(np.ptp(model.nodes, axis=0)))
+    for k, c in enumerate(model.contacts, start=1):
+        sides = []
+        for s in c["surfaces"]:
+            if s not in owner:
+                raise c["node"].error(f"surface {s!r} is on no body")
+            surfaces.setdefault(owner[s], [])
+            if s not in surfaces[owner[s]]:
+                surfaces[owner[s]].append(s)
+            sides.append(owner[s])
+        if c["type"] == "rigid_wall":
+            a, b, cc, d = c["plane"]
+            n = np.array([a, b, cc])
+            point = d * n / (n @ n)
+            unit = n / np.linalg.norm(n)
+            wall = f"wall{k}"
+            move = [_times(Load(c["offset"].value[0] * unit, c["offset"].curve), model, i)
+                    for i in range(3)]  # fmt: skip
+            obstacles.append(
+                {
+                    "name": wall,
+                    "plane": {"point": point.tolist(), "normal": n.tolist(), "size": 4 * scale},
+                    "translation": move,
+                }
+            )
+            sides.append(wall)
+        elif sides[0] == sides[1]:
+            raise c["node"].error("contact of a body with itself is not supported by tissuesim")
+        pairs.append({"bodies": sides, "friction": c["friction"]})
+    multi = {n for n, s in surfaces.items() if len(s) > 1}
+    if multi:
+        body = sorted(multi)[0]
+        raise model.contacts[0]["node"].error(
+            f"body {body!r} touches through several surfaces {surfaces[body]}: tissuesim takes "
+            "one contact surface per body (join them into one Surface)"
+        )
+    listed = {tuple(sorted(p["bodies"])) for p in pairs}
+    everyone = names + [o["name"] for o in obstacles]
+    for i, a in enumerate(everyone):
+        for b in everyone[i:]:
+            if (a, b) != tuple(sorted((a, b))) or tuple(sorted((a, b))) in listed:
+                continue
+            if a in names or b in names:
+                pairs.append({"bodies": [a, b], "enabled": False})
+    out = {"contact": {"surfaces": {n: s[0] for n, s in surfaces.items()}, "pairs": pairs}}
+    if obstacles:
+        out["obstacles"] = obstacles
+    return out
+
+
+def convert_febio(
+    path: str | os.PathLike[str], scene: str | os.PathLike[str], force: bool = False
+) -> list[Path]:
+    """Write the scene ``scene`` (TOML) equivalent to the FEBio model ``path`` and the mesh
+    file(s) it references next to it; refuses to overwrite unless ``force``. Each file is
+    written atomically. Returns the paths written."""
+    from tissuesim.errors import OutputError
+    from tissuesim.io.atomic import atomic_output
+    from tissuesim.mesh import write_mesh
+
+    scene = Path(scene)
+    model = read_feb(path)
+    data, meshes = febio_scene(model, scene.stem)
+    targets = [scene] + [scene.parent / f for f in meshes]
+    if not scene.parent.is_dir():
+        raise OutputError(f"{scene}: no directory {scene.parent}")
+    existing = [str(t) for t in targets if t.exists()]
+    if existing and not force:
+        raise OutputError(f"{existing[0]}: exists; give --force to overwrite it")
+    for file, mesh in meshes.items():
+        with atomic_output(scene.parent / file) as tmp:
+            write_mesh(mesh, tmp, file_format="gmsh22")
+    header = [f"converted by tissuesim from the FEBio model {Path(path).name}"]
+    header += [f"not used: {n}" for n in model.notes]
+    with atomic_output(scene) as tmp:
+        Path(tmp).write_text(dumps(data, header), encoding="utf-8")
+    return targets
+
+
+def load_febio(path: str | os.PathLike[str]):
+    """The Scene of a FEBio model, built as its converted scene is (the scene and mesh files
+    written to a temporary directory and loaded), so both run identically. The model's
+    notes (accepted settings tissuesim does not use) are printed as warnings."""
+    import warnings
+
+    from tissuesim.scene.loader import load_scene
+
+    path = Path(path)
+    with tempfile.TemporaryDirectory(prefix="tissuesim-febio-") as tmp:
+        scene_path = Path(tmp) / f"{path.stem}.toml"
+        convert_febio(path, scene_path)
+        for note in read_feb(path).notes:
+            warnings.warn(f"not used: {note}", UserWarning, stacklevel=2)
+        scene = load_scene(scene_path)
+    scene.source = str(path)
+    return scene

@@ -1,0 +1,81 @@
+"""A FEBio file as a tree of XML elements that know their line (``xml.parsers.expat``), so
+that every refusal can name the element and where it is."""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass, field
+from xml.parsers import expat
+
+from tissuesim.errors import InputError
+
+__all__ = ["FebError", "Node", "parse_feb"]
+
+
+class FebError(InputError):
+    """A FEBio file tissuesim cannot read or does not support (one line: file, element, line)."""
+
+
+@dataclass
+class Node:
+    """One XML element: its tag, attributes, text (stripped), children and line."""
+
+    tag: str
+    attrib: dict[str, str]
+    line: int
+    source: str
+    text: str = ""
+    children: list[Node] = field(default_factory=list)
+
+    def where(self) -> str:
+        """``file:line <tag>``, the prefix of every message about this element."""
+        return f"{self.source}:{self.line} <{self.tag}>"
+
+    def error(self, message: str) -> FebError:
+        """A FebError naming this element and its line."""
+        return FebError(f"{self.where()}: {message}")
+
+    def find(self, tag: str) -> Node | None:
+        """The first child with this tag, or None."""
+        return next((c for c in self.children if c.tag == tag), None)
+
+
+def parse_feb(path: str | os.PathLike[str]) -> Node:
+    """Parse a ``.feb`` file into Nodes with line numbers; FebError for a file that is not
+    well-formed XML (naming the line) or whose root is not ``<febio_spec>``."""
+    path = os.fspath(path)
+    try:
+        with open(path, "rb") as f:
+            data = f.read()
+    except OSError as exc:
+        raise FebError(f"{path}: cannot read the FEBio file ({exc.strerror})") from None
+    parser = expat.ParserCreate()
+    stack: list[Node] = []
+    root: list[Node] = []
+
+    def start(tag: str, attrib: dict[str, str]) -> None:
+        node = Node(tag, dict(attrib), parser.CurrentLineNumber, path)
+        (stack[-1].children if stack else root).append(node)
+        stack.append(node)
+
+    def end(tag: str) -> None:
+        node = stack.pop()
+        node.text = node.text.strip()
+
+    def chars(text: str) -> None:
+        if stack:
+            stack[-1].text += text
+
+    parser.StartElementHandler = start
+    parser.EndElementHandler = end
+    parser.CharacterDataHandler = chars
+    try:
+        parser.Parse(data, True)
+    except expat.ExpatError as exc:
+        raise FebError(
+            f"{path}:{exc.lineno}: not well-formed XML ({expat.ErrorString(exc.code)})"
+        ) from None
+    if not root or root[0].tag != "febio_spec":
+        tag = root[0].tag if root else "nothing"
+        raise FebError(f"{path}: not a FEBio file: the root element is <{tag}>, not <febio_spec>")
+    return root[0]

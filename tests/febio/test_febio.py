@@ -1,0 +1,165 @@
+"""FEBio models (tests/febio/models): each runs, matches the scene it converts to bit for bit,
+and the closed forms; every refusal is one line naming the XML element and its line."""
+
+from __future__ import annotations
+
+import json
+import re
+from pathlib import Path
+
+import numpy as np
+import pytest
+from scipy.optimize import brentq
+
+from tissuesim.cli import main
+from tissuesim.febio import FebError, convert_febio, load_febio, read_feb
+from tissuesim.febio.curves import curve_expression
+from tissuesim.febio.model import Curve
+from tissuesim.scene.expressions import compile_expression
+from tissuesim.scene.loader import load_scene
+
+MODELS = Path(__file__).parent / "models"
+ALL = sorted(p.stem for p in MODELS.glob("*.feb"))
+
+
+def _run(scene, steps: int) -> np.ndarray:
+    sim = scene.simulation
+    for _ in range(steps):
+        sim.step()
+    return sim.positions
+
+
+@pytest.mark.parametrize("name", ALL)
+def test_model_matches_its_converted_scene(name, tmp_path):
+    feb = MODELS / f"{name}.feb"
+    written = convert_febio(feb, tmp_path / f"{name}.toml")
+    assert all(p.exists() for p in written)
+    steps = load_scene(written[0]).run["steps"]
+    with pytest.warns(UserWarning) if read_feb(feb).notes else _nothing():
+        direct = _run(load_febio(feb), steps)
+    converted = _run(load_scene(written[0]), steps)
+    assert np.array_equal(direct, converted)
+    assert np.all(np.isfinite(direct))
+
+
+class _nothing:
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        return False
+
+
+def test_uniaxial_neo_hookean_reaction_matches_the_closed_form():
+    """FEBio's neo-Hookean, P = mu (F - F^-T) + lambda ln J F^-T, F = diag(l, t, t) with the
+    lateral faces free (P_yy = 0): the pull on the unit face is P_xx."""
+    scene = load_febio(MODELS / "uniaxial_neo_hookean.feb")
+    sim = scene.simulation
+    for _ in range(4):
+        record = sim.step()
+    E, nu, stretch = 1e4, 0.3, 1.2
+    mu, lam = E / (2 * (1 + nu)), E * nu / ((1 + nu) * (1 - 2 * nu))
+
+    def lateral(t):
+        return mu * (t - 1 / t) + lam * np.log(stretch * t * t) / t
+
+    t = brentq(lateral, 0.5, 1.0)
+    P_xx = mu * (stretch - 1 / stretch) + lam * np.log(stretch * t * t) / stretch
+    force = np.asarray(record.extra["forces"]["pull"])
+    assert abs(abs(force[0]) - P_xx) < 1e-6 * P_xx
+    x = sim.positions
+    X = sim.body("body").mesh.points
+    assert np.allclose(x[:, 1], t * X[:, 1], atol=1e-9)
+
+
+def test_mooney_rivlin_block_under_a_dead_pressure():
+    """The block is homogeneously compressed: its law's nominal stress is -p on the top face
+    and zero on the free sides (FEBio's Mooney-Rivlin, dead pressure)."""
+    scene = load_febio(MODELS / "mooney_rivlin_pressure.feb")
+    x = _run(scene, 5)
+    X = scene.simulation.body("body").mesh.points
+    stretch = np.array([np.polyfit(X[:, i], x[:, i], 1)[0] for i in range(3)])
+    F = np.diag(stretch)[None]
+    P = scene.simulation.body("body").model.material.evaluate(F, 1).stress
+    assert stretch[2] < 1.0
+    assert np.allclose(np.diag(P[0]), [0.0, 0.0, -500.0], atol=1e-5 * 500)
+
+
+def test_load_curves_follow_febio():
+    """LINEAR, STEP (the next point's value), SMOOTH (quadratics), SMOOTH STEP, extend."""
+    pts = np.array([[0.0, 0.0], [0.5, 2.0], [1.0, 1.0], [2.0, 3.0]])
+
+    def value(curve, t):
+        f = compile_expression(curve_expression(curve), "curve")
+        return float(f(np.zeros((1, 3)), t)[0])
+
+    linear = Curve(pts, "LINEAR", "CONSTANT")
+    assert value(linear, 0.25) == pytest.approx(1.0)
+    assert value(linear, 5.0) == pytest.approx(3.0)
+    assert value(Curve(pts, "LINEAR", "EXTRAPOLATE"), 3.0) == pytest.approx(5.0)
+    step = Curve(pts, "STEP", "CONSTANT")
+    assert [value(step, t) for t in (0.0, 0.2, 0.5, 0.7, 2.0, 9.0)] == [0, 2, 1, 1, 3, 3]
+    smooth = Curve(pts[:3], "SMOOTH", "CONSTANT")  # three points: one quadratic
+    assert value(smooth, 0.25) == pytest.approx(np.polyval(np.polyfit(*pts[:3].T, 2), 0.25))
+    w = 0.3
+    assert value(Curve(pts, "SMOOTH STEP", "CONSTANT"), 0.15) == pytest.approx(
+        2.0 * w**3 * (10 - 15 * w + 6 * w**2)
+    )
+
+
+def test_cli_runs_a_feb_and_converts_it(tmp_path, capsys):
+    feb = MODELS / "uniaxial_neo_hookean.feb"
+    out = tmp_path / "out"
+    assert main(["run", str(feb), "--out", str(out), "--no-render", "--quiet"]) == 0
+    report = json.loads(capsys.readouterr().out)
+    assert report["steps"] == 4 and "pull" in report["forces"]
+    scene = tmp_path / "scene.toml"
+    assert main(["convert", str(feb), str(scene)]) == 0
+    assert (tmp_path / "scene.msh").exists()
+    capsys.readouterr()
+    assert main(["convert", str(feb), str(scene)]) == 2
+    assert "--force" in capsys.readouterr().err
+    assert main(["convert", str(feb), str(scene), "--force"]) == 0
+
+
+REFUSALS = {
+    "hex20": ('<Elements type="hex20" name="p">', "element type 'hex20'"),
+    "material": ('<material id="1" name="m" type="Holzapfel-Gasser-Ogden">', "material type"),
+    "contact": ('<contact type="tied-elastic" surface_pair="p">', "contact type 'tied-elastic'"),
+    "element": ("<Rigid>", "<Rigid>: this section is not supported"),
+    "follower": ("<linear>0</linear>", "deformed surface"),
+    "bc": ('<bc type="rigid" node_set="x0">', "boundary condition type 'rigid'"),
+}
+
+
+@pytest.mark.parametrize("case", sorted(REFUSALS))
+def test_refusals_are_one_line_naming_the_element_and_its_line(case, tmp_path):
+    opening, message = REFUSALS[case]
+    text = (MODELS / "mooney_rivlin_pressure.feb").read_text()
+    if case == "hex20":
+        text = text.replace('<Elements type="tet4" name="cube">', opening)
+    elif case == "material":
+        text = text.replace('<material id="1" name="liver" type="Mooney-Rivlin">', opening)
+    elif case == "contact":
+        text = text.replace(
+            "  <LoadData>", f"  <Contact>\n    {opening}</contact>\n  </Contact>\n  <LoadData>"
+        )
+    elif case == "element":
+        text = text.replace("  <LoadData>", "  <Rigid/>\n  <LoadData>")
+    elif case == "follower":
+        text = text.replace("<linear>1</linear>", opening)
+    else:
+        text = text.replace('<bc type="fix" node_set="x0">', opening)
+    feb = tmp_path / "bad.feb"
+    feb.write_text(text)
+    tag = re.search(r"<(\w+)", opening).group(1)
+    line = next(
+        i
+        for i, s in enumerate(text.splitlines(), 1)
+        if f"<{tag}" in s and (tag != "linear" or "<linear>0" in s)
+    )
+    with pytest.raises(FebError) as info:
+        read_feb(feb)
+    said = str(info.value)
+    assert "\n" not in said and message in said
+    assert f"bad.feb:{line} <{tag}>" in said
