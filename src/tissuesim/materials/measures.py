@@ -45,6 +45,12 @@ def von_mises(sigma: np.ndarray) -> np.ndarray:
     return np.sqrt(1.5 * np.einsum("qij,qij->q", s, s))
 
 
+def _stress_where(material: Material, F3: np.ndarray, ok: np.ndarray) -> np.ndarray:
+    """P at every point, the points not ``ok`` evaluated at rest instead: the batch keeps its
+    length, so a law with data per point (fibre directions) stays aligned."""
+    return material.evaluate(np.where(ok[:, None, None], F3, np.eye(3)), 1).stress
+
+
 def continuum_fields(material: Material, F: np.ndarray) -> dict[str, np.ndarray]:
     """The fields of ``FIELD_NAMES`` at deformation gradients F (q, d, d), d = 2 or 3."""
     F3 = embed_3d(F)
@@ -57,11 +63,12 @@ def continuum_fields(material: Material, F: np.ndarray) -> dict[str, np.ndarray]
     psi = material.evaluate(F3, 0).energy if q else np.zeros(0)
     if ok.any():
         try:
-            P = material.evaluate(F3[ok], 1).stress
+            P = _stress_where(material, F3, ok)
         except InvertedElementError:
             ok &= J > 0.0  # the law has no stress at J <= 0
-            P = material.evaluate(F3[ok], 1).stress if ok.any() else np.zeros((0, 3, 3))
-        sigma[ok] = P @ np.swapaxes(F3[ok], 1, 2) / J[ok, None, None]
+            P = _stress_where(material, F3, ok) if ok.any() else None
+        if P is not None:
+            sigma[ok] = (P @ np.swapaxes(F3, 1, 2))[ok] / J[ok, None, None]
     return {
         "J": J,
         "green_strain": green,

@@ -1,0 +1,123 @@
+"""Transversely isotropic Mooney-Rivlin, FEBio's uncoupled ``trans iso Mooney-Rivlin``.
+
+    W = c1 (I1b - 3) + c2 (I2b - 3) + Wf(lb) + U(J),   lb = sqrt(I4b), I4b = J^(-2/3) a . C a
+
+The fibre (FEBio's ``FEFiberExpLinearUC``) bears tension only; its lb dWf/dlb is
+
+    0                                 lb < 1
+    c3 (exp(c4 (lb - 1)) - 1)         1 <= lb < lam_max
+    c5 lb + c6                        lb >= lam_max,   c6 = c3 (exp(c4 (lam_max - 1)) - 1)
+                                                             - c5 lam_max
+so Wf = c3 exp(-c4) (Ei(c4 lb) - Ei(c4)) - c3 ln lb below lam_max, and past it
+c5 (lb - lam_max) + c6 ln(lb / lam_max) + Wf(lam_max) (Ei the exponential integral). With
+c3 = 0, FEBio takes c3 = c5 / c4 exp(-c4 (lam_max - 1)) (a continuous slope), and so does this
+law. In the invariant I4b: dWf/dI4b = s / (2 I4b), d2Wf/dI4b2 = (lb s' - 2 s) / (4 I4b^2),
+s = lb dWf/dlb. U(J) = k/2 (ln J)^2 (FEBio's ``pressure_model`` picks another).
+
+``fiber``: the reference fibre direction, one vector or one per element ((m, 3), expanded by
+``bind``). ``.mu`` = 2 (c1 + c2), ``.lam`` = k - 2 mu / 3 are the matrix's small-strain moduli.
+J <= 0: energy +inf, stress and tangent raise InvertedElementError.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.special import expi
+
+from tissuesim.errors import MaterialError
+from tissuesim.materials._fibres import FibreLaw, unit_vectors
+from tissuesim.materials._hyperelastic import (
+    BULK_KINDS,
+    PRESSURE_MODELS,
+    bulk_energy,
+    parameter,
+)
+from tissuesim.materials._hyperelastic import pressure_model as _pressure_model
+
+__all__ = ["TransIsoMooneyRivlin"]
+
+
+class TransIsoMooneyRivlin(FibreLaw):
+    """FEBio's (uncoupled) trans iso Mooney-Rivlin: c1 (I1b - 3) + c2 (I2b - 3) + an
+    exponential-linear fibre (c3, c4, c5, lam_max) along ``fiber`` + U(J); c1, c2, c3, c5, k
+    in Pa."""
+
+    name = "trans_iso_mooney_rivlin"
+    febio_name = "trans iso Mooney-Rivlin"
+    uncoupled = True
+    uses_i2 = True
+
+    def __init__(
+        self,
+        *,
+        c1: float | None = None,
+        c2: float = 0.0,
+        c3: float = 0.0,
+        c4: float = 0.0,
+        c5: float = 0.0,
+        lam_max: float = 1.0,
+        k: float | None = None,
+        fiber: object = (1.0, 0.0, 0.0),
+        pressure_model: str | int = "default",
+    ) -> None:
+        law = self.name
+        self.c1, self.c2 = parameter(law, "c1", c1), parameter(law, "c2", c2)
+        self.c3, self.c4 = parameter(law, "c3", c3), parameter(law, "c4", c4, unit="")
+        self.c5 = parameter(law, "c5", c5)
+        self.lam_max = parameter(law, "lam_max", lam_max, unit="")
+        if min(self.c3, self.c4, self.c5) < 0.0 or self.lam_max < 1.0:
+            raise MaterialError(f"{law}: c3, c4, c5 must be >= 0 and lam_max >= 1")
+        if self.c4 == 0.0 and (self.c3 > 0.0 or self.c5 > 0.0):
+            raise MaterialError(f"{law}: c4 must be > 0 for a fibre with c3 or c5 > 0")
+        self.k = parameter(law, "k", k, positive=True, meaning="bulk modulus")
+        self.fiber = unit_vectors(law, "fiber", fiber)
+        self.fibres = self.fiber.reshape(-1, 1, 3)
+        self.bulk_kind = _pressure_model(law, pressure_model)
+        self._c3 = self.c3
+        if self.c3 == 0.0 and self.c5 > 0.0:
+            self._c3 = self.c5 / self.c4 * np.exp(-self.c4 * (self.lam_max - 1.0))
+        self._c6 = self._c3 * np.expm1(self.c4 * (self.lam_max - 1.0)) - self.c5 * self.lam_max
+        self._wmax = self._fibre_energy_below(np.array([self.lam_max]))[0]
+        self.mu = 2.0 * (self.c1 + self.c2)
+        self.lam = self.k - 2.0 * self.mu / 3.0
+        self._check_moduli()
+
+    def parameters(self) -> dict[str, object]:
+        out: dict[str, object] = dict(c1=self.c1, c2=self.c2, c3=self.c3, c4=self.c4)
+        out.update(c5=self.c5, lam_max=self.lam_max, k=self.k, fiber=self.fiber.tolist())
+        out["pressure_model"] = PRESSURE_MODELS[BULK_KINDS.index(self.bulk_kind)]
+        return out
+
+    def bulk(self, J: np.ndarray, lnJ: np.ndarray) -> tuple:
+        return bulk_energy(self.bulk_kind, self.k, J, lnJ)
+
+    def _fibre_energy_below(self, lb: np.ndarray) -> np.ndarray:
+        """Wf for 1 <= lb <= lam_max."""
+        c3, c4 = self._c3, self.c4
+        if c3 == 0.0:
+            return np.zeros_like(lb)
+        return c3 * np.exp(-c4) * (expi(c4 * lb) - expi(c4)) - c3 * np.log(lb)
+
+    def w(self, inv: np.ndarray, order: int) -> tuple:
+        I1, I2, I4 = inv[:, 0], inv[:, 1], inv[:, 2]
+        lb = np.sqrt(I4)
+        on, past = lb >= 1.0, lb >= self.lam_max
+        lbo = np.where(on, lb, 1.0)
+        c3, c4, c5, c6, lm = self._c3, self.c4, self.c5, self._c6, self.lam_max
+        below = np.minimum(lbo, lm)
+        Wf = np.where(
+            past,
+            c5 * (lbo - lm) + c6 * np.log(lbo / lm) + self._wmax,
+            self._fibre_energy_below(below),
+        )
+        Wf = np.where(on, Wf, 0.0)
+        ex = np.exp(c4 * (below - 1.0))
+        s = np.where(past, c5 * lbo + c6, c3 * (ex - 1.0))  # lb dWf/dlb
+        ds = np.where(past, c5, c3 * c4 * ex)  # its derivative in lb
+        s, ds = np.where(on, s, 0.0), np.where(on, ds, 0.0)
+        w = self.c1 * (I1 - 3.0) + self.c2 * (I2 - 3.0) + Wf
+        g = np.stack([np.full_like(I1, self.c1), np.full_like(I1, self.c2), s / (2.0 * I4)], 1)
+        h = np.zeros((inv.shape[0], 3, 3))
+        if order >= 2:
+            h[:, 2, 2] = (lbo * ds - 2.0 * s) / (4.0 * I4**2)
+        return w, g, h
