@@ -73,6 +73,8 @@ class Model:
         )
         self.density = positive_field(self.density, "density", self.mesh.n_cells, "kg/m^3")
         self.kinematics = _kinematics(self.mesh)
+        if hasattr(self.material, "bind"):  # internal variables per integration point
+            self.material = self.material.bind(self.kinematics.weights.size, self.mesh.dim)
         self.backend, self.backend_reason = resolve_backend(
             self.backend, self.mesh.n_cells, self.mesh.dim
         )
@@ -181,10 +183,34 @@ class Model:
     def new_accumulator(self, order: int, project: bool = False) -> Accumulator:
         return Accumulator(self.pattern, order, project)
 
+    #: Rayleigh damping (alpha 1/s, beta s) or None (``time/history.py``)
+    damping: tuple[float, float] | None = None
+    _step_damping = None  # the damping energy of the step in progress
+
+    def begin_step(self, x: np.ndarray, h: float) -> None:
+        """A step of ``h`` s from positions x starts: the material's history is frozen for it
+        and the Rayleigh damping about x is set up (``time/history.py``)."""
+        if hasattr(self.material, "begin_step"):
+            self.material.begin_step(h)
+        if self.damping is not None:
+            from tissuesim.energies.damping import RayleighDamping
+
+            self._step_damping = RayleighDamping.at(self, x, h, *self.damping)
+
+    def end_step(self, x: np.ndarray | None) -> None:
+        """The step ended at positions x (None: it was rejected): the material's history is
+        updated once, and the damping term dropped."""
+        self._step_damping = None
+        if x is not None and hasattr(self.material, "accept_step"):
+            self.material.accept_step(self.kinematics.deformation_gradients(x))
+
     def evaluate(self, x: np.ndarray, order: int, project: bool, energies=()) -> Accumulator:
-        """Elastic energy plus ``energies`` (inertia, loads, ...) at x."""
+        """Elastic energy plus ``energies`` (inertia, loads, ...) at x, and in a step the
+        Rayleigh damping."""
         acc = self.new_accumulator(order, project)
         self.elastic.accumulate(x, acc)
+        if self._step_damping is not None:
+            self._step_damping.accumulate(x, acc)
         for energy in energies:
             energy.accumulate(x, acc)
         return acc

@@ -4,7 +4,8 @@ stopped, bit-identical to a run that never stopped.
 What is kept (``capture``): the state (time, configuration, velocity), Newton's last gradient
 (the reactions), the step history, the contact model's state between steps (the obstacles'
 lagged positions, the adaptive barrier stiffness and its history), the sphere probes' touch
-points, live-driven obstacle motions, and the linear solver's state: the matrix the kept
+points, live-driven obstacle motions, the history of viscoelastic materials
+(``material.<body>.H`` and ``.Se``), and the linear solver's state: the matrix the kept
 factor was made from (``solve/reuse.py`` uses it as CG preconditioner in later steps), SuperLU's
 fill-reducing order and the matrix of a lagged AMG hierarchy, so that on load the factor is made
 again from the same matrix with the same ordering (a fresh factor takes other iterates). The
@@ -234,6 +235,16 @@ def _same_solver(solver, meta: dict | None) -> bool:
 
 
 # -- capture and restore ----------------------------------------------------------------------
+def _stateful_materials(sim) -> list[tuple[str, Any]]:
+    """(body name, material) of the FEM bodies whose law keeps a history per point."""
+    s = sim.system
+    return [
+        (name, s.bodies[j].material)
+        for j, name in enumerate(s.names)
+        if hasattr(getattr(s.bodies[j], "material", None), "state_arrays")
+    ]
+
+
 def capture(sim) -> tuple[dict, dict[str, np.ndarray]]:
     """(meta, arrays): everything of ``sim`` that changes from step to step, history aside."""
     from tissuesim.contact.obstacles import DrivenMotion
@@ -245,6 +256,9 @@ def capture(sim) -> tuple[dict, dict[str, np.ndarray]]:
     if sim._last_gradient is not None:
         arrays["last_gradient"] = sim._last_gradient
     meta["solver"] = _solver_state(sim._solver, "solver", arrays)
+    for name, material in _stateful_materials(sim):  # a viscoelastic law's history
+        for key, value in material.state_arrays().items():
+            arrays[f"material.{name}.{key}"] = value
     contact = s.contact
     if contact is not None:
         meta["kappa"] = contact.kappa
@@ -292,6 +306,11 @@ def restore(sim, meta: dict, arrays, history: list, path: Path) -> None:
         raise InputError(f"{path} holds a state of another size; {_FIX}")
     sim._state = State(float(arrays["time"]), x, v)
     sim._last_gradient = np.array(arrays["last_gradient"]) if "last_gradient" in arrays else None
+    for name, material in _stateful_materials(sim):
+        keys = [k for k in arrays if k.startswith(f"material.{name}.")]
+        if not keys:
+            raise InputError(f"{path} holds no material history for body {name!r}; {_FIX}")
+        material.set_state_arrays({k.rsplit(".", 1)[1]: np.array(arrays[k]) for k in keys})
     if meta["solver"] is not None and not sim.explicit:
         solver = sim._linear_solver()
         if _same_solver(solver, meta["solver"]):

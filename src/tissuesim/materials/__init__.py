@@ -14,6 +14,7 @@ from tissuesim.materials.psd import project_psd, project_tangent_psd
 from tissuesim.materials.registry import ALIASES, MATERIALS, SOFT_TISSUE_LAWS, make_material
 from tissuesim.materials.stvk import StVenantKirchhoff
 from tissuesim.materials.veronda_westmann import CoupledVerondaWestmann, VerondaWestmann
+from tissuesim.materials.viscoelastic import UncoupledViscoelastic, Viscoelastic
 from tissuesim.materials.yeoh import CoupledYeoh, Yeoh
 
 __all__ = [
@@ -34,6 +35,8 @@ __all__ = [
     "CoupledVerondaWestmann",
     "ArrudaBoyce",
     "CoupledArrudaBoyce",
+    "Viscoelastic",
+    "UncoupledViscoelastic",
     "lame_parameters",
     "project_psd",
     "project_tangent_psd",

@@ -5,7 +5,8 @@ The soft-tissue laws carry FEBio's names (its ``type`` with spaces and dashes as
 uncoupled laws; ``coupled_mooney_rivlin``, ``coupled_veronda_westmann`` and
 ``ogden_unconstrained`` its coupled ones; ``coupled_yeoh`` and ``coupled_arruda_boyce`` are
 tissuesim's coupled forms where FEBio has none. ``<law>_uncoupled`` and ``<law>_coupled`` are
-accepted as aliases (``ALIASES``).
+accepted as aliases (``ALIASES``). ``viscoelastic`` and ``uncoupled_viscoelastic`` wrap another
+law given as ``elastic`` (a material or a table with its ``model``), ``VISCOELASTIC_LAWS``.
 """
 
 from __future__ import annotations
@@ -24,6 +25,7 @@ from tissuesim.materials.neo_hookean import NeoHookean
 from tissuesim.materials.ogden import Ogden, OgdenUnconstrained
 from tissuesim.materials.stvk import StVenantKirchhoff
 from tissuesim.materials.veronda_westmann import CoupledVerondaWestmann, VerondaWestmann
+from tissuesim.materials.viscoelastic import VISCOELASTIC_LAWS
 from tissuesim.materials.yeoh import CoupledYeoh, Yeoh
 from tissuesim.validate import short
 
@@ -72,6 +74,27 @@ def _suggest(word: str, choices: list[str]) -> str:
     return f"{hint}valid: {', '.join(sorted(choices))}"
 
 
+def _viscoelastic(key: str, params: dict) -> Material:
+    """A Prony-series wrapper: ``elastic`` a material or a table with its ``model``."""
+    allowed = ["elastic", "g", "tau", "g0"]
+    for name in params:
+        if name not in allowed:
+            raise MaterialError(
+                f"unknown parameter {short(name)} for material {key!r}; {_suggest(name, allowed)}"
+            )
+    elastic = params.get("elastic")
+    if isinstance(elastic, dict):
+        table = dict(elastic)
+        if "model" not in table:
+            raise MaterialError(f"{key}: elastic needs its model (e.g. 'neo_hookean')")
+        try:
+            elastic = make_material(table.pop("model"), **table)
+        except MaterialError as exc:
+            raise MaterialError(f"{key}: elastic: {exc}") from None
+    rest = {k: v for k, v in params.items() if k != "elastic"}
+    return VISCOELASTIC_LAWS[key](elastic, **rest)
+
+
 def make_material(model: str, **params: object) -> Material:
     """Build the law registered as ``model`` with keyword parameters (e.g. E and nu, or a
     soft-tissue law's own: ``make_material("ogden", c=[1e3], m=[8.0], k=1e5)``).
@@ -80,6 +103,8 @@ def make_material(model: str, **params: object) -> Material:
     case, spaces and dashes do not matter."""
     key = str(model).strip().lower().replace("-", "_").replace(" ", "_")
     key = ALIASES.get(key, key)
+    if key in VISCOELASTIC_LAWS:
+        return _viscoelastic(key, params)
     if key not in MATERIALS:
         raise MaterialError(
             f"unknown material model {short(model)}; {_suggest(key, list(MATERIALS))}"

@@ -62,7 +62,7 @@ __all__ = ["Scene", "load_scene", "build_scene", "SCENE_KEYS"]
 SCENE_KEYS = {
     "mesh": set(MESH_KEYS),
     "material": None,  # checked by make_material
-    "simulation": set(SIMULATION_KEYS),
+    "simulation": {*SIMULATION_KEYS, "damping"},
     "newton": None,  # checked against NewtonOptions
     **FEM_TABLE_KEYS,
     "gravity": {"acceleration"},
@@ -140,8 +140,9 @@ def _build(data: dict, base_dir: Path, source: str, name: str) -> Scene:
     _unknown(data, [*SCENE_KEYS, "frames", "organs", "bodies"], f"{source}: top level")
     newton = _newton(data, source)
     sim_table = dict(_table(data, "simulation", source))
-    _unknown(sim_table, SIMULATION_KEYS, f"{source} [simulation]")
+    _unknown(sim_table, SCENE_KEYS["simulation"], f"{source} [simulation]")
     body = {k: sim_table.pop(k) for k in FEM_BODY_OPTIONS if k in sim_table}
+    damping = sim_table.pop("damping", None)
     with _context(f"{source} [simulation]"):
         sim = Simulation(newton=newton, **sim_table)
     tables = {k: data[k] for k in FEM_BODY_KEYS if k in data}
@@ -154,6 +155,13 @@ def _build(data: dict, base_dir: Path, source: str, name: str) -> Scene:
         _short_label(source),
         f"{source} [simulation]",
     )
+    if damping is not None:  # Rayleigh damping: { mass = alpha (1/s), stiffness = beta (s) }
+        where = f"{source} [simulation] damping"
+        if not isinstance(damping, dict):
+            raise SceneError(f"{where} must be a table {{ mass = ..., stiffness = ... }}")
+        _unknown(damping, ("mass", "stiffness"), where)
+        with _context(where):
+            sim.set_damping(**damping)
     gravity = _table(data, "gravity", source)
     if gravity:
         _unknown(gravity, SCENE_KEYS["gravity"], f"{source} [gravity]")

@@ -2,6 +2,8 @@
 
 A failed step of length h is retried as two steps of h/2, recursively, down to
 h / 2**max_halvings; if that still fails, ConvergenceError says when, why, and what to try.
+Around every attempt ``time/history.py`` freezes the bodies' internal variables and, once the
+attempt converged, updates them.
 """
 
 from __future__ import annotations
@@ -9,6 +11,7 @@ from __future__ import annotations
 from dataclasses import replace
 
 from tissuesim.errors import ConvergenceError, InputError
+from tissuesim.time.history import begin_attempt, end_attempt
 from tissuesim.time.state import State, StepOutcome
 
 __all__ = ["advance", "validate_stepping"]
@@ -33,7 +36,13 @@ def advance(
 
     def attempt(s: State, dt: float, level: int) -> State:
         nonlocal substeps
-        outcome: StepOutcome = step_fn(model, s, dt, solver, options)
+        begin_attempt(model, s, dt)  # internal variables frozen for the attempt
+        try:
+            outcome: StepOutcome = step_fn(model, s, dt, solver, options)
+        except BaseException:
+            end_attempt(model, StepOutcome(None, False))
+            raise
+        end_attempt(model, outcome)  # updated once, only if it converged
         records.extend(outcome.newton)
         if outcome.converged:
             substeps += 1
