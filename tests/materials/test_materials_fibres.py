@@ -204,3 +204,33 @@ def test_output_fields_of_a_law_with_per_point_fibres():
     np.testing.assert_allclose(sigma[3], sigma[0])  # same fibre, same stress
     assert sigma[0, 0, 0] > sigma[1, 0, 0]  # along its fibre it is stiffer
     assert fields["energy_density"][2] == np.inf
+
+
+@pytest.mark.parametrize("name", ["hgo", "hgo_unconstrained", "trans_iso_mooney_rivlin"])
+def test_mean_dilatation_with_fibres_matches_finite_differences(name):
+    mesh = box(divisions=(2, 1, 1), order=2)
+    law = LAWS[name]()
+    md = Model(mesh, law, np.ones(mesh.n_cells), backend="numpy", formulation="mean_dilatation")
+    rng = np.random.default_rng(3)
+    x = mesh.points.ravel() + 0.03 * rng.standard_normal(mesh.points.size)
+    acc = md.evaluate(x, 2, False)
+    H = md.pattern.matrix(acc.hessian)
+    dx = rng.standard_normal(x.size)
+    eps = 1e-6
+    plus, minus = md.evaluate(x + eps * dx, 1, False), md.evaluate(x - eps * dx, 1, False)
+    assert (plus.value - minus.value) / (2 * eps) == pytest.approx(acc.gradient @ dx, rel=1e-6)
+    fd_H = (plus.gradient - minus.gradient) / (2 * eps)
+    np.testing.assert_allclose(fd_H, H @ dx, rtol=0, atol=1e-6 * np.abs(H @ dx).max())
+
+
+@pytest.mark.parametrize("name", ["hgo", "hgo_unconstrained", "trans_iso_mooney_rivlin"])
+def test_the_volumetric_part_is_the_k_term(name):
+    from tissuesim.materials.volumetric import volumetric_part
+
+    F = _random_F(np.random.default_rng(6), 8, 3, 0.3)
+    a, b = LAWS[name](), LAWS[name]()
+    b.k = 2 * a.k  # the same law with another bulk modulus
+    theta = volumetric_part(a).theta(F, 0)[0]
+    diff = a.energy_density(F) - b.energy_density(F)
+    Ua, Ub = volumetric_part(a).energy(theta, 0)[0], volumetric_part(b).energy(theta, 0)[0]
+    np.testing.assert_allclose(diff, Ua - Ub, rtol=1e-10, atol=1e-9)

@@ -13,6 +13,8 @@ theta is the law's measure of volume change and U its lambda term, the part that
                          its pressure_model "NIKE3D"/"Abaqus (GOH)": k/4 (theta^2 - 1 - 2 ln
                          theta), "Abaqus": k/2 (theta - 1)^2)
     ogden_unconstrained  theta = J             U = cp/2 (theta - 1)^2
+    holzapfel_gasser_ogden, hgo_unconstrained, trans_iso_mooney_rivlin: their bulk term with k
+                         (HGO: FEBio's default k/4 (theta^2 - 1 - 2 ln theta))
 
 psi_rest keeps every mu term (for the uncoupled soft-tissue laws: the deviatoric energy), so its
 bulk stiffness is of order mu and does not lock. Shapes:
@@ -46,6 +48,9 @@ VOLUMETRIC_LAWS = {
     },
     "ogden": ("J", "log"),
     "ogden_unconstrained": ("J", "quadratic_J"),
+    "holzapfel_gasser_ogden": ("J", "goh"),
+    "hgo_unconstrained": ("J", "goh"),
+    "trans_iso_mooney_rivlin": ("J", "log"),
 }
 
 
