@@ -362,6 +362,18 @@ def main(argv: list[str] | None = None) -> int:
     p_examples.add_argument(
         "--json", action="store_true", help="print the list as JSON (for scripts)"
     )
+    p_verify = sub.add_parser(
+        "verify",
+        parents=common,
+        help="run the shipped verification problems and print their table (exit 1 if one fails)",
+    )
+    p_verify.add_argument("--json", action="store_true", help="print the checks as JSON")
+    p_verify.add_argument(
+        "--only",
+        action="append",
+        choices=("laws", "patch", "viscoelastic"),
+        help="run only this family (repeatable)",
+    )
     args = parser.parse_args(argv)
     with warnings.catch_warnings():
         warnings.showwarning = _show_warning
@@ -457,7 +469,22 @@ def _dispatch(args) -> int:
 
         print(json.dumps(describe_mesh(read_mesh(args.mesh)), indent=2))
         return 0
+    if args.command == "verify":
+        return _verify(args.json, args.only)
     return _examples(args.json)
+
+
+def _verify(as_json: bool, only: list[str] | None) -> int:
+    """``tissuesim verify``: the table (or JSON) of the verification problems; 0 if all pass."""
+    from tissuesim.verification import run, table
+
+    checks = run(tuple(only) if only else None)
+    ok = all(c.passed for c in checks)
+    if as_json:
+        print(json.dumps({"passed": ok, "checks": [c.as_dict() for c in checks]}, indent=2))
+    else:
+        print(table(checks))
+    return 0 if ok else 1
 
 
 def _examples(as_json: bool) -> int:

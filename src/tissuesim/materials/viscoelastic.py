@@ -124,6 +124,8 @@ class Viscoelastic(Material):
         """A copy holding the state of ``n_points`` integration points in ``dim`` dimensions,
         at rest (no history)."""
         out = copy.copy(self)
+        if hasattr(self.elastic, "bind"):  # a law with data per point (fibre directions)
+            out.elastic = self.elastic.bind(n_points, dim)
         out._n = int(n_points)
         out._H = np.zeros((len(self.g), out._n, dim, dim))
         out._Se = np.zeros((out._n, dim, dim))
