@@ -25,6 +25,9 @@ SOFT_TISSUE_PARAMETERS = {
     "coupled_veronda_westmann": dict(c1=200.0, c2=1.5, k=3000.0),
     "arruda_boyce": dict(mu=300.0, N=4.0, k=3000.0),
     "coupled_arruda_boyce": dict(mu=300.0, N=4.0, k=3000.0),
+    "holzapfel_gasser_ogden": dict(c=150.0, k1=200.0, k2=2.0, kappa=0.1, gamma=30.0, k=3000.0),
+    "hgo_unconstrained": dict(c=150.0, k1=200.0, k2=2.0, kappa=0.1, gamma=30.0, k=3000.0),
+    "trans_iso_mooney_rivlin": dict(c1=150.0, c3=10.0, c4=5.0, c5=300.0, lam_max=1.1, k=3e3),
 }
 
 

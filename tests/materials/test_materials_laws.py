@@ -11,6 +11,7 @@ from scipy.optimize import brentq
 
 from tissuesim.errors import InvertedElementError, MaterialError
 from tissuesim.materials import (
+    FIBRE_LAWS,
     MATERIALS,
     SOFT_TISSUE_LAWS,
     CourseNeoHookean,
@@ -23,7 +24,7 @@ from tissuesim.materials import (
 E, NU = 1000.0, 0.3
 MU, LAM = E / (2 * (1 + NU)), E * NU / ((1 + NU) * (1 - 2 * NU))
 #: the laws given by (E, nu) or (mu, lambda); the soft-tissue laws: test_materials_soft_tissue.py
-ALL = [cls for cls in MATERIALS.values() if cls not in SOFT_TISSUE_LAWS]
+ALL = [cls for cls in MATERIALS.values() if cls not in SOFT_TISSUE_LAWS + FIBRE_LAWS]
 DIMS = (2, 3)
 
 

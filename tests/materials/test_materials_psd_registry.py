@@ -7,6 +7,7 @@ import pytest
 
 from tissuesim.errors import MaterialError
 from tissuesim.materials import (
+    FIBRE_LAWS,
     MATERIALS,
     SOFT_TISSUE_LAWS,
     CourseNeoHookean,
@@ -52,10 +53,10 @@ def test_registry_builds_every_law():
         "stvk",
         "linear",
         "fixed_corotated",
-        *(cls.name for cls in SOFT_TISSUE_LAWS),
+        *(cls.name for cls in SOFT_TISSUE_LAWS + FIBRE_LAWS),
     }
     for name, cls in MATERIALS.items():
-        if cls in SOFT_TISSUE_LAWS:
+        if cls in SOFT_TISSUE_LAWS + FIBRE_LAWS:
             continue  # their own parameters: test_materials_soft_tissue_registry.py
         mat = make_material(name, youngs_modulus=1000.0, poisson_ratio=0.3)
         assert isinstance(mat, cls) and isinstance(mat, Material) and mat.name == name

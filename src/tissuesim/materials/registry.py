@@ -19,17 +19,19 @@ from tissuesim.materials.arruda_boyce import ArrudaBoyce, CoupledArrudaBoyce
 from tissuesim.materials.base import Material
 from tissuesim.materials.corotated import FixedCorotated
 from tissuesim.materials.course_neo_hookean import CourseNeoHookean
+from tissuesim.materials.holzapfel_gasser_ogden import HGOUnconstrained, HolzapfelGasserOgden
 from tissuesim.materials.linear import LinearElastic
 from tissuesim.materials.mooney_rivlin import CoupledMooneyRivlin, MooneyRivlin
 from tissuesim.materials.neo_hookean import NeoHookean
 from tissuesim.materials.ogden import Ogden, OgdenUnconstrained
 from tissuesim.materials.stvk import StVenantKirchhoff
+from tissuesim.materials.trans_iso_mooney_rivlin import TransIsoMooneyRivlin
 from tissuesim.materials.veronda_westmann import CoupledVerondaWestmann, VerondaWestmann
 from tissuesim.materials.viscoelastic import VISCOELASTIC_LAWS
 from tissuesim.materials.yeoh import CoupledYeoh, Yeoh
 from tissuesim.validate import short
 
-__all__ = ["MATERIALS", "ALIASES", "SOFT_TISSUE_LAWS", "make_material"]
+__all__ = ["MATERIALS", "ALIASES", "SOFT_TISSUE_LAWS", "FIBRE_LAWS", "make_material"]
 
 #: the laws with their own parameters (FEBio's names), not (E, nu) or (mu, lambda)
 SOFT_TISSUE_LAWS: tuple[type[Material], ...] = (
@@ -45,6 +47,13 @@ SOFT_TISSUE_LAWS: tuple[type[Material], ...] = (
     CoupledArrudaBoyce,
 )
 
+#: the fibre-reinforced laws (directions per body, element or point): FEBio's names too
+FIBRE_LAWS: tuple[type[Material], ...] = (
+    HolzapfelGasserOgden,
+    HGOUnconstrained,
+    TransIsoMooneyRivlin,
+)
+
 MATERIALS: dict[str, type[Material]] = {
     cls.name: cls
     for cls in (
@@ -54,6 +63,7 @@ MATERIALS: dict[str, type[Material]] = {
         LinearElastic,
         FixedCorotated,
         *SOFT_TISSUE_LAWS,
+        *FIBRE_LAWS,
     )
 }
 
