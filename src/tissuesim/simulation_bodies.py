@@ -271,9 +271,9 @@ class BodyCalls:
                 blade.area = done["area_m2"]
                 report = {"area_m2": blade.area, "new_area_m2": new,
                           "cells_cut": done["cells_cut"], "pieces": done["pieces"]}  # fmt: skip
-                forces[blade.name] = blade.force(new, t0, self.time)
+                forces[blade.name] = blade.force(new, t0, self.time).tolist()
             else:
-                forces[blade.name] = np.zeros(3)
+                forces[blade.name] = [0.0, 0.0, 0.0]
             out[blade.name] = report
         return {"cuts": out}
 

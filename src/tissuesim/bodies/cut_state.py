@@ -1,10 +1,11 @@
 """What a FEM body keeps of its cuts (virtual node algorithm, ``mesh/virtual_nodes.py``), so
 that it can be cut again, step after step, as a blade advances.
 
-Every cut is recomputed from the body's *original* mesh with all its cuts so far: the cells an
-earlier call cut keep their cut as it was made (``prior``: its index and the node distances
-where the body was then), new cells are cut where the body is now, and the node slots are
-grouped afresh. Each node of the new mesh continues a node of the current one (``carry``):
+Every cut is recomputed from the body's *original* mesh with all its cuts so far: the nodes of
+cells an earlier call cut keep their distance to the cut from then (``prior``), so those cells
+keep their cut as it was made and the level stays continuous across cells cut at different
+times; other nodes take their distance where the body is now; the node slots are grouped
+afresh. Each node of the new mesh continues a node of the current one (``carry``):
 its slot's copy in the current mesh (the same parent cell and side, or the parent's whole copy
 for a cell cut only now) names it, and positions, velocities, supports and graspers follow.
 """
@@ -34,16 +35,18 @@ class CutState:
     names: list[str] = field(default_factory=list)
 
     def prior(self) -> tuple[np.ndarray, np.ndarray] | None:
-        """(cut index per original cell, -1 none; its node distances then) of the cells cut."""
+        """(cut index per original cell, -1 none; each cut's node distances (cuts, n), NaN for
+        nodes of no cell it cut): what the cuts so far froze (``virtual_node_cut``'s prior)."""
         if self.vn is None:
             return None
-        m, k = self.original.cells.shape
+        m = len(self.original.cells)
         owner = np.full(m, -1)
-        dist = np.zeros((m, k))
+        frozen = np.full((len(self.cuts), self.original.n_points), np.nan)
         cut = self.vn.side != 0
         owner[self.vn.parent[cut]] = self.vn.cut[cut]
-        dist[self.vn.parent[cut]] = self.vn.level[cut] * self.vn.side[cut, None]
-        return owner, dist
+        nodes = self.original.cells[self.vn.parent[cut]]
+        frozen[self.vn.cut[cut][:, None], nodes] = self.vn.level[cut] * self.vn.side[cut, None]
+        return owner, frozen
 
     def cell_positions(self, positions: np.ndarray) -> np.ndarray:
         """Where each original cell's vertices are now (m, k, d): its first copy's nodes."""

@@ -78,6 +78,8 @@ class FemSeries(BodySeries):
         u = x - rest
         fields = b.cell_fields(c)
         if self.writers:
+            if self.writers[0].mesh is not b.mesh:  # cut since the last frame
+                self.writers[0].set_mesh(b.mesh)
             cell_data = _fields(fields)
             if b.mesh.cell_fractions is not None:  # a cut body: the copies' part of their cell
                 cell_data["material_fraction"] = np.asarray(b.mesh.cell_fractions)
@@ -87,7 +89,15 @@ class FemSeries(BodySeries):
                 point_data={"displacement": u, "velocity": v.reshape(rest.shape)},
                 cell_data=cell_data,
             )
-        return {"kind": "fem", "positions": x.copy(), "cells": fields, "displacement": u}
+        # the mesh and weights of this frame: a body cut later has other ones (the pictures)
+        return {
+            "kind": "fem",
+            "positions": x.copy(),
+            "cells": fields,
+            "displacement": u,
+            "mesh": b.mesh,
+            "weights": b.model.kinematics.cell_weights,
+        }
 
 
 class FrameSeries(BodySeries):

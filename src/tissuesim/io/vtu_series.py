@@ -164,6 +164,17 @@ class VTUSeriesWriter:
             if match and int(match.group(1)) >= len(keep):
                 old.unlink()
 
+    def set_mesh(self, mesh: Mesh) -> None:
+        """Write the next frames on ``mesh`` (a body that was cut: more points and cells);
+        frames written before keep theirs, and the index lists them all (ParaView follows a
+        series whose topology changes)."""
+        if not self._mesh_based or mesh.dim != self.dim:
+            raise InputError("set_mesh needs a writer made with a mesh of the same dimension")
+        self.mesh = mesh
+        self.n_points = mesh.n_points
+        self._cells = [(mesh.cell_type, np.asarray(mesh.cells, dtype=np.int64))]
+        self.n_cells = int(mesh.n_cells)
+
     @property
     def frames(self) -> list[tuple[float, Path]]:
         """(time, path of the .vtu) for every frame written so far, in order."""

@@ -165,7 +165,12 @@ def cut_cells(
     the points are now, as node positions (n, d) or per cell vertex (m, d+1, d) (default
     ``points``): the blade cuts the body as it is."""
     x_cell = _per_cell(points, cells, current)
-    d = _distances(x_cell, cut)
+    return _crossed(x_cell, _distances(x_cell, cut), cut)
+
+
+def _crossed(x_cell: np.ndarray, d: np.ndarray, cut: PlanarCut) -> np.ndarray:
+    """The cells (indices) whose vertex distances d (m, d+1) to the cut's plane have both
+    signs and whose section lies in its polygon (x_cell: where their vertices are)."""
     crossed = np.flatnonzero((d.max(axis=1) > 0.0) & (d.min(axis=1) < 0.0))
     inside = sections_inside(x_cell[crossed], d[crossed], cut.polygon, cut.normal)
     return crossed[inside].astype(np.int64)
@@ -426,19 +431,21 @@ def virtual_node_cut(
     cell's cut is the plane in its rest shape where that distance is zero, and the fractions
     and face parts are of rest volume (mass).
 
-    ``prior``: (cut index (m,), -1 for none; node distances (m, d+1)) of the cells an earlier
-    call cut: they keep that cut as it was made (a blade advancing step by step cuts each cell
-    once, where the body was when it crossed it), and are not cut again; a cell an earlier
-    cut took that another cut crosses now is refused."""
+    ``prior``: (cut index (m,), -1 for none, of the cells an earlier call cut; the node
+    distances (k, n) to the first k cuts that call used, NaN for nodes it did not): a node
+    keeps its distance to a cut from the first time a cell around it was cut (a blade
+    advancing step by step cuts each cell once, where the body was when it crossed it, and the
+    level stays one continuous function across cells cut at different times), and a cell an
+    earlier cut took that another cut crosses now is refused."""
     cells = np.asarray(cells, dtype=np.int64)
     x3 = _as3d(points)
     x_cell = _per_cell(points, cells, current)
     node_d = [_distances(x_cell, cut) for cut in cuts]  # per cut: (m, d+1)
     prior_owner = np.full(len(cells), -1) if prior is None else np.asarray(prior[0])
-    for j in range(len(cuts)):
-        mine = prior_owner == j
-        if mine.any():
-            node_d[j][mine] = np.asarray(prior[1])[mine]
+    if prior is not None:
+        for j, frozen in enumerate(np.asarray(prior[1], dtype=float)[: len(cuts)]):
+            at = frozen[cells]
+            node_d[j] = np.where(np.isfinite(at), at, node_d[j])
     dim = np.asarray(points).shape[1]
     if cells.shape[1] != dim + 1:
         raise InputError(
@@ -446,7 +453,7 @@ def virtual_node_cut(
         )
     owner = prior_owner.copy()
     for k, cut in enumerate(cuts):
-        hit = cut_cells(x3, cells, cut, x_cell)
+        hit = _crossed(x_cell, node_d[k], cut)  # frozen node distances where there are
         hit = hit[owner[hit] != k]  # cut by this cut before: kept as it was
         twice = hit[owner[hit] >= 0]
         if twice.size:

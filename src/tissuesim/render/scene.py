@@ -99,6 +99,16 @@ def render_run(sim, frames: list, directory: Path, field: str = "J") -> str:
     return _render_pyvista(sim, bodies, frames, directory, field, label)
 
 
+def _on_final_meshes(bodies, frames) -> list:
+    """The frames drawn on the bodies' meshes as they are now: a body cut during the run had
+    other meshes before (matplotlib draws one mesh for every frame; PyVista each its own)."""
+
+    def current(data) -> bool:
+        return all(data[b.name].get("mesh", b.mesh) is b.mesh for b in bodies if b.kind == "fem")
+
+    return [f for f in frames if current(f[1])] or frames[-1:]
+
+
 # -- 2D: matplotlib ---------------------------------------------------------------------------
 def _merged_mesh(bodies):
     from tissuesim.mesh.mesh import Mesh
@@ -125,6 +135,7 @@ def _cell_values_2d(bodies, data, field) -> np.ndarray:
 def _render_2d(bodies, frames, directory, field, label) -> str:
     from tissuesim.render.plot2d import render_frame_png, render_gif
 
+    frames = _on_final_meshes(bodies, frames)
     mesh = _merged_mesh(bodies)
     series = [
         (
@@ -168,13 +179,32 @@ def _range(values: list[np.ndarray], field: str) -> tuple[float, float]:
 
 
 # -- 3D: PyVista ------------------------------------------------------------------------------
-def _vertex_values(b, cell_values: np.ndarray) -> np.ndarray:
-    """Cell values averaged to the vertices (volume-weighted)."""
-    w = b.model.kinematics.cell_weights
-    n = b.mesh.n_points
-    num = np.bincount(b.mesh.cells.ravel(), np.repeat(w * cell_values, b.mesh.cells.shape[1]), n)
-    den = np.bincount(b.mesh.cells.ravel(), np.repeat(w, b.mesh.cells.shape[1]), n)
+def _vertex_values(b, cell_values: np.ndarray, d: dict | None = None) -> np.ndarray:
+    """Cell values averaged to the vertices (volume-weighted), on the frame's mesh (``d``)."""
+    mesh = b.mesh if d is None else d.get("mesh", b.mesh)
+    w = b.model.kinematics.cell_weights if d is None else d.get("weights", None)
+    w = b.model.kinematics.cell_weights if w is None else w
+    n, k = mesh.n_points, mesh.cells.shape[1]
+    num = np.bincount(mesh.cells.ravel(), np.repeat(w * cell_values, k), n)
+    den = np.bincount(mesh.cells.ravel(), np.repeat(w, k), n)
     return num / np.where(den > 0, den, 1.0)
+
+
+def _drawn_surface(mesh, cache: dict):
+    """(W or None, triangles) of a FEM mesh's surface to draw: its boundary facets, or for a
+    cut mesh its embedded surface with the cut faces exactly on the blade's plane (points
+    V = W x); one per mesh, cached."""
+    key = id(mesh)
+    if key not in cache:
+        if mesh.cell_levels is not None and mesh.dim == 3:
+            from tissuesim.contact.cut_surface import cut_surface
+
+            cache[key] = (mesh, cut_surface(mesh, 0.0))
+        else:
+            from tissuesim.mesh.boundary import boundary_facets
+
+            cache[key] = (mesh, (None, boundary_facets(mesh.simplices)))
+    return cache[key][1]
 
 
 def _frame3d(bodies, frame, field, label, clim, surfaces):
@@ -194,12 +224,16 @@ def _frame3d(bodies, frame, field, label, clim, surfaces):
             if field == "displacement":
                 vals = np.linalg.norm(d["displacement"], axis=1)
             else:
-                vals = _vertex_values(b, _values(d, field, "cells"))
+                vals = _vertex_values(b, _values(d, field, "cells"), d)
+            W, tri = _drawn_surface(d.get("mesh", b.mesh), surfaces)
+            x = d["positions"]
+            if W is not None:
+                x, vals = W @ x, W @ vals
             layers.append(
                 SurfaceLayer(
                     b.name,
-                    d["positions"],
-                    surfaces[b.name],
+                    x,
+                    tri,
                     scalars=vals,
                     scalar_name=bar(b),
                     clim=clim[b.name],
@@ -253,11 +287,10 @@ def _field_values(bodies, data, field) -> list[np.ndarray]:
 
 
 def _render_pyvista(sim, bodies, frames, directory, field, label) -> str:
-    from tissuesim.mesh.boundary import boundary_facets
     from tissuesim.render.gif3d import GifWriter
     from tissuesim.render.pyvista3d import render_frame_png
 
-    surfaces = {b.name: boundary_facets(b.mesh.simplices) for b in bodies if b.kind == "fem"}
+    surfaces: dict = {}  # drawn surfaces by mesh (a body that is cut changes its mesh)
     wall = sum(r.wall_time_s for r in sim.history)
     picked = [frames[i] for i in _subsample(len(frames), gif_frames_3d(wall))]
     # each body its own colour range and bar: a stiff organ's small strains are not washed
@@ -279,6 +312,7 @@ def _render_pyvista(sim, bodies, frames, directory, field, label) -> str:
 
 
 def _render_matplotlib_3d(b, frames, directory, field, label) -> str:
+    frames = _on_final_meshes([b], frames)
     picked = [frames[i] for i in _subsample(len(frames), MAX_GIF_FRAMES_3D)]
     if b.kind == "fem":
         from tissuesim.render.plot3d import render_frame_png_3d, render_gif_3d

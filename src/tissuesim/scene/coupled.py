@@ -25,7 +25,8 @@ argument of the Python API of ``tissuesim.coupling.simulation.CoupledSimulation`
                    the layer to rest points where the condition holds
     [[cuts]]       add_cut(blade, start, end, kerf, name): blade is a polyline of >= 2 points
                    [["x(t)", "y(t)", "z(t)"], ...], each coordinate a number or an expression
-                   of t
+                   of t; with body = "organ" the blade (a straight edge of 2 points) cuts
+                   that organ, with its toughness (J/m^2, optional)
     [tearing]      set_tearing(threshold)
     [run]          run(steps, every, render), as for every scene
 
@@ -89,7 +90,7 @@ TISSUE_KEYS = (
     "attach_distance",
     "attachment_stiffness",
 )
-CUT_KEYS = ("blade", "start", "end", "kerf", "name")
+CUT_KEYS = ("blade", "start", "end", "kerf", "name", "body", "toughness")
 COUPLED_SCENE_KEYS: dict[str, Any] = {
     "simulation": set(COUPLED_SIMULATION_KEYS),
     "gravity": {"acceleration"},
@@ -188,11 +189,13 @@ def build_bodies_scene(data: dict, base_dir: Path, source: str, name: str) -> Sc
     if tissue:
         _tissue(sim, tissue, f"{source} [tissue]")
     cuts = _table(data, "cuts", source, array=True)
-    if cuts and not tissue:
-        raise SceneError(
-            f"{source} cuts[1]: a cut dissects the connective tissue, and the scene has none; "
-            f"add a [tissue] table (material, thickness, spacing)"
-        )
+    for i, item in enumerate(cuts, start=1):
+        if not tissue and isinstance(item, dict) and "body" not in item:
+            raise SceneError(
+                f"{source} cuts[{i}]: a cut without body = '...' dissects the connective "
+                "tissue, and the scene has none; name the organ it cuts (body = 'liver'), or "
+                "add a [tissue] table (material, thickness, spacing)"
+            )
     for i, item in enumerate(cuts, start=1):
         _cut(sim, item, f"{source} cuts[{i}]")
     tearing = _table(data, "tearing", source)
@@ -455,15 +458,37 @@ def _cut(sim, item: dict, where: str) -> None:
     if not end > start:
         raise SceneError(f"{where}: end ({end:g} s) must be after start ({start:g} s)")
     options = {}
-    if "kerf" in item:
-        options["kerf"] = _number(item["kerf"], f"{where} kerf", "a width > 0 (m)")
     name = item.get("name", "cut")
     if not (isinstance(name, str) and name):
         raise SceneError(f"{where}: name must be a non-empty string, e.g. name = 'cut'")
-    if any(c.name == name for c in sim.tissue.cuts):
+    taken = [c.name for c in sim.organ_cuts] + ([] if sim.tissue is None else
+                                                [c.name for c in sim.tissue.cuts])  # fmt: skip
+    if name in taken:
         raise SceneError(
             f"{where}: a cut named {name!r} exists already; give each [[cuts]] table its own "
             f"name = '...'"
         )
+    if "body" in item:  # a blade cutting an organ (bodies/organ_cut.py)
+        body = item["body"]
+        if not isinstance(body, str) or body not in sim.bodies:
+            raise SceneError(
+                f"{where} body: {short(body)} is not a body of this scene; bodies: "
+                f"{', '.join(sim.bodies)}"
+            )
+        if "kerf" in item:
+            raise SceneError(f"{where}: kerf is for the tissue's cuts; an organ's cut has none")
+        if len(blade) != 2:
+            raise SceneError(
+                f"{where}: an organ's blade is a straight edge of 2 points, got {len(blade)}"
+            )
+        options = {"body": body}
+        if "toughness" in item:
+            options["toughness"] = _number(
+                item["toughness"], f"{where} toughness", "an energy per area >= 0 (J/m^2)", False
+            )
+    elif "toughness" in item:
+        raise SceneError(f"{where}: toughness is for a cut of an organ (body = '...')")
+    elif "kerf" in item:
+        options["kerf"] = _number(item["kerf"], f"{where} kerf", "a width > 0 (m)")
     with _context(where):
         sim.add_cut(polyline, start, end, name=name, **options)
