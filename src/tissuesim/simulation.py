@@ -121,6 +121,7 @@ class Simulation(BodyCalls, SetupCalls, StepChecks, BodyResults):
         self._last_gradient: np.ndarray | None = None
         self._indentation = IndentationTracker()  # probes' touch points, across rebuilds
         self.organ_cuts: list = []  # blades cutting FEM bodies (bodies/organ_cut.py)
+        self.organ_tears: list = []  # FEM bodies that tear (bodies/organ_tear.py)
         if self.newton.linear_solver != "auto" and not self.explicit:
             make_linear_solver(self.newton.linear_solver, 1, 3)  # unavailable: fail now
         if mesh is not None:
@@ -444,7 +445,7 @@ class Simulation(BodyCalls, SetupCalls, StepChecks, BodyResults):
             extra["contact"] = self._contact_report(s.contact, self._state.x, extra["forces"])
         if self.tissue is not None:
             extra.update(self._tissue_step(t0))
-        if self.organ_cuts:
+        if self.organ_cuts or self.organ_tears:
             extra.update(self._organ_cut_step(t0, extra["forces"]))
         record = StepRecord.build(
             len(self.history) + 1,

@@ -259,8 +259,9 @@ class BodyCalls:
 
     def _organ_cut_step(self, t0: float, forces: dict) -> dict:
         """After a step t0 -> now: each blade cutting a FEM body cuts what it has swept
-        (bodies/organ_cut.py); its cutting force joins ``forces``. Returns the step's
-        {"cuts": {name: {"area_m2", "new_area_m2", "cells_cut", "pieces"}}}."""
+        (bodies/organ_cut.py), its cutting force joining ``forces``; each tearing body's crack
+        grows (bodies/organ_tear.py). Returns the step's {"cuts": {name: {"area_m2",
+        "new_area_m2", "cells_cut", "pieces"}}} (a tear as "body.tear")."""
         out = {}
         for blade in self.organ_cuts:
             cut = blade.swept(self.time)
@@ -275,6 +276,15 @@ class BodyCalls:
             else:
                 forces[blade.name] = [0.0, 0.0, 0.0]
             out[blade.name] = report
+        for tear in self.organ_tears:
+            b, c, _ = self.body_state(tear.body)
+            crack = tear.grow(b, c)
+            report = {"area_m2": 0.0, "new_area_m2": 0.0, "cells_cut": 0}
+            if crack is not None:
+                done = self.cut_body(crack, body=tear.body, name=tear.name)
+                report = {"area_m2": done["area_m2"], "cells_cut": done["cells_cut"],
+                          "pieces": done["pieces"]}  # fmt: skip
+            out[f"{tear.body}.{tear.name}"] = report
         return {"cuts": out}
 
     def remove_body(self, name: str) -> None:

@@ -420,11 +420,39 @@ class SetupCalls:
             return tool
         return self._tissue("add_cut").add_cut(blade, start, end, kerf=kerf, name=name)
 
-    def set_tearing(self, threshold: float) -> None:
-        """Let the connective tissue tear (``add_tissue`` first): after each step, tissue
-        points whose largest principal Green strain exceeds ``threshold`` (dimensionless,
-        e.g. 0.5) are removed."""
-        self._tissue("set_tearing").set_tearing(threshold)
+    def set_tearing(
+        self,
+        threshold: float | None = None,
+        *,
+        body: str | None = None,
+        stress: float | None = None,
+        stretch: float | None = None,
+    ) -> None:
+        """Let tissue tear. Without ``body``: the connective tissue (``add_tissue`` first);
+        after each step, tissue points whose largest principal Green strain exceeds
+        ``threshold`` (dimensionless, e.g. 0.5) are removed. With ``body`` (a FEM body): it
+        tears where its largest principal Cauchy stress exceeds ``stress`` (Pa, its strength)
+        or its largest principal stretch exceeds ``stretch``: a crack normal to that stress
+        grows through the elements over the threshold, cut like a blade's cut
+        (``bodies/organ_tear.py``); reported as the cut ``tear`` in ``extra["cuts"]``."""
+        if body is None:
+            if threshold is None or stress is not None or stretch is not None:
+                raise InputError(
+                    "set_tearing: the connective tissue tears at a strain threshold "
+                    "(set_tearing(0.5)); stress= and stretch= are for a body (body='...')"
+                )
+            self._tissue("set_tearing").set_tearing(threshold)
+            return
+        from tissuesim.bodies.organ_tear import BodyTearing
+
+        b = self.body(body, ("fem",))
+        if threshold is not None:
+            raise InputError(
+                f"set_tearing: body {b.name!r} tears at a stress (stress=, Pa) or a stretch "
+                "(stretch=), not at a strain threshold"
+            )
+        self.organ_tears = [t for t in self.organ_tears if t.body != b.name]
+        self.organ_tears.append(BodyTearing(b.name, stress, stretch))
 
 
 def _median_boundary_edge(mesh: Mesh) -> float:

@@ -295,7 +295,8 @@ class FemBody:
     def apply_cut(self, cut, carry: np.ndarray, original, density: np.ndarray) -> None:
         """Take the mesh of a virtual-node cut (``VirtualNodeMesh`` of the body's ``original``
         mesh, whose cells had ``density``): a new model on it (the copies' densities their
-        parents', the same loads), every support and grasper on all copies of its vertices;
+        parents', the same loads), every support and grasper on all copies of its vertices
+        that lie in material (not on virtual nodes);
         ``carry`` (new n_points,) the current node each new one continues, kept as
         ``pending_origin`` for the simulation (positions and velocities)."""
         old = self.model
@@ -310,8 +311,10 @@ class FemBody:
         )
         model.loads = list(old.loads)  # nodal loads and tractions keep each node's first copy
 
+        material = cut.material_nodes  # a virtual node is held by nothing
+
         def copies(vertices: np.ndarray) -> np.ndarray:
-            return np.flatnonzero(np.isin(carry, vertices))
+            return np.flatnonzero(np.isin(carry, vertices) & material)
 
         self.conditions = [
             (name, DirichletCondition(copies(c.vertices), c.displacement, c.components, c.name))

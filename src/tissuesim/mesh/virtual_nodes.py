@@ -98,6 +98,17 @@ class VirtualNodeMesh:
     level: np.ndarray | None = None
 
     @property
+    def material_nodes(self) -> np.ndarray:
+        """(p,) whether each point lies in the material of a cell that uses it (False for a
+        virtual node only: a support or a grasper there would hold empty space)."""
+        inside = np.ones(self.cells.shape, dtype=bool)
+        if self.level is not None:
+            inside = self.level >= 0.0
+        out = np.zeros(len(self.points), dtype=bool)
+        out[self.cells[inside]] = True
+        return out
+
+    @property
     def n_pieces(self) -> int:
         """Connected pieces of material (cells joined through shared points)."""
         return _components(self.cells, len(self.points))

@@ -27,7 +27,8 @@ argument of the Python API of ``tissuesim.coupling.simulation.CoupledSimulation`
                    [["x(t)", "y(t)", "z(t)"], ...], each coordinate a number or an expression
                    of t; with body = "organ" the blade (a straight edge of 2 points) cuts
                    that organ, with its toughness (J/m^2, optional)
-    [tearing]      set_tearing(threshold)
+    [tearing]      set_tearing(threshold): the tissue; with body = "organ" and stress (Pa) or
+                   stretch, that organ tears
     [run]          run(steps, every, render), as for every scene
 
 Vertex selectors (fix, graspers' vertices) pick vertices of one organ's rest mesh: the
@@ -101,7 +102,7 @@ COUPLED_SCENE_KEYS: dict[str, Any] = {
     "attachments": set(ATTACHMENT_KEYS),
     "tissue": set(TISSUE_KEYS),
     "cuts": set(CUT_KEYS),
-    "tearing": {"threshold"},
+    "tearing": {"threshold", "body", "stress", "stretch"},
     "run": set(RUN_KEYS),
     "contact": set(CONTACT_KEYS),
     "obstacles": set(OBSTACLE_KEYS),
@@ -202,10 +203,32 @@ def build_bodies_scene(data: dict, base_dir: Path, source: str, name: str) -> Sc
     if tearing:
         where = f"{source} [tearing]"
         _unknown(tearing, COUPLED_SCENE_KEYS["tearing"], where)
+        if "body" in tearing:  # an organ tears (bodies/organ_tear.py)
+            body = tearing["body"]
+            if not isinstance(body, str) or body not in sim.bodies:
+                raise SceneError(
+                    f"{where} body: {short(body)} is not a body of this scene; bodies: "
+                    f"{', '.join(sim.bodies)}"
+                )
+            if "threshold" in tearing:
+                raise SceneError(
+                    f"{where}: a body tears at stress = ... (Pa) or stretch = ..., not at a "
+                    "strain threshold (that is the connective tissue's)"
+                )
+            options = {
+                key: _number(tearing[key], f"{where} {key}", want)
+                for key, want in (("stress", "a stress > 0 (Pa)"), ("stretch", "a stretch > 1"))
+                if key in tearing
+            }
+            with _context(where):
+                sim.set_tearing(body=body, **options)
+            return Scene(sim, name, source, _run_table(data, source))
+        if "stress" in tearing or "stretch" in tearing:
+            raise SceneError(f"{where}: stress and stretch are for a body that tears (body = ...)")
         if not tissue:
             raise SceneError(
                 f"{where}: tearing removes overstretched connective tissue, and the scene has "
-                f"none; add a [tissue] table or drop [tearing]"
+                f"none; add a [tissue] table, or name the body that tears (body = '...', stress)"
             )
         threshold = _required(tearing, "threshold", where)
         _number(threshold, f"{where} threshold", "a strain > 0 (largest principal Green strain)")

@@ -1,0 +1,85 @@
+"""A FEM body that tears (bodies/organ_tear.py): a strip pulled until it tears parts at the load
+its strength predicts (within one load increment) and carries nothing after; the crack is
+normal to the pull, through the whole section, and no gram is lost."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scipy.optimize import brentq
+
+import tissuesim as ts
+from tissuesim.errors import InputError
+
+E, NU, STRENGTH = 1e4, 0.3, 3000.0  # Pa
+L, W, H = 0.1, 0.02, 0.01
+STEP = 0.0005  # m of pull per step
+
+
+def strip(divisions: int) -> ts.Simulation:
+    """Pulled along x with rollers at both ends (free to narrow): a uniform uniaxial stress."""
+    mesh = ts.box((0, 0, 0), (L, W, H), (divisions, max(divisions // 5, 2), 2))
+    material = ts.make_material("neo_hookean", youngs_modulus=E, poisson_ratio=NU)
+    sim = ts.Simulation(mesh, material, density=1000.0, integrator="quasistatic", time_step=1.0)
+    P = mesh.points
+    sim.add_dirichlet(np.flatnonzero(P[:, 0] < 1e-9), None, (0,), name="left")
+    pull = lambda X, t: np.column_stack([STEP * t + 0 * X[:, 0], 0 * X[:, 0], 0 * X[:, 0]])  # noqa: E731
+    sim.add_dirichlet(np.flatnonzero(P[:, 0] > L - 1e-9), pull, (0,), name="right")
+    for x0, name in ((0.0, "a"), (L, "b")):  # no rigid motion of either piece
+        end = np.abs(P[:, 0] - x0) < 1e-9
+        sim.add_dirichlet(np.flatnonzero(end & (P[:, 1] < 1e-9) & (P[:, 2] < 1e-9)), None,
+                          (1, 2), name=f"pin{name}")  # fmt: skip
+        sim.add_dirichlet(np.flatnonzero(end & (P[:, 1] > W - 1e-9) & (P[:, 2] < 1e-9)), None,
+                          (2,), name=f"pinz{name}")  # fmt: skip
+    return sim
+
+
+def predicted_force() -> float:
+    """The pull at which the uniaxial Cauchy stress of the compressible neo-Hookean law reaches
+    the strength: lateral stretch l2 from P_22 = mu l2 + (lam ln J - mu) / l2 = 0, J = l1 l2^2,
+    sigma_11 = P_11 l1 / J, P_11 = mu l1 + (lam ln J - mu) / l1; the force is P_11 W H."""
+    mu, lam = E / (2 * (1 + NU)), E * NU / ((1 + NU) * (1 - 2 * NU))
+
+    def lateral(l1):
+        return brentq(lambda l2: mu * l2**2 + lam * np.log(l1 * l2**2) - mu, 0.3, 1.0)
+
+    def nominal(l1):
+        J = l1 * lateral(l1) ** 2
+        return mu * l1 + (lam * np.log(J) - mu) / l1
+
+    l1 = brentq(lambda l1: nominal(l1) * l1 / (l1 * lateral(l1) ** 2) - STRENGTH, 1.0, 2.0)
+    return nominal(l1) * W * H
+
+
+@pytest.mark.parametrize("divisions", [10, 20])
+def test_a_pulled_strip_tears_at_its_strength_and_then_carries_nothing(divisions):
+    sim = strip(divisions)
+    sim.set_tearing(body="body", stress=STRENGTH)
+    mass = sim.model.mass.lumped.sum()
+    forces, torn = [], None
+    for k in range(80):
+        record = sim.step()
+        forces.append(record.extra["forces"]["right"][0])
+        tear = record.extra["cuts"]["body.tear"]
+        if tear.get("pieces", 1) == 2:
+            torn = k
+            break
+    assert torn is not None
+    F = predicted_force()
+    assert forces[torn - 1] < F <= forces[torn]  # within the step's load increment
+    assert tear["area_m2"] == pytest.approx(W * H, rel=1e-9)  # through the whole section
+    after = sim.step().extra["forces"]["right"][0]
+    assert abs(after) < 1e-6 * F  # parted: the pull carries nothing
+    assert sim.model.mass.lumped.sum() == pytest.approx(mass, rel=1e-12)
+    normal = sim.organ_tears[0].normal
+    assert abs(normal[0]) == pytest.approx(1.0, abs=1e-9)  # the crack is normal to the pull
+
+
+def test_tearing_refuses_what_it_cannot_mean():
+    sim = strip(10)
+    with pytest.raises(InputError, match="one of the two"):
+        sim.set_tearing(body="body", stress=1e3, stretch=1.2)
+    with pytest.raises(InputError, match="stretch must be > 1"):
+        sim.set_tearing(body="body", stretch=0.9)
+    with pytest.raises(InputError, match="not at a strain threshold"):
+        sim.set_tearing(0.5, body="body")
