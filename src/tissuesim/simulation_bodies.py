@@ -279,7 +279,8 @@ class BodyCalls:
         for tear in self.organ_tears:
             b, c, _ = self.body_state(tear.body)
             crack = tear.grow(b, c)
-            report = {"area_m2": 0.0, "new_area_m2": 0.0, "cells_cut": 0}
+            area = 0.0 if b.cut_state is None else b.cut_state.area(tear.name)
+            report = {"area_m2": area, "cells_cut": 0}
             if crack is not None:
                 done = self.cut_body(crack, body=tear.body, name=tear.name)
                 report = {"area_m2": done["area_m2"], "cells_cut": done["cells_cut"],

@@ -83,3 +83,20 @@ def test_tearing_refuses_what_it_cannot_mean():
         sim.set_tearing(body="body", stretch=0.9)
     with pytest.raises(InputError, match="not at a strain threshold"):
         sim.set_tearing(0.5, body="body")
+
+
+def test_the_shipped_strip_tears_at_its_held_end_and_the_grasper_force_drops_to_zero():
+    from tissuesim.cli import example_path
+    from tissuesim.scene.loader import load_scene
+
+    sim = load_scene(example_path("strip_tearing")).simulation
+    forces, pieces = [], []
+    for _ in range(64):
+        record = sim.step()
+        forces.append(record.extra["forces"]["grasper"][0])
+        pieces.append(record.extra["cuts"]["strip.tear"].get("pieces", 1))
+    peak = int(np.argmax(forces))
+    assert 0.4 < forces[peak] < 0.6 and 2 in pieces  # it tore
+    assert max(np.diff(forces[:peak])) > 0 and min(np.diff(forces[: peak + 1])) > 0  # rising
+    assert abs(forces[-1]) < 1e-6 * forces[peak]  # parted: nothing pulls back
+    assert sim.organ_tears[0].point[0] < 0.01  # where the clamp stiffens it: the held end

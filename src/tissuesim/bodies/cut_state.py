@@ -55,6 +55,12 @@ class CutState:
         first = np.unique(self.vn.parent, return_index=True)[1]
         return positions[self.vn.cells[first]]
 
+    def area(self, name: str) -> float:
+        """The rest area of the cut called ``name`` so far (0 before it has cut anything)."""
+        if self.vn is None or name not in self.names:
+            return 0.0
+        return float(self.areas(self.vn)[self.names.index(name)])
+
     def areas(self, vn: VirtualNodeMesh) -> np.ndarray:
         """The rest area (2D: length) of each cut's surface in ``vn`` (per cut index)."""
         plus = vn.side > 0

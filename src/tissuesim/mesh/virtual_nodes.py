@@ -324,6 +324,22 @@ def _face_parts(x3, cells, cuts, owner, node_d, parent, side, nodes, ca, cb) -> 
     return part
 
 
+def _facet_table(cells: np.ndarray):
+    """``mesh.boundary.facet_table`` of ``cells``, kept for the last mesh asked (a body cut step
+    after step asks for its original mesh's every time)."""
+    from tissuesim.mesh.boundary import facet_table
+
+    cached = _FACETS.get("last")
+    if cached is not None and cached[0].shape == cells.shape and np.array_equal(cached[0], cells):
+        return cached[1]
+    table = facet_table(cells)
+    _FACETS["last"] = (cells.copy(), table)
+    return table
+
+
+_FACETS: dict = {}
+
+
 def _node_groups(x3, x_cell, cells, cuts, owner, node_d, parent, side) -> np.ndarray:
     """The group (a label) of every node slot (copy, local node), (copies * (d+1),): slots of
     two copies sharing a face are joined when their material meets on it; a face the cut runs
@@ -332,11 +348,9 @@ def _node_groups(x3, x_cell, cells, cuts, owner, node_d, parent, side) -> np.nda
     from scipy.sparse import coo_matrix
     from scipy.sparse.csgraph import connected_components
 
-    from tissuesim.mesh.boundary import facet_table
-
     m, k = cells.shape
     copies = len(parent)
-    facets, _, inverse, counts = facet_table(cells)
+    facets, _, inverse, counts = _facet_table(cells)
     # the two (cell, local facet) entries of every interior facet
     by_facet = np.argsort(inverse, kind="stable")
     shared = counts[inverse[by_facet]] == 2
@@ -492,9 +506,12 @@ def virtual_node_cut(
     labels = _node_groups(x3, x_cell, cells, cuts, owner, node_d, parent, side)
     # a slot's node: the original node for its first group, a new (duplicate) node after
     slot_node = cells[parent].ravel()
-    pairs, first, group = np.unique(
-        np.column_stack([slot_node, labels]), axis=0, return_index=True, return_inverse=True
+    # unique (node, group) pairs by one int64 key (a row-wise unique sorts far slower)
+    span = int(labels.max(initial=0)) + 1
+    keys, first, group = np.unique(
+        slot_node.astype(np.int64) * span + labels, return_index=True, return_inverse=True
     )
+    pairs = np.column_stack([keys // span, keys % span])
     order = np.lexsort((first, pairs[:, 0]))  # by node, then by where the group first appears
     is_first = np.ones(len(pairs), dtype=bool)
     is_first[order[1:]] = pairs[order[1:], 0] != pairs[order[:-1], 0]
