@@ -195,3 +195,11 @@ def test_add_cut_on_a_body_refuses_a_blade_that_leaves_its_plane():
         )  # fmt: skip
     with pytest.raises(InputError, match="straight edge"):
         sim.add_cut(lambda t: np.zeros((2, 2)), 0.0, 0.5, body="body")
+
+
+def test_a_cut_along_mesh_faces_parts_the_body_without_copying_elements():
+    """The plane x = 0.5 of a 10 x 2 x 2 beam runs along element faces: no element is crossed,
+    but the nodes on it part (the cut of a body that only parts nodes is still a cut)."""
+    sim = cantilever()
+    report = sim.cut_body(through(0.5))
+    assert report["cells_cut"] == 0 and report["new_nodes"] == 9 and report["pieces"] == 2

@@ -96,8 +96,9 @@ def recut(state: CutState, cut: PlanarCut, name: str, positions: np.ndarray):
         state.original.points, state.original.cells, cuts, current=x_cell, prior=state.prior()
     )
     before = 0 if state.vn is None else int(np.count_nonzero(state.vn.side))
-    if int(np.count_nonzero(vn.side)) == before:
-        return None
+    points = state.original.n_points if state.vn is None else len(state.vn.points)
+    if int(np.count_nonzero(vn.side)) == before and len(vn.points) == points:
+        return None  # no new element cut, no node parted (a cut along faces parts nodes only)
     carry = _carry(state.vn, vn)
     state.vn, state.cuts = vn, cuts
     if name not in state.names:
