@@ -100,3 +100,27 @@ def test_the_shipped_strip_tears_at_its_held_end_and_the_grasper_force_drops_to_
     assert max(np.diff(forces[:peak])) > 0 and min(np.diff(forces[: peak + 1])) > 0  # rising
     assert abs(forces[-1]) < 1e-6 * forces[peak]  # parted: nothing pulls back
     assert sim.organ_tears[0].point[0] < 0.01  # where the clamp stiffens it: the held end
+
+
+@pytest.mark.parametrize(
+    ("table", "message"),
+    [
+        ({"body": "liver", "stress": 1e3}, "'liver' is not a body of this scene"),
+        ({"body": "strip", "threshold": 0.5}, "not at a strain threshold"),
+        ({"body": "strip", "stress": -1.0}, "must be a stress > 0"),
+        ({"body": "strip"}, "one of the two"),
+        ({"stress": 1e3}, "for a body that tears"),
+    ],
+)
+def test_scene_tearing_of_a_body_errors_name_the_key(table, message):
+    import tomllib
+
+    from tissuesim.cli import example_path
+    from tissuesim.errors import SceneError
+    from tissuesim.scene.loader import build_scene
+
+    data = tomllib.loads(example_path("strip_tearing").read_text())
+    data["tearing"] = table
+    with pytest.raises(SceneError, match=message) as error:
+        build_scene(data)
+    assert "[tearing]" in str(error.value) and "\n" not in str(error.value)

@@ -204,12 +204,7 @@ def build_bodies_scene(data: dict, base_dir: Path, source: str, name: str) -> Sc
         where = f"{source} [tearing]"
         _unknown(tearing, COUPLED_SCENE_KEYS["tearing"], where)
         if "body" in tearing:  # an organ tears (bodies/organ_tear.py)
-            body = tearing["body"]
-            if not isinstance(body, str) or body not in sim.bodies:
-                raise SceneError(
-                    f"{where} body: {short(body)} is not a body of this scene; bodies: "
-                    f"{', '.join(sim.bodies)}"
-                )
+            body = _body_name(sim, tearing["body"], where)
             if "threshold" in tearing:
                 raise SceneError(
                     f"{where}: a body tears at stress = ... (Pa) or stretch = ..., not at a "
@@ -238,6 +233,16 @@ def build_bodies_scene(data: dict, base_dir: Path, source: str, name: str) -> Sc
 
 
 # -- values -------------------------------------------------------------------------------------
+
+
+def _body_name(sim, value, where: str) -> str:
+    """``value`` as the name of one of the scene's bodies (``where``'s body key)."""
+    if not isinstance(value, str) or value not in sim.bodies:
+        raise SceneError(
+            f"{where} body: {short(value)} is not a body of this scene; bodies: "
+            f"{', '.join(sim.bodies)}"
+        )
+    return value
 
 
 def _number(value, where: str, want: str, positive: bool = True) -> float:
@@ -492,12 +497,7 @@ def _cut(sim, item: dict, where: str) -> None:
             f"name = '...'"
         )
     if "body" in item:  # a blade cutting an organ (bodies/organ_cut.py)
-        body = item["body"]
-        if not isinstance(body, str) or body not in sim.bodies:
-            raise SceneError(
-                f"{where} body: {short(body)} is not a body of this scene; bodies: "
-                f"{', '.join(sim.bodies)}"
-            )
+        body = _body_name(sim, item["body"], where)
         if "kerf" in item:
             raise SceneError(f"{where}: kerf is for the tissue's cuts; an organ's cut has none")
         if len(blade) != 2:
