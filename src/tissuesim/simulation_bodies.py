@@ -219,8 +219,8 @@ class BodyCalls:
         b = self.body(body, ("fem",))
         if b.mesh.order != 1 or not b.mesh.simplicial:
             raise InputError(
-                f"cut_body: body {b.name!r} has {'quadratic' if b.mesh.order != 1 else 'Q1'} "
-                "cells; cuts apply to P1 triangles and tetrahedra"
+                f"cut_body: body {b.name!r} has {b.mesh.cell_type} cells; cuts apply to P1 "
+                "triangles and tetrahedra"
             )
         if self.contact is not None and b.dim != 3:
             raise InputError(
