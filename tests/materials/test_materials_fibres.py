@@ -244,8 +244,10 @@ def test_scenes_take_fibre_laws_with_directions_per_element():
     from tissuesim.scene.loader import build_scene
 
     page = (Path(__file__).resolve().parents[2] / "docs/guide/materials.md").read_text()
-    shown = [b for b in page.split("```toml\n")[1:] if "holzapfel_gasser_ogden" in b]
-    hgo = tomllib.loads(shown[0].split("```")[0])["material"]
+    blocks = [b.split("```")[0] for b in page.split("```toml\n")[1:]]
+    shown = [b for b in blocks if "holzapfel_gasser_ogden" in b]  # the block, not the page after
+    hgo = tomllib.loads(shown[0])["material"]
+    assert hgo["model"] == "holzapfel_gasser_ogden"
     base = {
         "mesh": {"generator": "box", "lower": [0, 0, 0], "upper": [1, 0.4, 0.4],
                  "divisions": [3, 1, 1]},
