@@ -314,14 +314,11 @@ def _assemble(n_points: int, nodes: np.ndarray, weights: np.ndarray, count: np.n
             inside.sort(reverse=bool(wa > wb))
             ring.extend(j for _, j in inside)
         # the centroid of the polygon's corners, a new point
-        W_poly = np.zeros(n_points)
-        for a in corner[poly, :n]:
-            W_poly[p_lo[a]] += (1.0 - p_w[a]) / n
-            W_poly[p_hi[a]] += p_w[a] / n
-        nz = np.flatnonzero(W_poly)
-        rows.append(np.full(nz.size, extra))
-        cols.append(nz)
-        vals.append(W_poly[nz])
+        # (its corners' node weights, averaged; the sparse sum adds repeated nodes)
+        own = corner[poly, :n]
+        rows.append(np.full(2 * n, extra))
+        cols.append(np.concatenate([p_lo[own], p_hi[own]]))
+        vals.append(np.concatenate([1.0 - p_w[own], p_w[own]]) / n)
         m = len(ring)
         tris.append(np.column_stack([np.full(m, extra), ring, np.roll(ring, -1)]))
         extra += 1
