@@ -413,6 +413,11 @@ class SetupCalls:
             from tissuesim.bodies.organ_cut import OrganCut
 
             b = self.body(body, ("fem",))
+            if kerf is not None:
+                raise InputError(
+                    f"add_cut: kerf is for cuts of the connective tissue; a cut of body "
+                    f"{b.name!r} follows the blade's plane and removes nothing: leave kerf out"
+                )
             if any(c.name == name for c in self.organ_cuts) or name in self.bodies:
                 raise InputError(f"add_cut: the name {name!r} is taken; give the cut its own")
             tool = OrganCut(blade, float(start), float(end), b.name, name, float(toughness))

@@ -195,6 +195,8 @@ def test_add_cut_on_a_body_refuses_a_blade_that_leaves_its_plane():
         )  # fmt: skip
     with pytest.raises(InputError, match="straight edge"):
         sim.add_cut(lambda t: np.zeros((2, 2)), 0.0, 0.5, body="body")
+    with pytest.raises(InputError, match="leave kerf out"):  # not silently ignored
+        sim.add_cut(lambda t: np.zeros((2, 3)), 0.0, 0.5, body="body", kerf=0.001)
 
 
 def test_a_cut_along_mesh_faces_parts_the_body_without_copying_elements():

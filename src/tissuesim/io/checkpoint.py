@@ -20,8 +20,8 @@ in ``checkpoint_history.jsonl``, appended (one JSON line per step) and fsynced b
 ``.npz`` that counts its lines is replaced: a kill at any moment leaves a checkpoint consistent
 with itself, and with frames up to those it lists (later frames are dropped on resume).
 
-Not supported: a tissue (tearing and cuts change the model's topology, which a checkpoint does
-not carry); ``refuse_unsupported`` says so in one line.
+Not supported: a tissue, and a body that is cut or tears (cuts and tearing change the model's
+topology, which a checkpoint does not carry); ``refuse_unsupported`` says so in one line.
 """
 
 from __future__ import annotations
@@ -44,6 +44,7 @@ __all__ = [
     "HISTORY",
     "fingerprint",
     "refuse_unsupported",
+    "unsupported",
     "save_simulation",
     "load_simulation",
     "RunCheckpoint",
@@ -55,13 +56,25 @@ FORMAT = 1
 _FIX = "run without --resume to start afresh, or resume with the original scene"
 
 
-def refuse_unsupported(sim) -> None:
-    """InputError for a simulation whose state a checkpoint cannot carry (a tissue)."""
+def unsupported(sim) -> str | None:
+    """What of ``sim`` a checkpoint cannot carry, or None: a tissue (its tearing and cuts), a
+    blade or tearing of a body, a body cut already (each changes the model's topology, which a
+    checkpoint does not carry)."""
     if sim.tissue is not None:
+        return "a tissue (its tearing and cuts change the model's topology"
+    cut = [b.name for b in sim.bodies.values() if getattr(b, "cut_state", None) is not None]
+    if sim.organ_cuts or sim.organ_tears or cut:
+        return "a body that is cut or tears (that changes the model's topology"
+    return None
+
+
+def refuse_unsupported(sim) -> None:
+    """InputError for a simulation whose state a checkpoint cannot carry (``unsupported``)."""
+    what = unsupported(sim)
+    if what is not None:
         raise InputError(
-            "resume and Simulation.save/load do not support a tissue (its tearing and cuts change "
-            "the model's topology, which a checkpoint does not carry); rerun the scene from the "
-            "start"
+            f"resume and Simulation.save/load do not support {what}, which a checkpoint does "
+            "not carry); rerun the scene from the start"
         )
 
 
@@ -458,7 +471,7 @@ class RunCheckpoint:
         """Append the new history lines (fsynced), then replace checkpoint.npz atomically."""
         from tissuesim._version import __version__
 
-        if sim.tissue is not None:
+        if unsupported(sim) is not None:
             return  # not resumable (refuse_unsupported): no checkpoint
         if self._fingerprint is None:
             self._fingerprint = fingerprint(sim, self.scene)

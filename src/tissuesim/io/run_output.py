@@ -30,7 +30,7 @@ import numpy as np
 from tissuesim.errors import InputError, TissueSimError
 from tissuesim.io.atomic import write_json_atomic
 from tissuesim.io.body_series import series_for
-from tissuesim.io.checkpoint import CHECKPOINT, HISTORY, RunCheckpoint, restore
+from tissuesim.io.checkpoint import CHECKPOINT, HISTORY, RunCheckpoint, restore, unsupported
 from tissuesim.io.interrupts import deferred_interrupts, interrupts_as_keyboard_interrupt
 from tissuesim.io.manifest import MANIFEST, Manifest, prepare_directory
 
@@ -210,7 +210,7 @@ class RunOutput:
 
     def _write_checkpoint(self, steps: int) -> None:
         """After a frame: the checkpoint of the state it shows (io/checkpoint.py)."""
-        if self.checkpoint is None or self.sim.tissue is not None:
+        if self.checkpoint is None or unsupported(self.sim) is not None:
             return
         self.manifest.add(file=CHECKPOINT)  # listed before it exists: the next run removes it
         self.manifest.add(file=HISTORY)
