@@ -148,15 +148,19 @@ def of_time(value, d: int, where: str, what: str = "this value"):
     return at
 
 
-def _material(data: dict, source: str, where: str | None = None):
+def _material(data: dict, source: str, where: str | None = None, mesh=None):
     """[material]: make_material(model, **parameters); shared by mesh and frame scenes, and by
-    the inline ``material = {...}`` tables of coupled scenes (``where`` names those)."""
+    the inline ``material = {...}`` tables of coupled scenes (``where`` names those). A FEM
+    body passes its ``mesh``, on which fibre directions given as cell data or expressions are
+    evaluated (``scene/fibre_fields.py``)."""
     from tissuesim.materials import make_material
+    from tissuesim.scene.fibre_fields import resolve_directions
 
     where = where or f"{source} [material]"
     material_table = dict(_table(data, "material", source))
     if "model" not in material_table:
         raise SceneError(f"{where}: missing key 'model' (e.g. 'course_neo_hookean')")
+    material_table = resolve_directions(material_table, mesh, where)
     with _context(where):
         return make_material(material_table.pop("model"), **material_table)
 

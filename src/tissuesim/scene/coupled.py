@@ -268,11 +268,11 @@ def _vertices(mesh, organ: str, selector, where: str, key: str) -> np.ndarray:
     return _select(mesh, "vertices", selector, where, key)
 
 
-def _inline_material(item: dict, where: str):
+def _inline_material(item: dict, where: str, mesh=None):
     value = _required(item, "material", where)
     if not isinstance(value, dict):
         raise SceneError(f"{where}: material must be a table, e.g. {MATERIAL_EXAMPLE}")
-    return _material(item, "", f"{where} material")
+    return _material(item, "", f"{where} material", mesh)
 
 
 def _organ(sim, item: dict, base_dir: Path, where: str) -> None:
@@ -287,7 +287,7 @@ def _organ(sim, item: dict, base_dir: Path, where: str) -> None:
         mesh = _mesh(item["mesh"], base_dir, f"{where}.mesh")
     if "material" not in item:
         raise SceneError(f"{where}: missing key 'material', e.g. {MATERIAL_EXAMPLE}")
-    material = _inline_material(item, where)
+    material = _inline_material(item, where, mesh)
     options = {}
     if "density" in item:
         options["density"] = _number(item["density"], f"{where} density", "a number > 0 (kg/m^3)")

@@ -72,7 +72,7 @@ def add_fem_body(
     with _context(label("mesh")):
         mesh = _mesh(_table(item, "mesh", source), base_dir, label("mesh"))
     d = mesh.dim
-    material = _material(item, source, label("material"))
+    material = _material(item, source, label("material"), mesh)
     options = {k: item[k] for k in FEM_BODY_OPTIONS if k in item}
     with _context(options_where or label()):
         sim.add_body(name, mesh, material, **options)
