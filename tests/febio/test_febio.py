@@ -12,7 +12,7 @@ import pytest
 from scipy.optimize import brentq
 
 from tissuesim.cli import main
-from tissuesim.febio import FebError, convert_febio, load_febio, read_feb
+from tissuesim.febio import FebError, convert_febio, febio_scene, load_febio, read_feb
 from tissuesim.febio.curves import curve_expression
 from tissuesim.febio.model import Curve
 from tissuesim.scene.expressions import compile_expression
@@ -124,7 +124,7 @@ def test_cli_runs_a_feb_and_converts_it(tmp_path, capsys):
 
 REFUSALS = {
     "hex20": ('<Elements type="hex20" name="p">', "element type 'hex20'"),
-    "material": ('<material id="1" name="m" type="Holzapfel-Gasser-Ogden">', "material type"),
+    "material": ('<material id="1" name="m" type="rigid body">', "material type 'rigid body'"),
     "contact": ('<contact type="tied-elastic" surface_pair="p">', "contact type 'tied-elastic'"),
     "element": ("<Rigid>", "<Rigid>: this section is not supported"),
     "follower": ("<linear>0</linear>", "deformed surface"),
@@ -163,3 +163,68 @@ def test_refusals_are_one_line_naming_the_element_and_its_line(case, tmp_path):
     said = str(info.value)
     assert "\n" not in said and message in said
     assert f"bad.feb:{line} <{tag}>" in said
+
+
+def test_viscoelastic_relaxation_follows_febios_prony_series():
+    """A unit cube (E = 1000, v = 0: no lateral strain) stretched to 1.2 in the first step and
+    held: FEBio's S = g0 Se + sum g_i H_i with H_i = e_i H_i + gamma_i (Se - Se_prev) gives
+    the pull lambda mu (1 - lambda^-2) (g0 + sum g_i gamma_i e_i^(n-1)) after step n."""
+    scene = load_febio(MODELS / "viscoelastic_relaxation.feb")
+    sim = scene.simulation
+    stretch, mu, h = 1.2, 500.0, 0.1
+    g, tau = np.array([0.5, 0.25]), np.array([0.2, 1.5])
+    e = np.exp(-h / tau)
+    gamma = (1 - e) / (h / tau)
+    for n in range(1, 6):
+        force = abs(sim.step().extra["forces"]["pull"][0])
+        expected = stretch * mu * (1 - stretch**-2) * (1.0 + np.sum(g * gamma * e ** (n - 1)))
+        assert force == pytest.approx(expected, rel=1e-6)
+    assert np.allclose(sim.positions[:, 1:], sim.body("body").mesh.points[:, 1:], atol=1e-9)
+
+
+def test_hgo_uniaxial_stretch_is_the_laws_homogeneous_state():
+    """Holzapfel-Gasser-Ogden with mat_axis a = x, d = y, gamma = 30: the cube stretched 1.15
+    along x deforms homogeneously with the law's lateral stresses zero (y and z contract
+    differently: the fibres lie in the x-y plane) and the pull equal to P_xx."""
+    from tissuesim.materials import HolzapfelGasserOgden
+
+    scene = load_febio(MODELS / "hgo_uniaxial.feb")
+    x = _run(scene, 3)
+    sim = scene.simulation
+    X = sim.body("body").mesh.points
+    stretch = np.array([np.polyfit(X[:, i], x[:, i], 1)[0] for i in range(3)])
+    law = HolzapfelGasserOgden(c=7640.0, k1=99660.0, k2=5.246, kappa=0.226, gamma=30.0, k=1e6)
+    P = law.evaluate(np.diag(stretch)[None], 1).stress[0]
+    force = abs(sim.step().extra["forces"]["pull"][0])  # held: the same state again
+    assert stretch[0] == pytest.approx(1.15)
+    assert abs(stretch[1] - stretch[2]) > 1e-3
+    assert np.allclose([P[1, 1], P[2, 2]], 0.0, atol=1e-6 * P[0, 0])
+    assert force == pytest.approx(P[0, 0], rel=1e-6)
+    matrix_only = HolzapfelGasserOgden(c=7640.0, k1=0.0, k2=5.246, kappa=0.226, k=1e6)
+    assert P[0, 0] > 1.5 * matrix_only.evaluate(np.diag(stretch)[None], 1).stress[0, 0, 0]
+
+
+def test_fibre_directions_from_mat_axis_fiber_and_element_data():
+    """trans iso Mooney-Rivlin's fiber (0,1,0) in the local axes of mat_axis type="local"
+    (nodes 1, 2, 4 of each element: e1 along n1 -> n2, e2 towards n4), replaced on two
+    elements by ElementData var="fiber"; the uncoupled viscoelastic wrapper's k adds to the
+    law's k (FEBio sums them)."""
+    model = read_feb(MODELS / "trans_iso_mesh_data.feb")
+    data, _ = febio_scene(model, "x")
+    elastic = data["material"]["elastic"]
+    assert data["material"]["model"] == "uncoupled_viscoelastic"
+    assert elastic["k"] == 50000.0
+    points = model.nodes
+    cells = model.parts["cube"][1]
+    fibres = np.array(elastic["fiber"])
+    for row, cell in enumerate(cells):
+        a = points[cell[1]] - points[cell[0]]
+        d = points[cell[3]] - points[cell[0]]
+        e3 = np.cross(a, d)
+        e2 = np.cross(e3, a)
+        expected = e2 / np.linalg.norm(e2)
+        if row == 1:
+            expected = np.array([0.0, 0.0, 1.0])
+        elif row == 4:
+            expected = np.array([0.0, 1.0, 1.0])
+        np.testing.assert_allclose(fibres[row], expected, atol=1e-12)

@@ -41,7 +41,7 @@ class FebModel:
     nodes: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
     #: name -> (cell type, (k, nv) node indices, FEBio element ids)
     parts: dict = field(default_factory=dict)
-    #: material name -> (model, parameters, density, FEBio type)
+    #: material name -> (model, parameters, density, FEBio type, Orientation or None)
     materials: dict = field(default_factory=dict)
     #: part name -> (material name, formulation or None)
     domains: dict = field(default_factory=dict)
@@ -56,6 +56,8 @@ class FebModel:
     body_loads: list = field(default_factory=list)  # Load (3,): force per unit mass
     contacts: list = field(default_factory=list)  # dicts: type, surfaces, friction, wall...
     curves: dict = field(default_factory=dict)
+    #: "mat_axis" / "fiber" -> {(part, row): (value, XML element)} from <MeshData>
+    element_data: dict = field(default_factory=dict)
     notes: list = field(default_factory=list)  # "file:line <tag>: what is not used"
     steps: int = 1
     _node_index: dict = field(default_factory=dict, repr=False)  # FEBio node id -> row

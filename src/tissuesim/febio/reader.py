@@ -8,32 +8,12 @@ from __future__ import annotations
 
 import os
 
+from tissuesim.febio.materials import MATERIAL_TYPES, UNCOUPLED, read_materials, read_mesh_data
 from tissuesim.febio.model import FebModel, Node, _floats, _ints, _unsupported
 from tissuesim.febio.xml import parse_feb
 
 __all__ = ["read_feb", "MATERIAL_TYPES", "UNCOUPLED"]
 
-#: FEBio material types tissuesim runs -> (model, FEBio parameter -> tissuesim keyword; None:
-#: the law takes FEBio's parameter names as they are)
-MATERIAL_TYPES = {
-    "neo-Hookean": ("neo_hookean", {"E": "youngs_modulus", "v": "poisson_ratio"}),
-    "isotropic elastic": ("stvk", {"E": "youngs_modulus", "v": "poisson_ratio"}),
-    **{
-        name: (name, None)
-        for name in (
-            "Mooney-Rivlin",
-            "coupled Mooney-Rivlin",
-            "Ogden",
-            "Ogden unconstrained",
-            "Yeoh",
-            "Veronda-Westmann",
-            "coupled Veronda-Westmann",
-            "Arruda-Boyce",
-        )
-    },
-}
-#: the uncoupled laws, which FEBio runs with its three-field (mean dilatation) hex8 / tet10
-UNCOUPLED = {"Mooney-Rivlin", "Ogden", "Yeoh", "Veronda-Westmann", "Arruda-Boyce"}
 #: Control children that tune FEBio's own solver or its output (notes)
 CONTROL_NOTES = {
     "solver", "time_stepper", "plot_level", "output_level", "plot_stride", "plot_range",
@@ -121,44 +101,6 @@ def _control(model: FebModel, node: Node) -> None:
             raise _unsupported(child, "this Control setting is not supported by tissuesim")
 
 
-def _material(model: FebModel, node: Node) -> None:
-    from tissuesim.errors import TissueSimError
-    from tissuesim.materials import make_material
-
-    for mat in node.children:
-        if mat.tag != "material":
-            raise _unsupported(mat, "expected <material>")
-        kind = mat.attrib.get("type", "")
-        if kind not in MATERIAL_TYPES:
-            raise mat.error(
-                f"material type {kind!r} is not supported by tissuesim; it runs "
-                f"{', '.join(repr(k) for k in MATERIAL_TYPES)}"
-            )
-        model_name, rename = MATERIAL_TYPES[kind]
-        params, density = {}, 1.0
-        for p in mat.children:
-            if p.children or "lc" in p.attrib or p.attrib.get("type") not in (None, "const"):
-                raise _unsupported(p, "a material parameter that is a field, a curve or a table")
-            if p.tag == "density":
-                density = float(_floats(p, 1)[0])
-                continue
-            if p.tag == "pressure_model":
-                params[p.tag] = int(p.text) if p.text.isdigit() else p.text
-                continue
-            key = p.tag if rename is None else rename.get(p.tag)
-            if key is None:
-                raise p.error(f"parameter {p.tag!r} of {kind!r}: it takes {sorted(rename)}")
-            params[key] = float(_floats(p, 1)[0])
-        try:
-            make_material(model_name, **params)
-        except TissueSimError as exc:
-            raise mat.error(f"material {kind!r}: {exc}") from None
-        name = mat.attrib.get("name") or mat.attrib.get("id", "")
-        model.materials[name] = (model_name, params, density, kind)
-        if "id" in mat.attrib:
-            model.materials.setdefault(f"#{mat.attrib['id']}", model.materials[name])
-
-
 from tissuesim.febio.condition_sections import SECTIONS as _CONDITION_SECTIONS  # noqa: E402
 from tissuesim.febio.mesh_sections import SECTIONS as _MESH_SECTIONS  # noqa: E402
 
@@ -170,7 +112,8 @@ SECTIONS = {
     "Module": _module,
     "Step": _step,
     "Control": _control,
-    "Material": _material,
+    "Material": read_materials,
+    "MeshData": read_mesh_data,
     **_MESH_SECTIONS,
     **_CONDITION_SECTIONS,
 }

@@ -11,6 +11,7 @@ from pathlib import Path
 import numpy as np
 
 from tissuesim.febio.curves import curve_expression
+from tissuesim.febio.materials import body_directions
 from tissuesim.febio.model import FebModel, Load
 from tissuesim.febio.reader import UNCOUPLED, read_feb
 from tissuesim.febio.toml import dumps
@@ -136,7 +137,8 @@ def febio_scene(model: FebModel, stem: str) -> tuple[dict, dict]:
         )
         file = f"{stem}.msh" if len(bodies) == 1 else f"{stem}.{name}.msh"
         meshes[file] = mesh
-        model_name, params, density, kind = model.materials[body["material"]]
+        spec = model.materials[body["material"]]
+        model_name, params, density, kind, _ = spec
         formulation = body["formulation"]
         if formulation is None:
             three_field = kind in UNCOUPLED and body["cell_type"] in ("hexahedron", "tetra10")
@@ -144,6 +146,18 @@ def febio_scene(model: FebModel, stem: str) -> tuple[dict, dict]:
         elif formulation == "mean_dilatation" and body["cell_type"] == "tetra":
             raise body["node"].error("three-field-solid on tet4: tissuesim's P1 mean dilatation "
                                      "is a vertex patch, not FEBio's element")  # fmt: skip
+        if model_name.endswith("viscoelastic") and formulation == "mean_dilatation":
+            raise body["node"].error(
+                f"{kind!r} on {body['cell_type']} runs FEBio's three-field element; tissuesim's "
+                "viscoelastic laws run the displacement form: give the SolidDomain "
+                'type="elastic-solid" (FEBio then runs that too)'
+            )
+        directions = body_directions(model, spec, body["parts"], model.nodes, body["cells"])
+        params = dict(params)
+        if "elastic" in params:
+            params["elastic"] = {**params["elastic"], **directions}
+        else:
+            params.update(directions)
         tables.update(
             mesh={"file": file},
             material={"model": model_name, **params},
