@@ -41,10 +41,19 @@ MODEL_BYTES_PER_CELL = {
     (3, 2): 40000,
     "quad": 6000,
     "hexahedron": 30000,
+    # quadratic ones, estimated the same way (3^d points of nv x d gradients, their scatter)
+    "quad8": 12000,
+    "quad9": 14000,
+    "hexahedron20": 90000,
+    "hexahedron27": 160000,
 }
 
 
 def _kinematics(mesh: Mesh):
+    if not mesh.simplicial and mesh.order == 2:
+        from tissuesim.kinematics.q2 import Q2Kinematics
+
+        return Q2Kinematics.from_mesh(mesh)
     if not mesh.simplicial:
         from tissuesim.kinematics.q1 import Q1Kinematics
 

@@ -120,10 +120,11 @@ class BodyCalls:
         if order is not None:
             if isinstance(order, bool) or order not in (1, 2):
                 raise InputError(f"order must be 1 or 2, not {validate.short(order)}")
-            if order == 2 and not mesh.simplicial:
+            if order == 2 and not mesh.simplicial and mesh.order == 1:
                 raise InputError(
                     f"add_body {name!r}: order 2 of {mesh.cell_type} cells is not available; "
-                    "give a tetrahedral / triangle mesh for order 2, or order 1"
+                    "give a tetrahedral / triangle mesh for order 2, a quadratic one (box / "
+                    "rectangle element = 'hex20', 'hex27', 'quad8', 'quad9'), or order 1"
                 )
             if order == 2 and mesh.order == 1:
                 from tissuesim.mesh.elevate import elevate_mesh

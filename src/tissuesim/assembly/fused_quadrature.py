@@ -1,5 +1,5 @@
-"""Fused assembly with Numba for elements of several quadrature points (P2, Q1 quadrilaterals
-and hexahedra).
+"""Fused assembly with Numba for elements of several quadrature points (P2, Q1 and quadratic
+quadrilaterals and hexahedra).
 
 The same sums as ``fused_p1.py`` (F, the law's point kernel, w G^T P, w G^T A G), but an
 element's nq points are summed into one local Hessian before it is scattered: a P2 tetrahedron
@@ -54,6 +54,34 @@ def _points_q4(law, mu, lam, x, cells, grads, weights, nq, order, scatter, gradi
 def _points_h8(law, mu, lam, x, cells, grads, weights, nq, order, scatter, gradient, hessian):
     return _points(
         3, 8, law, mu, lam, x, cells, grads, weights, nq, order, scatter, gradient, hessian
+    )
+
+
+@njit(cache=True)
+def _points_q8(law, mu, lam, x, cells, grads, weights, nq, order, scatter, gradient, hessian):
+    return _points(
+        2, 8, law, mu, lam, x, cells, grads, weights, nq, order, scatter, gradient, hessian
+    )
+
+
+@njit(cache=True)
+def _points_q9(law, mu, lam, x, cells, grads, weights, nq, order, scatter, gradient, hessian):
+    return _points(
+        2, 9, law, mu, lam, x, cells, grads, weights, nq, order, scatter, gradient, hessian
+    )
+
+
+@njit(cache=True)
+def _points_h20(law, mu, lam, x, cells, grads, weights, nq, order, scatter, gradient, hessian):
+    return _points(
+        3, 20, law, mu, lam, x, cells, grads, weights, nq, order, scatter, gradient, hessian
+    )
+
+
+@njit(cache=True)
+def _points_h27(law, mu, lam, x, cells, grads, weights, nq, order, scatter, gradient, hessian):
+    return _points(
+        3, 27, law, mu, lam, x, cells, grads, weights, nq, order, scatter, gradient, hessian
     )
 
 
@@ -125,6 +153,15 @@ def _points(d, nv, law, mu, lam, x, cells, grads, weights, nq, order, scatter, g
     return energy, -1
 
 
-#: (dimension, nodes per element) -> the compiled loop: P2 triangles and tetrahedra, Q1
-#: quadrilaterals and hexahedra
-_KERNELS = {(2, 6): _points_2d, (3, 10): _points_3d, (2, 4): _points_q4, (3, 8): _points_h8}
+#: (dimension, nodes per element) -> the compiled loop: P2 triangles and tetrahedra, Q1 and
+#: quadratic quadrilaterals and hexahedra
+_KERNELS = {
+    (2, 6): _points_2d,
+    (3, 10): _points_3d,
+    (2, 4): _points_q4,
+    (3, 8): _points_h8,
+    (2, 8): _points_q8,
+    (2, 9): _points_q9,
+    (3, 20): _points_h20,
+    (3, 27): _points_h27,
+}

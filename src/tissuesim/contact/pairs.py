@@ -49,7 +49,9 @@ class ContactPair:
 def contact_facets(name: str, mesh, surface) -> np.ndarray:
     """The boundary facets (k, d: triangles in 3D, edges in 2D) of body ``name`` that take part
     in contact: its whole boundary (``surface`` None), a facet set of its mesh by name, or a
-    (k, d) array of vertex indices; a hexahedral mesh's quad faces (k, 4) are split in two."""
+    (k, d) array of vertex indices; a hexahedral mesh's quad faces (k, 4) are split in two (a
+    quadratic one's into the 6 or 8 triangles of its split, a quad8 / quad9 mesh's edges into
+    2 segments)."""
     from tissuesim.mesh.boundary import boundary_facets
 
     if surface is None:
@@ -80,6 +82,14 @@ def contact_facets(name: str, mesh, surface) -> np.ndarray:
             )
     if len(tri) == 0:
         raise InputError(f"contact surface of {name!r} has no triangles")
+    if not mesh.simplicial and mesh.order == 2 and tri.shape[1] == mesh.facet_nodes:
+        # quadratic quadrilaterals / hexahedra: each facet as the simplices of the mesh's split
+        from tissuesim.mesh.tensor_quadratic import facet_simplices
+
+        try:
+            return facet_simplices(mesh, tri).astype(np.int64)
+        except InputError as exc:
+            raise InputError(f"contact surface of {name!r}: {exc}") from None
     if mesh.facet_nodes == 4 and tri.shape[1] == 4:  # quad faces of hexahedra: 2 triangles each
         from tissuesim.mesh.tensor import split_faces
 

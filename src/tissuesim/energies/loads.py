@@ -5,7 +5,8 @@ vertices of boundary facets and interpolated linearly, so (notes, eq. 6b)
     f^a = sum_b (int_facet N^a N^b) h^b,  int N^a N^b = A (1 + delta_ab) / (d (d + 1))
 for a facet of measure A with d vertices. Body forces b (force per unit rest volume) are
 integrated the same way over the elements with the unit-density consistent mass matrix.
-Quad faces of hexahedra interpolate h bilinearly (``quad_traction_nodal_forces``).
+Quad faces of hexahedra interpolate h bilinearly (``quad_traction_nodal_forces``), those of
+quadratic hexahedra with their quad8 / quad9 shape functions.
 """
 
 from __future__ import annotations
@@ -86,12 +87,20 @@ def quad_traction_nodal_forces(
     """Nodal forces (n, 3) of a traction on quad faces (k, 4) of hexahedra, given at the faces'
     nodes (k, 4, 3) and interpolated bilinearly: f^a = int N^a N^b dA h^b with
     dA = |dX/dxi_1 x dX/dxi_2| dxi, by 3 x 3 Gauss points (exact on a flat parallelogram, where
-    dA is constant and N^a N^b of degree 2 per variable)."""
+    dA is constant and N^a N^b of degree 2 per variable). Faces of quadratic hexahedra
+    (k, 8) / (k, 9) (``tensor_quadratic.local_facets`` order) interpolate it with the quad8 /
+    quad9 shape functions, by the same rule (N^a N^b of degree 4 per variable: still exact on
+    a flat parallelogram)."""
     from tissuesim.mesh.tensor import gauss_rule, shape_functions
 
     n = points.shape[0]
     xi, w = gauss_rule(2, 3)
-    N, dN = shape_functions(2, xi)  # (q, 4), (q, 4, 2)
+    if faces.shape[1] == 4:
+        N, dN = shape_functions(2, xi)  # (q, 4), (q, 4, 2)
+    else:
+        from tissuesim.mesh import tensor_quadratic as tq
+
+        N, dN = tq.shape_functions(tq.CELL_TYPES[2, faces.shape[1]], xi)
     T = np.einsum("kai,qaj->kqij", points[faces], dN)  # (k, q, 3, 2) tangents
     dA = np.linalg.norm(np.cross(T[..., 0], T[..., 1]), axis=-1)
     hq = np.einsum("qb,kbi->kqi", N, traction_at_nodes)
@@ -164,7 +173,9 @@ class Traction:
         X = mesh.points[facets]  # (k, nf, d) [facet, node, coord]
         h = np.asarray(self.traction(X.reshape(-1, X.shape[-1]), t), dtype=float)
         h = np.broadcast_to(h, (X.shape[0] * X.shape[1], X.shape[2])).reshape(X.shape)
-        if mesh.order == 2:
+        if mesh.order == 2 and mesh.dim == 3 and not mesh.simplicial:  # quad8 / quad9 faces
+            return quad_traction_nodal_forces(mesh.points, facets, h)
+        if mesh.order == 2:  # also the 3-node edges of quad8 / quad9 cells
             return quadratic_traction_nodal_forces(mesh.points, facets, h)
         if facets.shape[1] == 4 and mesh.dim == 3:  # quad faces of hexahedra
             return quad_traction_nodal_forces(mesh.points, facets, h)

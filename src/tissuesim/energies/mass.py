@@ -10,8 +10,11 @@ consistent row sums are not all positive (a 10-node tetrahedron's corners get -V
 lumped mass is HRZ's (Hinton, Rock & Zienkiewicz 1976): the consistent diagonal scaled to the
 element's mass, positive for every node; for P1 it equals the row sums. Q1 quadrilaterals and
 hexahedra integrate with 3 Gauss points per direction; their row sums are positive, so their
-lumped mass is the row sums. Gravity uses the consistent row sums (``row_sums``), which are
-exact for every element.
+lumped mass is the row sums. The quadratic ones (quad8, quad9, hexahedron20, hexahedron27)
+integrate with 4 per direction; a serendipity cell's row sums are negative at its corners
+(a hexahedron20's -V/32 each; a quad8's -A/12), so, as for P2, their lumped mass is HRZ's
+(the consistent diagonal scaled to the cell's mass: positive at every node). Gravity uses
+the consistent row sums (``row_sums``), which are exact for every element.
 
 Inertia energy of Backward Euler with x_pred = x_n + h v_n (Gast et al. 2015):
     E(x) = 1/(2 h^2) (x - x_pred)^T M (x - x_pred).
@@ -71,7 +74,7 @@ class MassMatrix:
             scalar = np.einsum("mq,qa,qb->mab", density[:, None] * w, N, N)
         row = scalar.sum(axis=2)  # (m, nv) consistent row sums
         diag = np.einsum("maa->ma", scalar)
-        if nv == d + 1 or not kinematics.mesh.simplicial:  # Q1 row sums are positive
+        if nv == d + 1 or nv == 2**d and not kinematics.mesh.simplicial:  # Q1: positive
             diagonal = row
         else:  # HRZ: positive, the same total
             diagonal = diag * (row.sum(axis=1) / diag.sum(axis=1))[:, None]
@@ -98,7 +101,13 @@ class MassMatrix:
 
 def _element_rule(mesh) -> tuple[np.ndarray, np.ndarray]:
     """N (q, nv) and weights (m, q) integrating N^a N^b exactly: a degree-4 rule for P2; for Q1
-    3 Gauss points per direction (N^a N^b det J is of degree 4 in each variable)."""
+    3 Gauss points per direction (N^a N^b det J is of degree 4 in each variable); for the
+    quadratic quadrilaterals and hexahedra 4 (degree 7: N^a N^b of degree 4 times det J of a
+    cell with straight edges, degree 2 in 3D)."""
+    if not mesh.simplicial and mesh.order == 2:
+        from tissuesim.kinematics.q2 import q2_shape_values
+
+        return q2_shape_values(mesh.points, mesh.cells, 4)
     if not mesh.simplicial:
         from tissuesim.kinematics.q1 import q1_shape_values
 

@@ -18,6 +18,8 @@ _KIND = {2: "triangles", 3: "tetrahedra"}
 #: with them): triangle6 (0 2 1 | 20 12 01), tetra10 (0 1 3 2 | 01 13 30 02 12 32)
 _REORIENT_LINEAR = {2: [0, 2, 1], 3: [0, 1, 3, 2]}
 _REORIENT = {2: [0, 2, 1, 5, 4, 3], 3: [0, 1, 3, 2, 4, 8, 7, 6, 5, 9]}
+#: nodes per quadrilateral / hexahedron: Q1, then quadratic (quad8, quad9; hexahedron20, 27)
+_TENSOR_WIDTHS = {2: (4, 8, 9), 3: (8, 20, 27)}
 
 
 def signed_volumes(points: np.ndarray, cells: np.ndarray) -> np.ndarray:
@@ -171,15 +173,16 @@ def validate_mesh(
         )
     c = _index_array(cells, source, "cells", f"(m, {d + 1})")
     nq = (d + 1) * (d + 2) // 2
-    if c.ndim != 2 or c.shape[1] not in (d + 1, nq, 2**d):
+    widths = _TENSOR_WIDTHS[d]
+    if c.ndim != 2 or c.shape[1] not in (d + 1, nq, *widths):
         raise MeshError(
             f"{source}: cells have shape {c.shape}; {d}D points need (m, {d + 1}) cells "
             f"({_KIND[d]}, one row of {d + 1} vertex indices per element), (m, {nq}) "
-            f"quadratic cells (corners, then midside nodes) or (m, {2**d}) "
-            f"{'quadrilaterals' if d == 2 else 'hexahedra'}"
+            f"quadratic cells (corners, then midside nodes) or (m, "
+            f"{' / '.join(map(str, widths))}) {'quadrilaterals' if d == 2 else 'hexahedra'}"
         )
     quadratic = c.shape[1] == nq
-    tensor = c.shape[1] == 2**d
+    tensor = c.shape[1] in widths
     m = c.shape[0]
     if m == 0:
         raise MeshError(f"{source}: the mesh has no cells; it needs at least one of the {_KIND[d]}")
@@ -203,10 +206,10 @@ def validate_mesh(
         )
 
     if tensor:
-        from tissuesim.mesh.tensor_checks import REORIENT, check_tensor_cells
+        from tissuesim.mesh.tensor_checks import check_tensor_cells, reorient_permutation
 
         flipped = check_tensor_cells(pts, c, source)
-        reorder, how = REORIENT[d], "mirroring their vertex order"
+        reorder, how = reorient_permutation(d, c.shape[1]), "mirroring their vertex order"
     else:
         flipped = _check_simplices(pts, c, source, d)
         reorder = _REORIENT[d] if quadratic else _REORIENT_LINEAR[d]
@@ -295,6 +298,10 @@ def _finish_checks(
 
         table = face_table(c, d)
         nf, per_cell = (4 if d == 3 else 2), 2 * d
+        if c.shape[1] != 2**d:
+            from tissuesim.mesh.tensor_quadratic import check_shared_nodes
+
+            check_shared_nodes(c, d, table, source)
     else:
         table = facet_table(c[:, : d + 1])
         nf, per_cell = d, d + 1

@@ -96,7 +96,10 @@ def rectangle(
     """Triangle mesh of the rectangle [lower, upper] with divisions (nx, ny) quads.
 
     element: "triangle" (the default) or "quad": the (nx, ny) Q1 quadrilaterals themselves
-    (counter-clockwise, VTK's node order; ``pattern`` does not apply, order must be 1).
+    (counter-clockwise, VTK's node order; ``pattern`` does not apply, order must be 1);
+    "quad8" / "quad9": quadratic quadrilaterals (serendipity / biquadratic, VTK's node order,
+    nodes at the midpoints; order is 2 whether given or not; point sets hold the midside
+    nodes on their sides, facet sets the edges by their corners).
 
     pattern: how each quad is split: "right" (diagonal bottom-left to top-right), "left" (the
     other diagonal), "alternate" (the two in a checkerboard, avoiding directional bias), "cross"
@@ -106,8 +109,27 @@ def rectangle(
     point sets then hold the midside nodes on their sides too).
     """
     lo, hi, (nx, ny) = _arguments("rectangle", lower, upper, divisions, 2)
-    if _element("rectangle", element, ("triangle", "quad")) == "quad":
+    element = _element("rectangle", element, ("triangle", "quad", "quad8", "quad9"))
+    if element == "quad":
         return _quad_rectangle(lo, hi, nx, ny, order)
+    if element in QUADRATIC_TENSOR:
+        coords = [np.linspace(lo[k], hi[k], n + 1) for k, n in enumerate((nx, ny))]
+        names = (("left", "right"), ("bottom", "top"))
+        source = f"rectangle(lower={lo}, upper={hi}, divisions={(nx, ny)})"
+        mesh = _quadratic_tensor(
+            "rectangle", element, coords, names, 2 if order == 1 else order, source
+        )
+        psets, fsets = dict(mesh.point_sets), dict(mesh.facet_sets)
+        for alias, name in (
+            ("xmin", "left"),
+            ("xmax", "right"),
+            ("ymin", "bottom"),
+            ("ymax", "top"),
+        ):
+            psets[alias], fsets[alias] = psets[name], fsets[name]
+        return validate_mesh(
+            mesh.points, mesh.cells, source=mesh.source, point_sets=psets, facet_sets=fsets
+        )
     if pattern not in PATTERNS:
         raise MeshError(f"rectangle: pattern must be one of {PATTERNS}, got {short(pattern)}")
     source = f"rectangle(lower={lo}, upper={hi}, divisions={(nx, ny)}, pattern={pattern!r})"
@@ -151,12 +173,62 @@ def rectangle(
     return _finish(points, cells, source, psets, fsets, order)
 
 
-def _element(name: str, element, allowed: tuple[str, str]) -> str:
+def _element(name: str, element, allowed: tuple[str, ...]) -> str:
     if not isinstance(element, str) or element not in allowed:
-        raise MeshError(
-            f"{name}: element must be {allowed[0]!r} or {allowed[1]!r}, got {short(element)}"
-        )
+        listing = ", ".join(repr(a) for a in allowed[:-1]) + f" or {allowed[-1]!r}"
+        raise MeshError(f"{name}: element must be {listing}, got {short(element)}")
     return element
+
+
+#: generator element names of the quadratic quadrilaterals / hexahedra -> meshio's cell type
+QUADRATIC_TENSOR = {
+    "quad8": "quad8",
+    "quad9": "quad9",
+    "hex20": "hexahedron20",
+    "hex27": "hexahedron27",
+}
+
+
+def _quadratic_tensor(name, element, coords, names, order, source) -> Mesh:
+    """Quadratic quadrilaterals / hexahedra on the grid of 1D vertex coordinates ``coords``
+    (one array per axis): midside (and face, centre) nodes at the midpoints, nodes no cell
+    uses (a hexahedron20's face centres) left out; point sets hold every node on their side,
+    facet sets the boundary facets by their corners."""
+    from tissuesim.mesh import tensor_quadratic as tq
+
+    if _order(order) == 1:
+        raise MeshError(f"{name}: element = {element!r} is quadratic; give order 2 or leave it out")
+    kind = QUADRATIC_TENSOR[element]
+    d = len(coords)
+    fine = [np.insert(c, np.arange(1, len(c)), 0.5 * (c[1:] + c[:-1])) for c in coords]
+    shape = [len(f) for f in fine]  # 2 n + 1 per axis
+    grid = np.meshgrid(*[np.arange(k) for k in shape], indexing="ij")
+    index = [g.ravel(order="F") for g in grid]  # x fastest
+    points = np.column_stack([f[i] for f, i in zip(fine, index, strict=True)])
+    ncell = [(k - 1) // 2 for k in shape]
+    base = np.meshgrid(*[2 * np.arange(k) for k in ncell], indexing="ij")
+    base = np.stack([b.ravel(order="F") for b in base], axis=1)  # (m, d) fine index of corner 0
+    local = (tq.NODES[kind] + 1).astype(np.int64)  # (nv, d) offsets 0, 1, 2
+    node = base[:, None, :] + local[None]  # (m, nv, d)
+    strides = np.cumprod([1, *shape[:-1]])
+    cells = node @ strides
+    used = np.unique(cells)
+    renumber = np.full(points.shape[0], -1, dtype=np.int64)
+    renumber[used] = np.arange(used.size)
+    points, cells = points[used], renumber[cells]
+    index = [i[used] for i in index]
+    from tissuesim.mesh.tensor import boundary_faces
+
+    bf = boundary_faces(cells[:, : 2**d], d)
+    psets, fsets = {}, {}
+    for axis, (low, high) in enumerate(names):
+        for set_name, value in ((low, 0), (high, shape[axis] - 1)):
+            ids = np.flatnonzero(index[axis] == value)
+            psets[set_name] = ids
+            fsets[set_name] = bf[np.isin(bf, ids).all(axis=1)]
+    check_mesh_size(name, cells.shape[0], d)
+    source = source[:-1] + f", element={element!r})"
+    return validate_mesh(points, cells, source=source, point_sets=psets, facet_sets=fsets)
 
 
 def _quad_rectangle(lo, hi, nx: int, ny: int, order) -> Mesh:
@@ -283,7 +355,10 @@ def box(
     """Tetrahedral mesh of the box [lower, upper] with divisions (nx, ny, nz) hexahedra.
 
     element: "tet" (the default) or "hex": the (nx, ny, nz) Q1 hexahedra themselves (VTK's node
-    order; ``pattern`` does not apply, order must be 1; facet sets hold quad faces (k, 4)).
+    order; ``pattern`` does not apply, order must be 1; facet sets hold quad faces (k, 4));
+    "hex20" / "hex27": quadratic hexahedra (serendipity / triquadratic, VTK's node order, nodes
+    at the midpoints of the graded grid's edges, faces and cells; order is 2 whether given or
+    not; point sets hold every node on their side, facet sets the faces by their corners).
 
     Each hexahedron is split into 6 tetrahedra around a main diagonal (Kuhn/Freudenthal); faces
     conform. Points (n, 3); cells (6 nx ny nz, 4) positive.
@@ -318,7 +393,12 @@ def box(
     if pattern != "mirrored":
         source = source[:-1] + f", pattern={pattern!r})"
     names = (("xmin", "xmax"), ("ymin", "ymax"), ("zmin", "zmax"))
-    if _element("box", element, ("tet", "hex")) == "hex":
+    element = _element("box", element, ("tet", "hex", "hex20", "hex27"))
+    if element in QUADRATIC_TENSOR:
+        n = np.array([nx, ny, nz])
+        coords = [points[np.arange(k + 1) * int(np.prod(n[:a] + 1)), a] for a, k in enumerate(n)]
+        return _quadratic_tensor("box", element, coords, names, 2 if order == 1 else order, source)
+    if element == "hex":
         if _order(order) != 1:
             raise MeshError("box: element = 'hex' takes order 1 (Q1 hexahedra)")
         cells = _hex_cells(nx, ny, nz)

@@ -2,8 +2,9 @@
 
 read_mesh takes tetrahedra (3D) or triangles (2D), linear or quadratic (meshio's tetra10 and
 triangle6, e.g. Gmsh second order; meshio converts Gmsh's node order to VTK's, which tissuesim
-uses), or Q1 hexahedra (3D, tagged quad faces become facet sets) and quadrilaterals (2D), and
-turns tags into named sets: meshio
+uses), or hexahedra (3D, tagged quad faces become facet sets) and quadrilaterals (2D), Q1 or
+quadratic (meshio's hexahedron20 / hexahedron27 / quad8 / quad9, VTK's node order), and turns
+tags into named sets: meshio
 cell sets and gmsh physical groups ("gmsh:physical" with names from $PhysicalNames). Tagged facets
 (lines in 2D, triangles in 3D) become facet sets, tagged volume cells cell sets, tagged lower-
 dimensional cells (vertices, edges in 3D) point sets. Everything is then checked by validate_mesh.
@@ -42,9 +43,22 @@ _CELL_DIM = {
     "tetra": 3,
     "tetra10": 3,
     "hexahedron": 3,
+    "quad8": 2,
+    "quad9": 2,
+    "hexahedron20": 3,
+    "hexahedron27": 3,
 }
-#: Q1 volume cells and the facet type (and its corner count) that tags their boundary
-_TENSOR_FACET = {"hexahedron": ("quad", 4), "quad": ("line", 2)}
+#: quadrilateral / hexahedral volume cells, each dimension's in order of preference
+_TENSOR = {3: ("hexahedron", "hexahedron20", "hexahedron27"), 2: ("quad", "quad8", "quad9")}
+#: their facet types that tag their boundary (the first is written) and the facets' corners
+_TENSOR_FACET = {
+    "hexahedron": (("quad",), 4),
+    "hexahedron20": (("quad", "quad8"), 4),
+    "hexahedron27": (("quad", "quad9"), 4),
+    "quad": (("line",), 2),
+    "quad8": (("line", "line3"), 2),
+    "quad9": (("line", "line3"), 2),
+}
 
 
 def _block_dim(block) -> int:
@@ -80,24 +94,24 @@ def _choose_cells(path: str, m) -> tuple[np.ndarray, int, str]:
     points = np.asarray(m.points, dtype=np.float64)
     if found.get("tetra") or found.get("tetra10"):
         d = 3
-    elif found.get("hexahedron"):
+    elif any(found.get(t) for t in _TENSOR[3]):
         d = 3
     elif found.get("triangle") or found.get("triangle6"):
         d = 2
-    elif found.get("quad"):
+    elif any(found.get(t) for t in _TENSOR[2]):
         d = 2
     else:
         raise MeshError(
             f"{path}: no tetrahedra, hexahedra, triangles or quadrilaterals; cell types found: "
-            f"{listing}. tissuesim needs 'tetra' / 'tetra10' / 'hexahedron' (3D) or 'triangle' "
-            f"/ 'triangle6' / 'quad' (2D) elements: re-export with element order 1 or 2 "
-            f"(order 1 for hexahedra and quadrilaterals)"
+            f"{listing}. tissuesim needs 'tetra' / 'tetra10' / 'hexahedron' / 'hexahedron20' / "
+            f"'hexahedron27' (3D) or 'triangle' / 'triangle6' / 'quad' / 'quad8' / 'quad9' (2D) "
+            f"elements: re-export with element order 1 or 2"
         )
     simplex = found.get(_VOLUME[d]) or found.get(_VOLUME2[d])
     if simplex:
         vtype = _VOLUME2[d] if found.get(_VOLUME2[d]) else _VOLUME[d]
     else:
-        vtype = "hexahedron" if d == 3 else "quad"
+        vtype = next(t for t in _TENSOR[d] if found.get(t))
     others = sorted({b.type for b in m.cells if b.type != vtype and _block_dim(b) >= d})
     if others:
         raise MeshError(
@@ -133,7 +147,7 @@ def _tagged_sets(m, d: int, vtype: str):
     point_sets, facet_sets, cell_sets = defaultdict(list), defaultdict(list), defaultdict(list)
     facet_types, nf = _FACETS[d], d
     if vtype in _TENSOR_FACET:
-        facet_types, nf = (_TENSOR_FACET[vtype][0],), _TENSOR_FACET[vtype][1]
+        facet_types, nf = _TENSOR_FACET[vtype]
 
     def add(block_index: int, name: str, rows: np.ndarray) -> None:
         b = m.cells[block_index]
@@ -234,7 +248,7 @@ def write_mesh(mesh: Mesh, path: str | os.PathLike[str], file_format: str | None
     if file_format is None and path.lower().endswith(".msh"):
         file_format = "gmsh22"
     blocks = [(mesh.cell_type, mesh.cells)]
-    facet_type = _TENSOR_FACET[mesh.cell_type][0] if not mesh.simplicial else _FACET[d]
+    facet_type = _TENSOR_FACET[mesh.cell_type][0][0] if not mesh.simplicial else _FACET[d]
     kwargs = {}
     if file_format == "gmsh22":
         volume_tags = np.zeros(mesh.n_cells, dtype=np.int32)

@@ -19,7 +19,13 @@ CELL_TYPES = {
     (3, 10): "tetra10",
     (2, 4): "quad",
     (3, 8): "hexahedron",
+    (2, 8): "quad8",
+    (2, 9): "quad9",
+    (3, 20): "hexahedron20",
+    (3, 27): "hexahedron27",
 }
+#: nodes per quadratic quadrilateral (quad8, quad9) and hexahedron (hexahedron20, 27)
+_QUADRATIC_TENSOR = {2: (8, 9), 3: (20, 27)}
 
 
 @dataclass(frozen=True, eq=False)
@@ -32,10 +38,12 @@ class Mesh:
         quadratic meshes (order 2): (m, 6) triangles or (m, 10) tetrahedra, the corners first,
         then the midside nodes (``mesh/quadratic.py``); Q1 quadrilaterals (m, 4) in 2D and
         hexahedra (m, 8) in 3D in VTK's node order, with a positive rest Jacobian at every
-        Gauss point (``mesh/tensor.py``).
+        Gauss point (``mesh/tensor.py``); quadratic quadrilaterals (m, 8) / (m, 9) and
+        hexahedra (m, 20) / (m, 27) in VTK's node order (``mesh/tensor_quadratic.py``).
     point_sets: name -> (k,) vertex indices.
     facet_sets: name -> (k, d) boundary facets (edges in 2D, triangles in 3D) as corner indices;
-        (k, 4) quad faces for hexahedra (``facet_nodes``).
+        (k, 4) quad faces for hexahedra (``facet_nodes``); quadratic cells' facets by their
+        corners, as for P2.
     cell_sets: name -> (k,) cell indices.
     source: where the mesh came from (a file path or a generator), used in error messages.
     cell_fractions: (m,) the part of each cell's volume that is material (a virtual-node cut's
@@ -72,6 +80,7 @@ class Mesh:
         kind = {2: "triangles", 3: "tetrahedra"}.get(self.dim, "cells")
         if not self.simplicial:
             kind = "quadrilaterals" if self.dim == 2 else "hexahedra"
+            kind = f"{self.cell_type} {kind}" if self.order == 2 else kind
         elif self.order == 2:
             kind = f"quadratic {kind}"
         lo, hi = self.points.min(axis=0), self.points.max(axis=0)
@@ -100,37 +109,43 @@ class Mesh:
 
     @property
     def cell_type(self) -> str:
-        """meshio's name of the cells: "triangle", "tetra", "triangle6", "tetra10", "quad" or
-        "hexahedron"."""
+        """meshio's name of the cells: "triangle", "tetra", "triangle6", "tetra10", "quad",
+        "hexahedron", "quad8", "quad9", "hexahedron20" or "hexahedron27"."""
         return CELL_TYPES[self.dim, int(self.cells.shape[1])]
 
     @property
     def simplicial(self) -> bool:
-        """True for triangles and tetrahedra (linear or quadratic), False for Q1 quadrilaterals
-        and hexahedra."""
+        """True for triangles and tetrahedra (linear or quadratic), False for quadrilaterals and
+        hexahedra (Q1 or quadratic)."""
         d, nv = self.dim, int(self.cells.shape[1])
         return nv in (d + 1, (d + 1) * (d + 2) // 2)
 
     @property
     def order(self) -> int:
-        """1 for linear simplices and Q1 cells, 2 for 6-node triangles / 10-node tetrahedra."""
+        """1 for linear simplices and Q1 cells, 2 for 6-node triangles / 10-node tetrahedra and
+        the quadratic quadrilaterals and hexahedra (8, 9, 20, 27 nodes)."""
         d, nv = self.dim, int(self.cells.shape[1])
-        return 2 if nv == (d + 1) * (d + 2) // 2 else 1
+        return 2 if nv == (d + 1) * (d + 2) // 2 or nv in _QUADRATIC_TENSOR[d] else 1
 
     @property
     def facet_nodes(self) -> int:
         """Corner nodes of a boundary facet: d (edges, triangles), 4 for hexahedra' quad faces."""
-        return 4 if (self.dim, int(self.cells.shape[1])) == (3, 8) else self.dim
+        return 4 if self.dim == 3 and not self.simplicial else self.dim
 
     @property
     def corners(self) -> np.ndarray:
-        """(m, d + 1) the corner vertices of every cell ((m, 2^d) for Q1 cells: all nodes)."""
+        """(m, d + 1) the corner vertices of every cell ((m, 2^d) for quadrilaterals and
+        hexahedra: all nodes of Q1 cells)."""
         if not self.simplicial:
-            return self.cells
+            return self.cells[:, : 2**self.dim]
         return self.cells[:, : self.dim + 1]
 
     @cached_property
     def _subdivision(self) -> tuple[np.ndarray, np.ndarray]:
+        if not self.simplicial and self.order == 2:
+            from tissuesim.mesh.tensor_quadratic import subdivide as split_quadratic
+
+            return split_quadratic(self.points, self.cells)
         if not self.simplicial:
             from tissuesim.mesh.tensor import subdivide as split
 
@@ -145,7 +160,9 @@ class Mesh:
     def simplices(self) -> np.ndarray:
         """Linear simplices (k, d + 1) over all nodes: the cells themselves for order 1, the
         linear subdivision of each quadratic cell (4 triangles, 8 tetrahedra) for order 2, the
-        split of each Q1 cell (2 triangles, 6 tetrahedra; ``mesh/tensor.py``).
+        split of each Q1 cell (2 triangles, 6 tetrahedra; ``mesh/tensor.py``) or quadratic
+        quadrilateral / hexahedron (6 or 8 triangles, 22 or 48 tetrahedra;
+        ``mesh/tensor_quadratic.py``).
         Geometry (boundary, location, contact, pictures) works on these."""
         return self._subdivision[0]
 

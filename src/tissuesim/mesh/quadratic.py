@@ -123,7 +123,13 @@ def midside_lookup(cells: np.ndarray, dim: int):
 
 def quadratic_facets(mesh, facets: np.ndarray) -> np.ndarray:
     """Boundary facets given by corners (k, d) with their midside nodes appended: (k, 3) edges
-    [a, b, m_ab] in 2D, (k, 6) triangles [a, b, c, m_ab, m_bc, m_ca] in 3D."""
+    [a, b, m_ab] in 2D, (k, 6) triangles [a, b, c, m_ab, m_bc, m_ca] in 3D; for quadratic
+    quadrilaterals / hexahedra their edges (k, 3) or quad faces (k, 8 / 9)
+    (``tensor_quadratic.full_facets``)."""
+    if not mesh.simplicial:
+        from tissuesim.mesh.tensor_quadratic import full_facets
+
+        return full_facets(mesh, facets)
     d = mesh.dim
     facets = np.asarray(facets, dtype=np.int64)
     mids = mesh.midside(facets[:, EDGES[d - 1]])  # (k, d(d-1)/2 or 1)

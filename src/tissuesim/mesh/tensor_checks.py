@@ -1,8 +1,9 @@
-"""Checks of Q1 cells (quadrilaterals, hexahedra), called by ``validate_mesh``.
+"""Checks of Q1 and quadratic quadrilaterals and hexahedra, called by ``validate_mesh``.
 
-A Q1 cell is usable when its rest map has a positive Jacobian at every Gauss point of the
-stiffness and at every node: a negative one somewhere means the cell is folded or its nodes are
-numbered in a twisted order, a tiny one that it is degenerate. A cell whose Jacobian is negative
+A Q1 cell (and a quadratic one, with its 3^d Gauss points) is usable when its rest map has a
+positive Jacobian at every Gauss point of the stiffness and at every node: a negative one
+somewhere means the cell is folded or its nodes are numbered in a twisted order, a tiny one
+that it is degenerate. A cell whose Jacobian is negative
 at *every* one of those points is a mirrored numbering (e.g. a hexahedron whose bottom face runs
 clockwise seen from inside) and is reoriented, as simplices are.
 """
@@ -14,7 +15,13 @@ import numpy as np
 from tissuesim.errors import MeshError
 from tissuesim.mesh.tensor import SIGNS, gauss_rule, rest_jacobians, shape_functions
 
-__all__ = ["tensor_jacobians", "check_tensor_cells", "tensor_quality", "REORIENT"]
+__all__ = [
+    "tensor_jacobians",
+    "check_tensor_cells",
+    "tensor_quality",
+    "REORIENT",
+    "reorient_permutation",
+]
 
 #: a node permutation that mirrors a Q1 cell (quad: reverse; hexahedron: swap top and bottom)
 REORIENT = {2: [0, 3, 2, 1], 3: [4, 5, 6, 7, 0, 1, 2, 3]}
@@ -23,11 +30,33 @@ REORIENT = {2: [0, 3, 2, 1], 3: [4, 5, 6, 7, 0, 1, 2, 3]}
 DEGENERATE = 1e-8
 
 
+def _basis(d: int, nv: int):
+    """(shape functions xi -> (N, dN), the node coordinates, stiffness Gauss points per axis)
+    of the cell of nv nodes: Q1, or quadratic (``tensor_quadratic``)."""
+    if nv == 2**d:
+        return (lambda xi: shape_functions(d, xi)), SIGNS[d], 2
+    from tissuesim.mesh import tensor_quadratic as tq
+
+    kind = tq.CELL_TYPES[d, nv]
+    return (lambda xi: tq.shape_functions(kind, xi)), tq.NODES[kind], tq.STIFFNESS_POINTS
+
+
+def reorient_permutation(d: int, nv: int) -> list[int]:
+    """The node permutation that mirrors a cell of nv nodes (``REORIENT`` for Q1)."""
+    if nv == 2**d:
+        return REORIENT[d]
+    from tissuesim.mesh import tensor_quadratic as tq
+
+    return tq.reorient(tq.CELL_TYPES[d, nv])
+
+
 def tensor_jacobians(points: np.ndarray, cells: np.ndarray) -> np.ndarray:
-    """det J (m, q) of the rest map at the 2^d Gauss points and the 2^d nodes of each cell."""
+    """det J (m, q) of the rest map at the stiffness's Gauss points and at the nodes of each
+    cell."""
     d = points.shape[1]
-    xi = np.concatenate([gauss_rule(d, 2)[0], SIGNS[d]])
-    _, dN = shape_functions(d, xi)
+    shape, nodes, n = _basis(d, cells.shape[1])
+    xi = np.concatenate([gauss_rule(d, n)[0], nodes])
+    _, dN = shape(xi)
     return np.linalg.det(rest_jacobians(points, cells, dN))
 
 
@@ -43,6 +72,7 @@ def check_tensor_cells(points: np.ndarray, cells: np.ndarray, source: str) -> np
     if bad.any():
         e = int(np.flatnonzero(bad)[0])
         kind = "quadrilateral" if d == 2 else "hexahedron"
+        kind = kind if cells.shape[1] == 2**d else f"{cells.shape[1]}-node {kind}"
         raise MeshError(
             f"{source}: {kind} {e} {cells[e].tolist()} is inverted or degenerate (the Jacobian "
             f"of its rest map runs from {detJ[e].min():.3g} to {detJ[e].max():.3g} over its "
@@ -54,16 +84,18 @@ def check_tensor_cells(points: np.ndarray, cells: np.ndarray, source: str) -> np
 
 
 def tensor_quality(points: np.ndarray, cells: np.ndarray):
-    """(volumes (m,), edge lengths (m, 4 or 12), scaled Jacobian (m,)) of Q1 cells: the volume
-    by 2^d Gauss points (exact), the quality min over the nodes of det J / prod |dX/dxi_j|
-    (1 for a rectangle / box, 0 for a degenerate corner)."""
+    """(volumes (m,), edge lengths (m, 4 or 12), scaled Jacobian (m,)) of Q1 or quadratic
+    cells: the volume by the stiffness's Gauss points (exact for Q1), the quality min over the
+    nodes of det J / prod |dX/dxi_j| (1 for a rectangle / box, 0 for a degenerate corner); the
+    edges are corner to corner."""
     from tissuesim.mesh.tensor import FACES
 
     d = points.shape[1]
-    xi, w = gauss_rule(d, 2)
-    _, dN = shape_functions(d, xi)
+    shape, nodes, n = _basis(d, cells.shape[1])
+    xi, w = gauss_rule(d, n)
+    _, dN = shape(xi)
     volumes = np.linalg.det(rest_jacobians(points, cells, dN)) @ w
-    _, dNc = shape_functions(d, SIGNS[d])
+    _, dNc = shape(nodes)
     Jc = rest_jacobians(points, cells, dNc)  # (m, nv, d, d)
     scaled = np.linalg.det(Jc) / np.linalg.norm(Jc, axis=2).prod(axis=2)
     faces = FACES[d]
