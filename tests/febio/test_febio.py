@@ -26,7 +26,7 @@ def _run(scene, steps: int) -> np.ndarray:
     sim = scene.simulation
     for _ in range(steps):
         sim.step()
-    return sim.positions
+    return np.concatenate([sim.body_positions(name) for name in sim.bodies])
 
 
 @pytest.mark.parametrize("name", ALL)
@@ -228,3 +228,28 @@ def test_fibre_directions_from_mat_axis_fiber_and_element_data():
         elif row == 4:
             expected = np.array([0.0, 1.0, 1.0])
         np.testing.assert_allclose(fibres[row], expected, atol=1e-12)
+
+
+def test_sliding_contact_and_rigid_wall_carry_the_load():
+    """Three laterally held cubes: 'upper' pressed onto 'lower' (sliding-elastic, its base
+    fixed in z) and 'puck' pressed onto a rigid_wall. The reactions balance through the
+    contact (the base carries the press, the wall the puck: 1e-6), and each cube is nearly in
+    uniaxial strain, its pull the law's P_zz at its mean stretch (1%: the barrier's nodal
+    forces on the triangulated faces differ a little, so the contact faces tilt by 1e-3)."""
+    from tissuesim.materials import NeoHookean
+
+    scene = load_febio(MODELS / "contact_stack.feb")
+    sim = scene.simulation
+    sim.step()
+    forces = sim.step().extra["forces"]
+    law = NeoHookean(youngs_modulus=1e4, poisson_ratio=0.3)
+    for body, press, support in (("upper", "press", "base"), ("puck", "press_puck", "wall2")):
+        z = sim.body_positions(body)[:, 2]
+        Z = sim.body(body).mesh.points[:, 2]
+        top = Z > Z.mean()
+        stretch = (z[top].mean() - z[~top].mean()) / (Z[top].mean() - Z[~top].mean())
+        P = law.evaluate(np.diag([1.0, 1.0, stretch])[None], 1).stress[0, 2, 2]
+        assert stretch < 0.97
+        assert forces[press][2] == pytest.approx(P, rel=1e-2)
+        assert forces[support][2] == pytest.approx(-forces[press][2], rel=1e-6)
+    assert forces["upper.contact.lower"][2] == pytest.approx(forces["base"][2], rel=1e-6)

@@ -353,7 +353,8 @@ class FemBody:
         out = {}
         owner = np.full((self.mesh.n_points, d), -1)
         for k, (_, c) in enumerate(self.conditions):
-            owner[c.vertices, slice(None) if c.components is None else list(c.components)] = k
+            comps = range(d) if c.components is None else list(c.components)
+            owner[np.ix_(np.asarray(c.vertices), comps)] = k
         for k, (name, c) in enumerate(self.conditions):
             f = np.zeros(3)
             if gradient is not None:
