@@ -253,3 +253,37 @@ def test_sliding_contact_and_rigid_wall_carry_the_load():
         assert forces[press][2] == pytest.approx(P, rel=1e-2)
         assert forces[support][2] == pytest.approx(-forces[press][2], rel=1e-6)
     assert forces["upper.contact.lower"][2] == pytest.approx(forces["base"][2], rel=1e-6)
+
+
+NEW_REFUSALS = {
+    "angles": ("hgo_uniaxial", '<mat_axis type="vector">', '<mat_axis type="angles">',
+               "mat_axis type 'angles'"),
+    "data": ("trans_iso_mesh_data", '<ElementData var="fiber"',
+             '<ElementData var="shell thickness"', "element data 'shell thickness'"),
+    "three_field": ("viscoelastic_relaxation", 'mat="tissue"/>',
+                    'mat="tissue" type="three-field-solid"/>', "three-field element"),
+    "hgo_fiber": ("hgo_uniaxial", '<mat_axis type="vector">',
+                  '<fiber type="vector">1,0,0</fiber>\n      <mat_axis type="vector">',
+                  "takes its fibres from <mat_axis>"),
+}  # fmt: skip
+
+
+@pytest.mark.parametrize("case", sorted(NEW_REFUSALS))
+def test_fibre_and_viscoelastic_refusals_name_the_element_and_line(case, tmp_path):
+    name, old, new, message = NEW_REFUSALS[case]
+    text = (MODELS / f"{name}.feb").read_text()
+    assert old in text
+    text = text.replace(old, new)
+    feb = tmp_path / "bad.feb"
+    feb.write_text(text)
+    tag = "SolidDomain" if case == "three_field" else re.search(r"<(\w+)", new).group(1)
+    line = next(i for i, s in enumerate(text.splitlines(), 1) if new.splitlines()[0] in s)
+    if tag == "SolidDomain":
+        with pytest.raises(FebError) as info:
+            febio_scene(read_feb(feb), "x")
+    else:
+        with pytest.raises(FebError) as info:
+            read_feb(feb)
+    said = str(info.value)
+    assert "\n" not in said and message in said
+    assert f"bad.feb:{line} <{tag}>" in said

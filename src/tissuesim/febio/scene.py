@@ -147,7 +147,7 @@ def febio_scene(model: FebModel, stem: str) -> tuple[dict, dict]:
             raise body["node"].error("three-field-solid on tet4: tissuesim's P1 mean dilatation "
                                      "is a vertex patch, not FEBio's element")  # fmt: skip
         if model_name.endswith("viscoelastic") and formulation == "mean_dilatation":
-            raise body["node"].error(
+            raise model.domains[body["parts"][0]][2].error(
                 f"{kind!r} on {body['cell_type']} runs FEBio's three-field element; tissuesim's "
                 "viscoelastic laws run the displacement form: give the SolidDomain "
                 'type="elastic-solid" (FEBio then runs that too)'
