@@ -266,6 +266,7 @@ TESTED_PYTHON_BLOCKS = {
     'sim.save("beam.npz")': "test_save_and_load_python_example_is_bit_identical",
     'ts.fit_material("ogden"': "test_fitting_python_example_recovers_the_parameters",
     'element="hex"': "test_hexahedra_python_example_runs",
+    'element="hex20"': "test_quadratic_hexahedra_python_example_runs",
 }
 
 
@@ -277,6 +278,16 @@ def test_hexahedra_python_example_runs(tmp_path):
     )
     assert result.returncode == 0, result.stderr
     assert float(result.stdout.split()[-1]) == -0.0121
+
+
+def test_quadratic_hexahedra_python_example_runs(tmp_path):
+    """The elements page's hexahedron20 Q2/P0 cantilever: the deflection it prints."""
+    code = block("python", 'element="hex20"')
+    result = subprocess.run(
+        [sys.executable, "-c", code], cwd=tmp_path, capture_output=True, text=True, timeout=300
+    )
+    assert result.returncode == 0, result.stderr
+    assert float(result.stdout.split()[-1]) == -0.0132
 
 
 def test_every_python_block_of_the_readme_and_the_docs_is_run_by_a_test():
