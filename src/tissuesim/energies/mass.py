@@ -14,8 +14,8 @@ lumped mass is the row sums. The quadratic ones (quad8, quad9, hexahedron20, hex
 integrate with 4 per direction; a serendipity cell's row sums are negative at its corners
 (a hexahedron20's -V/8 each, its midside nodes V/6; a quad8's -A/12, A/3), so, as for P2,
 their lumped mass is HRZ's (the consistent diagonal scaled to the cell's mass: positive at
-every node). Gravity uses
-the consistent row sums (``row_sums``), which are exact for every element.
+every node). Gravity uses the consistent row sums (``row_sums``), which are exact for every
+element.
 
 Inertia energy of Backward Euler with x_pred = x_n + h v_n (Gast et al. 2015):
     E(x) = 1/(2 h^2) (x - x_pred)^T M (x - x_pred).
