@@ -15,6 +15,7 @@ import warnings
 from pathlib import Path
 
 from tissuesim.scene.examples import example_path, list_examples
+from tissuesim.verification.check import FAMILIES as VERIFY_FAMILIES
 
 __all__ = ["main", "example_path", "list_examples"]
 
@@ -371,7 +372,7 @@ def main(argv: list[str] | None = None) -> int:
     p_verify.add_argument(
         "--only",
         action="append",
-        choices=("laws", "patch", "viscoelastic"),
+        choices=VERIFY_FAMILIES,
         help="run only this family (repeatable)",
     )
     args = parser.parse_args(argv)

@@ -3,27 +3,92 @@ say so, and a deliberately wrong reference makes the command exit 1."""
 
 import json
 
+import pytest
+
+import tissuesim.verification.cook as cook
+import tissuesim.verification.fibres as fibres
+import tissuesim.verification.hertz as hertz
 import tissuesim.verification.laws as laws
 from tissuesim.cli import main
 from tissuesim.verification import run, table
+from tissuesim.verification.check import FAMILIES
+from tissuesim.verification.result import Check
 
 
-def test_every_problem_passes():
-    checks = run()
-    assert len(checks) >= 3 * len(laws.LAWS) + 3 + 4
+@pytest.fixture(scope="module")
+def every_check():
+    """The whole set, run once for this module (about 5 s)."""
+    return run()
+
+
+def test_every_problem_passes(every_check):
+    checks = every_check
+    expected = 3 * len(laws.LAWS) + len(fibres.CASES) + 3 + 4 + len(cook.CASES) + 1
+    assert len(checks) == expected
     failed = [c for c in checks if not c.passed]
     assert failed == []
     assert table(checks).splitlines()[-1] == f"{len(checks)} of {len(checks)} checks pass"
-
-
-#: the fibre-reinforced laws have no closed form in the verification set yet
-NOT_YET = {"holzapfel_gasser_ogden", "hgo_unconstrained", "trans_iso_mooney_rivlin"}
+    assert {c.problem.split(",")[0] for c in checks} >= {
+        "Cook's membrane", "Hertz sphere", "holzapfel_gasser_ogden", "trans_iso_mooney_rivlin",
+    }  # fmt: skip
 
 
 def test_every_registered_law_is_verified():
     from tissuesim.materials import MATERIALS
 
-    assert set(MATERIALS) - NOT_YET <= set(laws.LAWS)
+    assert set(MATERIALS) <= set(laws.LAWS) | {case[0] for case in fibres.CASES}
+
+
+def test_the_fibre_checks_see_the_switch_off():
+    """A closed form whose fibres also bear compression (no Macaulay bracket) fails exactly the
+    checks where a family is compressed; one with the families' angle wrong fails the rest."""
+
+    def hgo_without_switch(fibres_, i1, i4s):
+        p = fibres._HGO
+        d = []
+        for i4 in i4s:
+            E = p["kappa"] * (i1 - 3.0) + (1.0 - 3.0 * p["kappa"]) * (i4 - 1.0)
+            d.append(p["k1"] * E * fibres.math.exp(p["k2"] * E * E))
+        return p["c"] / 2 + p["kappa"] * sum(d), 0.0, [(1 - 3 * p["kappa"]) * v for v in d]
+
+    hgo = [c for c in fibres.CASES if c[0] == "holzapfel_gasser_ogden"]
+    wrong = [(*c[:4], hgo_without_switch, c[5]) for c in hgo]
+    passed = {c.quantity: c.passed for c in fibres.checks(wrong)}
+    assert [q for q, ok in passed.items() if not ok] == [
+        q for q in passed if "compressed" in q
+    ] and len(passed) - sum(passed.values()) == 2
+    tilted = [(*c[:5], fibres._families(25.0, False)) for c in hgo if "along" in c[1]]
+    assert not fibres.checks(tilted)[0].passed
+
+
+def test_cooks_reference_belongs_to_the_middle_of_the_loaded_edge():
+    """23.96 is met at (48, 52); the upper corner, with the same reference, is 4 % off and
+    fails; a reference 0.5 % off fails too."""
+    label, stress, E, nu, traction, _, n, ref, tol = cook.CASES[0]
+    corner = (label, stress, E, nu, traction, (48.0, 60.0), n, ref, tol)
+    middle_off = (label, stress, E, nu, traction, (48.0, 52.0), n, ref * 1.005, tol)
+    results = cook.checks((corner, middle_off))
+    assert [c.passed for c in results] == [False, False]
+    assert 0.03 < results[0].error < 0.05
+
+
+def test_hertz_closed_form_and_a_wrong_reference(every_check):
+    # F = 4/3 E / (1 - nu^2) sqrt(R) d^1.5 at d = 100 um, worked out by hand
+    assert hertz.hertz_force(1e-4) == pytest.approx(4 / 3 * 1e4 / 0.91 * 0.1 * 1e-6, rel=1e-12)
+    (check,) = [c for c in every_check if c.problem.startswith("Hertz")]
+    assert 0.9e-4 < float(check.quantity.split("=")[1].split()[0]) * 1e-6 < 1.0e-4
+    assert check.result > check.reference  # the coarse mesh is stiff
+    # Hertz with E for E* (no 1 - nu^2), or the quarter's share: both fail
+    for factor in (1 - 0.3**2, 0.25):
+        wrong = Check(check.problem, check.quantity, factor * check.reference, check.result, 0.15)
+        assert not wrong.passed
+
+
+def test_every_family_can_be_chosen(capsys):
+    assert main(["verify", "--only", "fibres", "--only", "cook"]) == 0
+    out = capsys.readouterr().out
+    assert f"{len(fibres.CASES) + len(cook.CASES)} of" in out
+    assert set(FAMILIES) == {"laws", "fibres", "patch", "viscoelastic", "cook", "hertz"}
 
 
 def test_the_command_prints_the_table_and_json(capsys):

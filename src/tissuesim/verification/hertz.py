@@ -1,0 +1,81 @@
+"""Hertz contact on a coarse mesh: a rigid sphere (R = 10 mm) pressed 100 um into a linear
+elastic block (E = 10 kPa, nu = 0.3) with tissuesim's barrier contact, the force against Hertz's
+F = 4/3 E* sqrt(R) d^(3/2), E* = E / (1 - nu^2).
+
+The half-space is a quarter block (symmetry planes x = 0, y = 0) 80 mm wide and deep, clamped at
+its base, of 12 x 12 x 12 Q1 hexahedra graded towards the contact point: 0.4 mm up to 1.6 mm from
+it (the contact radius is a = sqrt(R d) = 1 mm), then each cell 1.8 times the previous one. The
+probe is a 15-degree cap of an icosphere of refinement 6 (facets of R / 55), starting dhat / 2
+above the block and moved 100 um in one quasistatic step; dhat = 1 um. The depth d is the
+probe's travel since it touched, less the barrier's gap; the quarter carries F / 4.
+
+The coarse mesh is stiff: it reads about 11 % above Hertz (finer meshes of the same kind and the
+gmsh-graded meshes of ``benchmarks/hertz.py`` approach Hertz, docs/guide/verify.md), so the
+tolerance is 15 %: the check catches a wrong contact force, depth or sign, not a few percent.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from tissuesim.verification.result import Check
+
+__all__ = ["DEPTH", "TOL", "checks", "graded_nodes", "indentation"]
+
+R, E, NU = 0.01, 1e4, 0.3
+DEPTH, DHAT = 1e-4, 1e-6
+H0, R_FINE, GROWTH, SIZE = 0.4e-3, 1.6e-3, 1.8, 0.08
+TOL = 0.15
+
+
+def graded_nodes(h0: float, r_fine: float, growth: float, size: float) -> np.ndarray:
+    """Grid coordinates from 0: steps of h0 up to r_fine, then each step ``growth`` times the
+    previous one until ``size`` (the last node moved to ``size``)."""
+    x = list(np.arange(0.0, r_fine + 0.5 * h0, h0))
+    h = h0
+    while x[-1] < size:
+        h *= growth
+        x.append(x[-1] + h)
+    x[-1] = size
+    return np.array(x)
+
+
+def indentation(depth: float = DEPTH) -> tuple[float, float]:
+    """(the indentation depth d (m), the whole sphere's force (N)) of one quasistatic step."""
+    import tissuesim as ts
+    from tissuesim.contact.obstacles import sphere
+
+    xs = graded_nodes(H0, R_FINE, GROWTH, SIZE)
+    n = len(xs) - 1
+    grid = ts.box((0, 0, 0), (1, 1, 1), (n, n, n), element="hex")
+    s = np.linspace(0.0, 1.0, n + 1)
+    p = grid.points.copy()
+    p[:, 0], p[:, 1] = np.interp(p[:, 0], s, xs), np.interp(p[:, 1], s, xs)
+    p[:, 2] = -np.interp(1.0 - p[:, 2], s, xs)  # top at z = 0, fine at the top
+    mesh = ts.Mesh(p, grid.cells, point_sets=grid.point_sets, facet_sets=grid.facet_sets)
+    law = ts.make_material("linear", youngs_modulus=E, poisson_ratio=NU)
+    newton = ts.NewtonOptions(max_iterations=150)
+    sim = ts.Simulation(mesh, law, integrator="quasistatic", time_step=1.0, newton=newton)
+    tol = 1e-12
+    sim.fix("body", np.flatnonzero(p[:, 2] < tol - SIZE), name="base")
+    sim.add_dirichlet(np.flatnonzero(p[:, 0] < tol), components=[0], name="symmetry_x")
+    sim.add_dirichlet(np.flatnonzero(p[:, 1] < tol), components=[1], name="symmetry_y")
+    probe = sphere((0.0, 0.0, R + DHAT / 2), R, refinement=6, cap_angle=15)
+    sim.add_obstacle("probe", probe, translation=lambda t: (0.0, 0.0, -depth * t))
+    sim.set_contact(dhat=DHAT, surfaces={"body": "zmax"})  # not the symmetry planes
+    record = sim.step()
+    contact = record.extra["contact"]
+    d = contact["indentation_depth"]["probe"] - contact["min_distance"]
+    return float(d), float(-4.0 * record.extra["forces"]["probe"][2])
+
+
+def hertz_force(d: float) -> float:
+    """Hertz's force (N) of the rigid sphere at depth ``d`` (m)."""
+    return 4.0 / 3.0 * E / (1.0 - NU**2) * np.sqrt(R) * d**1.5
+
+
+def checks() -> list[Check]:
+    """The contact force at the step's depth against Hertz's (relative, ``TOL``)."""
+    d, force = indentation()
+    what = f"force (N) at d = {d * 1e6:.1f} um"
+    return [Check("Hertz sphere, Q1 12x12x12 graded", what, hertz_force(d), force, TOL)]
