@@ -401,9 +401,10 @@ class SetupCalls:
         k >= 2 points (m); the tissue points within ``kerf`` (m; default half the tissue's
         sample spacing) of the swept surface are removed and frames stop acting across the
         cut; the swept surface is written as the series ``name``. With ``body`` (a FEM body)
-        it cuts that body: ``blade(t)`` returns its straight edge (2, 3), moving in its own
-        plane; after each step the cells it has swept through completely are cut by the
-        virtual node algorithm (``cut_body``), mass kept; its cutting force (``toughness``,
+        it cuts that body: ``blade(t)`` returns its straight edge (2, 3) or a flat triangular
+        blade's corners (3, 3), moving in its own plane; after each step the cells it has
+        swept through completely are cut by the virtual node algorithm (``cut_body``), mass
+        kept; its cutting force (``toughness``,
         J/m^2 of new surface) is reported as ``name`` and the cut's area per step under
         ``extra["cuts"]``. Returns the cutting tool.
 

@@ -186,6 +186,32 @@ def test_a_blade_moving_through_the_beam_cuts_it_step_by_step_and_reports_its_fo
     assert sim.model.mass.lumped.sum() == pytest.approx(mass, rel=1e-12)
 
 
+def test_a_triangular_blade_cuts_what_its_positions_cover():
+    """A flat triangular blade (a scalpel's tip) pushed down into the beam at x = 0.53, its tip
+    from 5 cm above the beam to 5 cm below it,
+    cuts what the hull of its positions covers, itself included: the same cells and area as
+    cut_body with that hull, drawn by hand; it stays one piece (the bottom corners are left)."""
+
+    def corners(z: float) -> np.ndarray:  # the blade's plane is x = 0.53
+        return np.array([[0.53, -0.1, z + 0.2], [0.53, 0.3, z + 0.2], [0.53, 0.1, z]])
+
+    sim = cantilever()
+    sim.add_cut(lambda t: corners(0.15 - 20.0 * t), 0.0, 0.01, body="body", name="tip")
+    record = sim.step()
+    cut = record.extra["cuts"]["tip"]
+    hull = np.array([[0.53, -0.1, 0.15], [0.53, 0.1, -0.05], [0.53, 0.3, 0.15],
+                     [0.53, 0.3, 0.35], [0.53, -0.1, 0.35]])  # fmt: skip
+    by_hand = cantilever()
+    by_hand.step()
+    expected = by_hand.cut_body(
+        PlanarCut(np.array([0.53, 0.0, 0.0]), np.array([1.0, 0.0, 0.0]), hull), name="tip"
+    )
+    assert cut["cells_cut"] == expected["cells_cut"] > 0 and cut["pieces"] == 1
+    assert cut["area_m2"] == pytest.approx(expected["area_m2"], rel=1e-12)
+    with pytest.raises(InputError, match="straight edge or a triangle"):
+        sim.add_cut(lambda t: np.eye(4, 3), 0.0, 0.5, body="body", name="square")
+
+
 def test_add_cut_on_a_body_refuses_a_blade_that_leaves_its_plane():
     sim = cantilever()
     with pytest.raises(InputError, match="leaves its plane"):
@@ -205,3 +231,18 @@ def test_a_cut_along_mesh_faces_parts_the_body_without_copying_elements():
     sim = cantilever()
     report = sim.cut_body(through(0.5))
     assert report["cells_cut"] == 0 and report["new_nodes"] == 9 and report["pieces"] == 2
+    assert report["area_m2"] == pytest.approx(0.2 * 0.2, rel=1e-12)  # the faces it parted
+    again = sim.cut_body(through(0.5))  # nothing new: the same area, not counted twice
+    assert again["cells_cut"] == 0 and again["area_m2"] == pytest.approx(0.04, rel=1e-12)
+
+
+def test_a_notch_along_mesh_faces_reports_the_faces_it_opened():
+    """From the top (z = 0.2) down to the layer of nodes at z = 0.1 along x = 0.5: the faces
+    above are parted, the nodes at z = 0.1 stay joined (the notch's front), area 0.2 x 0.1."""
+    sim = cantilever()
+    notch = PlanarCut.swept_segment(
+        (0.5, -1.0, 1.0), (0.5, 2.0, 1.0), (0.5, -1.0, 0.1), (0.5, 2.0, 0.1)
+    )
+    report = sim.cut_body(notch, name="notch")
+    assert report["cells_cut"] == 0 and report["pieces"] == 1 and report["new_nodes"] == 3
+    assert report["area_m2"] == pytest.approx(0.2 * 0.1, rel=1e-12)

@@ -33,6 +33,10 @@ class CutState:
     vn: VirtualNodeMesh | None = None
     cuts: list[PlanarCut] = field(default_factory=list)
     names: list[str] = field(default_factory=list)
+    #: rest area of the mesh faces each cut parted (a cut along faces copies no cell)
+    face_area: list[float] = field(default_factory=list)
+    _faces: tuple | None = field(default=None, repr=False)
+    _parted: np.ndarray | None = field(default=None, repr=False)
 
     def prior(self) -> tuple[np.ndarray, np.ndarray] | None:
         """(cut index per original cell, -1 none; each cut's node distances (cuts, n), NaN for
@@ -68,7 +72,60 @@ class CutState:
         measure = section_measures(
             self.original.points, self.original.cells[parent], vn.level[plus]
         )
-        return np.bincount(vn.cut[plus], weights=measure, minlength=len(self.cuts))
+        sections = np.bincount(vn.cut[plus], weights=measure, minlength=len(self.cuts))
+        faces = np.zeros(len(self.cuts))
+        faces[: len(self.face_area)] = self.face_area
+        return sections + faces
+
+    def parted_faces(self, vn: VirtualNodeMesh) -> np.ndarray:
+        """(faces,) whether each interior face of the original mesh lies between two whole
+        cells that no longer share all its nodes: a cut ran along it."""
+        if self._faces is None:
+            self._faces = _interior_faces(self.original.cells, self.original.points)
+        cell_a, slots_a, cell_b, slots_b, _ = self._faces
+        whole = np.full(len(self.original.cells), -1)
+        uncut = vn.side == 0
+        whole[vn.parent[uncut]] = np.flatnonzero(uncut)
+        a, b = whole[cell_a], whole[cell_b]
+        both = (a >= 0) & (b >= 0)
+        nodes_a = np.take_along_axis(vn.cells[a], slots_a, axis=1)
+        nodes_b = np.take_along_axis(vn.cells[b], slots_b, axis=1)
+        return both & np.any(nodes_a != nodes_b, axis=1)
+
+    def _count_faces(self, vn: VirtualNodeMesh, index: int) -> None:
+        """Credit cut ``index`` with the faces this call parted."""
+        parted = self.parted_faces(vn)
+        new = parted if self._parted is None else parted & ~self._parted
+        self._parted = parted
+        while len(self.face_area) <= index:
+            self.face_area.append(0.0)
+        if np.any(new):
+            self.face_area[index] += float(self._faces[4][new].sum())
+
+
+def _interior_faces(cells: np.ndarray, points: np.ndarray) -> tuple:
+    """The faces two cells share: (cell a, its slots of the face's nodes in ascending node
+    order, cell b, its slots, the face's rest measure: area in 3D, length in 2D), as arrays."""
+    m, k = cells.shape
+    local = np.array([[j for j in range(k) if j != i] for i in range(k)])  # (k, k-1)
+    nodes = cells[:, local]  # (m, k, k-1)
+    order = np.argsort(nodes, axis=2)
+    slots = np.broadcast_to(local, (m, k, k - 1))
+    slots = np.take_along_axis(slots, order, axis=2).reshape(m * k, k - 1)
+    keys = np.sort(nodes, axis=2).reshape(m * k, k - 1)
+    owner = np.repeat(np.arange(m), k)
+    _, inverse, counts = np.unique(keys, axis=0, return_inverse=True, return_counts=True)
+    inverse = inverse.ravel()
+    shared = counts[inverse] == 2
+    idx = np.flatnonzero(shared)
+    idx = idx[np.argsort(inverse[idx], kind="stable")]
+    first, second = idx[0::2], idx[1::2]
+    X = np.asarray(points, dtype=float)[keys[first]]
+    if k == 4:
+        measure = 0.5 * np.linalg.norm(np.cross(X[:, 1] - X[:, 0], X[:, 2] - X[:, 0]), axis=1)
+    else:
+        measure = np.linalg.norm(X[:, 1] - X[:, 0], axis=1)
+    return owner[first], slots[first], owner[second], slots[second], measure
 
 
 def recut(state: CutState, cut: PlanarCut, name: str, positions: np.ndarray):
@@ -103,6 +160,7 @@ def recut(state: CutState, cut: PlanarCut, name: str, positions: np.ndarray):
     state.vn, state.cuts = vn, cuts
     if name not in state.names:
         state.names.append(name)
+    state._count_faces(vn, index)
     return vn, carry, index
 
 

@@ -3,12 +3,14 @@
 since it started are cut (``Simulation.cut_body``, the virtual node algorithm), where the body
 is at the end of the step; cells it crossed before keep their cut.
 
-The blade is a straight edge, ``blade(t)`` its two end points, moving in its own plane from
-``start`` to ``end`` (a straight cut: the plane is checked at the start). The area it has swept
-is the convex hull of its positions so far (exact for a blade moving without turning; for one
-that turns, a little more than it swept). Its force per step is the cutting resistance: with
-``toughness`` G (J/m^2, the energy to make a unit of new cut surface; 0 by default), the work
-G dA of the area cut in the step over the blade's travel ds, against its motion:
+The blade is a straight edge, ``blade(t)`` its two end points, or a triangle (three corners: a
+scalpel's flat blade, which cuts wherever it is as well as where it has been), moving in its
+own plane from ``start`` to ``end`` (a straight cut: the plane is checked at the start). The
+area it has swept is the convex hull of its positions so far (exact for a blade moving without
+turning; for one that turns, a little more than it swept). Its force per step is the cutting
+resistance: with ``toughness`` G (J/m^2, the energy to make a unit of new cut surface; 0 by
+default), the work G dA of the area cut in the step over the blade's travel ds, against its
+motion:
 F = -G dA / |ds| ds/|ds| (N). The blade does not take part in contact (it must pass through the
 body to cut it), so that force is what cutting costs, not a push on its faces.
 """
@@ -31,8 +33,9 @@ SAMPLES = 17
 
 @dataclass
 class OrganCut:
-    """A blade ``blade(t) -> (2, 3)`` cutting FEM body ``body`` from ``start`` to ``end`` (s),
-    reported as ``name``, with cutting ``toughness`` (J/m^2)."""
+    """A blade ``blade(t) -> (2, 3)`` (an edge) or ``(3, 3)`` (a triangle) cutting FEM body
+    ``body`` from ``start`` to ``end`` (s), reported as ``name``, with cutting ``toughness``
+    (J/m^2)."""
 
     blade: Callable[[float], np.ndarray]
     start: float
@@ -68,26 +71,29 @@ class OrganCut:
         self.point, self.normal = centre, vt[2]
 
     def edge(self, t: float) -> np.ndarray:
-        """The blade's two end points at t, (2, 3)."""
+        """The blade at t: its two end points (2, 3), or a triangle's three corners (3, 3)."""
         try:
             P = np.asarray(self.blade(t), dtype=float)
         except Exception as exc:  # a user's function
             raise InputError(f"cut {self.name!r}: blade({t:g}) failed: {exc}") from None
         if P.ndim != 2 or P.shape[1] != 3 or len(P) < 2 or not np.all(np.isfinite(P)):
             raise InputError(
-                f"cut {self.name!r}: blade(t) must return a straight edge as (2, 3) finite "
-                f"points (m), got shape {P.shape}"
+                f"cut {self.name!r}: blade(t) must return a straight edge (2, 3) or a triangle "
+                f"(3, 3) of finite points (m), got shape {P.shape}"
             )
-        if len(P) > 2:
-            a, b = P[0], P[-1]
-            axis = (b - a) / max(np.linalg.norm(b - a), 1e-300)
-            off = np.linalg.norm(np.cross(P - a, axis), axis=1).max()
-            if off > 1e-9 * np.linalg.norm(b - a):
-                raise InputError(
-                    f"cut {self.name!r}: an organ's blade is a straight edge (its points lie "
-                    "off the line from the first to the last)"
-                )
-        return P[[0, -1]]
+        if len(P) == 2:
+            return P
+        a, b = P[0], P[-1]
+        axis = (b - a) / max(np.linalg.norm(b - a), 1e-300)
+        off = np.linalg.norm(np.cross(P - a, axis), axis=1).max()
+        if off <= 1e-9 * np.linalg.norm(b - a):
+            return P[[0, -1]]  # points along one line: that edge
+        if len(P) > 3:
+            raise InputError(
+                f"cut {self.name!r}: an organ's blade is a straight edge or a triangle; "
+                f"{len(P)} points off one line are neither"
+            )
+        return P
 
     def swept(self, t: float) -> PlanarCut | None:
         """The cut it has made by time t (the hull of its positions from start), or None."""

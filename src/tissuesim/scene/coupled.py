@@ -25,7 +25,7 @@ argument of the Python API of ``tissuesim.coupling.simulation.CoupledSimulation`
                    the layer to rest points where the condition holds
     [[cuts]]       add_cut(blade, start, end, kerf, name): blade is a polyline of >= 2 points
                    [["x(t)", "y(t)", "z(t)"], ...], each coordinate a number or an expression
-                   of t; with body = "organ" the blade (a straight edge of 2 points) cuts
+                   of t; with body = "organ" the blade (an edge of 2 points or a triangle) cuts
                    that organ, with its toughness (J/m^2, optional)
     [tearing]      set_tearing(threshold): the tissue; with body = "organ" and stress (Pa) or
                    stretch, that organ tears
@@ -500,9 +500,10 @@ def _cut(sim, item: dict, where: str) -> None:
         body = _body_name(sim, item["body"], where)
         if "kerf" in item:
             raise SceneError(f"{where}: kerf is for the tissue's cuts; an organ's cut has none")
-        if len(blade) != 2:
+        if len(blade) not in (2, 3):
             raise SceneError(
-                f"{where}: an organ's blade is a straight edge of 2 points, got {len(blade)}"
+                f"{where}: an organ's blade is a straight edge (2 points) or a triangle "
+                f"(3 points), got {len(blade)}"
             )
         options = {"body": body}
         if "toughness" in item:

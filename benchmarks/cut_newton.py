@@ -1,0 +1,106 @@
+"""Does a cut make the steps after it harder? Newton iterations per step of a run that cuts,
+against the same run without the cut, step for step (like for like: the same scene, the same
+steps, only the cut differs).
+
+1. The shipped ``liver_resection`` example over its cutting phase (t = 0.1 .. 0.24 s, before
+   the lobe comes off and falls, which changes the motion itself): with the blade, and with
+   the ``[[cuts]]`` table removed.
+2. The organ of ``benchmarks/cut_cost.py`` (12 divisions: 10,368 tetrahedra; ellipsoid under
+   gravity, Backward Euler) cut at step 4 by planes at several positions, chosen to pass close
+   to nodes (copies of fractions down to 1e-7: the slivers a cut can make), then 8 more steps.
+
+Per run: the mean and largest Newton iterations per step over the compared steps, and the
+ratio of the means (cut / uncut). Also the explicit stability limit before and after the cut is
+in ``benchmarks/explicit_limit.py``.
+
+    python3 benchmarks/cut_newton.py      # writes benchmarks/results/cut_newton.md
+"""
+
+from __future__ import annotations
+
+import tomllib
+from pathlib import Path
+
+import numpy as np
+
+from tissuesim.mesh.virtual_nodes import PlanarCut
+from tissuesim.scene.loader import build_scene
+
+HERE = Path(__file__).resolve().parent
+EXAMPLES = HERE.parent / "src" / "tissuesim" / "examples"
+
+
+def liver(cut: bool, steps: int = 24) -> list[int]:
+    """Newton iterations of each of the example's first ``steps`` steps."""
+    path = EXAMPLES / "liver_resection.toml"
+    data = tomllib.loads(path.read_text())
+    if not cut:
+        del data["cuts"]
+    sim = build_scene(data, base_dir=path.parent, source=str(path)).simulation
+    return [sim.step().newton_iterations for _ in range(steps)]
+
+
+def organ_run(x: float | None, before: int = 4, after: int = 8) -> tuple[list[int], float]:
+    """Newton iterations of the steps after step ``before``, cut there at x (None: no cut),
+    and the smallest copy fraction the cut made."""
+    import sys
+
+    sys.path.insert(0, str(HERE))
+    from cut_cost import organ
+
+    sim = organ(12)
+    for _ in range(before):
+        sim.step()
+    smallest = 1.0
+    if x is not None:
+        blade = PlanarCut(
+            np.array([x, 0.0, 0.0]),
+            np.array([1.0, 0.0, 0.0]),
+            np.array([[x, -1, -1], [x, 1, -1], [x, 1, 1], [x, -1, 1]], dtype=float),
+        )
+        sim.cut_body(blade, body="organ")
+        fractions = sim.bodies["organ"].mesh.cell_fractions
+        smallest = float(fractions.min())
+    return [sim.step().newton_iterations for _ in range(after)], smallest
+
+
+def row(name: str, cut: list[int], uncut: list[int], note: str = "") -> str:
+    a, b = float(np.mean(cut)), float(np.mean(uncut))
+    return (
+        f"| {name} | {b:.2f} (max {max(uncut)}) | {a:.2f} (max {max(cut)}) | {a / b:.2f} | {note} |"
+    )
+
+
+def main() -> None:
+    lines = [
+        "# Newton iterations per step with and without a cut",
+        "",
+        "`python3 benchmarks/cut_newton.py`: the same run with and without the cut, over the",
+        "same steps.",
+        "",
+        "| run | without the cut | with the cut | ratio | note |",
+        "| --- | --- | --- | --- | --- |",
+    ]
+    with_cut, without = liver(True), liver(False)
+    phase = slice(10, 24)  # t = 0.1 .. 0.24 s: the blade cutting, the lobe not yet off
+    lines.append(
+        row("liver_resection, steps 11-24 (cutting)", with_cut[phase], without[phase],
+            f"per step, cut: {with_cut[phase]}; uncut: {without[phase]}")
+    )  # fmt: skip
+    print(lines[-1], flush=True)
+    uncut, _ = organ_run(None)
+    for x in (0.011, -0.02137, 0.0, 0.0301):
+        cut, smallest = organ_run(x)
+        lines.append(
+            row(f"organ cut at x = {1e3 * x:g} mm, 8 steps after", cut, uncut,
+                f"smallest copy fraction {smallest:.2g}")
+        )  # fmt: skip
+        print(lines[-1], flush=True)
+    lines.append("")
+    out = HERE / "results" / "cut_newton.md"
+    out.write_text("\n".join(lines))
+    print(f"wrote {out}")
+
+
+if __name__ == "__main__":
+    main()
