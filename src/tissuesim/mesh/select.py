@@ -125,11 +125,17 @@ def _available(mesh: Mesh) -> str:
 
 
 def vertices_tagged(mesh: Mesh, tag: str) -> np.ndarray:
-    """Sorted ids (k,) of the point set ``tag``, else the vertices of that facet set or cell set."""
+    """Sorted ids (k,) of the point set ``tag``, else the vertices of that facet set (with its
+    facets' midside and face-centre nodes on a quadratic mesh) or cell set."""
     if tag in mesh.point_sets:
         ids = np.unique(np.asarray(mesh.point_sets[tag], dtype=np.int64))
     elif tag in mesh.facet_sets:
-        ids = np.unique(np.asarray(mesh.facet_sets[tag], dtype=np.int64))
+        facets = np.asarray(mesh.facet_sets[tag], dtype=np.int64).reshape(-1, mesh.facet_nodes)
+        if mesh.order == 2:
+            from tissuesim.mesh.quadratic import quadratic_facets
+
+            facets = quadratic_facets(mesh, facets)
+        ids = np.unique(facets[facets >= 0])
     elif tag in mesh.cell_sets:
         ids = np.unique(mesh.cells[np.asarray(mesh.cell_sets[tag], dtype=np.int64)])
     else:
