@@ -2,16 +2,17 @@
 elastic block (E = 10 kPa, nu = 0.3) with tissuesim's barrier contact, the force against Hertz's
 F = 4/3 E* sqrt(R) d^(3/2), E* = E / (1 - nu^2).
 
-The half-space is a quarter block (symmetry planes x = 0, y = 0) 80 mm wide and deep, clamped at
-its base, of 12 x 12 x 12 Q1 hexahedra graded towards the contact point: 0.4 mm up to 1.6 mm from
-it (the contact radius is a = sqrt(R d) = 1 mm), then each cell 1.8 times the previous one. The
+The half-space is a quarter block (symmetry planes x = 0, y = 0) 60 mm wide and deep, clamped at
+its base, of 10 x 10 x 10 Q1 hexahedra graded towards the contact point: 0.35 mm up to 1.4 mm
+from it (the contact radius is a = sqrt(R d) = 1 mm), then each cell 2.3 times the previous one. The
 probe is a 15-degree cap of an icosphere of refinement 6 (facets of R / 55), starting dhat / 2
 above the block and moved 100 um in one quasistatic step; dhat = 1 um. The depth d is the
 probe's travel since it touched, less the barrier's gap; the quarter carries F / 4.
 
-The coarse mesh is stiff: it reads about 11 % above Hertz (finer meshes of the same kind and the
+The coarse mesh is stiff: it reads about 13 % above Hertz (finer meshes of the same kind and the
 gmsh-graded meshes of ``benchmarks/hertz.py`` approach Hertz, docs/guide/verify.md), so the
-tolerance is 15 %: the check catches a wrong contact force, depth or sign, not a few percent.
+tolerance is 20 %: the check catches a wrong contact force, depth, modulus or share, not a few
+percent. The mesh is this coarse so that the step takes seconds with SciPy's SuperLU too.
 """
 
 from __future__ import annotations
@@ -24,8 +25,8 @@ __all__ = ["DEPTH", "TOL", "checks", "graded_nodes", "indentation"]
 
 R, E, NU = 0.01, 1e4, 0.3
 DEPTH, DHAT = 1e-4, 1e-6
-H0, R_FINE, GROWTH, SIZE = 0.4e-3, 1.6e-3, 1.8, 0.08
-TOL = 0.15
+H0, R_FINE, GROWTH, SIZE = 0.35e-3, 1.4e-3, 2.3, 0.06
+TOL = 0.2
 
 
 def graded_nodes(h0: float, r_fine: float, growth: float, size: float) -> np.ndarray:
@@ -78,4 +79,4 @@ def checks() -> list[Check]:
     """The contact force at the step's depth against Hertz's (relative, ``TOL``)."""
     d, force = indentation()
     what = f"force (N) at d = {d * 1e6:.1f} um"
-    return [Check("Hertz sphere, Q1 12x12x12 graded", what, hertz_force(d), force, TOL)]
+    return [Check("Hertz sphere, Q1 10x10x10 graded", what, hertz_force(d), force, TOL)]
