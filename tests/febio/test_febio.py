@@ -123,7 +123,7 @@ def test_cli_runs_a_feb_and_converts_it(tmp_path, capsys):
 
 
 REFUSALS = {
-    "hex20": ('<Elements type="hex20" name="p">', "element type 'hex20'"),
+    "penta6": ('<Elements type="penta6" name="p">', "element type 'penta6'"),
     "material": ('<material id="1" name="m" type="rigid body">', "material type 'rigid body'"),
     "contact": ('<contact type="tied-elastic" surface_pair="p">', "contact type 'tied-elastic'"),
     "element": ("<Rigid>", "<Rigid>: this section is not supported"),
@@ -136,7 +136,7 @@ REFUSALS = {
 def test_refusals_are_one_line_naming_the_element_and_its_line(case, tmp_path):
     opening, message = REFUSALS[case]
     text = (MODELS / "mooney_rivlin_pressure.feb").read_text()
-    if case == "hex20":
+    if case == "penta6":
         text = text.replace('<Elements type="tet4" name="cube">', opening)
     elif case == "material":
         text = text.replace('<material id="1" name="liver" type="Mooney-Rivlin">', opening)

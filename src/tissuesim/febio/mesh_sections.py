@@ -8,12 +8,25 @@ import numpy as np
 from tissuesim.febio.model import FebModel, _floats, _ints, _unsupported
 from tissuesim.febio.xml import Node
 
-__all__ = ["SECTIONS", "ELEMENTS", "FACETS"]
+__all__ = ["SECTIONS", "ELEMENTS", "PERMUTATIONS", "FACETS"]
 
-#: FEBio element type -> (nodes per element, meshio's cell type); node orders agree with VTK's
-ELEMENTS = {"tet4": (4, "tetra"), "tet10": (10, "tetra10"), "hex8": (8, "hexahedron")}
-#: FEBio surface facet types -> corners kept (tissuesim's facets are corner lists)
-FACETS = {"tri3": 3, "tri6": 3, "quad4": 4}
+#: FEBio element type -> (nodes per element, meshio's cell type)
+ELEMENTS = {
+    "tet4": (4, "tetra"),
+    "tet10": (10, "tetra10"),
+    "hex8": (8, "hexahedron"),
+    "hex20": (20, "hexahedron20"),
+    "hex27": (27, "hexahedron27"),
+}
+#: FEBio element type -> FEBio's local node of each of tissuesim's (VTK's) nodes, where the
+#: orders differ: tissuesim's cell = FEBio's element[PERMUTATIONS[type]]. From the reference
+#: coordinates of FEBio's nodes (FECore/FESolidElementShape.cpp: FEHex20::shape_fnc, HEX27_LUT):
+#: hex8, hex20 and hex27's nodes 0-19 are VTK's; hex27 puts its face centres in the order
+#: y = -1, x = +1, y = +1, x = -1, z = -1, z = +1, VTK x = -1, x = +1, y = -1, y = +1, ...
+PERMUTATIONS = {"hex27": np.array([*range(20), 23, 21, 20, 22, 24, 25, 26])}
+#: FEBio surface facet types -> corners kept (tissuesim's facets are corner lists; FEBio lists
+#: a facet's corners first)
+FACETS = {"tri3": 3, "tri6": 3, "quad4": 4, "quad8": 4, "quad9": 4}
 
 
 def _index(model: FebModel, node: Node, ids: list[int]) -> np.ndarray:
@@ -66,13 +79,14 @@ def _elements(model: FebModel, node: Node) -> None:
     if kind not in ELEMENTS:
         raise node.error(
             f"element type {kind!r} is not supported by tissuesim; it runs "
-            f"{', '.join(ELEMENTS)} (hex20, hex27, penta6, shells and beams are not)"
+            f"{', '.join(ELEMENTS)} (wedges, pyramids, tet5, tet15, tet20, shells and beams are "
+            "not)"
         )
     nv, cell_type = ELEMENTS[kind]
     name = node.attrib.get("name") or f"Part{len(model.parts) + 1}"
     if name in model.parts:
         raise node.error(f"a second <Elements> part named {name!r}")
-    cells, ids = [], []
+    cells, ids, elems = [], [], []
     for c in node.children:
         if c.tag not in ("elem", kind) or "id" not in c.attrib:
             raise _unsupported(c, f"expected <elem id=...> with {nv} node ids")
@@ -80,16 +94,46 @@ def _elements(model: FebModel, node: Node) -> None:
         if len(conn) != nv:
             raise c.error(f"a {kind} element has {nv} nodes, got {len(conn)}")
         cells.append(_index(model, c, conn))
+        if kind in PERMUTATIONS:
+            cells[-1] = cells[-1][PERMUTATIONS[kind]]
         eid = int(c.attrib["id"])
         if eid in model._element_index:
             raise c.error(f"element id {eid} is defined twice")
         model._element_index[eid] = (name, len(ids))
         ids.append(eid)
+        elems.append(c)
     if not cells:
         raise node.error("no elements in this part")
+    if kind in QUADRATIC_HEXES:
+        _check_order(model, kind, np.array(cells, dtype=np.int64), elems)
     model.parts[name] = (cell_type, np.array(cells, dtype=np.int64), np.array(ids), node)
     if "mat" in node.attrib:  # FEBio 2.5 style: the material on the part
         model.domains[name] = (node.attrib["mat"], None, node)
+
+
+#: each quadratic hexahedron's node order, in words, for the refusal of a misnumbered one
+QUADRATIC_HEXES = {
+    "hex20": "corners, then the midside nodes of edges 1-2 2-3 3-4 4-1 5-6 6-7 7-8 8-5 1-5 "
+    "2-6 3-7 4-8",
+    "hex27": "hex20's, then the centres of the faces y-, x+, y+, x-, z-, z+ and the centre",
+}
+
+
+def _check_order(model: FebModel, kind: str, cells: np.ndarray, elems: list[Node]) -> None:
+    """Refuses the first element whose rest map has a Jacobian that is not positive at a Gauss
+    point or node: its nodes are not in FEBio's order (or it is folded or inverted)."""
+    from tissuesim.mesh.tensor_checks import DEGENERATE, tensor_jacobians
+
+    detJ = tensor_jacobians(model.nodes, cells)
+    bad = (detJ <= DEGENERATE * np.abs(detJ).mean(axis=1, keepdims=True)).any(axis=1)
+    if bad.any():
+        e = int(np.flatnonzero(bad)[0])
+        raise elems[e].error(
+            f"the Jacobian of this {kind} runs from {detJ[e].min():.3g} to "
+            f"{detJ[e].max():.3g} over its Gauss points and nodes ({int(bad.sum())} such "
+            f"elements): its nodes are not in FEBio's order ({QUADRATIC_HEXES[kind]}), or it "
+            "is folded or inverted"
+        )
 
 
 def _node_set(model: FebModel, node: Node) -> None:
