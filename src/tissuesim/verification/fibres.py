@@ -33,6 +33,8 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
+
 from tissuesim.materials import make_material
 from tissuesim.verification.laws import TOL, G, L
 from tissuesim.verification.result import Check
@@ -100,8 +102,6 @@ def _closed(derivatives, fibres, kind: str) -> float:
 
 def combination(law, kind: str) -> float:
     """The law's stress combination s of ``kind`` (uniaxial, equibiaxial or shear)."""
-    import numpy as np
-
     if kind == "uniaxial":
         t = L**-0.5
         P = law.stress(np.diag([L, t, t])[None])[0]
