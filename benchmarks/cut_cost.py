@@ -12,6 +12,7 @@ over the later ones. Medians over ``--repeats``.
 
     python3 benchmarks/cut_cost.py                   # 10,368 tetrahedra, 3 repeats
     python3 benchmarks/cut_cost.py --divisions 8 12 17
+    python3 benchmarks/cut_cost.py --contact --out benchmarks/results/cut_cost_contact.md
 """
 
 from __future__ import annotations
@@ -29,17 +30,24 @@ from tissuesim.mesh.virtual_nodes import PlanarCut
 HERE = Path(__file__).resolve().parent
 
 
-def organ(divisions: int) -> ts.Simulation:
+def organ(divisions: int, contact: bool = False) -> ts.Simulation:
+    """The organ; with ``contact``, on a table (a plane obstacle just under it, contact on:
+    the cut then also rebuilds the organ's contact surface)."""
     mesh = ts.ellipsoid((0.0, 0.0, 0.03), (0.06, 0.04, 0.03), divisions)
     material = ts.make_material("neo_hookean", youngs_modulus=5e3, poisson_ratio=0.45)
     sim = ts.Simulation(integrator="backward_euler", time_step=1 / 30, gravity=(0, 0, -9.81))
     sim.add_body("organ", mesh, material, density=1000.0)
-    sim.fix(np.flatnonzero(mesh.points[:, 2] < 0.004), body="organ", name="table")
+    sim.fix(np.flatnonzero(mesh.points[:, 2] < 0.004), body="organ", name="support")
+    if contact:
+        from tissuesim.contact.obstacles import plane
+
+        sim.set_contact(dhat=2e-4)
+        sim.add_obstacle("table", plane((0.0, 0.0, -5e-4), (0.0, 0.0, 1.0), 0.3))
     return sim
 
 
-def once(divisions: int, before: int = 4, after: int = 4) -> dict:
-    sim = organ(divisions)
+def once(divisions: int, before: int = 4, after: int = 4, contact: bool = False) -> dict:
+    sim = organ(divisions, contact)
     walls = []
     for _ in range(before):
         start = time.perf_counter()
@@ -76,12 +84,14 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--divisions", type=int, nargs="+", default=[12])
     parser.add_argument("--repeats", type=int, default=3)
+    parser.add_argument("--contact", action="store_true", help="the organ on a table, contact on")
     parser.add_argument("--out", type=Path, default=HERE / "results" / "cut_cost.md")
     args = parser.parse_args()
     lines = [
         "# Cost of a cut event (benchmarks/cut_cost.py)",
         "",
-        f"`python3 benchmarks/cut_cost.py --divisions {' '.join(map(str, args.divisions))}`; "
+        f"`python3 benchmarks/cut_cost.py --divisions {' '.join(map(str, args.divisions))}"
+        f"{' --contact' if args.contact else ''}`; "
         f"medians of {args.repeats} repeats, each a fresh simulation; this machine, one process.",
         "",
         "| tetrahedra | cells cut | pieces | step (s) | cut (s) | first step after (s) "
@@ -89,7 +99,7 @@ def main() -> None:
         "| --- | --- | --- | --- | --- | --- | --- | --- | --- |",
     ]
     for divisions in args.divisions:
-        runs = [once(divisions) for _ in range(args.repeats)]
+        runs = [once(divisions, contact=args.contact) for _ in range(args.repeats)]
         med = {k: statistics.median(r[k] for r in runs) for k in runs[0]}
         lines.append(
             f"| {med['tetrahedra']:,} | {med['cells_cut']} | {med['pieces']} "
