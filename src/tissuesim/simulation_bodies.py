@@ -213,8 +213,9 @@ class BodyCalls:
         "new_nodes", "pieces", "area_m2" (the rest area of this cut so far), "origin": (n,)
         the node each node continues}. With contact on, the cut body's contact surface is its
         cut boundary (``contact/cut_surface.py``: each side's cut face a little inside it, so
-        the two never pass through each other). Not yet with a tissue attached, nor in 2D
-        with contact; a cell crossed by two different cuts is refused."""
+        the two never pass through each other). A tissue's attachment points on the body
+        follow the copy on their side of the cut. Not yet in 2D with contact; a cell crossed
+        by two different cuts is refused."""
         from tissuesim.bodies.cut_state import CutState, recut
 
         b = self.body(body, ("fem",))
@@ -228,11 +229,10 @@ class BodyCalls:
                 f"cut_body: body {b.name!r} is 2D and has contact on; a cut body's contact "
                 "surface is built in 3D only so far: cut without contact, or in 3D"
             )
-        if self.tissue is not None:
-            raise InputError("cut_body: a scene with a tissue cannot cut its organs yet")
         if b.cut_state is None:
             b.cut_state = CutState(b.mesh, density=np.asarray(b.model.density, dtype=float))
         current = self.body_positions(b.name) if self._state is not None else b.mesh.points
+        old_vn = b.cut_state.vn
         before_cells = int(np.count_nonzero(b.cut_state.vn.side > 0)) if b.cut_state.vn else 0
         before = b.mesh.n_points
         done = recut(b.cut_state, cut, name, current)
@@ -250,6 +250,12 @@ class BodyCalls:
             }
         vn, carry, index = done
         b.apply_cut(vn, carry, b.cut_state.original, b.cut_state.density)
+        if self.tissue is not None:  # its attachment points follow their side of the cut
+            from tissuesim.bodies.cut_state import follow_cells
+
+            self.tissue.follow_organ_cut(
+                b.name, lambda cells, bary: follow_cells(old_vn, vn, cells, bary)
+            )
         return {
             "cells_cut": int(np.count_nonzero(vn.side > 0)) - before_cells,
             "new_nodes": len(vn.points) - before,

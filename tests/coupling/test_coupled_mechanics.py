@@ -316,3 +316,57 @@ def test_frame_body_attached_on_a_fem_block_and_forces_balance():
     assert sim.attachment_gap() < 1e-3
     with pytest.raises(ValueError, match="cannot be attached to itself"):
         sim.attach("cap", "cap")
+
+
+def _lower_attachment_positions(sim) -> np.ndarray:
+    """Where the lower organ carries the tissue's attachment points now (S, 3)."""
+    names = [b.name for b in sim._active()]
+    mine = [a for a in sim.system.attachments if a.organ == names.index("lower")]
+    cells = sim.bodies["lower"].mesh.cells
+    x = sim.body_positions("lower").ravel()
+    return np.concatenate([a.organ_positions(cells, x) for a in mine])
+
+
+def test_cutting_an_organ_under_the_tissue_keeps_each_attachment_on_its_side():
+    """The lower organ cut through at x = 0.53 (through its cells) with the tissue attached to
+    its top: each attachment point moves to the copy of its cell on its side of the cut (in
+    that copy's material, on the piece its side became), the organ carries every point where
+    it was, and the coupled system stays in balance as the upper organ is lifted."""
+    from scipy.sparse import csr_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    from tissuesim.mesh.virtual_nodes import PlanarCut
+
+    sim = two_boxes()
+    sim.step()
+    before = _lower_attachment_positions(sim)
+    plane = np.array([[0.53, -1, -1], [0.53, 2, -1], [0.53, 2, 1], [0.53, -1, 1]], dtype=float)
+    report = sim.cut_body(
+        PlanarCut(np.array([0.53, 0.0, 0.0]), np.array([1.0, 0.0, 0.0]), plane), body="lower"
+    )
+    assert report["pieces"] == 2 and report["cells_cut"] > 0
+    np.testing.assert_allclose(_lower_attachment_positions(sim), before, atol=1e-12)
+    body = sim.bodies["lower"]
+    vn = body.cut_state.vn
+    (contact,) = [c for c in sim.tissue.contacts if c.organ == "lower"]
+    copies = contact.cells
+    cut = vn.side[copies] != 0
+    assert np.any(cut)  # some points lie in cells the cut crossed
+    level = np.einsum("sk,sk->s", contact.barycentric[cut], vn.level[copies[cut]])
+    assert np.all(level >= -1e-12)  # in the material of their copy
+    cells = body.mesh.cells
+    n = body.mesh.n_points
+    rows = np.repeat(np.arange(len(cells)), cells.shape[1])
+    size = len(cells) + n  # cells and nodes, joined where a cell uses a node
+    graph = csr_matrix((np.ones(rows.size), (rows, cells.ravel() + len(cells))), (size, size))
+    _, label = connected_components(graph, directed=False)
+    piece = label[copies]
+    x = contact.points[:, 0]
+    left, right = np.unique(piece[x < 0.5]), np.unique(piece[x > 0.56])
+    assert len(left) == 1 and len(right) == 1 and left[0] != right[0]
+    for _ in range(2):
+        record = sim.step()
+    f = record.extra["forces"]
+    total = np.add(f["grasper"], f["lower.support"])
+    np.testing.assert_allclose(total, [0.0, 0.0, total_weight(sim)], atol=1e-7 * total_weight(sim))
+    assert record.extra["attachment_gap"] < 0.02 * 0.1

@@ -20,7 +20,7 @@ from tissuesim.errors import InputError
 from tissuesim.mesh.plane_split import section_measures
 from tissuesim.mesh.virtual_nodes import PlanarCut, VirtualNodeMesh, virtual_node_cut
 
-__all__ = ["CutState", "recut"]
+__all__ = ["CutState", "follow_cells", "recut"]
 
 
 @dataclass
@@ -181,3 +181,28 @@ def _carry(old: VirtualNodeMesh | None, new: VirtualNodeMesh) -> np.ndarray:
     carry = np.empty(len(new.points), dtype=np.int64)
     carry[new.cells.ravel()] = old_node.ravel()
     return carry
+
+
+def follow_cells(
+    old: VirtualNodeMesh | None, new: VirtualNodeMesh, cells: np.ndarray, barycentric: np.ndarray
+) -> np.ndarray:
+    """The cell of the new cut mesh that holds each point given by its cell of the current
+    mesh (``old``'s copies; the original cells before any cut) and its barycentric coordinates
+    there (unchanged: a copy keeps its element's shape): the whole copy of an uncut cell, or
+    the copy of a cut one on whose side of the cut the point lies (something attached to the
+    body, e.g. the connective tissue, follows the material it is attached to)."""
+    cells = np.asarray(cells, dtype=np.int64)
+    original = cells if old is None else old.parent[cells]
+    order = np.argsort(new.parent, kind="stable")
+    sorted_parent = new.parent[order]
+    first = np.searchsorted(sorted_parent, original, side="left")
+    count = np.searchsorted(sorted_parent, original, side="right") - first
+    a = order[first]
+    b = order[np.minimum(first + 1, len(order) - 1)]
+    out = a.copy()
+    two = count == 2
+    if np.any(two) and new.level is not None:
+        level_a = np.einsum("sk,sk->s", barycentric[two], new.level[a[two]])
+        level_b = np.einsum("sk,sk->s", barycentric[two], new.level[b[two]])
+        out[two] = np.where(level_a >= level_b, a[two], b[two])
+    return out

@@ -12,6 +12,7 @@ See docs/coupling.md for every choice.
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
@@ -251,6 +252,17 @@ class TissueBody:
             keep_pair=d.point_filter(),
             allow_orphans=True,
         )
+
+    def follow_organ_cut(
+        self, organ: str, remap: Callable[[np.ndarray, np.ndarray], np.ndarray]
+    ) -> None:
+        """Organ ``organ`` was cut: each attachment point on it moves to the cell of the new
+        mesh that ``remap(cells, barycentric)`` gives (the copy on its side of the cut; its
+        barycentric coordinates stay, as a copy keeps its element's shape)."""
+        self.contacts = [
+            dataclasses.replace(c, cells=remap(c.cells, c.barycentric)) if c.organ == organ else c
+            for c in self.contacts
+        ]
 
     def attachments(self, organ_index: Callable[[str], int], tissue_index: int) -> list:
         """The attachments still alive, organs by their system index."""
