@@ -212,10 +212,10 @@ class BodyCalls:
         crossed it), another name is another cut. Returns what changed: {"cells_cut" (new),
         "new_nodes", "pieces", "area_m2" (the rest area of this cut so far), "origin": (n,)
         the node each node continues}. With contact on, the cut body's contact surface is its
-        cut boundary (``contact/cut_surface.py``: each side's cut face a little inside it, so
-        the two never pass through each other). A tissue's attachment points on the body
-        follow the copy on their side of the cut. Not yet in 2D with contact; a cell crossed
-        by two different cuts is refused."""
+        cut boundary (``contact/cut_surface.py``, in 2D ``contact/cut_surface_2d.py``: each
+        side's cut face a little inside it, so the two never pass through each other). A
+        tissue's attachment points on the body follow the copy on their side of the cut. A
+        cell crossed by two different cuts is refused."""
         from tissuesim.bodies.cut_state import CutState, recut
 
         b = self.body(body, ("fem",))
@@ -223,11 +223,6 @@ class BodyCalls:
             raise InputError(
                 f"cut_body: body {b.name!r} has {b.mesh.cell_type} cells; cuts apply to P1 "
                 "triangles and tetrahedra"
-            )
-        if self.contact is not None and b.dim != 3:
-            raise InputError(
-                f"cut_body: body {b.name!r} is 2D and has contact on; a cut body's contact "
-                "surface is built in 3D only so far: cut without contact, or in 3D"
             )
         if b.cut_state is None:
             b.cut_state = CutState(b.mesh, density=np.asarray(b.model.density, dtype=float))

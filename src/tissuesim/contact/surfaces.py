@@ -62,7 +62,8 @@ class FemSurface:
 class CutFemSurface:
     """A cut FEM body's contact surface (``contact/cut_surface.py``): points embedded in its
     element copies, V = W X with ``embedding`` W (k, n_points) over the body's node positions
-    X, ``rest`` (k, d), ``triangles`` (m, 3), the body's ``config`` and ``tangent`` slices."""
+    X, ``rest`` (k, d), ``triangles`` (m, d: triangles in 3D, edges in 2D,
+    ``contact/cut_surface_2d.py``), the body's ``config`` and ``tangent`` slices."""
 
     name: str
     material: object
@@ -72,17 +73,20 @@ class CutFemSurface:
     config: slice
     tangent: slice
     linear = True
-    dim = 3
+
+    @property
+    def dim(self) -> int:
+        return self.rest.shape[1]
 
     def positions(self, c: np.ndarray) -> np.ndarray:
-        return self.embedding @ c[self.config].reshape(-1, 3)
+        return self.embedding @ c[self.config].reshape(-1, self.dim)
 
     def jacobian(self, c: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """(row over 0..3k-1, system tangent column, value) of dV/dq = W (x) I_3."""
-        E = self.embedding.tocoo()
-        rows = (3 * E.row[:, None] + np.arange(3)).ravel()
-        cols = (self.tangent.start + 3 * E.col[:, None] + np.arange(3)).ravel()
-        return rows, cols, np.repeat(E.data, 3)
+        """(row over 0..dk-1, system tangent column, value) of dV/dq = W (x) I_d."""
+        d, E = self.dim, self.embedding.tocoo()
+        rows = (d * E.row[:, None] + np.arange(d)).ravel()
+        cols = (self.tangent.start + d * E.col[:, None] + np.arange(d)).ravel()
+        return rows, cols, np.repeat(E.data, d)
 
     def curvature(self, c: np.ndarray, g_vertices: np.ndarray):
         return None
@@ -152,14 +156,16 @@ def fem_surface(
 
     if model.mesh.cell_levels is not None:
         from tissuesim.contact.cut_surface import cut_surface
+        from tissuesim.contact.cut_surface_2d import cut_boundary
 
         if choice is not None:
             raise InputError(
                 f"contact surface of {name!r}: the body has been cut, and its contact surface "
                 "is its whole boundary with the cut faces; leave its surface out of [contact]"
             )
-        W, tri = cut_surface(model.mesh, dhat)
-        n = model.mesh.n_points * 3
+        build = cut_boundary if model.mesh.dim == 2 else cut_surface
+        W, tri = build(model.mesh, dhat)
+        n = model.mesh.n_points * model.mesh.dim
         return CutFemSurface(
             name,
             model.material,
