@@ -171,6 +171,40 @@ def _boundary_edges(cells: np.ndarray) -> np.ndarray:
     return uniq[counts == 1]
 
 
+def _material_weights(levels: np.ndarray) -> np.ndarray:
+    """(m, 4, 3) vertex weights of each triangle's material part {level >= 0} (a cut mesh's
+    copies, ``Mesh.cell_levels``; +inf for whole cells): a triangle or a quadrilateral, the
+    shorter ones padded with their last corner, so that a copy is drawn as its material only
+    and the faces of a cut show apart."""
+    m = len(levels)
+    lv = np.where(np.isfinite(levels), levels, 1.0)
+    slots = np.zeros((m, 6, 3))
+    valid = np.zeros((m, 6), dtype=bool)
+    eye = np.eye(3)
+    for k in range(3):  # edge k -> k + 1: its start if inside, then its crossing
+        i, j = k, (k + 1) % 3
+        li, lj = lv[:, i], lv[:, j]
+        slots[:, 2 * k] = eye[i]
+        valid[:, 2 * k] = li >= 0.0
+        cross = li * lj < 0.0
+        t = np.where(cross, li / np.where(cross, li - lj, 1.0), 0.0)
+        slots[:, 2 * k + 1] = (1.0 - t)[:, None] * eye[i] + t[:, None] * eye[j]
+        valid[:, 2 * k + 1] = cross
+    order = np.argsort(~valid, axis=1, kind="stable")[:, :4]  # the valid corners first, in turn
+    count = valid.sum(axis=1)
+    last = np.take_along_axis(order, np.maximum(count - 1, 0)[:, None], axis=1)
+    order = np.where(np.arange(4)[None, :] < count[:, None], order, last)
+    return np.take_along_axis(slots, order[:, :, None], axis=1)
+
+
+def _cell_polygons(mesh: Mesh, x: np.ndarray) -> np.ndarray:
+    """The polygons to draw for each cell at positions x: the triangles, or for a cut mesh
+    each copy's material part."""
+    if mesh.cell_levels is None:
+        return x[mesh.cells]
+    return np.einsum("mkv,mvd->mkd", _material_weights(mesh.cell_levels), x[mesh.cells])
+
+
 def _setup_2d(
     mesh: Mesh, all_positions: Sequence[np.ndarray], label: str, cmap, norm, rest_outline
 ):
@@ -184,7 +218,7 @@ def _setup_2d(
     ax = fig.add_subplot()
     many = mesh.n_cells > 5000
     coll = PolyCollection(
-        np.asarray(all_positions[0], dtype=float)[mesh.cells],
+        _cell_polygons(mesh, np.asarray(all_positions[0], dtype=float)),
         cmap=cmap,
         norm=norm,
         edgecolors="face" if many else (0.0, 0.0, 0.0, 0.25),
@@ -274,7 +308,7 @@ def render_gif(
 
     def update(i: int) -> Any:
         t, x, v = data[i]
-        coll.set_verts(x[mesh.cells])
+        coll.set_verts(_cell_polygons(mesh, x))
         coll.set_array(v)
         ax.set_title(f"{prefix}t = {t:.4g} s")
         return (coll, *overlay, ax.title)
