@@ -114,7 +114,14 @@ def _interior_faces(cells: np.ndarray, points: np.ndarray) -> tuple:
     slots = np.take_along_axis(slots, order, axis=2).reshape(m * k, k - 1)
     keys = np.sort(nodes, axis=2).reshape(m * k, k - 1)
     owner = np.repeat(np.arange(m), k)
-    _, inverse, counts = np.unique(keys, axis=0, return_inverse=True, return_counts=True)
+    n = int(cells.max(initial=0)) + 1
+    if n ** (k - 1) < 2**62:  # one int64 per face: a 1D unique, far faster than by rows
+        code = keys[:, 0].astype(np.int64)
+        for j in range(1, k - 1):
+            code = code * n + keys[:, j]
+        _, inverse, counts = np.unique(code, return_inverse=True, return_counts=True)
+    else:
+        _, inverse, counts = np.unique(keys, axis=0, return_inverse=True, return_counts=True)
     inverse = inverse.ravel()
     shared = counts[inverse] == 2
     idx = np.flatnonzero(shared)

@@ -36,6 +36,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from tissuesim.errors import InputError
+from tissuesim.mesh.planar_cut import PlanarCut
 from tissuesim.mesh.plane_split import positive_fraction, sections_inside
 
 __all__ = ["PlanarCut", "VirtualNodeMesh", "cut_cells", "virtual_node_cut"]
@@ -44,38 +45,6 @@ __all__ = ["PlanarCut", "VirtualNodeMesh", "cut_cells", "virtual_node_cut"]
 PLANE_TOLERANCE = 1e-9
 #: a face part (or a side's volume) below this fraction of the whole counts as empty
 EMPTY = 1e-12
-
-
-@dataclass(frozen=True)
-class PlanarCut:
-    """A cut in the plane through ``point`` with unit ``normal``, bounded by the convex
-    ``polygon`` (k, 3) of points in that plane (counter-clockwise or clockwise)."""
-
-    point: np.ndarray
-    normal: np.ndarray
-    polygon: np.ndarray
-
-    @classmethod
-    def swept_segment(cls, a0, b0, a1, b1) -> PlanarCut:
-        """The area a straight blade edge sweeps from segment a0-b0 to a1-b1 (moved without
-        turning out of its plane: the four points must be coplanar)."""
-        p = np.array([a0, b0, b1, a1], dtype=float)
-        if p.shape != (4, 3):
-            raise InputError("a swept segment is four 3D points: a0, b0, a1, b1")
-        n = np.cross(p[1] - p[0], p[3] - p[0])
-        if np.linalg.norm(n) == 0.0:
-            n = np.cross(p[1] - p[0], p[2] - p[0])
-        size = float(np.max(np.linalg.norm(p - p[0], axis=1)))
-        if np.linalg.norm(n) <= 1e-12 * size**2:
-            raise InputError("the blade sweeps no area (it moved along itself or not at all)")
-        n = n / np.linalg.norm(n)
-        off = np.abs((p - p[0]) @ n).max()
-        if off > 1e-9 * size:
-            raise InputError(
-                f"the swept segment is not planar (a corner {off:.3g} m off the plane of the "
-                "others); split the motion into steps that are"
-            )
-        return cls(p[0].copy(), n, p)
 
 
 @dataclass(frozen=True)
@@ -127,12 +96,27 @@ class VirtualNodeMesh:
             name: np.flatnonzero(np.isin(self.parent, ids)) for name, ids in mesh.cell_sets.items()
         }
         facets = boundary_facets(self.cells)
-        keys = np.sort(self.origin[facets], axis=1)
+        n = int(self.origin.max(initial=0)) + 1
+
+        def codes(f: np.ndarray) -> np.ndarray:  # one int64 per facet of original nodes
+            f = np.sort(np.asarray(f, dtype=np.int64).reshape(len(f), -1), axis=1)
+            out = f[:, 0].copy()
+            for j in range(1, f.shape[1]):
+                out = out * n + f[:, j]
+            return out
+
         facet_sets = {}
-        for name, ids in mesh.facet_sets.items():
-            wanted = {tuple(f) for f in np.sort(np.asarray(ids), axis=1)}
-            mine = np.array([tuple(k) in wanted for k in keys], dtype=bool)
-            facet_sets[name] = facets[mine]
+        if mesh.facet_sets and n ** facets.shape[1] < 2**62:
+            keys = codes(self.origin[facets])
+            facet_sets = {
+                name: facets[np.isin(keys, codes(ids))] for name, ids in mesh.facet_sets.items()
+            }
+        elif mesh.facet_sets:  # too many nodes for one int64 per facet: compare rows
+            rows = np.sort(self.origin[facets], axis=1)
+            for name, ids in mesh.facet_sets.items():
+                wanted = {tuple(f) for f in np.sort(np.asarray(ids), axis=1)}
+                mine = np.array([tuple(k) in wanted for k in rows], dtype=bool)
+                facet_sets[name] = facets[mine]
         return Mesh(
             self.points,
             self.cells,

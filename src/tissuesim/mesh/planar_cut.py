@@ -1,0 +1,44 @@
+"""A planar cut: a plane bounded by a convex polygon (the area a straight blade sweeps), the
+input of the virtual node algorithm (``mesh/virtual_nodes.py``)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from tissuesim.errors import InputError
+
+__all__ = ["PlanarCut"]
+
+
+@dataclass(frozen=True)
+class PlanarCut:
+    """A cut in the plane through ``point`` with unit ``normal``, bounded by the convex
+    ``polygon`` (k, 3) of points in that plane (counter-clockwise or clockwise)."""
+
+    point: np.ndarray
+    normal: np.ndarray
+    polygon: np.ndarray
+
+    @classmethod
+    def swept_segment(cls, a0, b0, a1, b1) -> PlanarCut:
+        """The area a straight blade edge sweeps from segment a0-b0 to a1-b1 (moved without
+        turning out of its plane: the four points must be coplanar)."""
+        p = np.array([a0, b0, b1, a1], dtype=float)
+        if p.shape != (4, 3):
+            raise InputError("a swept segment is four 3D points: a0, b0, a1, b1")
+        n = np.cross(p[1] - p[0], p[3] - p[0])
+        if np.linalg.norm(n) == 0.0:
+            n = np.cross(p[1] - p[0], p[2] - p[0])
+        size = float(np.max(np.linalg.norm(p - p[0], axis=1)))
+        if np.linalg.norm(n) <= 1e-12 * size**2:
+            raise InputError("the blade sweeps no area (it moved along itself or not at all)")
+        n = n / np.linalg.norm(n)
+        off = np.abs((p - p[0]) @ n).max()
+        if off > 1e-9 * size:
+            raise InputError(
+                f"the swept segment is not planar (a corner {off:.3g} m off the plane of the "
+                "others); split the motion into steps that are"
+            )
+        return cls(p[0].copy(), n, p)
