@@ -52,7 +52,7 @@ from tissuesim.simulation_setup import SetupCalls
 from tissuesim.solve.linear import make_linear_solver
 from tissuesim.solve.newton import NewtonOptions
 from tissuesim.time.grid import check_time_resolution
-from tissuesim.time.retry import advance, validate_stepping
+from tissuesim.time.retry import QUASISTATIC_ADVICE, advance, validate_stepping
 from tissuesim.time.state import State
 
 if TYPE_CHECKING:  # frames and the system pull in scipy.spatial: imported when first used
@@ -428,6 +428,7 @@ class Simulation(BodyCalls, SetupCalls, StepChecks, BodyResults):
             self.newton,
             self.max_step_halvings,
             self._end_time(),
+            QUASISTATIC_ADVICE if self.integrator == "quasistatic" else None,
         )
         if records:
             self._last_gradient = records[-1].gradient

@@ -52,6 +52,28 @@ def test_non_converging_step_raises_a_helpful_convergence_error():
     assert np.all(sim.cell_fields()["J"] > 0)
 
 
+def test_a_failing_quasistatic_step_says_to_apply_the_load_gradually():
+    """Full gravity on a soft beam from the first quasistatic step: a shorter step is the same
+    problem (the load does not depend on t), so the error says to ramp the load instead."""
+    mesh = ts.box((0.0, 0.0, 0.0), (1.0, 0.4, 0.4), (3, 1, 1))
+    sim = ts.Simulation(
+        mesh,
+        ts.make_material("neo_hookean", youngs_modulus=3e3, poisson_ratio=0.45),
+        density=1000.0,
+        integrator="quasistatic",
+        time_step=1.0,
+        gravity=(0.0, 0.0, -9.81),
+        max_step_halvings=1,
+        newton=ts.NewtonOptions(max_iterations=3),
+    )
+    sim.fix(select.vertices_on_plane(mesh, 0, 0.0))
+    with pytest.raises(ConvergenceError) as info:
+        sim.step()
+    message = str(info.value)
+    assert "apply the load gradually" in message and "backward_euler" in message
+    assert "smaller time_step" not in message
+
+
 def test_failed_run_leaves_valid_output(tmp_path):
     sim = squashed_square()
     out = tmp_path / "run"

@@ -16,6 +16,18 @@ from tissuesim.time.state import State, StepOutcome
 
 __all__ = ["advance", "validate_stepping"]
 
+DEFAULT_ADVICE = (
+    "Try a smaller time_step, more newton.max_iterations, or a material defined for inverted "
+    "elements (course_neo_hookean)."
+)
+#: in a quasistatic run a shorter step changes only what depends on t: a constant load (full
+#: gravity from the start) is as hard at h / 64 as at h
+QUASISTATIC_ADVICE = (
+    "In a quasistatic run a shorter step only helps loads and supports that change with t: "
+    "apply the load gradually (as an expression of t over several steps), raise "
+    "newton.max_iterations, or use integrator = 'backward_euler'."
+)
+
 
 def advance(
     step_fn,
@@ -26,8 +38,12 @@ def advance(
     options,
     max_halvings: int,
     end_time: float | None = None,
+    advice: str | None = None,
 ):
     """Advance by h; returns (new State, list of NewtonResult, number of substeps).
+
+    advice: what the error says to try when even the smallest step fails (default: a smaller
+    time step, more iterations, an inversion-safe law).
 
     end_time: the time the new state gets (start + n h, given by the caller) instead of the
     running sum of (sub)step lengths, which drifts by round-off (ten steps of 0.1 would end
@@ -50,9 +66,7 @@ def advance(
         if level >= max_halvings:
             raise ConvergenceError(
                 f"the step from t = {s.time:.6g} s with time_step {dt:.3g} s did not converge "
-                f"after {max_halvings} halvings: {outcome.reason}. Try a smaller time_step, more "
-                "newton.max_iterations, or a material defined for inverted elements "
-                "(course_neo_hookean)."
+                f"after {max_halvings} halvings: {outcome.reason}. {advice or DEFAULT_ADVICE}"
             )
         mid = attempt(s, dt / 2, level + 1)
         return attempt(mid, dt / 2, level + 1)
