@@ -224,6 +224,11 @@ class BodyCalls:
                 f"cut_body: body {b.name!r} has {b.mesh.cell_type} cells; cuts apply to P1 "
                 "triangles and tetrahedra"
             )
+        if b.pressures:
+            raise InputError(
+                f"cut_body: body {b.name!r} carries a follower pressure on a closed surface; "
+                "a cut would open that surface: cut a body without one"
+            )
         if b.cut_state is None:
             b.cut_state = CutState(b.mesh, density=np.asarray(b.model.density, dtype=float))
         current = self.body_positions(b.name) if self._state is not None else b.mesh.points

@@ -272,6 +272,19 @@ class SetupCalls:
         down at 100 Pa."""
         self.body(body, ("fem",)).add_traction(facets, traction)
 
+    def add_follower_pressure(
+        self, facets, pressure, *, body: str | None = None, name: str = "pressure"
+    ) -> None:
+        """A follower pressure (Pa) on a closed surface of a 3D P1 body: it acts normal to
+        the surface where it is now (FEBio's non-linear pressure), so its work is p times the
+        enclosed volume's change, one more energy of the step. ``facets``: (k, 3) boundary
+        triangles closing a surface, oriented outward from the material (the body's whole
+        boundary: a positive p compresses it; a cavity's wall: a positive p inflates it);
+        ``pressure``: a number or a callable ``t -> p``. An open surface is refused (no energy:
+        use ``add_traction``). ``sim.add_follower_pressure(select.all_boundary_facets(mesh),
+        1e3)`` squeezes a body from all sides at 1 kPa."""
+        self.body(body, ("fem",)).add_follower_pressure(facets, pressure, name)
+
     def add_nodal_forces(self, vertices, force, *, body=None) -> None:
         """Dead point loads (N) on vertices of a FEM body: a vector (d,) on each vertex, (k, d)
         per vertex, or a callable ``t -> (k, d)``. ``sim.add_nodal_forces(tip, (0, 0, -0.1))``

@@ -299,3 +299,46 @@ def test_fibre_and_viscoelastic_refusals_name_the_element_and_line(case, tmp_pat
     said = str(info.value)
     assert "\n" not in said and message in said
     assert f"bad.feb:{line} <{tag}>" in said
+
+
+def test_a_pressure_on_the_deformed_closed_surface_is_a_follower_pressure(tmp_path):
+    """FEBio's default pressure (<linear>0</linear>) on the cube's whole boundary, a closed
+    surface: it runs as a follower pressure, so at the end the Cauchy stress is -p I (a dead
+    pressure on the reference faces would leave -p J^(-1/3) I); the converted scene says
+    [[pressure]]."""
+    from tissuesim.mesh.boundary import boundary_facets
+
+    text = (MODELS / "mooney_rivlin_pressure.feb").read_text()
+    cells = np.array([[1, 2, 4, 8], [1, 4, 3, 8], [1, 3, 7, 8], [1, 7, 5, 8], [1, 5, 6, 8],
+                      [1, 6, 2, 8]]) - 1  # fmt: skip
+    points = np.array([[i & 1, (i >> 1) & 1, (i >> 2) & 1] for i in range(8)], dtype=float)
+    facets = boundary_facets(cells)
+    signed = np.einsum(
+        "ki,ki->k",
+        np.cross(
+            points[facets[:, 1]] - points[facets[:, 0]], points[facets[:, 2]] - points[facets[:, 0]]
+        ),
+        points[facets].mean(axis=1) - 0.5,
+    )
+    assert np.all(signed > 0)  # outward, as FEBio's surfaces are
+    rows = "\n".join(
+        f'      <tri3 id="{k + 1}">{",".join(str(int(v) + 1) for v in f)}</tri3>'
+        for k, f in enumerate(facets)
+    )
+    start, end = text.index('    <Surface name="top">'), text.index("    </Surface>")
+    text = text[:start] + f'    <Surface name="top">\n{rows}\n' + text[end:]
+    text = text.replace("<linear>1</linear>", "<linear>0</linear>")
+    feb = tmp_path / "closed.feb"
+    feb.write_text(text)
+    with pytest.warns(UserWarning, match="symmetric_stiffness"):
+        scene = load_febio(feb)
+    x = _run(scene, 5)
+    X = scene.simulation.body("body").mesh.points
+    stretch = np.array([np.polyfit(X[:, i], x[:, i], 1)[0] for i in range(3)])
+    F = np.diag(stretch)
+    P = scene.simulation.body("body").model.material.evaluate(F[None], 1).stress[0]
+    cauchy = P @ F.T / np.linalg.det(F)
+    assert stretch.max() < 1.0
+    assert np.allclose(cauchy, -500.0 * np.eye(3), atol=1e-5 * 500)
+    written = convert_febio(feb, tmp_path / "closed.toml")
+    assert "[[pressure]]" in written[0].read_text()

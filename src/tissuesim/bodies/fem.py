@@ -103,6 +103,7 @@ class FemBody:
         self.conditions: list[tuple[str, DirichletCondition]] = []
         self.graspers: list[Grasper] = []
         self.spring_graspers: list[tuple[Grasper, VertexSprings]] = []
+        self.pressures: list = []  # energies/pressure.py FollowerPressure
         self.velocity = np.zeros(self.model.n_dofs)
 
     def __repr__(self) -> str:
@@ -243,6 +244,32 @@ class FemBody:
         field = as_field(traction, "add_traction: traction (N/m or Pa)", self.dim)
         self.model.loads.append(Traction(facets, field))
 
+    def add_follower_pressure(self, facets, pressure, name: str) -> None:
+        """A follower pressure p (Pa; a number or a callable t -> p) on a closed surface of
+        boundary triangles (k, 3) of this 3D P1 body (``energies/pressure.py``)."""
+        from tissuesim.energies.pressure import FollowerPressure, check_closed
+
+        where = f"add_follower_pressure {name!r}"
+        if self.dim != 3 or self.mesh.order != 1 or not self.mesh.simplicial:
+            raise InputError(
+                f"{where}: body {self.name!r} has {self.mesh.cell_type} cells; a follower "
+                "pressure acts on the triangles of a 3D P1 tetrahedral body"
+            )
+        ids = indices(facets, f"{where}: facets", self.mesh.n_points)
+        facets = ids.reshape(np.shape(facets)) if ids.size else ids.reshape(0, 3)
+        check_closed(facets, where)
+        if callable(pressure):
+            value = pressure
+        else:
+            p = float(pressure)
+            if not np.isfinite(p):
+                raise InputError(f"{where}: pressure must be a finite number (Pa), not {p}")
+
+            def value(t: float, p: float = p) -> float:
+                return p
+
+        self.pressures.append(FollowerPressure(np.asarray(facets, dtype=np.int64), value, name))
+
     def add_gravity(self, acceleration: Sequence[float]) -> None:
         """Gravity, acceleration (d,) in m/s^2, acting on the element densities."""
         g = vector(acceleration, "add_gravity: acceleration", self.dim, unit="m/s^2")
@@ -343,6 +370,7 @@ class FemBody:
         energies = [] if x_pred is None else [Inertia(self.model.mass, x_pred, h)]
         energies.append(ExternalForce(self.model.external_force(t)))
         energies += [s.energy(t) for _, s in self.spring_graspers]
+        energies += [p.energy(t) for p in self.pressures]
         return energies
 
     def forces(self, x: np.ndarray, gradient: np.ndarray | None, t: float) -> dict:

@@ -117,6 +117,11 @@ def febio_scene(model: FebModel, stem: str) -> tuple[dict, dict]:
                     {"facets": {"tagged": surface}, "traction": traction}
                 )
                 continue
+            if kind == "follower":  # FEBio's non-linear pressure on a closed surface
+                tables.setdefault("pressure", []).append(
+                    {"facets": {"tagged": surface}, "pressure": _times(load, model, 0)}
+                )
+                continue
             groups = _by_normal(model.nodes[used], facet_sets[surface], model, surface)
             for g, (normal, rows) in enumerate(groups):
                 set_name = surface if len(groups) == 1 else f"{surface}.pressure{k}_{g}"

@@ -30,6 +30,7 @@ __all__ = ["MESH_KEYS", "FEM_BODY_KEYS", "FEM_BODY_OPTIONS", "FEM_TABLE_KEYS", "
 FEM_TABLE_KEYS = {
     "dirichlet": {"vertices", "displacement", "components", "name"},
     "traction": {"facets", "traction"},
+    "pressure": {"facets", "pressure", "name"},
     "body_force": {"force_density"},
     "initial": {"velocity"},
     "nodal_forces": {"vertices", "force"},
@@ -59,7 +60,7 @@ FEM_BODY_OPTIONS = ("density", "mass", "order", "formulation")
 #: the tables of one FEM body (top level in a one-body scene, inside each [[bodies]] entry)
 FEM_BODY_KEYS = ("mesh", "material", "dirichlet", "traction", "body_force", "nodal_forces")
 
-FEM_BODY_KEYS += ("initial",)
+FEM_BODY_KEYS += ("initial", "pressure")
 
 
 def add_fem_body(
@@ -104,6 +105,21 @@ def add_fem_body(
         facets = _select(mesh, "facets", entry["facets"], where)
         with _context(where):
             sim.add_traction(facets, _field(entry["traction"], d, f"{where} traction"), body=name)
+    for i, entry in enumerate(_table(item, "pressure", source, array=True), start=1):
+        where = label("pressure", i)
+        _unknown(entry, FEM_TABLE_KEYS["pressure"], where)
+        for key in ("facets", "pressure"):
+            if key not in entry:
+                raise SceneError(f"{where}: missing key {key!r}")
+        facets = _select(mesh, "facets", entry["facets"], where)
+        value = of_time([entry["pressure"]], 1, f"{where} pressure", "a pressure")
+        with _context(where):
+            sim.add_follower_pressure(
+                facets,
+                lambda t, value=value: float(value(t)[0]),
+                body=name,
+                name=entry.get("name", "pressure"),
+            )
     for i, entry in enumerate(_table(item, "body_force", source, array=True), start=1):
         where = label("body_force", i)
         _unknown(entry, FEM_TABLE_KEYS["body_force"], where)
