@@ -18,7 +18,7 @@ from tissuesim.kinematics.nodal import NodalKinematics
 from tissuesim.mesh.mesh import Mesh
 from tissuesim.mesh.tensor import gauss_rule, rest_jacobians, shape_functions
 
-__all__ = ["Q1Kinematics", "q1_shape_values"]
+__all__ = ["Q1Kinematics", "q1_shape_values", "tensor_kinematics"]
 
 #: Gauss points per direction of the stiffness (exact for a parallelepiped's Q1 stiffness)
 STIFFNESS_POINTS = 2
@@ -47,21 +47,28 @@ class Q1Kinematics(NodalKinematics):
             from tissuesim.errors import InputError
 
             raise InputError("a virtual-node cut applies to linear simplices; this mesh is Q1")
-        d = mesh.dim
-        xi, w = gauss_rule(d, STIFFNESS_POINTS)
-        _, dN = shape_functions(d, xi)  # (nq, nv, d)
-        Jac = rest_jacobians(mesh.points, mesh.cells, dN)  # (m, nq, d, d)
-        inv = np.linalg.inv(Jac)
-        grads = np.einsum("qaj,mqji->mqai", dN, inv)  # dN/dX_i = sum_j dN/dxi_j (J^-1)_ji
-        weights = w[None, :] * np.linalg.det(Jac)
-        m, nq = Jac.shape[:2]
-        cells = np.repeat(mesh.cells, nq, axis=0)
-        return cls(
-            cells=cells,
-            stencil=cls.dof_stencil(cells, d),
-            weights=weights.reshape(-1),
-            grads=np.ascontiguousarray(grads.reshape(m * nq, -1, d)),
-            n_nodes=mesh.n_points,
-            points_per_cell=nq,
-            mesh=mesh,
-        )
+        xi, w = gauss_rule(mesh.dim, STIFFNESS_POINTS)
+        _, dN = shape_functions(mesh.dim, xi)  # (nq, nv, d)
+        return tensor_kinematics(cls, mesh, w, dN)
+
+
+def tensor_kinematics(cls, mesh: Mesh, w: np.ndarray, dN: np.ndarray):
+    """``cls`` (Q1 or Q2 kinematics) of ``mesh`` from its reference shape gradients dN
+    (nq, nv, d) at Gauss points of weights w (nq,): per point dN/dX = J^-T dN/dxi and the
+    weight w det J, cell-major."""
+    d = mesh.dim
+    Jac = rest_jacobians(mesh.points, mesh.cells, dN)  # (m, nq, d, d)
+    inv = np.linalg.inv(Jac)
+    grads = np.einsum("qaj,mqji->mqai", dN, inv)  # dN/dX_i = sum_j dN/dxi_j (J^-1)_ji
+    weights = w[None, :] * np.linalg.det(Jac)
+    m, nq = Jac.shape[:2]
+    cells = np.repeat(mesh.cells, nq, axis=0)
+    return cls(
+        cells=cells,
+        stencil=cls.dof_stencil(cells, d),
+        weights=weights.reshape(-1),
+        grads=np.ascontiguousarray(grads.reshape(m * nq, -1, d)),
+        n_nodes=mesh.n_points,
+        points_per_cell=nq,
+        mesh=mesh,
+    )

@@ -15,6 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from tissuesim.kinematics.nodal import NodalKinematics
+from tissuesim.kinematics.q1 import tensor_kinematics
 from tissuesim.mesh import tensor_quadratic as tq
 from tissuesim.mesh.mesh import Mesh
 from tissuesim.mesh.tensor import gauss_rule, rest_jacobians
@@ -46,21 +47,6 @@ class Q2Kinematics(NodalKinematics):
             raise InputError(
                 f"a virtual-node cut applies to linear simplices; this mesh is {mesh.cell_type}"
             )
-        d = mesh.dim
-        xi, w = gauss_rule(d, tq.STIFFNESS_POINTS)
+        xi, w = gauss_rule(mesh.dim, tq.STIFFNESS_POINTS)
         _, dN = tq.shape_functions(mesh.cell_type, xi)  # (nq, nv, d)
-        Jac = rest_jacobians(mesh.points, mesh.cells, dN)  # (m, nq, d, d)
-        inv = np.linalg.inv(Jac)
-        grads = np.einsum("qaj,mqji->mqai", dN, inv)  # dN/dX_i = sum_j dN/dxi_j (J^-1)_ji
-        weights = w[None, :] * np.linalg.det(Jac)
-        m, nq = Jac.shape[:2]
-        cells = np.repeat(mesh.cells, nq, axis=0)
-        return cls(
-            cells=cells,
-            stencil=cls.dof_stencil(cells, d),
-            weights=weights.reshape(-1),
-            grads=np.ascontiguousarray(grads.reshape(m * nq, -1, d)),
-            n_nodes=mesh.n_points,
-            points_per_cell=nq,
-            mesh=mesh,
-        )
+        return tensor_kinematics(cls, mesh, w, dN)
