@@ -34,6 +34,7 @@ __all__ = [
     "rest_jacobians",
     "boundary_faces",
     "subdivide",
+    "positively_oriented",
     "split_faces",
 ]
 
@@ -159,11 +160,17 @@ def subdivide(points: np.ndarray, cells: np.ndarray) -> tuple[np.ndarray, np.nda
         if len(glue):
             simplices = np.concatenate([simplices, glue])
             parent = np.concatenate([parent, owner])
+    return positively_oriented(points, simplices), parent
+
+
+def positively_oriented(points: np.ndarray, simplices: np.ndarray) -> np.ndarray:
+    """The simplices (s, d+1) with the first two vertices swapped where their volume is
+    negative (a distorted cell can give a simplex of its split the other orientation)."""
     X = points[simplices]
     vol = np.linalg.det(np.swapaxes(X[:, 1:] - X[:, :1], 1, 2))
-    flip = vol < 0  # a distorted cell can give a simplex the other orientation
+    flip = vol < 0
     simplices[flip, :2] = simplices[flip, 1::-1]
-    return np.ascontiguousarray(simplices, dtype=np.int64), parent
+    return np.ascontiguousarray(simplices, dtype=np.int64)
 
 
 def _glue_tets(cells: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

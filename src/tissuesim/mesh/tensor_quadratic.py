@@ -268,11 +268,7 @@ def subdivide(points: np.ndarray, cells: np.ndarray) -> tuple[np.ndarray, np.nda
         if len(glue):
             simplices = np.concatenate([simplices, glue])
             parent = np.concatenate([parent, owner])
-    X = points[simplices]
-    vol = np.linalg.det(np.swapaxes(X[:, 1:] - X[:, :1], 1, 2))
-    flip = vol < 0
-    simplices[flip, :2] = simplices[flip, 1::-1]
-    return np.ascontiguousarray(simplices), parent
+    return tensor.positively_oriented(points, simplices), parent
 
 
 @cache
