@@ -17,6 +17,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from tissuesim.errors import InputError
+from tissuesim.mesh.boundary import all_facets, facet_measures, facet_table
 from tissuesim.mesh.plane_split import section_measures
 from tissuesim.mesh.virtual_nodes import PlanarCut, VirtualNodeMesh, virtual_node_cut
 
@@ -107,31 +108,15 @@ def _interior_faces(cells: np.ndarray, points: np.ndarray) -> tuple:
     """The faces two cells share: (cell a, its slots of the face's nodes in ascending node
     order, cell b, its slots, the face's rest measure: area in 3D, length in 2D), as arrays."""
     m, k = cells.shape
-    local = np.array([[j for j in range(k) if j != i] for i in range(k)])  # (k, k-1)
-    nodes = cells[:, local]  # (m, k, k-1)
-    order = np.argsort(nodes, axis=2)
-    slots = np.broadcast_to(local, (m, k, k - 1))
-    slots = np.take_along_axis(slots, order, axis=2).reshape(m * k, k - 1)
-    keys = np.sort(nodes, axis=2).reshape(m * k, k - 1)
+    local = all_facets(np.arange(k)[None])[0]  # (k, k-1): each facet's slots in its cell
+    facets, _, inverse, counts = facet_table(cells)  # (m k, k-1), cell-major
+    order = np.argsort(facets, axis=1)
+    slots = np.take_along_axis(np.tile(local, (m, 1)), order, axis=1)
     owner = np.repeat(np.arange(m), k)
-    n = int(cells.max(initial=0)) + 1
-    if n ** (k - 1) < 2**62:  # one int64 per face: a 1D unique, far faster than by rows
-        code = keys[:, 0].astype(np.int64)
-        for j in range(1, k - 1):
-            code = code * n + keys[:, j]
-        _, inverse, counts = np.unique(code, return_inverse=True, return_counts=True)
-    else:
-        _, inverse, counts = np.unique(keys, axis=0, return_inverse=True, return_counts=True)
-    inverse = inverse.ravel()
-    shared = counts[inverse] == 2
-    idx = np.flatnonzero(shared)
+    idx = np.flatnonzero(counts[inverse] == 2)
     idx = idx[np.argsort(inverse[idx], kind="stable")]
     first, second = idx[0::2], idx[1::2]
-    X = np.asarray(points, dtype=float)[keys[first]]
-    if k == 4:
-        measure = 0.5 * np.linalg.norm(np.cross(X[:, 1] - X[:, 0], X[:, 2] - X[:, 0]), axis=1)
-    else:
-        measure = np.linalg.norm(X[:, 1] - X[:, 0], axis=1)
+    measure = facet_measures(np.asarray(points, dtype=float), facets[first])
     return owner[first], slots[first], owner[second], slots[second], measure
 
 

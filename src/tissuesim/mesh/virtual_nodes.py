@@ -86,7 +86,7 @@ class VirtualNodeMesh:
         """The cut as a ``Mesh`` of the original ``mesh``: its point sets hold every copy of
         their nodes, its cell sets the copies of their cells, its facet sets the boundary
         facets over copies of their nodes; ``cell_fractions`` weights the copies."""
-        from tissuesim.mesh.boundary import boundary_facets
+        from tissuesim.mesh.boundary import boundary_facets, match_facets
         from tissuesim.mesh.mesh import Mesh
 
         point_sets = {
@@ -96,27 +96,10 @@ class VirtualNodeMesh:
             name: np.flatnonzero(np.isin(self.parent, ids)) for name, ids in mesh.cell_sets.items()
         }
         facets = boundary_facets(self.cells)
-        n = int(self.origin.max(initial=0)) + 1
-
-        def codes(f: np.ndarray) -> np.ndarray:  # one int64 per facet of original nodes
-            f = np.sort(np.asarray(f, dtype=np.int64).reshape(len(f), -1), axis=1)
-            out = f[:, 0].copy()
-            for j in range(1, f.shape[1]):
-                out = out * n + f[:, j]
-            return out
-
-        facet_sets = {}
-        if mesh.facet_sets and n ** facets.shape[1] < 2**62:
-            keys = codes(self.origin[facets])
-            facet_sets = {
-                name: facets[np.isin(keys, codes(ids))] for name, ids in mesh.facet_sets.items()
-            }
-        elif mesh.facet_sets:  # too many nodes for one int64 per facet: compare rows
-            rows = np.sort(self.origin[facets], axis=1)
-            for name, ids in mesh.facet_sets.items():
-                wanted = {tuple(f) for f in np.sort(np.asarray(ids), axis=1)}
-                mine = np.array([tuple(k) in wanted for k in rows], dtype=bool)
-                facet_sets[name] = facets[mine]
+        facet_sets = {  # the boundary facets whose original nodes make a facet of the set
+            name: facets[match_facets(np.asarray(ids), self.origin[facets]) >= 0]
+            for name, ids in mesh.facet_sets.items()
+        }
         return Mesh(
             self.points,
             self.cells,
