@@ -278,8 +278,9 @@ class SetupCalls:
         """A follower pressure (Pa) on a closed surface of a 3D P1 body: it acts normal to
         the surface where it is now (FEBio's non-linear pressure), so its work is p times the
         enclosed volume's change, one more energy of the step. ``facets``: (k, 3) boundary
-        triangles closing a surface, oriented outward from the material (the body's whole
-        boundary: a positive p compresses it; a cavity's wall: a positive p inflates it);
+        triangles closing a surface, in any vertex order (they are oriented outward from the
+        material: on the body's whole boundary a positive p compresses it, on a cavity's wall
+        a positive p inflates it);
         ``pressure``: a number or a callable ``t -> p``. An open surface is refused (no energy:
         use ``add_traction``). ``sim.add_follower_pressure(select.all_boundary_facets(mesh),
         1e3)`` squeezes a body from all sides at 1 kPa."""

@@ -77,11 +77,15 @@ def test_open_surfaces_and_cut_bodies_are_refused():
     mesh = ts.box((0.0, 0.0, 0.0), (1.0, 1.0, 1.0), (2, 2, 2))
     sim = ts.Simulation(mesh, ts.make_material("neo_hookean", youngs_modulus=1e4,
                                                poisson_ratio=0.3))  # fmt: skip
-    with pytest.raises(InputError, match="do not close a surface"):
+    with pytest.raises(InputError, match="surface is not closed"):
         sim.add_follower_pressure(mesh.facet_sets["zmax"], 100.0)
-    with pytest.raises(InputError, match="do not close a surface"):  # reversed orientation
+    with pytest.raises(InputError, match="surface is not closed"):  # reversed orientation
         sim.add_follower_pressure(select.all_boundary_facets(mesh)[:, ::-1][1:], 100.0)
-    sim.add_follower_pressure(select.all_boundary_facets(mesh), 100.0)
+    with pytest.raises(InputError, match="not a boundary triangle"):
+        sim.add_follower_pressure([[0, 1, 13]], 100.0)
+    sim.add_follower_pressure(select.all_boundary_facets(mesh)[:, ::-1], 100.0)  # inward given
+    (load,) = sim.bodies["body"].pressures
+    np.testing.assert_array_equal(load.facets, select.all_boundary_facets(mesh))  # outward
     from tissuesim.mesh.virtual_nodes import PlanarCut
 
     plane = np.array([[0.5, -1, -1], [0.5, 2, -1], [0.5, 2, 2], [0.5, -1, 2]], dtype=float)
@@ -111,5 +115,5 @@ def test_a_scene_takes_a_pressure_table_and_names_its_errors():
     assert np.mean(sim.cell_fields()["J"]) == pytest.approx(squeezed_cube(3e3), rel=1e-9)
     with pytest.raises(SceneError, match=r"pressure\]?\[?1?.*depends on t only"):
         build_scene({**scene, "pressure": [{"facets": {"boundary": True}, "pressure": "x"}]})
-    with pytest.raises(SceneError, match="do not close a surface"):
+    with pytest.raises(SceneError, match="surface is not closed"):
         build_scene({**scene, "pressure": [{"facets": {"where": "z > 0.999"}, "pressure": 1}]})

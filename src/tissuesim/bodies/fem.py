@@ -255,8 +255,20 @@ class FemBody:
                 f"{where}: body {self.name!r} has {self.mesh.cell_type} cells; a follower "
                 "pressure acts on the triangles of a 3D P1 tetrahedral body"
             )
+        from tissuesim.mesh.boundary import boundary_facets, match_facets
+
         ids = indices(facets, f"{where}: facets", self.mesh.n_points)
         facets = ids.reshape(np.shape(facets)) if ids.size else ids.reshape(0, 3)
+        if facets.ndim != 2 or facets.shape[1] != 3:
+            raise InputError(f"{where}: facets must be (k, 3) vertex indices of triangles")
+        boundary = boundary_facets(self.mesh.cells)
+        row = match_facets(boundary, facets)
+        if np.any(row < 0):
+            raise InputError(
+                f"{where}: facet {facets[row < 0][0].tolist()} is not a boundary triangle of "
+                f"body {self.name!r}; a pressure acts on the body's boundary"
+            )
+        facets = boundary[row]  # oriented outward from the material, whatever order was given
         check_closed(facets, where)
         if callable(pressure):
             value = pressure

@@ -30,20 +30,21 @@ __all__ = ["FollowerPressure", "check_closed"]
 
 
 def check_closed(facets: np.ndarray, where: str) -> None:
-    """Refuse a triangle set that is not a closed, consistently oriented surface: every
-    directed edge once, and its reverse once."""
-    if facets.ndim != 2 or facets.shape[1] != 3 or len(facets) < 4:
+    """Refuse a triangle set that is not a closed, consistently oriented surface (the check
+    of ``frames.surfaces.Surface``: every edge in two triangles that traverse it oppositely)."""
+    from tissuesim.errors import MeshError
+    from tissuesim.frames.surfaces import Surface
+
+    facets = np.asarray(facets)
+    if facets.ndim != 2 or facets.shape[1] != 3 or len(facets) == 0:
         raise InputError(f"{where}: a follower pressure needs a closed surface of triangles")
-    edges = facets[:, [[0, 1], [1, 2], [2, 0]]].reshape(-1, 2)
-    n = int(facets.max()) + 1
-    code = edges[:, 0].astype(np.int64) * n + edges[:, 1]
-    back = edges[:, 1].astype(np.int64) * n + edges[:, 0]
-    if len(np.unique(code)) != len(code) or not np.all(np.isin(back, code)):
+    try:
+        Surface(np.zeros((int(facets.max()) + 1, 3)), facets, source=where).volume()
+    except MeshError as exc:
         raise InputError(
-            f"{where}: the facets do not close a surface (an edge without its opposite, or "
-            "one used twice); a follower pressure is conservative only on a closed surface, "
-            "e.g. a body's whole boundary or a cavity's wall: use a dead traction on open ones"
-        )
+            f"{exc}; a follower pressure is conservative only on a closed surface (a body's "
+            "whole boundary, a cavity's wall): on an open one use a dead traction"
+        ) from None
 
 
 @dataclass(eq=False)
