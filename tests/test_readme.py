@@ -267,7 +267,20 @@ TESTED_PYTHON_BLOCKS = {
     'ts.fit_material("ogden"': "test_fitting_python_example_recovers_the_parameters",
     'element="hex"': "test_hexahedra_python_example_runs",
     'element="hex20"': "test_quadratic_hexahedra_python_example_runs",
+    "from tissuesim.time.phases import Phase": "test_phases_python_example_runs",
 }
+
+
+def test_phases_python_example_runs(tmp_path):
+    """The time-integration page's run in phases: pulled, then let go (no pull force)."""
+    code = block("python", "from tissuesim.time.phases import Phase")
+    result = subprocess.run(
+        [sys.executable, "-c", code], cwd=tmp_path, capture_output=True, text=True, timeout=300
+    )
+    assert result.returncode == 0, result.stderr
+    time, integrator, *force = result.stdout.replace("[", " ").replace("]", " ").split()
+    assert float(time) == 1.1 and integrator == "backward_euler"
+    assert [float(f.strip(",")) for f in force] == [0.0, 0.0, 0.0]
 
 
 def test_hexahedra_python_example_runs(tmp_path):

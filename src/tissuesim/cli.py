@@ -81,7 +81,8 @@ def _run(
     run = dict(scene.run)
     if steps is not None:
         run["steps"] = steps
-    run.setdefault("steps", 100)
+    schedule = scene.simulation.schedule  # a run in phases runs them all by default
+    run.setdefault("steps", 100 if schedule is None else schedule.steps)
     if not render:
         run["render"] = False
     if field is not None:

@@ -52,6 +52,7 @@ from tissuesim.simulation_setup import SetupCalls
 from tissuesim.solve.linear import make_linear_solver
 from tissuesim.solve.newton import NewtonOptions
 from tissuesim.time.grid import check_time_resolution
+from tissuesim.time.phases import Phase, Schedule
 from tissuesim.time.retry import QUASISTATIC_ADVICE, advance, validate_stepping
 from tissuesim.time.state import State
 
@@ -77,6 +78,7 @@ class Simulation(BodyCalls, SetupCalls, StepChecks, BodyResults):
     FEM bodies then use the lumped mass). time_step: s (quasistatics: the load-step length).
     gravity: (d,) m/s^2 on every body, or None. newton: NewtonOptions. max_step_halvings: how
     often a failing step is split in two before giving up. backend: "auto", "numba" or "numpy".
+    phases: a run in phases (``set_phases``), each with its steps, time step and integrator.
     """
 
     def __init__(
@@ -94,6 +96,7 @@ class Simulation(BodyCalls, SetupCalls, StepChecks, BodyResults):
         max_step_halvings: int = 6,
         start_time: float = 0.0,
         backend: str = "auto",
+        phases: Sequence[Phase | dict] | None = None,
     ) -> None:
         self.integrator = validate.choice(integrator, "integrator", INTEGRATORS)
         self.time_step, self.max_step_halvings = validate_stepping(time_step, max_step_halvings)
@@ -122,6 +125,9 @@ class Simulation(BodyCalls, SetupCalls, StepChecks, BodyResults):
         self._indentation = IndentationTracker()  # probes' touch points, across rebuilds
         self.organ_cuts: list = []  # blades cutting FEM bodies (bodies/organ_cut.py)
         self.organ_tears: list = []  # FEM bodies that tear (bodies/organ_tear.py)
+        self.schedule: Schedule | None = None  # time/phases.py: a run in phases
+        if phases is not None:
+            self.set_phases(phases)
         if self.newton.linear_solver != "auto" and not self.explicit:
             make_linear_solver(self.newton.linear_solver, 1, 3)  # unavailable: fail now
         if mesh is not None:
@@ -381,10 +387,13 @@ class Simulation(BodyCalls, SetupCalls, StepChecks, BodyResults):
                 )
         from tissuesim.time.steps import explicit_step, implicit_step
 
+        self._enter_phase()
         tol = 1e-9 * self.time_step  # a release at t_n counts for the step from t_n
+        t_end = self._end_time()
         for body in self.bodies.values():
             if body.kind == "fem":
                 body.release_graspers(self.time + tol)
+                body.set_condition_time(t_end, tol)
         s = self.system
         by_contact = self.integrator == "quasistatic" and self._check_supported()
         if self.explicit and self._stability_checked is not s:
@@ -464,12 +473,36 @@ class Simulation(BodyCalls, SetupCalls, StepChecks, BodyResults):
 
     def _end_time(self) -> float:
         """start + (k + 1) h for a state at start + k h (no running sum: ten steps of 0.1 end
-        at 1.0); a state off that grid (set by hand, or a changed time_step) steps to t + h."""
-        h, t = self.time_step, self._state.time
+        at 1.0); a state off that grid (set by hand, or a changed time_step) steps to t + h.
+        In phases, the grid is the phase's and a step ends at its phase's end at the latest."""
+        if self.schedule is not None:
+            return self.schedule.end_time(self.time)
+        h, t = self.time_step, self.time
         k = round((t - self.start_time) / h)
         if abs(self.start_time + k * h - t) <= 1e-9 * h:
             return self.start_time + (k + 1) * h
         return t + h
+
+    def set_phases(self, phases: Sequence[Phase | dict]) -> None:
+        """Run in phases from the start time: each ``Phase(steps, time_step, integrator)`` (or
+        dict with those keys) starts where the previous one ends, with its own time step and
+        integrator ("quasistatic" or "backward_euler"; None keeps the simulation's). After the
+        last phase, steps go on with its settings. ``sim.set_phases([Phase(5, 0.2,
+        "quasistatic"), Phase(20, 0.01, "backward_euler")])``: a static preload to t = 1 s,
+        then 0.2 s of dynamics. Conditions and loads follow time (``active`` windows of
+        ``add_dirichlet``, expressions of t), not phases."""
+        self._base_integrator = getattr(self, "_base_integrator", self.integrator)
+        self.schedule = Schedule(phases, self.start_time, self._base_integrator in EXPLICIT)
+        if self._state is None:
+            self._enter_phase()
+
+    def _enter_phase(self) -> None:
+        """The time step and integrator of the phase the next step belongs to."""
+        if self.schedule is None:
+            return
+        phase, _, _ = self.schedule.at(self.time)
+        self.time_step = phase.time_step
+        self.integrator = phase.integrator or self._base_integrator
 
     def run(
         self,

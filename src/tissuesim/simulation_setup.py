@@ -223,21 +223,25 @@ class SetupCalls:
         return spec
 
     # -- set-up on one body (see bodies/fem.py, bodies/frames.py, coupling/tissue.py) ---------
-    def add_dirichlet(self, vertices, displacement=None, components=None, *, body=None, name=None):
+    def add_dirichlet(
+        self, vertices, displacement=None, components=None, *, body=None, name=None, active=None
+    ):
         """Prescribe the displacement u = g(X, t) (m) of vertices of a FEM body.
 
         ``vertices``: vertex indices (e.g. ``select.vertices_on_plane(mesh, axis=0,
         value=-1.0)`` or ``mesh.point_sets["left"]``). ``displacement``: None clamps them, a
         vector (d,) holds a constant offset, a callable ``g(X, t)`` maps their rest positions
         (k, d) and the time (s) to displacements (k, d). ``components`` restricts the
-        condition to some axes (``(0,)``: x only; the others stay free). Returns the name
-        under which its reaction force (N) is reported per step (default
-        ``"<body>.dirichlet_<k>"``, or ``name``).
+        condition to some axes (``(0,)``: x only; the others stay free). ``active`` (t0, t1)
+        in s holds it only for the steps that end after t0 and by t1 (None: always): the
+        vertices are let go where they are after t1, and taken to g(X, t) from t0. Returns
+        the name under which its reaction force (N) is reported per step (default
+        ``"<body>.dirichlet_<k>"``, or ``name``; zero while it is not active).
 
         ``sim.add_dirichlet(left, lambda X, t: np.stack([0.1 * t + 0 * X[:, 0], 0 * X[:, 1]],
         axis=1))`` pulls the vertices ``left`` along x at 0.1 m/s."""
         return self.body(body, ("fem",)).add_dirichlet(
-            vertices, displacement, components, name=name
+            vertices, displacement, components, name=name, active=active
         )
 
     def fix(self, *args, body: str | None = None, name: str | None = None) -> str:

@@ -32,6 +32,7 @@ from tissuesim.materials.base import Material
 from tissuesim.materials.measures import continuum_fields
 from tissuesim.mesh.mesh import Mesh
 from tissuesim.model import Model
+from tissuesim.time.phases import check_window, in_window
 from tissuesim.validate import indices, short, vector
 
 __all__ = ["FemBody", "Grasper", "vertex_indices"]
@@ -101,6 +102,8 @@ class FemBody:
         self.model = Model(mesh, material, density, mass, backend=backend, formulation=formulation)
         self._claim, self._changed = claim_name, changed
         self.conditions: list[tuple[str, DirichletCondition]] = []
+        self.windows: dict[str, tuple[float, float]] = {}  # name -> (t0, t1]: when it holds
+        self._condition_time: tuple[float, float] | None = None  # (step end, tolerance)
         self.graspers: list[Grasper] = []
         self.spring_graspers: list[tuple[Grasper, VertexSprings]] = []
         self.pressures: list = []  # energies/pressure.py FollowerPressure
@@ -118,9 +121,25 @@ class FemBody:
         return self.mesh.dim
 
     # -- prescribed sets and graspers -----------------------------------------------------------
+    def active_conditions(self) -> list[tuple[str, DirichletCondition]]:
+        """The conditions that hold for the coming step (all, before the first one)."""
+        if self._condition_time is None:
+            return list(self.conditions)
+        t_end, tol = self._condition_time
+        return [(n, c) for n, c in self.conditions if in_window(self.windows.get(n), t_end, tol)]
+
     def _set_conditions(self) -> None:
-        self.model.set_conditions([c for _, c in self.conditions])
+        self.model.set_conditions([c for _, c in self.active_conditions()])
         self._changed()
+
+    def set_condition_time(self, t_end: float, tol: float) -> None:
+        """Hold the conditions whose ``active`` window takes the step that ends at t_end; the
+        system is rebuilt only when that set changes (a vertex let go moves on from where it
+        is, one taken keeps its prescribed value from then on)."""
+        before = [n for n, _ in self.active_conditions()]
+        self._condition_time = (t_end, tol)
+        if [n for n, _ in self.active_conditions()] != before:
+            self._set_conditions()
 
     def add_dirichlet(
         self,
@@ -129,15 +148,21 @@ class FemBody:
         components: Sequence[int] | None = None,
         *,
         name: str | None = None,
+        active: tuple[float, float] | None = None,
     ) -> str:
         """Prescribe u = g(X, t) (m) on ``vertices``: None clamps, a vector is constant, a
         callable maps rest positions (k, d) and time to displacements (k, d). ``components``
-        restricts the condition to some axes (e.g. (0,) for x only). Returns the name its
-        reaction force is reported under (default "<body>.dirichlet_<k>")."""
+        restricts the condition to some axes (e.g. (0,) for x only). ``active`` (t0, t1) s:
+        the condition holds only for the steps that end after t0 and by t1 (None: always).
+        Returns the name its reaction force is reported under (default
+        "<body>.dirichlet_<k>")."""
         default = f"{self.name}.dirichlet_{len(self.conditions)}"
-        return self._prescribe(vertices, displacement, components, name, default)
+        window = check_window(active, f"add_dirichlet {name or default!r}")
+        return self._prescribe(vertices, displacement, components, name, default, window)
 
-    def _prescribe(self, vertices, displacement, components, name, default: str) -> str:
+    def _prescribe(
+        self, vertices, displacement, components, name, default: str, window=None
+    ) -> str:
         v = vertex_indices(vertices, self.mesh.n_points, "add_dirichlet")
         if displacement is None:
             displacement = np.zeros(self.dim)
@@ -158,6 +183,8 @@ class FemBody:
                 )
         name = self._claim(name, default)
         self.conditions.append((name, DirichletCondition(v, g, comps, repr(name))))
+        if window is not None:
+            self.windows[name] = window
         self._set_conditions()
         return name
 
@@ -392,12 +419,14 @@ class FemBody:
         d = self.dim
         out = {}
         owner = np.full((self.mesh.n_points, d), -1)
-        for k, (_, c) in enumerate(self.conditions):
-            comps = range(d) if c.components is None else list(c.components)
-            owner[np.ix_(np.asarray(c.vertices), comps)] = k
+        active = {n for n, _ in self.active_conditions()}
         for k, (name, c) in enumerate(self.conditions):
-            f = np.zeros(3)
-            if gradient is not None:
+            if name in active:
+                comps = range(d) if c.components is None else list(c.components)
+                owner[np.ix_(np.asarray(c.vertices), comps)] = k
+        for k, (name, c) in enumerate(self.conditions):
+            f = np.zeros(3)  # a condition out of its window holds nothing
+            if gradient is not None and name in active:
                 g = gradient.reshape(-1, d)[c.vertices]
                 f[:d] = np.where(owner[c.vertices] == k, g, 0.0).sum(axis=0)
             out[name] = f.tolist()

@@ -42,7 +42,7 @@ def _node_set(model: FebModel, node: Node, attr: str = "node_set") -> str:
 def _load(model: FebModel, node: Node, count: int) -> Load:
     """value * curve: the element's numbers and its lc attribute."""
     curve = node.attrib.get("lc")
-    return Load(_floats(node, count), None if curve is None else int(curve))
+    return Load(_floats(node, count), None if curve is None else int(curve), model.window)
 
 
 def _children(node: Node, allowed: set[str]) -> dict[str, Node]:
@@ -73,7 +73,9 @@ def _boundary(model: FebModel, section: Node) -> None:
                 comps = [AXES[t[0]] for t in ("x_dof", "y_dof", "z_dof") if t in p and _flag(p[t])]
             if not comps:
                 raise bc.error("fixes no degree of freedom")
-            model.dirichlet.append((nodes, None if comps == [0, 1, 2] else comps, None, name))
+            model.dirichlet.append(
+                (nodes, None if comps == [0, 1, 2] else comps, None, name, model.window)
+            )
         elif kind == "prescribed displacement":
             nodes = _node_set(model, bc)
             p = _children(bc, {"dof", "value", "scale", "relative"})
@@ -82,10 +84,14 @@ def _boundary(model: FebModel, section: Node) -> None:
             value = p.get("value", p.get("scale"))
             if value is None:
                 raise bc.error("needs a <value> (FEBio 4) or <scale> (FEBio 3)")
-            if "relative" in p and _flag(p["relative"]) and model.steps > 1:
-                raise p["relative"].error("relative displacements across steps are not supported")
+            later = model.window is not None and model.window[0] > 0.0
+            if "relative" in p and _flag(p["relative"]) and later:  # from where the step starts
+                raise p["relative"].error(
+                    "relative = 1 in a step after the first: tissuesim prescribes displacements "
+                    "from the reference configuration (give the value from there, relative = 0)"
+                )
             load = _load(model, value, 1)
-            model.dirichlet.append((nodes, [AXES[p["dof"].text]], load, name))
+            model.dirichlet.append((nodes, [AXES[p["dof"].text]], load, name, model.window))
         else:
             raise bc.error(
                 f"boundary condition type {kind!r} is not supported by tissuesim; it runs "
@@ -113,7 +119,7 @@ def _loads(model: FebModel, section: Node) -> None:
             one = _load(model, p["scale"], 1)
             value = np.zeros(3)
             value[AXES[p["dof"].text]] = one.value[0]
-            model.nodal.append((nodes, Load(value, one.curve)))
+            model.nodal.append((nodes, Load(value, one.curve, model.window)))
         elif load.tag == "surface_load" and kind in ("pressure", "traction"):
             _surface_load(model, load, kind)
         elif load.tag == "body_load" and kind == "const":  # FEBio 3: x, y, z
@@ -123,7 +129,9 @@ def _loads(model: FebModel, section: Node) -> None:
                 raise load.error("x, y and z must share one load curve (or none)")
             value = np.array([_floats(p[a], 1)[0] if a in p else 0.0 for a in "xyz"])
             curve = curves.pop() if curves else None
-            model.body_loads.append(Load(value, None if curve is None else int(curve)))
+            model.body_loads.append(
+                Load(value, None if curve is None else int(curve), model.window)
+            )
         elif load.tag == "body_load" and kind == "body force":  # FEBio 4: force vector
             p = _children(load, {"force"})
             if "force" not in p:
@@ -181,7 +189,7 @@ def _surface_load(model: FebModel, load: Node, kind: str) -> None:
         scale = _load(model, p["scale"], 1)
         if scale.curve is not None and vector.curve is not None:
             raise p["scale"].error("a curve on both <traction> and <scale>")
-        vector = Load(vector.value * scale.value[0], scale.curve or vector.curve)
+        vector = Load(vector.value * scale.value[0], scale.curve or vector.curve, model.window)
     model.tractions.append((surface, "traction", vector))
 
 

@@ -23,10 +23,12 @@ class Curve:
 
 @dataclass
 class Load:
-    """A scaled, possibly curve-driven quantity: value * curve(t) (curve None: constant)."""
+    """A scaled, possibly curve-driven quantity: value * curve(t) (curve None: constant),
+    applied during the time window (t0, t1] of the <step> it is given in (None: always)."""
 
     value: np.ndarray
     curve: int | None = None
+    window: tuple[float, float] | None = None
 
 
 @dataclass
@@ -49,7 +51,7 @@ class FebModel:
     surfaces: dict = field(default_factory=dict)
     element_sets: dict = field(default_factory=dict)
     surface_pairs: dict = field(default_factory=dict)
-    #: (node set, components or None for all, Load or None for clamped, name)
+    #: (node set, components or None for all, Load or None for clamped, name, window)
     dirichlet: list = field(default_factory=list)
     nodal: list = field(default_factory=list)  # (node set, Load (3,))
     tractions: list = field(default_factory=list)  # (surface, "pressure"|"traction", Load)
@@ -60,6 +62,10 @@ class FebModel:
     element_data: dict = field(default_factory=dict)
     notes: list = field(default_factory=list)  # "file:line <tag>: what is not used"
     steps: int = 1
+    #: one dict per <step> of a model of several (time_steps, step_size, analysis)
+    phases: list = field(default_factory=list)
+    #: the time window (t0, t1] of the <step> being read (None: the whole run)
+    window: tuple[float, float] | None = None
     _node_index: dict = field(default_factory=dict, repr=False)  # FEBio node id -> row
     _element_index: dict = field(default_factory=dict, repr=False)  # id -> (part, row)
 

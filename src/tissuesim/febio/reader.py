@@ -6,6 +6,7 @@ notes that ``run`` prints and ``convert`` writes into the scene."""
 
 from __future__ import annotations
 
+import math
 import os
 
 from tissuesim.febio.materials import MATERIAL_TYPES, UNCOUPLED, read_materials, read_mesh_data
@@ -49,22 +50,42 @@ def read_feb(path: str | os.PathLike[str]) -> FebModel:
 
 
 def _step(model: FebModel, section: Node) -> None:
-    """<Step>: one <step>, whose Control and conditions hold for the whole run."""
+    """<Step>: its <step>s one after the other. A model of one step runs its conditions for
+    the whole run; in a model of several, each step is a phase (its own Control: steps, step
+    size, analysis) and the conditions and loads given in it hold during its time only
+    (FEBio deactivates them at the step's end; its time runs on from the step before)."""
     steps = [c for c in section.children]
     for c in steps:
         if c.tag != "step":
             raise _unsupported(c, "expected <step>")
-    if len(steps) > 1:
-        raise steps[1].error(
-            "a second <step>: tissuesim runs one step (put the conditions in one step and "
-            "drive them with load curves)"
-        )
-    for step in steps:
+    model.steps = len(steps)
+    start = 0.0
+    for k, step in enumerate(steps):
         for child in step.children:
+            if child.tag == "Control":
+                _control(model, child)
+        end = start + model.time_steps * model.step_size
+        if len(steps) > 1:
+            model.phases.append(
+                {"time_steps": model.time_steps, "step_size": model.step_size,
+                 "analysis": model.analysis}
+            )  # fmt: skip
+            # the last step's conditions go on if the run is continued past its end
+            model.window = (start, end if k < len(steps) - 1 else math.inf)
+        for child in step.children:
+            if child.tag == "Control":
+                continue
             reader = STEP_SECTIONS.get(child.tag)
             if reader is None:
                 raise _unsupported(child, "this step section is not supported by tissuesim")
+            if child.tag == "Contact" and len(steps) > 1:
+                raise child.error(
+                    "contact given in one <step> of several: tissuesim's contact holds for the "
+                    "whole run (give it in the model's <Contact> section)"
+                )
             reader(model, child)
+        start = end
+    model.window = None
 
 
 def _module(model: FebModel, node: Node) -> None:

@@ -21,12 +21,21 @@ __all__ = ["febio_scene", "convert_febio", "load_febio"]
 INTEGRATORS = {"static": "quasistatic", "dynamic": "backward_euler"}
 
 
-def _times(load: Load, model: FebModel, k: int = 0) -> str:
-    """value[k] * curve(t) as an expression (a number string when there is no curve)."""
+def _times(load: Load, model: FebModel, k: int = 0, windowed: bool = True) -> str:
+    """value[k] * curve(t) as an expression (a number string when there is no curve), times
+    the indicator of its step's time window (``windowed``; a condition's ``active`` says it
+    instead)."""
     value = float(load.value[k])
-    if load.curve is None or value == 0.0:
+    if value == 0.0:
         return repr(value)
-    return f"{value!r} * ({curve_expression(model.curves[load.curve])})"
+    text = repr(value)
+    if load.curve is not None:
+        text = f"{value!r} * ({curve_expression(model.curves[load.curve])})"
+    if load.window is not None and windowed:
+        t0, t1 = load.window
+        on = f"(t > {t0!r})" if t1 == float("inf") else f"(t > {t0!r}) * (t <= {t1!r})"
+        text = f"{text} * {on}"
+    return text
 
 
 def _bodies(model: FebModel) -> list[dict]:
@@ -127,7 +136,8 @@ def febio_scene(model: FebModel, stem: str) -> tuple[dict, dict]:
                 set_name = surface if len(groups) == 1 else f"{surface}.pressure{k}_{g}"
                 facet_sets[set_name] = facet_sets[surface][rows]
                 traction = [
-                    _times(Load(-load.value[0] * normal, load.curve), model, i) for i in range(3)
+                    _times(Load(-load.value[0] * normal, load.curve, load.window), model, i)
+                    for i in range(3)
                 ]
                 tables.setdefault("traction", []).append(
                     {"facets": {"tagged": set_name}, "traction": traction}
@@ -169,18 +179,20 @@ def febio_scene(model: FebModel, stem: str) -> tuple[dict, dict]:
             density=density,
             formulation=formulation,
         )
-        for nodes, comps, load, bc_name in model.dirichlet:
+        for nodes, comps, load, bc_name, window in model.dirichlet:
             if _local_set(model, nodes) not in mesh.point_sets | mesh.facet_sets:
                 continue
             entry = {"vertices": {"tagged": _local_set(model, nodes)}}
             if load is not None:
                 displacement = ["0.0"] * 3
-                displacement[comps[0]] = _times(load, model)
+                displacement[comps[0]] = _times(load, model, windowed=False)
                 entry["displacement"] = displacement
             if comps is not None:
                 entry["components"] = comps
             if bc_name:
                 entry["name"] = bc_name
+            if window is not None:
+                entry["active"] = list(window)
             tables.setdefault("dirichlet", []).append(entry)
         for nodes, load in model.nodal:
             if _local_set(model, nodes) in mesh.point_sets | mesh.facet_sets:
@@ -189,10 +201,10 @@ def febio_scene(model: FebModel, stem: str) -> tuple[dict, dict]:
                     {"vertices": {"tagged": _local_set(model, nodes)}, "force": force}
                 )
         for load in model.body_loads:
-            if load.curve is None:
+            if load.curve is None and load.window is None:
                 gravity += load.value / len(bodies)
             else:
-                density_load = Load(density * load.value, load.curve)
+                density_load = Load(density * load.value, load.curve, load.window)
                 force = [_times(density_load, model, i) for i in range(3)]
                 tables.setdefault("body_force", []).append({"force_density": force})
         tables_per_body.append((name, tables))
@@ -200,6 +212,14 @@ def febio_scene(model: FebModel, stem: str) -> tuple[dict, dict]:
         "integrator": INTEGRATORS[model.analysis],
         "time_step": model.step_size,
     }
+    if model.phases:  # several <step>s: one phase each
+        sim["integrator"] = INTEGRATORS[model.phases[0]["analysis"]]
+        sim["time_step"] = model.phases[0]["step_size"]
+        sim["phases"] = [
+            {"steps": p["time_steps"], "time_step": p["step_size"],
+             "integrator": INTEGRATORS[p["analysis"]]}
+            for p in model.phases
+        ]  # fmt: skip
     data: dict = {}
     if len(bodies) == 1:
         ((_, tables),) = tables_per_body
@@ -213,7 +233,7 @@ def febio_scene(model: FebModel, stem: str) -> tuple[dict, dict]:
     if gravity.any():
         data["gravity"] = {"acceleration": (gravity * len(bodies)).tolist()}
     data.update(_contact(model, [n for n, _ in tables_per_body], bodies, meshes))
-    data["run"] = {"steps": model.time_steps}
+    data["run"] = {"steps": sum(p["time_steps"] for p in model.phases) or model.time_steps}
     return data, meshes
 
 
@@ -287,7 +307,8 @@ def _contact(model: FebModel, names: list[str], bodies: list[dict], meshes: dict
             point = d * n / (n @ n)
             unit = n / np.linalg.norm(n)
             wall = f"wall{k}"
-            move = [_times(Load(c["offset"].value[0] * unit, c["offset"].curve), model, i)
+            offset = c["offset"]
+            move = [_times(Load(offset.value[0] * unit, offset.curve, offset.window), model, i)
                     for i in range(3)]  # fmt: skip
             obstacles.append(
                 {

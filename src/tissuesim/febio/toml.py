@@ -15,6 +15,8 @@ def _value(v) -> str:
     if isinstance(v, int):
         return str(v)
     if isinstance(v, float):
+        if v == math.inf:  # an open-ended time window
+            return "inf"
         if not math.isfinite(v):
             raise ValueError(f"a scene value must be finite, not {v}")
         return repr(v)

@@ -37,6 +37,7 @@ SIMULATION_KEYS = (
     "backend",
     "order",
     "formulation",
+    "phases",
 )
 
 #: what pictures can be coloured by

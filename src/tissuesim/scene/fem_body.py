@@ -28,7 +28,7 @@ __all__ = ["MESH_KEYS", "FEM_BODY_KEYS", "FEM_BODY_OPTIONS", "FEM_TABLE_KEYS", "
 
 #: the keys of a FEM body's condition and load tables
 FEM_TABLE_KEYS = {
-    "dirichlet": {"vertices", "displacement", "components", "name"},
+    "dirichlet": {"vertices", "displacement", "components", "name", "active"},
     "traction": {"facets", "traction"},
     "pressure": {"facets", "pressure", "name"},
     "body_force": {"force_density"},
@@ -95,7 +95,10 @@ def add_fem_body(
         if components is not None and not isinstance(components, list):
             raise SceneError(f"{where}: components must be a list of axes, e.g. [0]")
         with _context(where):
-            sim.add_dirichlet(vertices, g, components, body=name, name=entry.get("name"))
+            sim.add_dirichlet(
+                vertices, g, components, body=name, name=entry.get("name"),
+                active=entry.get("active"),
+            )  # fmt: skip
     for i, entry in enumerate(_table(item, "traction", source, array=True), start=1):
         where = label("traction", i)
         _unknown(entry, FEM_TABLE_KEYS["traction"], where)

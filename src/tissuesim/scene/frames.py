@@ -69,7 +69,9 @@ from tissuesim.validate import short
 __all__ = ["build_frame_scene", "FRAME_SCENE_KEYS"]
 
 #: element order and formulation are FEM options: a frame body has neither
-FRAME_SIMULATION_KEYS = tuple(k for k in SIMULATION_KEYS if k not in ("order", "formulation"))
+FRAME_SIMULATION_KEYS = tuple(
+    k for k in SIMULATION_KEYS if k not in ("order", "formulation", "phases")
+)
 
 FRAMES_KEYS = {
     "type": "rigid (6 DOF per frame) or affine (12 DOF)",
