@@ -226,8 +226,8 @@ class BodyCalls:
             )
         if b.pressures:
             raise InputError(
-                f"cut_body: body {b.name!r} carries a follower pressure on a closed surface; "
-                "a cut would open that surface: cut a body without one"
+                f"cut_body: body {b.name!r} carries a follower pressure; a cut would change "
+                "the surface it acts on: cut a body without one"
             )
         if b.cut_state is None:
             b.cut_state = CutState(b.mesh, density=np.asarray(b.model.density, dtype=float))

@@ -279,15 +279,21 @@ class SetupCalls:
     def add_follower_pressure(
         self, facets, pressure, *, body: str | None = None, name: str = "pressure"
     ) -> None:
-        """A follower pressure (Pa) on a closed surface of a 3D P1 body: it acts normal to
-        the surface where it is now (FEBio's non-linear pressure), so its work is p times the
-        enclosed volume's change, one more energy of the step. ``facets``: (k, 3) boundary
-        triangles closing a surface, in any vertex order (they are oriented outward from the
-        material: on the body's whole boundary a positive p compresses it, on a cavity's wall
-        a positive p inflates it);
-        ``pressure``: a number or a callable ``t -> p``. An open surface is refused (no energy:
-        use ``add_traction``). ``sim.add_follower_pressure(select.all_boundary_facets(mesh),
-        1e3)`` squeezes a body from all sides at 1 kPa."""
+        """A follower pressure (Pa) on boundary facets of a 3D body: it acts normal to the
+        surface where it is now (FEBio's non-linear pressure). ``facets``: (k, 3) boundary
+        triangles of P1 tetrahedra or (k, 4) quad faces of Q1 hexahedra, in any vertex order
+        (they are oriented outward from the material: a positive p pushes on the body, on a
+        cavity's wall it inflates it); ``pressure``: a number or a callable ``t -> p``.
+
+        On a closed surface of triangles its work is p times the enclosed volume's change, one
+        more energy of the step. On any other surface (the top face of a block, the inside of
+        a vessel segment) it has no energy: each solve freezes it at a lag configuration and
+        re-lags at the solution until it moves less than Newton's ``gradient_tolerance`` of
+        itself, where it is the follower load (``energies/pressure_lag.py``); one that does
+        not settle in 30 re-lags fails the step, which is then halved. Its energy term is the
+        potential -f . x of the load frozen at the state, as a dead load's.
+        ``sim.add_follower_pressure(mesh.facet_sets["zmax"], 1e3)`` presses a box's top face
+        at 1 kPa."""
         self.body(body, ("fem",)).add_follower_pressure(facets, pressure, name)
 
     def add_nodal_forces(self, vertices, force, *, body=None) -> None:

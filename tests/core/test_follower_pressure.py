@@ -1,6 +1,7 @@
 """A follower pressure on a closed surface (energies/pressure.py): its energy, gradient and
 Hessian against finite differences, a cube squeezed from all sides against the closed form of
-the neo-Hookean law under a Cauchy (follower) pressure, and open surfaces refused."""
+the neo-Hookean law under a Cauchy (follower) pressure, which surfaces take the energy and which
+the lag (tests/core/test_follower_pressure_open.py), and the facets refused."""
 
 from __future__ import annotations
 
@@ -73,19 +74,35 @@ def test_a_cube_squeezed_from_all_sides_takes_the_cauchy_pressure():
     assert squeezed_cube(p) == pytest.approx(follower, rel=1e-6)
 
 
-def test_open_surfaces_and_cut_bodies_are_refused():
+def test_closed_triangles_take_the_energy_other_surfaces_the_lag_and_bad_facets_are_refused():
     mesh = ts.box((0.0, 0.0, 0.0), (1.0, 1.0, 1.0), (2, 2, 2))
     sim = ts.Simulation(mesh, ts.make_material("neo_hookean", youngs_modulus=1e4,
                                                poisson_ratio=0.3))  # fmt: skip
-    with pytest.raises(InputError, match="surface is not closed"):
-        sim.add_follower_pressure(mesh.facet_sets["zmax"], 100.0)
-    with pytest.raises(InputError, match="surface is not closed"):  # reversed orientation
-        sim.add_follower_pressure(select.all_boundary_facets(mesh)[:, ::-1][1:], 100.0)
+    sim.add_follower_pressure(mesh.facet_sets["zmax"], 100.0, name="top")
+    sim.add_follower_pressure(select.all_boundary_facets(mesh)[:, ::-1][1:], 100.0, name="open")
+    sim.add_follower_pressure(select.all_boundary_facets(mesh)[:, ::-1], 100.0)  # inward given
+    top, opened, closed = sim.bodies["body"].pressures
+    assert not top.closed and not opened.closed and closed.closed
+    assert type(top.energy(0.0)).__name__ == "LaggedPressureEnergy"
+    assert type(closed.energy(0.0)).__name__ == "PressureEnergy"
+    np.testing.assert_array_equal(closed.facets, select.all_boundary_facets(mesh))  # outward
     with pytest.raises(InputError, match="not a boundary triangle"):
         sim.add_follower_pressure([[0, 1, 13]], 100.0)
-    sim.add_follower_pressure(select.all_boundary_facets(mesh)[:, ::-1], 100.0)  # inward given
-    (load,) = sim.bodies["body"].pressures
-    np.testing.assert_array_equal(load.facets, select.all_boundary_facets(mesh))  # outward
+    with pytest.raises(InputError, match=r"facets must be \(k, 3\)"):
+        sim.add_follower_pressure(np.zeros((0, 3), dtype=int), 100.0)
+    with pytest.raises(InputError, match="given twice"):
+        sim.add_follower_pressure(np.repeat(mesh.facet_sets["zmax"][:1], 2, axis=0), 100.0)
+    hexes = ts.box((0.0, 0.0, 0.0), (1.0, 1.0, 1.0), (2, 2, 2), element="hex")
+    on_hexes = ts.Simulation(hexes, ts.make_material("neo_hookean", youngs_modulus=1e4,
+                                                     poisson_ratio=0.3))  # fmt: skip
+    on_hexes.add_follower_pressure(select.all_boundary_facets(hexes), 100.0)  # closed: lagged
+    assert not on_hexes.bodies["body"].pressures[0].closed
+    with pytest.raises(InputError, match=r"facets must be \(k, 4\)"):
+        on_hexes.add_follower_pressure(mesh.facet_sets["zmax"], 100.0)
+    quadratic = ts.box((0.0, 0.0, 0.0), (1.0, 1.0, 1.0), (1, 1, 1), element="hex20")
+    with pytest.raises(InputError, match="hexahedron20 cells"):
+        ts.Simulation(quadratic, ts.make_material("neo_hookean", youngs_modulus=1e4,
+                      poisson_ratio=0.3)).add_follower_pressure([[0, 1, 2]], 1.0)  # fmt: skip
     from tissuesim.mesh.virtual_nodes import PlanarCut
 
     plane = np.array([[0.5, -1, -1], [0.5, 2, -1], [0.5, 2, 2], [0.5, -1, 2]], dtype=float)
@@ -115,5 +132,14 @@ def test_a_scene_takes_a_pressure_table_and_names_its_errors():
     assert np.mean(sim.cell_fields()["J"]) == pytest.approx(squeezed_cube(3e3), rel=1e-9)
     with pytest.raises(SceneError, match=r"pressure\]?\[?1?.*depends on t only"):
         build_scene({**scene, "pressure": [{"facets": {"boundary": True}, "pressure": "x"}]})
-    with pytest.raises(SceneError, match="surface is not closed"):
-        build_scene({**scene, "pressure": [{"facets": {"where": "z > 0.999"}, "pressure": 1}]})
+    # an open surface is lagged: a block on rollers pressed through its top face alone ends at
+    # the uniaxial closed form (test_follower_pressure_open.py: s = 0.8094864, a = 1.0637637)
+    rollers = [{"vertices": {"where": f"{axis} < 1e-9"}, "components": [k]}
+               for k, axis in enumerate("xyz")]  # fmt: skip
+    top = {"facets": {"where": "z > 0.999"}, "pressure": "4000 * t", "name": "top"}
+    sim = build_scene({**scene, "dirichlet": rollers, "pressure": [top]}).simulation
+    for _ in range(2):  # to t = 0.5: p = 2000 Pa
+        sim.step()
+    P = sim.mesh.points
+    np.testing.assert_allclose(sim.state.x.reshape(-1, 3), P * [1.0637637, 1.0637637, 0.8094864],
+                               atol=1e-7)  # fmt: skip

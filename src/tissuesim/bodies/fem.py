@@ -272,42 +272,12 @@ class FemBody:
         self.model.loads.append(Traction(facets, field))
 
     def add_follower_pressure(self, facets, pressure, name: str) -> None:
-        """A follower pressure p (Pa; a number or a callable t -> p) on a closed surface of
-        boundary triangles (k, 3) of this 3D P1 body (``energies/pressure.py``)."""
-        from tissuesim.energies.pressure import FollowerPressure, check_closed
+        """A follower pressure p (Pa; a number or a callable t -> p) on boundary facets of this
+        3D body (P1 triangles (k, 3), Q1 quad faces (k, 4)): an energy on a closed surface of
+        triangles, lagged on any other (``energies/pressure.py``, ``pressure_lag.py``)."""
+        from tissuesim.energies.pressure import follower_pressure
 
-        where = f"add_follower_pressure {name!r}"
-        if self.dim != 3 or self.mesh.order != 1 or not self.mesh.simplicial:
-            raise InputError(
-                f"{where}: body {self.name!r} has {self.mesh.cell_type} cells; a follower "
-                "pressure acts on the triangles of a 3D P1 tetrahedral body"
-            )
-        from tissuesim.mesh.boundary import boundary_facets, match_facets
-
-        ids = indices(facets, f"{where}: facets", self.mesh.n_points)
-        facets = ids.reshape(np.shape(facets)) if ids.size else ids.reshape(0, 3)
-        if facets.ndim != 2 or facets.shape[1] != 3:
-            raise InputError(f"{where}: facets must be (k, 3) vertex indices of triangles")
-        boundary = boundary_facets(self.mesh.cells)
-        row = match_facets(boundary, facets)
-        if np.any(row < 0):
-            raise InputError(
-                f"{where}: facet {facets[row < 0][0].tolist()} is not a boundary triangle of "
-                f"body {self.name!r}; a pressure acts on the body's boundary"
-            )
-        facets = boundary[row]  # oriented outward from the material, whatever order was given
-        check_closed(facets, where)
-        if callable(pressure):
-            value = pressure
-        else:
-            p = float(pressure)
-            if not np.isfinite(p):
-                raise InputError(f"{where}: pressure must be a finite number (Pa), not {p}")
-
-            def value(t: float, p: float = p) -> float:
-                return p
-
-        self.pressures.append(FollowerPressure(np.asarray(facets, dtype=np.int64), value, name))
+        self.pressures.append(follower_pressure(self.mesh, facets, pressure, name, self.name))
 
     def add_gravity(self, acceleration: Sequence[float]) -> None:
         """Gravity, acceleration (d,) in m/s^2, acting on the element densities."""

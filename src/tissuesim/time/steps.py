@@ -118,16 +118,14 @@ def implicit_step(
         candidates = tuple(starts)
         max_step = contact.max_step
     c0 = choose_start(evaluate, candidates, lambda c: system.apply_prescribed(c, t1))
-    relag, max_relags = None, 0
+    friction = None
     if contact is not None:
         _initialize_stiffness(system, c0, body_energies)
         if contact.has_friction:
-            relag_at = _start_friction(contact, state.x, y0, h, friction_from, friction_h)
-            max_relags = contact.settings.friction_iterations - 1
-
-            def relag(c: np.ndarray) -> bool:
-                # friction lagged at the last solution (IPC): normal forces, tangent bases
-                return relag_at(c, None)
+            # friction lagged at the last solution (IPC): normal forces, tangent bases
+            friction = _start_friction(contact, state.x, y0, h, friction_from, friction_h)
+    lags = _Lags(system, body_energies, c0, options, contact, friction)
+    relag, max_relags = lags.newton_relag(), lags.max_relags
 
     c1, record = minimize(
         evaluate,
@@ -146,9 +144,10 @@ def implicit_step(
         max_relags=max_relags,
         budget=budget,
     )
+    lags.check(c1, record)
     if contact is not None:
         contact.clear_friction()
-        contact.stats.friction_solves += record.relags + 1 if contact.has_friction else 0
+        contact.stats.friction_solves += lags.friction_relags + 1 if contact.has_friction else 0
         if not record.converged and not record.budget_stop and contact.moving:
             contact.obstacle_state = y0  # the halved step starts where this one did
     if not record.converged and not record.budget_stop:
@@ -177,6 +176,51 @@ def _start_friction(contact, x0, y0, h, friction_from=None, friction_h=None):
         return True
 
     return relag
+
+
+class _Lags:
+    """The lagged terms of one step, re-lagged together by Newton's ``relag``: friction (IPC,
+    ``friction_iterations`` - 1 re-lags, then kept) and the follower pressures on open
+    surfaces (``energies/pressure_lag.py``: re-lagged until each settles to Newton's
+    ``gradient_tolerance``, at most ``MAX_RELAGS`` times; ``check`` fails a solve that ends
+    with one unsettled, so the step is halved and retried instead of accepted)."""
+
+    def __init__(self, system, body_energies, c0, options, contact=None, friction=None):
+        from tissuesim.energies.pressure_lag import MAX_RELAGS, PressureLags
+
+        self.friction = friction  # relag(c, y) of _start_friction, or None
+        self.friction_max = contact.settings.friction_iterations - 1 if friction else 0
+        self.friction_relags = 0
+        self.pressures = PressureLags.of(
+            system.config_slices, body_energies, options.gradient_tolerance
+        )
+        if self.pressures is not None:
+            self.pressures.start(c0)
+        self.max_relags = max(self.friction_max, MAX_RELAGS if self.pressures else 0)
+
+    def relag(self, c: np.ndarray, y: np.ndarray | None = None) -> bool:
+        """Re-lag at c (obstacles at y); whether anything changed."""
+        changed = False
+        if self.friction is not None and self.friction_relags < self.friction_max:
+            self.friction_relags += 1
+            changed = self.friction(c, y)
+        if self.pressures is not None:
+            changed = self.pressures.relag(c) or changed
+        return changed
+
+    def newton_relag(self):
+        """The relag(c) for ``minimize`` (None when nothing is lagged)."""
+        if self.friction is None and self.pressures is None:
+            return None
+        return lambda c: self.relag(c)
+
+    def check(self, c1: np.ndarray, record) -> None:
+        """A converged solve whose pressures have not settled at c1 becomes a failed one."""
+        if self.pressures is None or not record.converged:
+            return
+        reason = self.pressures.unsettled(c1, self.pressures.relags)
+        if reason is not None:
+            record.converged, record.reason = False, reason
 
 
 def _initialize_stiffness(system, c0, body_energies, obstacle=None) -> None:
@@ -224,11 +268,11 @@ def _step_with_moving_obstacles(
         return StepOutcome(None, False, [], "the prescribed motion of this step crosses a surface")
     c0 = choose_start(evaluate, starts, lambda c: c)
     _initialize_stiffness(system, c0, body_energies, y)
-    relag, max_relags = None, 0
+    friction = None
     if contact.has_friction:
         # inside the solves, as in implicit_step: the lag at the loosely converged point
-        relag = _start_friction(contact, state.x, y, h, friction_from, friction_h)
-        max_relags = contact.settings.friction_iterations - 1
+        friction = _start_friction(contact, state.x, y, h, friction_from, friction_h)
+    lags = _Lags(system, body_energies, c0, options, contact, friction)
 
     c1, y1, record, results = solve_with_moving_obstacles(
         system,
@@ -240,12 +284,13 @@ def _step_with_moving_obstacles(
         options,
         y0=y,
         budget=budget,
-        relag=relag,
-        max_relags=max_relags,
+        relag=None if lags.newton_relag() is None else lags.relag,
+        max_relags=lags.max_relags,
     )
+    lags.check(c1, record)
     contact.clear_friction()
     if contact.has_friction:
-        contact.stats.friction_solves += 1 + sum(r.relags for r in results)
+        contact.stats.friction_solves += 1 + lags.friction_relags
     if not record.converged and not record.budget_stop:
         return StepOutcome(None, False, results, record.reason)
     contact.obstacle_state = y1
