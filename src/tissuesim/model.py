@@ -46,10 +46,16 @@ MODEL_BYTES_PER_CELL = {
     "quad9": 14000,
     "hexahedron20": 90000,
     "hexahedron27": 160000,
+    # wedges, estimated the same way (6 points of 6 x 3 gradients, an 18 x 18 scatter)
+    "wedge": 18000,
 }
 
 
 def _kinematics(mesh: Mesh):
+    if mesh.cell_type == "wedge":
+        from tissuesim.kinematics.wedge import WedgeKinematics
+
+        return WedgeKinematics.from_mesh(mesh)
     if not mesh.simplicial and mesh.order == 2:
         from tissuesim.kinematics.q2 import Q2Kinematics
 

@@ -135,7 +135,7 @@ def test_cli_runs_a_feb_and_converts_it(tmp_path, capsys):
 
 
 REFUSALS = {
-    "penta6": ('<Elements type="penta6" name="p">', "element type 'penta6'"),
+    "pyra5": ('<Elements type="pyra5" name="p">', "element type 'pyra5'"),
     "material": ('<material id="1" name="m" type="rigid body">', "material type 'rigid body'"),
     "contact": ('<contact type="tied-elastic" surface_pair="p">', "contact type 'tied-elastic'"),
     "element": ("<Rigid>", "<Rigid>: this section is not supported"),
@@ -148,7 +148,7 @@ REFUSALS = {
 def test_refusals_are_one_line_naming_the_element_and_its_line(case, tmp_path):
     opening, message = REFUSALS[case]
     text = (MODELS / "mooney_rivlin_pressure.feb").read_text()
-    if case == "penta6":
+    if case == "pyra5":
         text = text.replace('<Elements type="tet4" name="cube">', opening)
     elif case == "material":
         text = text.replace('<material id="1" name="liver" type="Mooney-Rivlin">', opening)

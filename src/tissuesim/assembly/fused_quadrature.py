@@ -1,5 +1,5 @@
 """Fused assembly with Numba for elements of several quadrature points (P2, Q1 and quadratic
-quadrilaterals and hexahedra).
+quadrilaterals and hexahedra, wedges).
 
 The same sums as ``fused_p1.py`` (F, the law's point kernel, w G^T P, w G^T A G), but an
 element's nq points are summed into one local Hessian before it is scattered: a P2 tetrahedron
@@ -85,6 +85,13 @@ def _points_h27(law, mu, lam, x, cells, grads, weights, nq, order, scatter, grad
     )
 
 
+@njit(cache=True)
+def _points_w6(law, mu, lam, x, cells, grads, weights, nq, order, scatter, gradient, hessian):
+    return _points(
+        3, 6, law, mu, lam, x, cells, grads, weights, nq, order, scatter, gradient, hessian
+    )
+
+
 @njit(cache=True, inline="always")
 def _points(d, nv, law, mu, lam, x, cells, grads, weights, nq, order, scatter, grad, hess):
     m = cells.shape[0] // nq
@@ -154,7 +161,7 @@ def _points(d, nv, law, mu, lam, x, cells, grads, weights, nq, order, scatter, g
 
 
 #: (dimension, nodes per element) -> the compiled loop: P2 triangles and tetrahedra, Q1 and
-#: quadratic quadrilaterals and hexahedra
+#: quadratic quadrilaterals and hexahedra, wedges
 _KERNELS = {
     (2, 6): _points_2d,
     (3, 10): _points_3d,
@@ -164,4 +171,5 @@ _KERNELS = {
     (2, 9): _points_q9,
     (3, 20): _points_h20,
     (3, 27): _points_h27,
+    (3, 6): _points_w6,
 }

@@ -14,8 +14,13 @@ lumped mass is the row sums. The quadratic ones (quad8, quad9, hexahedron20, hex
 integrate with 4 per direction; a serendipity cell's row sums are negative at its corners
 (a hexahedron20's -V/8 each, its midside nodes V/6; a quad8's -A/12, A/3), so, as for P2,
 their lumped mass is HRZ's (the consistent diagonal scaled to the cell's mass: positive at
-every node). Gravity uses the consistent row sums (``row_sums``), which are exact for every
-element.
+every node). Linear wedges integrate with a rule exact for N^a N^b det J (``mesh/wedge.py``);
+their shape functions are non-negative, so their row sums are positive and, as for Q1, the
+lumped mass is the row sums: they keep the element's mass and its first moments exactly
+(sum_a m_a X_a = int rho X, the mass centre) and are the consistent nodal loads of a uniform
+body force, so gravity is the same with either mass; HRZ keeps only the total (it equals the
+row sums on a right prism, differs on a distorted wedge).
+Gravity uses the consistent row sums (``row_sums``), which are exact for every element.
 
 Inertia energy of Backward Euler with x_pred = x_n + h v_n (Gast et al. 2015):
     E(x) = 1/(2 h^2) (x - x_pred)^T M (x - x_pred).
@@ -75,7 +80,8 @@ class MassMatrix:
             scalar = np.einsum("mq,qa,qb->mab", density[:, None] * w, N, N)
         row = scalar.sum(axis=2)  # (m, nv) consistent row sums
         diag = np.einsum("maa->ma", scalar)
-        if nv == d + 1 or nv == 2**d and not kinematics.mesh.simplicial:  # Q1: positive
+        positive = nv == 2**d or (d, nv) == (3, 6)  # Q1 and wedges: N^a >= 0
+        if nv == d + 1 or positive and not kinematics.mesh.simplicial:  # row sums positive
             diagonal = row
         else:  # HRZ: positive, the same total
             diagonal = diag * (row.sum(axis=1) / diag.sum(axis=1))[:, None]
@@ -107,7 +113,13 @@ def _element_rule(mesh) -> tuple[np.ndarray, np.ndarray]:
     """N (q, nv) and weights (m, q) integrating N^a N^b exactly: a degree-4 rule for P2; for Q1
     3 Gauss points per direction (N^a N^b det J is of degree 4 in each variable); for the
     quadratic quadrilaterals and hexahedra 4 (degree 7: N^a N^b of degree 4 times det J of a
-    cell with straight edges, degree 2 in 3D)."""
+    cell with straight edges, degree 2 in 3D); for wedges a rule of degree 3 on the triangle
+    and 4 along the axis (``wedge.mass_rule``)."""
+    if mesh.cell_type == "wedge":
+        from tissuesim.kinematics.wedge import wedge_shape_values
+        from tissuesim.mesh.wedge import mass_rule
+
+        return wedge_shape_values(mesh.points, mesh.cells, mass_rule())
     if not mesh.simplicial and mesh.order == 2:
         from tissuesim.kinematics.q2 import q2_shape_values
 

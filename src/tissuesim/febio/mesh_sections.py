@@ -17,15 +17,21 @@ ELEMENTS = {
     "hex8": (8, "hexahedron"),
     "hex20": (20, "hexahedron20"),
     "hex27": (27, "hexahedron27"),
+    "penta6": (6, "wedge"),
 }
 #: FEBio element type -> FEBio's local node of each of tissuesim's (VTK's) nodes, where the
 #: orders differ: tissuesim's cell = FEBio's element[PERMUTATIONS[type]]. From the reference
 #: coordinates of FEBio's nodes (FECore/FESolidElementShape.cpp: FEHex20::shape_fnc, HEX27_LUT):
 #: hex8, hex20 and hex27's nodes 0-19 are VTK's; hex27 puts its face centres in the order
 #: y = -1, x = +1, y = +1, x = -1, z = -1, z = +1, VTK x = -1, x = +1, y = -1, y = +1, ...
+#: penta6 is read as it is: FEPenta6::shape_fnc puts its nodes at (r, s, t) = (0, 0, -1),
+#: (1, 0, -1), (0, 1, -1), (0, 0, 1), (1, 0, 1), (0, 1, 1), Gmsh's and meshio's ``wedge`` order,
+#: which tissuesim uses (``mesh/wedge.py``; VTK's mirrors it, and meshio converts)
 PERMUTATIONS = {"hex27": np.array([*range(20), 23, 21, 20, 22, 24, 25, 26])}
 #: FEBio surface facet types -> corners kept (tissuesim's facets are corner lists; FEBio lists
-#: a facet's corners first)
+#: a facet's corners first). A surface that mixes triangles and quadrilaterals (a penta6
+#: mesh's) keeps its triangles as (a, b, c, c), the rows of 4 a wedge mesh's facets are
+#: (``mesh/wedge.py``)
 FACETS = {"tri3": 3, "tri6": 3, "quad4": 4, "quad8": 4, "quad9": 4}
 
 
@@ -79,8 +85,8 @@ def _elements(model: FebModel, node: Node) -> None:
     if kind not in ELEMENTS:
         raise node.error(
             f"element type {kind!r} is not supported by tissuesim; it runs "
-            f"{', '.join(ELEMENTS)} (wedges, pyramids, tet5, tet15, tet20, shells and beams are "
-            "not)"
+            f"{', '.join(ELEMENTS)} (penta15, pyramids, tet5, tet15, tet20, shells and beams "
+            "are not)"
         )
     nv, cell_type = ELEMENTS[kind]
     name = node.attrib.get("name") or f"Part{len(model.parts) + 1}"
@@ -104,18 +110,20 @@ def _elements(model: FebModel, node: Node) -> None:
         elems.append(c)
     if not cells:
         raise node.error("no elements in this part")
-    if kind in QUADRATIC_HEXES:
+    if kind in ORDERS:
         _check_order(model, kind, np.array(cells, dtype=np.int64), elems)
     model.parts[name] = (cell_type, np.array(cells, dtype=np.int64), np.array(ids), node)
     if "mat" in node.attrib:  # FEBio 2.5 style: the material on the part
         model.domains[name] = (node.attrib["mat"], None, node)
 
 
-#: each quadratic hexahedron's node order, in words, for the refusal of a misnumbered one
-QUADRATIC_HEXES = {
+#: the node order, in words, of the elements checked as they are read (the quadratic
+#: hexahedra and the wedge), for the refusal of a misnumbered one
+ORDERS = {
     "hex20": "corners, then the midside nodes of edges 1-2 2-3 3-4 4-1 5-6 6-7 7-8 8-5 1-5 "
     "2-6 3-7 4-8",
     "hex27": "hex20's, then the centres of the faces y-, x+, y+, x-, z-, z+ and the centre",
+    "penta6": "the triangle 1-2-3 counter-clockwise seen from the triangle 4-5-6 above it",
 }
 
 
@@ -131,7 +139,7 @@ def _check_order(model: FebModel, kind: str, cells: np.ndarray, elems: list[Node
         raise elems[e].error(
             f"the Jacobian of this {kind} runs from {detJ[e].min():.3g} to "
             f"{detJ[e].max():.3g} over its Gauss points and nodes ({int(bad.sum())} such "
-            f"elements): its nodes are not in FEBio's order ({QUADRATIC_HEXES[kind]}), or it "
+            f"elements): its nodes are not in FEBio's order ({ORDERS[kind]}), or it "
             "is folded or inverted"
         )
 
@@ -156,9 +164,12 @@ def _surface(model: FebModel, node: Node) -> None:
             )
         conn = _index(model, c, _ints(c))
         facets.append(conn[: FACETS[c.tag]])
-    kinds = {len(f) for f in facets}
-    if len(kinds) != 1:
-        raise node.error("a surface must be all triangles or all quadrilaterals")
+    if not facets:
+        raise node.error("a surface needs at least one facet")
+    if len({len(f) for f in facets}) > 1:  # a wedge mesh's triangles and quadrilaterals
+        from tissuesim.mesh.wedge import as_facets
+
+        facets = as_facets([np.pad(f, (0, 4 - len(f)), mode="edge") for f in facets])
     model.surfaces[name] = (np.array(facets, dtype=np.int64), node)
 
 

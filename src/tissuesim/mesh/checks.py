@@ -18,8 +18,17 @@ _KIND = {2: "triangles", 3: "tetrahedra"}
 #: with them): triangle6 (0 2 1 | 20 12 01), tetra10 (0 1 3 2 | 01 13 30 02 12 32)
 _REORIENT_LINEAR = {2: [0, 2, 1], 3: [0, 1, 3, 2]}
 _REORIENT = {2: [0, 2, 1, 5, 4, 3], 3: [0, 1, 3, 2, 4, 8, 7, 6, 5, 9]}
-#: nodes per quadrilateral / hexahedron: Q1, then quadratic (quad8, quad9; hexahedron20, 27)
-_TENSOR_WIDTHS = {2: (4, 8, 9), 3: (8, 20, 27)}
+#: nodes per quadrilateral / hexahedron: Q1, then quadratic (quad8, quad9; hexahedron20, 27);
+#: in 3D also the 6-node wedge (checked like them, ``tensor_checks``)
+_TENSOR_WIDTHS = {2: (4, 8, 9), 3: (8, 20, 27, 6)}
+#: what the facets of a mesh are, by (dimension, nodes per cell; 0: simplices)
+_FACET_WORDS = {
+    (2, 0): "edges",
+    (3, 0): "triangles",
+    **{(2, nv): "edges" for nv in (4, 8, 9)},
+    **{(3, nv): "quad faces" for nv in (8, 20, 27)},
+    (3, 6): "quad faces and triangles (k, 4), a triangle as (a, b, c, c)",
+}
 
 
 def signed_volumes(points: np.ndarray, cells: np.ndarray) -> np.ndarray:
@@ -149,8 +158,10 @@ def validate_mesh(
 
     points: (n, d) coordinates, d = 2 or 3, finite. cells: (m, d+1) 0-based vertex indices.
     point_sets: name -> (k,) vertex ids. facet_sets: name -> (k, d) boundary facets (reoriented
-    outward). cell_sets: name -> (k,) cell ids. Negatively oriented cells are fixed by swapping
-    their last two vertices (with a UserWarning). Vertices closer than COINCIDENT_TOLERANCE
+    outward; (k, 4) quad faces of hexahedra; for wedges (k, 4) rows, a triangle (k, 3) or
+    (a, b, c, c)). cell_sets: name -> (k,) cell ids. Negatively oriented cells are fixed by
+    swapping their last two vertices (mirrored hexahedra and wedges: ``tensor_checks``), with a
+    UserWarning. Vertices closer than COINCIDENT_TOLERANCE
     times the bounding-box diagonal (an unwelded seam) are refused, or merged with
     ``merge_coincident``; vertices no element uses are dropped (UserWarning; indices after
     them shift down, point sets are remapped).
@@ -179,7 +190,8 @@ def validate_mesh(
             f"{source}: cells have shape {c.shape}; {d}D points need (m, {d + 1}) cells "
             f"({_KIND[d]}, one row of {d + 1} vertex indices per element), (m, {nq}) "
             f"quadratic cells (corners, then midside nodes) or (m, "
-            f"{' / '.join(map(str, widths))}) {'quadrilaterals' if d == 2 else 'hexahedra'}"
+            f"{' / '.join(map(str, widths))}) "
+            f"{'quadrilaterals' if d == 2 else 'hexahedra (or 6: wedges)'}"
         )
     quadratic = c.shape[1] == nq
     tensor = c.shape[1] in widths
@@ -293,12 +305,13 @@ def _finish_checks(
         from tissuesim.mesh.quadratic_checks import check_quadratic
 
         check_quadratic(pts, c, source)
+    wedges = (d, c.shape[1]) == (3, 6)
     if tensor:
-        from tissuesim.mesh.tensor import face_table
+        from tissuesim.mesh.tensor import face_table, local_faces
 
         table = face_table(c, d)
-        nf, per_cell = (4 if d == 3 else 2), 2 * d
-        if c.shape[1] != 2**d:
+        nf, per_cell = (4 if d == 3 else 2), len(local_faces(d, c.shape[1]))
+        if c.shape[1] != 2**d and not wedges:
             from tissuesim.mesh.tensor_quadratic import check_shared_nodes
 
             check_shared_nodes(c, d, table, source)
@@ -327,6 +340,10 @@ def _finish_checks(
         a = _index_array(v, source, f"facet set {name!r}", f"(k, {nf})")
         if a.size == 0:
             a = a.reshape(0, nf)
+        if wedges:  # triangles (k, 3) and collapsed quads as (a, b, c, c)
+            from tissuesim.mesh.wedge import as_facets
+
+            a = as_facets(a)
         if a.ndim != 2 or a.shape[1] != nf:
             raise MeshError(f"{source}: facet set {name!r} has shape {a.shape}; expected (k, {nf})")
         row = match_facets(boundary, a)
@@ -335,7 +352,7 @@ def _finish_checks(
             raise MeshError(
                 f"{source}: facet set {name!r} row {k} {a[k].tolist()} is not a boundary facet "
                 f"of the mesh; facet sets must list boundary "
-                f"{'edges' if d == 2 else 'quad faces' if tensor else 'triangles'}"
+                f"{_FACET_WORDS[d, c.shape[1]] if tensor else _FACET_WORDS[d, 0]}"
             )
         fsets[str(name)] = boundary[np.unique(row)]
     return Mesh(

@@ -256,6 +256,17 @@ def _hex_cells(nx: int, ny: int, nz: int) -> np.ndarray:
     return np.concatenate([bottom, bottom + (nx + 1) * (ny + 1)], axis=1)
 
 
+def _wedge_cells(nx: int, ny: int, nz: int, mirrored: bool) -> np.ndarray:
+    """(2 nx ny nz, 6) wedges of the grid: each of ``_hex_cells`` cut along its bottom face's
+    0-2 diagonal (``mirrored``: the 1-3 one where x < centre xor y < centre, so the pattern is
+    mirror-symmetric about the vertical mid-planes)."""
+    from tissuesim.mesh.wedge import from_hexahedra
+
+    qz, qy, qx = (g.ravel() for g in np.mgrid[0:nz, 0:ny, 0:nx])
+    across = ((2 * qx + 1) < nx) ^ ((2 * qy + 1) < ny) if mirrored else np.zeros(qx.size, bool)
+    return from_hexahedra(_hex_cells(nx, ny, nz), across)
+
+
 def _order(order) -> int:
     if isinstance(order, bool) or order not in (1, 2):
         raise MeshError(
@@ -356,6 +367,11 @@ def box(
 
     element: "tet" (the default) or "hex": the (nx, ny, nz) Q1 hexahedra themselves (VTK's node
     order; ``pattern`` does not apply, order must be 1; facet sets hold quad faces (k, 4));
+    "wedge": each hexahedron cut into 2 linear wedges (6-node prisms, Gmsh's node order, their
+    axes along z) by a vertical plane through a diagonal of its bottom face, mirrored about the
+    vertical mid-planes like the tetrahedra (``pattern`` "uniform": the same diagonal
+    everywhere); order must be 1; facet sets hold (k, 4) rows, the sides' quadrilaterals and
+    the zmin / zmax triangles as (a, b, c, c) (``mesh/wedge.py``);
     "hex20" / "hex27": quadratic hexahedra (serendipity / triquadratic, VTK's node order, nodes
     at the midpoints of the graded grid's edges, faces and cells; order is 2 whether given or
     not; point sets hold every node on their side, facet sets the faces by their corners).
@@ -393,17 +409,23 @@ def box(
     if pattern != "mirrored":
         source = source[:-1] + f", pattern={pattern!r})"
     names = (("xmin", "xmax"), ("ymin", "ymax"), ("zmin", "zmax"))
-    element = _element("box", element, ("tet", "hex", "hex20", "hex27"))
+    element = _element("box", element, ("tet", "hex", "wedge", "hex20", "hex27"))
     if element in QUADRATIC_TENSOR:
         n = np.array([nx, ny, nz])
         coords = [points[np.arange(k + 1) * int(np.prod(n[:a] + 1)), a] for a, k in enumerate(n)]
         return _quadratic_tensor("box", element, coords, names, 2 if order == 1 else order, source)
-    if element == "hex":
+    if element in ("hex", "wedge"):
         if _order(order) != 1:
-            raise MeshError("box: element = 'hex' takes order 1 (Q1 hexahedra)")
-        cells = _hex_cells(nx, ny, nz)
+            raise MeshError(
+                f"box: element = {element!r} takes order 1 "
+                f"({'Q1 hexahedra' if element == 'hex' else 'linear wedges'})"
+            )
+        if element == "hex":
+            cells = _hex_cells(nx, ny, nz)
+        else:
+            cells = _wedge_cells(nx, ny, nz, mirrored=pattern == "mirrored")
         psets, fsets = _side_sets(cells, (gx, gy, gz), names, tensor=True)
-        source = source[:-1] + ", element='hex')"
+        source = source[:-1] + f", element={element!r})"
         return validate_mesh(points, cells, source=source, point_sets=psets, facet_sets=fsets)
     cells = _kuhn_cells(nx, ny, nz, mirrored=pattern == "mirrored")
     psets, fsets = _side_sets(cells, (gx, gy, gz), names)

@@ -3,8 +3,9 @@
 read_mesh takes tetrahedra (3D) or triangles (2D), linear or quadratic (meshio's tetra10 and
 triangle6, e.g. Gmsh second order; meshio converts Gmsh's node order to VTK's, which tissuesim
 uses), or hexahedra (3D, tagged quad faces become facet sets) and quadrilaterals (2D), Q1 or
-quadratic (meshio's hexahedron20 / hexahedron27 / quad8 / quad9, VTK's node order), and turns
-tags into named sets: meshio
+quadratic (meshio's hexahedron20 / hexahedron27 / quad8 / quad9, VTK's node order), or linear
+wedges (meshio's ``wedge``, Gmsh's prism order: meshio converts VTK's mirrored one; tagged
+triangles and quads both become facets, ``mesh/wedge.py``), and turns tags into named sets: meshio
 cell sets and gmsh physical groups ("gmsh:physical" with names from $PhysicalNames). Tagged facets
 (lines in 2D, triangles in 3D) become facet sets, tagged volume cells cell sets, tagged lower-
 dimensional cells (vertices, edges in 3D) point sets. Everything is then checked by validate_mesh.
@@ -47,10 +48,15 @@ _CELL_DIM = {
     "quad9": 2,
     "hexahedron20": 3,
     "hexahedron27": 3,
+    "wedge": 3,
 }
 #: quadrilateral / hexahedral volume cells, each dimension's in order of preference
-_TENSOR = {3: ("hexahedron", "hexahedron20", "hexahedron27"), 2: ("quad", "quad8", "quad9")}
-#: their facet types that tag their boundary (the first is written) and the facets' corners
+_TENSOR = {
+    3: ("hexahedron", "hexahedron20", "hexahedron27", "wedge"),
+    2: ("quad", "quad8", "quad9"),
+}
+#: their facet types that tag their boundary (the first is written; a wedge's facets are
+#: written as triangles and quads) and the facets' corners
 _TENSOR_FACET = {
     "hexahedron": (("quad",), 4),
     "hexahedron20": (("quad", "quad8"), 4),
@@ -58,6 +64,7 @@ _TENSOR_FACET = {
     "quad": (("line",), 2),
     "quad8": (("line", "line3"), 2),
     "quad9": (("line", "line3"), 2),
+    "wedge": (("quad", "triangle"), 4),
 }
 
 
@@ -102,10 +109,10 @@ def _choose_cells(path: str, m) -> tuple[np.ndarray, int, str]:
         d = 2
     else:
         raise MeshError(
-            f"{path}: no tetrahedra, hexahedra, triangles or quadrilaterals; cell types found: "
-            f"{listing}. tissuesim needs 'tetra' / 'tetra10' / 'hexahedron' / 'hexahedron20' / "
-            f"'hexahedron27' (3D) or 'triangle' / 'triangle6' / 'quad' / 'quad8' / 'quad9' (2D) "
-            f"elements: re-export with element order 1 or 2"
+            f"{path}: no tetrahedra, hexahedra, wedges, triangles or quadrilaterals; cell types "
+            f"found: {listing}. tissuesim needs 'tetra' / 'tetra10' / 'hexahedron' / "
+            f"'hexahedron20' / 'hexahedron27' / 'wedge' (3D) or 'triangle' / 'triangle6' / "
+            f"'quad' / 'quad8' / 'quad9' (2D) elements: re-export with element order 1 or 2"
         )
     simplex = found.get(_VOLUME[d]) or found.get(_VOLUME2[d])
     if simplex:
@@ -154,7 +161,12 @@ def _tagged_sets(m, d: int, vtype: str):
         if b.type == vtype:
             cell_sets[name].append(offsets[block_index] + rows)
         elif b.type in facet_types:  # quadratic facets by their corners
-            facet_sets[name].append(np.asarray(b.data)[rows][:, :nf])
+            facets = np.asarray(b.data)[rows][:, :nf]
+            if facets.shape[1] < nf:  # a wedge's triangle: (a, b, c, c)
+                from tissuesim.mesh.wedge import as_facets
+
+                facets = as_facets(facets)
+            facet_sets[name].append(facets)
         elif _block_dim(b) < d - 1 or b.type == "vertex":
             point_sets[name].append(np.asarray(b.data)[rows].reshape(-1))
 
@@ -249,14 +261,25 @@ def write_mesh(mesh: Mesh, path: str | os.PathLike[str], file_format: str | None
         file_format = "gmsh22"
     blocks = [(mesh.cell_type, mesh.cells)]
     facet_type = _TENSOR_FACET[mesh.cell_type][0][0] if not mesh.simplicial else _FACET[d]
+    wedges = mesh.cell_type == "wedge"
     kwargs = {}
     if file_format == "gmsh22":
         volume_tags = np.zeros(mesh.n_cells, dtype=np.int32)
         physical, field_data, tag = [], {}, 0
         for name, facets in mesh.facet_sets.items():
             tag += 1
-            blocks.append((facet_type, np.asarray(facets)))
-            physical.append(np.full(len(facets), tag, dtype=np.int32))
+            facets = np.asarray(facets)
+            if wedges:  # the triangles (a, b, c, c) as triangles, the quads as quads
+                from tissuesim.mesh.wedge import is_triangle
+
+                tri = is_triangle(facets)
+                parts = [("triangle", facets[tri, :3]), ("quad", facets[~tri])]
+            else:
+                parts = [(facet_type, facets)]
+            for kind, rows in parts:
+                if len(rows) or not wedges:
+                    blocks.append((kind, rows))
+                    physical.append(np.full(len(rows), tag, dtype=np.int32))
             field_data[name] = np.array([tag, d - 1])
         for name, ids in mesh.point_sets.items():
             if name in mesh.facet_sets or name in mesh.cell_sets:

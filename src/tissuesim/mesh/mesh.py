@@ -1,5 +1,5 @@
-"""The Mesh: rest positions and cells (simplices, quadrilaterals or hexahedra), plus named
-vertex, facet and cell sets."""
+"""The Mesh: rest positions and cells (simplices, quadrilaterals, hexahedra or wedges), plus
+named vertex, facet and cell sets."""
 
 from __future__ import annotations
 
@@ -23,6 +23,7 @@ CELL_TYPES = {
     (2, 9): "quad9",
     (3, 20): "hexahedron20",
     (3, 27): "hexahedron27",
+    (3, 6): "wedge",  # meshio's and Gmsh's order (VTK's mirrored; meshio converts)
 }
 #: nodes per quadratic quadrilateral (quad8, quad9) and hexahedron (hexahedron20, 27)
 _QUADRATIC_TENSOR = {2: (8, 9), 3: (20, 27)}
@@ -39,11 +40,13 @@ class Mesh:
         then the midside nodes (``mesh/quadratic.py``); Q1 quadrilaterals (m, 4) in 2D and
         hexahedra (m, 8) in 3D in VTK's node order, with a positive rest Jacobian at every
         Gauss point (``mesh/tensor.py``); quadratic quadrilaterals (m, 8) / (m, 9) and
-        hexahedra (m, 20) / (m, 27) in VTK's node order (``mesh/tensor_quadratic.py``).
+        hexahedra (m, 20) / (m, 27) in VTK's node order (``mesh/tensor_quadratic.py``);
+        linear wedges (m, 6) in meshio's / Gmsh's / FEBio's node order (``mesh/wedge.py``).
     point_sets: name -> (k,) vertex indices.
     facet_sets: name -> (k, d) boundary facets (edges in 2D, triangles in 3D) as corner indices;
-        (k, 4) quad faces for hexahedra (``facet_nodes``); quadratic cells' facets by their
-        corners, as for P2.
+        (k, 4) quad faces for hexahedra (``facet_nodes``), and for wedges their quads and
+        triangles, a triangle as (a, b, c, c) (``mesh/wedge.py``); quadratic cells' facets by
+        their corners, as for P2.
     cell_sets: name -> (k,) cell indices.
     source: where the mesh came from (a file path or a generator), used in error messages.
     cell_fractions: (m,) the part of each cell's volume that is material (a virtual-node cut's
@@ -78,7 +81,9 @@ class Mesh:
 
     def __repr__(self) -> str:
         kind = {2: "triangles", 3: "tetrahedra"}.get(self.dim, "cells")
-        if not self.simplicial:
+        if self.cell_type == "wedge":
+            kind = "wedges"
+        elif not self.simplicial:
             kind = "quadrilaterals" if self.dim == 2 else "hexahedra"
             kind = f"{self.cell_type} {kind}" if self.order == 2 else kind
         elif self.order == 2:
@@ -110,38 +115,43 @@ class Mesh:
     @property
     def cell_type(self) -> str:
         """meshio's name of the cells: "triangle", "tetra", "triangle6", "tetra10", "quad",
-        "hexahedron", "quad8", "quad9", "hexahedron20" or "hexahedron27"."""
+        "hexahedron", "quad8", "quad9", "hexahedron20", "hexahedron27" or "wedge"."""
         return CELL_TYPES[self.dim, int(self.cells.shape[1])]
 
     @property
     def simplicial(self) -> bool:
         """True for triangles and tetrahedra (linear or quadratic), False for quadrilaterals and
-        hexahedra (Q1 or quadratic)."""
+        hexahedra (Q1 or quadratic) and wedges."""
         d, nv = self.dim, int(self.cells.shape[1])
         return nv in (d + 1, (d + 1) * (d + 2) // 2)
 
     @property
     def order(self) -> int:
-        """1 for linear simplices and Q1 cells, 2 for 6-node triangles / 10-node tetrahedra and
-        the quadratic quadrilaterals and hexahedra (8, 9, 20, 27 nodes)."""
+        """1 for linear simplices, Q1 cells and wedges, 2 for 6-node triangles / 10-node
+        tetrahedra and the quadratic quadrilaterals and hexahedra (8, 9, 20, 27 nodes)."""
         d, nv = self.dim, int(self.cells.shape[1])
         return 2 if nv == (d + 1) * (d + 2) // 2 or nv in _QUADRATIC_TENSOR[d] else 1
 
     @property
     def facet_nodes(self) -> int:
-        """Corner nodes of a boundary facet: d (edges, triangles), 4 for hexahedra' quad faces."""
+        """Corner nodes of a boundary facet: d (edges, triangles), 4 for hexahedra' quad faces
+        and for wedges' facets (a triangle as (a, b, c, c))."""
         return 4 if self.dim == 3 and not self.simplicial else self.dim
 
     @property
     def corners(self) -> np.ndarray:
         """(m, d + 1) the corner vertices of every cell ((m, 2^d) for quadrilaterals and
-        hexahedra: all nodes of Q1 cells)."""
+        hexahedra: all nodes of Q1 cells; (m, 6) for wedges)."""
         if not self.simplicial:
             return self.cells[:, : 2**self.dim]
         return self.cells[:, : self.dim + 1]
 
     @cached_property
     def _subdivision(self) -> tuple[np.ndarray, np.ndarray]:
+        if self.cell_type == "wedge":
+            from tissuesim.mesh.wedge import subdivide as split_wedges
+
+            return split_wedges(self.points, self.cells)
         if not self.simplicial and self.order == 2:
             from tissuesim.mesh.tensor_quadratic import subdivide as split_quadratic
 
@@ -160,9 +170,9 @@ class Mesh:
     def simplices(self) -> np.ndarray:
         """Linear simplices (k, d + 1) over all nodes: the cells themselves for order 1, the
         linear subdivision of each quadratic cell (4 triangles, 8 tetrahedra) for order 2, the
-        split of each Q1 cell (2 triangles, 6 tetrahedra; ``mesh/tensor.py``) or quadratic
+        split of each Q1 cell (2 triangles, 6 tetrahedra; ``mesh/tensor.py``), quadratic
         quadrilateral / hexahedron (6 or 8 triangles, 22 or 48 tetrahedra;
-        ``mesh/tensor_quadratic.py``).
+        ``mesh/tensor_quadratic.py``) or wedge (3 tetrahedra; ``mesh/wedge.py``).
         Geometry (boundary, location, contact, pictures) works on these."""
         return self._subdivision[0]
 

@@ -1,7 +1,8 @@
 """Select vertices and boundary facets of a Mesh by plane, box or tag.
 
 Vertex selections return sorted unique (k,) int64 vertex ids; facet selections return (k, d) int64
-boundary facets oriented outward ((k, 4) quad faces for hexahedra). An empty selection raises
+boundary facets oriented outward ((k, 4) quad faces for hexahedra; for wedges (k, 4) rows of
+quads and triangles, a triangle as (a, b, c, c), ``mesh/wedge.py``). An empty selection raises
 MeshError stating what was asked and the mesh's bounding box. Default tolerances are 1e-6 times
 the bounding-box diagonal.
 """
@@ -74,7 +75,7 @@ def _boundary(mesh: Mesh) -> np.ndarray:
     if facets is None:
         if mesh.simplicial:
             facets = boundary_facets(mesh.corners)
-        else:  # Q1 cells: edges of quadrilaterals, quad faces (k, 4) of hexahedra
+        else:  # edges of quadrilaterals, quad faces (k, 4) of hexahedra and wedges
             from tissuesim.mesh.tensor import boundary_faces
 
             facets = boundary_faces(mesh.cells, mesh.dim)
@@ -165,7 +166,7 @@ def facets_in_box(
 
 def facets_tagged(mesh: Mesh, tag: str) -> np.ndarray:
     """Facet set ``tag`` (k, d), else boundary facets with all vertices in point set ``tag``."""
-    if tag in mesh.facet_sets:
+    if tag in mesh.facet_sets:  # (k, 4) for hexahedra and wedges
         facets = np.asarray(mesh.facet_sets[tag], dtype=np.int64).reshape(-1, mesh.facet_nodes)
     elif tag in mesh.point_sets:
         bf = _boundary(mesh)

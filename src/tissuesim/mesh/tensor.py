@@ -18,6 +18,9 @@ triangles (along its 0-2 diagonal), each hexahedron into 6 tetrahedra around its
 shared face the same way when they number it alike (every structured mesh, the ``box``
 generator); where a file's numbering differs, a flat tetrahedron over the face's 4 nodes is
 added so that the split stays closed (its faces are both splits' triangles).
+
+The face tables (``all_faces``, ``face_table``, ``boundary_faces``) also serve linear wedges
+(``mesh/wedge.py``), whose facets are (k, 4) rows too (``WEDGE_FACES``).
 """
 
 from __future__ import annotations
@@ -29,6 +32,9 @@ import numpy as np
 __all__ = [
     "SIGNS",
     "FACES",
+    "WEDGE_FACES",
+    "local_faces",
+    "collapsed_triangles",
     "shape_functions",
     "gauss_rule",
     "rest_jacobians",
@@ -73,6 +79,19 @@ FACES = {
     ),
 }
 
+#: the facets of a linear wedge (``mesh/wedge.py``), outward as ``FACES``: the triangles with
+#: their last corner repeated, so that a wedge mesh's facets are (k, 4) rows like a
+#: hexahedral one's and the face tables below serve both
+WEDGE_FACES = np.array(
+    [
+        [0, 2, 1, 1],  # bottom, t = -1
+        [3, 4, 5, 5],  # top, t = +1
+        [0, 1, 4, 3],  # s = 0
+        [1, 2, 5, 4],  # r + s = 1
+        [2, 0, 3, 5],  # r = 0
+    ]
+)
+
 # simplices of one cell in local node numbers, positively oriented for a positive cell
 _SPLIT = {
     2: np.array([[0, 1, 2], [0, 2, 3]]),
@@ -114,14 +133,34 @@ def rest_jacobians(points: np.ndarray, cells: np.ndarray, dN: np.ndarray) -> np.
     return np.einsum("mai,qaj->mqij", points[cells], dN)
 
 
+def local_faces(dim: int, nv: int) -> np.ndarray:
+    """The local facets (f, nf) of a cell of nv nodes: ``FACES[dim]`` for quadrilaterals and
+    hexahedra (their corners), ``WEDGE_FACES`` for wedges."""
+    return WEDGE_FACES if (dim, nv) == (3, 6) else FACES[dim]
+
+
 def all_faces(cells: np.ndarray, dim: int) -> np.ndarray:
-    """Every facet of every cell, outward for its cell: (m, 2d, nf) (edges or quad faces)."""
-    return np.asarray(cells)[:, FACES[dim]]
+    """Every facet of every cell, outward for its cell: (m, f, nf) (edges or quad faces; a
+    wedge's 5 faces, its triangles as collapsed quads, ``collapsed_triangles``)."""
+    cells = np.asarray(cells)
+    faces = cells[:, local_faces(dim, cells.shape[1])]
+    if (dim, cells.shape[1]) == (3, 6):
+        faces[:, :2] = collapsed_triangles(faces[:, :2, :3])
+    return faces
+
+
+def collapsed_triangles(triangles: np.ndarray) -> np.ndarray:
+    """Triangles (..., 3) as 4-node rows (..., 4) (a, b, c, c): the corners in the same cyclic
+    order (the same orientation), rotated so that the repeated one is the largest, so that
+    every description of a triangle gives one row and one sorted key."""
+    t = np.asarray(triangles)
+    k = np.argmax(t, axis=-1)[..., None]
+    return np.take_along_axis(t, (k + np.array([1, 2, 0, 0])) % 3, axis=-1)
 
 
 def face_table(cells: np.ndarray, dim: int):
-    """Unique facets of Q1 ``cells``: (faces (m*2d, nf) in cell order, first (u,), inverse
-    (m*2d,), counts (u,)), as ``boundary.facet_table`` for simplices."""
+    """Unique facets of Q1 or wedge ``cells``: (faces (m*f, nf) in cell order, first (u,),
+    inverse (m*f,), counts (u,)), as ``boundary.facet_table`` for simplices."""
     faces = all_faces(cells, dim).reshape(-1, FACES[dim].shape[1])
     keys = np.sort(faces, axis=1)
     _, first, inverse, counts = np.unique(
@@ -131,8 +170,9 @@ def face_table(cells: np.ndarray, dim: int):
 
 
 def boundary_faces(cells: np.ndarray, dim: int) -> np.ndarray:
-    """Facets (k, nf) int64 of Q1 cells that belong to one cell only (edges (k, 2) of quads,
-    quad faces (k, 4) of hexahedra), outward, in the order of the cells they belong to."""
+    """Facets (k, nf) int64 of Q1 or wedge cells that belong to one cell only (edges (k, 2) of
+    quads, quad faces (k, 4) of hexahedra, quads and collapsed triangles (k, 4) of wedges),
+    outward, in the order of the cells they belong to."""
     faces, first, _, counts = face_table(cells, dim)
     return np.ascontiguousarray(faces[np.sort(first[counts == 1])], dtype=np.int64)
 

@@ -1,11 +1,13 @@
-"""Checks of Q1 and quadratic quadrilaterals and hexahedra, called by ``validate_mesh``.
+"""Checks of Q1 and quadratic quadrilaterals and hexahedra and of wedges, called by
+``validate_mesh``.
 
-A Q1 cell (and a quadratic one, with its 3^d Gauss points) is usable when its rest map has a
+A Q1 cell (a quadratic one with its 3^d Gauss points, a wedge with its 6) is usable when its
+rest map has a
 positive Jacobian at every Gauss point of the stiffness and at every node: a negative one
 somewhere means the cell is folded or its nodes are numbered in a twisted order, a tiny one
 that it is degenerate. A cell whose Jacobian is negative
 at *every* one of those points is a mirrored numbering (e.g. a hexahedron whose bottom face runs
-clockwise seen from inside) and is reoriented, as simplices are.
+clockwise seen from inside, a wedge in VTK's order) and is reoriented, as simplices are.
 """
 
 from __future__ import annotations
@@ -31,20 +33,44 @@ DEGENERATE = 1e-8
 
 
 def _basis(d: int, nv: int):
-    """(shape functions xi -> (N, dN), the node coordinates, stiffness Gauss points per axis)
-    of the cell of nv nodes: Q1, or quadratic (``tensor_quadratic``)."""
+    """(shape functions xi -> (N, dN), the node coordinates, the stiffness rule (points,
+    weights)) of the cell of nv nodes: Q1, quadratic (``tensor_quadratic``) or a wedge."""
     if nv == 2**d:
-        return (lambda xi: shape_functions(d, xi)), SIGNS[d], 2
+        return (lambda xi: shape_functions(d, xi)), SIGNS[d], gauss_rule(d, 2)
+    if (d, nv) == (3, 6):
+        from tissuesim.mesh import wedge
+
+        return wedge.shape_functions, wedge.NODES, wedge.stiffness_rule()
     from tissuesim.mesh import tensor_quadratic as tq
 
     kind = tq.CELL_TYPES[d, nv]
-    return (lambda xi: tq.shape_functions(kind, xi)), tq.NODES[kind], tq.STIFFNESS_POINTS
+    rule = gauss_rule(d, tq.STIFFNESS_POINTS)
+    return (lambda xi: tq.shape_functions(kind, xi)), tq.NODES[kind], rule
+
+
+#: each cell's name and node order in words, for the refusal of an inverted one
+_KINDS = {
+    (2, 4): ("quadrilateral", "VTK's: counter-clockwise"),
+    (3, 8): (
+        "hexahedron",
+        "VTK's: the bottom face counter-clockwise seen from above, then the top face",
+    ),
+    (3, 6): (
+        "wedge",
+        "Gmsh's / FEBio's: the bottom triangle counter-clockwise seen from the top, then the "
+        "top triangle above it",
+    ),
+}
 
 
 def reorient_permutation(d: int, nv: int) -> list[int]:
     """The node permutation that mirrors a cell of nv nodes (``REORIENT`` for Q1)."""
     if nv == 2**d:
         return REORIENT[d]
+    if (d, nv) == (3, 6):
+        from tissuesim.mesh.wedge import REORIENT as WEDGE
+
+        return WEDGE
     from tissuesim.mesh import tensor_quadratic as tq
 
     return tq.reorient(tq.CELL_TYPES[d, nv])
@@ -54,8 +80,8 @@ def tensor_jacobians(points: np.ndarray, cells: np.ndarray) -> np.ndarray:
     """det J (m, q) of the rest map at the stiffness's Gauss points and at the nodes of each
     cell."""
     d = points.shape[1]
-    shape, nodes, n = _basis(d, cells.shape[1])
-    xi = np.concatenate([gauss_rule(d, n)[0], nodes])
+    shape, nodes, (points_q, _) = _basis(d, cells.shape[1])
+    xi = np.concatenate([points_q, nodes])
     _, dN = shape(xi)
     return np.linalg.det(rest_jacobians(points, cells, dN))
 
@@ -71,37 +97,38 @@ def check_tensor_cells(points: np.ndarray, cells: np.ndarray, source: str) -> np
     bad = ~(ok | mirrored)
     if bad.any():
         e = int(np.flatnonzero(bad)[0])
-        kind = "quadrilateral" if d == 2 else "hexahedron"
-        kind = kind if cells.shape[1] == 2**d else f"{cells.shape[1]}-node {kind}"
+        nv = cells.shape[1]
+        kind, order = _KINDS.get((d, nv), _KINDS[d, 2**d])
+        kind = kind if (d, nv) in _KINDS else f"{nv}-node {kind}"
         raise MeshError(
             f"{source}: {kind} {e} {cells[e].tolist()} is inverted or degenerate (the Jacobian "
             f"of its rest map runs from {detJ[e].min():.3g} to {detJ[e].max():.3g} over its "
             f"Gauss points and nodes; {int(bad.sum())} such cells): check the node order "
-            "(VTK's: the bottom face counter-clockwise seen from above, then the top face) or "
-            "remesh"
+            f"({order}) or remesh"
         )
     return np.flatnonzero(mirrored)
 
 
 def tensor_quality(points: np.ndarray, cells: np.ndarray):
-    """(volumes (m,), edge lengths (m, 4 or 12), scaled Jacobian (m,)) of Q1 or quadratic
-    cells: the volume by the stiffness's Gauss points (exact for Q1), the quality min over the
-    nodes of det J / prod |dX/dxi_j| (1 for a rectangle / box, 0 for a degenerate corner); the
-    edges are corner to corner."""
-    from tissuesim.mesh.tensor import FACES
+    """(volumes (m,), edge lengths (m, 4, 12 or 9), scaled Jacobian (m,)) of Q1, quadratic or
+    wedge cells: the volume by the stiffness's Gauss points (exact for Q1 and wedges), the
+    quality min over the nodes of det J / prod |dX/dxi_j| (1 for a rectangle / box and a
+    right prism over a right isosceles triangle, 0 for a degenerate corner); the edges are
+    corner to corner."""
+    from tissuesim.mesh.tensor import local_faces
 
     d = points.shape[1]
-    shape, nodes, n = _basis(d, cells.shape[1])
-    xi, w = gauss_rule(d, n)
+    shape, nodes, (xi, w) = _basis(d, cells.shape[1])
     _, dN = shape(xi)
     volumes = np.linalg.det(rest_jacobians(points, cells, dN)) @ w
     _, dNc = shape(nodes)
     Jc = rest_jacobians(points, cells, dNc)  # (m, nv, d, d)
     scaled = np.linalg.det(Jc) / np.linalg.norm(Jc, axis=2).prod(axis=2)
-    faces = FACES[d]
+    faces = local_faces(d, cells.shape[1])
     pairs = np.unique(
         np.sort(np.stack([faces, np.roll(faces, -1, axis=1)], -1).reshape(-1, 2), axis=1), axis=0
     )
+    pairs = pairs[pairs[:, 0] != pairs[:, 1]]  # a wedge's triangles repeat a corner
     x = points[cells]
     edges = np.linalg.norm(x[:, pairs[:, 1]] - x[:, pairs[:, 0]], axis=2)
     return volumes, edges, scaled.min(axis=1)
