@@ -267,6 +267,7 @@ TESTED_PYTHON_BLOCKS = {
     'ts.fit_material("ogden"': "test_fitting_python_example_recovers_the_parameters",
     'element="hex"': "test_hexahedra_python_example_runs",
     'element="hex20"': "test_quadratic_hexahedra_python_example_runs",
+    'element="wedge"': "test_wedges_python_example_runs",
     "from tissuesim.time.phases import Phase": "test_phases_python_example_runs",
 }
 
@@ -291,6 +292,17 @@ def test_hexahedra_python_example_runs(tmp_path):
     )
     assert result.returncode == 0, result.stderr
     assert float(result.stdout.split()[-1]) == -0.0121
+
+
+def test_wedges_python_example_runs(tmp_path):
+    """The elements page's cantilever of wedges, loaded on its end's quadrilaterals and its
+    top's triangles: the deflection it prints."""
+    code = block("python", 'element="wedge"')
+    result = subprocess.run(
+        [sys.executable, "-c", code], cwd=tmp_path, capture_output=True, text=True, timeout=300
+    )
+    assert result.returncode == 0, result.stderr
+    assert float(result.stdout.split()[-1]) == -0.0168
 
 
 def test_quadratic_hexahedra_python_example_runs(tmp_path):

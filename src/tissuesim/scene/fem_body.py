@@ -49,8 +49,8 @@ MESH_KEYS = {
     "divisions": "generator: cells per axis",
     "pattern": "rectangle: triangle pattern; box: tetrahedral split (mirrored or uniform)",
     "grading": "box: per-axis grading exponents (1 uniform, p finer towards lower, -p upper)",
-    "element": "box: tet (default), hex, hex20 or hex27; rectangle: triangle (default), quad, "
-    "quad8 or quad9",
+    "element": "box: tet (default), hex, hex20, hex27 or wedge; rectangle: triangle (default), "
+    "quad, quad8 or quad9",
     "merge_coincident": "file: merge vertices that coincide (an unwelded seam) instead of refusing",
 }
 
