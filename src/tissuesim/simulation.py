@@ -28,7 +28,6 @@ and spring set has a name; its force (N) is reported per step in ``history[k].ex
 
 from __future__ import annotations
 
-import functools
 import time as wallclock
 from collections.abc import Sequence
 from dataclasses import asdict
@@ -49,9 +48,11 @@ from tissuesim.simulation_bodies import RESERVED_NAMES, BodyCalls
 from tissuesim.simulation_checks import StepChecks
 from tissuesim.simulation_results import BodyResults
 from tissuesim.simulation_setup import SetupCalls
+from tissuesim.simulation_stepping import Stepping
 from tissuesim.solve.linear import make_linear_solver
 from tissuesim.solve.newton import NewtonOptions
 from tissuesim.time.grid import check_time_resolution
+from tissuesim.time.newmark import check_newmark
 from tissuesim.time.phases import Phase, Schedule
 from tissuesim.time.retry import QUASISTATIC_ADVICE, advance, validate_stepping
 from tissuesim.time.state import State
@@ -63,19 +64,21 @@ if TYPE_CHECKING:  # frames and the system pull in scipy.spatial: imported when 
 
 __all__ = ["Simulation", "StepRecord", "INTEGRATORS", "RESERVED_NAMES", "check_time_resolution"]
 
-Integrator = Literal["backward_euler", "quasistatic", "explicit", "symplectic_euler"]
+Integrator = Literal["backward_euler", "quasistatic", "explicit", "symplectic_euler", "newmark"]
 #: "symplectic_euler" is the FEM name of the explicit scheme; both step every body explicitly
-INTEGRATORS = ("backward_euler", "quasistatic", "explicit", "symplectic_euler")
+INTEGRATORS = ("backward_euler", "quasistatic", "explicit", "symplectic_euler", "newmark")
 EXPLICIT = ("explicit", "symplectic_euler")
 
 
-class Simulation(BodyCalls, SetupCalls, StepChecks, BodyResults):
+class Simulation(BodyCalls, SetupCalls, StepChecks, BodyResults, Stepping):
     """Bodies, their interactions and a time integrator; see the module docstring.
 
     mesh, material (optional): the short form, one FEM body named ``name`` with ``density``
     (kg/m^3, scalar or per element) and ``mass`` ("consistent" or "lumped").
-    integrator: "backward_euler", "quasistatic" or "explicit" ("symplectic_euler": the same;
-    FEM bodies then use the lumped mass). time_step: s (quasistatics: the load-step length).
+    integrator: "backward_euler", "quasistatic", "newmark" (``newmark`` = (beta, gamma), the
+    trapezoidal rule (0.25, 0.5) by default: FEBio's dynamics, no numerical damping) or
+    "explicit" ("symplectic_euler": the same; FEM bodies then use the lumped mass).
+    time_step: s (quasistatics: the load-step length).
     gravity: (d,) m/s^2 on every body, or None. newton: NewtonOptions. max_step_halvings: how
     often a failing step is split in two before giving up. backend: "auto", "numba" or "numpy".
     phases: a run in phases (``set_phases``), each with its steps, time step and integrator.
@@ -97,8 +100,10 @@ class Simulation(BodyCalls, SetupCalls, StepChecks, BodyResults):
         start_time: float = 0.0,
         backend: str = "auto",
         phases: Sequence[Phase | dict] | None = None,
+        newmark: Sequence[float] = (0.25, 0.5),
     ) -> None:
         self.integrator = validate.choice(integrator, "integrator", INTEGRATORS)
+        self.newmark = check_newmark(newmark)
         self.time_step, self.max_step_halvings = validate_stepping(time_step, max_step_halvings)
         self.start_time = validate.real(start_time, "start_time", unit="s")
         check_time_resolution(self.start_time, self.time_step, "start_time")
@@ -198,7 +203,8 @@ class Simulation(BodyCalls, SetupCalls, StepChecks, BodyResults):
         parts: dict[str, tuple[np.ndarray, np.ndarray]] = {}
         if old is not None and state is not None:
             for j, name in enumerate(old.names):
-                parts[name] = (state.x[old.config_slices[j]], state.v[old.tangent_slices[j]])
+                a = None if state.a is None else state.a[old.tangent_slices[j]]
+                parts[name] = (state.x[old.config_slices[j]], state.v[old.tangent_slices[j]], a)
         bodies = self._active()
         names = [b.name for b in bodies]
         attachments = []
@@ -217,20 +223,24 @@ class Simulation(BodyCalls, SetupCalls, StepChecks, BodyResults):
             if old is not None and old.contact is not None:
                 self._system.contact.carry_over(old.contact)
         self._system_dirty = False
-        x, v = [], []
+        x, v, a, carry_a = [], [], [], False
         for b in bodies:
-            c0, v0 = parts.get(b.name) or (self._initial_config(b), b.velocity)
+            c0, v0, a0 = parts.get(b.name) or (self._initial_config(b), b.velocity, None)
             origin = getattr(b, "pending_origin", None)
             if origin is not None and b.name in parts:  # a cut: each new node continues its old
                 d = b.dim
                 c0 = c0.reshape(-1, d)[origin].ravel()
                 v0 = v0.reshape(-1, d)[origin].ravel()
+                a0 = None if a0 is None else a0.reshape(-1, d)[origin].ravel()
             if origin is not None:
                 b.pending_origin = None
             x.append(c0)
             v.append(v0)
+            a.append(np.zeros_like(v0) if a0 is None else a0)
+            carry_a = carry_a or a0 is not None
         t = self.start_time if state is None else state.time
-        self._state = State(t, np.concatenate(x), np.concatenate(v))
+        acceleration = np.concatenate(a) if carry_a else None  # Newmark's, across rebuilds
+        self._state = State(t, np.concatenate(x), np.concatenate(v), acceleration)
         if old is None or old.pattern is not self._system.pattern:
             self._solver = None  # the pattern changed: a new symbolic analysis
 
@@ -385,7 +395,6 @@ class Simulation(BodyCalls, SetupCalls, StepChecks, BodyResults):
                 budget["iterations"] = validate.integer(
                     budget_iterations, "budget_iterations", low=1, high=10_000
                 )
-        from tissuesim.time.steps import explicit_step, implicit_step
 
         self._enter_phase()
         tol = 1e-9 * self.time_step  # a release at t_n counts for the step from t_n
@@ -402,32 +411,7 @@ class Simulation(BodyCalls, SetupCalls, StepChecks, BodyResults):
         start = wallclock.perf_counter()
         t0 = self.time
         explicit_gradient: dict = {}
-        if self.explicit:
-            solver = None
-
-            def step_fn(system, state, h, solver, options):
-                return explicit_step(
-                    system,
-                    state,
-                    h,
-                    energies=self.step_energies,
-                    limit=self.critical_time_step,
-                    keep=explicit_gradient,
-                )
-        else:
-            solver = self._linear_solver()
-            step_fn = functools.partial(
-                implicit_step,
-                dynamic=self.integrator == "backward_euler",
-                energies=self.step_energies,
-                budget=budget,
-            )
-            if by_contact:  # quasistatics of bodies only contact holds: rest in pseudo-time
-                from tissuesim.time.pseudo_time import pseudo_time_step
-
-                step_fn = functools.partial(
-                    pseudo_time_step, energies=self.step_energies, budget=budget
-                )
+        step_fn, solver = self._step_function(budget, explicit_gradient, by_contact)
         self._state, records, substeps = advance(
             step_fn,
             s,
@@ -470,39 +454,6 @@ class Simulation(BodyCalls, SetupCalls, StepChecks, BodyResults):
         )
         self.history.append(record)
         return record
-
-    def _end_time(self) -> float:
-        """start + (k + 1) h for a state at start + k h (no running sum: ten steps of 0.1 end
-        at 1.0); a state off that grid (set by hand, or a changed time_step) steps to t + h.
-        In phases, the grid is the phase's and a step ends at its phase's end at the latest."""
-        if self.schedule is not None:
-            return self.schedule.end_time(self.time)
-        h, t = self.time_step, self.time
-        k = round((t - self.start_time) / h)
-        if abs(self.start_time + k * h - t) <= 1e-9 * h:
-            return self.start_time + (k + 1) * h
-        return t + h
-
-    def set_phases(self, phases: Sequence[Phase | dict]) -> None:
-        """Run in phases from the start time: each ``Phase(steps, time_step, integrator)`` (or
-        dict with those keys) starts where the previous one ends, with its own time step and
-        integrator ("quasistatic" or "backward_euler"; None keeps the simulation's). After the
-        last phase, steps go on with its settings. ``sim.set_phases([Phase(5, 0.2,
-        "quasistatic"), Phase(20, 0.01, "backward_euler")])``: a static preload to t = 1 s,
-        then 0.2 s of dynamics. Conditions and loads follow time (``active`` windows of
-        ``add_dirichlet``, expressions of t), not phases."""
-        self._base_integrator = getattr(self, "_base_integrator", self.integrator)
-        self.schedule = Schedule(phases, self.start_time, self._base_integrator in EXPLICIT)
-        if self._state is None:
-            self._enter_phase()
-
-    def _enter_phase(self) -> None:
-        """The time step and integrator of the phase the next step belongs to."""
-        if self.schedule is None:
-            return
-        phase, _, _ = self.schedule.at(self.time)
-        self.time_step = phase.time_step
-        self.integrator = phase.integrator or self._base_integrator
 
     def run(
         self,

@@ -139,7 +139,7 @@ REFUSALS = {
     "material": ('<material id="1" name="m" type="rigid body">', "material type 'rigid body'"),
     "contact": ('<contact type="tied-elastic" surface_pair="p">', "contact type 'tied-elastic'"),
     "element": ("<Rigid>", "<Rigid>: this section is not supported"),
-    "follower": ("<linear>0</linear>", "deformed surface"),
+    "follower": ("<linear>0</linear>", "traction on the deformed surface"),
     "bc": ('<bc type="rigid" node_set="x0">', "boundary condition type 'rigid'"),
 }
 
@@ -158,7 +158,11 @@ def test_refusals_are_one_line_naming_the_element_and_its_line(case, tmp_path):
         )
     elif case == "element":
         text = text.replace("  <LoadData>", "  <Rigid/>\n  <LoadData>")
-    elif case == "follower":
+    elif case == "follower":  # a follower traction (a follower pressure runs)
+        text = text.replace('type="pressure"', 'type="traction"').replace(
+            '<pressure lc="1">500</pressure>', '<traction lc="1">0,0,-500</traction>'
+        )
+        text = text.replace("<symmetric_stiffness>1</symmetric_stiffness>", "")
         text = text.replace("<linear>1</linear>", opening)
     else:
         text = text.replace('<bc type="fix" node_set="x0">', opening)

@@ -162,22 +162,20 @@ def _surface_load(model: FebModel, load: Node, kind: str) -> None:
     if "shell_bottom" in p and _flag(p["shell_bottom"]):
         raise _unsupported(p["shell_bottom"], "shell_bottom = 1")
     if not ("linear" in p and _flag(p["linear"])):
-        where = p.get("linear", load)
-        if kind == "pressure":  # a follower pressure: conservative on a closed surface only
-            facets = model.surfaces[surface][0]
-            if facets.shape[1] == 3 and _closed(facets):
-                model.tractions.append((surface, "follower", _load(model, value, 1)))
-                if "symmetric_stiffness" in p:
-                    model.note(
-                        p["symmetric_stiffness"],
-                        "not used: a pressure on a closed surface has a symmetric stiffness",
-                    )
-                return
-        raise where.error(
-            f"a {kind} on the deformed surface (FEBio's default, <linear>0</linear>) runs in "
-            f"tissuesim only as a pressure on a closed surface of triangles (where it has an "
-            f"energy, p times the enclosed volume); surface {surface!r} is not one: write "
-            f"<linear>1</linear> for a dead load on the reference surface"
+        if kind == "pressure":  # a follower pressure: an energy on a closed surface of
+            # triangles, lagged on any other (energies/pressure.py, energies/pressure_lag.py)
+            model.tractions.append((surface, "follower", _load(model, value, 1)))
+            if "symmetric_stiffness" in p:
+                model.note(
+                    p["symmetric_stiffness"],
+                    "not used: tissuesim gives a follower pressure on a closed surface its "
+                    "exact energy and lags one on an open surface (each solve a dead load's)",
+                )
+            return
+        raise p.get("linear", load).error(
+            "a traction on the deformed surface (FEBio's default, <linear>0</linear>) is not "
+            "supported by tissuesim: write <linear>1</linear> for a dead load on the reference "
+            "surface"
         )
     if "symmetric_stiffness" in p:
         model.note(p["symmetric_stiffness"], "not used: a dead pressure has no load stiffness")
@@ -294,15 +292,3 @@ SECTIONS = {
     "Globals": _globals,
     "Output": _output,
 }
-
-
-def _closed(facets: np.ndarray) -> bool:
-    """Whether triangles close a consistently oriented surface (energies/pressure.py)."""
-    from tissuesim.energies.pressure import check_closed
-    from tissuesim.errors import InputError
-
-    try:
-        check_closed(facets, "surface")
-    except InputError:
-        return False
-    return True

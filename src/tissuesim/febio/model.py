@@ -62,6 +62,10 @@ class FebModel:
     element_data: dict = field(default_factory=dict)
     notes: list = field(default_factory=list)  # "file:line <tag>: what is not used"
     steps: int = 1
+    #: a DYNAMIC analysis' Newmark (beta, gamma); the <solver> values read and their elements
+    newmark: tuple[float, float] | None = None
+    newmark_parameters: tuple | None = None
+    integrator_nodes: dict = field(default_factory=dict)
     #: one dict per <step> of a model of several (time_steps, step_size, analysis)
     phases: list = field(default_factory=list)
     #: the time window (t0, t1] of the <step> being read (None: the whole run)

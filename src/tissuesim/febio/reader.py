@@ -17,7 +17,7 @@ __all__ = ["read_feb", "MATERIAL_TYPES", "UNCOUPLED"]
 
 #: Control children that tune FEBio's own solver or its output (notes)
 CONTROL_NOTES = {
-    "solver", "time_stepper", "plot_level", "output_level", "plot_stride", "plot_range",
+    "time_stepper", "plot_level", "output_level", "plot_stride", "plot_range",
     "plot_zero_state", "output_stride", "adaptor_re_solve", "title", "optimize_bw",
 }  # fmt: skip
 
@@ -68,7 +68,7 @@ def _step(model: FebModel, section: Node) -> None:
         if len(steps) > 1:
             model.phases.append(
                 {"time_steps": model.time_steps, "step_size": model.step_size,
-                 "analysis": model.analysis}
+                 "analysis": model.analysis, "newmark": model.newmark, "node": step}
             )  # fmt: skip
             # the last step's conditions go on if the run is continued past its end
             model.window = (start, end if k < len(steps) - 1 else math.inf)
@@ -88,6 +88,56 @@ def _step(model: FebModel, section: Node) -> None:
     model.window = None
 
 
+#: <solver> parameters of FEBio's time integrator (FESolidSolver2), FEBio's defaults
+INTEGRATOR_PARAMETERS = {"rhoi": -2.0, "alpha": 1.0, "beta": 0.25, "gamma": 0.5}
+
+
+def _solver(model: FebModel, node: Node) -> None:
+    """<solver>: Newmark's beta and gamma (read as FEBio's FESolidSolver2 sets them up for
+    a DYNAMIC step: rhoi = -2, its default, takes beta and gamma as given, rhoi = -1 the
+    trapezoidal rule); everything else tunes FEBio's own Newton iterations (a note)."""
+    values = dict(INTEGRATOR_PARAMETERS)
+    tuning = []
+    for c in node.children:
+        if c.tag in INTEGRATOR_PARAMETERS:
+            values[c.tag] = float(_floats(c, 1)[0])
+            if c.tag in ("rhoi", "alpha"):
+                model.integrator_nodes[c.tag] = c
+        else:
+            tuning.append(c.tag)
+    rhoi, alpha = values["rhoi"], values["alpha"]
+    if rhoi == -1.0:
+        values["beta"], values["gamma"] = 0.25, 0.5
+    model.newmark_parameters = (values["beta"], values["gamma"], rhoi, alpha, node)
+    if tuning:
+        model.note(node, f"FEBio's solver settings ({', '.join(tuning)}) not used: tissuesim's "
+                   "Newton converges to its own tolerances")  # fmt: skip
+
+
+def _newmark(model: FebModel) -> tuple[float, float] | None:
+    """A DYNAMIC step's (beta, gamma), checked: FEBio's generalised-alpha (0 <= rhoi <= 1)
+    and an alpha other than 1 (FEBio's HHT-like weighting) are refused."""
+    if model.analysis != "dynamic":
+        return None
+    beta, gamma, rhoi, alpha, node = model.newmark_parameters or (0.25, 0.5, -2.0, 1.0, None)
+    if 0.0 <= rhoi <= 1.0:
+        raise model.integrator_nodes["rhoi"].error(
+            f"rhoi = {rhoi:g} selects FEBio's generalised-alpha integration; tissuesim runs "
+            "Newmark's method (rhoi = -2 with beta and gamma, or rhoi = -1)"
+        )
+    if rhoi != -1.0 and alpha != 1.0:
+        raise model.integrator_nodes["alpha"].error(
+            f"alpha = {alpha:g}: tissuesim runs Newmark's method with alpha = 1"
+        )
+    from tissuesim.errors import InputError
+    from tissuesim.time.newmark import check_newmark
+
+    try:
+        return check_newmark((beta, gamma))
+    except InputError as exc:
+        raise node.error(str(exc)) from None
+
+
 def _module(model: FebModel, node: Node) -> None:
     kind = node.attrib.get("type", node.text or "solid")
     if kind != "solid":
@@ -95,6 +145,7 @@ def _module(model: FebModel, node: Node) -> None:
 
 
 def _control(model: FebModel, node: Node) -> None:
+    model.newmark_parameters = None  # FEBio makes each step's solver anew, with its defaults
     for child in node.children:
         tag = child.tag
         if tag == "analysis":
@@ -102,24 +153,21 @@ def _control(model: FebModel, node: Node) -> None:
             if kind not in ("static", "dynamic"):
                 raise child.error(f"analysis {kind!r}: tissuesim runs STATIC and DYNAMIC")
             model.analysis = kind
-            if kind == "dynamic":
-                model.note(
-                    child,
-                    "FEBio integrates DYNAMIC steps with Newmark / generalised-alpha; tissuesim "
-                    "with Backward Euler (same equilibrium, more numerical damping)",
-                )
         elif tag == "time_steps":
             model.time_steps = int(_ints(child)[0])
         elif tag == "step_size":
             model.step_size = float(_floats(child, 1)[0])
             if not model.step_size > 0:
                 raise child.error("step_size must be > 0")
+        elif tag == "solver":
+            _solver(model, child)
         elif tag in CONTROL_NOTES:
             names = ", ".join(c.tag for c in child.children) or child.text
             model.note(child, f"FEBio's solver / output setting ({names}) not used: tissuesim's "
                        "Newton converges to its own tolerances")  # fmt: skip
         else:
             raise _unsupported(child, "this Control setting is not supported by tissuesim")
+    model.newmark = _newmark(model)
 
 
 from tissuesim.febio.condition_sections import SECTIONS as _CONDITION_SECTIONS  # noqa: E402

@@ -18,7 +18,7 @@ from tissuesim.febio.toml import dumps
 
 __all__ = ["febio_scene", "convert_febio", "load_febio"]
 
-INTEGRATORS = {"static": "quasistatic", "dynamic": "backward_euler"}
+INTEGRATORS = {"static": "quasistatic", "dynamic": "newmark"}
 
 
 def _times(load: Load, model: FebModel, k: int = 0, windowed: bool = True) -> str:
@@ -126,7 +126,7 @@ def febio_scene(model: FebModel, stem: str) -> tuple[dict, dict]:
                     {"facets": {"tagged": surface}, "traction": traction}
                 )
                 continue
-            if kind == "follower":  # FEBio's non-linear pressure on a closed surface
+            if kind == "follower":  # FEBio's non-linear pressure (energy or lag: pressure.py)
                 tables.setdefault("pressure", []).append(
                     {"facets": {"tagged": surface}, "pressure": _times(load, model, 0)}
                 )
@@ -211,7 +211,17 @@ def febio_scene(model: FebModel, stem: str) -> tuple[dict, dict]:
     sim = {
         "integrator": INTEGRATORS[model.analysis],
         "time_step": model.step_size,
-    }
+    }  # FEBio's DYNAMIC: Newmark's method with its beta and gamma
+    schemes = {p["newmark"] for p in model.phases if p["newmark"]} or (
+        {model.newmark} if model.newmark else set()
+    )
+    if len(schemes) > 1:
+        raise model.phases[0]["node"].error(
+            f"DYNAMIC steps with different Newmark parameters {sorted(schemes)}: tissuesim "
+            "runs one (beta, gamma) per model"
+        )
+    if schemes:
+        sim["newmark"] = list(schemes.pop())
     if model.phases:  # several <step>s: one phase each
         sim["integrator"] = INTEGRATORS[model.phases[0]["analysis"]]
         sim["time_step"] = model.phases[0]["step_size"]

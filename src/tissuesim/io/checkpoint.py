@@ -265,6 +265,8 @@ def capture(sim) -> tuple[dict, dict[str, np.ndarray]]:
     refuse_unsupported(sim)
     s, state = sim.system, sim.state
     arrays: dict[str, np.ndarray] = {"x": state.x, "v": state.v, "time": np.float64(state.time)}
+    if state.a is not None:  # Newmark's accelerations
+        arrays["a"] = state.a
     meta: dict[str, Any] = {"time": float(state.time), "steps": len(sim.history)}
     if sim._last_gradient is not None:
         arrays["last_gradient"] = sim._last_gradient
@@ -317,7 +319,8 @@ def restore(sim, meta: dict, arrays, history: list, path: Path) -> None:
     x, v = np.array(arrays["x"]), np.array(arrays["v"])
     if x.shape != sim.state.x.shape or v.shape != sim.state.v.shape:
         raise InputError(f"{path} holds a state of another size; {_FIX}")
-    sim._state = State(float(arrays["time"]), x, v)
+    a = np.array(arrays["a"]) if "a" in arrays else None
+    sim._state = State(float(arrays["time"]), x, v, a)
     sim._last_gradient = np.array(arrays["last_gradient"]) if "last_gradient" in arrays else None
     for name, material in _stateful_materials(sim):
         keys = [k for k in arrays if k.startswith(f"material.{name}.")]

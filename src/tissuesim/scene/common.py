@@ -38,6 +38,7 @@ SIMULATION_KEYS = (
     "order",
     "formulation",
     "phases",
+    "newmark",
 )
 
 #: what pictures can be coloured by

@@ -13,11 +13,13 @@ __all__ = ["State", "StepOutcome"]
 
 @dataclass(frozen=True, eq=False)
 class State:
-    """time (s); x current positions and v velocities, flat (n_dofs,) vertex-major."""
+    """time (s); x current positions and v velocities, flat (n_dofs,) vertex-major; a the
+    accelerations Newmark's method carries from step to step (None for the others)."""
 
     time: float
     x: np.ndarray
     v: np.ndarray
+    a: np.ndarray | None = None
 
 
 @dataclass

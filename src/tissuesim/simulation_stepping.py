@@ -1,0 +1,123 @@
+"""How a Simulation steps (a mixin of ``simulation.Simulation``): the step function of its
+integrator (explicit, Backward Euler, Newmark, quasistatic, pseudo-time), the phases of a run
+(``time/phases.py``) and the end time of the next step."""
+
+from __future__ import annotations
+
+import functools
+from collections.abc import Sequence
+
+import numpy as np
+
+from tissuesim.errors import InputError
+from tissuesim.time.phases import Phase, Schedule
+
+__all__ = ["Stepping"]
+
+
+class Stepping:
+    """Mixed into Simulation (uses its bodies, system, state, integrator and newton)."""
+
+    def _step_function(self, budget: dict | None, explicit_gradient: dict, by_contact: bool):
+        """(step_fn(system, state, h, solver, options), linear solver) for the integrator."""
+        from tissuesim.time.steps import explicit_step, implicit_step
+
+        if self.explicit:
+
+            def step_fn(system, state, h, solver, options):
+                return explicit_step(
+                    system,
+                    state,
+                    h,
+                    energies=self.step_energies,
+                    limit=self.critical_time_step,
+                    keep=explicit_gradient,
+                )
+
+            return step_fn, None
+        solver = self._linear_solver()
+        if self.integrator == "newmark":
+            from tissuesim.time.newmark import newmark_step
+
+            self._check_newmark_bodies()
+            beta, gamma = self.newmark
+            step_fn = functools.partial(
+                newmark_step,
+                beta=beta,
+                gamma=gamma,
+                implicit_step=implicit_step,
+                energies=self.step_energies,
+                budget=budget,
+            )
+            return step_fn, solver
+        step_fn = functools.partial(
+            implicit_step,
+            dynamic=self.integrator == "backward_euler",
+            energies=self.step_energies,
+            budget=budget,
+        )
+        if by_contact:  # quasistatics of bodies only contact holds: rest in pseudo-time
+            from tissuesim.time.pseudo_time import pseudo_time_step
+
+            step_fn = functools.partial(
+                pseudo_time_step, energies=self.step_energies, budget=budget
+            )
+        return step_fn, solver
+
+    def _check_newmark_bodies(self) -> None:
+        """Newmark steps FEM bodies without Rayleigh damping; the first step of a run starts
+        from the initial acceleration of the loads (FEBio's)."""
+        for b in self.bodies.values():
+            if b.kind != "fem":
+                raise InputError(
+                    f"integrator 'newmark' steps FEM bodies; {b.kind} body {b.name!r} needs "
+                    "'backward_euler'"
+                )
+            if b.model.damping is not None:
+                raise InputError(
+                    f"integrator 'newmark' with Rayleigh damping on {b.name!r}: the damping is "
+                    "a term of Backward Euler's step; use 'backward_euler', or no damping"
+                )
+        s, state = self.system, self._state
+        if state.a is None and not self.history and state.time == self.start_time:
+            from dataclasses import replace
+
+            from tissuesim.time.newmark import initial_acceleration
+
+            a0 = initial_acceleration(s, s.bodies, state.time)
+            self._state = replace(state, a=a0 if np.any(a0) else None)
+
+    def _end_time(self) -> float:
+        """start + (k + 1) h for a state at start + k h (no running sum: ten steps of 0.1 end
+        at 1.0); a state off that grid (set by hand, or a changed time_step) steps to t + h.
+        In phases, the grid is the phase's and a step ends at its phase's end at the latest."""
+        if self.schedule is not None:
+            return self.schedule.end_time(self.time)
+        h, t = self.time_step, self.time
+        k = round((t - self.start_time) / h)
+        if abs(self.start_time + k * h - t) <= 1e-9 * h:
+            return self.start_time + (k + 1) * h
+        return t + h
+
+    def set_phases(self, phases: Sequence[Phase | dict]) -> None:
+        """Run in phases from the start time: each ``Phase(steps, time_step, integrator)`` (or
+        dict with those keys) starts where the previous one ends, with its own time step and
+        integrator ("quasistatic", "backward_euler" or "newmark"; None keeps the simulation's).
+        After the last phase, steps go on with its settings. ``sim.set_phases([Phase(5, 0.2,
+        "quasistatic"), Phase(20, 0.01, "backward_euler")])``: a static preload to t = 1 s,
+        then 0.2 s of dynamics. Conditions and loads follow time (``active`` windows of
+        ``add_dirichlet``, expressions of t), not phases."""
+        self._base_integrator = getattr(self, "_base_integrator", self.integrator)
+        explicit = self._base_integrator in ("explicit", "symplectic_euler")
+        self.schedule = Schedule(phases, self.start_time, explicit)
+        if self._state is None:
+            self._enter_phase()
+
+    def _enter_phase(self) -> None:
+        """The time step and integrator of the phase the next step belongs to."""
+        if self.schedule is None:
+            return
+        phase, _, _ = self.schedule.at(self.time)
+        self.time_step = phase.time_step
+        self.integrator = phase.integrator or self._base_integrator
+
