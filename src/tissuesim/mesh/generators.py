@@ -256,17 +256,6 @@ def _hex_cells(nx: int, ny: int, nz: int) -> np.ndarray:
     return np.concatenate([bottom, bottom + (nx + 1) * (ny + 1)], axis=1)
 
 
-def _wedge_cells(nx: int, ny: int, nz: int, mirrored: bool) -> np.ndarray:
-    """(2 nx ny nz, 6) wedges of the grid: each of ``_hex_cells`` cut along its bottom face's
-    0-2 diagonal (``mirrored``: the 1-3 one where x < centre xor y < centre, so the pattern is
-    mirror-symmetric about the vertical mid-planes)."""
-    from tissuesim.mesh.wedge import from_hexahedra
-
-    qz, qy, qx = (g.ravel() for g in np.mgrid[0:nz, 0:ny, 0:nx])
-    across = ((2 * qx + 1) < nx) ^ ((2 * qy + 1) < ny) if mirrored else np.zeros(qx.size, bool)
-    return from_hexahedra(_hex_cells(nx, ny, nz), across)
-
-
 def _order(order) -> int:
     if isinstance(order, bool) or order not in (1, 2):
         raise MeshError(
@@ -415,15 +404,17 @@ def box(
         coords = [points[np.arange(k + 1) * int(np.prod(n[:a] + 1)), a] for a, k in enumerate(n)]
         return _quadratic_tensor("box", element, coords, names, 2 if order == 1 else order, source)
     if element in ("hex", "wedge"):
+        kind = "Q1 hexahedra" if element == "hex" else "linear wedges"
         if _order(order) != 1:
-            raise MeshError(
-                f"box: element = {element!r} takes order 1 "
-                f"({'Q1 hexahedra' if element == 'hex' else 'linear wedges'})"
-            )
+            raise MeshError(f"box: element = {element!r} takes order 1 ({kind})")
         if element == "hex":
             cells = _hex_cells(nx, ny, nz)
-        else:
-            cells = _wedge_cells(nx, ny, nz, mirrored=pattern == "mirrored")
+        else:  # each cut along a bottom diagonal (0-2; 1-3 where mirrored: x < centre xor y <)
+            from tissuesim.mesh.wedge import from_hexahedra
+
+            qz, qy, qx = (g.ravel() for g in np.mgrid[0:nz, 0:ny, 0:nx])
+            across = (((2 * qx + 1) < nx) ^ ((2 * qy + 1) < ny)) & (pattern == "mirrored")
+            cells = from_hexahedra(_hex_cells(nx, ny, nz), across)
         psets, fsets = _side_sets(cells, (gx, gy, gz), names, tensor=True)
         source = source[:-1] + f", element={element!r})"
         return validate_mesh(points, cells, source=source, point_sets=psets, facet_sets=fsets)
