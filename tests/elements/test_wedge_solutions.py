@@ -47,44 +47,46 @@ def test_cantilever_of_wedges_converges_with_the_hexahedra_it_was_cut_from():
     assert richardson(*wedges) == pytest.approx(richardson(*hexes), rel=0.002)
 
 
-fe = pytest.importorskip("felupe")
-
 #: FEBio's FEPenta6G6 points (r, s, t) and weights
-RULE = fe.quadrature.Scheme(
+RULE = (
     np.array([[a, b, c] for c in (-(3**-0.5), 3**-0.5) for a, b in ((1, 1), (4, 1), (1, 4))])
     / [6, 6, 1],
     np.full(6, 1 / 6),
 )
 
 
-class FelupeWedge(fe.Element):
-    """N = L(r, s) (1 -+ t) / 2, L = (1 - r - s, r, s), for FElupe's generic Region."""
+def felupe_wedge(fe):
+    """FElupe's element for its generic Region: N = L(r, s) (1 -+ t) / 2, L = (1 - r - s, r, s)."""
 
-    def __init__(self):
-        self.points = np.array(
-            [[0, 0, -1], [1, 0, -1], [0, 1, -1], [0, 0, 1], [1, 0, 1], [0, 1, 1]], dtype=float
-        )
-        self.cells = np.arange(6).reshape(1, -1)
-        self.cell_type = "wedge"
+    class FelupeWedge(fe.Element):
+        def __init__(self):
+            self.points = np.array(
+                [[0, 0, -1], [1, 0, -1], [0, 1, -1], [0, 0, 1], [1, 0, 1], [0, 1, 1]], dtype=float
+            )
+            self.cells = np.arange(6).reshape(1, -1)
+            self.cell_type = "wedge"
 
-    def function(self, rst):
-        r, s, t = rst
-        L = np.array([1 - r - s, r, s])
-        return np.concatenate([L * (1 - t) / 2, L * (1 + t) / 2])
+        def function(self, rst):
+            r, s, t = rst
+            L = np.array([1 - r - s, r, s])
+            return np.concatenate([L * (1 - t) / 2, L * (1 + t) / 2])
 
-    def gradient(self, rst):
-        r, s, t = rst
-        L = np.array([1 - r - s, r, s])
-        dL = np.array([[-1.0, -1.0], [1.0, 0.0], [0.0, 1.0]])
-        low = np.column_stack([dL * (1 - t) / 2, -L / 2])
-        high = np.column_stack([dL * (1 + t) / 2, L / 2])
-        return np.concatenate([low, high])
+        def gradient(self, rst):
+            r, s, t = rst
+            L = np.array([1 - r - s, r, s])
+            dL = np.array([[-1.0, -1.0], [1.0, 0.0], [0.0, 1.0]])
+            low = np.column_stack([dL * (1 - t) / 2, -L / 2])
+            high = np.column_stack([dL * (1 + t) / 2, L / 2])
+            return np.concatenate([low, high])
+
+    return FelupeWedge()
 
 
 def test_bent_wedge_beam_matches_felupe():
     """10 x 2 x 2 hexahedra cut into 160 wedges, neo-Hookean, clamped, 20 N down on the end
     face (nodal loads from tissuesim's facet integration): the end deflects 0.22 m (large
     rotation) and the displacements agree to 1e-9 of the largest (measured: 2e-15)."""
+    fe = pytest.importorskip("felupe")
     mesh = ts.box((0, 0, 0), (2.0, 0.4, 0.4), (10, 2, 2), element="wedge")
     E, nu, steps = 1e5, 0.3, 2
     mu, lam = E / (2 * (1 + nu)), E * nu / ((1 + nu) * (1 - 2 * nu))
@@ -104,7 +106,8 @@ def test_bent_wedge_beam_matches_felupe():
         assert sim.step().converged
     u = sim.displacement
 
-    region = fe.Region(fe.Mesh(mesh.points, mesh.cells, "wedge"), FelupeWedge(), RULE)
+    rule = fe.quadrature.Scheme(*RULE)
+    region = fe.Region(fe.Mesh(mesh.points, mesh.cells, "wedge"), felupe_wedge(fe), rule)
     field = fe.FieldContainer([fe.Field(region, dim=3)])
     solid = fe.SolidBody(fe.NeoHookeCompressible(mu=mu, lmbda=lam), field)
     mask = np.zeros(mesh.n_points, dtype=bool)
