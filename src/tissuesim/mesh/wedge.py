@@ -52,7 +52,6 @@ __all__ = [
     "NODES",
     "FACES",
     "REORIENT",
-    "EDGES",
     "shape_functions",
     "stiffness_rule",
     "mass_rule",
@@ -70,8 +69,6 @@ NODES = np.array([[0, 0, -1], [1, 0, -1], [0, 1, -1], [0, 0, 1], [1, 0, 1], [0, 
 FACES = WEDGE_FACES
 #: the node permutation that mirrors a wedge (its triangles reversed): VTK's order <-> this one
 REORIENT = [0, 2, 1, 3, 5, 4]
-#: the 9 edges (local node pairs)
-EDGES = np.array([[0, 1], [1, 2], [2, 0], [3, 4], [4, 5], [5, 3], [0, 3], [1, 4], [2, 5]])
 
 #: the orientation-preserving renumberings of a wedge: _SYMMETRY[k] makes its node k node 0
 _SYMMETRY = np.array(
