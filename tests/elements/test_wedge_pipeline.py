@@ -3,6 +3,7 @@ node orders (Gmsh / meshio / FEBio against VTK's), checks that refuse a bad cell
 mixed facet sets, files, output series and pictures, scenes, contact, and what is refused."""
 
 import json
+import warnings
 
 import meshio
 import numpy as np
@@ -60,6 +61,65 @@ def test_node_orders_and_the_volume_of_one_wedge():
         r = validate_mesh(ONE, vtk_order, source="vtk order")
     assert describe_mesh(r)["total_volume"] == pytest.approx(1.0, rel=1e-15)
     assert sorted_rows(r.cells) == sorted_rows(m.cells)
+
+
+#: what Gmsh 4.15 writes for a right triangle (legs 1) extruded by 2 in 2 layers of prisms
+#: (``Extrude {0, 0, 2} { Surface{1}; Layers{2}; Recombine; }``) with tagged faces
+GMSH_PRISMS = """$MeshFormat
+2.2 0 8
+$EndMeshFormat
+$PhysicalNames
+4
+2 2 "bottom"
+2 3 "top"
+2 4 "sides"
+3 1 "body"
+$EndPhysicalNames
+$Nodes
+9
+1 0 0 0
+2 1 0 0
+3 0 1 0
+4 0 0 2
+5 1 0 2
+6 0 1 2
+7 0 0 1
+8 1 0 1
+9 0 1 1
+$EndNodes
+$Elements
+10
+1 2 2 2 1 1 2 3
+2 2 2 3 20 4 5 6
+3 3 2 4 11 1 2 8 7
+4 3 2 4 11 7 8 5 4
+5 3 2 4 15 2 3 9 8
+6 3 2 4 15 8 9 6 5
+7 3 2 4 19 3 1 7 9
+8 3 2 4 19 9 7 4 6
+9 6 2 1 1 1 2 3 7 8 9
+10 6 2 1 1 7 8 9 4 5 6
+$EndElements
+"""
+
+
+def test_a_mesh_gmsh_wrote_reads_as_it_is(tmp_path):
+    """Gmsh's prisms are positive as they are (no reorientation), volume 1; its tagged
+    triangles and quadrilaterals become facet sets, turned outward (Gmsh's bottom triangle
+    faces up, into the body)."""
+    path = tmp_path / "prisms.msh"
+    path.write_text(GMSH_PRISMS)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        m = read_mesh(path)
+    assert m.cell_type == "wedge" and m.n_cells == 2
+    assert describe_mesh(m)["total_volume"] == pytest.approx(1.0, rel=1e-14)
+    sizes = {k: (len(v), int(wedge.is_triangle(v).sum())) for k, v in m.facet_sets.items()}
+    assert sizes == {"bottom": (1, 1), "top": (1, 1), "sides": (6, 0)}
+    facets = np.concatenate(list(m.facet_sets.values()))
+    t = m.points[wedge.facet_triangles(facets)]
+    n = np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0])
+    assert (np.einsum("ij,ij->i", n, t.mean(axis=1) - m.points.mean(axis=0)) > 0).all()
 
 
 def test_inverted_and_degenerate_wedges_are_refused_in_one_line():
