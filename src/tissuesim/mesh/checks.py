@@ -189,9 +189,9 @@ def validate_mesh(
         raise MeshError(
             f"{source}: cells have shape {c.shape}; {d}D points need (m, {d + 1}) cells "
             f"({_KIND[d]}, one row of {d + 1} vertex indices per element), (m, {nq}) "
-            f"quadratic cells (corners, then midside nodes) or (m, "
-            f"{' / '.join(map(str, widths))}) "
-            f"{'quadrilaterals' if d == 2 else 'hexahedra (or 6: wedges)'}"
+            f"quadratic cells (corners, then midside nodes) or "
+            f"{'(m, 4 / 8 / 9) quadrilaterals' if d == 2 else '(m, 8 / 20 / 27) hexahedra'}"
+            f"{' or (m, 6) wedges' if d == 3 else ''}"
         )
     quadratic = c.shape[1] == nq
     tensor = c.shape[1] in widths
