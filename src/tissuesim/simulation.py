@@ -290,7 +290,7 @@ class Simulation(BodyCalls, SetupCalls, StepChecks, BodyResults, Stepping):
                 "contact acts on FEM bodies and frame bodies with an embedded surface; this "
                 "simulation has none"
             )
-        return ContactModel(surfaces, list(self.obstacles), settings, s.n_dofs)
+        return ContactModel(surfaces, list(self.obstacles), _with_blades(self), s.n_dofs)
 
     def _contact_dhat(self) -> float:
         """The barrier's dhat (m) as the contact model will take it: the scene's, else 1e-3 of
@@ -403,6 +403,8 @@ class Simulation(BodyCalls, SetupCalls, StepChecks, BodyResults, Stepping):
             if body.kind == "fem":
                 body.release_graspers(self.time + tol)
                 body.set_condition_time(t_end, tol)
+        for blade in self.organ_cuts:  # an instrument's blade leaving its plane: refused now
+            blade.record(self.time, t_end, keep=False)
         s = self.system
         by_contact = self.integrator == "quasistatic" and self._check_supported()
         if self.explicit and self._stability_checked is not s:
@@ -521,3 +523,20 @@ class Simulation(BodyCalls, SetupCalls, StepChecks, BodyResults, Stepping):
             "linear_solver": self.linear_solver_info(),
             "contact": None if s.contact is None else s.contact.describe(),
         }
+
+
+def _with_blades(sim) -> object:
+    """The contact settings with each obstacle that cuts a body out of contact with that body
+    (it passes through what it cuts), unless the scene pairs them itself."""
+    from dataclasses import replace
+
+    from tissuesim.contact.pairs import ContactPair
+
+    settings = sim.contact
+    listed = {frozenset((p.a, p.b)) for p in settings.pairs}
+    blades = [
+        ContactPair(c.body, c.obstacle, enabled=False)
+        for c in sim.organ_cuts
+        if c.obstacle is not None and frozenset((c.body, c.obstacle)) not in listed
+    ]
+    return replace(settings, pairs=tuple(settings.pairs) + tuple(blades)) if blades else settings

@@ -230,7 +230,7 @@ class BodyCalls:
                 "the surface it acts on: cut a body without one"
             )
         if b.cut_state is None:
-            b.cut_state = CutState(b.mesh, density=np.asarray(b.model.density, dtype=float))
+            b.cut_state = CutState.of_model(b.model)
         current = self.body_positions(b.name) if self._state is not None else b.mesh.points
         old_vn = b.cut_state.vn
         before_cells = int(np.count_nonzero(b.cut_state.vn.side > 0)) if b.cut_state.vn else 0
@@ -249,7 +249,7 @@ class BodyCalls:
                 "origin": np.arange(before),
             }
         vn, carry, index = done
-        b.apply_cut(vn, carry, b.cut_state.original, b.cut_state.density)
+        b.apply_cut(vn, carry, b.cut_state)
         if self.tissue is not None:  # its attachment points follow their side of the cut
             from tissuesim.bodies.cut_state import follow_cells
 
@@ -271,17 +271,20 @@ class BodyCalls:
         "new_area_m2", "cells_cut", "pieces"}}} (a tear as "body.tear")."""
         out = {}
         for blade in self.organ_cuts:
+            blade.record(t0, self.time)  # an obstacle's blade, sampled as it went
             cut = blade.swept(self.time)
             report = {"area_m2": blade.area, "new_area_m2": 0.0, "cells_cut": 0}
+            force = np.zeros(3)
             if cut is not None and t0 < blade.end + 1e-9 * self.time_step:
                 done = self.cut_body(cut, body=blade.body, name=blade.name)
                 new = max(done["area_m2"] - blade.area, 0.0)
                 blade.area = done["area_m2"]
                 report = {"area_m2": blade.area, "new_area_m2": new,
                           "cells_cut": done["cells_cut"], "pieces": done["pieces"]}  # fmt: skip
-                forces[blade.name] = blade.force(new, t0, self.time).tolist()
-            else:
-                forces[blade.name] = [0.0, 0.0, 0.0]
+                force = blade.force(new, t0, self.time)
+            if blade.obstacle is not None:  # and the bodies' contact force on the instrument
+                force = force - np.asarray(forces.get(blade.obstacle, np.zeros(3)), dtype=float)
+            forces[blade.name] = force.tolist()
             out[blade.name] = report
         for tear in self.organ_tears:
             b, c, _ = self.body_state(tear.body)

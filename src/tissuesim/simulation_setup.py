@@ -419,6 +419,7 @@ class SetupCalls:
         kerf=None,
         name: str = "cut",
         toughness: float = 0.0,
+        edge: Sequence[int] | None = None,
     ):
         """A blade sweeping from ``start`` to ``end`` (s). Without ``body`` it dissects the
         connective tissue (``add_tissue`` first): ``blade(t)`` returns a polyline (k, 3) of
@@ -428,9 +429,15 @@ class SetupCalls:
         it cuts that body: ``blade(t)`` returns its straight edge (2, 3) or a flat triangular
         blade's corners (3, 3), moving in its own plane; after each step the cells it has
         swept through completely are cut by the virtual node algorithm (``cut_body``), mass
-        kept; its cutting force (``toughness``,
-        J/m^2 of new surface) is reported as ``name`` and the cut's area per step under
-        ``extra["cuts"]``. Returns the cutting tool.
+        kept; its cutting force (``toughness``, J/m^2 of new surface) is reported as ``name``
+        and the cut's area per step under ``extra["cuts"]``. Returns the cutting tool.
+
+        ``blade`` may instead name an obstacle (an instrument): its surface's vertices
+        ``edge`` (2 or 3 indices; default its only triangle) are the blade, moved with it,
+        also when it is driven live (``drive_obstacle``); ``end`` may then be ``math.inf``.
+        The obstacle passes through the body it cuts and keeps its contact with every other
+        body; ``name``'s force is then what the instrument feels: the cutting resistance
+        plus the contact force of the bodies on it.
 
         ``sim.add_cut(lambda t: np.array([[t - 1, -0.2, 0.15], [t - 1, 1.2, 0.15]]),
         start=1.0, end=2.0)`` sweeps a straight blade along x."""
@@ -445,10 +452,51 @@ class SetupCalls:
                 )
             if any(c.name == name for c in self.organ_cuts) or name in self.bodies:
                 raise InputError(f"add_cut: the name {name!r} is taken; give the cut its own")
-            tool = OrganCut(blade, float(start), float(end), b.name, name, float(toughness))
+            obstacle = None
+            if isinstance(blade, str):
+                obstacle, blade = blade, self._obstacle_blade(blade, edge, name)
+            elif edge is not None:
+                raise InputError("add_cut: edge picks an obstacle's vertices; blade is no obstacle")
+            tool = OrganCut(
+                blade, float(start), float(end), b.name, name, float(toughness), obstacle
+            )
             self.organ_cuts.append(tool)
+            if obstacle is not None:
+                self._changed()  # the blade leaves the body it cuts out of its contact
             return tool
+        if isinstance(blade, str) or edge is not None:
+            raise InputError("add_cut: an obstacle as the blade cuts a FEM body: give body = '...'")
         return self._tissue("add_cut").add_cut(blade, start, end, kerf=kerf, name=name)
+
+    def _obstacle_blade(self, obstacle: str, edge, cut: str):
+        """blade(t): the vertices ``edge`` of obstacle ``obstacle`` where it is at t (looked
+        up at each call: driving replaces the obstacle's motion)."""
+        names = [ob.name for ob in self.obstacles]
+        if obstacle not in names:
+            known = ", ".join(names) or "none"
+            raise InputError(f"add_cut {cut!r}: no obstacle {obstacle!r} (obstacles: {known})")
+        surface = self.obstacles[names.index(obstacle)].surface
+        if edge is None:
+            if len(surface.triangles) != 1:
+                raise InputError(
+                    f"add_cut {cut!r}: obstacle {obstacle!r} has {len(surface.triangles)} "
+                    "triangles: give edge = (i, j) or (i, j, k), the vertices of its blade"
+                )
+            edge = surface.triangles[0]
+        from tissuesim.validate import indices
+
+        ids = indices(edge, f"add_cut {cut!r}: edge", len(surface.points))
+        if ids.size not in (2, 3) or len(set(ids.tolist())) != ids.size:
+            raise InputError(
+                f"add_cut {cut!r}: edge must be 2 or 3 distinct vertices of obstacle "
+                f"{obstacle!r} (an edge or a triangle), not {short(edge)}"
+            )
+
+        def blade(t: float) -> np.ndarray:
+            ob = next(o for o in self.obstacles if o.name == obstacle)
+            return ob.positions(t)[ids]
+
+        return blade
 
     def set_tearing(
         self,

@@ -11,8 +11,17 @@ turning; for one that turns, a little more than it swept). Its force per step is
 resistance: with ``toughness`` G (J/m^2, the energy to make a unit of new cut surface; 0 by
 default), the work G dA of the area cut in the step over the blade's travel ds, against its
 motion:
-F = -G dA / |ds| ds/|ds| (N). The blade does not take part in contact (it must pass through the
-body to cut it), so that force is what cutting costs, not a push on its faces.
+F = -G dA / |ds| ds/|ds| (N). The blade does not take part in contact with the body it cuts (it
+must pass through the body to cut it), so that force is what cutting costs, not a push on its
+faces.
+
+An instrument can be the blade (``obstacle``): an edge or a triangle of an obstacle's surface,
+moved by the obstacle's motion, prescribed or driven live between steps
+(``Simulation.drive_obstacle``). Its future is then unknown, so the blade is sampled step by
+step (``record``) and its plane is the one its first samples span; a blade that leaves that
+plane is refused (an organ cut is planar). The obstacle keeps its contact with every other
+body; the cut's force is what the instrument feels, its contact force plus the cutting
+resistance.
 """
 
 from __future__ import annotations
@@ -29,6 +38,8 @@ __all__ = ["OrganCut"]
 
 #: blade positions sampled over the sweep (planarity check, swept hull)
 SAMPLES = 17
+#: blade positions sampled per step for a blade recorded step by step (an obstacle's)
+STEP_SAMPLES = 5
 
 
 @dataclass
@@ -43,9 +54,12 @@ class OrganCut:
     body: str
     name: str = "cut"
     toughness: float = 0.0
-    point: np.ndarray = field(init=False)
-    normal: np.ndarray = field(init=False)
+    #: the obstacle whose edge or triangle is the blade (sampled step by step), or None
+    obstacle: str | None = None
+    point: np.ndarray | None = field(init=False, default=None)
+    normal: np.ndarray | None = field(init=False, default=None)
     area: float = field(init=False, default=0.0)
+    _samples: list = field(init=False, default_factory=list, repr=False)
 
     def __post_init__(self) -> None:
         where = f"cut {self.name!r} of body {self.body!r}"
@@ -53,22 +67,59 @@ class OrganCut:
             raise InputError(f"{where}: end ({self.end}) must come after start ({self.start})")
         if self.toughness < 0 or not np.isfinite(self.toughness):
             raise InputError(f"{where}: toughness must be >= 0 J/m^2, not {self.toughness}")
-        P = np.array([self.edge(t) for t in np.linspace(self.start, self.end, SAMPLES)])
-        pts = P.reshape(-1, 3)
-        centre = pts.mean(axis=0)
-        _, s, vt = np.linalg.svd(pts - centre)
-        size = float(np.linalg.norm(np.ptp(pts, axis=0)))
-        if s[1] <= 1e-9 * max(s[0], 1e-300):
+        if self.obstacle is not None:  # its motion is known step by step only (record)
+            self._samples.append(self.edge(self.start))
+            self._plane(final=False)
+            return
+        if not np.isfinite(self.end):
             raise InputError(
-                f"{where}: the blade sweeps no area (it moves along itself or not at all)"
+                f"{where}: end must be a finite time for a blade given as a function of t "
+                "(an obstacle's blade may cut until the end of the run)"
             )
-        off = float(np.abs((pts - centre) @ vt[2]).max())
+        P = np.array([self.edge(t) for t in np.linspace(self.start, self.end, SAMPLES)])
+        self._samples = list(P)
+        self._plane(final=True)
+
+    def _plane(self, final: bool) -> None:
+        """Fix the cut's plane from the samples once they span one (a triangle blade spans
+        its own) and check every sample lies in it; ``final``: the samples are the whole
+        sweep, which must span an area."""
+        where = f"cut {self.name!r} of body {self.body!r}"
+        pts = np.concatenate(self._samples)
+        size = float(np.linalg.norm(np.ptp(pts, axis=0)))
+        if self.normal is None:
+            centre = pts.mean(axis=0)
+            _, s, vt = np.linalg.svd(pts - centre)
+            if s[1] <= 1e-9 * max(s[0], 1e-300):
+                if final:
+                    raise InputError(
+                        f"{where}: the blade sweeps no area (it moves along itself or not at all)"
+                    )
+                return
+            self.point, self.normal = centre, vt[2]
+        off = float(np.abs((pts - self.point) @ self.normal).max())
         if off > 1e-6 * size:
             raise InputError(
                 f"{where}: the blade leaves its plane ({off:.3g} m off it); an organ cut is "
                 "planar: split a curved cut into cuts of their own names"
+                + (" (keep a driven blade's motion in its plane)" if self.obstacle else "")
             )
-        self.point, self.normal = centre, vt[2]
+
+    def record(self, t0: float, t1: float, keep: bool = True) -> None:
+        """Sample an obstacle's blade over the step t0 -> t1 (within start..end); ``keep``
+        False only checks that it stays in its plane (before the step, so that a refused
+        motion leaves the simulation where it was)."""
+        lo, hi = max(t0, self.start), min(t1, self.end)
+        if self.obstacle is None or hi <= lo:
+            return
+        before = len(self._samples), self.point, self.normal
+        self._samples.extend(self.edge(t) for t in np.linspace(lo, hi, STEP_SAMPLES)[1:])
+        try:
+            self._plane(final=False)
+        finally:
+            if not keep:
+                del self._samples[before[0] :]
+                self.point, self.normal = before[1], before[2]
 
     def edge(self, t: float) -> np.ndarray:
         """The blade at t: its two end points (2, 3), or a triangle's three corners (3, 3)."""
@@ -99,10 +150,13 @@ class OrganCut:
         """The cut it has made by time t (the hull of its positions from start), or None."""
         from scipy.spatial import ConvexHull
 
-        if t <= self.start:
+        if t <= self.start or self.normal is None:
             return None
-        P = np.array([self.edge(s) for s in np.linspace(self.start, min(t, self.end), SAMPLES)])
-        pts = P.reshape(-1, 3)
+        if self.obstacle is None:
+            P = [self.edge(s) for s in np.linspace(self.start, min(t, self.end), SAMPLES)]
+        else:
+            P = self._samples
+        pts = np.concatenate(P)
         u = np.cross(self.normal, [1.0, 0.0, 0.0])
         if np.linalg.norm(u) < 0.5:
             u = np.cross(self.normal, [0.0, 1.0, 0.0])

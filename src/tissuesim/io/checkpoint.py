@@ -88,12 +88,27 @@ def _digest(*arrays) -> str:
     return h.hexdigest()[:16]
 
 
+def _scheme(sim) -> str:
+    """The time scheme as set up: integrator and time step, or the phases (whose current
+    ones change as the run goes), and Newmark's parameters where Newmark runs."""
+    schedule = getattr(sim, "schedule", None)
+    if schedule is None:
+        text = f"{sim.integrator}, time_step {sim.time_step!r} s"
+    else:
+        phases = [(p.steps, p.time_step, p.integrator) for p in schedule.phases]
+        text = f"{sim._base_integrator}, phases {phases}"
+    uses = [sim.integrator] if schedule is None else [p.integrator for p in schedule.phases]
+    if "newmark" in uses or sim.integrator == "newmark":
+        text += f", newmark {tuple(sim.newmark)}"
+    return text
+
+
 def fingerprint(sim, scene: str | None = None) -> dict[str, str]:
     """Readable parts of the set-up a checkpoint must match (one per setting group and body);
     ``scene``: the scene file's hash, when run from one."""
     parts = {
         "simulation settings": (
-            f"{sim.integrator}, time_step {sim.time_step!r} s, start_time {sim.start_time!r} s, "
+            f"{_scheme(sim)}, start_time {sim.start_time!r} s, "
             f"max_step_halvings {sim.max_step_halvings}, "
             f"gravity {[g.tolist() for g in sim.gravity]}"
         ),

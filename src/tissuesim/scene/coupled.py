@@ -93,7 +93,7 @@ TISSUE_KEYS = (
     "attach_distance",
     "attachment_stiffness",
 )
-CUT_KEYS = ("blade", "start", "end", "kerf", "name", "body", "toughness")
+CUT_KEYS = ("blade", "start", "end", "kerf", "name", "body", "toughness", "obstacle", "edge")
 COUPLED_SCENE_KEYS: dict[str, Any] = {
     "simulation": set(COUPLED_SIMULATION_KEYS),
     "gravity": {"acceleration"},
@@ -466,6 +466,11 @@ def _tissue(sim, table: dict, where: str) -> None:
 
 def _cut(sim, item: dict, where: str) -> None:
     _unknown(item, CUT_KEYS, where)
+    if "obstacle" in item:
+        _obstacle_cut(sim, item, where)
+        return
+    if "edge" in item:
+        raise SceneError(f"{where}: edge picks the blade's vertices of an obstacle = '...'")
     blade = _required(item, "blade", where)
     example = '[["-0.07 + 0.14 * t", "-0.05", "0.01"], ["-0.07 + 0.14 * t", "0.05", "0.01"]]'
     if not (isinstance(blade, list) and all(isinstance(p, list) for p in blade)):
@@ -518,3 +523,34 @@ def _cut(sim, item: dict, where: str) -> None:
         options["kerf"] = _number(item["kerf"], f"{where} kerf", "a width > 0 (m)")
     with _context(where):
         sim.add_cut(polyline, start, end, name=name, **options)
+
+
+def _obstacle_cut(sim, item: dict, where: str) -> None:
+    """[[cuts]] with obstacle = "scalpel": an instrument's edge or triangle (``edge``, vertex
+    indices of its surface) cuts ``body`` from ``start`` (default 0) to ``end`` (default: the
+    end of the run)."""
+    if "blade" in item:
+        raise SceneError(f"{where}: give blade = [...] or obstacle = '...', not both")
+    if "body" not in item:
+        raise SceneError(f"{where}: an obstacle's blade cuts a body: give body = '...'")
+    obstacle = item["obstacle"]
+    if not (isinstance(obstacle, str) and obstacle):
+        raise SceneError(f"{where}: obstacle must be the name of an [[obstacles]] table")
+    body = _body_name(sim, item["body"], where)
+    start = _number(item.get("start", 0.0), f"{where} start", "a time (s)", False)
+    end = float("inf")  # the blade cuts as long as it moves
+    if "end" in item:
+        end = _number(item["end"], f"{where} end", "a time (s)", False)
+    options = {"body": body, "name": item.get("name", "cut")}
+    if not (isinstance(options["name"], str) and options["name"]):
+        raise SceneError(f"{where}: name must be a non-empty string, e.g. name = 'cut'")
+    if "edge" in item:
+        options["edge"] = item["edge"]
+    if "toughness" in item:
+        options["toughness"] = _number(
+            item["toughness"], f"{where} toughness", "an energy per area >= 0 (J/m^2)", False
+        )
+    if "kerf" in item:
+        raise SceneError(f"{where}: kerf is for the tissue's cuts; an organ's cut has none")
+    with _context(where):
+        sim.add_cut(obstacle, start, end, **options)
