@@ -199,11 +199,6 @@ def test_misnumbered_penta6_is_refused_at_its_element(tmp_path):
     assert "not in FEBio's order" in said and "1 such elements" in said
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="febio/scene.py still picks FEBio's default three-field element for hex8 and tet10 "
-    "only; 'wedge' is to be added there (FEBio's m_b3field_hex covers penta6)",
-)
 def test_an_uncoupled_law_on_penta6_runs_febios_three_field_element_by_default(tmp_path):
     """FEBio runs an uncoupled law on penta6 without a domain type in its three-field form, as
     on hex8 (FEModelBuilder: ET_PENTA6 takes m_b3field_hex)."""

@@ -156,7 +156,8 @@ def febio_scene(model: FebModel, stem: str) -> tuple[dict, dict]:
         model_name, params, density, kind, _ = spec
         formulation = body["formulation"]
         if formulation is None:
-            three_field = kind in UNCOUPLED and body["cell_type"] in ("hexahedron", "tetra10")
+            linear = ("hexahedron", "tetra10", "wedge")  # FEBio's three-field default
+            three_field = kind in UNCOUPLED and body["cell_type"] in linear
             formulation = "mean_dilatation" if three_field else "displacement"
         elif formulation == "mean_dilatation" and body["cell_type"] == "tetra":
             raise body["node"].error("three-field-solid on tet4: tissuesim's P1 mean dilatation "
