@@ -51,7 +51,7 @@ MODEL_BYTES_PER_CELL = {
 }
 
 
-def _kinematics(mesh: Mesh):
+def _kinematics(mesh: Mesh, rest: tuple | None = None):
     if mesh.cell_type == "wedge":
         from tissuesim.kinematics.wedge import WedgeKinematics
 
@@ -64,7 +64,9 @@ def _kinematics(mesh: Mesh):
         from tissuesim.kinematics.q1 import Q1Kinematics
 
         return Q1Kinematics.from_mesh(mesh)
-    return (P1Kinematics if mesh.order == 1 else P2Kinematics).from_mesh(mesh)
+    if mesh.order == 1:
+        return P1Kinematics.from_mesh(mesh, rest)
+    return P2Kinematics.from_mesh(mesh)
 
 
 @dataclass(eq=False)
@@ -77,6 +79,8 @@ class Model:
     conditions: Sequence[DirichletCondition] = ()
     backend: str = "auto"  # "auto", "numba" or "numpy" (see backend.py)
     formulation: str = "displacement"  # or "mean_dilatation" (energies/mean_dilatation.py)
+    #: P1 cells' (shape gradients, rest measures) when known: a cut's copies keep their parent's
+    rest: tuple | None = field(default=None, repr=False)
 
     def __post_init__(self) -> None:
         cells = self.mesh.n_cells
@@ -87,7 +91,7 @@ class Model:
             "Use a coarser mesh.",
         )
         self.density = positive_field(self.density, "density", self.mesh.n_cells, "kg/m^3")
-        self.kinematics = _kinematics(self.mesh)
+        self.kinematics = _kinematics(self.mesh, self.rest)
         if hasattr(self.material, "bind"):  # internal variables per integration point
             self.material = self.material.bind(self.kinematics.weights.size, self.mesh.dim)
         self.backend, self.backend_reason = resolve_backend(

@@ -27,10 +27,12 @@ __all__ = ["CutState", "follow_cells", "recut"]
 @dataclass
 class CutState:
     """A cut body's ``original`` mesh and its cells' ``density``, the current cut (``vn``)
-    and its ``cuts`` by name."""
+    and its ``cuts`` by name; ``rest``: the original cells' (shape gradients, rest volumes),
+    which every copy of a cell keeps (None: computed anew from the cut mesh)."""
 
     original: object
     density: np.ndarray
+    rest: tuple[np.ndarray, np.ndarray] | None = None
     vn: VirtualNodeMesh | None = None
     cuts: list[PlanarCut] = field(default_factory=list)
     names: list[str] = field(default_factory=list)
@@ -38,6 +40,15 @@ class CutState:
     face_area: list[float] = field(default_factory=list)
     _faces: tuple | None = field(default=None, repr=False)
     _parted: np.ndarray | None = field(default=None, repr=False)
+
+    @classmethod
+    def of_model(cls, model) -> CutState:
+        """The state of a body not cut yet, from its P1 ``model``: its mesh, its cells'
+        densities and the rest geometry its kinematics computed already."""
+        k = model.kinematics
+        plain = model.mesh.cell_fractions is None and k.points_per_cell == 1
+        rest = (k.grads, k.weights) if plain else None  # weights: the rest volumes then
+        return cls(model.mesh, np.asarray(model.density, dtype=float), rest)
 
     def prior(self) -> tuple[np.ndarray, np.ndarray] | None:
         """(cut index per original cell, -1 none; each cut's node distances (cuts, n), NaN for

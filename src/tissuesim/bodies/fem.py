@@ -328,22 +328,24 @@ class FemBody:
         self._changed("velocity")
 
     # -- cutting (mesh/virtual_nodes.py) ---------------------------------------------------------
-    def apply_cut(self, cut, carry: np.ndarray, original, density: np.ndarray) -> None:
-        """Take the mesh of a virtual-node cut (``VirtualNodeMesh`` of the body's ``original``
-        mesh, whose cells had ``density``): a new model on it (the copies' densities their
-        parents', the same loads), every support and grasper on all copies of its vertices
-        that lie in material (not on virtual nodes);
+    def apply_cut(self, cut, carry: np.ndarray, state) -> None:
+        """Take the mesh of a virtual-node cut (``VirtualNodeMesh`` of the original mesh of
+        ``state``, a ``bodies.cut_state.CutState``): a new model on it (the copies' densities,
+        shape gradients and rest volumes their parents', the same loads), every support and
+        grasper on all copies of its vertices that lie in material (not on virtual nodes);
         ``carry`` (new n_points,) the current node each new one continues, kept as
         ``pending_origin`` for the simulation (positions and velocities)."""
         old = self.model
-        mesh = cut.to_mesh(original)
+        mesh = cut.to_mesh(state.original)
+        rest = None if state.rest is None else tuple(a[cut.parent] for a in state.rest)
         model = Model(
             mesh,
             old.material,
-            density[cut.parent],
+            state.density[cut.parent],
             old.mass_kind,
             backend=old.backend,
             formulation=old.formulation,
+            rest=rest,
         )
         model.loads = list(old.loads)  # nodal loads and tractions keep each node's first copy
 

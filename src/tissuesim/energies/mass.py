@@ -87,12 +87,16 @@ class MassMatrix:
             diagonal = diag * (row.sum(axis=1) / diag.sum(axis=1))[:, None]
         if kind == "lumped":
             scalar = diagonal[:, :, None] * np.eye(nv)[None]
-        local = np.zeros((len(scalar), nv, d, nv, d))
-        for i in range(d):  # the scalar block on each component (an einsum with I was 3x slower)
-            local[:, :, i, :, i] = scalar
-        local = local.reshape(-1, nv * d, nv * d)
-        data = np.zeros(pattern.nnz)
-        pattern.accumulate(data, stencil_id, local)
+        blocks = pattern.blocks
+        if blocks is not None and blocks.d == d and stencil_id < len(blocks.scatters):
+            data = blocks.scalar_blocks(stencil_id, scalar, pattern.nnz)  # node by node
+        else:
+            local = np.zeros((len(scalar), nv, d, nv, d))
+            for i in range(d):  # the scalar block on each component (einsum with I: 3x slower)
+                local[:, :, i, :, i] = scalar
+            local = local.reshape(-1, nv * d, nv * d)
+            data = np.zeros(pattern.nnz)
+            pattern.accumulate(data, stencil_id, local)
 
         def per_dof(values: np.ndarray) -> np.ndarray:  # (m, nv) -> (n_dofs,)
             return np.bincount(

@@ -53,8 +53,10 @@ class P1Kinematics(NodalKinematics):
     mesh: Mesh | None = None
 
     @classmethod
-    def from_mesh(cls, mesh: Mesh) -> P1Kinematics:
-        grads, measure = shape_gradients(mesh.points, mesh.cells)
+    def from_mesh(cls, mesh: Mesh, rest: tuple | None = None) -> P1Kinematics:
+        """The kinematics of ``mesh``; ``rest``: its cells' (shape gradients, rest measures)
+        when known (the copies of a cut cell keep their parent's rest shape)."""
+        grads, measure = shape_gradients(mesh.points, mesh.cells) if rest is None else rest
         if mesh.cell_fractions is not None:  # virtual-node copies integrate their part only
             measure = measure * mesh.cell_fractions
         return cls(
