@@ -138,7 +138,7 @@ def test_examples_lists_the_shipped_scenes(capsys):
     names = {e["name"] for e in described}
     assert {"course_stretch", "course_literal", "beam_3d_gravity"} <= names
     for e in described:
-        assert e["path"].endswith(f"{e['name']}.toml")
+        assert e["path"].endswith((f"{e['name']}.toml", f"{e['name']}.feb"))
         assert e["shows"].endswith(".") and len(e["shows"]) > 20
         assert re.fullmatch(r"\d+ s", e["runtime"] or "")  # each scene says
     by_name = {e["name"]: e for e in described}
@@ -149,6 +149,9 @@ def test_examples_lists_the_shipped_scenes(capsys):
     parts = by_name["organs_rest_after_cut"]["made_of"]
     assert parts.startswith("3D, 2 bodies, connective tissue, contact, cutting")
     assert "PyVista" in by_name["organs_rest_after_cut"]["needs"][0]
+    artery = by_name["artery_strip"]  # a shipped FEBio model
+    assert artery["path"].endswith("artery_strip.feb")
+    assert artery["made_of"] == "3D, a FEBio model in 3 steps, 40 time steps"
     assert main(["examples"]) == 0
     text = capsys.readouterr().out
     assert text.startswith("# run times: the plain install")

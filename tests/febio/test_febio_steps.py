@@ -118,3 +118,19 @@ def test_relative_in_the_first_step_is_the_same_as_absolute(tmp_path):
     feb = tmp_path / "rel.feb"
     feb.write_text(text)
     assert read_feb(feb).dirichlet[-1][2].value[0] == 0.2
+
+
+def test_the_shipped_artery_strip_relaxes_under_its_hold():
+    """The shipped FEBio example (HGO in an uncoupled Prony series, three steps): the pull of
+    step 1 hands over to step 2's hold, under which the force relaxes."""
+    from tissuesim.scene.examples import example_path
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        sim = load_febio(example_path("artery_strip")).simulation
+    forces = [sim.step().extra["forces"] for _ in range(13)]
+    pulled, held = forces[9], forces[10:]
+    assert pulled["hold"] == [0.0, 0.0, 0.0] and held[0]["pull"] == [0.0, 0.0, 0.0]
+    assert pulled["pull"][0] == pytest.approx(0.110, abs=1e-3)
+    relaxing = [f["hold"][0] for f in held]
+    assert relaxing[0] < pulled["pull"][0] and np.all(np.diff(relaxing) < 0)

@@ -5,7 +5,8 @@ to run (``load_febio``; ``tissuesim run model.feb``). What is supported: docs/gu
 from __future__ import annotations
 
 from tissuesim.febio.reader import read_feb
-from tissuesim.febio.scene import convert_febio, febio_scene, load_febio
+from tissuesim.febio.scene import convert_febio, febio_scene
 from tissuesim.febio.xml import FebError
+from tissuesim.scene.loader import load_febio
 
 __all__ = ["read_feb", "febio_scene", "convert_febio", "load_febio", "FebError"]

@@ -1,11 +1,11 @@
 """A FEBio model (``FebModel``) as a tissuesim scene: the TOML tables and one mesh file per
 body, so that ``tissuesim run model.feb`` and ``tissuesim run`` on the converted scene build
-the same objects (``run`` converts into a temporary directory and loads that scene)."""
+the same objects (``run`` converts into a temporary directory and loads that scene:
+``scene/loader.py load_febio``)."""
 
 from __future__ import annotations
 
 import os
-import tempfile
 from pathlib import Path
 
 import numpy as np
@@ -16,7 +16,7 @@ from tissuesim.febio.model import FebModel, Load
 from tissuesim.febio.reader import UNCOUPLED, read_feb
 from tissuesim.febio.toml import dumps
 
-__all__ = ["febio_scene", "convert_febio", "load_febio"]
+__all__ = ["febio_scene", "convert_febio"]
 
 INTEGRATORS = {"static": "quasistatic", "dynamic": "newmark"}
 
@@ -380,22 +380,3 @@ def convert_febio(
     with atomic_output(scene) as tmp:
         Path(tmp).write_text(dumps(data, header), encoding="utf-8")
     return targets
-
-
-def load_febio(path: str | os.PathLike[str]):
-    """The Scene of a FEBio model, built as its converted scene is (the scene and mesh files
-    written to a temporary directory and loaded), so both run identically. The model's
-    notes (accepted settings tissuesim does not use) are printed as warnings."""
-    import warnings
-
-    from tissuesim.scene.loader import load_scene
-
-    path = Path(path)
-    with tempfile.TemporaryDirectory(prefix="tissuesim-febio-") as tmp:
-        scene_path = Path(tmp) / f"{path.stem}.toml"
-        convert_febio(path, scene_path)
-        for note in read_feb(path).notes:
-            warnings.warn(f"not used: {note}", UserWarning, stacklevel=2)
-        scene = load_scene(scene_path)
-    scene.source = str(path)
-    return scene

@@ -103,8 +103,11 @@ class HolzapfelGasserOgden(FibreLaw):
         E = kappa * (I1[:, None] - 3.0) + (1.0 - 3.0 * kappa) * (I4 - 1.0)  # (q, 2)
         on = E >= 0.0
         Eo = np.where(on, E, 0.0)
-        ex = np.exp(k2 * Eo**2)
-        phi = 0.5 * k1 * (np.expm1(k2 * Eo**2) / k2 if k2 > 0.0 else Eo**2)
+        # a trial state stretched beyond reach overflows to an infinite energy, which the
+        # line search and the start choice reject: not a warning for the user
+        with np.errstate(over="ignore"):
+            ex = np.exp(k2 * Eo**2)
+            phi = 0.5 * k1 * (np.expm1(k2 * Eo**2) / k2 if k2 > 0.0 else Eo**2)
         d1 = np.where(on, k1 * Eo * ex, 0.0)  # phi'(E)
         d2 = np.where(on, k1 * (1.0 + 2.0 * k2 * Eo**2) * ex, 0.0)  # phi''(E)
         w = 0.5 * c * (I1 - 3.0) + phi.sum(axis=1)

@@ -3,7 +3,8 @@
 What an example shows is the first sentence of its scene file's opening comment; what it is
 made of (dimension, bodies, contact, frames, tissue, cuts) is read from its tables without
 building it; how long it takes is the scene's own ``# Runs in about ...`` comment line,
-measured with the plain install (SciPy's SuperLU, no Numba) on a 2-core machine."""
+measured with the plain install (SciPy's SuperLU, no Numba) on a 2-core machine. An example
+may also be a FEBio model (``.feb``): its opening ``<!-- ... -->`` comment says the same."""
 
 from __future__ import annotations
 
@@ -25,16 +26,24 @@ RUNTIME_NOTE = (
 _MESH_FILE_DIMS = {".msh": 3, ".vtu": 3}  # the shipped mesh files are tetrahedral
 
 
+#: the file types of shipped examples: scenes, and FEBio models
+SUFFIXES = (".toml", ".feb")
+
+
 def example_path(name: str) -> Path:
-    """Path of a shipped example scene by name (``tissuesim examples`` lists them)."""
+    """Path of a shipped example scene (or FEBio model) by name (``tissuesim examples``)."""
     root = resources.files("tissuesim") / "examples"
+    for suffix in SUFFIXES[1:]:
+        path = Path(str(root / f"{name}{suffix}"))
+        if path.exists():
+            return path
     return Path(str(root / f"{name}.toml"))
 
 
 def list_examples() -> list[str]:
-    """The names of the shipped example scenes, sorted."""
+    """The names of the shipped example scenes and FEBio models, sorted."""
     root = resources.files("tissuesim") / "examples"
-    return sorted(p.name[:-5] for p in root.iterdir() if p.name.endswith(".toml"))
+    return sorted(p.name.rsplit(".", 1)[0] for p in root.iterdir() if p.name.endswith(SUFFIXES))
 
 
 def _first_sentence(text: str) -> str:
@@ -66,6 +75,8 @@ def describe_example(name: str) -> dict[str, Any]:
     packages its output uses, and its measured run time (None where the scene does not say)."""
     path = example_path(name)
     text = path.read_text()
+    if path.suffix == ".feb":
+        return _describe_febio(name, path, text)
     scene = tomllib.loads(text)
     bodies = scene.get("bodies") or ([scene] if "mesh" in scene else [])
     dims = {_dimension(b) for b in bodies} or {3}
@@ -99,5 +110,25 @@ def describe_example(name: str) -> dict[str, Any]:
         "shows": _first_sentence(text),
         "made_of": ", ".join(parts),
         "needs": needs,
+        "runtime": runtime.group(1) if runtime else None,
+    }
+
+
+def _describe_febio(name: str, path: Path, text: str) -> dict[str, Any]:
+    """A shipped FEBio model, described from its opening comment and its steps."""
+    from tissuesim.febio import read_feb
+
+    match = re.search(r"<!--(.*?)-->", text, flags=re.S)
+    lines = (match.group(1) if match else "").strip().splitlines()
+    comment = "\n".join(f"# {line.strip()}" for line in lines)
+    model = read_feb(path)
+    steps = sum(p["time_steps"] for p in model.phases) or model.time_steps
+    runtime = _RUNTIME.search(comment)
+    return {
+        "name": name,
+        "path": str(path),
+        "shows": _first_sentence(comment),
+        "made_of": f"3D, a FEBio model in {len(model.phases) or 1} steps, {steps} time steps",
+        "needs": [],
         "runtime": runtime.group(1) if runtime else None,
     }

@@ -77,8 +77,12 @@ COUPLED_ONLY_KEYS = ("graspers", "tissue", "cuts", "tearing")
 
 
 def load_scene(path: str | Path) -> Scene:
-    """Read a TOML scene file and build its Simulation."""
+    """Read a TOML scene file and build its Simulation (a FEBio model, ``.feb``, is read as
+    its converted scene: ``load_febio``)."""
     from tissuesim.validate import regular_file
+
+    if Path(path).suffix.lower() == ".feb":
+        return load_febio(path)
 
     try:
         path = regular_file(path, "scene file")
@@ -94,6 +98,27 @@ def load_scene(path: str | Path) -> Scene:
     except tomllib.TOMLDecodeError as exc:
         raise SceneError(f"{path}: not valid TOML: {exc}") from None
     return build_scene(data, base_dir=path.parent, source=str(path), name=path.stem)
+
+
+def load_febio(path: str | Path) -> Scene:
+    """The Scene of a FEBio model, built as its converted scene is (the scene and mesh files
+    written to a temporary directory and loaded), so both run identically. The model's
+    notes (accepted settings tissuesim does not use) are printed as warnings."""
+    import tempfile
+    import warnings
+
+    from tissuesim.febio.reader import read_feb
+    from tissuesim.febio.scene import convert_febio
+
+    path = Path(path)
+    with tempfile.TemporaryDirectory(prefix="tissuesim-febio-") as tmp:
+        scene_path = Path(tmp) / f"{path.stem}.toml"
+        convert_febio(path, scene_path)
+        for note in read_feb(path).notes:
+            warnings.warn(f"not used: {note}", UserWarning, stacklevel=2)
+        scene = load_scene(scene_path)
+    scene.source = str(path)
+    return scene
 
 
 def build_scene(
