@@ -266,3 +266,18 @@ def test_refused_with_reasons():
     cut = PlanarCut(np.array([0.5, 0, 0.0]), np.array([1.0, 0, 0]), np.array(square, float))
     with pytest.raises(InputError, match="wedge cells"):
         sim.cut_body(cut, body="b")
+
+
+def test_a_traction_on_a_wedges_triangles_given_as_triangles():
+    """add_traction takes a wedge body's triangle faces as (k, 3) too: the same load as their
+    (k, 4) rows."""
+    mesh = ts.box((0, 0, 0), (1, 1, 1), (2, 2, 2), element="wedge")
+    top = ts.select.facets_on_plane(mesh, 2, 1.0)
+    assert wedge.is_triangle(top).all()
+    forces = []
+    for facets in (top, top[:, :3]):
+        sim = ts.Simulation(mesh, ts.NeoHookean(youngs_modulus=1e3, poisson_ratio=0.3))
+        sim.add_traction(facets, [0.0, 0.0, -3.0])
+        forces.append(sim.body().model.external_force(0.0))
+    np.testing.assert_array_equal(forces[0], forces[1])
+    assert forces[1].reshape(-1, 3)[:, 2].sum() == pytest.approx(-3.0, rel=1e-12)

@@ -251,11 +251,15 @@ class FemBody:
     # -- loads -----------------------------------------------------------------------------------
     def add_traction(self, facets, traction) -> None:
         """Dead traction (N/m in 2D, Pa in 3D) on boundary facets (k, d) (hexahedra: quad
-        faces (k, 4)): a vector or a callable (X (k, d), t) -> (k, d) evaluated at the facets'
-        vertices."""
+        faces (k, 4); wedges: rows of 4 or their triangles (k, 3)): a vector or a callable
+        (X (k, d), t) -> (k, d) evaluated at the facets' vertices."""
         ids = indices(facets, "add_traction: facets", self.mesh.n_points)
         width = self.mesh.facet_nodes  # d; 4 for the quad faces of hexahedra
         facets = ids.reshape(np.shape(facets)) if ids.size else ids.reshape(0, width)
+        if self.mesh.cell_type == "wedge" and facets.ndim == 2 and facets.shape[1] == 3:
+            from tissuesim.mesh.wedge import as_facets
+
+            facets = as_facets(facets)  # a wedge's triangle faces, as its facet rows hold them
         if facets.ndim != 2 or facets.shape[1] != width:
             raise InputError(f"add_traction: facets must be (k, {width}) vertex indices")
         if self.mesh.order == 2 and facets.size:
