@@ -17,7 +17,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from tissuesim.errors import InputError
-from tissuesim.mesh.boundary import all_facets, facet_measures, facet_table
+from tissuesim.mesh.boundary import facet_measures
+from tissuesim.mesh.interior_faces import interior_faces
 from tissuesim.mesh.plane_split import section_measures
 from tissuesim.mesh.virtual_nodes import PlanarCut, VirtualNodeMesh, virtual_node_cut
 
@@ -38,7 +39,6 @@ class CutState:
     names: list[str] = field(default_factory=list)
     #: rest area of the mesh faces each cut parted (a cut along faces copies no cell)
     face_area: list[float] = field(default_factory=list)
-    _faces: tuple | None = field(default=None, repr=False)
     _parted: np.ndarray | None = field(default=None, repr=False)
 
     @classmethod
@@ -90,45 +90,29 @@ class CutState:
         return sections + faces
 
     def parted_faces(self, vn: VirtualNodeMesh) -> np.ndarray:
-        """(faces,) whether each interior face of the original mesh lies between two whole
-        cells that no longer share all its nodes: a cut ran along it."""
-        if self._faces is None:
-            self._faces = _interior_faces(self.original.cells, self.original.points)
-        cell_a, slots_a, cell_b, slots_b, _ = self._faces
+        """(faces,) whether each interior face of the original mesh (``interior_faces``)
+        lies between two whole cells that no longer share all its nodes: a cut ran along it."""
+        faces = interior_faces(self.original.cells)
         whole = np.full(len(self.original.cells), -1)
         uncut = vn.side == 0
         whole[vn.parent[uncut]] = np.flatnonzero(uncut)
-        a, b = whole[cell_a], whole[cell_b]
+        a, b = whole[faces.cell_a], whole[faces.cell_b]
         both = (a >= 0) & (b >= 0)
-        nodes_a = np.take_along_axis(vn.cells[a], slots_a, axis=1)
-        nodes_b = np.take_along_axis(vn.cells[b], slots_b, axis=1)
+        nodes_a = np.take_along_axis(vn.cells[a], faces.slot_a, axis=1)
+        nodes_b = np.take_along_axis(vn.cells[b], faces.slot_b, axis=1)
         return both & np.any(nodes_a != nodes_b, axis=1)
 
     def _count_faces(self, vn: VirtualNodeMesh, index: int) -> None:
-        """Credit cut ``index`` with the faces this call parted."""
+        """Credit cut ``index`` with the rest area of the faces this call parted."""
         parted = self.parted_faces(vn)
         new = parted if self._parted is None else parted & ~self._parted
         self._parted = parted
         while len(self.face_area) <= index:
             self.face_area.append(0.0)
         if np.any(new):
-            self.face_area[index] += float(self._faces[4][new].sum())
-
-
-def _interior_faces(cells: np.ndarray, points: np.ndarray) -> tuple:
-    """The faces two cells share: (cell a, its slots of the face's nodes in ascending node
-    order, cell b, its slots, the face's rest measure: area in 3D, length in 2D), as arrays."""
-    m, k = cells.shape
-    local = all_facets(np.arange(k)[None])[0]  # (k, k-1): each facet's slots in its cell
-    facets, _, inverse, counts = facet_table(cells)  # (m k, k-1), cell-major
-    order = np.argsort(facets, axis=1)
-    slots = np.take_along_axis(np.tile(local, (m, 1)), order, axis=1)
-    owner = np.repeat(np.arange(m), k)
-    idx = np.flatnonzero(counts[inverse] == 2)
-    idx = idx[np.argsort(inverse[idx], kind="stable")]
-    first, second = idx[0::2], idx[1::2]
-    measure = facet_measures(np.asarray(points, dtype=float), facets[first])
-    return owner[first], slots[first], owner[second], slots[second], measure
+            nodes = interior_faces(self.original.cells).nodes[new]
+            points = np.asarray(self.original.points, dtype=float)
+            self.face_area[index] += float(facet_measures(points, nodes).sum())
 
 
 def recut(state: CutState, cut: PlanarCut, name: str, positions: np.ndarray):

@@ -9,7 +9,12 @@ import numpy as np
 
 from tissuesim.errors import InputError
 
-__all__ = ["PlanarCut"]
+__all__ = ["EMPTY", "PLANE_TOLERANCE", "PlanarCut"]
+
+#: a vertex this close to the plane, relative to the element's size, counts as on it
+PLANE_TOLERANCE = 1e-9
+#: a face part (or a side's volume) below this fraction of the whole counts as empty
+EMPTY = 1e-12
 
 
 @dataclass(frozen=True)

@@ -36,15 +36,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from tissuesim.errors import InputError
-from tissuesim.mesh.planar_cut import PlanarCut
+from tissuesim.mesh.node_groups import node_groups
+from tissuesim.mesh.planar_cut import EMPTY, PLANE_TOLERANCE, PlanarCut
 from tissuesim.mesh.plane_split import positive_fraction, sections_inside
 
 __all__ = ["PlanarCut", "VirtualNodeMesh", "cut_cells", "virtual_node_cut"]
-
-#: a vertex this close to the plane, relative to the element's size, counts as on it
-PLANE_TOLERANCE = 1e-9
-#: a face part (or a side's volume) below this fraction of the whole counts as empty
-EMPTY = 1e-12
 
 
 @dataclass(frozen=True)
@@ -154,89 +150,11 @@ def _crossed(x_cell: np.ndarray, d: np.ndarray, cut: PlanarCut) -> np.ndarray:
     return crossed[inside].astype(np.int64)
 
 
-def _inside_polygon(q: np.ndarray, cut: PlanarCut, tol: float) -> bool:
-    """Whether points q (k, 3) in the cut's plane lie in its convex polygon (within tol)."""
-    poly = cut.polygon
-    n = cut.normal
-    centre = poly.mean(axis=0)
-    for a, b in zip(poly, np.roll(poly, -1, axis=0), strict=True):
-        inward = np.cross(n, b - a)
-        if inward @ (centre - a) < 0.0:
-            inward = -inward
-        inward = inward / np.linalg.norm(inward)
-        if np.any((q - a) @ inward < -tol):
-            return False
-    return True
-
-
 def _as3d(points: np.ndarray) -> np.ndarray:
     points = np.asarray(points, dtype=float)
     if points.shape[1] == 2:
         return np.column_stack([points, np.zeros(len(points))])
     return points
-
-
-def _measure(points: np.ndarray) -> float:
-    """Volume (3D) or area (2D, points in a plane) of the convex hull of ``points``."""
-    from scipy.spatial import ConvexHull, QhullError
-
-    if len(points) < 3:
-        return 0.0
-    centred = points - points.mean(axis=0)
-    # the points' own dimension: drop the directions they do not span (a 2D mesh's z)
-    _, s, vt = np.linalg.svd(centred, full_matrices=False)
-    rank = int(np.sum(s > 1e-12 * max(s[0], 1e-300)))
-    if rank < 2 or len(points) <= rank:
-        return 0.0
-    try:
-        return float(ConvexHull(centred @ vt[:rank].T).volume)
-    except QhullError:  # flat within round-off
-        return 0.0
-
-
-def _clip(poly: np.ndarray, d: np.ndarray, side: int) -> tuple[np.ndarray, np.ndarray]:
-    """A convex polygon (k, 3) with signed distances d (k,) clipped to ``side`` of the plane
-    (Sutherland-Hodgman); returns the polygon and its points' distances (0 on the plane)."""
-    out, dist = [], []
-    k = len(poly)
-    for i in range(k):
-        p, q, dp, dq = poly[i], poly[(i + 1) % k], side * d[i], side * d[(i + 1) % k]
-        if dp >= 0.0:
-            out.append(p)
-            dist.append(d[i])
-        if dp * dq < 0.0:
-            t = dp / (dp - dq)
-            out.append(p + t * (q - p))
-            dist.append(0.0)
-    return np.array(out).reshape(-1, poly.shape[1]), np.array(dist)
-
-
-def _face_part(face: np.ndarray, constraints: list) -> float:
-    """Area of a face (3, 3) (2D: the length of an edge (2, 3)) where every constraint
-    (distances of its points to a cut (3,), side) holds; the distances are linear on the face."""
-    poly = face
-    dists = [np.asarray(d, dtype=float) for d, _ in constraints]
-    for k, (_, side) in enumerate(constraints):
-        carried = np.column_stack([poly, *[dd[:, None] for dd in dists]])
-        clipped, _ = _clip(carried, dists[k], side)
-        if len(clipped) == 0:
-            return 0.0
-        poly = clipped[:, :3]
-        dists = [clipped[:, 3 + j] for j in range(len(dists))]
-    if face.shape[0] == 2:  # an edge of a triangle mesh: the length of what is left
-        if len(poly) < 2:
-            return 0.0
-        return float(np.linalg.norm(poly.max(axis=0) - poly.min(axis=0)))
-    return _measure(poly)
-
-
-def _face_on_cut(face_now: np.ndarray, cut: PlanarCut) -> bool:
-    """Whether a mesh face (3, 3) (2D: an edge), where it is now, lies in the cut's plane
-    inside its polygon."""
-    size = float(np.linalg.norm(face_now.max(axis=0) - face_now.min(axis=0)))
-    if np.any(np.abs((face_now - cut.point) @ cut.normal) > PLANE_TOLERANCE * size):
-        return False
-    return _inside_polygon(face_now, cut, 1e-9 * size)
 
 
 def _components(cells: np.ndarray, n_points: int) -> int:
@@ -251,139 +169,16 @@ def _components(cells: np.ndarray, n_points: int) -> int:
     return len(np.unique(labels[:m]))
 
 
-def _face_parts(x3, cells, cuts, owner, node_d, parent, side, nodes, ca, cb) -> np.ndarray:
-    """The fraction (f,) of each face (its global ``nodes`` (f, d)) where the material of copy
-    ca and of copy cb both lie: 1 for two whole cells, the face's part on the side of the one
-    cut copy, or on the common side of two copies of one cut (none on opposite sides); faces
-    between copies of two different cuts are clipped one by one (a cell is cut once, so these
-    are few)."""
-
-    def face_d(c: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """The signed distances (f, d) of the face's nodes to copy c's cut, times its side."""
-        e = parent[c]
-        where = np.argmax(cells[e][:, :, None] == nodes[:, None, :], axis=1)
-        cut = np.maximum(owner[e], 0)
-        dist = np.stack(node_d)[cut[:, None], e[:, None], where] if node_d else 0.0 * where
-        return dist * side[c][:, None], cut
-
-    part = np.ones(len(nodes))
-    if not len(nodes):
-        return part
-    da, ka = face_d(ca)
-    db, kb = face_d(cb)
-    cut_a, cut_b = side[ca] != 0, side[cb] != 0
-    only_a, only_b = cut_a & ~cut_b, cut_b & ~cut_a
-    part[only_a] = positive_fraction(da[only_a])
-    part[only_b] = positive_fraction(db[only_b])
-    same = cut_a & cut_b & (ka == kb)
-    flat = np.all(da == 0.0, axis=1) | np.all(db == 0.0, axis=1)
-    agree = same & (side[ca] == side[cb]) & ~flat
-    part[agree] = np.minimum(positive_fraction(da[agree]), positive_fraction(db[agree]))
-    part[same & (side[ca] != side[cb]) & ~flat] = 0.0
-    for i in np.flatnonzero(cut_a & cut_b & (~same | flat)):  # two cuts meet on this face
-        face = x3[nodes[i]]
-        constraints = []
-        for c in (ca[i], cb[i]):
-            e = int(parent[c])
-            where = [int(np.flatnonzero(cells[e] == v)[0]) for v in nodes[i]]
-            constraints.append((node_d[owner[e]][e][where], int(side[c])))
-        part[i] = _face_part(face, constraints) / max(_face_part(face, []), 1e-300)
-    return part
-
-
-def _facet_table(cells: np.ndarray):
-    """``mesh.boundary.facet_table`` of ``cells``, kept for the last mesh asked (a body cut step
-    after step asks for its original mesh's every time)."""
-    from tissuesim.mesh.boundary import facet_table
-
-    cached = _FACETS.get("last")
-    if cached is not None and cached[0].shape == cells.shape and np.array_equal(cached[0], cells):
-        return cached[1]
-    table = facet_table(cells)
-    _FACETS["last"] = (cells.copy(), table)
-    return table
-
-
-_FACETS: dict = {}
-
-
-def _node_groups(x3, x_cell, cells, cuts, owner, node_d, parent, side) -> np.ndarray:
-    """The group (a label) of every node slot (copy, local node), (copies * (d+1),): slots of
-    two copies sharing a face are joined when their material meets on it; a face the cut runs
-    along joins nothing. Whole cells on both sides of a face join at once; faces next to a cut
-    cell are looked at one by one (there are few)."""
-    from scipy.sparse import coo_matrix
-    from scipy.sparse.csgraph import connected_components
-
-    m, k = cells.shape
-    copies = len(parent)
-    facets, _, inverse, counts = _facet_table(cells)
-    # the two (cell, local facet) entries of every interior facet
-    by_facet = np.argsort(inverse, kind="stable")
-    shared = counts[inverse[by_facet]] == 2
-    pairs = by_facet[shared].reshape(-1, 2)
-    cell_a, cell_b = pairs[:, 0] // k, pairs[:, 1] // k
-    face_nodes = facets[pairs[:, 0]]  # (f, d) global nodes of each interior facet
-    # faces a cut runs along: every vertex on its plane (where the body is now), in its polygon
-    on_cut = np.zeros(len(pairs), dtype=bool)
-    where_a = np.argmax(cells[cell_a][:, :, None] == face_nodes[:, None, :], axis=1)
-    x_face = x_cell[cell_a[:, None], where_a]  # (f, d, 3) where cell a's face is now
-    size = np.linalg.norm(np.ptp(x_face, axis=1), axis=1)
-    for cut in cuts:  # a vectorised plane test first: few faces lie in the plane
-        dist = np.abs((x_face - cut.point) @ cut.normal)
-        for f in np.flatnonzero(np.all(dist <= PLANE_TOLERANCE * size[:, None], axis=1)):
-            on_cut[f] = on_cut[f] or _face_on_cut(x_face[f], cut)
-    copy_of_whole = np.full(m, -1)
-    whole = np.flatnonzero(side == 0)
-    copy_of_whole[parent[whole]] = whole
-    rows, cols = [], []
-
-    def slots(c: np.ndarray, e: np.ndarray, nodes: np.ndarray) -> np.ndarray:
-        """Slot ids (f, d) of ``nodes`` (f, d) in copies c (f,) of cells e (f,)."""
-        where = np.argmax(cells[e][:, :, None] == nodes[:, None, :], axis=1)  # (f, d)
-        return c[:, None] * k + where
-
-    plain = (copy_of_whole[cell_a] >= 0) & (copy_of_whole[cell_b] >= 0) & ~on_cut
-    if plain.any():
-        rows.append(slots(copy_of_whole[cell_a[plain]], cell_a[plain], face_nodes[plain]).ravel())
-        cols.append(slots(copy_of_whole[cell_b[plain]], cell_b[plain], face_nodes[plain]).ravel())
-    # faces next to a cut cell: every pair (copy of one cell, copy of the other) whose material
-    # meets on the face, all at once; the copies of a cell are consecutive in ``parent``
-    todo = np.flatnonzero(~plain & ~on_cut)
-    by_parent = np.argsort(parent, kind="stable")
-    first = np.searchsorted(parent[by_parent], np.arange(m))
-    count = np.bincount(parent, minlength=m)
-    fa, ca, cb = [], [], []
-    for i in range(2):  # at most two copies per cell
-        for j in range(2):
-            ok = (count[cell_a[todo]] > i) & (count[cell_b[todo]] > j)
-            f = todo[ok]
-            fa.append(f)
-            ca.append(by_parent[first[cell_a[f]] + i])
-            cb.append(by_parent[first[cell_b[f]] + j])
-    f, ca, cb = np.concatenate(fa), np.concatenate(ca), np.concatenate(cb)
-    part = _face_parts(x3, cells, cuts, owner, node_d, parent, side, face_nodes[f], ca, cb)
-    meet = part > EMPTY
-    rows.append(slots(ca[meet], cell_a[f[meet]], face_nodes[f[meet]]).ravel())
-    cols.append(slots(cb[meet], cell_b[f[meet]], face_nodes[f[meet]]).ravel())
-    n = copies * k
-    r = np.concatenate([np.zeros(0, dtype=np.int64), *rows])
-    c = np.concatenate([np.zeros(0, dtype=np.int64), *cols])
-    graph = coo_matrix((np.ones(len(r)), (r, c)), shape=(n, n))
-    return connected_components(graph, directed=False)[1]
-
-
-def _levels(x_cell, cells, cuts, node_d, owner, parent, side, origin) -> np.ndarray:
+def _levels(x_cell, cells, cuts, d_all, owner, parent, side, origin) -> np.ndarray:
     """Each copy's material level at its vertices (copies, d+1): a cut copy's signed distance
     to its cut's plane times its side; a whole cell on one side of a cut that shares a node with
     a cell it cuts, or a node it parts on its plane (a cut along faces), its distance on that
     side (the cut faces' contact surfaces shave such cells where they come close to the plane:
-    contact/cut_surface.py); +inf else."""
+    contact/cut_surface.py); +inf else. d_all (cuts, m, d+1): the cells' vertex distances."""
     copies, k = len(parent), cells.shape[1]
     level = np.full((copies, k), np.inf)
-    if not node_d:
+    if not len(d_all):
         return level
-    d_all = np.stack(node_d)  # (cuts, m, k)
     copied = side != 0
     level[copied] = d_all[owner[parent[copied]], parent[copied]] * side[copied, None]
     whole = np.flatnonzero(~copied)
@@ -454,12 +249,13 @@ def virtual_node_cut(
                 "cuts a cell once: keep cuts apart by an element or merge them into one plane"
             )
         owner[hit] = k
+    d_all = np.stack(node_d) if node_d else np.zeros((0, *cells.shape))  # (cuts, m, d+1)
     # the copies: every uncut cell once, then one per side holding material of each cut cell
     cut_ids = np.flatnonzero(owner >= 0)
     parent = [np.flatnonzero(owner < 0)]
     # each cut cell's fraction on the + side, in closed form (plane_split.py): the distances
     # are linear in the element, so the rest-shape fraction is that of the vertex values
-    d_cut = np.stack(node_d)[owner[cut_ids], cut_ids] if len(cut_ids) else np.zeros((0, dim + 1))
+    d_cut = d_all[owner[cut_ids], cut_ids] if len(cut_ids) else np.zeros((0, dim + 1))
     f_plus = positive_fraction(d_cut) if len(cut_ids) else np.zeros(0)
     f_both = np.column_stack([f_plus, 1.0 - f_plus]).ravel()  # + then - per cell
     keep = f_both > EMPTY
@@ -470,7 +266,7 @@ def virtual_node_cut(
     )
     fraction = np.concatenate([np.ones(n_whole), f_both[keep]])
     copies, k = len(parent), dim + 1
-    labels = _node_groups(x3, x_cell, cells, cuts, owner, node_d, parent, side)
+    labels = node_groups(x3, x_cell, cells, cuts, owner, d_all, parent, side)
     # a slot's node: the original node for its first group, a new (duplicate) node after
     slot_node = cells[parent].ravel()
     # unique (node, group) pairs by one int64 key (a row-wise unique sorts far slower)
@@ -489,7 +285,7 @@ def virtual_node_cut(
     origin = np.concatenate([np.arange(len(x3)), pairs[dup, 0]])
     new_cells = node[group.reshape(-1)]
     pts = np.asarray(points, dtype=float)[origin]
-    level = _levels(x_cell, cells, cuts, node_d, owner, parent, side, origin)
+    level = _levels(x_cell, cells, cuts, d_all, owner, parent, side, origin)
     return VirtualNodeMesh(
         level=level,
         points=pts,

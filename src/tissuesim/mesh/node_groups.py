@@ -1,0 +1,201 @@
+"""Which node slots of a virtual node cut stay one node (``mesh/virtual_nodes.py``): every
+(copy, local node) is a slot, and the slots of two copies that share a face are joined when
+their material meets on that face (the face's part on both copies' sides has an area); a face
+the cut runs along joins nothing. The groups are the connected components of those joins.
+
+Whole cells on both sides of a face join at once, through the mesh's interior face table
+(``mesh/interior_faces.py``, kept across the cuts of a body); faces next to a cut cell take
+their parts in closed form (``plane_split.positive_fraction``), all at once; only faces where
+two different cuts meet are clipped one by one (a cell is cut once, so these are few)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from tissuesim.mesh.interior_faces import InteriorFaces, interior_faces
+from tissuesim.mesh.planar_cut import EMPTY, PLANE_TOLERANCE, PlanarCut
+from tissuesim.mesh.plane_split import positive_fraction
+
+__all__ = ["node_groups"]
+
+
+def node_groups(x3, x_cell, cells, cuts, owner, d_all, parent, side) -> np.ndarray:
+    """The group (a label) of every node slot (copy, local node), (copies * (d+1),): x3 the
+    rest points (n, 3), x_cell (m, d+1, 3) where each original cell's vertices are now,
+    ``owner`` (m,) each cell's cut (-1 none), d_all (cuts, m, d+1) its vertices' distances
+    to each cut, ``parent`` / ``side`` (copies,) each copy's cell and side (0: whole)."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    m, k = cells.shape
+    faces = interior_faces(cells)
+    cell_a, cell_b = faces.cell_a, faces.cell_b
+    on_cut = _on_cuts(x_cell, faces, cuts)
+    copy_of_whole = np.full(m, -1)
+    whole = np.flatnonzero(side == 0)
+    copy_of_whole[parent[whole]] = whole
+    whole_a, whole_b = copy_of_whole[cell_a], copy_of_whole[cell_b]
+    plain = (whole_a >= 0) & (whole_b >= 0) & ~on_cut
+    rows = [(whole_a[plain, None] * k + faces.slot_a[plain]).ravel()]
+    cols = [(whole_b[plain, None] * k + faces.slot_b[plain]).ravel()]
+    # faces next to a cut cell: every pair (copy of one cell, copy of the other) whose material
+    # meets on the face, all at once; a cell has at most two copies
+    todo = np.flatnonzero(~plain & ~on_cut)
+    by_parent = np.argsort(parent, kind="stable")
+    first = np.searchsorted(parent[by_parent], np.arange(m))
+    count = np.bincount(parent, minlength=m)
+    fa, ca, cb = [], [], []
+    for i in range(2):
+        for j in range(2):
+            ok = (count[cell_a[todo]] > i) & (count[cell_b[todo]] > j)
+            f = todo[ok]
+            fa.append(f)
+            ca.append(by_parent[first[cell_a[f]] + i])
+            cb.append(by_parent[first[cell_b[f]] + j])
+    f, ca, cb = np.concatenate(fa), np.concatenate(ca), np.concatenate(cb)
+    part = _face_parts(x3, cells, owner, d_all, parent, side, faces, f, ca, cb)
+    meet = f[part > EMPTY]
+    ca, cb = ca[part > EMPTY], cb[part > EMPTY]
+    rows.append((ca[:, None] * k + faces.slot_a[meet]).ravel())
+    cols.append((cb[:, None] * k + faces.slot_b[meet]).ravel())
+    n = len(parent) * k
+    r, c = np.concatenate(rows), np.concatenate(cols)
+    graph = coo_matrix((np.ones(len(r)), (r, c)), shape=(n, n))
+    return connected_components(graph, directed=False)[1]
+
+
+def _on_cuts(x_cell: np.ndarray, faces: InteriorFaces, cuts: list[PlanarCut]) -> np.ndarray:
+    """(f,) whether each interior face, where it is now, lies in a cut's plane within its
+    polygon (a cut along faces). A face's tolerance is PLANE_TOLERANCE of its own size, below
+    twice that of the whole body's, so cell vertices further than that from the plane leave
+    their faces off it: that cheap test on every vertex first, the exact one on the few left."""
+    on_cut = np.zeros(len(faces.cell_a), dtype=bool)
+    if not cuts:
+        return on_cut
+    reach = 2.0 * PLANE_TOLERANCE * float(np.linalg.norm(np.ptp(x_cell.reshape(-1, 3), axis=0)))
+    for cut in cuts:
+        near = np.abs((x_cell - cut.point) @ cut.normal) <= reach  # (m, d+1)
+        maybe = np.flatnonzero(near[faces.cell_a[:, None], faces.slot_a].all(axis=1))
+        x_face = x_cell[faces.cell_a[maybe, None], faces.slot_a[maybe]]  # (f', d, 3)
+        size = np.linalg.norm(np.ptp(x_face, axis=1), axis=1)
+        dist = np.abs((x_face - cut.point) @ cut.normal)
+        for i in np.flatnonzero(np.all(dist <= PLANE_TOLERANCE * size[:, None], axis=1)):
+            on_cut[maybe[i]] = on_cut[maybe[i]] or _face_on_cut(x_face[i], cut)
+    return on_cut
+
+
+def _face_parts(x3, cells, owner, d_all, parent, side, faces, f, ca, cb) -> np.ndarray:
+    """The fraction (f,) of each face ``faces``[f] where the material of copy ca (of its cell
+    a) and of copy cb (of its cell b) both lie: 1 for two whole cells, the face's part on the
+    side of the one cut copy, or on the common side of two copies of one cut (none on
+    opposite sides); faces between copies of two different cuts are clipped one by one."""
+
+    def face_d(c: np.ndarray, where: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The signed distances (f, d) of the face's nodes to copy c's cut, times its side."""
+        e = parent[c]
+        cut = np.maximum(owner[e], 0)
+        dist = d_all[cut[:, None], e[:, None], where] if len(d_all) else 0.0 * where
+        return dist * side[c][:, None], cut
+
+    part = np.ones(len(f))
+    if not len(f):
+        return part
+    nodes = faces.nodes[f]
+    da, ka = face_d(ca, faces.slot_a[f])
+    db, kb = face_d(cb, faces.slot_b[f])
+    cut_a, cut_b = side[ca] != 0, side[cb] != 0
+    only_a, only_b = cut_a & ~cut_b, cut_b & ~cut_a
+    part[only_a] = positive_fraction(da[only_a])
+    part[only_b] = positive_fraction(db[only_b])
+    same = cut_a & cut_b & (ka == kb)
+    flat = np.all(da == 0.0, axis=1) | np.all(db == 0.0, axis=1)
+    agree = same & (side[ca] == side[cb]) & ~flat
+    part[agree] = np.minimum(positive_fraction(da[agree]), positive_fraction(db[agree]))
+    part[same & (side[ca] != side[cb]) & ~flat] = 0.0
+    for i in np.flatnonzero(cut_a & cut_b & (~same | flat)):  # two cuts meet on this face
+        face = x3[nodes[i]]
+        constraints = []
+        for c in (ca[i], cb[i]):
+            e = int(parent[c])
+            where = [int(np.flatnonzero(cells[e] == v)[0]) for v in nodes[i]]
+            constraints.append((d_all[owner[e]][e][where], int(side[c])))
+        part[i] = _face_part(face, constraints) / max(_face_part(face, []), 1e-300)
+    return part
+
+
+def _inside_polygon(q: np.ndarray, cut: PlanarCut, tol: float) -> bool:
+    """Whether points q (k, 3) in the cut's plane lie in its convex polygon (within tol)."""
+    poly = cut.polygon
+    n = cut.normal
+    centre = poly.mean(axis=0)
+    for a, b in zip(poly, np.roll(poly, -1, axis=0), strict=True):
+        inward = np.cross(n, b - a)
+        if inward @ (centre - a) < 0.0:
+            inward = -inward
+        inward = inward / np.linalg.norm(inward)
+        if np.any((q - a) @ inward < -tol):
+            return False
+    return True
+
+
+def _measure(points: np.ndarray) -> float:
+    """Volume (3D) or area (2D, points in a plane) of the convex hull of ``points``."""
+    from scipy.spatial import ConvexHull, QhullError
+
+    if len(points) < 3:
+        return 0.0
+    centred = points - points.mean(axis=0)
+    # the points' own dimension: drop the directions they do not span (a 2D mesh's z)
+    _, s, vt = np.linalg.svd(centred, full_matrices=False)
+    rank = int(np.sum(s > 1e-12 * max(s[0], 1e-300)))
+    if rank < 2 or len(points) <= rank:
+        return 0.0
+    try:
+        return float(ConvexHull(centred @ vt[:rank].T).volume)
+    except QhullError:  # flat within round-off
+        return 0.0
+
+
+def _clip(poly: np.ndarray, d: np.ndarray, side: int) -> tuple[np.ndarray, np.ndarray]:
+    """A convex polygon (k, 3) with signed distances d (k,) clipped to ``side`` of the plane
+    (Sutherland-Hodgman); returns the polygon and its points' distances (0 on the plane)."""
+    out, dist = [], []
+    k = len(poly)
+    for i in range(k):
+        p, q, dp, dq = poly[i], poly[(i + 1) % k], side * d[i], side * d[(i + 1) % k]
+        if dp >= 0.0:
+            out.append(p)
+            dist.append(d[i])
+        if dp * dq < 0.0:
+            t = dp / (dp - dq)
+            out.append(p + t * (q - p))
+            dist.append(0.0)
+    return np.array(out).reshape(-1, poly.shape[1]), np.array(dist)
+
+
+def _face_part(face: np.ndarray, constraints: list) -> float:
+    """Area of a face (3, 3) (2D: the length of an edge (2, 3)) where every constraint
+    (distances of its points to a cut (3,), side) holds; the distances are linear on the face."""
+    poly = face
+    dists = [np.asarray(d, dtype=float) for d, _ in constraints]
+    for k, (_, side) in enumerate(constraints):
+        carried = np.column_stack([poly, *[dd[:, None] for dd in dists]])
+        clipped, _ = _clip(carried, dists[k], side)
+        if len(clipped) == 0:
+            return 0.0
+        poly = clipped[:, :3]
+        dists = [clipped[:, 3 + j] for j in range(len(dists))]
+    if face.shape[0] == 2:  # an edge of a triangle mesh: the length of what is left
+        if len(poly) < 2:
+            return 0.0
+        return float(np.linalg.norm(poly.max(axis=0) - poly.min(axis=0)))
+    return _measure(poly)
+
+
+def _face_on_cut(face_now: np.ndarray, cut: PlanarCut) -> bool:
+    """Whether a mesh face (3, 3) (2D: an edge), where it is now, lies in the cut's plane
+    inside its polygon."""
+    size = float(np.linalg.norm(face_now.max(axis=0) - face_now.min(axis=0)))
+    if np.any(np.abs((face_now - cut.point) @ cut.normal) > PLANE_TOLERANCE * size):
+        return False
+    return _inside_polygon(face_now, cut, 1e-9 * size)
