@@ -19,7 +19,7 @@ def test_every_problem_passes():
     """The whole set, run once in the suite (about 5 s; its Hertz check is looked at here too,
     as xdist would run a shared fixture once per worker)."""
     checks = run()
-    expected = 3 * len(laws.LAWS) + len(fibres.CASES) + 3 + 4 + len(cook.CASES) + 1
+    expected = 3 * len(laws.LAWS) + len(fibres.CASES) + 3 + 4 + 2 + len(cook.CASES) + 1
     assert len(checks) == expected
     failed = [c for c in checks if not c.passed]
     assert failed == []
@@ -86,7 +86,19 @@ def test_every_family_can_be_chosen(capsys):
     assert main(["verify", "--only", "fibres", "--only", "cook"]) == 0
     out = capsys.readouterr().out
     assert f"{len(fibres.CASES) + len(cook.CASES)} of" in out
-    assert set(FAMILIES) == {"laws", "fibres", "patch", "viscoelastic", "cook", "hertz"}
+    assert set(FAMILIES) == {
+        "laws", "fibres", "patch", "viscoelastic", "dynamics", "cook", "hertz",
+    }  # fmt: skip
+
+
+def test_the_dynamics_checks_pass_and_fail_backward_euler():
+    """Newmark passes both; Backward Euler, first order and damped, fails both tolerances."""
+    from tissuesim.verification import dynamics
+
+    assert all(c.passed for c in dynamics.checks())
+    drop, fallen = dynamics.free_fall("backward_euler")
+    start, end = dynamics.swing("backward_euler")
+    assert abs(fallen - drop) > 1e-3 * drop and abs(end - start) > 1e-3 * start
 
 
 def test_the_command_prints_the_table_and_json(capsys):

@@ -11,20 +11,21 @@ __all__ = ["FAMILIES", "run", "table"]
 
 
 def _families() -> dict[str, Callable[[], list[Check]]]:
-    from tissuesim.verification import cook, fibres, hertz, laws, patch, viscoelastic
+    from tissuesim.verification import cook, dynamics, fibres, hertz, laws, patch, viscoelastic
 
     return {
         "laws": laws.checks,
         "fibres": fibres.checks,
         "patch": patch.checks,
         "viscoelastic": viscoelastic.checks,
+        "dynamics": dynamics.checks,
         "cook": cook.checks,
         "hertz": hertz.checks,
     }
 
 
 #: the families by name, in the order they run
-FAMILIES = ("laws", "fibres", "patch", "viscoelastic", "cook", "hertz")
+FAMILIES = ("laws", "fibres", "patch", "viscoelastic", "dynamics", "cook", "hertz")
 
 
 def run(families: tuple[str, ...] | None = None) -> list[Check]:
