@@ -14,6 +14,7 @@ from functools import cached_property
 import numpy as np
 
 from tissuesim.assembly.pattern import SparsityPattern
+from tissuesim.assembly.pattern_renewal import renew_pattern
 from tissuesim.backend import resolve_backend
 from tissuesim.constraints.dirichlet import DirichletCondition, Elimination, PrescribedDofs
 from tissuesim.energies.accumulator import Accumulator
@@ -81,6 +82,9 @@ class Model:
     formulation: str = "displacement"  # or "mean_dilatation" (energies/mean_dilatation.py)
     #: P1 cells' (shape gradients, rest measures) when known: a cut's copies keep their parent's
     rest: tuple | None = field(default=None, repr=False)
+    #: (pattern, cells) of the P1 model this one replaces and, per cell, the cell of it with
+    #: the same nodes (-1 none): a cut renews only the pattern's rows it touched
+    renew: tuple | None = field(default=None, repr=False)
 
     def __post_init__(self) -> None:
         cells = self.mesh.n_cells
@@ -110,7 +114,10 @@ class Model:
                 f"formulation must be 'displacement' or 'mean_dilatation', not "
                 f"{short(self.formulation)}"
             )
-        self.pattern = SparsityPattern.from_stencils(
+        pattern = None
+        if self.renew is not None and extra is None and self.mesh.simplicial:
+            pattern = renew_pattern(*self.renew, self.mesh.cells, self.mesh.n_points)
+        self.pattern = pattern or SparsityPattern.from_stencils(
             self.kinematics.n_dofs, [self.kinematics.cell_stencil], extra
         )
         if extra is not None:

@@ -14,9 +14,10 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.sparse as sp
 
+from tissuesim.assembly.node_blocks import NodeBlocks
 from tissuesim.errors import InputError
 
-__all__ = ["NodeBlocks", "SparsityPattern"]
+__all__ = ["SparsityPattern"]
 
 
 def _node_block(n: int, stencils: list[np.ndarray]) -> int:
@@ -39,57 +40,6 @@ def _node_block(n: int, stencils: list[np.ndarray]) -> int:
         if ok:
             return d
     return 0
-
-
-def _split(inverse: np.ndarray, nodes: list[np.ndarray]) -> list[np.ndarray]:
-    """``inverse`` cut into each node stencil's (k, b * b) node pair indices, in order."""
-    out, start = [], 0
-    for v in nodes:
-        k, b = v.shape
-        out.append(inverse[start : start + k * b * b].reshape(k, b * b))
-        start += k * b * b
-    return out
-
-
-@dataclass(frozen=True, eq=False)
-class NodeBlocks:
-    """The node level of a node-blocked pattern: every node pair (r, c) it holds is a d x d
-    block of the DOF pattern. ``vptr`` (nodes + 1,) where node row r's pairs start in the
-    node pattern, ``count`` (nodes,) their number L_r, ``scatters`` one (k, b * b) array per
-    stencil of b nodes: each local node pair's index j in the node pattern."""
-
-    d: int
-    vptr: np.ndarray
-    count: np.ndarray
-    scatters: tuple[np.ndarray, ...]
-
-    def positions(self, j: np.ndarray, r: np.ndarray) -> np.ndarray:
-        """Data positions (..., b, d, b', d) of the d x d blocks of node pairs j (..., b, b'),
-        r (..., b) their row nodes: d^2 vptr[r] + a d L_r + d (j - vptr[r]) + b, the
-        pair's part computed once and the d x d offsets broadcast (its scatter map)."""
-        d, a = self.d, np.arange(self.d)
-        base = d * j + (d * d - d) * self.vptr[r][..., None]  # (..., b, b')
-        stride = d * self.count[r]  # (..., b): DOF row a of node row r starts a d L_r on
-        pos = base[..., :, None, :, None] + a[:, None, None] * stride[..., :, None, None, None]
-        return (pos + a).reshape(*j.shape[:-2], -1)
-
-    def diagonal_positions(self, j: np.ndarray, r: np.ndarray) -> np.ndarray:
-        """Data positions (p, d) of the diagonal entries (a, a) of the blocks of node pairs
-        j (p,) in node rows r (p,)."""
-        d, a = self.d, np.arange(self.d)
-        return (d * j + (d * d - d) * self.vptr[r])[:, None] + a * (d * self.count[r] + 1)[:, None]
-
-    def scalar_blocks(self, which: int, blocks: np.ndarray, nnz: int) -> np.ndarray:
-        """The data (nnz,) of local scalar blocks (k, b, b) of stencil ``which`` on every
-        component (each block times the d x d identity, as a mass matrix): summed node pair
-        by node pair, d^2 times fewer entries than scattering the d-DOF blocks, in the same
-        order (the same sums)."""
-        pairs = int(self.vptr[-1])
-        nodal = np.bincount(self.scatters[which].ravel(), weights=blocks.ravel(), minlength=pairs)
-        row = np.repeat(np.arange(len(self.count)), self.count)
-        data = np.zeros(nnz)
-        data[self.diagonal_positions(np.arange(pairs), row)] = nodal[:, None]
-        return data
 
 
 @dataclass(frozen=True, eq=False)
@@ -169,17 +119,13 @@ class SparsityPattern:
         v_row, v_col = unique // nv, unique % nv
         count = np.bincount(v_row, minlength=nv)  # L_r
         vptr = np.concatenate([[0], np.cumsum(count)]).astype(np.int64)
-        a = np.arange(d)
-        # DOF rows: d per node row, each with d L_r entries
-        row_len = np.repeat(d * count, d)
-        indptr = np.concatenate([[0], np.cumsum(row_len)]).astype(np.int64)
-        # columns: DOF row d r + a holds node row r's neighbours, each expanded to its d DOFs;
-        # gathered node pair by node pair (d times fewer indices than entry by entry)
-        reps = d * count  # node pairs of node row r's d DOF rows
-        offset = np.arange(d * len(v_col)) - np.repeat(d * vptr[:-1], reps)
-        pair = np.repeat(vptr[:-1], reps) + offset % np.repeat(count, reps)
-        indices = (v_col[pair, None] * d + a).reshape(-1).astype(np.int32)
-        blocks = NodeBlocks(d, vptr, count, tuple(_split(inverse, nodes)))
+        pairs, start = [], 0  # each stencil's (k, b * b) node pair indices
+        for v in nodes:
+            size = v.shape[0] * v.shape[1] ** 2
+            pairs.append(inverse[start : start + size].reshape(v.shape[0], -1))
+            start += size
+        blocks = NodeBlocks(d, vptr, count, v_col, tuple(pairs))
+        indptr, indices = blocks.csr()
         scatters = [
             blocks.positions(j.reshape(len(v), v.shape[1], -1), v)
             for j, v in zip(blocks.scatters, nodes, strict=True)

@@ -37,6 +37,8 @@ class CutState:
     vn: VirtualNodeMesh | None = None
     cuts: list[PlanarCut] = field(default_factory=list)
     names: list[str] = field(default_factory=list)
+    #: (copies,) the copy before the last cut of the same cell and side as each copy, -1 none
+    source: np.ndarray | None = field(default=None, repr=False)
     #: rest area of the mesh faces each cut parted (a cut along faces copies no cell)
     face_area: list[float] = field(default_factory=list)
     _parted: np.ndarray | None = field(default=None, repr=False)
@@ -143,7 +145,7 @@ def recut(state: CutState, cut: PlanarCut, name: str, positions: np.ndarray):
     points = state.original.n_points if state.vn is None else len(state.vn.points)
     if int(np.count_nonzero(vn.side)) == before and len(vn.points) == points:
         return None  # no new element cut, no node parted (a cut along faces parts nodes only)
-    carry = _carry(state.vn, vn)
+    carry, state.source = _carry(state.vn, vn)
     state.vn, state.cuts = vn, cuts
     if name not in state.names:
         state.names.append(name)
@@ -151,10 +153,11 @@ def recut(state: CutState, cut: PlanarCut, name: str, positions: np.ndarray):
     return vn, carry, index
 
 
-def _carry(old: VirtualNodeMesh | None, new: VirtualNodeMesh) -> np.ndarray:
-    """The node of the current mesh each node of the new one continues (new n_points,)."""
+def _carry(old: VirtualNodeMesh | None, new: VirtualNodeMesh) -> tuple[np.ndarray, np.ndarray]:
+    """The node of the current mesh each node of the new one continues (new n_points,), and
+    the current copy of the same cell and side as each new copy, -1 for none (``source``)."""
     if old is None:
-        return new.origin
+        return new.origin, np.where(new.side == 0, new.parent, -1)
     # the current copy standing for each new copy: same parent and side, else the whole one
     key_old = old.parent * 3 + (old.side + 1)
     order = np.argsort(key_old)
@@ -167,7 +170,7 @@ def _carry(old: VirtualNodeMesh | None, new: VirtualNodeMesh) -> np.ndarray:
     old_node = old.cells[source]  # (copies, k): the current node of every new slot
     carry = np.empty(len(new.points), dtype=np.int64)
     carry[new.cells.ravel()] = old_node.ravel()
-    return carry
+    return carry, np.where(found, order[pos], -1)
 
 
 def follow_cells(

@@ -342,6 +342,10 @@ class FemBody:
         old = self.model
         mesh = cut.to_mesh(state.original)
         rest = None if state.rest is None else tuple(a[cut.parent] for a in state.rest)
+        same, src = None, state.source
+        if src is not None and old.mesh.order == 1:  # cells the cut left as they were
+            equal = np.all(cut.cells == old.mesh.cells[np.maximum(src, 0)], axis=1)
+            same = np.where((src >= 0) & equal, src, -1)
         model = Model(
             mesh,
             old.material,
@@ -350,6 +354,7 @@ class FemBody:
             backend=old.backend,
             formulation=old.formulation,
             rest=rest,
+            renew=None if same is None else (old.pattern, old.mesh.cells, same),
         )
         model.loads = list(old.loads)  # nodal loads and tractions keep each node's first copy
 
