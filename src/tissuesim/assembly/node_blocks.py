@@ -37,7 +37,8 @@ class NodeBlocks:
         reps = d * count  # node pairs of node row r's d DOF rows
         offset = np.arange(d * len(self.cols)) - np.repeat(d * vptr[:-1], reps)
         pair = np.repeat(vptr[:-1], reps) + offset % np.repeat(count, reps)
-        indices = (self.cols[pair, None] * d + np.arange(d)).reshape(-1).astype(np.int32)
+        indices = np.repeat((self.cols[pair] * d).astype(np.int32), d)  # flat: see row_positions
+        indices += np.tile(np.arange(d, dtype=np.int32), len(pair))
         return indptr, indices
 
     def positions(self, j: np.ndarray, r: np.ndarray) -> np.ndarray:

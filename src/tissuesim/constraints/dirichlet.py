@@ -107,8 +107,10 @@ class Elimination:
     def build(cls, pattern: SparsityPattern, dofs: np.ndarray) -> Elimination:
         fixed = np.zeros(pattern.n, dtype=bool)
         fixed[dofs] = True
-        rows = np.repeat(np.arange(pattern.n), np.diff(pattern.indptr))
-        zero = np.flatnonzero(fixed[rows] | fixed[pattern.indices])
+        zero = np.zeros(0, dtype=np.int64)
+        if fixed.any():  # entries in a prescribed row (the row's flag repeated) or column
+            in_row = np.repeat(fixed, np.diff(pattern.indptr))
+            zero = np.flatnonzero(in_row | fixed[pattern.indices])
         return cls(zero, pattern.diagonal[dofs], pattern.diagonal[~fixed], dofs)
 
     def eliminate_matrix(self, matrix):
