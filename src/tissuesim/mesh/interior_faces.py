@@ -5,9 +5,11 @@ asks for its original mesh's faces every time, so the last few meshes' are kept.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import connected_components
 
 from tissuesim.mesh.boundary import all_facets, facet_table
 
@@ -19,13 +21,26 @@ class InteriorFaces:
     """Every face two cells share, once, in the order of ``facet_table``'s unique facets:
     ``cell_a`` / ``cell_b`` (f,) its two cells (a the one listed first), ``nodes`` (f, d) its
     nodes as a's facet lists them (outward for a), ``slot_a`` / ``slot_b`` (f, d) where each
-    of those nodes sits in a and in b."""
+    of those nodes sits in a and in b; ``shape`` the cells' (m, d+1)."""
 
     cell_a: np.ndarray
     cell_b: np.ndarray
     nodes: np.ndarray
     slot_a: np.ndarray
     slot_b: np.ndarray
+    shape: tuple[int, int]
+    _kept: dict = field(default_factory=dict, repr=False)
+
+    def uncut_groups(self) -> np.ndarray:
+        """(m (d+1),) the group of every slot (cell, local node) of the mesh uncut: the slots
+        of two cells that share a face joined at its nodes (connected components, once)."""
+        if "groups" not in self._kept:
+            m, k = self.shape
+            r = (self.cell_a[:, None] * k + self.slot_a).ravel()
+            c = (self.cell_b[:, None] * k + self.slot_b).ravel()
+            graph = coo_matrix((np.ones(len(r)), (r, c)), shape=(m * k, m * k))
+            self._kept["groups"] = connected_components(graph, directed=False)[1]
+        return self._kept["groups"]
 
 
 def _build(cells: np.ndarray) -> InteriorFaces:
@@ -38,7 +53,7 @@ def _build(cells: np.ndarray) -> InteriorFaces:
     nodes = facets[pairs[:, 0]]
     slot_a = all_facets(np.arange(k)[None])[0][pairs[:, 0] % k]  # a's facet: its local slots
     slot_b = np.argmax(cells[cell_b][:, :, None] == nodes[:, None, :], axis=1)
-    return InteriorFaces(cell_a, cell_b, nodes, slot_a, slot_b)
+    return InteriorFaces(cell_a, cell_b, nodes, slot_a, slot_b, (m, k))
 
 
 def interior_faces(cells: np.ndarray) -> InteriorFaces:

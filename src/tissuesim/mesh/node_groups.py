@@ -3,14 +3,17 @@
 their material meets on that face (the face's part on both copies' sides has an area); a face
 the cut runs along joins nothing. The groups are the connected components of those joins.
 
-Whole cells on both sides of a face join at once, through the mesh's interior face table
-(``mesh/interior_faces.py``, kept across the cuts of a body); faces next to a cut cell take
+Slots of nodes away from every cut group as in the uncut mesh (its groups are kept with its
+interior face table, ``mesh/interior_faces.py``, across the cuts of a body); the others join
+here: whole cells across a face at once, and faces next to a cut cell take
 their parts in closed form (``plane_split.positive_fraction``), all at once; only faces where
 two different cuts meet are clipped one by one (a cell is cut once, so these are few)."""
 
 from __future__ import annotations
 
 import numpy as np
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import connected_components
 
 from tissuesim.mesh.interior_faces import InteriorFaces, interior_faces
 from tissuesim.mesh.planar_cut import EMPTY, PLANE_TOLERANCE, PlanarCut
@@ -24,20 +27,27 @@ def node_groups(x3, x_cell, cells, cuts, owner, d_all, parent, side) -> np.ndarr
     rest points (n, 3), x_cell (m, d+1, 3) where each original cell's vertices are now,
     ``owner`` (m,) each cell's cut (-1 none), d_all (cuts, m, d+1) its vertices' distances
     to each cut, ``parent`` / ``side`` (copies,) each copy's cell and side (0: whole)."""
-    from scipy.sparse import coo_matrix
-    from scipy.sparse.csgraph import connected_components
-
     m, k = cells.shape
     faces = interior_faces(cells)
     cell_a, cell_b = faces.cell_a, faces.cell_b
     on_cut = _on_cuts(x_cell, faces, cuts)
+    # a node no cut cell holds and no face on a cut touches has all its cells whole and all its
+    # faces plain: its slots group as in the uncut mesh (``uncut_groups``, kept with the faces);
+    # only the slots of the nodes near a cut are joined here (groups never span two nodes)
+    near = np.zeros(len(x3), dtype=bool)
+    near[cells[owner >= 0]] = True
+    near[faces.nodes[on_cut]] = True
+    here = near[cells[parent]].ravel()
+    uncut = faces.uncut_groups()
+    labels = uncut[(parent[:, None] * k + np.arange(k)).ravel()]
     copy_of_whole = np.full(m, -1)
     whole = np.flatnonzero(side == 0)
     copy_of_whole[parent[whole]] = whole
     whole_a, whole_b = copy_of_whole[cell_a], copy_of_whole[cell_b]
     plain = (whole_a >= 0) & (whole_b >= 0) & ~on_cut
-    rows = [(whole_a[plain, None] * k + faces.slot_a[plain]).ravel()]
-    cols = [(whole_b[plain, None] * k + faces.slot_b[plain]).ravel()]
+    f, i = np.nonzero(near[faces.nodes] & plain[:, None])  # plain faces' joins of such nodes
+    rows = [whole_a[f] * k + faces.slot_a[f, i]]
+    cols = [whole_b[f] * k + faces.slot_b[f, i]]
     # faces next to a cut cell: every pair (copy of one cell, copy of the other) whose material
     # meets on the face, all at once; a cell has at most two copies
     todo = np.flatnonzero(~plain & ~on_cut)
@@ -58,10 +68,13 @@ def node_groups(x3, x_cell, cells, cuts, owner, d_all, parent, side) -> np.ndarr
     ca, cb = ca[part > EMPTY], cb[part > EMPTY]
     rows.append((ca[:, None] * k + faces.slot_a[meet]).ravel())
     cols.append((cb[:, None] * k + faces.slot_b[meet]).ravel())
-    n = len(parent) * k
-    r, c = np.concatenate(rows), np.concatenate(cols)
-    graph = coo_matrix((np.ones(len(r)), (r, c)), shape=(n, n))
-    return connected_components(graph, directed=False)[1]
+    slots = np.flatnonzero(here)
+    index = np.full(len(here), -1)
+    index[slots] = np.arange(len(slots))
+    r, c = index[np.concatenate(rows)], index[np.concatenate(cols)]
+    graph = coo_matrix((np.ones(len(r)), (r, c)), shape=(len(slots), len(slots)))
+    labels[slots] = len(uncut) + connected_components(graph, directed=False)[1]
+    return labels
 
 
 def _on_cuts(x_cell: np.ndarray, faces: InteriorFaces, cuts: list[PlanarCut]) -> np.ndarray:
