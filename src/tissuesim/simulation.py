@@ -403,8 +403,6 @@ class Simulation(BodyCalls, SetupCalls, StepChecks, BodyResults, Stepping):
             if body.kind == "fem":
                 body.release_graspers(self.time + tol)
                 body.set_condition_time(t_end, tol)
-        for blade in self.organ_cuts:  # an instrument's blade leaving its plane: refused now
-            blade.record(self.time, t_end, keep=False)
         s = self.system
         by_contact = self.integrator == "quasistatic" and self._check_supported()
         if self.explicit and self._stability_checked is not s:

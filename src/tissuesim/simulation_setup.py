@@ -427,9 +427,10 @@ class SetupCalls:
         sample spacing) of the swept surface are removed and frames stop acting across the
         cut; the swept surface is written as the series ``name``. With ``body`` (a FEM body)
         it cuts that body: ``blade(t)`` returns its straight edge (2, 3) or a flat triangular
-        blade's corners (3, 3), moving in its own plane; after each step the cells it has
-        swept through completely are cut by the virtual node algorithm (``cut_body``), mass
-        kept; its cutting force (``toughness``, J/m^2 of new surface) is reported as ``name``
+        blade's corners (3, 3), moving in its own plane or off it (then along the surface it
+        sweeps, ``mesh/swept_cut.py``); after each step the cells it has swept through
+        completely are cut by the virtual node algorithm (``cut_body``), mass kept; its
+        cutting force (``toughness``, J/m^2 of new surface) is reported as ``name``
         and the cut's area per step under ``extra["cuts"]``. Returns the cutting tool.
 
         ``blade`` may instead name an obstacle (an instrument): its surface's vertices

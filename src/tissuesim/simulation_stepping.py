@@ -120,4 +120,3 @@ class Stepping:
         phase, _, _ = self.schedule.at(self.time)
         self.time_step = phase.time_step
         self.integrator = phase.integrator or self._base_integrator
-

@@ -245,13 +245,15 @@ def test_a_triangular_blade_cuts_what_its_positions_cover():
         sim.add_cut(lambda t: np.eye(4, 3), 0.0, 0.5, body="body", name="square")
 
 
-def test_add_cut_on_a_body_refuses_a_blade_that_leaves_its_plane():
+def test_add_cut_on_a_body_follows_a_blade_that_leaves_its_plane():
+    """A blade that twists as it goes sweeps no plane: its cut follows its swept surface
+    (tests/cutting/test_curved_cut.py); the bad blades are refused in one line."""
     sim = cantilever()
-    with pytest.raises(InputError, match="leaves its plane"):
-        sim.add_cut(
-            lambda t: np.array([[0.47 + t, -0.5, 0.3 - t], [0.47 - t, 0.7, 0.3 - t]]),
-            0.0, 0.5, body="body",
-        )  # fmt: skip
+    tool = sim.add_cut(
+        lambda t: np.array([[0.47 + t, -0.5, 0.3 - t], [0.47 - t, 0.7, 0.3 - t]]),
+        0.0, 0.5, body="body", name="twist",
+    )  # fmt: skip
+    assert tool.curved
     with pytest.raises(InputError, match="straight edge"):
         sim.add_cut(lambda t: np.zeros((2, 2)), 0.0, 0.5, body="body")
     with pytest.raises(InputError, match="leave kerf out"):  # not silently ignored

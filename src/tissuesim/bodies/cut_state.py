@@ -20,6 +20,7 @@ from tissuesim.errors import InputError
 from tissuesim.mesh.boundary import facet_measures
 from tissuesim.mesh.interior_faces import interior_faces
 from tissuesim.mesh.plane_split import section_measures
+from tissuesim.mesh.swept_cut import SweptCut
 from tissuesim.mesh.virtual_nodes import PlanarCut, VirtualNodeMesh, virtual_node_cut
 
 __all__ = ["CutState", "follow_cells", "recut"]
@@ -117,15 +118,23 @@ class CutState:
             self.face_area[index] += float(facet_measures(points, nodes).sum())
 
 
-def recut(state: CutState, cut: PlanarCut, name: str, positions: np.ndarray):
+def recut(state: CutState, cut: PlanarCut | SweptCut, name: str, positions: np.ndarray):
     """Cut again: ``cut`` as the cut called ``name`` (a new one, or the same plane with its
-    swept polygon grown: a blade advancing), the body's nodes at ``positions`` now. Returns
+    swept polygon grown: a blade advancing; or the surface a blade swept once it left its
+    plane), the body's nodes at ``positions`` now. Returns
     (the new VirtualNodeMesh, the current node each new node continues, the cut's index), or
     None when no new cell is cut."""
     cuts = list(state.cuts)
-    if name in state.names:
+    if name in state.names and isinstance(cut, SweptCut):  # a blade off its plane goes on
+        index = state.names.index(name)
+        cuts[index] = cut  # the cells cut before keep their levels (prior)
+    elif name in state.names:
         index = state.names.index(name)
         old = cuts[index]
+        if isinstance(old, SweptCut):
+            raise InputError(
+                f"cut {name!r}: it follows a swept surface now; give a planar cut its own name"
+            )
         same = abs(abs(float(old.normal @ cut.normal)) - 1.0) < 1e-9
         size = float(np.linalg.norm(np.ptp(state.original.points, axis=0)))
         if not same or abs(float((cut.point - old.point) @ old.normal)) > 1e-9 * size:

@@ -4,10 +4,13 @@ since it started are cut (``Simulation.cut_body``, the virtual node algorithm), 
 is at the end of the step; cells it crossed before keep their cut.
 
 The blade is a straight edge, ``blade(t)`` its two end points, or a triangle (three corners: a
-scalpel's flat blade, which cuts wherever it is as well as where it has been), moving in its
-own plane from ``start`` to ``end`` (a straight cut: the plane is checked at the start). The
-area it has swept is the convex hull of its positions so far (exact for a blade moving without
-turning; for one that turns, a little more than it swept). Its force per step is the cutting
+scalpel's flat blade, which cuts wherever it is as well as where it has been), moving from
+``start`` to ``end``. While it moves in one plane, the area it has swept is the convex hull of
+its positions so far in that plane (exact for a blade moving without turning; for one that
+turns in its plane, a little more than it swept). A blade that leaves its plane (it tilts,
+turns or follows a curved path) cuts along the surface it sweeps: the triangles between its
+positions sampled step by step (``mesh/swept_cut.py``), each cell along the swept surface's
+plane where it passes. Its force per step is the cutting
 resistance: with ``toughness`` G (J/m^2, the energy to make a unit of new cut surface; 0 by
 default), the work G dA of the area cut in the step over the blade's travel ds, against its
 motion:
@@ -18,8 +21,8 @@ faces.
 An instrument can be the blade (``obstacle``): an edge or a triangle of an obstacle's surface,
 moved by the obstacle's motion, prescribed or driven live between steps
 (``Simulation.drive_obstacle``). Its future is then unknown, so the blade is sampled step by
-step (``record``) and its plane is the one its first samples span; a blade that leaves that
-plane is refused (an organ cut is planar). The obstacle keeps its contact with every other
+step (``record``); its plane is the one its first samples span, and its cut becomes a swept
+surface once it leaves it. The obstacle keeps its contact with every other
 body; the cut's force is what the instrument feels, its contact force plus the cutting
 resistance.
 """
@@ -32,6 +35,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from tissuesim.errors import InputError
+from tissuesim.mesh.swept_cut import SweptCut
 from tissuesim.mesh.virtual_nodes import PlanarCut
 
 __all__ = ["OrganCut"]
@@ -58,6 +62,8 @@ class OrganCut:
     obstacle: str | None = None
     point: np.ndarray | None = field(init=False, default=None)
     normal: np.ndarray | None = field(init=False, default=None)
+    #: the blade left its plane: the cut follows the surface it sweeps (mesh/swept_cut.py)
+    curved: bool = field(init=False, default=False)
     area: float = field(init=False, default=0.0)
     _samples: list = field(init=False, default_factory=list, repr=False)
 
@@ -79,11 +85,13 @@ class OrganCut:
         P = np.array([self.edge(t) for t in np.linspace(self.start, self.end, SAMPLES)])
         self._samples = list(P)
         self._plane(final=True)
+        if self.curved:  # sampled step by step from now on, as the blade goes
+            self._samples = [self.edge(self.start)]
 
     def _plane(self, final: bool) -> None:
         """Fix the cut's plane from the samples once they span one (a triangle blade spans
-        its own) and check every sample lies in it; ``final``: the samples are the whole
-        sweep, which must span an area."""
+        its own), and follow the swept surface instead (``curved``) once a sample leaves
+        it; ``final``: the samples are the whole sweep, which must span an area."""
         where = f"cut {self.name!r} of body {self.body!r}"
         pts = np.concatenate(self._samples)
         size = float(np.linalg.norm(np.ptp(pts, axis=0)))
@@ -99,27 +107,18 @@ class OrganCut:
             self.point, self.normal = centre, vt[2]
         off = float(np.abs((pts - self.point) @ self.normal).max())
         if off > 1e-6 * size:
-            raise InputError(
-                f"{where}: the blade leaves its plane ({off:.3g} m off it); an organ cut is "
-                "planar: split a curved cut into cuts of their own names"
-                + (" (keep a driven blade's motion in its plane)" if self.obstacle else "")
-            )
+            self.curved = True
 
-    def record(self, t0: float, t1: float, keep: bool = True) -> None:
-        """Sample an obstacle's blade over the step t0 -> t1 (within start..end); ``keep``
-        False only checks that it stays in its plane (before the step, so that a refused
-        motion leaves the simulation where it was)."""
+    def record(self, t0: float, t1: float) -> None:
+        """Sample the blade over the step t0 -> t1 (within start..end): an obstacle's (its
+        motion is known step by step) or one that left its plane (the swept surface is built
+        from its samples)."""
         lo, hi = max(t0, self.start), min(t1, self.end)
-        if self.obstacle is None or hi <= lo:
+        if (self.obstacle is None and not self.curved) or hi <= lo:
             return
-        before = len(self._samples), self.point, self.normal
         self._samples.extend(self.edge(t) for t in np.linspace(lo, hi, STEP_SAMPLES)[1:])
-        try:
+        if not self.curved:
             self._plane(final=False)
-        finally:
-            if not keep:
-                del self._samples[before[0] :]
-                self.point, self.normal = before[1], before[2]
 
     def edge(self, t: float) -> np.ndarray:
         """The blade at t: its two end points (2, 3), or a triangle's three corners (3, 3)."""
@@ -146,11 +145,16 @@ class OrganCut:
             )
         return P
 
-    def swept(self, t: float) -> PlanarCut | None:
-        """The cut it has made by time t (the hull of its positions from start), or None."""
+    def swept(self, t: float) -> PlanarCut | SweptCut | None:
+        """The cut it has made by time t, or None: the hull of its positions from start in
+        its plane, or the surface between its samples once it left its plane."""
         from scipy.spatial import ConvexHull
 
-        if t <= self.start or self.normal is None:
+        if t <= self.start:
+            return None
+        if self.curved:
+            return SweptCut.from_blades(self._samples) if len(self._samples) > 1 else None
+        if self.normal is None:
             return None
         if self.obstacle is None:
             P = [self.edge(s) for s in np.linspace(self.start, min(t, self.end), SAMPLES)]

@@ -18,6 +18,7 @@ from scipy.sparse.csgraph import connected_components
 from tissuesim.mesh.interior_faces import InteriorFaces, interior_faces
 from tissuesim.mesh.planar_cut import EMPTY, PLANE_TOLERANCE, PlanarCut
 from tissuesim.mesh.plane_split import positive_fraction
+from tissuesim.mesh.swept_cut import SweptCut
 
 __all__ = ["node_groups"]
 
@@ -30,7 +31,7 @@ def node_groups(x3, x_cell, cells, cuts, owner, d_all, parent, side) -> np.ndarr
     m, k = cells.shape
     faces = interior_faces(cells)
     cell_a, cell_b = faces.cell_a, faces.cell_b
-    on_cut = _on_cuts(x_cell, faces, cuts)
+    on_cut = _on_cuts(x_cell, faces, cuts, d_all)
     # a node no cut cell holds and no face on a cut touches has all its cells whole and all its
     # faces plain: its slots group as in the uncut mesh (``uncut_groups``, kept with the faces);
     # only the slots of the nodes near a cut are joined here (groups never span two nodes)
@@ -77,7 +78,7 @@ def node_groups(x3, x_cell, cells, cuts, owner, d_all, parent, side) -> np.ndarr
     return labels
 
 
-def _on_cuts(x_cell: np.ndarray, faces: InteriorFaces, cuts: list[PlanarCut]) -> np.ndarray:
+def _on_cuts(x_cell: np.ndarray, faces: InteriorFaces, cuts: list, d_all) -> np.ndarray:
     """(f,) whether each interior face, where it is now, lies in a cut's plane within its
     polygon (a cut along faces). A face's tolerance is PLANE_TOLERANCE of its own size, below
     twice that of the whole body's, so cell vertices further than that from the plane leave
@@ -87,12 +88,15 @@ def _on_cuts(x_cell: np.ndarray, faces: InteriorFaces, cuts: list[PlanarCut]) ->
         return on_cut
     extent = [np.ptp(x_cell[..., i]) for i in range(3)]  # per coordinate: a strided ptp is slow
     reach = 2.0 * PLANE_TOLERANCE * float(np.linalg.norm(extent))
-    for cut in cuts:
-        near = np.abs((x_cell - cut.point) @ cut.normal) <= reach  # (m, d+1)
+    for j, cut in enumerate(cuts):
+        # a swept cut's distances cost a search of its triangles: its cut's own (d_all) pick
+        # the candidates, the exact test below looks at them where they are now
+        d = d_all[j] if isinstance(cut, SweptCut) else cut.distances(x_cell)
+        near = np.abs(d) <= reach  # (m, d+1)
         maybe = np.flatnonzero(near[faces.cell_a[:, None], faces.slot_a].all(axis=1))
         x_face = x_cell[faces.cell_a[maybe, None], faces.slot_a[maybe]]  # (f', d, 3)
         size = np.linalg.norm(np.ptp(x_face, axis=1), axis=1)
-        dist = np.abs((x_face - cut.point) @ cut.normal)
+        dist = np.abs(cut.distances(x_face))
         for i in np.flatnonzero(np.all(dist <= PLANE_TOLERANCE * size[:, None], axis=1)):
             on_cut[maybe[i]] = on_cut[maybe[i]] or _face_on_cut(x_face[i], cut)
     return on_cut
@@ -135,21 +139,6 @@ def _face_parts(x3, cells, owner, d_all, parent, side, faces, f, ca, cb) -> np.n
             constraints.append((d_all[owner[e]][e][where], int(side[c])))
         part[i] = _face_part(face, constraints) / max(_face_part(face, []), 1e-300)
     return part
-
-
-def _inside_polygon(q: np.ndarray, cut: PlanarCut, tol: float) -> bool:
-    """Whether points q (k, 3) in the cut's plane lie in its convex polygon (within tol)."""
-    poly = cut.polygon
-    n = cut.normal
-    centre = poly.mean(axis=0)
-    for a, b in zip(poly, np.roll(poly, -1, axis=0), strict=True):
-        inward = np.cross(n, b - a)
-        if inward @ (centre - a) < 0.0:
-            inward = -inward
-        inward = inward / np.linalg.norm(inward)
-        if np.any((q - a) @ inward < -tol):
-            return False
-    return True
 
 
 def _measure(points: np.ndarray) -> float:
@@ -210,6 +199,6 @@ def _face_on_cut(face_now: np.ndarray, cut: PlanarCut) -> bool:
     """Whether a mesh face (3, 3) (2D: an edge), where it is now, lies in the cut's plane
     inside its polygon."""
     size = float(np.linalg.norm(face_now.max(axis=0) - face_now.min(axis=0)))
-    if np.any(np.abs((face_now - cut.point) @ cut.normal) > PLANE_TOLERANCE * size):
+    if np.any(np.abs(cut.distances(face_now)) > PLANE_TOLERANCE * size):
         return False
-    return _inside_polygon(face_now, cut, 1e-9 * size)
+    return cut.covers(face_now, 1e-9 * size)

@@ -47,3 +47,28 @@ class PlanarCut:
                 "others); split the motion into steps that are"
             )
         return cls(p[0].copy(), n, p)
+
+    # -- what the virtual node algorithm asks of a cut (mesh/swept_cut.py answers it too) ---
+    def distances(self, x: np.ndarray) -> np.ndarray:
+        """Signed distances (...) of points x (..., 3) to the plane."""
+        return (np.asarray(x, dtype=float) - self.point) @ self.normal
+
+    def sections_inside(self, x: np.ndarray, d: np.ndarray) -> np.ndarray:
+        """Whether each simplex's section of the plane (x (m, k, 3) its vertices, d (m, k)
+        their distances) lies in the polygon (plane_split.sections_inside). Returns (m,)."""
+        from tissuesim.mesh.plane_split import sections_inside
+
+        return sections_inside(x, d, self.polygon, self.normal)
+
+    def covers(self, q: np.ndarray, tol: float) -> bool:
+        """Whether points q (k, 3) in the plane lie in its convex polygon (within tol, m)."""
+        poly, n = self.polygon, self.normal
+        centre = poly.mean(axis=0)
+        for a, b in zip(poly, np.roll(poly, -1, axis=0), strict=True):
+            inward = np.cross(n, b - a)
+            if inward @ (centre - a) < 0.0:
+                inward = -inward
+            inward = inward / np.linalg.norm(inward)
+            if np.any((q - a) @ inward < -tol):
+                return False
+        return True

@@ -38,7 +38,8 @@ import numpy as np
 from tissuesim.errors import InputError
 from tissuesim.mesh.node_groups import node_groups
 from tissuesim.mesh.planar_cut import EMPTY, PLANE_TOLERANCE, PlanarCut
-from tissuesim.mesh.plane_split import positive_fraction, sections_inside
+from tissuesim.mesh.plane_split import positive_fraction
+from tissuesim.mesh.swept_cut import SweptCut
 
 __all__ = ["PlanarCut", "VirtualNodeMesh", "cut_cells", "virtual_node_cut"]
 
@@ -108,10 +109,11 @@ class VirtualNodeMesh:
         )
 
 
-def _distances(x_cell: np.ndarray, cut: PlanarCut) -> np.ndarray:
+def _distances(x_cell: np.ndarray, cut: PlanarCut | SweptCut) -> np.ndarray:
     """Signed distances (m, d+1) of the cells' vertices (x_cell (m, d+1, 3), where each cell's
-    vertices are) to the cut's plane, snapped to 0 within PLANE_TOLERANCE of the cell's size."""
-    d = (x_cell - cut.point) @ cut.normal
+    vertices are) to the cut (its plane; a swept cut's nearest plane), snapped to 0 within
+    PLANE_TOLERANCE of the cell's size."""
+    d = cut.distances(x_cell)
     e = x_cell - x_cell[:, :1]  # the norm's sums of squares, then one root per cell: its max
     square = e[..., 0] * e[..., 0]
     for i in range(1, e.shape[2]):
@@ -159,7 +161,7 @@ def _crossed(x_cell: np.ndarray, d: np.ndarray, cut: PlanarCut) -> np.ndarray:
     """The cells (indices) whose vertex distances d (m, d+1) to the cut's plane have both
     signs and whose section lies in its polygon (x_cell: where their vertices are)."""
     crossed = np.flatnonzero((_row_max(d) > 0.0) & (_row_max(-d) > 0.0))
-    inside = sections_inside(x_cell[crossed], d[crossed], cut.polygon, cut.normal)
+    inside = cut.sections_inside(x_cell[crossed], d[crossed])
     return crossed[inside].astype(np.int64)
 
 
@@ -203,7 +205,7 @@ def _levels(x_cell, cells, cuts, d_all, owner, parent, side, origin) -> np.ndarr
     for j, cut in enumerate(cuts):  # few cuts
         near = np.zeros(n, dtype=bool)
         near[cells[owner == j]] = True
-        on_plane = np.abs((x_node[parted] - cut.point) @ cut.normal) <= PLANE_TOLERANCE * size
+        on_plane = np.abs(cut.distances(x_node[parted])) <= PLANE_TOLERANCE * size
         near[parted[on_plane]] = True
         e = parent[whole]
         d = d_all[j][e]
