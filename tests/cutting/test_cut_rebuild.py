@@ -1,7 +1,8 @@
 """A cut body's rebuild reuses what its model had (``FemBody.apply_cut``): the copies keep
 their parent cells' shape gradients and rest volumes, the sparsity pattern is renewed only in
 the rows the cut touched (``assembly/pattern_renewal.py``), the mass matrix is summed node pair
-by node pair. Each must be exactly what building the cut model afresh gives."""
+by node pair, the facet sets come from the copies of their facets. Each must be exactly what
+building the cut model afresh gives."""
 
 from __future__ import annotations
 
@@ -12,6 +13,7 @@ import tissuesim as ts
 from tissuesim.assembly.pattern import SparsityPattern
 from tissuesim.energies.mass import MassMatrix
 from tissuesim.kinematics.p1 import shape_gradients
+from tissuesim.mesh.boundary import boundary_facets, match_facets
 from tissuesim.mesh.virtual_nodes import PlanarCut
 
 NO_EXTRA = (np.zeros(0, np.int64), np.zeros(0, np.int64))  # forces the generic pattern
@@ -47,6 +49,13 @@ def assert_rebuilt_exactly(sim: ts.Simulation, name: str = "body") -> None:
     assert np.array_equal(k.grads, grads)
     fraction = 1.0 if mesh.cell_fractions is None else mesh.cell_fractions
     assert np.array_equal(k.weights, volume * fraction)
+    state = sim.bodies[name].cut_state
+    if state is not None and state.vn is not None:  # facet sets: the copies' boundary facets
+        facets = boundary_facets(mesh.cells)
+        origin = state.vn.origin[facets]
+        for key, ids in state.original.facet_sets.items():
+            expected = facets[match_facets(np.asarray(ids), origin) >= 0]
+            assert np.array_equal(mesh.facet_sets[key], expected), key
     generic = SparsityPattern.from_stencils(k.n_dofs, [k.cell_stencil], NO_EXTRA)
     mass = MassMatrix.build(k, model.density, generic, model.mass_kind)
     assert np.array_equal(model.mass.data, mass.data)

@@ -94,16 +94,23 @@ class CutState:
 
     def parted_faces(self, vn: VirtualNodeMesh) -> np.ndarray:
         """(faces,) whether each interior face of the original mesh (``interior_faces``)
-        lies between two whole cells that no longer share all its nodes: a cut ran along it."""
+        lies between two whole cells that no longer share all its nodes: a cut ran along it.
+        Only a face with a node that has copies can be (the others are looked at no more)."""
         faces = interior_faces(self.original.cells)
+        n = self.original.n_points
+        copied = np.zeros(n, dtype=bool)
+        copied[vn.origin[n:]] = True
+        maybe = np.flatnonzero(copied[faces.nodes].any(axis=1))
         whole = np.full(len(self.original.cells), -1)
         uncut = vn.side == 0
         whole[vn.parent[uncut]] = np.flatnonzero(uncut)
-        a, b = whole[faces.cell_a], whole[faces.cell_b]
+        a, b = whole[faces.cell_a[maybe]], whole[faces.cell_b[maybe]]
         both = (a >= 0) & (b >= 0)
-        nodes_a = np.take_along_axis(vn.cells[a], faces.slot_a, axis=1)
-        nodes_b = np.take_along_axis(vn.cells[b], faces.slot_b, axis=1)
-        return both & np.any(nodes_a != nodes_b, axis=1)
+        nodes_a = np.take_along_axis(vn.cells[a], faces.slot_a[maybe], axis=1)
+        nodes_b = np.take_along_axis(vn.cells[b], faces.slot_b[maybe], axis=1)
+        parted = np.zeros(len(faces.cell_a), dtype=bool)
+        parted[maybe] = both & np.any(nodes_a != nodes_b, axis=1)
+        return parted
 
     def _count_faces(self, vn: VirtualNodeMesh, index: int) -> None:
         """Credit cut ``index`` with the rest area of the faces this call parted."""

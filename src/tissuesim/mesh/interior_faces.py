@@ -21,7 +21,9 @@ class InteriorFaces:
     """Every face two cells share, once, in the order of ``facet_table``'s unique facets:
     ``cell_a`` / ``cell_b`` (f,) its two cells (a the one listed first), ``nodes`` (f, d) its
     nodes as a's facet lists them (outward for a), ``slot_a`` / ``slot_b`` (f, d) where each
-    of those nodes sits in a and in b; ``shape`` the cells' (m, d+1)."""
+    of those nodes sits in a and in b; ``shape`` the cells' (m, d+1). And every facet of the
+    mesh, once: ``unique`` (u, d) its nodes, ``facet_id`` (m (d+1),) which one each cell's
+    local facet is (``facet_table``'s inverse, cell-major)."""
 
     cell_a: np.ndarray
     cell_b: np.ndarray
@@ -29,6 +31,8 @@ class InteriorFaces:
     slot_a: np.ndarray
     slot_b: np.ndarray
     shape: tuple[int, int]
+    unique: np.ndarray
+    facet_id: np.ndarray
     _kept: dict = field(default_factory=dict, repr=False)
 
     def uncut_groups(self) -> np.ndarray:
@@ -45,7 +49,7 @@ class InteriorFaces:
 
 def _build(cells: np.ndarray) -> InteriorFaces:
     m, k = cells.shape
-    facets, _, inverse, counts = facet_table(cells)  # (m k, k-1), cell-major
+    facets, first, inverse, counts = facet_table(cells)  # (m k, k-1), cell-major
     by_facet = np.argsort(inverse, kind="stable")
     shared = counts[inverse[by_facet]] == 2
     pairs = by_facet[shared].reshape(-1, 2)  # the two (cell, local facet) entries of each
@@ -53,7 +57,7 @@ def _build(cells: np.ndarray) -> InteriorFaces:
     nodes = facets[pairs[:, 0]]
     slot_a = all_facets(np.arange(k)[None])[0][pairs[:, 0] % k]  # a's facet: its local slots
     slot_b = np.argmax(cells[cell_b][:, :, None] == nodes[:, None, :], axis=1)
-    return InteriorFaces(cell_a, cell_b, nodes, slot_a, slot_b, (m, k))
+    return InteriorFaces(cell_a, cell_b, nodes, slot_a, slot_b, (m, k), facets[first], inverse)
 
 
 def interior_faces(cells: np.ndarray) -> InteriorFaces:

@@ -83,7 +83,6 @@ class VirtualNodeMesh:
         """The cut as a ``Mesh`` of the original ``mesh``: its point sets hold every copy of
         their nodes, its cell sets the copies of their cells, its facet sets the boundary
         facets over copies of their nodes; ``cell_fractions`` weights the copies."""
-        from tissuesim.mesh.boundary import boundary_facets, match_facets
         from tissuesim.mesh.mesh import Mesh
 
         point_sets = {
@@ -92,11 +91,7 @@ class VirtualNodeMesh:
         cell_sets = {
             name: np.flatnonzero(np.isin(self.parent, ids)) for name, ids in mesh.cell_sets.items()
         }
-        facets = boundary_facets(self.cells)
-        facet_sets = {  # the boundary facets whose original nodes make a facet of the set
-            name: facets[match_facets(np.asarray(ids), self.origin[facets]) >= 0]
-            for name, ids in mesh.facet_sets.items()
-        }
+        facet_sets = {name: self._facet_set(mesh, ids) for name, ids in mesh.facet_sets.items()}
         return Mesh(
             self.points,
             self.cells,
@@ -107,6 +102,25 @@ class VirtualNodeMesh:
             cell_fractions=self.fraction,
             cell_levels=self.level,
         )
+
+    def _facet_set(self, mesh, ids: np.ndarray) -> np.ndarray:
+        """The boundary facets (k, d) of the cut mesh whose original nodes make a facet of
+        ``ids`` (a facet set of the original ``mesh``), outward, in the order of their cells:
+        a copy's facet stands for its cell's, so only the copies of the set's facets are
+        looked at (two facets with the same nodes have the same original one), and of those
+        the ones no other copy shares bound the cut mesh."""
+        from tissuesim.mesh.boundary import all_facets, match_facets
+        from tissuesim.mesh.interior_faces import interior_faces
+
+        faces = interior_faces(mesh.cells)
+        k = self.cells.shape[1]
+        in_set = match_facets(np.asarray(ids), faces.unique) >= 0
+        original = faces.facet_id[(self.parent[:, None] * k + np.arange(k)).ravel()]
+        slot = np.flatnonzero(in_set[original])  # copy c's local facet l: slot c k + l
+        local = all_facets(np.arange(k)[None])[0]  # each local facet's slots
+        rows = self.cells[slot // k][np.arange(len(slot))[:, None], local[slot % k]]
+        same = match_facets(rows, rows)  # the first copy with the same nodes
+        return rows[np.bincount(same, minlength=len(rows))[same] == 1]
 
 
 def _distances(x_cell: np.ndarray, cut: PlanarCut | SweptCut) -> np.ndarray:
