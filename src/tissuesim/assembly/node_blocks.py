@@ -64,8 +64,13 @@ class NodeBlocks:
     def diagonal_positions(self, j: np.ndarray, r: np.ndarray) -> np.ndarray:
         """Data positions (p, d) of the diagonal entries (a, a) of the blocks of node pairs
         j (p,) in node rows r (p,)."""
-        d, a = self.d, np.arange(self.d)
-        return (d * j + (d * d - d) * self.vptr[r])[:, None] + a * (d * self.count[r] + 1)[:, None]
+        base, step = self._diagonal(j, r)
+        return np.stack([base + a * step for a in range(self.d)], axis=1)
+
+    def _diagonal(self, j: np.ndarray, r: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(position of entry (0, 0), the step to (a + 1, a + 1)) of the blocks of pairs j."""
+        d = self.d
+        return d * j + (d * d - d) * self.vptr[r], d * self.count[r] + 1
 
     def scalar_blocks(self, which: int, blocks: np.ndarray, nnz: int) -> np.ndarray:
         """The data (nnz,) of local scalar blocks (k, b, b) of stencil ``which`` on every
@@ -75,6 +80,8 @@ class NodeBlocks:
         pairs = int(self.vptr[-1])
         nodal = np.bincount(self.scatters[which].ravel(), weights=blocks.ravel(), minlength=pairs)
         row = np.repeat(np.arange(len(self.count)), self.count)
+        base, step = self._diagonal(np.arange(pairs), row)
         data = np.zeros(nnz)
-        data[self.diagonal_positions(np.arange(pairs), row)] = nodal[:, None]
+        for a in range(self.d):  # one diagonal of every block at a time: long loops
+            data[base + a * step] = nodal
         return data

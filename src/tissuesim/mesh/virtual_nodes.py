@@ -191,11 +191,11 @@ def _components(cells: np.ndarray, n_points: int) -> int:
     from scipy.sparse import coo_matrix
     from scipy.sparse.csgraph import connected_components
 
-    m, k = cells.shape
-    rows = np.repeat(np.arange(m), k)
-    graph = coo_matrix((np.ones(m * k), (rows, m + cells.ravel())), shape=(m + n_points,) * 2)
+    m, k = cells.shape  # a cell's points joined to its first: the pieces of the points used
+    rows = np.repeat(cells[:, 0], k - 1)
+    graph = coo_matrix((np.ones(m * (k - 1)), (rows, cells[:, 1:].ravel())), shape=(n_points,) * 2)
     _, labels = connected_components(graph, directed=False)
-    return len(np.unique(labels[:m]))
+    return len(np.unique(labels[cells[:, 0]]))
 
 
 def _levels(x_cell, cells, cuts, d_all, owner, parent, side, origin) -> np.ndarray:
