@@ -43,6 +43,7 @@ class CutState:
     #: rest area of the mesh faces each cut parted (a cut along faces copies no cell)
     face_area: list[float] = field(default_factory=list)
     _parted: np.ndarray | None = field(default=None, repr=False)
+    _sections: np.ndarray | None = field(default=None, repr=False)  # per cell, NaN: not cut
 
     @classmethod
     def of_model(cls, model) -> CutState:
@@ -81,12 +82,18 @@ class CutState:
         return float(self.areas(self.vn)[self.names.index(name)])
 
     def areas(self, vn: VirtualNodeMesh) -> np.ndarray:
-        """The rest area (2D: length) of each cut's surface in ``vn`` (per cut index)."""
+        """The rest area (2D: length) of each cut's surface in ``vn`` (per cut index). A cut
+        cell keeps its level, so its section is measured once (a blade going on measures the
+        cells it crossed since)."""
         plus = vn.side > 0
         parent = vn.parent[plus]
-        measure = section_measures(
-            self.original.points, self.original.cells[parent], vn.level[plus]
+        if self._sections is None:
+            self._sections = np.full(len(self.original.cells), np.nan)
+        new = np.flatnonzero(np.isnan(self._sections[parent]))
+        self._sections[parent[new]] = section_measures(
+            self.original.points, self.original.cells[parent[new]], vn.level[plus][new]
         )
+        measure = self._sections[parent]
         sections = np.bincount(vn.cut[plus], weights=measure, minlength=len(self.cuts))
         faces = np.zeros(len(self.cuts))
         faces[: len(self.face_area)] = self.face_area
