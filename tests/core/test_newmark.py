@@ -72,12 +72,14 @@ def test_newmark_steps_converge_quadratically():
     for _ in range(3):
         record = sim.step()
     g = np.array(record.residual_norms[-1])
-    assert len(g) >= 5  # a nonlinear step
-    # near the solution each residual is below C * previous^2 (quadratic), above round-off
-    tail = [(a, b) for a, b in zip(g, g[1:], strict=False) if a < 1e-1 * g[0] and b > 1e-9 * g[0]]
-    assert len(tail) >= 2
-    ratios = [b / a**2 for a, b in tail]
-    assert max(ratios) < 10 * min(ratios) + 1.0 and all(b < 0.1 * a for a, b in tail)
+    assert len(g) >= 4  # a nonlinear step
+    # from the first residual below 1 % of the start, each next one above round-off (1e-10 of
+    # the start) is below a^2 / (1 % of the start): quadratic, whichever linear solver and
+    # assembly backend the machine has (their iterates differ in the last digits)
+    scale = 1e-2 * g[0]
+    tail = [(a, b) for a, b in zip(g, g[1:], strict=False) if a < scale and b > 1e-10 * g[0]]
+    assert tail and all(b <= a * a / scale for a, b in tail)
+    assert any(b < 1e-2 * a for a, b in tail)  # far faster than a linear rate
 
 
 def test_a_checkpoint_carries_the_accelerations(tmp_path):
