@@ -42,7 +42,8 @@ def renew_pattern(
     e, p = np.nonzero(affected[cells])
     r = cells[e, p]
     rows = np.flatnonzero(affected)
-    key = np.unique(np.concatenate([(r[:, None] * n + cells[e]).ravel(), rows * n + rows]))
+    wanted = (r[:, None] * n + cells[e]).ravel()
+    key, inverse = np.unique(np.concatenate([wanted, rows * n + rows]), return_inverse=True)
     new_row, new_col = key // n, key % n
     count = np.zeros(n, dtype=np.int64)
     count[:n_old] = blocks.count
@@ -56,11 +57,12 @@ def renew_pattern(
     cols[moved + shift[old_row[moved]]] = blocks.cols[moved]
     rank = np.arange(len(key)) - np.searchsorted(new_row, new_row)  # within its row
     cols[vptr[new_row] + rank] = new_col
-    keys = np.repeat(np.arange(n, dtype=np.int64), count) * n + cols  # ascending
-    # node pairs: an unchanged cell's old ones moved with their rows, the affected rows' found
+    # node pairs: an unchanged cell's old ones moved with their rows, the affected rows' new
     src = np.maximum(same, 0)
-    j = blocks.scatters[0].reshape(-1, b, b)[src] + shift[cells][:, :, None]
-    j[e, p] = np.searchsorted(keys, r[:, None] * n + cells[e])
+    j = blocks.scatters[0][src].reshape(-1)  # (m b b,), flat: b-long rows would run slowly
+    j += np.repeat(shift[cells].reshape(-1), b)
+    j = j.reshape(m, b, b)
+    j[e, p] = (vptr[new_row] + rank)[inverse[: len(wanted)]].reshape(-1, b)
     renewed = NodeBlocks(d, vptr, count, cols, (j.reshape(m, -1),))
     # DOF entries: likewise, an unaffected row's block row moves by d^2 times its shift
     scatter = old.scatters[0][src]
@@ -69,6 +71,7 @@ def renew_pattern(
     rows_of[e, p] = renewed.row_positions(j[e, p], r)
     indptr, indices = renewed.csr()
     diag = np.arange(n, dtype=np.int64)
+    keys = np.repeat(diag, count) * n + cols  # every pair's, ascending
     jd = np.searchsorted(keys, diag * n + diag)
     diagonal = renewed.diagonal_positions(jd, diag).reshape(-1)
     return SparsityPattern(n * d, indptr, indices, diagonal, (scatter,), renewed)
