@@ -20,6 +20,7 @@ from tissuesim.errors import InputError
 from tissuesim.mesh.boundary import facet_measures
 from tissuesim.mesh.interior_faces import interior_faces
 from tissuesim.mesh.plane_split import section_measures
+from tissuesim.mesh.rows import rows_any
 from tissuesim.mesh.swept_cut import SweptCut
 from tissuesim.mesh.virtual_nodes import PlanarCut, VirtualNodeMesh, virtual_node_cut
 
@@ -107,7 +108,7 @@ class CutState:
         n = self.original.n_points
         copied = np.zeros(n, dtype=bool)
         copied[vn.origin[n:]] = True
-        maybe = np.flatnonzero(copied[faces.nodes].any(axis=1))
+        maybe = np.flatnonzero(rows_any(copied[faces.nodes]))
         whole = np.full(len(self.original.cells), -1)
         uncut = vn.side == 0
         whole[vn.parent[uncut]] = np.flatnonzero(uncut)
@@ -116,7 +117,7 @@ class CutState:
         nodes_a = np.take_along_axis(vn.cells[a], faces.slot_a[maybe], axis=1)
         nodes_b = np.take_along_axis(vn.cells[b], faces.slot_b[maybe], axis=1)
         parted = np.zeros(len(faces.cell_a), dtype=bool)
-        parted[maybe] = both & np.any(nodes_a != nodes_b, axis=1)
+        parted[maybe] = both & rows_any(nodes_a != nodes_b)
         return parted
 
     def _count_faces(self, vn: VirtualNodeMesh, index: int) -> None:

@@ -31,6 +31,7 @@ from tissuesim.errors import InputError
 from tissuesim.materials.base import Material
 from tissuesim.materials.measures import continuum_fields
 from tissuesim.mesh.mesh import Mesh
+from tissuesim.mesh.rows import rows_all
 from tissuesim.model import Model
 from tissuesim.time.phases import check_window, in_window
 from tissuesim.validate import indices, short, vector
@@ -344,7 +345,7 @@ class FemBody:
         rest = None if state.rest is None else tuple(a[cut.parent] for a in state.rest)
         same, src = None, state.source
         if src is not None and old.mesh.order == 1:  # cells the cut left as they were
-            equal = np.all(cut.cells == old.mesh.cells[np.maximum(src, 0)], axis=1)
+            equal = rows_all(cut.cells == old.mesh.cells[np.maximum(src, 0)])
             same = np.where((src >= 0) & equal, src, -1)
         model = Model(
             mesh,

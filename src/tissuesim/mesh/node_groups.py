@@ -18,6 +18,7 @@ from scipy.sparse.csgraph import connected_components
 from tissuesim.mesh.interior_faces import InteriorFaces, interior_faces
 from tissuesim.mesh.planar_cut import EMPTY, PLANE_TOLERANCE, PlanarCut
 from tissuesim.mesh.plane_split import positive_fraction
+from tissuesim.mesh.rows import rows_all
 from tissuesim.mesh.swept_cut import SweptCut
 
 __all__ = ["node_groups"]
@@ -93,7 +94,7 @@ def _on_cuts(x_cell: np.ndarray, faces: InteriorFaces, cuts: list, d_all) -> np.
         # the candidates, the exact test below looks at them where they are now
         d = d_all[j] if isinstance(cut, SweptCut) else cut.distances(x_cell)
         near = np.abs(d) <= reach  # (m, d+1)
-        maybe = np.flatnonzero(near[faces.cell_a[:, None], faces.slot_a].all(axis=1))
+        maybe = np.flatnonzero(rows_all(near[faces.cell_a[:, None], faces.slot_a]))
         x_face = x_cell[faces.cell_a[maybe, None], faces.slot_a[maybe]]  # (f', d, 3)
         size = np.linalg.norm(np.ptp(x_face, axis=1), axis=1)
         dist = np.abs(cut.distances(x_face))
@@ -126,7 +127,7 @@ def _face_parts(x3, cells, owner, d_all, parent, side, faces, f, ca, cb) -> np.n
     part[only_a] = positive_fraction(da[only_a])
     part[only_b] = positive_fraction(db[only_b])
     same = cut_a & cut_b & (ka == kb)
-    flat = np.all(da == 0.0, axis=1) | np.all(db == 0.0, axis=1)
+    flat = rows_all(da == 0.0) | rows_all(db == 0.0)
     agree = same & (side[ca] == side[cb]) & ~flat
     part[agree] = np.minimum(positive_fraction(da[agree]), positive_fraction(db[agree]))
     part[same & (side[ca] != side[cb]) & ~flat] = 0.0
