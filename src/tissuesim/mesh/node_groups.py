@@ -119,7 +119,6 @@ def _face_parts(x3, cells, owner, d_all, parent, side, faces, f, ca, cb) -> np.n
     part = np.ones(len(f))
     if not len(f):
         return part
-    nodes = faces.nodes[f]
     da, ka = face_d(ca, faces.slot_a[f])
     db, kb = face_d(cb, faces.slot_b[f])
     cut_a, cut_b = side[ca] != 0, side[cb] != 0
@@ -129,14 +128,20 @@ def _face_parts(x3, cells, owner, d_all, parent, side, faces, f, ca, cb) -> np.n
     same = cut_a & cut_b & (ka == kb)
     flat = rows_all(da == 0.0) | rows_all(db == 0.0)
     agree = same & (side[ca] == side[cb]) & ~flat
-    part[agree] = np.minimum(positive_fraction(da[agree]), positive_fraction(db[agree]))
+    pa = positive_fraction(da[agree])
+    pb = pa.copy()  # the two copies' distances on the face mostly agree: measured once then
+    differ = ~rows_all(da[agree] == db[agree])
+    pb[differ] = positive_fraction(db[agree][differ])
+    part[agree] = np.minimum(pa, pb)
     part[same & (side[ca] != side[cb]) & ~flat] = 0.0
-    for i in np.flatnonzero(cut_a & cut_b & (~same | flat)):  # two cuts meet on this face
-        face = x3[nodes[i]]
+    meet = np.flatnonzero(cut_a & cut_b & (~same | flat))  # two cuts meet on these faces
+    nodes = faces.nodes[f[meet]]
+    for i, face_nodes in zip(meet, nodes, strict=True):
+        face = x3[face_nodes]
         constraints = []
         for c in (ca[i], cb[i]):
             e = int(parent[c])
-            where = [int(np.flatnonzero(cells[e] == v)[0]) for v in nodes[i]]
+            where = [int(np.flatnonzero(cells[e] == v)[0]) for v in face_nodes]
             constraints.append((d_all[owner[e]][e][where], int(side[c])))
         part[i] = _face_part(face, constraints) / max(_face_part(face, []), 1e-300)
     return part
