@@ -257,8 +257,9 @@ class Simulation(BodyCalls, SetupCalls, StepChecks, BodyResults, Stepping):
             body, choice = self.bodies[name], settings.surfaces.get(name)
             config, tangent = s.config_slices[j], s.tangent_slices[j]
             if body.kind == "fem":
+                blade = any(c.body == name and self._cuts_ahead(c) for c in self.organ_cuts)
                 surfaces.append(
-                    fem_surface(name, s.bodies[j], config.start, tangent.start, choice, dhat)
+                    fem_surface(name, s.bodies[j], config.start, tangent.start, choice, dhat, blade)
                 )
             elif body.kind == "frames" and body.surface is not None:
                 embedding = body.embedded["surface"]
@@ -403,6 +404,8 @@ class Simulation(BodyCalls, SetupCalls, StepChecks, BodyResults, Stepping):
             if body.kind == "fem":
                 body.release_graspers(self.time + tol)
                 body.set_condition_time(t_end, tol)
+        if self.organ_cuts:
+            self._cut_ahead()  # blades in contact with what they cut: the cut goes first
         s = self.system
         by_contact = self.integrator == "quasistatic" and self._check_supported()
         if self.explicit and self._stability_checked is not s:
@@ -524,8 +527,8 @@ class Simulation(BodyCalls, SetupCalls, StepChecks, BodyResults, Stepping):
 
 
 def _with_blades(sim) -> object:
-    """The contact settings with each obstacle that cuts a body out of contact with that body
-    (it passes through what it cuts), unless the scene pairs them itself."""
+    """The contact settings with each obstacle that cuts a body without contact out of contact
+    with that body (it passes through what it cuts), unless the scene pairs them itself."""
     from dataclasses import replace
 
     from tissuesim.contact.pairs import ContactPair
@@ -535,6 +538,8 @@ def _with_blades(sim) -> object:
     blades = [
         ContactPair(c.body, c.obstacle, enabled=False)
         for c in sim.organ_cuts
-        if c.obstacle is not None and frozenset((c.body, c.obstacle)) not in listed
+        if c.obstacle is not None
+        and not c.contact
+        and frozenset((c.body, c.obstacle)) not in listed
     ]
     return replace(settings, pairs=tuple(settings.pairs) + tuple(blades)) if blades else settings

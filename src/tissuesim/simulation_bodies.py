@@ -264,6 +264,38 @@ class BodyCalls:
             "origin": carry,
         }
 
+    def _cuts_ahead(self, blade) -> bool:
+        """Whether ``blade`` is in contact with the body it cuts (an obstacle's, contact on):
+        its cut is made before each step (``_cut_ahead``)."""
+        return blade.contact and self.contact is not None
+
+    def _cut_ahead(self) -> None:
+        """Before a step: each blade in contact with the body it cuts cuts every cell it will
+        touch in the step, where the body is now (``mesh/cut_ahead.py``), so that it moves in
+        the cut's kerf; what that changed is reported after the step."""
+        from tissuesim.bodies.organ_cut import STEP_SAMPLES
+        from tissuesim.mesh.cut_ahead import MARGIN, cut_ahead
+
+        t0, t1 = self.time, self.time + self.time_step
+        for blade in self.organ_cuts:
+            lo, hi = max(t0, blade.start), min(t1, blade.end)
+            if not self._cuts_ahead(blade) or hi <= lo:
+                continue
+            blade.record(t0, t1)
+            swept = blade.swept(t1)
+            if swept is None:
+                continue
+            b = self.body(blade.body, ("fem",))
+            current = self.body_positions(b.name) if self._state is not None else b.mesh.points
+            state = b.cut_state
+            x_cell = current[b.mesh.cells] if state is None else state.cell_positions(current)
+            blades = [blade.edge(t) for t in np.linspace(lo, hi, STEP_SAMPLES)]
+            cut = cut_ahead(swept, x_cell, blades, MARGIN * self._contact_dhat())
+            done = self.cut_body(cut, body=b.name, name=blade.name)
+            if blade.pending is not None:  # a step that failed and is taken again
+                done["cells_cut"] += blade.pending["cells_cut"]
+            blade.pending = done
+
     def _organ_cut_step(self, t0: float, forces: dict) -> dict:
         """After a step t0 -> now: each blade cutting a FEM body cuts what it has swept
         (bodies/organ_cut.py), its cutting force joining ``forces``; each tearing body's crack
@@ -272,11 +304,14 @@ class BodyCalls:
         out = {}
         for blade in self.organ_cuts:
             blade.record(t0, self.time)  # an obstacle's blade, sampled as it went
-            cut = blade.swept(self.time)
+            ahead = self._cuts_ahead(blade)
+            cut = None if ahead else blade.swept(self.time)
             report = {"area_m2": blade.area, "new_area_m2": 0.0, "cells_cut": 0}
             force = np.zeros(3)
-            if cut is not None and t0 < blade.end + 1e-9 * self.time_step:
+            done, blade.pending = blade.pending, None
+            if done is None and cut is not None and t0 < blade.end + 1e-9 * self.time_step:
                 done = self.cut_body(cut, body=blade.body, name=blade.name)
+            if done is not None:
                 new = max(done["area_m2"] - blade.area, 0.0)
                 blade.area = done["area_m2"]
                 report = {"area_m2": blade.area, "new_area_m2": new,

@@ -420,6 +420,7 @@ class SetupCalls:
         name: str = "cut",
         toughness: float = 0.0,
         edge: Sequence[int] | None = None,
+        contact: bool | None = None,
     ):
         """A blade sweeping from ``start`` to ``end`` (s). Without ``body`` it dissects the
         connective tissue (``add_tissue`` first): ``blade(t)`` returns a polyline (k, 3) of
@@ -436,9 +437,12 @@ class SetupCalls:
         ``blade`` may instead name an obstacle (an instrument): its surface's vertices
         ``edge`` (2 or 3 indices; default its only triangle) are the blade, moved with it,
         also when it is driven live (``drive_obstacle``); ``end`` may then be ``math.inf``.
-        The obstacle passes through the body it cuts and keeps its contact with every other
-        body; ``name``'s force is then what the instrument feels: the cutting resistance
-        plus the contact force of the bodies on it.
+        With contact on (``set_contact``) the instrument is in contact with the body it cuts
+        as with every other (``contact``, default True): before each step the cells it will
+        touch in the step are cut (``mesh/cut_ahead.py``), so it moves in the cut's kerf and
+        the cut's faces never pass through it; ``contact=False`` lets it pass through the body
+        it cuts, which is then cut after each step. ``name``'s force is what the instrument
+        feels: the cutting resistance plus the contact force of the bodies on it.
 
         ``sim.add_cut(lambda t: np.array([[t - 1, -0.2, 0.15], [t - 1, 1.2, 0.15]]),
         start=1.0, end=2.0)`` sweeps a straight blade along x."""
@@ -458,8 +462,12 @@ class SetupCalls:
                 obstacle, blade = blade, self._obstacle_blade(blade, edge, name)
             elif edge is not None:
                 raise InputError("add_cut: edge picks an obstacle's vertices; blade is no obstacle")
+            if contact is None:
+                contact = obstacle is not None
+            elif not isinstance(contact, bool):
+                raise InputError(f"add_cut: contact must be true or false, not {contact!r}")
             tool = OrganCut(
-                blade, float(start), float(end), b.name, name, float(toughness), obstacle
+                blade, float(start), float(end), b.name, name, float(toughness), obstacle, contact
             )
             self.organ_cuts.append(tool)
             if obstacle is not None:

@@ -1,7 +1,8 @@
 """An instrument as the blade (``add_cut("scalpel", ..., body=..., edge=...)``): an obstacle's
-triangle cuts as the same blade given as a function of t does, follows a live drive between
-steps (off its first plane too), passes through the body it cuts while keeping contact with
-the others and reports what the instrument feels."""
+triangle cuts as the same blade given as a function of t does (``contact=False``: it passes
+through the body it cuts while keeping contact with the others), follows a live drive between
+steps (off its first plane too) and reports what the instrument feels. In contact with the body
+it cuts (the default): ``test_blade_contact.py``."""
 
 from __future__ import annotations
 
@@ -42,7 +43,7 @@ def test_an_instruments_blade_cuts_as_the_same_blade_given_as_a_function():
 
     by_obstacle = _block()
     _scalpel(by_obstacle, move)
-    by_obstacle.add_cut("scalpel", 0.0, math.inf, body="body", name="incision")
+    by_obstacle.add_cut("scalpel", 0.0, math.inf, body="body", name="incision", contact=False)
     by_function = _block()
     _scalpel(by_function, move)  # the same instrument in the scene, not the blade
     by_function.set_contact(dhat=1e-4, pairs=[{"bodies": ["body", "scalpel"], "enabled": False}])
@@ -64,7 +65,8 @@ def test_a_live_driven_blade_cuts_where_it_is_driven_and_reports_what_it_feels()
     toughness G the instrument feels G dA / ds against its motion (no contact on it)."""
     sim = _block()
     _scalpel(sim, None)
-    sim.add_cut("scalpel", 0.0, math.inf, body="body", name="incision", toughness=100.0)
+    sim.add_cut("scalpel", 0.0, math.inf, body="body", name="incision", toughness=100.0,
+                contact=False)  # fmt: skip
     areas, at = [], 0.0
     for k in range(1, 6):
         target = 0.025 * k + 0.04
@@ -102,6 +104,8 @@ def test_an_obstacle_blade_is_refused_in_one_line_when_it_cannot_be_one():
         sim.add_cut("probe", 0.0, 1.0, edge=(0, 1))
     with pytest.raises(InputError, match="end must be a finite time"):
         sim.add_cut(lambda t: CORNERS, 0.0, math.inf, body="body")
+    with pytest.raises(InputError, match="a cutting path, not a body in contact"):
+        sim.add_cut(lambda t: CORNERS, 0.0, 1.0, body="body", contact=True)
 
 
 def test_a_scene_cuts_with_an_obstacles_blade(tmp_path):
@@ -122,10 +126,24 @@ def test_a_scene_cuts_with_an_obstacles_blade(tmp_path):
     }  # fmt: skip
     lines = [f"v {x} {y} {z}" for x, y, z in CORNERS] + ["f 1 2 3"]
     (tmp_path / "scalpel.obj").write_text("\n".join(lines) + "\n")
+    data["cuts"][0]["contact"] = False  # it passes through the block: cut after each step
     sim = build_scene(data, base_dir=tmp_path, source="s.toml").simulation
     for _ in range(4):
         record = sim.step()
     assert record.extra["cuts"]["incision"]["area_m2"] == pytest.approx(0.1 * 0.015, rel=1e-9)
+    del data["cuts"][0]["contact"]  # in contact with it (the default): the cut goes first
+    sim = build_scene(data, base_dir=tmp_path, source="s.toml").simulation
+    table = sim.system.contact.table
+    assert table.enabled[table.names.index("block"), table.names.index("scalpel")]
+    for _ in range(4):
+        record = sim.step()
+        assert not sim.system.contact.intersecting(sim.state.x)
+    area = record.extra["cuts"]["incision"]["area_m2"]
+    assert 0.1 * 0.015 < area <= 0.1 * (0.015 + 0.01) + 1e-12  # a cell (10 mm) deeper at most
+    data["cuts"][0]["contact"] = "yes"
+    with pytest.raises(SceneError, match=r"cuts\[1\]: contact must be true"):
+        build_scene(data, base_dir=tmp_path, source="s.toml")
+    data["cuts"][0]["contact"] = False
     data["cuts"][0]["blade"] = [[0, 0, 0], [1, 0, 0]]
     with pytest.raises(SceneError, match=r"cuts\[1\]: give blade = \[...\] or obstacle"):
         build_scene(data, base_dir=tmp_path, source="s.toml")

@@ -14,16 +14,19 @@ plane where it passes. Its force per step is the cutting
 resistance: with ``toughness`` G (J/m^2, the energy to make a unit of new cut surface; 0 by
 default), the work G dA of the area cut in the step over the blade's travel ds, against its
 motion:
-F = -G dA / |ds| ds/|ds| (N). The blade does not take part in contact with the body it cuts (it
-must pass through the body to cut it), so that force is what cutting costs, not a push on its
-faces.
+F = -G dA / |ds| ds/|ds| (N). A blade given as a function of t is a cutting path, not a body:
+it takes no part in contact, so that force is what cutting costs, not a push on its faces.
 
 An instrument can be the blade (``obstacle``): an edge or a triangle of an obstacle's surface,
 moved by the obstacle's motion, prescribed or driven live between steps
 (``Simulation.drive_obstacle``). Its future is then unknown, so the blade is sampled step by
 step (``record``); its plane is the one its first samples span, and its cut becomes a swept
-surface once it leaves it. The obstacle keeps its contact with every other
-body; the cut's force is what the instrument feels, its contact force plus the cutting
+surface once it leaves it. With contact on, the instrument is in contact with the body it
+cuts too (``contact``, the default): before each step, every cell the blade will touch in the
+step is cut (``mesh/cut_ahead.py``), so the blade moves in the cut's kerf, both faces of the
+cut stay clear of it, and what presses on its faces is a contact force. The cut then leads
+the blade by at most one cell (after each step, without contact, it trails by at most one).
+Either way the cut's force is what the instrument feels: its contact force plus the cutting
 resistance.
 """
 
@@ -60,12 +63,17 @@ class OrganCut:
     toughness: float = 0.0
     #: the obstacle whose edge or triangle is the blade (sampled step by step), or None
     obstacle: str | None = None
+    #: an obstacle's blade in contact with the body it cuts: the cut is made ahead of it
+    contact: bool = False
     point: np.ndarray | None = field(init=False, default=None)
     normal: np.ndarray | None = field(init=False, default=None)
     #: the blade left its plane: the cut follows the surface it sweeps (mesh/swept_cut.py)
     curved: bool = field(init=False, default=False)
     area: float = field(init=False, default=0.0)
     _samples: list = field(init=False, default_factory=list, repr=False)
+    _sampled_to: float = field(init=False, default=-np.inf, repr=False)
+    #: a cut made ahead of the step (``contact``): what it changed, reported after the step
+    pending: dict | None = field(init=False, default=None, repr=False)
 
     def __post_init__(self) -> None:
         where = f"cut {self.name!r} of body {self.body!r}"
@@ -73,6 +81,12 @@ class OrganCut:
             raise InputError(f"{where}: end ({self.end}) must come after start ({self.start})")
         if self.toughness < 0 or not np.isfinite(self.toughness):
             raise InputError(f"{where}: toughness must be >= 0 J/m^2, not {self.toughness}")
+        if self.contact and self.obstacle is None:
+            raise InputError(
+                f"{where}: a blade given as a function of t is a cutting path, not a body in "
+                "contact; make the instrument an obstacle (add_obstacle) and cut with it"
+            )
+        self._sampled_to = self.start
         if self.obstacle is not None:  # its motion is known step by step only (record)
             self._samples.append(self.edge(self.start))
             self._plane(final=False)
@@ -113,10 +127,11 @@ class OrganCut:
         """Sample the blade over the step t0 -> t1 (within start..end): an obstacle's (its
         motion is known step by step) or one that left its plane (the swept surface is built
         from its samples)."""
-        lo, hi = max(t0, self.start), min(t1, self.end)
+        lo, hi = max(t0, self.start, self._sampled_to), min(t1, self.end)
         if (self.obstacle is None and not self.curved) or hi <= lo:
             return
         self._samples.extend(self.edge(t) for t in np.linspace(lo, hi, STEP_SAMPLES)[1:])
+        self._sampled_to = hi
         if not self.curved:
             self._plane(final=False)
 

@@ -103,32 +103,7 @@ class BodyTearing:
             points = np.concatenate([points + span, points - span])
         if self.corners is not None:
             points = np.concatenate([points, self.corners])
-        corners = _hull(points, self.point, self.normal)
-        if corners is None:
-            return None
-        self.corners = corners
-        return PlanarCut(self.point.copy(), self.normal.copy(), corners)
-
-
-def _hull(points: np.ndarray, point: np.ndarray, normal: np.ndarray) -> np.ndarray | None:
-    """The convex hull of ``points`` in the plane (point, normal), grown by 1e-6 of its size
-    (the sections of the elements it was made of lie inside), as corners (k, 3)."""
-    from scipy.spatial import ConvexHull, QhullError
-
-    u = np.cross(normal, [1.0, 0.0, 0.0])
-    if np.linalg.norm(u) < 0.5:
-        u = np.cross(normal, [0.0, 1.0, 0.0])
-    u /= np.linalg.norm(u)
-    w = np.cross(normal, u)
-    flat = np.column_stack([(points - point) @ u, (points - point) @ w])
-    if len(flat) < 3:
-        return None
-    try:
-        hull = ConvexHull(flat)
-    except QhullError:
-        return None
-    ring = flat[hull.vertices]
-    centre = ring.mean(axis=0)
-    size = float(np.ptp(ring, axis=0).max())
-    ring = centre + (ring - centre) * (1.0 + 1e-6) + 1e-9 * size * np.sign(ring - centre)
-    return point + ring[:, :1] * u + ring[:, 1:] * w
+        crack = PlanarCut.hull(points, self.point.copy(), self.normal.copy())
+        if crack is not None:
+            self.corners = crack.polygon
+        return crack

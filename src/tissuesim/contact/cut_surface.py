@@ -36,6 +36,10 @@ __all__ = ["cut_surface"]
 #: the cut faces' contact surfaces lie GAP dhat inside each side: the fresh faces start
 #: 2 GAP dhat apart, outside each other's barrier, and overlap by at most that when pressed
 GAP = 1.0
+#: the gap of a body cut by an instrument in contact with it (``add_cut(obstacle, ...)``):
+#: the blade moves on the cut's plane, and the faces, at least (BLADE_GAP - SNAP_OUT) dhat =
+#: 1.1 dhat from it, leave it outside their barrier
+BLADE_GAP = 1.5
 #: node levels within SNAP_IN dhat above the level set (into the material) or SNAP_OUT dhat
 #: below it are put on it; the sides stay 2 (GAP - SNAP_OUT) dhat = 1.2 dhat apart at least
 SNAP_IN, SNAP_OUT = 1.0, 0.4
@@ -51,16 +55,16 @@ _ZERO = 1e-12
 _MERGE = 1e-9
 
 
-def cut_surface(mesh, dhat: float) -> tuple[sp.csr_matrix, np.ndarray]:
+def cut_surface(mesh, dhat: float, gap: float = GAP) -> tuple[sp.csr_matrix, np.ndarray]:
     """(W, triangles): the surface points as rows of node weights W (k, n_points), so that
     V = W @ X for node positions X (n_points, 3), and the outward triangles (t, 3) over them,
     of a cut 3D P1 mesh (``mesh.cell_levels`` set), for a barrier of activation distance
-    ``dhat`` (m): the cut faces GAP dhat inside each side; node levels within SNAP_IN dhat
-    above or SNAP_OUT dhat below that are taken as on it, so the level set passes through those
-    nodes instead of making tiny triangles next to them; points closer than MERGE dhat (at
-    rest) made one (``_cluster``). IPC's barrier acts between a surface's own primitives closer
-    than dhat, so the surface must have no feature that small."""
-    gap = GAP * dhat
+    ``dhat`` (m): the cut faces ``gap`` dhat inside each side (default GAP); node levels
+    within SNAP_IN dhat above or SNAP_OUT dhat below that are taken as on it, so the level set
+    passes through those nodes instead of making tiny triangles next to them; points closer than
+    MERGE dhat (at rest) made one (``_cluster``). IPC's barrier acts between a surface's own
+    primitives closer than dhat, so the surface must have no feature that small."""
+    gap = gap * dhat
     if mesh.dim != 3 or mesh.cells.shape[1] != 4:
         raise InputError(
             "contact of a cut body: only 3D P1 tetrahedra are built so far; cut it without "

@@ -19,7 +19,7 @@ import numpy as np
 
 from tissuesim.errors import InputError
 from tissuesim.frames.sampling import Surface, ellipsoid_surface
-from tissuesim.validate import real, vector
+from tissuesim.validate import real, short, vector
 
 __all__ = [
     "DrivenMotion",
@@ -29,6 +29,7 @@ __all__ = [
     "cylinder",
     "plane",
     "sphere",
+    "triangle",
 ]
 
 Motion = Callable[[float], Sequence[float]]
@@ -60,6 +61,30 @@ def plane(point: Sequence[float], normal: Sequence[float], size: float) -> Surfa
     return ShapeSurface(
         corners, np.array([[0, 1, 2], [0, 2, 3]]), "plane", "plane", {"point": p, "normal": n}
     )
+
+
+def triangle(corners: Sequence[Sequence[float]]) -> Surface:
+    """One triangle (three corners, m): a scalpel's flat blade, its front side the one its
+    corners turn counter-clockwise about."""
+    P = np.asarray(corners, dtype=float) if _numeric(corners) else None
+    if P is None or P.shape != (3, 3) or not np.all(np.isfinite(P)):
+        raise InputError(
+            f"triangle: corners must be three points [[x, y, z], [x, y, z], [x, y, z]] (m), "
+            f"not {short(corners)}"
+        )
+    area = 0.5 * np.linalg.norm(np.cross(P[1] - P[0], P[2] - P[0]))
+    size = float(np.linalg.norm(np.ptp(P, axis=0)))
+    if not area > 1e-12 * size**2:
+        raise InputError("triangle: the corners lie on one line (the triangle has no area)")
+    return Surface(P, np.array([[0, 1, 2]]))
+
+
+def _numeric(value) -> bool:
+    try:
+        np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        return False
+    return True
 
 
 def sphere(

@@ -146,16 +146,23 @@ class FrameSurface:
 
 
 def fem_surface(
-    name: str, model, config_offset: int, tangent_offset: int, choice, dhat: float = 0.0
+    name: str,
+    model,
+    config_offset: int,
+    tangent_offset: int,
+    choice,
+    dhat: float = 0.0,
+    blade: bool = False,
 ) -> FemSurface | CutFemSurface:
     """Body ``name``'s contact surface: its boundary (triangles in 3D, edges in 2D), or a
     facet set / facets (``choice``); a cut body's is embedded in its element copies, its cut
     faces a little inside each side for a barrier of activation distance ``dhat`` (m;
-    ``contact/cut_surface.py``)."""
+    ``contact/cut_surface.py``; ``blade``: an instrument in contact cuts it, and its cut faces
+    sit further in, clear of the blade's barrier)."""
     from tissuesim.contact.pairs import contact_facets
 
     if model.mesh.cell_levels is not None:
-        from tissuesim.contact.cut_surface import cut_surface
+        from tissuesim.contact.cut_surface import BLADE_GAP, GAP, cut_surface
         from tissuesim.contact.cut_surface_2d import cut_boundary
 
         if choice is not None:
@@ -163,8 +170,10 @@ def fem_surface(
                 f"contact surface of {name!r}: the body has been cut, and its contact surface "
                 "is its whole boundary with the cut faces; leave its surface out of [contact]"
             )
-        build = cut_boundary if model.mesh.dim == 2 else cut_surface
-        W, tri = build(model.mesh, dhat)
+        if model.mesh.dim == 2:
+            W, tri = cut_boundary(model.mesh, dhat)
+        else:
+            W, tri = cut_surface(model.mesh, dhat, BLADE_GAP if blade else GAP)
         n = model.mesh.n_points * model.mesh.dim
         return CutFemSurface(
             name,

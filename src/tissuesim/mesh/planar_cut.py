@@ -48,6 +48,30 @@ class PlanarCut:
             )
         return cls(p[0].copy(), n, p)
 
+    @classmethod
+    def hull(cls, points: np.ndarray, point: np.ndarray, normal: np.ndarray) -> PlanarCut | None:
+        """The cut in the plane (point, normal) bounded by the convex hull of ``points`` (k, 3)
+        in it, grown by 1e-6 of its size (so sections the points came from lie inside), or None
+        when they span no area."""
+        from scipy.spatial import ConvexHull, QhullError
+
+        u = np.cross(normal, [1.0, 0.0, 0.0])
+        if np.linalg.norm(u) < 0.5:
+            u = np.cross(normal, [0.0, 1.0, 0.0])
+        u /= np.linalg.norm(u)
+        w = np.cross(normal, u)
+        flat = np.column_stack([(points - point) @ u, (points - point) @ w])
+        if len(flat) < 3:
+            return None
+        try:
+            ring = flat[ConvexHull(flat).vertices]
+        except QhullError:
+            return None
+        centre = ring.mean(axis=0)
+        size = float(np.ptp(ring, axis=0).max())
+        ring = centre + (ring - centre) * (1.0 + 1e-6) + 1e-9 * size * np.sign(ring - centre)
+        return cls(point, normal, point + ring[:, :1] * u + ring[:, 1:] * w)
+
     # -- what the virtual node algorithm asks of a cut (mesh/swept_cut.py answers it too) ---
     def distances(self, x: np.ndarray) -> np.ndarray:
         """Signed distances (...) of points x (..., 3) to the plane."""

@@ -47,6 +47,7 @@ SHAPES = {
     "box": {"lower", "upper", "divisions"},
     "capsule": {"start", "end", "radius", "segments"},
     "cylinder": {"start", "end", "radius", "segments"},
+    "triangle": {"corners"},
     "file": None,
 }
 OBSTACLE_KEYS = {"name", "translation", "rotation", "friction", *SHAPES}
@@ -79,7 +80,7 @@ def add_contact_tables(sim, data: dict, base_dir: Path, source: str) -> None:
 
 
 def _obstacle(sim, item: dict, base_dir: Path, where: str) -> None:
-    from tissuesim.contact.obstacles import capsule, cylinder, plane, sphere
+    from tissuesim.contact.obstacles import capsule, cylinder, plane, sphere, triangle
     from tissuesim.frames.sampling import box_surface, read_surface
     from tissuesim.scene.common import _context, _unknown, of_time
 
@@ -92,7 +93,7 @@ def _obstacle(sim, item: dict, base_dir: Path, where: str) -> None:
         raise SceneError(
             f"{where}: give exactly one shape: plane = {{ point, normal, size }}, sphere = "
             "{ center, radius }, box = { lower, upper }, capsule or cylinder = { start, end, "
-            "radius }, or file = 'instrument.stl'"
+            "radius }, triangle = { corners } (a flat blade), or file = 'instrument.stl'"
         )
     shape = shapes[0]
     here = f"{where} {shape}"
@@ -113,6 +114,7 @@ def _obstacle(sim, item: dict, base_dir: Path, where: str) -> None:
                 "box": box_surface,
                 "capsule": capsule,
                 "cylinder": cylinder,
+                "triangle": triangle,
             }[shape]
             surface = make(**value)
     motions = {}

@@ -93,7 +93,18 @@ TISSUE_KEYS = (
     "attach_distance",
     "attachment_stiffness",
 )
-CUT_KEYS = ("blade", "start", "end", "kerf", "name", "body", "toughness", "obstacle", "edge")
+CUT_KEYS = (
+    "blade",
+    "start",
+    "end",
+    "kerf",
+    "name",
+    "body",
+    "toughness",
+    "obstacle",
+    "edge",
+    "contact",
+)
 COUPLED_SCENE_KEYS: dict[str, Any] = {
     "simulation": set(COUPLED_SIMULATION_KEYS),
     "gravity": {"acceleration"},
@@ -469,8 +480,9 @@ def _cut(sim, item: dict, where: str) -> None:
     if "obstacle" in item:
         _obstacle_cut(sim, item, where)
         return
-    if "edge" in item:
-        raise SceneError(f"{where}: edge picks the blade's vertices of an obstacle = '...'")
+    for key in ("edge", "contact"):
+        if key in item:
+            raise SceneError(f"{where}: {key} is for an instrument's blade (obstacle = '...')")
     blade = _required(item, "blade", where)
     example = '[["-0.07 + 0.14 * t", "-0.05", "0.01"], ["-0.07 + 0.14 * t", "0.05", "0.01"]]'
     if not (isinstance(blade, list) and all(isinstance(p, list) for p in blade)):
@@ -552,5 +564,12 @@ def _obstacle_cut(sim, item: dict, where: str) -> None:
         )
     if "kerf" in item:
         raise SceneError(f"{where}: kerf is for the tissue's cuts; an organ's cut has none")
+    if "contact" in item:
+        if not isinstance(item["contact"], bool):
+            raise SceneError(
+                f"{where}: contact must be true (the instrument touches the body it cuts, the "
+                f"default) or false (it passes through it), not {short(item['contact'])}"
+            )
+        options["contact"] = item["contact"]
     with _context(where):
         sim.add_cut(obstacle, start, end, **options)

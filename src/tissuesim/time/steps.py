@@ -85,7 +85,7 @@ def implicit_step(
         for c in candidates:
             c = system.apply_prescribed(c, t1)
             if contact.moving:
-                ok = contact.path_free(state.x, c, y0, y1)
+                ok = contact.start_free(state.x, c, y0, y1)
             else:
                 ok = contact.reachable(state.x, state.time, c, t1)
             if ok:

@@ -1,0 +1,161 @@
+"""A cut made ahead of a blade that is in contact with the body it cuts: every cell the blade
+will touch in the coming step is cut before the step, so the blade only ever moves in the
+cut's kerf and never presses into tissue it has not cut.
+
+The virtual node algorithm cuts whole cells. A blade cut after each step cuts the cells it has
+swept through completely (the cut trails the blade's edge by at most one cell, and the blade
+passes through the cells it is inside: it cannot be in contact with that body). A blade in
+contact is ahead of that: before the step, the blade's positions over the step are known (a
+prescribed motion, or a live drive's target), and each cell whose section of the cut's surface
+comes within ``margin`` of what the blade will have swept by the step's end, or that holds a
+point of the blade, is cut along that surface. The cut then leads the blade by at most one
+cell, and its faces, each ``dhat`` inside its side (``contact/cut_surface.py``), leave the blade
+a kerf to move in.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from tissuesim.mesh.planar_cut import PLANE_TOLERANCE, PlanarCut
+from tissuesim.mesh.swept_cut import SweptCut
+
+__all__ = ["MARGIN", "cut_ahead", "touched_cells"]
+
+#: a cell within this many dhat of the blade counts as touched (its barrier would act)
+MARGIN = 2.0
+
+#: points sampled along each blade edge, per smallest cell size (the edge's cells it crosses)
+EDGE_SAMPLES_PER_CELL = 2.0
+#: at most this many points along one blade edge
+MAX_EDGE_SAMPLES = 512
+
+
+def cut_ahead(
+    swept: PlanarCut | SweptCut, x_cell: np.ndarray, blades: list[np.ndarray], margin: float
+) -> PlanarCut | SweptCut:
+    """The cut to make before a step: ``swept`` (what the blade will have swept by the step's
+    end) grown over the sections of the cells (x_cell (m, k, 3), where their vertices are now)
+    it touches (``touched_cells``) given the blade's positions ``blades`` over the step (each
+    (2, 3) or (3, 3)) and ``margin`` (m)."""
+    hit, points, valid, d = touched_cells(swept, x_cell, blades, margin)
+    if not hit.any():
+        return swept
+    sections = [points[i][valid[i]] for i in np.flatnonzero(hit)]
+    if isinstance(swept, PlanarCut):
+        extra = np.concatenate(sections)
+        grown = PlanarCut.hull(np.concatenate([swept.polygon, extra]), swept.point, swept.normal)
+        return swept if grown is None else grown
+    # a swept surface: each touched section as a fan of triangles in its own plane (the
+    # plane of the swept triangle nearest the cell), facing the surface's side
+    tris = []
+    for s in sections:
+        if len(s) < 3:
+            continue
+        centre = s.mean(axis=0)
+        normal = swept.normals[swept._nearest(centre[None])[0][0]]
+        u = s[0] - centre
+        w = np.cross(normal, u)
+        order = np.argsort(np.arctan2((s - centre) @ w, (s - centre) @ u))
+        ring = s[order]
+        for a, b in zip(ring, np.roll(ring, -1, axis=0), strict=True):
+            tri = np.array([centre, a, b])
+            if np.cross(a - centre, b - centre) @ normal < 0.0:
+                tri = tri[[0, 2, 1]]
+            tris.append(tri)
+    if not tris:
+        return swept
+    return SweptCut(np.concatenate([swept.triangles, np.array(tris)]))
+
+
+def touched_cells(
+    swept: PlanarCut | SweptCut, x_cell: np.ndarray, blades: list[np.ndarray], margin: float
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Which cells (x_cell (m, k, 3)) the blade touches: those the cut's surface crosses whose
+    section has a point within ``margin`` of the swept area (over it, along the surface), or
+    that hold a point of the blade (its corners and points along its edges at every position
+    in ``blades``) within ``margin``. Returns (touched (m,), the sections' points (m, P, 3),
+    which of them are points (m, P), the vertex distances (m, k))."""
+    d = swept.distances(x_cell)
+    e = x_cell - x_cell[:, :1]
+    size = np.sqrt((e * e).sum(axis=2).max(axis=1))
+    d[np.abs(d) <= PLANE_TOLERANCE * size[:, None]] = 0.0
+    m, k = d.shape
+    crossed = (d.max(axis=1) > 0.0) & (d.min(axis=1) < 0.0)
+    i, j = np.triu_indices(k, 1)
+    di, dj = d[:, i], d[:, j]
+    crosses = (di * dj < 0.0) & crossed[:, None]
+    t = np.where(crosses, di / np.where(crosses, di - dj, 1.0), 0.0)
+    points = np.concatenate(
+        [x_cell, x_cell[:, i] + t[..., None] * (x_cell[:, j] - x_cell[:, i])], 1
+    )
+    valid = np.concatenate([(d == 0.0) & crossed[:, None], crosses], axis=1)
+    reach = np.full(valid.shape, np.inf)
+    reach[valid] = _reach(swept, points[valid])
+    hit = crossed & np.any(reach <= margin, axis=1)
+    hit |= crossed & _holding(x_cell, size, _blade_points(blades, size), margin)
+    return hit, points, valid, d
+
+
+def _reach(swept: PlanarCut | SweptCut, q: np.ndarray) -> np.ndarray:
+    """How far points q (n, 3) on the cut's surface lie beyond what was swept (0 over it): for
+    a planar cut, the largest distance outside an edge line of its convex polygon (the distance
+    outside it, or less near a corner)."""
+    if isinstance(swept, SweptCut):
+        return swept.reach(q)
+    poly, n = swept.polygon, swept.normal
+    centre = poly.mean(axis=0)
+    out = np.zeros(len(q))
+    for a, b in zip(poly, np.roll(poly, -1, axis=0), strict=True):
+        outward = np.cross(b - a, n)
+        norm = np.linalg.norm(outward)
+        if norm == 0.0:
+            continue
+        outward /= norm
+        if outward @ (centre - a) > 0.0:
+            outward = -outward
+        out = np.maximum(out, (q - a) @ outward)
+    return out
+
+
+def _blade_points(blades: list[np.ndarray], size: np.ndarray) -> np.ndarray:
+    """The blade's corners and points along its edges (spaced by half the smallest cell),
+    at every sampled position."""
+    h = float(size[size > 0].min(initial=np.inf))
+    pts = []
+    for blade in blades:
+        edges = ((0, 1),) if len(blade) == 2 else ((0, 1), (1, 2), (2, 0))
+        for a, b in edges:
+            length = float(np.linalg.norm(blade[b] - blade[a]))
+            n = EDGE_SAMPLES_PER_CELL * length / h if np.isfinite(h) else 1.0
+            n = int(np.clip(np.ceil(n), 1, MAX_EDGE_SAMPLES))
+            s = np.linspace(0.0, 1.0, n + 1)[:, None]
+            pts.append(blade[a] + s * (blade[b] - blade[a]))
+    return np.concatenate(pts) if pts else np.zeros((0, 3))
+
+
+def _holding(x_cell: np.ndarray, size: np.ndarray, points: np.ndarray, margin: float) -> np.ndarray:
+    """Whether each tetrahedron (x_cell (m, 4, 3)) holds one of ``points`` within ``margin``
+    (its barycentric coordinates all above -margin / its size). Returns (m,)."""
+    from scipy.spatial import cKDTree
+
+    m = len(x_cell)
+    held = np.zeros(m, dtype=bool)
+    if not len(points) or x_cell.shape[1] != 4:
+        return held
+    centre = x_cell.mean(axis=1)
+    radius = float(np.linalg.norm(x_cell - centre[:, None], axis=2).max()) + margin
+    pairs = cKDTree(centre).query_ball_point(points, radius)
+    cell = np.concatenate([np.asarray(p, dtype=np.int64) for p in pairs])
+    point = np.repeat(np.arange(len(points)), [len(p) for p in pairs])
+    if not len(cell):
+        return held
+    X = x_cell[cell]
+    T = np.swapaxes(X[:, 1:] - X[:, :1], 1, 2)  # (pairs, 3, 3): columns the edges from vertex 0
+    ok = np.abs(np.linalg.det(T)) > 1e-300
+    lam = np.zeros((len(cell), 3))
+    lam[ok] = np.linalg.solve(T[ok], (points[point] - X[:, 0])[ok][..., None])[..., 0]
+    bary = np.column_stack([1.0 - lam.sum(axis=1), lam])
+    inside = ok & np.all(bary >= -margin / np.maximum(size[cell], 1e-300)[:, None], axis=1)
+    held[cell[inside]] = True
+    return held

@@ -1,0 +1,124 @@
+"""An instrument in contact with the body it cuts (``add_cut(obstacle, ...)`` with contact on):
+the cut is made ahead of the blade (``mesh/cut_ahead.py``), so the blade moves in the cut's
+kerf: no step intersects, the cut leads the blade by at most one cell, nothing presses on the
+blade while the body is at rest, and when a side leans on the blade the instrument carries it
+(its force and the support's balance the body's weight)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+import tissuesim as ts
+from tissuesim.frames.sampling import Surface
+from tissuesim.mesh.cut_ahead import touched_cells
+from tissuesim.mesh.planar_cut import PlanarCut
+from tissuesim.mesh.swept_cut import SweptCut
+
+pytest.importorskip("ipctk")
+
+#: a scalpel's flat blade in the plane y = 0.015, its edge slanting down to z = 0.025
+CORNERS = np.array([[-0.06, 0.015, 0.025], [-0.02, 0.015, 0.06], [-0.06, 0.015, 0.06]])
+H = 0.01  # the block's cell size
+WEIGHT = 0.1 * 0.04 * 0.04 * 1000.0 * 9.81  # N
+
+
+def _swept_area(shift: float) -> float:
+    """The area of the block the blade swept moving by ``shift`` along x (its edge inside the
+    block's length): left of the edge x = shift - 0.06 + (0.04 / 0.035) (z - 0.025), above
+    z = 0.025, in closed form."""
+    a, b, depth = shift - 0.06, 0.04 / 0.035, 0.04 - 0.025
+    assert a >= 0.0 and a + b * depth <= 0.1
+    return a * depth + 0.5 * b * depth**2
+
+
+def _block(contact: bool, stop: float) -> ts.Simulation:
+    mesh = ts.box((0, 0, 0), (0.1, 0.04, 0.04), (10, 4, 4))
+    sim = ts.Simulation(mesh, ts.NeoHookean(youngs_modulus=3e3, poisson_ratio=0.4),
+                        density=1000.0, integrator="quasistatic", time_step=0.25)  # fmt: skip
+    sim.fix(ts.select.vertices_on_plane(mesh, axis=2, value=0.0), name="table")
+    sim.set_contact(dhat=1e-4)
+    sim.add_obstacle("scalpel", Surface(CORNERS, np.array([[0, 1, 2]])),
+                     translation=lambda t: np.array([0.2 * min(t, stop), 0.0, 0.0]))  # fmt: skip
+    sim.add_cut("scalpel", 0.0, math.inf, body="body", name="incision", contact=contact)
+    return sim
+
+
+def test_the_blade_moves_in_the_cuts_kerf_and_the_cut_leads_it_by_at_most_a_cell():
+    """Driven 0.1 m along x into the block: every step free of intersection, the blade clear
+    of the body's surface, no Newton iteration (nothing presses on it), and the cut's area
+    between what the blade swept and that plus a cell's band along the blade's edges inside
+    the block; without contact the cut trails: at most what it swept."""
+    sim = _block(contact=True, stop=0.5)
+    table = sim.system.contact.table
+    assert table.enabled[table.names.index("body"), table.names.index("scalpel")]
+    for _ in range(3):
+        record = sim.step()
+        contact = sim.system.contact
+        assert record.converged and record.newton_iterations == 0
+        assert not contact.intersecting(sim.state.x)
+        assert contact.min_distance(sim.state.x) > 1e-4  # outside the barrier: 1.1 dhat
+    area = record.extra["cuts"]["incision"]["area_m2"]
+    swept = _swept_area(0.1)
+    inside = 0.04 + math.hypot(0.015 * 0.04 / 0.035, 0.015)  # its edges inside the block
+    assert swept < area <= swept + H * inside + H**2
+    ghost = _block(contact=False, stop=0.5)
+    for _ in range(3):
+        trailing = ghost.step().extra["cuts"]["incision"]["area_m2"]
+    assert trailing <= swept < area
+
+
+def test_a_side_leaning_on_the_blade_is_carried_by_it():
+    """The blade stops in the block, then gravity pulls the block sideways (+y): the flap on
+    the blade's -y side leans on it. The instrument feels that push (+y); its force and the
+    table's balance the weight (1e-6), no step intersects; the blade that passes through the
+    body (contact off) carries nothing and the flap moves through it."""
+    sim = _block(contact=True, stop=0.5)
+    for _ in range(3):
+        sim.step()
+    sim.add_gravity([0.0, 9.81, 0.0])
+    for _ in range(2):
+        record = sim.step()
+        assert record.converged and not sim.system.contact.intersecting(sim.state.x)
+    blade = np.asarray(record.extra["forces"]["incision"])
+    table = np.asarray(record.extra["forces"]["table"])
+    assert blade[1] > 0.2 * WEIGHT  # a third of the weight leans on it here
+    # the instrument feels -(its push on the body): weight + table - blade = 0 on the body
+    assert np.allclose(np.array([0.0, WEIGHT, 0.0]) + table - blade, 0.0, atol=1e-6 * WEIGHT)
+    ghost = _block(contact=False, stop=0.5)
+    for _ in range(3):
+        ghost.step()
+    ghost.add_gravity([0.0, 9.81, 0.0])
+    for _ in range(2):
+        record = ghost.step()
+    assert np.allclose(record.extra["forces"]["incision"], 0.0)
+    assert record.extra["forces"]["table"][1] == pytest.approx(-WEIGHT, rel=1e-6)
+
+
+def test_touched_cells_are_those_the_blade_reaches_within_the_margin():
+    """Three unit cubes of tetrahedra along x, the plane y = 0.5: a blade whose swept
+    polygon ends at x = 1.5 touches the crossed cells of cubes 0 and 1, not 2; one whose tip
+    lies in cube 2 touches the cells holding it as well; a wider margin reaches into cube 2;
+    a planar cut and the same surface as a swept cut agree."""
+    mesh = ts.box((0, 0, 0), (3.0, 1.0, 1.0), (3, 1, 1))  # 3 cubes of 6 tetrahedra
+    x_cell = mesh.points[mesh.cells]
+    cube = np.floor(x_cell.mean(axis=1)[:, 0]).astype(int)
+    n = np.array([0.0, 1.0, 0.0])
+    ring = np.array([[-1.0, 0.5, -1.0], [1.5, 0.5, -1.0], [1.5, 0.5, 2.0], [-1.0, 0.5, 2.0]])
+    edge = np.array([[1.5, 0.5, -1.0], [1.5, 0.5, 2.0]])
+    planar = PlanarCut(np.array([0.0, 0.5, 0.0]), n, ring)
+    hit, _, _, d = touched_cells(planar, x_cell, [edge], 1e-3)
+    crossed = (d.max(axis=1) > 0) & (d.min(axis=1) < 0)
+    assert set(cube[hit]) == {0, 1} and np.all(hit == (crossed & (cube <= 1)))
+    swept = SweptCut.from_blades([np.array([[-1.0, 0.5, -1.0], [-1.0, 0.5, 2.0]]), edge])
+    hit_swept, *_ = touched_cells(swept, x_cell, [edge], 1e-3)
+    assert np.array_equal(hit, hit_swept)
+    # the blade's tip pokes 0.7 into cube 2 at mid-height: it holds the tip's cells
+    tip = np.array([[1.5, 0.5, 0.5], [2.7, 0.5, 0.5]])
+    hit, *_ = touched_cells(planar, x_cell, [tip], 1e-3)
+    assert 2 in set(cube[hit]) and hit[cube == 0].any()
+    # a margin of 0.6 reaches across into cube 2 from the polygon's edge at x = 1.5
+    hit, *_ = touched_cells(planar, x_cell, [edge], 0.6)
+    assert set(cube[hit]) == {0, 1, 2}
