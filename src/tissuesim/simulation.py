@@ -539,7 +539,7 @@ def _with_blades(sim) -> object:
         ContactPair(c.body, c.obstacle, enabled=False)
         for c in sim.organ_cuts
         if c.obstacle is not None
-        and not c.contact
+        and (not c.contact or c.suspended)
         and frozenset((c.body, c.obstacle)) not in listed
     ]
     return replace(settings, pairs=tuple(settings.pairs) + tuple(blades)) if blades else settings

@@ -279,11 +279,15 @@ class BodyCalls:
         t0, t1 = self.time, self.time + self.time_step
         for blade in self.organ_cuts:
             lo, hi = max(t0, blade.start), min(t1, blade.end)
-            if not self._cuts_ahead(blade) or hi <= lo:
+            if not self._cuts_ahead(blade):
                 continue
-            blade.record(t0, t1)
-            swept = blade.swept(t1)
+            swept = None
+            if hi > lo:
+                blade.record(t0, t1)
+                swept = blade.swept(t1)
             if swept is None:
+                if blade.suspended:
+                    self._check_blade_start(blade)
                 continue
             b = self.body(blade.body, ("fem",))
             current = self.body_positions(b.name) if self._state is not None else b.mesh.points
@@ -295,6 +299,24 @@ class BodyCalls:
             if blade.pending is not None:  # a step that failed and is taken again
                 done["cells_cut"] += blade.pending["cells_cut"]
             blade.pending = done
+            self._check_blade_start(blade)
+
+    def _check_blade_start(self, blade) -> None:
+        """The blade must start the step outside the body it cuts. Where the body has moved
+        since cells next to the new ones were cut (each node keeps its distance to the cut from
+        then), a new cut face can cross the blade: the blade then leaves that body's contact
+        for the step (``blade_contact`` False in the cut's report) and the next step tries
+        again."""
+        was = blade.suspended
+        blade.suspended = False
+        if was:
+            self._changed()
+        contact = self.system.contact
+        if contact is None or self._state is None:
+            return
+        if contact.intersecting(self._state.x, self.time):
+            blade.suspended = True
+            self._changed()
 
     def _organ_cut_step(self, t0: float, forces: dict) -> dict:
         """After a step t0 -> now: each blade cutting a FEM body cuts what it has swept
@@ -317,6 +339,8 @@ class BodyCalls:
                 report = {"area_m2": blade.area, "new_area_m2": new,
                           "cells_cut": done["cells_cut"], "pieces": done["pieces"]}  # fmt: skip
                 force = blade.force(new, t0, self.time)
+            if ahead:
+                report["blade_contact"] = not blade.suspended
             if blade.obstacle is not None:  # and the bodies' contact force on the instrument
                 force = force - np.asarray(forces.get(blade.obstacle, np.zeros(3)), dtype=float)
             forces[blade.name] = force.tolist()

@@ -58,6 +58,7 @@ def test_the_blade_moves_in_the_cuts_kerf_and_the_cut_leads_it_by_at_most_a_cell
         record = sim.step()
         contact = sim.system.contact
         assert record.converged and record.newton_iterations == 0
+        assert record.extra["cuts"]["incision"]["blade_contact"]
         assert not contact.intersecting(sim.state.x)
         assert contact.min_distance(sim.state.x) > 1e-4  # outside the barrier: 1.1 dhat
     area = record.extra["cuts"]["incision"]["area_m2"]

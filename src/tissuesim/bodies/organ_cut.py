@@ -74,6 +74,8 @@ class OrganCut:
     _sampled_to: float = field(init=False, default=-np.inf, repr=False)
     #: a cut made ahead of the step (``contact``): what it changed, reported after the step
     pending: dict | None = field(init=False, default=None, repr=False)
+    #: out of contact with its body for this step (a new cut face crossed it at the start)
+    suspended: bool = field(init=False, default=False, repr=False)
 
     def __post_init__(self) -> None:
         where = f"cut {self.name!r} of body {self.body!r}"

@@ -45,9 +45,7 @@ class CollisionQueries:
         V0, V1 = self.vertices(c0, obstacle=y0), self.vertices(c1, obstacle=y1)
         return bool(self._sweep(self._ipctk.is_step_collision_free, V0, V1))
 
-    def start_free(
-        self, c0: np.ndarray, c1: np.ndarray, y0: np.ndarray, y1: np.ndarray
-    ) -> bool:
+    def start_free(self, c0: np.ndarray, c1: np.ndarray, y0: np.ndarray, y1: np.ndarray) -> bool:
         """Whether the straight move from (c0, obstacles y0) to (c1, obstacles y1) is free of
         intersection, by tight-inclusion CCD with its iterations bounded (undecided counts as
         not free): where a step's Newton solve may start. The additive CCD of the line search
