@@ -1,8 +1,9 @@
 """An instrument in contact with the body it cuts (``add_cut(obstacle, ...)`` with contact on):
 the cut is made ahead of the blade (``mesh/cut_ahead.py``), so the blade moves in the cut's
-kerf: no step intersects, the cut leads the blade by at most one cell, nothing presses on the
-blade while the body is at rest, and when a side leans on the blade the instrument carries it
-(its force and the support's balance the body's weight)."""
+kerf: no step intersects, the cut leads the blade by little (a step's travel, at most a cell
+edge, and a cell), nothing presses on the blade while the body is at rest, and when a side
+leans on the blade the instrument carries it (its force and the support's balance the body's
+weight)."""
 
 from __future__ import annotations
 
@@ -46,11 +47,12 @@ def _block(contact: bool, stop: float) -> ts.Simulation:
     return sim
 
 
-def test_the_blade_moves_in_the_cuts_kerf_and_the_cut_leads_it_by_at_most_a_cell():
-    """Driven 0.1 m along x into the block: every step free of intersection, the blade clear
-    of the body's surface, no Newton iteration (nothing presses on it), and the cut's area
-    between what the blade swept and that plus a cell's band along the blade's edges inside
-    the block; without contact the cut trails: at most what it swept."""
+def test_the_blade_moves_in_the_cuts_kerf_and_the_cut_leads_it_by_little():
+    """Driven 0.1 m along x into the block (5 cells a step) and stopped: every step free of
+    intersection, the blade clear of the body's surface, no Newton iteration (nothing presses
+    on it), and the cut's area between what the blade swept and that plus a cell's band along
+    the blade's edges inside the block (the last moving step's lead of one cell edge lies in
+    it); without contact the cut trails: at most what it swept."""
     sim = _block(contact=True, stop=0.5)
     table = sim.system.contact.table
     assert table.enabled[table.names.index("body"), table.names.index("scalpel")]

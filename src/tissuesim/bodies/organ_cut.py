@@ -25,7 +25,8 @@ surface once it leaves it. With contact on, the instrument is in contact with th
 cuts too (``contact``, the default): before each step, every cell the blade will touch in the
 step is cut (``mesh/cut_ahead.py``), so the blade moves in the cut's kerf, both faces of the
 cut stay clear of it, and what presses on its faces is a contact force. The cut then leads
-the blade by at most one cell (after each step, without contact, it trails by at most one).
+the blade by at most a step's travel (capped at a cell's edge) and one cell (after each step,
+without contact, it trails by at most one cell).
 Either way the cut's force is what the instrument feels: its contact force plus the cutting
 resistance.
 """

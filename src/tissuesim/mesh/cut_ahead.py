@@ -7,8 +7,10 @@ swept through completely (the cut trails the blade's edge by at most one cell, a
 passes through the cells it is inside: it cannot be in contact with that body). A blade in
 contact is ahead of that: before the step, the blade's positions over the step are known (a
 prescribed motion, or a live drive's target), and each cell whose section of the cut's surface
-comes within ``margin`` of what the blade will have swept by the step's end, or that holds a
-point of the blade, is cut along that surface. The cut then leads the blade by at most one
+comes within ``margin`` of what the blade will have swept by the step's end, carried on along
+its motion by one more step's travel (at most a cell's edge: tissue moves while the step is
+solved, and what meets the edge must have been cut, not pushed), or that holds a point of the
+blade, is cut along that surface. The cut then leads the blade by at most that lead and one
 cell, and its faces, each ``dhat`` inside its side (``contact/cut_surface.py``), leave the blade
 a kerf to move in.
 """
@@ -20,10 +22,12 @@ import numpy as np
 from tissuesim.mesh.planar_cut import PLANE_TOLERANCE, PlanarCut
 from tissuesim.mesh.swept_cut import SweptCut
 
-__all__ = ["MARGIN", "cut_ahead", "touched_cells"]
+__all__ = ["LEAD_CELLS", "MARGIN", "cut_ahead", "lead", "touched_cells"]
 
 #: a cell within this many dhat of the blade counts as touched (its barrier would act)
 MARGIN = 2.0
+#: the blade is carried on by its travel in a step, at most this many median cell edges
+LEAD_CELLS = 1.0
 
 #: points sampled along each blade edge, per smallest cell size (the edge's cells it crosses)
 EDGE_SAMPLES_PER_CELL = 2.0
@@ -37,7 +41,9 @@ def cut_ahead(
     """The cut to make before a step: ``swept`` (what the blade will have swept by the step's
     end) grown over the sections of the cells (x_cell (m, k, 3), where their vertices are now)
     it touches (``touched_cells``) given the blade's positions ``blades`` over the step (each
-    (2, 3) or (3, 3)) and ``margin`` (m)."""
+    (2, 3) or (3, 3)) and ``margin`` (m), the blade carried on by one more step's travel
+    along its motion (``lead``)."""
+    swept, blades = lead(swept, x_cell, blades)
     hit, points, valid, d = touched_cells(swept, x_cell, blades, margin)
     if not hit.any():
         return swept
@@ -66,6 +72,31 @@ def cut_ahead(
     if not tris:
         return swept
     return SweptCut(np.concatenate([swept.triangles, np.array(tris)]))
+
+
+def lead(
+    swept: PlanarCut | SweptCut, x_cell: np.ndarray, blades: list[np.ndarray]
+) -> tuple[PlanarCut | SweptCut, list[np.ndarray]]:
+    """``swept`` and ``blades`` with the blade carried on past the step's end by its travel in
+    the step, at most LEAD_CELLS of the cells' median edge: tissue moves while the step is
+    solved, and what comes towards the blade's edge within that lead is cut already rather than
+    pushed (a drooping lobe dragged its last bridge off the blade's plane with a lead of
+    2 dhat). The lead is along the blade's motion only: no cell beside its path is cut."""
+    first, last = blades[0], blades[-1]
+    move = last - first
+    travel = float(np.linalg.norm(move, axis=1).max())
+    if travel == 0.0 or not len(x_cell):
+        return swept, blades
+    edge = float(np.median(np.linalg.norm(x_cell[:, 1] - x_cell[:, 0], axis=1)))
+    ahead = last + move * min(1.0, LEAD_CELLS * edge / travel)
+    if isinstance(swept, PlanarCut):
+        ahead = ahead - np.outer((ahead - swept.point) @ swept.normal, swept.normal)  # in plane
+        grown = PlanarCut.hull(np.concatenate([swept.polygon, ahead]), swept.point, swept.normal)
+        swept = swept if grown is None else grown
+    else:
+        more = SweptCut.from_blades([last, ahead]).triangles
+        swept = SweptCut(np.concatenate([swept.triangles, more]))
+    return swept, [*blades, ahead]
 
 
 def touched_cells(
