@@ -9,10 +9,16 @@ one exceeds the threshold, the crack's plane is set: through the centroid of the
 exceeds it most, normal to its principal direction (the crack opens against that stress). Then
 every step the crack takes the elements its plane crosses that exceed the threshold: the crack
 polygon is the convex hull, in that plane, of their sections and of the crack so far, and the
-body is cut along it (a named cut that goes on). The rule is deterministic (no random
-nucleation) and the crack is planar (one plane per body). Its size per step, and so the load at
-which a body tears, depends on the mesh as every local strength criterion on a stress field
-does: the guide reports it.
+body is cut along it (a named cut that goes on).
+
+The crack turns where the stress ahead of it turns: when the mean principal direction of the
+new elements it would take is more than TURN_DEGREES off its plane's normal, the crack goes on
+as a new planar piece from its front, through the front's nearest edge (so the pieces join
+along it), normal to that direction (turned about the edge), taking only elements ahead of
+the front. The pieces together are a swept surface (``mesh/swept_cut.py``), each element cut
+along the piece nearest to it. The rule is deterministic (no random nucleation). Its size per
+step, and so the load at which a body tears, depends on the mesh as every local strength
+criterion on a stress field does: the guide reports it.
 """
 
 from __future__ import annotations
@@ -22,9 +28,14 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from tissuesim.errors import InputError
+from tissuesim.mesh.swept_cut import SweptCut
 from tissuesim.mesh.virtual_nodes import PlanarCut
 
-__all__ = ["BodyTearing"]
+__all__ = ["BodyTearing", "TURN_DEGREES"]
+
+#: the crack turns (a new planar piece from its front) where the mean principal direction of
+#: the elements over the threshold ahead of it is more than this far off its plane's normal
+TURN_DEGREES = 15.0
 
 
 @dataclass
@@ -39,6 +50,12 @@ class BodyTearing:
     point: np.ndarray | None = field(default=None, init=False)
     normal: np.ndarray | None = field(default=None, init=False)
     corners: np.ndarray | None = field(default=None, init=False)  # the crack polygon so far
+    #: the crack's earlier planar pieces, before it turned (the current one: point, normal)
+    pieces: list[PlanarCut] = field(default_factory=list, init=False)
+    #: the current piece's start on the front it turned at (the edge's ends), and the way it
+    #: grows in its plane (None for the first piece)
+    _front: np.ndarray | None = field(default=None, init=False, repr=False)
+    _growth: np.ndarray | None = field(default=None, init=False, repr=False)
 
     def __post_init__(self) -> None:
         given = [v for v in (self.stress, self.stretch) if v is not None]
@@ -70,9 +87,10 @@ class BodyTearing:
         w, v = np.linalg.eigh(F @ np.swapaxes(F, 1, 2))  # left Cauchy-Green: spatial axes
         return np.sqrt(np.maximum(w[:, -1], 0.0)), v[:, :, -1]
 
-    def grow(self, body, c: np.ndarray) -> PlanarCut | None:
+    def grow(self, body, c: np.ndarray) -> PlanarCut | SweptCut | None:
         """The crack after this step (None while nothing exceeds the threshold), from the body's
-        configuration c (its current mesh)."""
+        configuration c (its current mesh): a plane bounded by a polygon, or once it has turned
+        the planar pieces as a swept surface."""
         value, direction = self.measure(body, c)
         over = value >= self.threshold
         if not over.any():
@@ -81,29 +99,100 @@ class BodyTearing:
         x = c.reshape(-1, mesh.dim)
         x = np.column_stack([x, np.zeros(len(x))]) if mesh.dim == 2 else x
         X = x[mesh.cells]  # (m, k, 3) where each element's vertices are
+        if direction.shape[1] == 2:
+            direction = np.column_stack([direction, np.zeros(len(direction))])
+        span = float(np.ptp(x, axis=0).max()) if mesh.dim == 2 else 0.0
         if self.point is None:
             worst = int(np.argmax(value / self.threshold))
             self.point = X[worst].mean(axis=0)
-            n = direction[worst]
-            n = np.concatenate([n, [0.0]]) if n.size == 2 else n
-            self.normal = n / np.linalg.norm(n)
+            self.normal = direction[worst] / np.linalg.norm(direction[worst])
+        crossed, points = self._sections(X, over, span)
+        if self.corners is not None and crossed.any():
+            turn = self._turn(X, crossed, direction)
+            if turn is not None:
+                self._start_piece(*turn)
+                crossed, points = self._sections(X, over, span)
+        if not crossed.any():
+            return None  # nothing new: the crack stays as it is
+        if self.corners is not None:
+            points = np.concatenate([points, self.corners])
+        if self._front is not None:
+            points = np.concatenate([points, self._front])
+        piece = PlanarCut.hull(points, self.point.copy(), self.normal.copy())
+        if piece is None:
+            return None
+        self.corners = piece.polygon
+        if not self.pieces:
+            return piece
+        done = [*self.pieces]
+        if self.corners is not None:
+            done.append(PlanarCut(self.point, self.normal, self.corners))
+        return SweptCut(np.concatenate([p.triangles() for p in done]))
+
+    def _sections(self, X: np.ndarray, over: np.ndarray, span: float):
+        """(the elements over the threshold the current piece's plane crosses ahead of its
+        front (m,), the points where it crosses their edges (p, 3); a 2D body's spanning z by
+        ``span`` either way)."""
         d = (X - self.point) @ self.normal
         crossed = over & (d.max(axis=1) > 0.0) & (d.min(axis=1) < 0.0)
-        if not crossed.any():
-            return None
-        k = mesh.cells.shape[1]
+        if self._growth is not None:  # a piece after a turn grows forward only
+            crossed &= ((X - self.point) @ self._growth).max(axis=1) > 0.0
+        k = X.shape[1]
         i, j = np.triu_indices(k, 1)
         di, dj = d[crossed][:, i], d[crossed][:, j]
         hit = di * dj < 0.0
         t = np.where(hit, di / np.where(hit, di - dj, 1.0), 0.0)
         P = X[crossed][:, i] + t[..., None] * (X[crossed][:, j] - X[crossed][:, i])
         points = P[hit]
-        if mesh.dim == 2:  # a 2D body's crack is a line: the cut's polygon spans it in z
-            span = np.array([0.0, 0.0, float(np.ptp(x, axis=0).max())])
-            points = np.concatenate([points + span, points - span])
-        if self.corners is not None:
-            points = np.concatenate([points, self.corners])
-        crack = PlanarCut.hull(points, self.point.copy(), self.normal.copy())
-        if crack is not None:
-            self.corners = crack.polygon
-        return crack
+        if span:  # a 2D body's crack is a line: the cut's polygon spans it in z
+            up = np.array([0.0, 0.0, span])
+            points = np.concatenate([points + up, points - up])
+        return crossed, points
+
+    def _turn(self, X: np.ndarray, crossed: np.ndarray, direction: np.ndarray):
+        """Where and how the crack turns, or None: the new elements it would take (crossed,
+        their centroids beyond the polygon) and their mean principal direction; if that is more
+        than TURN_DEGREES off the normal, (the nearest point of the polygon's boundary, that
+        edge's ends, the new normal: the mean direction turned about the edge, the way ahead)."""
+        centre = X[crossed].mean(axis=1)
+        on_plane = centre - np.outer((centre - self.point) @ self.normal, self.normal)
+        current = PlanarCut(self.point, self.normal, self.corners)
+        new = current.reach(on_plane) > 0.0
+        if not new.any():
+            return None
+        dirs = direction[crossed][new]
+        dirs = dirs * np.sign(dirs @ self.normal)[:, None]
+        n = dirs.sum(axis=0)
+        if np.linalg.norm(n) == 0.0:
+            return None
+        n = n / np.linalg.norm(n)
+        if np.degrees(np.arccos(min(1.0, abs(float(n @ self.normal))))) <= TURN_DEGREES:
+            return None
+        q = on_plane[new].mean(axis=0)
+        ring = self.corners
+        best = None
+        for a, b in zip(ring, np.roll(ring, -1, axis=0), strict=True):
+            e = b - a
+            s = np.clip((q - a) @ e / max(float(e @ e), 1e-300), 0.0, 1.0)
+            p = a + s * e
+            gap = float(np.linalg.norm(q - p))
+            if best is None or gap < best[0]:
+                best = (gap, p, np.array([a, b]))
+        _, p, edge = best
+        axis = edge[1] - edge[0]
+        axis = axis / np.linalg.norm(axis)
+        n = n - (n @ axis) * axis  # turned about the front's edge: the pieces join along it
+        if np.linalg.norm(n) < 1e-6:
+            return None
+        n = n / np.linalg.norm(n)
+        growth = np.cross(n, axis)
+        if growth @ (q - p) < 0.0:
+            growth = -growth
+        return p, edge, n, growth
+
+    def _start_piece(self, p, edge, normal, growth) -> None:
+        """Close the current piece and go on from ``p`` on its front ``edge`` in the plane of
+        ``normal``, growing along ``growth``."""
+        self.pieces.append(PlanarCut(self.point, self.normal, self.corners))
+        self.point, self.normal, self.corners = p, normal, None
+        self._front, self._growth = edge, growth

@@ -122,31 +122,10 @@ def touched_cells(
     )
     valid = np.concatenate([(d == 0.0) & crossed[:, None], crosses], axis=1)
     reach = np.full(valid.shape, np.inf)
-    reach[valid] = _reach(swept, points[valid])
+    reach[valid] = swept.reach(points[valid])
     hit = crossed & np.any(reach <= margin, axis=1)
     hit |= crossed & _holding(x_cell, size, _blade_points(blades, size), margin)
     return hit, points, valid, d
-
-
-def _reach(swept: PlanarCut | SweptCut, q: np.ndarray) -> np.ndarray:
-    """How far points q (n, 3) on the cut's surface lie beyond what was swept (0 over it): for
-    a planar cut, the largest distance outside an edge line of its convex polygon (the distance
-    outside it, or less near a corner)."""
-    if isinstance(swept, SweptCut):
-        return swept.reach(q)
-    poly, n = swept.polygon, swept.normal
-    centre = poly.mean(axis=0)
-    out = np.zeros(len(q))
-    for a, b in zip(poly, np.roll(poly, -1, axis=0), strict=True):
-        outward = np.cross(b - a, n)
-        norm = np.linalg.norm(outward)
-        if norm == 0.0:
-            continue
-        outward /= norm
-        if outward @ (centre - a) > 0.0:
-            outward = -outward
-        out = np.maximum(out, (q - a) @ outward)
-    return out
 
 
 def _blade_points(blades: list[np.ndarray], size: np.ndarray) -> np.ndarray:

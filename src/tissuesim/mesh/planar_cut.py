@@ -84,6 +84,32 @@ class PlanarCut:
 
         return sections_inside(x, d, self.polygon, self.normal)
 
+    def reach(self, q: np.ndarray) -> np.ndarray:
+        """How far points q (n, 3) in the plane lie outside the polygon (0 inside): the largest
+        distance outside one of its edge lines (the distance outside it, or less near a
+        corner), as ``SweptCut.reach`` says of its triangles."""
+        poly, n = self.polygon, self.normal
+        centre = poly.mean(axis=0)
+        out = np.zeros(len(q))
+        for a, b in zip(poly, np.roll(poly, -1, axis=0), strict=True):
+            outward = np.cross(b - a, n)
+            norm = np.linalg.norm(outward)
+            if norm == 0.0:
+                continue
+            outward /= norm
+            if outward @ (centre - a) > 0.0:
+                outward = -outward
+            out = np.maximum(out, (q - a) @ outward)
+        return out
+
+    def triangles(self) -> np.ndarray:
+        """The polygon as a fan of triangles (k - 2, 3, 3), each turning about the normal."""
+        c = self.polygon
+        tris = np.stack([np.broadcast_to(c[0], c[1:-1].shape), c[1:-1], c[2:]], axis=1)
+        flip = np.cross(tris[:, 1] - tris[:, 0], tris[:, 2] - tris[:, 0]) @ self.normal < 0.0
+        tris[flip] = tris[flip][:, ::-1]
+        return tris
+
     def covers(self, q: np.ndarray, tol: float) -> bool:
         """Whether points q (k, 3) in the plane lie in its convex polygon (within tol, m)."""
         poly, n = self.polygon, self.normal
