@@ -4,7 +4,8 @@ steps, only the cut differs).
 
 1. The shipped ``liver_resection`` example over its cutting phase (t = 0.1 .. 0.24 s, before
    the lobe comes off and falls, which changes the motion itself): with the blade, and with
-   the ``[[cuts]]`` table removed.
+   the ``[[cuts]]`` table removed; and ``liver_instrument`` over the same phase, the scalpel in
+   contact with the liver against the same scalpel passing through it (``contact = false``).
 2. The organ of ``benchmarks/cut_cost.py`` (12 divisions: 10,368 tetrahedra; ellipsoid under
    gravity, Backward Euler) cut at step 4 by planes at several positions, chosen to pass close
    to nodes (copies of fractions down to 1e-7: the slivers a cut can make), then 8 more steps.
@@ -36,6 +37,16 @@ def liver(cut: bool, steps: int = 24) -> list[int]:
     data = tomllib.loads(path.read_text())
     if not cut:
         del data["cuts"]
+    sim = build_scene(data, base_dir=path.parent, source=str(path)).simulation
+    return [sim.step().newton_iterations for _ in range(steps)]
+
+
+def liver_instrument(contact: bool, steps: int = 24) -> list[int]:
+    """Newton iterations of the first ``steps`` steps of the shipped ``liver_instrument``: the
+    scalpel in contact with the liver, or passing through it (``contact = false``)."""
+    path = EXAMPLES / "liver_instrument.toml"
+    data = tomllib.loads(path.read_text())
+    data["cuts"][0]["contact"] = contact
     sim = build_scene(data, base_dir=path.parent, source=str(path)).simulation
     return [sim.step().newton_iterations for _ in range(steps)]
 
@@ -86,6 +97,13 @@ def main() -> None:
     lines.append(
         row("liver_resection, steps 11-24 (cutting)", with_cut[phase], without[phase],
             f"per step, cut: {with_cut[phase]}; uncut: {without[phase]}")
+    )  # fmt: skip
+    print(lines[-1], flush=True)
+    touching, passing = liver_instrument(True), liver_instrument(False)
+    lines.append(
+        row("liver_instrument, steps 11-24: the scalpel in contact (with) against passing "
+            "through (without)", touching[phase], passing[phase],
+            f"per step, in contact: {touching[phase]}; passing through: {passing[phase]}")
     )  # fmt: skip
     print(lines[-1], flush=True)
     uncut, _ = organ_run(None)

@@ -125,3 +125,27 @@ def test_touched_cells_are_those_the_blade_reaches_within_the_margin():
     # a margin of 0.6 reaches across into cube 2 from the polygon's edge at x = 1.5
     hit, *_ = touched_cells(planar, x_cell, [edge], 0.6)
     assert set(cube[hit]) == {0, 1, 2}
+
+
+def test_an_instrument_driven_off_its_plane_cuts_along_its_sweep_in_contact():
+    """Driven live along x, then 2 mm off its plane (y) as it goes on: its cut becomes a swept
+    surface (mesh/cut_ahead.py's fans over the touched cells), no step intersects, the blade
+    stays in contact, the cut grows; its flat, moved sideways, pushes the tissue it faces, so
+    the instrument feels a force against the sideways motion."""
+    mesh = ts.box((0, 0, 0), (0.1, 0.04, 0.04), (10, 4, 4))
+    sim = ts.Simulation(mesh, ts.NeoHookean(youngs_modulus=3e3, poisson_ratio=0.4),
+                        density=1000.0, integrator="quasistatic", time_step=0.25)  # fmt: skip
+    sim.fix(ts.select.vertices_on_plane(mesh, axis=2, value=0.0), name="table")
+    sim.set_contact(dhat=1e-4)
+    sim.add_obstacle("scalpel", Surface(CORNERS, np.array([[0, 1, 2]])))
+    tool = sim.add_cut("scalpel", 0.0, math.inf, body="body", name="incision")
+    areas = []
+    for target in ((0.05, 0.0, 0.0), (0.07, 0.002, 0.0)):
+        sim.drive_obstacle("scalpel", translation=target)
+        record = sim.step()
+        cut = record.extra["cuts"]["incision"]
+        assert record.converged and cut["blade_contact"]
+        assert not sim.system.contact.intersecting(sim.state.x)
+        areas.append(cut["area_m2"])
+    assert tool.curved and areas[1] > areas[0] > 0.0
+    assert record.extra["forces"]["incision"][1] < 0.0  # the tissue it pushes sideways (+y)

@@ -47,31 +47,39 @@ def cut_ahead(
     hit, points, valid, d = touched_cells(swept, x_cell, blades, margin)
     if not hit.any():
         return swept
-    sections = [points[i][valid[i]] for i in np.flatnonzero(hit)]
     if isinstance(swept, PlanarCut):
-        extra = np.concatenate(sections)
+        extra = points[hit][valid[hit]]
         grown = PlanarCut.hull(np.concatenate([swept.polygon, extra]), swept.point, swept.normal)
         return swept if grown is None else grown
-    # a swept surface: each touched section as a fan of triangles in its own plane (the
-    # plane of the swept triangle nearest the cell), facing the surface's side
-    tris = []
-    for s in sections:
-        if len(s) < 3:
-            continue
-        centre = s.mean(axis=0)
-        normal = swept.normals[swept._nearest(centre[None])[0][0]]
-        u = s[0] - centre
-        w = np.cross(normal, u)
-        order = np.argsort(np.arctan2((s - centre) @ w, (s - centre) @ u))
-        ring = s[order]
-        for a, b in zip(ring, np.roll(ring, -1, axis=0), strict=True):
-            tri = np.array([centre, a, b])
-            if np.cross(a - centre, b - centre) @ normal < 0.0:
-                tri = tri[[0, 2, 1]]
-            tris.append(tri)
-    if not tris:
-        return swept
-    return SweptCut(np.concatenate([swept.triangles, np.array(tris)]))
+    more = _section_fans(points[hit], valid[hit], swept)
+    return SweptCut(np.concatenate([swept.triangles, more])) if len(more) else swept
+
+
+def _section_fans(points: np.ndarray, valid: np.ndarray, swept: SweptCut) -> np.ndarray:
+    """Each cell's section (its valid ``points`` (m, P, 3)) as a fan of triangles about its
+    centroid, ordered by angle in the plane of the swept triangle nearest to it and facing
+    that triangle's side. Returns (t, 3, 3)."""
+    count = valid.sum(axis=1)
+    centre = (points * valid[..., None]).sum(axis=1) / np.maximum(count, 1)[:, None]
+    normal = swept.normals[swept._nearest(centre)[0]]
+    first = np.take_along_axis(points, np.argmax(valid, axis=1)[:, None, None], axis=1)[:, 0]
+    u = first - centre
+    w = np.cross(normal, u)
+    rel = points - centre[:, None]
+    angle = np.arctan2((rel * w[:, None]).sum(-1), (rel * u[:, None]).sum(-1))
+    order = np.argsort(np.where(valid, angle, np.inf), axis=1)  # the valid points first
+    ring = np.take_along_axis(points, order[..., None], axis=1)
+    nxt = np.roll(np.arange(ring.shape[1]), -1)
+    j = np.arange(ring.shape[1])
+    # the edge from sorted point j to the next valid one (the last wraps to the first)
+    after = np.where(j[None, :] + 1 < count[:, None], nxt[None, :], 0)
+    b = np.take_along_axis(ring, after[..., None], axis=1)
+    keep = (j[None, :] < count[:, None]) & (count[:, None] >= 3)
+    tris = np.stack([np.broadcast_to(centre[:, None], ring.shape), ring, b], axis=2)[keep]
+    flip = np.cross(tris[:, 1] - tris[:, 0], tris[:, 2] - tris[:, 0])
+    flip = (flip * np.repeat(normal, keep.sum(axis=1), axis=0)).sum(-1) < 0.0
+    tris[flip] = tris[flip][:, [0, 2, 1]]
+    return tris
 
 
 def lead(
