@@ -291,7 +291,10 @@ class Simulation(BodyCalls, SetupCalls, StepChecks, BodyResults, Stepping):
                 "contact acts on FEM bodies and frame bodies with an embedded surface; this "
                 "simulation has none"
             )
-        return ContactModel(surfaces, list(self.obstacles), _with_blades(self), s.n_dofs)
+        model = ContactModel(surfaces, list(self.obstacles), _with_blades(self), s.n_dofs)
+        if any(self._cuts_ahead(c) for c in self.organ_cuts):
+            model.clear_path = self._clear_blade_paths
+        return model
 
     def _contact_dhat(self) -> float:
         """The barrier's dhat (m) as the contact model will take it: the scene's, else 1e-3 of

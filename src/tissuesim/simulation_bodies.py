@@ -279,6 +279,7 @@ class BodyCalls:
         t0, t1 = self.time, self.time + self.time_step
         for blade in self.organ_cuts:
             lo, hi = max(t0, blade.start), min(t1, blade.end)
+            blade.path = None
             if not self._cuts_ahead(blade):
                 continue
             swept = None
@@ -294,12 +295,56 @@ class BodyCalls:
             state = b.cut_state
             x_cell = current[b.mesh.cells] if state is None else state.cell_positions(current)
             blades = [blade.edge(t) for t in np.linspace(lo, hi, STEP_SAMPLES)]
+            blade.path = blades
             cut = cut_ahead(swept, x_cell, blades, MARGIN * self._contact_dhat())
             done = self.cut_body(cut, body=b.name, name=blade.name)
             if blade.pending is not None:  # a step that failed and is taken again
                 done["cells_cut"] += blade.pending["cells_cut"]
             blade.pending = done
             self._check_blade_start(blade)
+
+    def _clear_blade_paths(self, c: np.ndarray) -> np.ndarray | None:
+        """The configuration ``c`` with the kerf ahead of each blade in contact opened where
+        the body closed it on the blade's path in this step (``contact/blade_clearance.py``), or
+        None when no blade's path needs it: a step's start when ``c`` is not one."""
+        from tissuesim.contact.blade_clearance import clearance
+        from tissuesim.contact.cut_surface import BLADE_GAP
+
+        s, contact = self.system, self.system.contact
+        out = None
+        for blade in self.organ_cuts:
+            if blade.path is None or blade.suspended or blade.curved or blade.normal is None:
+                continue
+            b = self.bodies[blade.body]
+            vn = None if b.cut_state is None else b.cut_state.vn
+            if vn is None or b.name not in s.names or b.name not in contact.slices:
+                continue
+            config = s.config_slices[s.index(b.name)]
+            dim = b.mesh.points.shape[1]
+            if dim != 3:
+                continue
+            rows, surface = contact.slices[b.name]
+            weights = getattr(surface, "embedding", None)  # a cut body's surface: V = W X
+            if weights is None:
+                continue
+            base = c if out is None else out
+            copies = vn.side != 0
+            move = clearance(
+                base[config].reshape(-1, dim),
+                vn.cells[copies],
+                vn.level[copies],
+                weights,
+                contact.vertices(base)[rows],
+                blade.path,
+                blade.point,
+                blade.normal,
+                BLADE_GAP * contact.dhat,
+                2.0 * BLADE_GAP * contact.dhat,
+            )
+            if move is not None:
+                out = base.copy()
+                out[config] += move.ravel()
+        return out
 
     def _check_blade_start(self, blade) -> None:
         """The blade must start the step outside the body it cuts. Where the body has moved

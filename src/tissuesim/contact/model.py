@@ -148,6 +148,9 @@ class ContactModel(FrictionLag, CollisionQueries):
         self._constant = all(isinstance(s, FemSurface | CutFemSurface) for s in self.surfaces)
         self._constant_selection: dict = {}
         self.obstacle_state: np.ndarray | None = None  # where the obstacles are (flat), if lagged
+        # c -> a step's start with the kerf ahead of each blade in contact opened, or None
+        # (set by the simulation when a blade cuts a body it touches: blade_clearance.py)
+        self.clear_path = None
         diag = float(np.linalg.norm(np.ptp(self.rest, axis=0)))
         self.dhat = self.settings.dhat if self.settings.dhat is not None else 1e-3 * diag
         default = max(_youngs(s.material) for s in self.surfaces)

@@ -90,6 +90,8 @@ def implicit_step(
                 ok = contact.reachable(state.x, state.time, c, t1)
             if ok:
                 starts.append(c)
+        if not starts and contact.moving and contact.clear_path is not None:
+            starts = _cleared_starts(system, contact, state.x, candidates, y0, y1, t1)
         if not starts and contact.moving:  # an instrument runs into a body at rest: pull it in
             return _step_with_moving_obstacles(
                 system,
@@ -159,6 +161,23 @@ def implicit_step(
     system.last_step_energies = body_energies  # the step's Phi, for haptics.py's linearisation
     v1 = system.difference(c1, state.x) / h if dynamic else np.zeros(system.n_dofs)
     return StepOutcome(State(t1, c1, v1), True, [record])
+
+
+def _cleared_starts(system, contact, x0, candidates, y0, y1, t1) -> list[np.ndarray]:
+    """Starts with the kerf ahead of a blade in contact opened (``contact.clear_path``,
+    contact/blade_clearance.py) where the plain ones would put the blade through the faces the
+    loaded body closed on its path. A start counts when the bodies get there from x0 with the
+    obstacles where they are, and the obstacles then get to their targets, both free of
+    intersection (exact CCD): the same proof as one straight move, taken in two legs."""
+    starts = []
+    for c in candidates:
+        cleared = contact.clear_path(system.apply_prescribed(c, t1))
+        if cleared is None:
+            continue
+        cleared = system.apply_prescribed(cleared, t1)
+        if contact.start_free(x0, cleared, y0, y0) and contact.start_free(cleared, cleared, y0, y1):
+            starts.append(cleared)
+    return starts
 
 
 def _start_friction(contact, x0, y0, h, friction_from=None, friction_h=None):
