@@ -115,3 +115,27 @@ def test_the_liver_steps_start_with_the_blade_at_its_target():
             assert not sim.system.contact.intersecting(sim.state.x)
     assert sum(cleared) >= 2
     assert len(pulled) <= 2
+
+
+def test_a_vertex_on_a_node_both_sides_share_is_moved_by_its_other_nodes():
+    """Where a cut's copies stay joined (at its front) a node belongs to copies on both sides:
+    it stays where it is and the vertex's nodes on one side move further for it, when they
+    carry at least MIN_SIDED of its weight; a vertex held mostly by the shared node is left."""
+    from tissuesim.contact.blade_clearance import MIN_SIDED
+
+    # a + copy (nodes 0, 1, 2 on the + side, node 3 virtual) and a - copy sharing node 3
+    x = np.array([[1.0, 0, 0], [1.0, 1, 0], [1.0, 0, 1], [-1.0, 0, 0],
+                  [-1.0, 1, 0], [-1.0, 0, 1], [-1.0, 1, 1]])  # fmt: skip
+    cells = np.array([[0, 1, 2, 3], [4, 5, 6, 3]])
+    level = np.array([[1.0, 1.0, 1.0, -1.0], [1.0, 1.0, 1.0, 1.0]])  # distance x side
+    W = sp.csr_matrix(np.array([[0.5, 0, 0, 0.5, 0, 0, 0], [0.1, 0, 0, 0.9, 0, 0, 0]]))
+    V = W @ x
+    blades = [np.array([[0.0, -5, -5], [0.0, 5, -5]]), np.array([[0.0, -5, 5], [0.0, 5, 5]])]
+    gap = 0.01
+    move = clearance(x, cells, level, W, V, blades, np.zeros(3), np.array([1.0, 0, 0]), gap, 0.0)
+    assert move is not None
+    assert np.allclose(move[1:], 0.0)  # node 3 shared: kept; nodes 1, 2 hold no vertex here
+    after = W @ (x + move)
+    assert after[0, 0] == pytest.approx(gap)  # node 0 moved 2 gaps for its half weight
+    assert 0.1 < MIN_SIDED  # the second vertex is held by the shared node: not moved for it
+    assert after[1, 0] == pytest.approx(V[1, 0] + 0.1 * move[0, 0])
