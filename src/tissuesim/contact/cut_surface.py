@@ -30,6 +30,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from tissuesim.errors import InputError
+from tissuesim.mesh.rows import unique_rows
 
 __all__ = ["cut_surface"]
 
@@ -96,8 +97,7 @@ def _exposed_faces(cells: np.ndarray, levels: np.ndarray, gap: float):
     order = np.argsort(fnodes, axis=1)
     snodes = np.take_along_axis(fnodes, order, axis=1)  # sorted: partners align node by node
     slev = np.take_along_axis(flev, order, axis=1)
-    _, group, size = np.unique(snodes, axis=0, return_inverse=True, return_counts=True)
-    group = group.ravel()
+    _, group, size = unique_rows(snodes, return_inverse=True, return_counts=True)
     # constraints per face, in the sorted node order: own level - gap >= 0, and for each
     # partner gap - level_p >= 0; a whole partner (level +inf) covers the face entirely
     by_group = np.argsort(group, kind="stable")
@@ -358,8 +358,8 @@ def _cluster(W: sp.csr_matrix, tri: np.ndarray, rest: np.ndarray, merge: float):
     if merge <= 0.0 or len(tri) == 0:
         return W, tri
     V = W @ rest
-    edges = np.unique(
-        np.sort(np.concatenate([tri[:, [0, 1]], tri[:, [1, 2]], tri[:, [2, 0]]]), 1), axis=0
+    edges = unique_rows(
+        np.sort(np.concatenate([tri[:, [0, 1]], tri[:, [1, 2]], tri[:, [2, 0]]]), 1)
     )
     short = np.linalg.norm(V[edges[:, 0]] - V[edges[:, 1]], axis=1) < merge
     pairs = edges[short]
@@ -375,8 +375,8 @@ def _cluster(W: sp.csr_matrix, tri: np.ndarray, rest: np.ndarray, merge: float):
     tri = tri[(tri[:, 0] != tri[:, 1]) & (tri[:, 1] != tri[:, 2]) & (tri[:, 0] != tri[:, 2])]
     # a face and its reverse cancel (two sides of a collapsed sliver)
     key = np.sort(tri, axis=1)
-    _, inverse, count = np.unique(key, axis=0, return_inverse=True, return_counts=True)
-    tri = tri[count[inverse.ravel()] == 1]
+    _, inverse, count = unique_rows(key, return_inverse=True, return_counts=True)
+    tri = tri[count[inverse] == 1]
     used = np.unique(tri)
     local = np.full(n, -1)
     local[used] = np.arange(used.size)

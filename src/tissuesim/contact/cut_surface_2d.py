@@ -27,6 +27,7 @@ import scipy.sparse as sp
 
 from tissuesim.contact.cut_surface import _MERGE, _ZERO, GAP, MERGE, SNAP_IN, SNAP_OUT
 from tissuesim.errors import InputError
+from tissuesim.mesh.rows import unique_rows
 
 __all__ = ["cut_boundary"]
 
@@ -63,8 +64,7 @@ def _exposed_edges(cells: np.ndarray, levels: np.ndarray, gap: float):
     swap = enodes[:, 0] > enodes[:, 1]
     snodes = np.where(swap[:, None], enodes[:, ::-1], enodes)  # sorted: lo, hi
     slev = np.where(swap[:, None], elev[:, ::-1], elev)
-    _, group, size = np.unique(snodes, axis=0, return_inverse=True, return_counts=True)
-    group = group.ravel()
+    _, group, size = unique_rows(snodes, return_inverse=True, return_counts=True)
     by_group = np.argsort(group, kind="stable")
     start = np.concatenate([[0], np.cumsum(size)])
     # the interval [s0, s1] of the sorted edge (s = weight of hi) where every constraint >= 0

@@ -11,6 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from tissuesim.errors import InputError
+from tissuesim.mesh.rows import row_keys
 
 __all__ = ["boundary_facets", "facet_measures", "facet_normals"]
 
@@ -44,19 +45,6 @@ def sort_rows(rows: np.ndarray) -> np.ndarray:
     return np.stack([np.minimum(lo, c), mid, np.maximum(hi, c)], axis=1)
 
 
-def _row_keys(rows: np.ndarray) -> np.ndarray | None:
-    """One int64 key per row of ``rows`` (k, d) of ints, equal iff rows are; None if too big."""
-    if rows.size == 0:
-        return np.zeros(len(rows), dtype=np.int64)
-    low, base = int(rows.min()), int(rows.max()) - int(rows.min()) + 1
-    if base ** rows.shape[1] >= 2**62:
-        return None
-    keys = rows[:, 0].astype(np.int64) - low
-    for j in range(1, rows.shape[1]):
-        keys = keys * base + (rows[:, j] - low)
-    return keys
-
-
 def facet_table(cells: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Unique facets of ``cells`` (m, d+1).
 
@@ -66,7 +54,7 @@ def facet_table(cells: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, 
     """
     facets = all_facets(cells).reshape(-1, np.asarray(cells).shape[1] - 1)
     sorted_rows = sort_rows(facets)
-    keys = _row_keys(sorted_rows)
+    keys = row_keys(sorted_rows)
     if keys is None:  # more vertices than int64 keys can hold: slower row-wise unique
         keys = sorted_rows
     _, first, inverse, counts = np.unique(
@@ -92,7 +80,7 @@ def match_facets(table: np.ndarray, queries: np.ndarray) -> np.ndarray:
     """First row of ``table`` (t, d) with the vertex set of each query (q, d), else -1: (q,)."""
     queries = sort_rows(np.asarray(queries, dtype=np.int64))
     table = sort_rows(np.asarray(table, dtype=np.int64).reshape(-1, queries.shape[1]))
-    keys = _row_keys(np.concatenate([table, queries]))
+    keys = row_keys(np.concatenate([table, queries]))
     if keys is None:
         _, keys = np.unique(np.concatenate([table, queries]), axis=0, return_inverse=True)
         keys = keys.reshape(-1)
