@@ -296,7 +296,10 @@ class BodyCalls:
             x_cell = current[b.mesh.cells] if state is None else state.cell_positions(current)
             blades = [blade.edge(t) for t in np.linspace(lo, hi, STEP_SAMPLES)]
             blade.path = blades
-            cut = cut_ahead(swept, x_cell, blades, MARGIN * self._contact_dhat())
+            following = None  # where a prescribed blade will be a step later (its lead)
+            if self._prescribed_motion(blade.obstacle):
+                following = blade.edge(min(t1 + self.time_step, blade.end))
+            cut = cut_ahead(swept, x_cell, blades, MARGIN * self._contact_dhat(), following)
             done = self.cut_body(cut, body=b.name, name=blade.name)
             if blade.pending is not None:  # a step that failed and is taken again
                 done["cells_cut"] += blade.pending["cells_cut"]
@@ -345,6 +348,16 @@ class BodyCalls:
                 out = base.copy()
                 out[config] += move.ravel()
         return out
+
+    def _prescribed_motion(self, name: str | None) -> bool:
+        """Whether obstacle ``name`` moves as prescribed (a function of t, or not at all), so
+        that where it will be after the coming step is known; not when driven live."""
+        from tissuesim.contact.obstacles import DrivenMotion
+
+        ob = next((o for o in self.obstacles if o.name == name), None)
+        return ob is not None and not any(
+            isinstance(m, DrivenMotion) for m in (ob.translation, ob.rotation)
+        )
 
     def _check_blade_start(self, blade) -> None:
         """The blade must start the step outside the body it cuts. Where the body has moved

@@ -149,3 +149,26 @@ def test_an_instrument_driven_off_its_plane_cuts_along_its_sweep_in_contact():
         areas.append(cut["area_m2"])
     assert tool.curved and areas[1] > areas[0] > 0.0
     assert record.extra["forces"]["incision"][1] < 0.0  # the tissue it pushes sideways (+y)
+
+
+def test_the_lead_follows_the_blades_next_step_when_its_motion_is_known():
+    """A prescribed blade leads by where it will be a step later: not at all when it stops,
+    along its next move when it turns; a live one (``following`` None) by this step's travel,
+    at most a cell's edge."""
+    from tissuesim.mesh.cut_ahead import lead
+
+    cube = ts.box((0, 0, 0), (1, 1, 1), (4, 4, 4))  # cell edges 0.25 (0.35 diagonals)
+    x_cell = cube.points[cube.cells]
+    first = np.array([[0.2, 0.5, 0.9], [0.2, 0.5, 0.7]])  # an upright edge in y = 0.5
+    last = first + [0.1, 0.0, 0.0]  # this step: along +x
+    plane = (np.array([0.0, 0.5, 0.0]), np.array([0.0, 1.0, 0.0]))
+    swept = PlanarCut.hull(np.concatenate([first, last]), *plane)
+    same, blades = lead(swept, x_cell, [first, last], following=last)
+    assert same is swept and np.array_equal(blades[-1], last)  # it stops: no lead
+    turned, blades = lead(swept, x_cell, [first, last], following=last + [0.0, 0.0, -0.1])
+    assert np.allclose(blades[-1], last + [0.0, 0.0, -0.1])  # along its next move (-z)
+    assert turned.polygon[:, 2].min() == pytest.approx(0.6)
+    assert turned.polygon[:, 0].max() == pytest.approx(0.3)  # not on along +x
+    live, blades = lead(swept, x_cell, [first, last])
+    assert np.allclose(blades[-1], last + [0.1, 0.0, 0.0])  # this step's travel, < an edge
+    assert live.polygon[:, 0].max() == pytest.approx(0.4)

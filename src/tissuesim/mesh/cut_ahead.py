@@ -36,14 +36,19 @@ MAX_EDGE_SAMPLES = 512
 
 
 def cut_ahead(
-    swept: PlanarCut | SweptCut, x_cell: np.ndarray, blades: list[np.ndarray], margin: float
+    swept: PlanarCut | SweptCut,
+    x_cell: np.ndarray,
+    blades: list[np.ndarray],
+    margin: float,
+    following: np.ndarray | None = None,
 ) -> PlanarCut | SweptCut:
     """The cut to make before a step: ``swept`` (what the blade will have swept by the step's
     end) grown over the sections of the cells (x_cell (m, k, 3), where their vertices are now)
     it touches (``touched_cells``) given the blade's positions ``blades`` over the step (each
     (2, 3) or (3, 3)) and ``margin`` (m), the blade carried on by one more step's travel
-    along its motion (``lead``)."""
-    swept, blades = lead(swept, x_cell, blades)
+    along its motion (``lead``; ``following``: where the blade will be a step later, when its
+    motion is known)."""
+    swept, blades = lead(swept, x_cell, blades, following)
     hit, points, valid, d = touched_cells(swept, x_cell, blades, margin)
     if not hit.any():
         return swept
@@ -83,15 +88,21 @@ def _section_fans(points: np.ndarray, valid: np.ndarray, swept: SweptCut) -> np.
 
 
 def lead(
-    swept: PlanarCut | SweptCut, x_cell: np.ndarray, blades: list[np.ndarray]
+    swept: PlanarCut | SweptCut,
+    x_cell: np.ndarray,
+    blades: list[np.ndarray],
+    following: np.ndarray | None = None,
 ) -> tuple[PlanarCut | SweptCut, list[np.ndarray]]:
     """``swept`` and ``blades`` with the blade carried on past the step's end by its travel in
-    the step, at most LEAD_CELLS of the cells' median edge: tissue moves while the step is
+    the next step, at most LEAD_CELLS of the cells' median edge: tissue moves while the step is
     solved, and what comes towards the blade's edge within that lead is cut already rather than
     pushed (a drooping lobe dragged its last bridge off the blade's plane with a lead of
-    2 dhat). The lead is along the blade's motion only: no cell beside its path is cut."""
+    2 dhat). The lead is along the blade's motion only: no cell beside its path is cut. The
+    next step's travel is the blade's move to ``following`` (where it will be a step later,
+    when its motion is prescribed: a blade that stops leads by nothing), else its travel in
+    this step (a live drive's next target is not known yet)."""
     first, last = blades[0], blades[-1]
-    move = last - first
+    move = last - first if following is None else np.asarray(following, dtype=float) - last
     travel = float(np.linalg.norm(move, axis=1).max())
     if travel == 0.0 or not len(x_cell):
         return swept, blades
