@@ -51,8 +51,9 @@ def test_the_blade_moves_in_the_cuts_kerf_and_the_cut_leads_it_by_little():
     """Driven 0.1 m along x into the block (5 cells a step) and stopped: every step free of
     intersection, the blade clear of the body's surface, no Newton iteration (nothing presses
     on it), and the cut's area between what the blade swept and that plus a cell's band along
-    the blade's edges inside the block (the last moving step's lead of one cell edge lies in
-    it); without contact the cut trails: at most what it swept."""
+    the blade's edges inside the block (the blade stops: its last moving step leads by
+    nothing, the band is the cells it touches); without contact the cut trails: at most what
+    it swept."""
     sim = _block(contact=True, stop=0.5)
     table = sim.system.contact.table
     assert table.enabled[table.names.index("body"), table.names.index("scalpel")]
