@@ -82,23 +82,12 @@ def clearance(
 def _in_swept_area(vertices, blades, point, normal, margin) -> np.ndarray | None:
     """Which vertices project onto the blade's plane within ``margin`` of the convex polygon
     its edges or triangles over the step span (None: they span no area)."""
-    from scipy.spatial import ConvexHull, QhullError
+    from tissuesim.mesh.planar_cut import PlanarCut
 
-    u = np.cross(normal, [1.0, 0.0, 0.0])
-    if np.linalg.norm(u) < 0.5:
-        u = np.cross(normal, [0.0, 1.0, 0.0])
-    u /= np.linalg.norm(u)
-    w = np.cross(normal, u)
-    pts = np.concatenate([np.asarray(b, dtype=float) for b in blades]) - point
-    try:
-        hull = ConvexHull(np.column_stack([pts @ u, pts @ w]))
-    except (QhullError, ValueError):
-        return None
-    rel = vertices - point
-    flat = np.column_stack([rel @ u, rel @ w])
-    # hull.equations: unit outward normals and offsets, a point inside has every row <= 0
-    outside = flat @ hull.equations[:, :2].T + hull.equations[:, 2]
-    return outside.max(axis=1) <= margin
+    area = PlanarCut.hull(
+        np.concatenate([np.asarray(b, dtype=float) for b in blades]), point, normal
+    )
+    return None if area is None else area.reach(vertices) <= margin
 
 
 def _node_sides(nodes, cells, level, point, normal) -> np.ndarray:

@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from tissuesim.errors import InputError
-from tissuesim.mesh.rows import row_keys
+from tissuesim.mesh.rows import row_keys, unique_rows
 
 __all__ = ["boundary_facets", "facet_measures", "facet_normals"]
 
@@ -53,14 +53,10 @@ def facet_table(cells: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, 
     facet, inverse (m*(d+1),) unique id of each facet, counts (u,) how many cells share each.
     """
     facets = all_facets(cells).reshape(-1, np.asarray(cells).shape[1] - 1)
-    sorted_rows = sort_rows(facets)
-    keys = row_keys(sorted_rows)
-    if keys is None:  # more vertices than int64 keys can hold: slower row-wise unique
-        keys = sorted_rows
-    _, first, inverse, counts = np.unique(
-        keys, axis=0, return_index=True, return_inverse=True, return_counts=True
+    _, first, inverse, counts = unique_rows(
+        sort_rows(facets), return_index=True, return_inverse=True, return_counts=True
     )
-    return facets, first, inverse.reshape(-1), counts
+    return facets, first, inverse, counts
 
 
 def boundary_facets(cells: np.ndarray) -> np.ndarray:
