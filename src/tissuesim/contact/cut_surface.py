@@ -29,6 +29,7 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
+from tissuesim.contact.polygon_surface import polygon_surface
 from tissuesim.errors import InputError
 from tissuesim.mesh.rows import unique_rows
 
@@ -63,8 +64,9 @@ def cut_surface(mesh, dhat: float, gap: float = GAP) -> tuple[sp.csr_matrix, np.
     ``dhat`` (m): the cut faces ``gap`` dhat inside each side (default GAP); node levels
     within SNAP_IN dhat above or SNAP_OUT dhat below that are taken as on it, so the level set
     passes through those nodes instead of making tiny triangles next to them; points closer than
-    MERGE dhat (at rest) made one (``_cluster``). IPC's barrier acts between a surface's own
-    primitives closer than dhat, so the surface must have no feature that small."""
+    MERGE dhat (at rest) made one (``contact/polygon_surface.py``). IPC's barrier acts between
+    a surface's own primitives closer than dhat, so the surface must have no feature that
+    small."""
     gap = gap * dhat
     if mesh.dim != 3 or mesh.cells.shape[1] != 4:
         raise InputError(
@@ -84,8 +86,7 @@ def cut_surface(mesh, dhat: float, gap: float = GAP) -> tuple[sp.csr_matrix, np.
     nodes = np.concatenate([pad(face_polys[0]), pad(cap_polys[0])])  # (p, K, 4) corner nodes
     weights = np.concatenate([pad(face_polys[1]), pad(cap_polys[1])])  # (p, K, 4)
     count = np.concatenate([face_polys[2], cap_polys[2]])
-    W, tri = _assemble(mesh.n_points, nodes, weights, count)
-    return _cluster(W, tri, mesh.points, MERGE * dhat)
+    return polygon_surface(mesh.n_points, nodes, weights, count, mesh.points, MERGE * dhat)
 
 
 def _exposed_faces(cells: np.ndarray, levels: np.ndarray, gap: float):
@@ -216,168 +217,3 @@ def _level_gradients(X: np.ndarray, levels: np.ndarray) -> np.ndarray:
     edges = X[:, 1:] - X[:, :1]  # (c, 3, 3)
     rise = levels[:, 1:] - levels[:, :1]  # (c, 3)
     return np.linalg.solve(edges, rise[:, :, None])[:, :, 0]
-
-
-def _assemble(n_points: int, nodes: np.ndarray, weights: np.ndarray, count: np.ndarray):
-    """Polygons (corners as weights over 4 nodes) -> merged surface points W (k, n_points) and
-    triangles (t, 3) over them. Corners on one mesh edge with the same weight (to _MERGE) are
-    one point. A polygon edge along a mesh edge that holds other polygons' points between its
-    ends gets them inserted (no T-junction: IPC would see a point at zero distance from a
-    triangle it is not a vertex of), and such a polygon is fanned from its centroid; the others
-    from their first corner."""
-    P, K, _ = weights.shape
-    weights = np.where(weights > _ZERO, weights, 0.0)
-    weights /= np.maximum(weights.sum(axis=2, keepdims=True), 1e-300)
-    # each corner: its (up to two) nodes and the weight of the larger-numbered one
-    big = np.argsort(-weights, axis=2)[:, :, :2]  # the two largest weights
-    w2 = np.take_along_axis(weights, big, axis=2)
-    n2 = np.take_along_axis(nodes, big, axis=2)
-    single = w2[:, :, 1] <= 0.0
-    n2[:, :, 1] = np.where(single, n2[:, :, 0], n2[:, :, 1])
-    lo, hi = n2.min(axis=2), n2.max(axis=2)
-    w_hi = np.where(single, 0.0, np.where(n2[:, :, 0] == hi, w2[:, :, 0], w2[:, :, 1]))
-    valid = np.arange(K)[None, :] < count[:, None]
-    vlo, vhi, vw = lo[valid], hi[valid], w_hi[valid]
-    # merge: sort by (edge, weight); a new point where the edge changes or the weight jumps
-    order = np.lexsort((vw, vhi, vlo))
-    new = np.ones(order.size, dtype=bool)
-    new[1:] = (
-        (vlo[order][1:] != vlo[order][:-1])
-        | (vhi[order][1:] != vhi[order][:-1])
-        | (np.diff(vw[order]) > _MERGE)
-    )
-    label = np.cumsum(new) - 1
-    point = np.empty(order.size, dtype=np.int64)
-    point[order] = label
-    corner = np.full((P, K), -1)
-    corner[valid] = point
-    first = order[new]
-    p_lo, p_hi, p_w = vlo[first], vhi[first], vw[first]
-    # corners that merged with their neighbour are one corner; a polygon left with fewer than
-    # three is empty (a face between copies whose regions only touch along a line)
-    prev = np.where(np.arange(K)[None, :] == 0, np.maximum(count[:, None] - 1, 0), np.arange(K) - 1)
-    repeat = valid & (corner == np.take_along_axis(corner, prev, axis=1))
-    keep_corner = valid & ~repeat
-    slot = np.cumsum(keep_corner, axis=1) - 1
-    packed = np.full((P, K), -1)
-    r, c = np.nonzero(keep_corner)
-    packed[r, slot[r, c]] = corner[r, c]
-    packed_lo, packed_hi = np.zeros((P, K), np.int64), np.zeros((P, K), np.int64)
-    packed_lo[r, slot[r, c]] = lo[r, c]
-    packed_hi[r, slot[r, c]] = hi[r, c]
-    count = keep_corner.sum(axis=1)
-    corner, lo, hi = packed, packed_lo, packed_hi
-    valid = np.arange(K)[None, :] < count[:, None]
-    corner[~valid] = -1
-    alive = count >= 3
-    k = len(first)
-    rows = [np.repeat(np.arange(k), 2)]
-    cols = [np.column_stack([p_lo, p_hi]).ravel()]
-    vals = [np.column_stack([1.0 - p_w, p_w]).ravel()]  # a node: lo == hi, 1 in all
-    # points strictly inside mesh edges, by edge: (lo, hi) -> [(w, point)], sorted
-    on_edge: dict[tuple[int, int], list] = {}
-    for j in np.flatnonzero(p_lo != p_hi):
-        on_edge.setdefault((int(p_lo[j]), int(p_hi[j])), []).append((float(p_w[j]), int(j)))
-    split = np.zeros((P, K), dtype=bool)  # polygon edge i -> i+1 lies along a split mesh edge
-    if on_edge:
-        keys = np.array(list(on_edge), dtype=np.int64)
-        split_keys = set((keys[:, 0] * n_points + keys[:, 1]).tolist())
-        nxt = np.where(np.arange(K)[None, :] + 1 < count[:, None], np.arange(K) + 1, 0)
-        b_lo = np.take_along_axis(lo, nxt, axis=1)
-        b_hi = np.take_along_axis(hi, nxt, axis=1)
-        ends = np.stack([lo, hi, b_lo, b_hi], axis=2)
-        e_lo, e_hi = ends.min(axis=2), ends.max(axis=2)
-        # along one mesh edge: both corners' nodes within {e_lo, e_hi}, and two nodes in all
-        along = np.all((ends == e_lo[..., None]) | (ends == e_hi[..., None]), axis=2)
-        along &= (e_lo != e_hi) & valid
-        ekey = e_lo * n_points + e_hi
-        split = along & np.isin(ekey, list(split_keys))
-    tris = []
-    extra = k
-    plain = ~split.any(axis=1) & alive
-    for i in range(1, K - 1):  # fans from the first corner
-        ok = plain & (i + 1 < count)
-        tris.append(np.column_stack([corner[ok, 0], corner[ok, i], corner[ok, i + 1]]))
-    for poly in np.flatnonzero(~plain & alive):  # few: polygons with a T-junction to mend
-        ring = []
-        n = int(count[poly])
-        for i in range(n):
-            a = int(corner[poly, i])
-            ring.append(a)
-            if not split[poly, i]:
-                continue
-            b = int(corner[poly, (i + 1) % n])
-            e0 = int(min(p_lo[a], p_lo[b]))
-            e1 = int(max(p_hi[a], p_hi[b]))
-            wa, wb = _along(a, e0, e1, p_lo, p_w), _along(b, e0, e1, p_lo, p_w)
-            inside = [
-                (w, j)
-                for w, j in on_edge.get((e0, e1), [])
-                if min(wa, wb) + _MERGE < w < max(wa, wb) - _MERGE
-            ]
-            inside.sort(reverse=bool(wa > wb))
-            ring.extend(j for _, j in inside)
-        # the centroid of the polygon's corners, a new point
-        # (its corners' node weights, averaged; the sparse sum adds repeated nodes)
-        own = corner[poly, :n]
-        rows.append(np.full(2 * n, extra))
-        cols.append(np.concatenate([p_lo[own], p_hi[own]]))
-        vals.append(np.concatenate([1.0 - p_w[own], p_w[own]]) / n)
-        m = len(ring)
-        tris.append(np.column_stack([np.full(m, extra), ring, np.roll(ring, -1)]))
-        extra += 1
-    W = sp.csr_matrix(
-        (np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
-        shape=(extra, n_points),
-    )
-    tri = np.concatenate(tris).astype(np.int64) if tris else np.zeros((0, 3), dtype=np.int64)
-    tri = tri[(tri[:, 0] != tri[:, 1]) & (tri[:, 1] != tri[:, 2]) & (tri[:, 0] != tri[:, 2])]
-    used = np.unique(tri)
-    local = np.full(extra, -1)
-    local[used] = np.arange(used.size)
-    return W[used], local[tri]
-
-
-def _along(j: int, e0: int, e1: int, p_lo: np.ndarray, p_w: np.ndarray) -> float:
-    """Where point j lies along mesh edge (e0, e1): 0 at node e0, 1 at node e1, else its
-    weight (a point inside that edge)."""
-    if p_w[j] == 0.0:  # a node
-        return 0.0 if p_lo[j] == e0 else 1.0
-    return float(p_w[j])
-
-
-def _cluster(W: sp.csr_matrix, tri: np.ndarray, rest: np.ndarray, merge: float):
-    """Surface points joined by an edge shorter than ``merge`` (at rest) made one, at their
-    mean (weights averaged): the level set passes within dhat of nodes near the cut's plane in
-    a star of points dhat apart, which IPC's barrier would push apart at rest. Where the body
-    was cut the level is an affine function of the node positions, so the mean keeps the level
-    exactly. Triangles that collapse, and pairs that become one face twice in opposite
-    orientations, are dropped."""
-    from scipy.sparse.csgraph import connected_components
-
-    if merge <= 0.0 or len(tri) == 0:
-        return W, tri
-    V = W @ rest
-    edges = unique_rows(
-        np.sort(np.concatenate([tri[:, [0, 1]], tri[:, [1, 2]], tri[:, [2, 0]]]), 1)
-    )
-    short = np.linalg.norm(V[edges[:, 0]] - V[edges[:, 1]], axis=1) < merge
-    pairs = edges[short]
-    if len(pairs) == 0:
-        return W, tri
-    k = len(V)
-    graph = sp.coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(k, k))
-    n, label = connected_components(graph, directed=False)
-    size = np.bincount(label, minlength=n)
-    average = sp.csr_matrix((1.0 / size[label], (label, np.arange(k))), shape=(n, k))
-    W = (average @ W).tocsr()
-    tri = label[tri]
-    tri = tri[(tri[:, 0] != tri[:, 1]) & (tri[:, 1] != tri[:, 2]) & (tri[:, 0] != tri[:, 2])]
-    # a face and its reverse cancel (two sides of a collapsed sliver)
-    key = np.sort(tri, axis=1)
-    _, inverse, count = unique_rows(key, return_inverse=True, return_counts=True)
-    tri = tri[count[inverse] == 1]
-    used = np.unique(tri)
-    local = np.full(n, -1)
-    local[used] = np.arange(used.size)
-    return W[used], local[tri]

@@ -1,0 +1,280 @@
+"""Clipped face polygons -> one watertight triangle surface (the cut body's contact surface,
+``contact/cut_surface.py``): every surface point a fixed weighting of mesh nodes.
+
+1. Corners are points on mesh edges (or nodes): corners on one edge with the same weight are
+   one point.
+2. A polygon side along a mesh edge that holds other polygons' points between its ends gets
+   them inserted (no T-junction: IPC would see a point at zero distance from a triangle it is
+   not a vertex of).
+3. Points joined by a polygon side shorter than ``merge`` at rest are made one, at their mean
+   (weights averaged): the level set passes within dhat of nodes near the cut's plane in a
+   star of points dhat apart, which IPC's barrier would push apart at rest. Where the body
+   was cut the level is an affine function of the node positions, so the mean keeps the
+   level exactly.
+4. Only then are the polygons triangulated, over their merged corners: a polygon left with
+   three corners is one triangle; one with inserted points is fanned from the centroid of its
+   corners, the others from their first corner.
+
+Merging before triangulating matters: a sliver polygon (a level set passing along a mesh edge)
+fanned first and merged after could have its fan's apex left on the wrong side of corners that
+merged, and the folded triangles crossed their neighbours (measured on an arc cut through a
+sagging block: one edge through one face, all within 0.1 mm).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import scipy.sparse as sp
+from scipy.sparse.csgraph import connected_components
+
+from tissuesim.mesh.rows import unique_rows
+
+__all__ = ["polygon_surface"]
+
+#: weights below this are round-off (a point on an edge has two, a node one)
+_ZERO = 1e-12
+#: points on one mesh edge closer than this (in weight) are one point
+_MERGE = 1e-9
+
+
+def polygon_surface(
+    n_points: int,
+    nodes: np.ndarray,
+    weights: np.ndarray,
+    count: np.ndarray,
+    rest: np.ndarray,
+    merge: float,
+) -> tuple[sp.csr_matrix, np.ndarray]:
+    """(W (k, n_points), triangles (t, 3)) of the polygons whose corners are weights
+    ``weights`` (p, K, 4) over ``nodes`` (p, K, 4) (at most two nonzero: a point on a mesh edge
+    or a node), ``count`` (p,) corners each, in outward order; ``rest`` the node positions at
+    rest (n_points, 3), ``merge`` the distance (m) under which points are made one."""
+    p_lo, p_hi, p_w, corner, count, lo, hi = _points(nodes, weights, count)
+    k = len(p_lo)
+    W = sp.csr_matrix(
+        (
+            np.column_stack([1.0 - p_w, p_w]).ravel(),  # a node: lo == hi, 1 in all
+            (np.repeat(np.arange(k), 2), np.column_stack([p_lo, p_hi]).ravel()),
+        ),
+        shape=(k, n_points),
+    )
+    ring, size, mended = _rings(n_points, corner, count, lo, hi, p_lo, p_hi, p_w)
+    label, W = _merge(W, ring, size, rest, merge)
+    ring = np.where(ring >= 0, label[np.maximum(ring, 0)], -1)
+    ring, size, mended = _distinct(ring, size, mended)
+    W, tri = _triangulate(W, ring, size, mended)
+    tri = tri[(tri[:, 0] != tri[:, 1]) & (tri[:, 1] != tri[:, 2]) & (tri[:, 0] != tri[:, 2])]
+    # a face and its reverse cancel (two sides of a collapsed sliver)
+    _, inverse, times = unique_rows(np.sort(tri, axis=1), return_inverse=True, return_counts=True)
+    tri = tri[times[inverse] == 1]
+    used = np.unique(tri)
+    local = np.full(W.shape[0], -1)
+    local[used] = np.arange(used.size)
+    return W[used], local[tri]
+
+
+def _points(nodes: np.ndarray, weights: np.ndarray, count: np.ndarray):
+    """The polygons' points: corners on one mesh edge with the same weight (to _MERGE) are one
+    point. Returns each point's edge (p_lo, p_hi; a node: both the same) and weight of p_hi,
+    then the polygons' corners as points (P, K) (-1 padding, a corner repeated by its
+    neighbour dropped), their counts, and each corner's edge (lo, hi)."""
+    P, K, _ = weights.shape
+    weights = np.where(weights > _ZERO, weights, 0.0)
+    weights /= np.maximum(weights.sum(axis=2, keepdims=True), 1e-300)
+    # each corner: its (up to two) nodes and the weight of the larger-numbered one
+    big = np.argsort(-weights, axis=2)[:, :, :2]  # the two largest weights
+    w2 = np.take_along_axis(weights, big, axis=2)
+    n2 = np.take_along_axis(nodes, big, axis=2)
+    single = w2[:, :, 1] <= 0.0
+    n2[:, :, 1] = np.where(single, n2[:, :, 0], n2[:, :, 1])
+    lo, hi = n2.min(axis=2), n2.max(axis=2)
+    w_hi = np.where(single, 0.0, np.where(n2[:, :, 0] == hi, w2[:, :, 0], w2[:, :, 1]))
+    valid = np.arange(K)[None, :] < count[:, None]
+    vlo, vhi, vw = lo[valid], hi[valid], w_hi[valid]
+    # merge: sort by (edge, weight); a new point where the edge changes or the weight jumps
+    order = np.lexsort((vw, vhi, vlo))
+    new = np.ones(order.size, dtype=bool)
+    new[1:] = (
+        (vlo[order][1:] != vlo[order][:-1])
+        | (vhi[order][1:] != vhi[order][:-1])
+        | (np.diff(vw[order]) > _MERGE)
+    )
+    label = np.cumsum(new) - 1
+    point = np.empty(order.size, dtype=np.int64)
+    point[order] = label
+    corner = np.full((P, K), -1)
+    corner[valid] = point
+    first = order[new]
+    # corners that merged with their neighbour are one corner; a polygon left with fewer than
+    # three is empty (a face between copies whose regions only touch along a line)
+    prev = np.where(np.arange(K)[None, :] == 0, np.maximum(count[:, None] - 1, 0), np.arange(K) - 1)
+    repeat = valid & (corner == np.take_along_axis(corner, prev, axis=1))
+    keep_corner = valid & ~repeat
+    slot = np.cumsum(keep_corner, axis=1) - 1
+    packed = np.full((P, K), -1)
+    r, c = np.nonzero(keep_corner)
+    packed[r, slot[r, c]] = corner[r, c]
+    packed_lo, packed_hi = np.zeros((P, K), np.int64), np.zeros((P, K), np.int64)
+    packed_lo[r, slot[r, c]] = lo[r, c]
+    packed_hi[r, slot[r, c]] = hi[r, c]
+    return vlo[first], vhi[first], vw[first], packed, keep_corner.sum(axis=1), packed_lo, packed_hi
+
+
+def _rings(n_points, corner, count, lo, hi, p_lo, p_hi, p_w):
+    """Each polygon's ring of points (R, L) (-1 padding), its size (R,), and whether it got
+    points inserted along a side (``mended``: it is fanned from its centroid, since inserted
+    points lie on a line with its corners); polygons with fewer than three corners dropped."""
+    P, K = corner.shape
+    valid = np.arange(K)[None, :] < count[:, None]
+    alive = count >= 3
+    # points strictly inside mesh edges, by edge: (lo, hi) -> [(w, point)]
+    on_edge: dict[tuple[int, int], list] = {}
+    for j in np.flatnonzero(p_lo != p_hi):
+        on_edge.setdefault((int(p_lo[j]), int(p_hi[j])), []).append((float(p_w[j]), int(j)))
+    split = np.zeros((P, K), dtype=bool)  # polygon side i -> i+1 lies along a split mesh edge
+    if on_edge:
+        keys = np.array(list(on_edge), dtype=np.int64)
+        nxt = np.where(np.arange(K)[None, :] + 1 < count[:, None], np.arange(K) + 1, 0)
+        b_lo = np.take_along_axis(lo, nxt, axis=1)
+        b_hi = np.take_along_axis(hi, nxt, axis=1)
+        ends = np.stack([lo, hi, b_lo, b_hi], axis=2)
+        e_lo, e_hi = ends.min(axis=2), ends.max(axis=2)
+        # along one mesh edge: both corners' nodes within {e_lo, e_hi}, and two nodes in all
+        along = np.all((ends == e_lo[..., None]) | (ends == e_hi[..., None]), axis=2)
+        along &= (e_lo != e_hi) & valid
+        split = along & np.isin(e_lo * n_points + e_hi, keys[:, 0] * n_points + keys[:, 1])
+    plain = alive & ~split.any(axis=1)
+    mended_rows = []
+    for poly in np.flatnonzero(alive & ~plain):  # few: polygons with a T-junction to mend
+        ring = []
+        n = int(count[poly])
+        for i in range(n):
+            a = int(corner[poly, i])
+            ring.append(a)
+            if not split[poly, i]:
+                continue
+            b = int(corner[poly, (i + 1) % n])
+            e0 = int(min(p_lo[a], p_lo[b]))
+            e1 = int(max(p_hi[a], p_hi[b]))
+            wa, wb = _along(a, e0, e1, p_lo, p_w), _along(b, e0, e1, p_lo, p_w)
+            inside = [
+                (w, j)
+                for w, j in on_edge.get((e0, e1), [])
+                if min(wa, wb) + _MERGE < w < max(wa, wb) - _MERGE
+            ]
+            inside.sort(reverse=bool(wa > wb))
+            ring.extend(j for _, j in inside)
+        mended_rows.append(ring)
+    L = max([K] + [len(r) for r in mended_rows])
+    rings = np.full((int(plain.sum()) + len(mended_rows), L), -1)
+    rings[: int(plain.sum()), :K] = corner[plain]
+    for i, r in enumerate(mended_rows):
+        rings[int(plain.sum()) + i, : len(r)] = r
+    size = np.concatenate([count[plain], [len(r) for r in mended_rows]]).astype(np.int64)
+    mended = np.arange(len(rings)) >= int(plain.sum())
+    return rings, size, mended
+
+
+def _along(j: int, e0: int, e1: int, p_lo: np.ndarray, p_w: np.ndarray) -> float:
+    """Where point j lies along mesh edge (e0, e1): 0 at node e0, 1 at node e1, else its
+    weight (a point inside that edge)."""
+    if p_w[j] == 0.0:  # a node
+        return 0.0 if p_lo[j] == e0 else 1.0
+    return float(p_w[j])
+
+
+def _merge(W: sp.csr_matrix, ring: np.ndarray, size: np.ndarray, rest: np.ndarray, merge: float):
+    """(label (k,), merged W): points joined by a ring side shorter than ``merge`` at rest
+    made one, at their mean."""
+    k = W.shape[0]
+    if merge <= 0.0 or len(ring) == 0:
+        return np.arange(k), W
+    L = ring.shape[1]
+    nxt = np.where(np.arange(L)[None, :] + 1 < size[:, None], np.arange(L) + 1, 0)
+    valid = np.arange(L)[None, :] < size[:, None]
+    a, b = ring[valid], np.take_along_axis(ring, nxt, axis=1)[valid]
+    V = W @ rest
+    short = np.linalg.norm(V[a] - V[b], axis=1) < merge
+    if not short.any():
+        return np.arange(k), W
+    graph = sp.coo_matrix((np.ones(int(short.sum())), (a[short], b[short])), shape=(k, k))
+    n, label = connected_components(graph, directed=False)
+    members = np.bincount(label, minlength=n)
+    average = sp.csr_matrix((1.0 / members[label], (label, np.arange(k))), shape=(n, k))
+    return label, (average @ W).tocsr()
+
+
+def _distinct(ring: np.ndarray, size: np.ndarray, mended: np.ndarray):
+    """The rings with each run of one point kept once (also around the end), and a ring that
+    now meets itself (a point twice, apart: merged across a pinch) split there into loops;
+    rings left with fewer than three points dropped."""
+    R, L = ring.shape
+    valid = np.arange(L)[None, :] < size[:, None]
+    prev = np.where(np.arange(L)[None, :] == 0, np.maximum(size[:, None] - 1, 0), np.arange(L) - 1)
+    keep = valid & (ring != np.take_along_axis(ring, prev, axis=1))
+    all_same = valid.any(axis=1) & ~keep.any(axis=1)  # one point: nothing left
+    keep[all_same] = False
+    slot = np.cumsum(keep, axis=1) - 1
+    packed = np.full((R, L), -1)
+    r, c = np.nonzero(keep)
+    packed[r, slot[r, c]] = ring[r, c]
+    size = keep.sum(axis=1)
+    # a point twice in one ring (rare): the ring splits into its loops
+    s = np.sort(np.where(packed >= 0, packed, -1 - np.arange(L)[None, :]), axis=1)
+    pinched = np.flatnonzero((s[:, 1:] == s[:, :-1]).any(axis=1) & (size >= 3))
+    extra, extra_mended = [], []
+    for i in pinched:
+        for loop in _loops([int(v) for v in packed[i, : size[i]]]):
+            extra.append(loop)
+            extra_mended.append(bool(mended[i]))
+        size[i] = 0
+    if extra:
+        more = np.full((len(extra), L), -1)
+        for i, loop in enumerate(extra):
+            more[i, : len(loop)] = loop
+        packed = np.concatenate([packed, more])
+        size = np.concatenate([size, [len(loop) for loop in extra]])
+        mended = np.concatenate([mended, extra_mended])
+    ok = size >= 3
+    return packed[ok], size[ok], mended[ok]
+
+
+def _loops(ring: list[int]) -> list[list[int]]:
+    """A closed ring that passes a point more than once, cut into simple loops there."""
+    out, stack, seen = [], [], {}
+    for v in ring + ring[:1]:
+        if v in seen:
+            start = seen[v]
+            loop = stack[start:]
+            for u in loop:
+                seen.pop(u, None)
+            del stack[start:]
+            if len(loop) >= 3:
+                out.append(loop)
+        seen[v] = len(stack)
+        stack.append(v)
+    return out
+
+
+def _triangulate(W: sp.csr_matrix, ring: np.ndarray, size: np.ndarray, mended: np.ndarray):
+    """(W with the mended rings' centroids appended, triangles): fans from the first point,
+    and from a new centroid point for mended rings with more than three points."""
+    L = ring.shape[1]
+    tris = []
+    corner_fan = ~mended | (size == 3)
+    for i in range(1, L - 1):
+        ok = corner_fan & (i + 1 < size)
+        tris.append(np.column_stack([ring[ok, 0], ring[ok, i], ring[ok, i + 1]]))
+    fan = np.flatnonzero(~corner_fan)
+    if len(fan):
+        k = W.shape[0]
+        valid = np.arange(L)[None, :] < size[fan, None]
+        r, c = np.nonzero(valid)
+        # each centroid: its ring's point weights, averaged
+        average = sp.csr_matrix((1.0 / size[fan][r], (r, ring[fan][r, c])), shape=(len(fan), k))
+        W = sp.vstack([W, average @ W]).tocsr()
+        centre = k + r
+        nxt = np.where(c + 1 < size[fan][r], c + 1, 0)
+        tris.append(np.column_stack([centre, ring[fan][r, c], ring[fan][r, nxt]]))
+    tri = np.concatenate(tris).astype(np.int64) if tris else np.zeros((0, 3), dtype=np.int64)
+    return W, tri
