@@ -155,7 +155,7 @@ def test_the_step_candidate_set_gives_the_barrier_of_a_fresh_build():
     _press(sim, [4e-4])
     contact = sim.system.contact
     x = sim.state.x
-    contact.begin_step(x, np.zeros_like(x))
+    contact.begin_step()
     rng = np.random.default_rng(5)
     cache = contact.candidates
     for scale in (0.0, 0.3 * cache.margin, 3.0 * cache.margin):  # the last rebuilds
@@ -171,6 +171,31 @@ def test_the_step_candidate_set_gives_the_barrier_of_a_fresh_build():
             assert np.allclose(cached[1], fresh[1], rtol=1e-12, atol=0)
         if scale > cache.margin:
             assert contact.stats.candidate_builds == builds + 1
+
+
+def test_a_sweep_from_its_own_broad_phase_finds_the_step_of_the_step_set(monkeypatch):
+    """CCD sweeps take their pairs from the step's candidate set or, where that set is dense,
+    from a broad phase over the sweep's own boxes (contact/ccd_queries.py): both give the same
+    collision-free fraction, for moves that hit the probe and moves that do not."""
+    from tissuesim.contact import ccd_queries
+
+    sim = pressed_block()
+    _press(sim, [4e-4])
+    contact = sim.system.contact
+    x = sim.state.x
+    contact.begin_step()
+    rng = np.random.default_rng(3)
+    top = np.zeros_like(x).reshape(-1, 3)
+    top[:, 2] = 1.0  # every node up: the top surface runs into the probe
+    fractions = []
+    for move in (1e-3 * top.ravel(), 2e-4 * rng.uniform(-1, 1, x.size)):
+        got = []
+        for pairs in (float("inf"), 0.0):  # the step's set; the sweep's own
+            monkeypatch.setattr(ccd_queries, "SWEEP_PAIRS_PER_VERTEX", pairs)
+            got.append(contact.max_step(x, x + move))
+        assert got[0] == pytest.approx(got[1], rel=1e-12)
+        fractions.append(got[0])
+    assert fractions[0] < 0.5  # the upward move is cut short by the probe
 
 
 def test_the_live_session_moves_the_instrument_with_keys_and_the_mouse_headless():

@@ -2,7 +2,8 @@
 ``contact.model.ContactModel``): the largest intersection-free fraction of a straight move (the
 line search's first trial), whether a move or a step's start is free of intersection, and
 whether a configuration intersects; from the step's candidate set when both ends lie within its
-margin, timed into the step's stats."""
+margin and the set is not dense, else from a broad phase over the sweep's own boxes; timed into
+the step's stats."""
 
 from __future__ import annotations
 
@@ -15,6 +16,13 @@ __all__ = ["CollisionQueries"]
 #: tight-inclusion CCD for one yes-or-no query per step: its tolerance, and the iterations after
 #: which it gives up (and says "not free"; unbounded it took 16-80 s between parallel faces)
 TIGHT_TOLERANCE, TIGHT_ITERATIONS = 1e-6, 100_000
+#: a sweep takes its pairs from the step's candidate set (``contact/candidates.py``) while that
+#: holds at most this many per surface vertex, else from ipctk's broad phase over the sweep's
+#: own boxes: the narrow phase pays for every pair, and the step's set holds every pair within
+#: dhat of the step's path. Between a cut's two fresh faces (2 dhat apart over a whole section)
+#: it held 11 per vertex (900 after a long sweep) and CCD took 5x longer from it; a probe on
+#: an organ (1 per vertex) is as fast either way (``benchmarks/contact_candidates.py``)
+SWEEP_PAIRS_PER_VERTEX = 8.0
 
 
 class CollisionQueries:
@@ -69,9 +77,12 @@ class CollisionQueries:
 
     def _sweep(self, query, V0: np.ndarray, V1: np.ndarray):
         """One CCD query over the straight move V0 -> V1, timed into the step's stats; from the
-        step's candidate set when both ends lie within its margin."""
+        step's candidate set when both ends lie within its margin and it holds at most
+        SWEEP_PAIRS_PER_VERTEX pairs per vertex, else from a broad phase over the sweep."""
         start = time.perf_counter()
         candidates = self.candidates.get(V0, V1)
+        if candidates is not None and len(candidates) > SWEEP_PAIRS_PER_VERTEX * len(V0):
+            candidates = None
         if candidates is not None:
             out = getattr(candidates, query.__name__)(self.mesh, V0, V1, 0.0, self.ccd)
         else:

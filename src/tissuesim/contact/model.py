@@ -319,33 +319,15 @@ class ContactModel(FrictionLag, CollisionQueries):
         return np.asfortranarray(V)
 
     # -- the candidate set, built once per step and reused ------------------------------------
-    def begin_step(
-        self, c: np.ndarray, motion: np.ndarray, obstacles_start: np.ndarray | None = None
-    ) -> None:
-        """A new step from c, its bodies expected to move by about ``motion`` (tangent DOFs,
-        h v_n): the candidate set is built at the first evaluation with bounds inflated by a
-        margin (the largest expected vertex motion, the obstacles' motion in the step, at
-        least dhat) and reused by every evaluation and CCD sweep whose vertices stay within
-        the margin of where it was built; a vertex that leaves it rebuilds the set
-        (contact/candidates.py)."""
-        expected = 0.0
-        if motion.size and np.any(motion):
-            expected = float(np.max(np.abs(self.selection(c) @ motion), initial=0.0))
-        if self.moving and obstacles_start is not None:  # self.time: the step's end
-            moved = np.abs(self.obstacle_positions(self.time) - obstacles_start)
-            expected = max(expected, float(np.max(moved, initial=0.0)))
-        # past a quarter of an edge, a body's own neighbouring facets all become candidates
-        self.candidates.begin(max(self.dhat, min(1.5 * expected, 0.25 * self.edge_length)))
-
-    @property
-    def edge_length(self) -> float:
-        """The median edge length (m) of the bodies' contact surfaces."""
-        if getattr(self, "_edge_length", None) is None:
-            E = self.mesh.edges
-            E = E[E.max(axis=1) < self.n_deformable] if self.n_deformable else E
-            lengths = np.linalg.norm(self.rest[E[:, 0]] - self.rest[E[:, 1]], axis=1)
-            self._edge_length = float(np.median(lengths)) if len(lengths) else self.dhat
-        return self._edge_length
+    def begin_step(self) -> None:
+        """A new step: the candidate set is built at the first evaluation with bounds inflated
+        by a margin of dhat and reused by every evaluation (and CCD sweep, while it is not
+        dense: ``contact/ccd_queries.py``) whose vertices stay within the margin of where it
+        was built; a vertex that leaves it rebuilds the set (contact/candidates.py). A margin
+        of the step's expected motion (up to a quarter of an edge, the earlier default) saved
+        rebuilds but every evaluation paid for its extra pairs: dhat was as fast or faster on
+        every scene of ``benchmarks/contact_candidates.py``, and needs no motion estimate."""
+        self.candidates.begin(self.dhat)
 
     def _collisions(self, V: np.ndarray):
         col = self._ipctk.NormalCollisions()

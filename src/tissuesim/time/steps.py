@@ -76,7 +76,7 @@ def implicit_step(
             if y0 is None:
                 y0 = contact.obstacle_positions(state.time)
             y1 = contact.obstacle_positions(t1)
-        contact.begin_step(state.x, h * (state.v if dynamic else 0.0 * state.v), y0)
+        contact.begin_step()
         # Newton must start where the bodies can get from x_n without crossing a surface, the
         # obstacles and prescribed vertices moving to their t1 places on the way: with moving
         # obstacles the prediction c_n + h v_n carries the surface under an instrument along
