@@ -122,10 +122,13 @@ def _exposed_faces(cells: np.ndarray, levels: np.ndarray, gap: float):
     rows = np.arange(len(idx))[:, None]
     W[rows, np.arange(3)[None, :], inverse_order] = 1.0
     count = np.full(len(idx), 3)
-    for values in constraints:
-        v = values[idx]
-        v = np.where(np.isfinite(v), v, 1.0)  # +inf (no constraint) keeps everything
-        W, count = _clip(W, count, v)
+    # only faces some constraint cuts into are clipped (most faces are whole: away from a cut)
+    values = [np.where(np.isfinite(v), v, 1.0) for v in (c[idx] for c in constraints)]
+    clipped = np.flatnonzero(np.any([np.any(v < 0.0, axis=1) for v in values], axis=0))
+    Wc, count_c = W[clipped], count[clipped]
+    for v in values:  # +inf (no constraint) keeps everything
+        Wc, count_c = _clip(Wc, count_c, v[clipped])
+    W[clipped], count[clipped] = Wc, count_c
     keep = count >= 3
     nodes = np.zeros((keep.sum(), K, 4), dtype=np.int64)
     nodes[:, :, :3] = snodes[idx[keep]][:, None, :]

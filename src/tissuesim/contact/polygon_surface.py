@@ -127,13 +127,13 @@ def _rings(n_points, corner, count, lo, hi, p_lo, p_hi, p_w):
     P, K = corner.shape
     valid = np.arange(K)[None, :] < count[:, None]
     alive = count >= 3
-    # points strictly inside mesh edges, by edge: (lo, hi) -> [(w, point)]
-    on_edge: dict[tuple[int, int], list] = {}
-    for j in np.flatnonzero(p_lo != p_hi):
-        on_edge.setdefault((int(p_lo[j]), int(p_hi[j])), []).append((float(p_w[j]), int(j)))
+    # points strictly inside mesh edges, sorted by (edge key, weight): an edge's run of them
+    inner = np.flatnonzero(p_lo != p_hi)
+    inner_key = p_lo[inner] * n_points + p_hi[inner]
+    by_edge = inner[np.lexsort((p_w[inner], inner_key))]
+    sorted_key = p_lo[by_edge] * n_points + p_hi[by_edge]
     split = np.zeros((P, K), dtype=bool)  # polygon side i -> i+1 lies along a split mesh edge
-    if on_edge:
-        keys = np.array(list(on_edge), dtype=np.int64)
+    if len(inner):
         nxt = np.where(np.arange(K)[None, :] + 1 < count[:, None], np.arange(K) + 1, 0)
         b_lo = np.take_along_axis(lo, nxt, axis=1)
         b_hi = np.take_along_axis(hi, nxt, axis=1)
@@ -142,7 +142,7 @@ def _rings(n_points, corner, count, lo, hi, p_lo, p_hi, p_w):
         # along one mesh edge: both corners' nodes within {e_lo, e_hi}, and two nodes in all
         along = np.all((ends == e_lo[..., None]) | (ends == e_hi[..., None]), axis=2)
         along &= (e_lo != e_hi) & valid
-        split = along & np.isin(e_lo * n_points + e_hi, keys[:, 0] * n_points + keys[:, 1])
+        split = along & np.isin(e_lo * n_points + e_hi, sorted_key)
     plain = alive & ~split.any(axis=1)
     mended_rows = []
     for poly in np.flatnonzero(alive & ~plain):  # few: polygons with a T-junction to mend
@@ -157,13 +157,13 @@ def _rings(n_points, corner, count, lo, hi, p_lo, p_hi, p_w):
             e0 = int(min(p_lo[a], p_lo[b]))
             e1 = int(max(p_hi[a], p_hi[b]))
             wa, wb = _along(a, e0, e1, p_lo, p_w), _along(b, e0, e1, p_lo, p_w)
-            inside = [
-                (w, j)
-                for w, j in on_edge.get((e0, e1), [])
-                if min(wa, wb) + _MERGE < w < max(wa, wb) - _MERGE
+            key = e0 * n_points + e1
+            run = by_edge[
+                np.searchsorted(sorted_key, key) : np.searchsorted(sorted_key, key, "right")
             ]
-            inside.sort(reverse=bool(wa > wb))
-            ring.extend(j for _, j in inside)
+            w = p_w[run]  # ascending
+            inside = run[(w > min(wa, wb) + _MERGE) & (w < max(wa, wb) - _MERGE)]
+            ring.extend((inside[::-1] if wa > wb else inside).tolist())
         mended_rows.append(ring)
     L = max([K] + [len(r) for r in mended_rows])
     rings = np.full((int(plain.sum()) + len(mended_rows), L), -1)
