@@ -149,6 +149,16 @@ def test_automatic_choice_and_its_reason(monkeypatch):
     assert solver.name == "cg+amg" and "pyamg" in reason
     solver, reason = make_linear_solver("auto", 6_000, 3, vertices)
     assert solver.name == "cg+amg" and "beats SuperLU" in reason
+    # several bodies (no vertices for the rigid-body modes): AMG only without a direct solver
+    solver, reason = make_linear_solver("auto", 10**5, 3)
+    assert solver.name == "cg+amg" and "several bodies" in reason
+    monkeypatch.setattr(linear, "has_cholmod", lambda: True)
+    monkeypatch.setattr(linear, "CholmodSolver", linear.SuperLUSolver)  # stands in for it
+    solver, reason = make_linear_solver("auto", 10**5, 3)
+    assert "cholmod available" in reason
+    solver, reason = make_linear_solver("auto", 10**5, 3, np.zeros((10**5 // 3, 3)))
+    assert solver.name == "cg+amg"  # one body: its rigid-body modes, AMG-CG
+    monkeypatch.setattr(linear, "has_cholmod", lambda: False)
     # nearly incompressible (nu = 0.49: lambda/mu = 49): CG would crawl, a direct solver at any size
     solver, reason = make_linear_solver("auto", 10**5, 3, vertices, volumetric_ratio=49.0)
     assert solver.name == "splu" and "nearly incompressible" in reason

@@ -440,7 +440,10 @@ def make_linear_solver(
             if available():
                 return cls(), f"auto: {label}, {why}"
         return SuperLUSolver(), f"auto: SciPy SuperLU, {why}"
-    if large_3d and has_pyamg():
+    # AMG needs the rigid-body modes (one FEM body's vertices) to beat a direct solver: on two
+    # bodies in contact without them it took 20 s per Newton iteration at 48k DOFs, PARDISO
+    # 0.3-0.8 s (docs/performance.md); without contact 0.9 s against 0.09 s
+    if large_3d and has_pyamg() and points is not None:
         return CGSolver("amg", points=points), (
             f"auto: 3D with {n_dofs} DOFs > {AMG_MIN_DOFS_3D}, pyamg available"
         )
@@ -462,6 +465,11 @@ def make_linear_solver(
         return CGSolver("jacobi"), (
             f"auto: 3D with {n_dofs} DOFs > {SPLU_MAX_DOFS_3D}, no pypardiso, scikit-sparse or "
             "pyamg (Jacobi-CG beats SuperLU there)"
+        )
+    if large_3d and has_pyamg():  # several bodies, no direct solver: AMG without the modes
+        return CGSolver("amg"), (
+            f"auto: 3D with {n_dofs} DOFs > {AMG_MIN_DOFS_3D} (several bodies), no pypardiso "
+            "or scikit-sparse, pyamg available"
         )
     if large_3d:
         return CGSolver("jacobi"), f"auto: 3D with {n_dofs} DOFs > {AMG_MIN_DOFS_3D}, no pyamg"
