@@ -37,11 +37,6 @@ class StepCandidates:
         """A new step: the set is built at the first query, inflated by ``margin`` (m)."""
         self.margin, self._cached = float(margin), None
 
-    @property
-    def pairs(self) -> int:
-        """The pairs in the current set (0: none built this step)."""
-        return 0 if self._cached is None else len(self._cached[1])
-
     def get(self, *V: np.ndarray):
         """The candidates valid for every vertex array in V (built or rebuilt if needed), or
         None when caching is off."""

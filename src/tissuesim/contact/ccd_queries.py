@@ -20,7 +20,7 @@ TIGHT_TOLERANCE, TIGHT_ITERATIONS = 1e-6, 100_000
 #: holds at most this many per surface vertex, else from ipctk's broad phase over the sweep's
 #: own boxes: the narrow phase pays for every pair, and the step's set holds every pair within
 #: dhat of the step's path. Between a cut's two fresh faces (2 dhat apart over a whole section)
-#: it held 11 per vertex (900 after a long sweep) and CCD took 10x longer from it; a probe on
+#: it held 11 per vertex (900 after a long sweep) and CCD took 5x longer from it; a probe on
 #: an organ (1 per vertex) is as fast either way (``benchmarks/contact_candidates.py``)
 SWEEP_PAIRS_PER_VERTEX = 8.0
 
@@ -80,12 +80,9 @@ class CollisionQueries:
         step's candidate set when both ends lie within its margin and it holds at most
         SWEEP_PAIRS_PER_VERTEX pairs per vertex, else from a broad phase over the sweep."""
         start = time.perf_counter()
-        dense = SWEEP_PAIRS_PER_VERTEX * len(V0)
-        candidates = None
-        if self.candidates.pairs <= dense:  # a dense set is not rebuilt for a sweep either
-            candidates = self.candidates.get(V0, V1)
-            if candidates is not None and len(candidates) > dense:
-                candidates = None
+        candidates = self.candidates.get(V0, V1)
+        if candidates is not None and len(candidates) > SWEEP_PAIRS_PER_VERTEX * len(V0):
+            candidates = None
         if candidates is not None:
             out = getattr(candidates, query.__name__)(self.mesh, V0, V1, 0.0, self.ccd)
         else:

@@ -51,6 +51,10 @@ MERGE = 1.0
 _TET_FACES = np.array([[1, 2, 3], [0, 3, 2], [0, 1, 3], [0, 2, 1]])
 #: the edges of a tetrahedron, and the cyclic order of the four crossings of a 2-2 section
 _TET_EDGES = np.array([[0, 1], [0, 2], [0, 3], [1, 2], [1, 3], [2, 3]])
+#: weights below this are round-off (a point on an edge has two, a node one)
+_ZERO = 1e-12
+#: points on one mesh edge closer than this (in weight) are one point
+_MERGE = 1e-9
 
 
 def cut_surface(mesh, dhat: float, gap: float = GAP) -> tuple[sp.csr_matrix, np.ndarray]:

@@ -25,8 +25,7 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
-from tissuesim.contact.cut_surface import GAP, MERGE, SNAP_IN, SNAP_OUT
-from tissuesim.contact.polygon_surface import _MERGE, _ZERO, edge_points
+from tissuesim.contact.cut_surface import _MERGE, _ZERO, GAP, MERGE, SNAP_IN, SNAP_OUT
 from tissuesim.errors import InputError
 from tissuesim.mesh.rows import unique_rows
 
@@ -135,7 +134,16 @@ def _assemble(n_points: int, lo: np.ndarray, hi: np.ndarray, w: np.ndarray):
     lo = np.where(at_hi, hi, lo)
     hi = np.where(at_lo, lo, hi)
     w = np.where(at_lo | at_hi, 0.0, w)
-    label, first = edge_points(lo, hi, w)
+    order = np.lexsort((w, hi, lo))
+    new = np.ones(order.size, dtype=bool)
+    new[1:] = (
+        (lo[order][1:] != lo[order][:-1])
+        | (hi[order][1:] != hi[order][:-1])
+        | (np.diff(w[order]) > _MERGE)
+    )
+    label = np.empty(order.size, dtype=np.int64)
+    label[order] = np.cumsum(new) - 1
+    first = order[new]
     k = first.size
     W = sp.csr_matrix(
         (

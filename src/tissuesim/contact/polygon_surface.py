@@ -29,7 +29,7 @@ from scipy.sparse.csgraph import connected_components
 
 from tissuesim.mesh.rows import unique_rows
 
-__all__ = ["edge_points", "polygon_surface"]
+__all__ = ["polygon_surface"]
 
 #: weights below this are round-off (a point on an edge has two, a node one)
 _ZERO = 1e-12
@@ -91,49 +91,33 @@ def _points(nodes: np.ndarray, weights: np.ndarray, count: np.ndarray):
     w_hi = np.where(single, 0.0, np.where(n2[:, :, 0] == hi, w2[:, :, 0], w2[:, :, 1]))
     valid = np.arange(K)[None, :] < count[:, None]
     vlo, vhi, vw = lo[valid], hi[valid], w_hi[valid]
-    point, first = edge_points(vlo, vhi, vw)
-    corner = np.full((P, K), -1)
-    corner[valid] = point
-    # corners that merged with their neighbour are one corner; a polygon left with fewer than
-    # three is empty (a face between copies whose regions only touch along a line)
-    corner, size, (lo, hi) = _drop_repeats(corner, count, lo, hi)
-    return vlo[first], vhi[first], vw[first], corner, size, lo, hi
-
-
-def edge_points(lo: np.ndarray, hi: np.ndarray, w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Ends on mesh edges (nodes lo <= hi, weight w of hi; a node: lo == hi, w 0) made points:
-    those on one edge with the same weight (to _MERGE) are one. Returns each end's point and
-    each point's first end (its edge and weight)."""
-    order = np.lexsort((w, hi, lo))
+    # merge: sort by (edge, weight); a new point where the edge changes or the weight jumps
+    order = np.lexsort((vw, vhi, vlo))
     new = np.ones(order.size, dtype=bool)
     new[1:] = (
-        (lo[order][1:] != lo[order][:-1])
-        | (hi[order][1:] != hi[order][:-1])
-        | (np.diff(w[order]) > _MERGE)
+        (vlo[order][1:] != vlo[order][:-1])
+        | (vhi[order][1:] != vhi[order][:-1])
+        | (np.diff(vw[order]) > _MERGE)
     )
+    label = np.cumsum(new) - 1
     point = np.empty(order.size, dtype=np.int64)
-    point[order] = np.cumsum(new) - 1
-    return point, order[new]
-
-
-def _drop_repeats(ring: np.ndarray, size: np.ndarray, *also: np.ndarray):
-    """Rings (R, L) (-1 padding) with each run of one point kept once, also around the end
-    (a ring of one point is left empty): (packed rings, sizes, the arrays ``also`` (R, L)
-    packed alike)."""
-    R, L = ring.shape
-    valid = np.arange(L)[None, :] < size[:, None]
-    prev = np.where(np.arange(L)[None, :] == 0, np.maximum(size[:, None] - 1, 0), np.arange(L) - 1)
-    keep = valid & (ring != np.take_along_axis(ring, prev, axis=1))
-    slot = np.cumsum(keep, axis=1) - 1
-    r, c = np.nonzero(keep)
-    packed = np.full((R, L), -1)
-    packed[r, slot[r, c]] = ring[r, c]
-    others = []
-    for a in also:
-        out = np.zeros_like(a)
-        out[r, slot[r, c]] = a[r, c]
-        others.append(out)
-    return packed, keep.sum(axis=1), others
+    point[order] = label
+    corner = np.full((P, K), -1)
+    corner[valid] = point
+    first = order[new]
+    # corners that merged with their neighbour are one corner; a polygon left with fewer than
+    # three is empty (a face between copies whose regions only touch along a line)
+    prev = np.where(np.arange(K)[None, :] == 0, np.maximum(count[:, None] - 1, 0), np.arange(K) - 1)
+    repeat = valid & (corner == np.take_along_axis(corner, prev, axis=1))
+    keep_corner = valid & ~repeat
+    slot = np.cumsum(keep_corner, axis=1) - 1
+    packed = np.full((P, K), -1)
+    r, c = np.nonzero(keep_corner)
+    packed[r, slot[r, c]] = corner[r, c]
+    packed_lo, packed_hi = np.zeros((P, K), np.int64), np.zeros((P, K), np.int64)
+    packed_lo[r, slot[r, c]] = lo[r, c]
+    packed_hi[r, slot[r, c]] = hi[r, c]
+    return vlo[first], vhi[first], vw[first], packed, keep_corner.sum(axis=1), packed_lo, packed_hi
 
 
 def _rings(n_points, corner, count, lo, hi, p_lo, p_hi, p_w):
@@ -224,8 +208,17 @@ def _distinct(ring: np.ndarray, size: np.ndarray, mended: np.ndarray):
     """The rings with each run of one point kept once (also around the end), and a ring that
     now meets itself (a point twice, apart: merged across a pinch) split there into loops;
     rings left with fewer than three points dropped."""
-    L = ring.shape[1]
-    packed, size, _ = _drop_repeats(ring, size)
+    R, L = ring.shape
+    valid = np.arange(L)[None, :] < size[:, None]
+    prev = np.where(np.arange(L)[None, :] == 0, np.maximum(size[:, None] - 1, 0), np.arange(L) - 1)
+    keep = valid & (ring != np.take_along_axis(ring, prev, axis=1))
+    all_same = valid.any(axis=1) & ~keep.any(axis=1)  # one point: nothing left
+    keep[all_same] = False
+    slot = np.cumsum(keep, axis=1) - 1
+    packed = np.full((R, L), -1)
+    r, c = np.nonzero(keep)
+    packed[r, slot[r, c]] = ring[r, c]
+    size = keep.sum(axis=1)
     # a point twice in one ring (rare): the ring splits into its loops
     s = np.sort(np.where(packed >= 0, packed, -1 - np.arange(L)[None, :]), axis=1)
     pinched = np.flatnonzero((s[:, 1:] == s[:, :-1]).any(axis=1) & (size >= 3))
