@@ -215,7 +215,8 @@ class BodyCalls:
         cut boundary (``contact/cut_surface.py``, in 2D ``contact/cut_surface_2d.py``: each
         side's cut face a little inside it, so the two never pass through each other). A
         tissue's attachment points on the body follow the copy on their side of the cut. A
-        cell crossed by two different cuts is refused."""
+        cell several cuts cross is split into the parts between them (refused with contact
+        on: the contact surface where cuts meet is not built yet)."""
         from tissuesim.bodies.cut_state import CutState, recut
 
         b = self.body(body, ("fem",))
@@ -233,9 +234,15 @@ class BodyCalls:
             b.cut_state = CutState.of_model(b.model)
         current = self.body_positions(b.name) if self._state is not None else b.mesh.points
         old_vn = b.cut_state.vn
-        before_cells = int(np.count_nonzero(b.cut_state.vn.side > 0)) if b.cut_state.vn else 0
+        before_cells = b.cut_state.vn.n_cell_cuts if b.cut_state.vn else 0
         before = b.mesh.n_points
-        done = recut(b.cut_state, cut, name, current)
+        several = None
+        if self.contact is not None:
+            several = (
+                "with contact on, a cell is cut once (the contact surface where cuts meet is "
+                "not built yet): keep the cuts an element apart, or cut without contact"
+            )
+        done = recut(b.cut_state, cut, name, current, several)
         if done is None:  # no new cell crossed completely: nothing changes
             vn, names = b.cut_state.vn, b.cut_state.names
             area = 0.0
@@ -257,7 +264,7 @@ class BodyCalls:
                 b.name, lambda cells, bary: follow_cells(old_vn, vn, cells, bary)
             )
         return {
-            "cells_cut": int(np.count_nonzero(vn.side > 0)) - before_cells,
+            "cells_cut": vn.n_cell_cuts - before_cells,
             "new_nodes": len(vn.points) - before,
             "pieces": vn.n_pieces,
             "area_m2": float(b.cut_state.areas(vn)[index]),

@@ -90,9 +90,49 @@ def test_cut_body_refuses_what_it_cannot_do_yet():
     with pytest.raises(InputError, match="keeps its plane"):  # one name, one plane
         sim.cut_body(through(0.83))
     assert sim.model.mass.lumped.sum() == mass
-    with pytest.raises(InputError, match="crossed by two cuts"):  # a cell is cut once
-        sim.cut_body(PlanarCut.swept_segment((0.3, -1, 0.1), (0.6, 2, 0.1), (0.3, -1, -1),
-                                             (0.6, 2, -1)), name="oblique")  # fmt: skip
+
+
+def oblique() -> PlanarCut:
+    """A plane through the beam from x = 0.3 at its top to 0.6 at its bottom."""
+    return PlanarCut.swept_segment((0.3, -1, 0.2), (0.3, 2, 0.2), (0.6, -1, 0.0), (0.6, 2, 0.0))
+
+
+def test_a_second_cut_across_cells_cut_before_splits_them_further():
+    """A cut through x = 0.47, then an oblique one crossing it in the cells around it: the
+    cells both cross are split into their parts, the mass is kept, and the beam is in four
+    pieces (either side of each cut); the support holds the one below the oblique cut and
+    left of x = 0.47."""
+    sim = cantilever()
+    mass = sim.model.mass.lumped.sum() / 3
+    sim.cut_body(through(0.47))
+    report = sim.cut_body(oblique(), name="oblique")
+    body = sim.bodies["body"]
+    assert body.cut_state.vn.extra is not None  # cells both cuts cross
+    assert report["pieces"] == 4 and report["cells_cut"] > 0
+    assert body.model.mass.lumped.sum() / 3 == pytest.approx(mass, rel=1e-12)
+    m = body.model.mass.lumped.reshape(-1, 3)[:, 0]
+    label = pieces(body.mesh.cells, body.mesh.n_points)
+    held = label == label[np.flatnonzero(body.mesh.points[:, 0] < 1e-9)[0]]
+    # held: x < 0.47 below the oblique plane z = 0.2 (0.6 - x) / 0.3, a trapezoid in x-z
+    # (x from 0.3 to 0.47 the plane runs from z = 0.2 down to 0.0867) plus x < 0.3
+    cross = 0.3 * 0.2 + 0.5 * (0.2 + 0.2 * 0.13 / 0.3) * 0.17
+    assert m[held].sum() == pytest.approx(mass * cross / 0.2, rel=1e-9)
+    z = []
+    for _ in range(5):  # the three pieces cut off fall with g (Backward Euler)
+        sim.step()
+        z.append((m[~held] @ sim.positions[~held, 2]) / m[~held].sum())
+    np.testing.assert_allclose(np.diff(z, 2) / sim.time_step**2, -G, rtol=1e-2)
+
+
+def test_a_second_cut_across_a_cut_cell_is_refused_with_contact_on():
+    sim = cantilever()
+    sim.set_contact(dhat=1e-3)
+    sim.cut_body(through(0.47))
+    mass = sim.model.mass.lumped.sum()
+    with pytest.raises(InputError, match="crossed by two cuts"):
+        sim.cut_body(oblique(), name="oblique")
+    assert sim.model.mass.lumped.sum() == mass
+    assert sim.bodies["body"].cut_state.vn.extra is None  # nothing changed
 
 
 def test_a_second_cut_and_a_blade_going_on_step_by_step():

@@ -23,8 +23,8 @@ def beam(nx: int = 20, n: int = 4) -> Mesh:
     return ts.box((0.0, 0.0, 0.0), (1.0, 0.2, 0.2), (nx, n, n))
 
 
-def cut(mesh: Mesh, c: PlanarCut) -> Mesh:
-    return virtual_node_cut(mesh.points, mesh.cells, [c]).to_mesh(mesh)
+def cut(mesh: Mesh, *c: PlanarCut) -> Mesh:
+    return virtual_node_cut(mesh.points, mesh.cells, list(c)).to_mesh(mesh)
 
 
 MATERIAL = ts.make_material("neo_hookean", youngs_modulus=1e6, poisson_ratio=0.3)
@@ -40,9 +40,16 @@ def tip_deflection(mesh: Mesh) -> float:
     return float(sim.displacement[end, 2].mean())
 
 
-def test_a_cut_keeps_the_mass_and_the_copies_derivatives_match_finite_differences():
+def oblique() -> PlanarCut:
+    """z = 0.2 (0.6 - x) / 0.3 across the beam: it crosses x = 0.47 inside cells."""
+    return PlanarCut.swept_segment((0.3, -1, 0.2), (0.3, 2, 0.2), (0.6, -1, 0.0), (0.6, 2, 0.0))
+
+
+@pytest.mark.parametrize("several", [False, True], ids=["one cut", "crossing cuts"])
+def test_a_cut_keeps_the_mass_and_the_copies_derivatives_match_finite_differences(several):
     whole = beam(6, 2)
-    mesh = cut(whole, plane_x(0.47))
+    mesh = cut(whole, plane_x(0.47), *([oblique()] if several else []))
+    assert (mesh.several_cuts is not None) == several
     assert mesh.n_points > whole.n_points and mesh.cell_fractions is not None
     a = Model(whole, MATERIAL, np.full(whole.n_cells, 1000.0), backend="numpy")
     b = Model(mesh, MATERIAL, np.full(mesh.n_cells, 1000.0), backend="numpy")

@@ -84,9 +84,68 @@ def test_a_2d_strip_cut_across():
     assert (area * out.fraction).sum() == pytest.approx(0.2, rel=1e-12)
 
 
-def test_a_cell_cut_twice_is_refused(block):
-    with pytest.raises(InputError, match="crossed by two cuts"):
-        virtual_node_cut(block.points, block.cells, [plane_x(0.47), plane_x(0.48)])
+def plane_y(y0: float, x=(-1.0, 2.0)) -> PlanarCut:
+    """The plane y = y0, bounded by x0..x1 (and z over the block)."""
+    (x0, x1), (z0, z1) = x, (-1.0, 2.0)
+    poly = np.array([[x0, y0, z0], [x1, y0, z0], [x1, y0, z1], [x0, y0, z1]])
+    return PlanarCut(np.array([0.0, y0, 0.0]), np.array([0.0, 1.0, 0.0]), poly)
+
+
+def piece_volumes(out) -> np.ndarray:
+    """The material volume of each connected piece of a cut mesh, smallest first."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    k = out.cells.shape[1]
+    rows = np.repeat(out.cells[:, 0], k - 1)
+    n = len(out.points)
+    graph = coo_matrix((np.ones(len(rows)), (rows, out.cells[:, 1:].ravel())), shape=(n, n))
+    labels = connected_components(graph, directed=False)[1][out.cells[:, 0]]
+    v = volumes(out.points, out.cells) * out.fraction
+    return np.sort(np.bincount(labels, weights=v)[np.unique(labels)])
+
+
+def test_two_cuts_through_the_same_cells_leave_the_slab_between_them(block):
+    out = virtual_node_cut(block.points, block.cells, [plane_x(0.47), plane_x(0.48)])
+    assert out.n_pieces == 3 and out.extra is not None
+    # a cell both cross: three parts holding material (the fourth sign vector is empty)
+    both = np.unique(out.parent[out.several])
+    assert both.size > 0
+    for e in both:
+        mine = out.fraction[out.parent == e]
+        assert len(mine) == 3 and mine.sum() == pytest.approx(1.0, abs=1e-12)
+    np.testing.assert_allclose(piece_volumes(out), np.array([0.01, 0.47, 0.52]) * 0.25, rtol=1e-11)
+
+
+def test_crossing_cuts_make_four_pieces_and_keep_every_volume(block):
+    out = virtual_node_cut(block.points, block.cells, [plane_x(0.47), plane_y(0.23)])
+    assert out.n_pieces == 4
+    x, y = np.array([0.47, 0.53]), np.array([0.23, 0.27])
+    expected = np.sort(np.outer(x, y).ravel() * 0.5)
+    np.testing.assert_allclose(piece_volumes(out), expected, rtol=1e-11)
+    assert np.any(np.bincount(out.parent) == 4)  # cells along the crossing: four parts
+    # every copy's material at its real nodes: a node is material in some copy using it
+    assert out.material_nodes[: block.n_points].all()
+    c = out.constraints()
+    assert set(np.unique(c.copy)) == set(np.flatnonzero(out.side != 0))
+
+
+def test_a_cut_ending_at_another_parts_one_side_only(block):
+    """A T: a second cut from the first one's left side to x = 0.5 (a mesh plane) splits the
+    left part in two and notches the right one 0.03 deep, leaving three pieces."""
+    out = virtual_node_cut(block.points, block.cells, [plane_x(0.47), plane_y(0.23, (-1, 0.5))])
+    assert out.n_pieces == 3
+    expected = np.sort([0.47 * 0.23 * 0.5, 0.47 * 0.27 * 0.5, 0.53 * 0.5 * 0.5])
+    np.testing.assert_allclose(piece_volumes(out), expected, rtol=1e-11)
+
+
+def test_crossing_cuts_in_2d_make_four_pieces():
+    square = ts.rectangle((0.0, 0.0), (1.0, 1.0), (8, 8))
+    cuts = [plane_x(0.43), plane_y(0.61)]
+    out = virtual_node_cut(square.points, square.cells, cuts)
+    assert out.n_pieces == 4
+    expected = np.sort(np.outer([0.43, 0.57], [0.61, 0.39]).ravel())
+    np.testing.assert_allclose(piece_volumes(out), expected, rtol=1e-11)
 
 
 def test_a_blade_swept_down_through_the_block_is_a_planar_cut(block):

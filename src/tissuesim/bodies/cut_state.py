@@ -44,7 +44,8 @@ class CutState:
     #: rest area of the mesh faces each cut parted (a cut along faces copies no cell)
     face_area: list[float] = field(default_factory=list)
     _parted: np.ndarray | None = field(default=None, repr=False)
-    _sections: np.ndarray | None = field(default=None, repr=False)  # per cell, NaN: not cut
+    #: per cut, the rest area of its section in each cell (NaN: not cut by it)
+    _sections: dict | None = field(default=None, repr=False)
 
     @classmethod
     def of_model(cls, model) -> CutState:
@@ -56,25 +57,30 @@ class CutState:
         return cls(model.mesh, np.asarray(model.density, dtype=float), rest)
 
     def prior(self) -> tuple[np.ndarray, np.ndarray] | None:
-        """(cut index per original cell, -1 none; each cut's node distances (cuts, n), NaN for
-        nodes of no cell it cut): what the cuts so far froze (``virtual_node_cut``'s prior)."""
+        """(which cuts cut each original cell (m, cuts); each cut's node distances (cuts, n),
+        NaN for nodes of no cell it cut): what the cuts so far froze (``virtual_node_cut``'s
+        prior)."""
         if self.vn is None:
             return None
-        m = len(self.original.cells)
-        owner = np.full(m, -1)
+        taken = np.zeros((len(self.original.cells), len(self.cuts)), dtype=bool)
         frozen = np.full((len(self.cuts), self.original.n_points), np.nan)
-        cut = self.vn.side != 0
-        owner[self.vn.parent[cut]] = self.vn.cut[cut]
-        nodes = self.original.cells[self.vn.parent[cut]]
-        frozen[self.vn.cut[cut][:, None], nodes] = self.vn.level[cut] * self.vn.side[cut, None]
-        return owner, frozen
+        c = self.vn.constraints()
+        cell = self.vn.parent[c.copy]
+        taken[cell, c.cut] = True
+        frozen[c.cut[:, None], self.original.cells[cell]] = c.level * c.side[:, None]
+        return taken, frozen
 
     def cell_positions(self, positions: np.ndarray) -> np.ndarray:
-        """Where each original cell's vertices are now (m, k, d): its first copy's nodes."""
+        """Where each original cell's vertices are now (m, k, d): a cut cell's vertex where the
+        copy whose material holds it is (its real node), the others their one copy's."""
         if self.vn is None:
             return positions[self.original.cells]
-        first = np.unique(self.vn.parent, return_index=True)[1]
-        return positions[self.vn.cells[first]]
+        vn = self.vn
+        first = np.unique(vn.parent, return_index=True)[1]
+        out = positions[vn.cells[first]]
+        copy, vertex = np.nonzero(vn.material_slots & (vn.side != 0)[:, None])
+        out[vn.parent[copy], vertex] = positions[vn.cells[copy, vertex]]
+        return out
 
     def area(self, name: str) -> float:
         """The rest area of the cut called ``name`` so far (0 before it has cut anything)."""
@@ -86,16 +92,24 @@ class CutState:
         """The rest area (2D: length) of each cut's surface in ``vn`` (per cut index). A cut
         cell keeps its level, so its section is measured once (a blade going on measures the
         cells it crossed since)."""
-        plus = vn.side > 0
-        parent = vn.parent[plus]
+        c = vn.constraints()
+        m = len(self.original.cells)
+        key = c.cut * m + vn.parent[c.copy]  # each (cut, cell) once, on its + side
+        _, once = np.unique(np.where(c.side > 0, key, -1), return_index=True)
+        once = once[c.side[once] > 0]
+        cut, parent, level = c.cut[once], vn.parent[c.copy[once]], c.level[once]
         if self._sections is None:
-            self._sections = np.full(len(self.original.cells), np.nan)
-        new = np.flatnonzero(np.isnan(self._sections[parent]))
-        self._sections[parent[new]] = section_measures(
-            self.original.points, self.original.cells[parent[new]], vn.level[plus][new]
-        )
-        measure = self._sections[parent]
-        sections = np.bincount(vn.cut[plus], weights=measure, minlength=len(self.cuts))
+            self._sections = {}
+        measure = np.empty(len(once))
+        for j in np.unique(cut):
+            mine = np.flatnonzero(cut == j)
+            known = self._sections.setdefault(int(j), np.full(m, np.nan))
+            new = mine[np.isnan(known[parent[mine]])]
+            known[parent[new]] = section_measures(
+                self.original.points, self.original.cells[parent[new]], level[new]
+            )
+            measure[mine] = known[parent[mine]]
+        sections = np.bincount(cut, weights=measure, minlength=len(self.cuts))
         faces = np.zeros(len(self.cuts))
         faces[: len(self.face_area)] = self.face_area
         return sections + faces
@@ -133,10 +147,17 @@ class CutState:
             self.face_area[index] += float(facet_measures(points, nodes).sum())
 
 
-def recut(state: CutState, cut: PlanarCut | SweptCut, name: str, positions: np.ndarray):
+def recut(
+    state: CutState,
+    cut: PlanarCut | SweptCut,
+    name: str,
+    positions: np.ndarray,
+    several: str | None = None,
+):
     """Cut again: ``cut`` as the cut called ``name`` (a new one, or the same plane with its
     swept polygon grown: a blade advancing; or the surface a blade swept once it left its
-    plane), the body's nodes at ``positions`` now. Returns
+    plane), the body's nodes at ``positions`` now. ``several``: why a cell several cuts cross
+    cannot be taken (refused with it before anything changes), None: it can. Returns
     (the new VirtualNodeMesh, the current node each new node continues, the cut's index), or
     None when no new cell is cut."""
     cuts = list(state.cuts)
@@ -165,10 +186,13 @@ def recut(state: CutState, cut: PlanarCut | SweptCut, name: str, positions: np.n
     vn = virtual_node_cut(
         state.original.points, state.original.cells, cuts, current=x_cell, prior=state.prior()
     )
-    before = 0 if state.vn is None else int(np.count_nonzero(state.vn.side))
+    before = 0 if state.vn is None else state.vn.n_cell_cuts
     points = state.original.n_points if state.vn is None else len(state.vn.points)
-    if int(np.count_nonzero(vn.side)) == before and len(vn.points) == points:
+    if vn.n_cell_cuts == before and len(vn.points) == points:
         return None  # no new element cut, no node parted (a cut along faces parts nodes only)
+    if several is not None and vn.extra is not None:
+        cell = int(vn.parent[vn.extra.copy[0]])
+        raise InputError(f"cut {name!r}: cell {cell} is crossed by two cuts; {several}")
     carry, state.source = _carry(state.vn, vn)
     state.vn, state.cuts = vn, cuts
     if name not in state.names:
@@ -179,7 +203,7 @@ def recut(state: CutState, cut: PlanarCut | SweptCut, name: str, positions: np.n
 
 def _carry(old: VirtualNodeMesh | None, new: VirtualNodeMesh) -> tuple[np.ndarray, np.ndarray]:
     """The node of the current mesh each node of the new one continues (new n_points,), and
-    the current copy of the same cell and side as each new copy, -1 for none (``source``)."""
+    the current copy of the same cell and part as each new copy, -1 for none (``source``)."""
     if old is None:
         return new.origin, np.where(new.side == 0, new.parent, -1)
     # the current copy standing for each new copy: same parent and side, else the whole one
@@ -190,11 +214,42 @@ def _carry(old: VirtualNodeMesh | None, new: VirtualNodeMesh) -> tuple[np.ndarra
     found = key_old[order][pos] == key_new
     whole = new.parent * 3 + 1
     pos_whole = np.minimum(np.searchsorted(key_old[order], whole), len(order) - 1)
-    source = np.where(found, order[pos], order[pos_whole])
-    old_node = old.cells[source]  # (copies, k): the current node of every new slot
+    stand = np.where(found, order[pos], order[pos_whole])
+    same = np.where(found, order[pos], -1)
+    _carry_parts(old, new, stand, same)
+    old_node = old.cells[stand]  # (copies, k): the current node of every new slot
     carry = np.empty(len(new.points), dtype=np.int64)
     carry[new.cells.ravel()] = old_node.ravel()
-    return carry, np.where(found, order[pos], -1)
+    return carry, same
+
+
+def _carry_parts(old: VirtualNodeMesh, new: VirtualNodeMesh, stand, same) -> None:
+    """Where several cuts cross a cell (now or before), the current copy each new copy
+    continues is the one whose cuts and sides are among the new copy's (a part split further
+    continues the part it was split from); ``same`` where they are the same (few cells)."""
+    cells = np.union1d(new.parent[new.several], old.parent[old.several])
+    if not cells.size:
+        return
+
+    def signatures(vn: VirtualNodeMesh, copies: np.ndarray) -> dict:
+        c = vn.constraints()
+        out = {int(i): {} for i in copies}
+        for i, cut, side in zip(c.copy, c.cut, c.side, strict=True):
+            if int(i) in out:
+                out[int(i)][int(cut)] = int(side)
+        return out
+
+    old_copies = np.flatnonzero(np.isin(old.parent, cells))
+    new_copies = np.flatnonzero(np.isin(new.parent, cells))
+    sig_old, sig_new = signatures(old, old_copies), signatures(new, new_copies)
+    for n in new_copies:
+        mine = sig_new[int(n)]
+        for o in old_copies[old.parent[old_copies] == new.parent[n]]:
+            theirs = sig_old[int(o)]
+            if all(mine.get(cut) == side for cut, side in theirs.items()):
+                stand[n] = o
+                same[n] = o if theirs == mine else -1
+                break
 
 
 def follow_cells(
@@ -215,8 +270,30 @@ def follow_cells(
     b = order[np.minimum(first + 1, len(order) - 1)]
     out = a.copy()
     two = count == 2
+    if new.extra is not None:  # cells several cuts cross: the part whose levels are highest
+        several = np.flatnonzero(np.isin(original, new.parent[new.several]))
+        two[several] = False
+        out[several] = _holding(new, order, first[several], count[several], barycentric[several])
     if np.any(two) and new.level is not None:
         level_a = np.einsum("sk,sk->s", barycentric[two], new.level[a[two]])
         level_b = np.einsum("sk,sk->s", barycentric[two], new.level[b[two]])
         out[two] = np.where(level_a >= level_b, a[two], b[two])
+    return out
+
+
+def _holding(vn: VirtualNodeMesh, order, first, count, barycentric) -> np.ndarray:
+    """For points in cells several cuts cross: the copy of their cell whose least level at
+    the point (barycentric) is the highest (the part that holds the point)."""
+    c = vn.constraints()
+    rows_of: dict = {}
+    for r, copy in enumerate(c.copy):
+        rows_of.setdefault(int(copy), []).append(r)
+    out = np.empty(len(first), dtype=np.int64)
+    for i in range(len(first)):
+        best, best_level = -1, -np.inf
+        for copy in order[first[i] : first[i] + count[i]]:
+            lv = min(float(barycentric[i] @ c.level[r]) for r in rows_of.get(int(copy), []))
+            if lv > best_level:
+                best, best_level = int(copy), lv
+        out[i] = best
     return out

@@ -54,6 +54,8 @@ class Mesh:
     cell_levels: (m, d + 1) with ``cell_fractions``: each copy's material level at its
         vertices (material where its linear interpolation is >= 0); whole cells next to the
         cut carry their distance to its plane on their side, the others +inf.
+    several_cuts: (m,) with ``cell_levels``: the copies of cells several cuts cross; their
+        level is the least of their cuts' at each vertex.
     surface_projection: the exact curved surface the boundary approximates, as a projection
         of points onto it ((k, d) -> (k, d)), when a generator knows it (``ellipsoid``);
         elevating the mesh to order 2 puts the boundary's midside nodes on it. None (files,
@@ -78,6 +80,10 @@ class Mesh:
     # their distance on their side, others +inf rows. The cut faces' contact surfaces are level
     # sets of it (contact/cut_surface.py)
     cell_levels: np.ndarray | None = None
+    # (m,) bool with cell_levels: copies of cells several cuts cross; their cell_levels are
+    # the least of their levels at each vertex (exact at the vertices, drawn as one plane
+    # between them), so their contact surface is not built (contact/surfaces.py refuses)
+    several_cuts: np.ndarray | None = None
 
     def __repr__(self) -> str:
         kind = {2: "triangles", 3: "tetrahedra"}.get(self.dim, "cells")

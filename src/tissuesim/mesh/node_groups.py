@@ -7,7 +7,8 @@ Slots of nodes away from every cut group as in the uncut mesh (its groups are ke
 interior face table, ``mesh/interior_faces.py``, across the cuts of a body); the others join
 here: whole cells across a face at once, and faces next to a cut cell take
 their parts in closed form (``plane_split.positive_fraction``), all at once; only faces where
-two different cuts meet are clipped one by one (a cell is cut once, so these are few)."""
+two different cuts meet, or next to a cell several cuts cross, are clipped one by one (these
+are few: where cuts meet)."""
 
 from __future__ import annotations
 
@@ -24,11 +25,13 @@ from tissuesim.mesh.swept_cut import SweptCut
 __all__ = ["node_groups"]
 
 
-def node_groups(x3, x_cell, cells, cuts, owner, d_all, parent, side) -> np.ndarray:
+def node_groups(x3, x_cell, cells, cuts, taken, d_all, parent, side, copy_cut, more) -> np.ndarray:
     """The group (a label) of every node slot (copy, local node), (copies * (d+1),): x3 the
     rest points (n, 3), x_cell (m, d+1, 3) where each original cell's vertices are now,
-    ``owner`` (m,) each cell's cut (-1 none), d_all (cuts, m, d+1) its vertices' distances
-    to each cut, ``parent`` / ``side`` (copies,) each copy's cell and side (0: whole)."""
+    ``taken`` (m, cuts) which cuts cut each cell, d_all (cuts, m, d+1) its vertices'
+    distances to each cut, ``parent`` / ``side`` / ``copy_cut`` (copies,) each copy's cell,
+    side and cut (0 and -1: whole), ``more`` (``virtual_nodes.Constraints``) the further
+    cuts of copies of cells several cuts cross."""
     m, k = cells.shape
     faces = interior_faces(cells)
     cell_a, cell_b = faces.cell_a, faces.cell_b
@@ -37,7 +40,7 @@ def node_groups(x3, x_cell, cells, cuts, owner, d_all, parent, side) -> np.ndarr
     # faces plain: its slots group as in the uncut mesh (``uncut_groups``, kept with the faces);
     # only the slots of the nodes near a cut are joined here (groups never span two nodes)
     near = np.zeros(len(x3), dtype=bool)
-    near[cells[owner >= 0]] = True
+    near[cells[taken.any(axis=1)]] = True
     near[faces.nodes[on_cut]] = True
     here = near[cells[parent]].ravel()
     uncut = faces.uncut_groups()
@@ -51,21 +54,22 @@ def node_groups(x3, x_cell, cells, cuts, owner, d_all, parent, side) -> np.ndarr
     rows = [whole_a[f] * k + faces.slot_a[f, i]]
     cols = [whole_b[f] * k + faces.slot_b[f, i]]
     # faces next to a cut cell: every pair (copy of one cell, copy of the other) whose material
-    # meets on the face, all at once; a cell has at most two copies
+    # meets on the face, all at once; a cell has two copies, or more where cuts meet
     todo = np.flatnonzero(~plain & ~on_cut)
     by_parent = np.argsort(parent, kind="stable")
     first = np.searchsorted(parent[by_parent], np.arange(m))
     count = np.bincount(parent, minlength=m)
+    most = int(count.max(initial=1))
     fa, ca, cb = [], [], []
-    for i in range(2):
-        for j in range(2):
+    for i in range(most):
+        for j in range(most):
             ok = (count[cell_a[todo]] > i) & (count[cell_b[todo]] > j)
             f = todo[ok]
             fa.append(f)
             ca.append(by_parent[first[cell_a[f]] + i])
             cb.append(by_parent[first[cell_b[f]] + j])
     f, ca, cb = np.concatenate(fa), np.concatenate(ca), np.concatenate(cb)
-    part = _face_parts(x3, cells, owner, d_all, parent, side, faces, f, ca, cb)
+    part = _face_parts(x3, cells, copy_cut, more, d_all, parent, side, faces, f, ca, cb)
     meet = f[part > EMPTY]
     ca, cb = ca[part > EMPTY], cb[part > EMPTY]
     rows.append((ca[:, None] * k + faces.slot_a[meet]).ravel())
@@ -103,16 +107,17 @@ def _on_cuts(x_cell: np.ndarray, faces: InteriorFaces, cuts: list, d_all) -> np.
     return on_cut
 
 
-def _face_parts(x3, cells, owner, d_all, parent, side, faces, f, ca, cb) -> np.ndarray:
+def _face_parts(x3, cells, copy_cut, more, d_all, parent, side, faces, f, ca, cb) -> np.ndarray:
     """The fraction (f,) of each face ``faces``[f] where the material of copy ca (of its cell
     a) and of copy cb (of its cell b) both lie: 1 for two whole cells, the face's part on the
     side of the one cut copy, or on the common side of two copies of one cut (none on
-    opposite sides); faces between copies of two different cuts are clipped one by one."""
+    opposite sides); faces between copies of two different cuts, or of a cell several cuts
+    cross, are clipped one by one."""
 
     def face_d(c: np.ndarray, where: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """The signed distances (f, d) of the face's nodes to copy c's cut, times its side."""
         e = parent[c]
-        cut = np.maximum(owner[e], 0)
+        cut = np.maximum(copy_cut[c], 0)
         dist = d_all[cut[:, None], e[:, None], where] if len(d_all) else 0.0 * where
         return dist * side[c][:, None], cut
 
@@ -122,10 +127,13 @@ def _face_parts(x3, cells, owner, d_all, parent, side, faces, f, ca, cb) -> np.n
     da, ka = face_d(ca, faces.slot_a[f])
     db, kb = face_d(cb, faces.slot_b[f])
     cut_a, cut_b = side[ca] != 0, side[cb] != 0
-    only_a, only_b = cut_a & ~cut_b, cut_b & ~cut_a
+    several = np.zeros(len(parent), dtype=bool)
+    several[more.copy] = True
+    odd = several[ca] | several[cb]
+    only_a, only_b = cut_a & ~cut_b & ~odd, cut_b & ~cut_a & ~odd
     part[only_a] = positive_fraction(da[only_a])
     part[only_b] = positive_fraction(db[only_b])
-    same = cut_a & cut_b & (ka == kb)
+    same = cut_a & cut_b & (ka == kb) & ~odd
     flat = rows_all(da == 0.0) | rows_all(db == 0.0)
     agree = same & (side[ca] == side[cb]) & ~flat
     pa = positive_fraction(da[agree])
@@ -134,15 +142,22 @@ def _face_parts(x3, cells, owner, d_all, parent, side, faces, f, ca, cb) -> np.n
     pb[differ] = positive_fraction(db[agree][differ])
     part[agree] = np.minimum(pa, pb)
     part[same & (side[ca] != side[cb]) & ~flat] = 0.0
-    meet = np.flatnonzero(cut_a & cut_b & (~same | flat))  # two cuts meet on these faces
+    meet = np.flatnonzero(odd | (cut_a & cut_b & (~same | flat)))  # where cuts meet
     nodes = faces.nodes[f[meet]]
+    rows_of = {}
+    for r, c in enumerate(more.copy):
+        rows_of.setdefault(int(c), []).append(r)
     for i, face_nodes in zip(meet, nodes, strict=True):
         face = x3[face_nodes]
         constraints = []
-        for c in (ca[i], cb[i]):
+        for c in (int(ca[i]), int(cb[i])):
+            if side[c] == 0:
+                continue
             e = int(parent[c])
             where = [int(np.flatnonzero(cells[e] == v)[0]) for v in face_nodes]
-            constraints.append((d_all[owner[e]][e][where], int(side[c])))
+            constraints.append((d_all[copy_cut[c]][e][where], int(side[c])))
+            for r in rows_of.get(c, []):
+                constraints.append((d_all[more.cut[r]][e][where], int(more.side[r])))
         part[i] = _face_part(face, constraints) / max(_face_part(face, []), 1e-300)
     return part
 

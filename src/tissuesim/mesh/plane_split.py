@@ -141,3 +141,57 @@ def section_measures(points: np.ndarray, cells: np.ndarray, values: np.ndarray) 
     R = np.take_along_axis(Q, nxt_index[:, :, None], axis=1)
     tri = 0.5 * np.linalg.norm(np.cross(Q, R), axis=2)
     return np.where(count >= 3, np.where(ok, tri, 0.0).sum(axis=1), 0.0)
+
+
+def region_fractions(d: np.ndarray) -> np.ndarray:
+    """Fraction (r,) of each simplex where several linear functions are all >= 0: d (r, C, n+1)
+    their values at the simplex's vertices (C functions; +inf values: no constraint), n = 2
+    or 3. The region is a convex polytope: its vertices are enumerated (every n of the
+    simplex's faces and the functions' zero sets meeting in a point inside all of them, in
+    barycentric coordinates) and its volume is their convex hull's. A cell crossed by several
+    cuts (``virtual_nodes.py``) is rare (where cuts meet), so this is a loop over rows."""
+    from math import factorial
+
+    d = np.asarray(d, dtype=float)
+    r, C, k = d.shape
+    n = k - 1
+    # constraints a . y + b >= 0 on y = (l_1 .. l_n), l_0 = 1 - sum(y): the barycentric
+    # coordinates themselves, then each function sum_i l_i d_i
+    a = np.zeros((r, k + C, n))
+    b = np.zeros((r, k + C))
+    a[:, 0, :] = -1.0
+    b[:, 0] = 1.0
+    a[:, 1:k, :] = np.eye(n)
+    finite = np.where(np.isfinite(d), d, 0.0)
+    scale = np.maximum(np.abs(finite).max(axis=(1, 2)), 1e-300)[:, None]
+    a[:, k:, :] = (finite[:, :, 1:] - finite[:, :, :1]) / scale[:, :, None]
+    b[:, k:] = finite[:, :, 0] / scale
+    from itertools import combinations
+
+    points = [[] for _ in range(r)]
+    for combo in combinations(range(k + C), n):
+        A, B = a[:, combo, :], -b[:, combo]
+        ok = np.abs(np.linalg.det(A)) > 1e-12
+        y = np.zeros((r, n))
+        if ok.any():
+            y[ok] = np.linalg.solve(A[ok], B[ok][:, :, None])[:, :, 0]
+        slack = np.einsum("rcn,rn->rc", a, y) + b
+        ok &= np.all(slack >= -1e-12, axis=1)
+        for i in np.flatnonzero(ok):
+            points[i].append(y[i])
+    out = np.zeros(r)
+    for i, p in enumerate(points):
+        out[i] = _hull_measure(np.array(p).reshape(-1, n)) * factorial(n)
+    return np.clip(out, 0.0, 1.0)
+
+
+def _hull_measure(points: np.ndarray) -> float:
+    """Volume (area in 2D) of the convex hull of ``points`` (p, n); 0 when flat."""
+    from scipy.spatial import ConvexHull, QhullError
+
+    if len(points) <= points.shape[1]:
+        return 0.0
+    try:
+        return float(ConvexHull(points).volume)
+    except QhullError:  # flat within round-off
+        return 0.0

@@ -26,7 +26,9 @@ vertices and the plane's section of it lies inside the polygon (the blade has cr
 completely; an element the blade's edge is still inside stays whole until a later step crosses
 it). ``virtual_node_cut`` returns the new mesh (points duplicated, copies of the cut cells), each
 copy's fraction and cut, and each new node's original node (for carrying positions and
-velocities across the cut). An element cut once is not cut again (refused).
+velocities across the cut). A cell several cuts cross is split into the convex parts between
+them (one copy per sign vector holding material): where two cuts meet or cross, or a blade
+passes again through a cell cut before.
 """
 
 from __future__ import annotations
@@ -38,11 +40,30 @@ import numpy as np
 from tissuesim.errors import InputError
 from tissuesim.mesh.node_groups import node_groups
 from tissuesim.mesh.planar_cut import EMPTY, PLANE_TOLERANCE, PlanarCut
-from tissuesim.mesh.plane_split import positive_fraction
+from tissuesim.mesh.plane_split import positive_fraction, region_fractions
 from tissuesim.mesh.rows import row_max, rows_all, rows_any
 from tissuesim.mesh.swept_cut import SweptCut
 
 __all__ = ["PlanarCut", "VirtualNodeMesh", "cut_cells", "virtual_node_cut"]
+
+
+@dataclass(frozen=True)
+class Constraints:
+    """Rows of (copy, cut, side, level (r, d+1)): a copy's signed distance to a cut's plane at
+    its vertices times its side (its material is where every row of it is >= 0)."""
+
+    copy: np.ndarray
+    cut: np.ndarray
+    side: np.ndarray
+    level: np.ndarray
+
+    def join(self, other: Constraints) -> Constraints:
+        return Constraints(
+            *(np.concatenate([a, b]) for a, b in zip(self.rows(), other.rows(), strict=True))
+        )
+
+    def rows(self) -> tuple[np.ndarray, ...]:
+        return self.copy, self.cut, self.side, self.level
 
 
 @dataclass(frozen=True)
@@ -63,16 +84,48 @@ class VirtualNodeMesh:
     cut: np.ndarray
     origin: np.ndarray
     level: np.ndarray | None = None
+    #: the further cuts of copies of cells several cuts cross (their first is ``cut``/``side``)
+    extra: Constraints | None = None
+
+    def constraints(self) -> Constraints:
+        """Every (copy, cut) pair of the cut copies: each copy's first cut, then the further
+        cuts of copies of cells several cuts cross; a copy's material is where all its
+        levels are >= 0."""
+        cut = np.flatnonzero(self.side != 0)
+        first = Constraints(cut, self.cut[cut], self.side[cut], self.level[cut])
+        return first if self.extra is None else first.join(self.extra)
+
+    @property
+    def several(self) -> np.ndarray:
+        """(copies,) whether each copy stands for a part of a cell several cuts cross."""
+        out = np.zeros(len(self.cells), dtype=bool)
+        if self.extra is not None:
+            out[self.extra.copy] = True
+        return out
+
+    @property
+    def n_cell_cuts(self) -> int:
+        """How many (cell, cut) pairs there are: each cell a cut has crossed, once per cut."""
+        c = self.constraints()
+        return len(np.unique(self.parent[c.copy] * max(len(self.cells), 1) + c.cut))
+
+    @property
+    def material_slots(self) -> np.ndarray:
+        """(copies, d+1) whether each copy's vertex lies in its material (else the copy's
+        node there is virtual)."""
+        inside = np.ones(self.cells.shape, dtype=bool)
+        if self.level is not None:
+            inside = self.level >= 0.0
+            if self.extra is not None:
+                np.logical_and.at(inside, self.extra.copy, self.extra.level >= 0.0)
+        return inside
 
     @property
     def material_nodes(self) -> np.ndarray:
         """(p,) whether each point lies in the material of a cell that uses it (False for a
         virtual node only: a support or a grasper there would hold empty space)."""
-        inside = np.ones(self.cells.shape, dtype=bool)
-        if self.level is not None:
-            inside = self.level >= 0.0
         out = np.zeros(len(self.points), dtype=bool)
-        out[self.cells[inside]] = True
+        out[self.cells[self.material_slots]] = True
         return out
 
     @property
@@ -101,8 +154,18 @@ class VirtualNodeMesh:
             cell_sets=cell_sets,
             source=f"{mesh.source} (cut)",
             cell_fractions=self.fraction,
-            cell_levels=self.level,
+            cell_levels=self._drawn_levels(),
+            several_cuts=None if self.extra is None else self.several,
         )
+
+    def _drawn_levels(self) -> np.ndarray | None:
+        """``level``, where a copy several cuts bound the least of its levels at each vertex:
+        its material's vertices exactly, the part between them as one plane (for pictures)."""
+        if self.extra is None or self.level is None:
+            return self.level
+        out = self.level.copy()
+        np.minimum.at(out, self.extra.copy, self.extra.level)
+        return out
 
     def _facet_set(self, mesh, ids: np.ndarray) -> np.ndarray:
         """The boundary facets (k, d) of the cut mesh whose original nodes make a facet of
@@ -190,18 +253,19 @@ def _components(cells: np.ndarray, n_points: int) -> int:
     return int(np.count_nonzero(np.bincount(labels[cells[:, 0]])))  # the labels used
 
 
-def _levels(x_cell, cells, cuts, d_all, owner, parent, side, origin) -> np.ndarray:
+def _levels(x_cell, cells, cuts, d_all, taken, copy_cut, parent, side, origin) -> np.ndarray:
     """Each copy's material level at its vertices (copies, d+1): a cut copy's signed distance
-    to its cut's plane times its side; a whole cell on one side of a cut that shares a node with
-    a cell it cuts, or a node it parts on its plane (a cut along faces), its distance on that
-    side (the cut faces' contact surfaces shave such cells where they come close to the plane:
-    contact/cut_surface.py); +inf else. d_all (cuts, m, d+1): the cells' vertex distances."""
+    to its (first) cut's plane times its side; a whole cell on one side of a cut that shares a
+    node with a cell it cuts, or a node it parts on its plane (a cut along faces), its distance
+    on that side (the cut faces' contact surfaces shave such cells where they come close to the
+    plane: contact/cut_surface.py); +inf else. d_all (cuts, m, d+1): the cells' vertex
+    distances; ``taken`` (m, cuts) which cuts cut each cell."""
     copies, k = len(parent), cells.shape[1]
     level = np.full((copies, k), np.inf)
     if not len(d_all):
         return level
     copied = side != 0
-    level[copied] = d_all[owner[parent[copied]], parent[copied]] * side[copied, None]
+    level[copied] = d_all[copy_cut[copied], parent[copied]] * side[copied, None]
     whole = np.flatnonzero(~copied)
     n = int(cells.max()) + 1
     x_node = np.zeros((n, 3))
@@ -210,7 +274,7 @@ def _levels(x_cell, cells, cuts, d_all, owner, parent, side, origin) -> np.ndarr
     size = float(np.linalg.norm(np.ptp(x_node, axis=0)))
     for j, cut in enumerate(cuts):  # few cuts
         near = np.zeros(n, dtype=bool)
-        near[cells[owner == j]] = True
+        near[cells[taken[:, j]]] = True
         on_plane = np.abs(cut.distances(x_node[parted])) <= PLANE_TOLERANCE * size
         near[parted[on_plane]] = True
         e = parent[whole]
@@ -222,6 +286,61 @@ def _levels(x_cell, cells, cuts, d_all, owner, parent, side, origin) -> np.ndarr
     return level
 
 
+def _taken(prior, m: int, n_cuts: int) -> np.ndarray:
+    """(m, n_cuts) which cuts an earlier call cut each cell: ``prior``'s first entry, a cut
+    index per cell (-1 none) or such a matrix."""
+    taken = np.zeros((m, n_cuts), dtype=bool)
+    if prior is None:
+        return taken
+    before = np.asarray(prior[0])
+    if before.ndim == 1:
+        rows = np.flatnonzero(before >= 0)
+        taken[rows, before[rows]] = True
+    else:
+        taken[:, : before.shape[1]] = before[:, :n_cuts]
+    return taken
+
+
+def _copies(taken: np.ndarray, d_all: np.ndarray, dim: int):
+    """The copies of the cut cells, cell by cell: a cell one cut crosses gets its + then its -
+    side; a cell C cuts cross gets one copy per sign vector (bit i of its index: the side of
+    its i-th cut, 0 for +), each its convex part of the cell (``plane_split.region_fractions``).
+    Returns (parent, side and cut of each copy's first cut, fraction, the further cuts as
+    (copy index among these, cut, side) rows); empty parts are dropped."""
+    n_by_cell = taken.sum(axis=1)
+    cut_ids = np.flatnonzero(n_by_cell > 0)
+    count = np.left_shift(1, n_by_cell[cut_ids])  # 2^C copies per cell
+    parent = np.repeat(cut_ids, count)
+    start = np.cumsum(count) - count
+    index = np.arange(len(parent)) - np.repeat(start, count)  # the sign vector, bit by bit
+    first = np.argmax(taken[cut_ids], axis=1)  # each cell's first cut
+    cut = np.repeat(first, count)
+    side = np.where(index & 1, -1, 1)
+    fraction = np.zeros(len(parent))
+    one = np.repeat(n_by_cell[cut_ids] == 1, count)
+    plus = one & (side > 0)
+    f_plus = positive_fraction(d_all[cut[plus], parent[plus]]) if plus.any() else np.zeros(0)
+    fraction[plus] = f_plus
+    fraction[one & (side < 0)] = 1.0 - f_plus
+    several = np.flatnonzero(~one)
+    extra_rows = []
+    if several.size:  # cells where cuts meet: few
+        cuts_of = [np.flatnonzero(row) for row in taken[parent[several]]]
+        most = max(len(c) for c in cuts_of)
+        d = np.full((len(several), most, dim + 1), np.inf)
+        for r, (c, cs) in enumerate(zip(several, cuts_of, strict=True)):
+            signs = np.where((index[c] >> np.arange(len(cs))) & 1, -1, 1)
+            d[r, : len(cs)] = d_all[cs, parent[c]] * signs[:, None]
+            extra_rows += [(c, j, sg) for j, sg in zip(cs[1:], signs[1:], strict=True)]
+        f = region_fractions(d)
+        total = np.bincount(parent[several], weights=f)[parent[several]]
+        fraction[several] = f / total  # the parts of a cell add up to it exactly
+    keep = fraction > EMPTY
+    new_index = np.cumsum(keep) - 1
+    extra = np.array([(new_index[c], j, sg) for c, j, sg in extra_rows if keep[c]], dtype=np.int64)
+    return parent[keep], side[keep], cut[keep], fraction[keep], extra.reshape(-1, 3)
+
+
 def virtual_node_cut(
     points: np.ndarray,
     cells: np.ndarray,
@@ -230,8 +349,9 @@ def virtual_node_cut(
     prior: tuple[np.ndarray, np.ndarray] | None = None,
 ) -> VirtualNodeMesh:
     """Cut a P1 mesh (rest points (n, d), cells (m, d+1), d = 2 or 3) by ``cuts``: every cell
-    one of them crosses completely (``cut_cells``) becomes a copy per side holding material;
-    nodes are duplicated where the material around them separates (see the module docstring).
+    one of them crosses completely (``cut_cells``) becomes a copy per side holding material, a
+    cell several cross one copy per part between them that holds material; nodes are
+    duplicated where the material around them separates (see the module docstring).
 
     ``current``: where the points are now, as node positions (n, d) or per cell vertex
     (m, d+1, d) (default the rest points). The blade cuts the body as it is: a node's side is
@@ -239,17 +359,16 @@ def virtual_node_cut(
     cell's cut is the plane in its rest shape where that distance is zero, and the fractions
     and face parts are of rest volume (mass).
 
-    ``prior``: (cut index (m,), -1 for none, of the cells an earlier call cut; the node
-    distances (k, n) to the first k cuts that call used, NaN for nodes it did not): a node
-    keeps its distance to a cut from the first time a cell around it was cut (a blade
-    advancing step by step cuts each cell once, where the body was when it crossed it, and the
-    level stays one continuous function across cells cut at different times), and a cell an
-    earlier cut took that another cut crosses now is refused."""
+    ``prior``: (which cuts an earlier call cut each cell, (m, k) bool, or a cut index (m,)
+    with -1 for none; the node distances (k, n) to the first k cuts that call used, NaN for
+    nodes it did not): a node keeps its distance to a cut from the first time a cell around it
+    was cut (a blade advancing step by step cuts each cell once, where the body was when it
+    crossed it, and the level stays one continuous function across cells cut at different
+    times); another cut crossing a cell cut before splits its parts further."""
     cells = np.asarray(cells, dtype=np.int64)
     x3 = _as3d(points)
     x_cell = _per_cell(points, cells, current)
     node_d = [_distances(x_cell, cut) for cut in cuts]  # per cut: (m, d+1)
-    prior_owner = np.full(len(cells), -1) if prior is None else np.asarray(prior[0])
     if prior is not None:
         for j, frozen in enumerate(np.asarray(prior[1], dtype=float)[: len(cuts)]):
             at = frozen[cells]
@@ -259,35 +378,27 @@ def virtual_node_cut(
         raise InputError(
             f"virtual_node_cut takes P1 simplices ({dim + 1} nodes), not {cells.shape[1]}"
         )
-    owner = prior_owner.copy()
+    taken = _taken(prior, len(cells), len(cuts))
     for k, cut in enumerate(cuts):
-        hit = _crossed(x_cell, node_d[k], cut)  # frozen node distances where there are
-        hit = hit[owner[hit] != k]  # cut by this cut before: kept as it was
-        twice = hit[owner[hit] >= 0]
-        if twice.size:
-            raise InputError(
-                f"cell {int(twice[0])} is crossed by two cuts; the virtual node algorithm here "
-                "cuts a cell once: keep cuts apart by an element or merge them into one plane"
-            )
-        owner[hit] = k
+        taken[_crossed(x_cell, node_d[k], cut), k] = True  # a cell cut before stays so
     d_all = np.stack(node_d) if node_d else np.zeros((0, *cells.shape))  # (cuts, m, d+1)
-    # the copies: every uncut cell once, then one per side holding material of each cut cell
-    cut_ids = np.flatnonzero(owner >= 0)
-    parent = [np.flatnonzero(owner < 0)]
-    # each cut cell's fraction on the + side, in closed form (plane_split.py): the distances
-    # are linear in the element, so the rest-shape fraction is that of the vertex values
-    d_cut = d_all[owner[cut_ids], cut_ids] if len(cut_ids) else np.zeros((0, dim + 1))
-    f_plus = positive_fraction(d_cut) if len(cut_ids) else np.zeros(0)
-    f_both = np.column_stack([f_plus, 1.0 - f_plus]).ravel()  # + then - per cell
-    keep = f_both > EMPTY
-    n_whole = len(parent[0])
-    parent = np.concatenate([parent[0], np.repeat(cut_ids, 2)[keep]])
-    side = np.concatenate(
-        [np.zeros(n_whole, dtype=np.int64), np.tile(np.array([1, -1]), len(cut_ids))[keep]]
-    )
-    fraction = np.concatenate([np.ones(n_whole), f_both[keep]])
+    # the copies: every uncut cell once, then one per part holding material of each cut cell;
+    # the distances are linear in the element, so a part's rest-shape fraction is that of
+    # the vertex values (in closed form for one cut: plane_split.py)
+    whole = np.flatnonzero(~taken.any(axis=1))
+    cut_parent, cut_side, cut_first, cut_fraction, extra = _copies(taken, d_all, dim)
+    n_whole = len(whole)
+    parent = np.concatenate([whole, cut_parent])
+    side = np.concatenate([np.zeros(n_whole, dtype=np.int64), cut_side])
+    copy_cut = np.concatenate([np.full(n_whole, -1), cut_first])
+    fraction = np.concatenate([np.ones(n_whole), cut_fraction])
+    extra[:, 0] += n_whole
     copies, k = len(parent), dim + 1
-    labels = node_groups(x3, x_cell, cells, cuts, owner, d_all, parent, side)
+    row_copy, row_cut, row_side = extra.T
+    more = Constraints(
+        row_copy, row_cut, row_side, d_all[row_cut, parent[row_copy]] * row_side[:, None]
+    )
+    labels = node_groups(x3, x_cell, cells, cuts, taken, d_all, parent, side, copy_cut, more)
     # a slot's node: the original node for its first group, a new (duplicate) node after
     slot_node = cells[parent].ravel()
     # unique (node, group) pairs by one int64 key (a row-wise unique sorts far slower)
@@ -306,7 +417,7 @@ def virtual_node_cut(
     origin = np.concatenate([np.arange(len(x3)), pairs[dup, 0]])
     new_cells = node[group.reshape(-1)]
     pts = np.asarray(points, dtype=float)[origin]
-    level = _levels(x_cell, cells, cuts, d_all, owner, parent, side, origin)
+    level = _levels(x_cell, cells, cuts, d_all, taken, copy_cut, parent, side, origin)
     return VirtualNodeMesh(
         level=level,
         points=pts,
@@ -314,6 +425,7 @@ def virtual_node_cut(
         fraction=fraction,
         parent=parent,
         side=side,
-        cut=np.where(side == 0, -1, owner[parent]),
+        cut=copy_cut,
         origin=origin,
+        extra=more if len(extra) else None,
     )
