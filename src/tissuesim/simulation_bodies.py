@@ -215,8 +215,8 @@ class BodyCalls:
         cut boundary (``contact/cut_surface.py``, in 2D ``contact/cut_surface_2d.py``: each
         side's cut face a little inside it, so the two never pass through each other). A
         tissue's attachment points on the body follow the copy on their side of the cut. A
-        cell several cuts cross is split into the parts between them (refused with contact
-        on: the contact surface where cuts meet is not built yet)."""
+        cell several cuts cross is split into the parts between them (with contact on in 2D
+        refused: the contact surface where cuts meet is built in 3D only)."""
         from tissuesim.bodies.cut_state import CutState, recut
 
         b = self.body(body, ("fem",))
@@ -236,13 +236,7 @@ class BodyCalls:
         old_vn = b.cut_state.vn
         before_cells = b.cut_state.vn.n_cell_cuts if b.cut_state.vn else 0
         before = b.mesh.n_points
-        several = None
-        if self.contact is not None:
-            several = (
-                "with contact on, a cell is cut once (the contact surface where cuts meet is "
-                "not built yet): keep the cuts an element apart, or cut without contact"
-            )
-        done = recut(b.cut_state, cut, name, current, several)
+        done = recut(b.cut_state, cut, name, current, self._cut_check(b, name))
         if done is None:  # no new cell crossed completely: nothing changes
             vn, names = b.cut_state.vn, b.cut_state.names
             area = 0.0
@@ -270,6 +264,30 @@ class BodyCalls:
             "area_m2": float(b.cut_state.areas(vn)[index]),
             "origin": carry,
         }
+
+    def _cut_check(self, b, name: str):
+        """With contact on, a check of a cut of body ``b`` before it is taken: where cuts meet
+        in a cell, the contact surface must be one that can be built (in 3D; in 2D it is not
+        built yet), else the cut is refused with nothing changed."""
+        if self.contact is None:
+            return None
+        state = b.cut_state
+
+        def check(vn) -> None:
+            if vn.extra is None:
+                return
+            cell = int(vn.parent[vn.extra.copy[0]])
+            if b.mesh.dim == 2:
+                raise InputError(
+                    f"cut {name!r}: cell {cell} of {b.name!r} is crossed by two cuts; the "
+                    "contact surface where cuts meet is built in 3D only: keep the cuts an "
+                    "element apart, or cut without contact"
+                )
+            from tissuesim.contact.cut_surface import cut_surface
+
+            cut_surface(vn.to_mesh(state.original), self._contact_dhat())
+
+        return check
 
     def _cuts_ahead(self, blade) -> bool:
         """Whether ``blade`` is in contact with the body it cuts (an obstacle's, contact on):

@@ -49,7 +49,7 @@ def oblique() -> PlanarCut:
 def test_a_cut_keeps_the_mass_and_the_copies_derivatives_match_finite_differences(several):
     whole = beam(6, 2)
     mesh = cut(whole, plane_x(0.47), *([oblique()] if several else []))
-    assert (mesh.several_cuts is not None) == several
+    assert (mesh.cell_more_levels is not None) == several
     assert mesh.n_points > whole.n_points and mesh.cell_fractions is not None
     a = Model(whole, MATERIAL, np.full(whole.n_cells, 1000.0), backend="numpy")
     b = Model(mesh, MATERIAL, np.full(mesh.n_cells, 1000.0), backend="numpy")

@@ -33,6 +33,11 @@ def _z_areas(W, tri) -> np.ndarray:
     return 0.5 * np.cross(V[tri[:, 1]] - V[tri[:, 0]], V[tri[:, 2]] - V[tri[:, 0]])[:, 2]
 
 
+def cross2(a: np.ndarray, b: np.ndarray) -> float:
+    """The z component of the cross product of two 2D vectors."""
+    return float(a[0] * b[1] - a[1] * b[0])
+
+
 def test_a_sliver_along_a_mesh_edge_merges_without_a_folded_triangle():
     """Flat polygons facing +z: a sliver P along edge A-B (0.2 wide at A, 4.5 long) whose side
     on A-B holds Q's point at 0.30, and a small triangle R at A whose sides are all shorter
@@ -52,8 +57,8 @@ def test_a_sliver_along_a_mesh_edge_merges_without_a_folded_triangle():
     merged = (REST[A] + np.array([-0.2, 0, 0]) + np.array([-0.25, -0.1, 0])) / 3
     assert np.isclose(np.linalg.norm(V - merged, axis=1), 0.0).sum() == 1  # R's mean, once
     # P: (merged, AB30, AB45); Q: (merged, E, AB30), by the shoelace formula
-    p = 0.5 * abs(np.cross(np.array([0, 3.0]) - merged[:2], np.array([0, 4.5]) - merged[:2]))
-    q = 0.5 * abs(np.cross(np.array([3, 2.0]) - merged[:2], np.array([0, 3.0]) - merged[:2]))
+    p = 0.5 * abs(cross2(np.array([0, 3.0]) - merged[:2], np.array([0, 4.5]) - merged[:2]))
+    q = 0.5 * abs(cross2(np.array([3, 2.0]) - merged[:2], np.array([0, 3.0]) - merged[:2]))
     assert np.isclose(area.sum(), p + q)
 
 

@@ -152,12 +152,12 @@ def recut(
     cut: PlanarCut | SweptCut,
     name: str,
     positions: np.ndarray,
-    several: str | None = None,
+    check=None,
 ):
     """Cut again: ``cut`` as the cut called ``name`` (a new one, or the same plane with its
     swept polygon grown: a blade advancing; or the surface a blade swept once it left its
-    plane), the body's nodes at ``positions`` now. ``several``: why a cell several cuts cross
-    cannot be taken (refused with it before anything changes), None: it can. Returns
+    plane), the body's nodes at ``positions`` now. ``check``: called with the new
+    ``VirtualNodeMesh`` before anything changes, raising ``InputError`` to refuse it. Returns
     (the new VirtualNodeMesh, the current node each new node continues, the cut's index), or
     None when no new cell is cut."""
     cuts = list(state.cuts)
@@ -190,9 +190,8 @@ def recut(
     points = state.original.n_points if state.vn is None else len(state.vn.points)
     if vn.n_cell_cuts == before and len(vn.points) == points:
         return None  # no new element cut, no node parted (a cut along faces parts nodes only)
-    if several is not None and vn.extra is not None:
-        cell = int(vn.parent[vn.extra.copy[0]])
-        raise InputError(f"cut {name!r}: cell {cell} is crossed by two cuts; {several}")
+    if check is not None:
+        check(vn)
     carry, state.source = _carry(state.vn, vn)
     state.vn, state.cuts = vn, cuts
     if name not in state.names:

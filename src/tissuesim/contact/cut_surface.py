@@ -73,7 +73,7 @@ def cut_surface(mesh, dhat: float, gap: float = GAP) -> tuple[sp.csr_matrix, np.
             "contact of a cut body: only 3D P1 tetrahedra are built so far; cut it without "
             "contact, or simulate the cut in 3D"
         )
-    cells, levels = mesh.cells, np.asarray(mesh.cell_levels, dtype=float)
+    cells, levels = mesh.cells, _level_stack(mesh)
     snap = (levels >= gap - SNAP_OUT * dhat) & (levels <= gap + SNAP_IN * dhat)
     levels = np.where(snap, gap, levels)
     face_polys = _exposed_faces(cells, levels, gap)
@@ -89,31 +89,77 @@ def cut_surface(mesh, dhat: float, gap: float = GAP) -> tuple[sp.csr_matrix, np.
     return polygon_surface(mesh.n_points, nodes, weights, count, mesh.points, MERGE * dhat)
 
 
+def _level_stack(mesh) -> np.ndarray:
+    """Each cell's levels (m, C, 4): ``cell_levels`` first, then its further ones
+    (``cell_more_levels``: cells several cuts bound), +inf padding."""
+    first = np.asarray(mesh.cell_levels, dtype=float)
+    if mesh.cell_more_levels is None:
+        return first[:, None, :]
+    rows, more = mesh.cell_more_levels
+    order = np.argsort(rows, kind="stable")
+    rows, more = rows[order], more[order]
+    start = np.searchsorted(rows, rows)  # each row's rank among its cell's
+    rank = np.arange(len(rows)) - start
+    out = np.full((len(first), 2 + int(rank.max()), first.shape[1]), np.inf)
+    out[:, 0] = first
+    out[rows, 1 + rank] = more
+    return out
+
+
 def _exposed_faces(cells: np.ndarray, levels: np.ndarray, gap: float):
     """Every copy face's exposed part as polygons: (nodes (p, K, 4), weights (p, K, 4),
-    corner counts (p,)) with weights over the face's three nodes (the fourth weight 0)."""
-    m = len(cells)
+    corner counts (p,)) with weights over the face's three nodes (the fourth weight 0);
+    ``levels`` (m, C, 4) each copy's levels (+inf: none)."""
+    m, C, _ = levels.shape
     fnodes = cells[:, _TET_FACES].reshape(-1, 3)  # (4m, 3), outward order
-    flev = levels[:, _TET_FACES].reshape(-1, 3)
+    flev = levels[:, :, _TET_FACES].transpose(0, 2, 1, 3).reshape(4 * m, C, 3)
     order = np.argsort(fnodes, axis=1)
     snodes = np.take_along_axis(fnodes, order, axis=1)  # sorted: partners align node by node
-    slev = np.take_along_axis(flev, order, axis=1)
+    slev = np.take_along_axis(flev, order[:, None, :], axis=2)
     _, group, size = unique_rows(snodes, return_inverse=True, return_counts=True)
-    # constraints per face, in the sorted node order: own level - gap >= 0, and for each
-    # partner gap - level_p >= 0; a whole partner (level +inf) covers the face entirely
     by_group = np.argsort(group, kind="stable")
     start = np.concatenate([[0], np.cumsum(size)])
     most = int(size.max(initial=1))
-    constraints = [slev - gap]
+    # constraints per face, in the sorted node order: each own level - gap >= 0, and for each
+    # partner (a copy holding the same face nodes) gap - level_p >= 0 for its one level that
+    # is not also one of the face's own (the others hold wherever the own ones do): its
+    # region is left out; a partner with no such level covers the face entirely
+    constraints = [slev[:, i] - gap for i in range(C)]
+    finite = np.all(np.isfinite(slev), axis=2)  # (4m, C)
+    # a copy whose level is gap all over a face and lower at the opposite vertex (nodes
+    # snapped onto the level set) holds no volume next to it: its face is not exposed, and as
+    # a partner it covers nothing (face i of a cell is the one opposite its vertex i)
+    opposite = levels.transpose(0, 2, 1).reshape(4 * m, C)
+    hollow = np.any(finite & np.all(slev == gap, axis=2) & (opposite < gap), axis=1)
     covered = np.zeros(4 * m, dtype=bool)
+    rows = np.arange(4 * m)
     for j in range(most):  # the j-th member of each face's group, skipping the face itself
         has = j < size[group]
         member = np.where(has, by_group[np.minimum(start[group] + j, len(by_group) - 1)], 0)
-        other = has & (member != np.arange(4 * m))
-        lev = np.where(other[:, None], slev[member], -np.inf)  # -inf: no constraint
-        covered |= other & np.all(np.isinf(lev) & (lev > 0), axis=1)
-        constraints.append(gap - lev)
-    live = ~covered & ~np.all(slev - gap < 0.0, axis=1)  # some of it can be exposed
+        other = has & (member != rows) & ~hollow[member]
+        plev, pfin = slev[member], finite[member]
+        # partner level a holds on the whole face, or is one of the face's own
+        own = np.all(plev >= gap, axis=2)
+        for b in range(C):
+            both = pfin & finite[:, b : b + 1]
+            with np.errstate(invalid="ignore"):  # inf - inf where a level is none: not used
+                dif = np.where(both[:, :, None], plev - slev[:, b : b + 1], np.inf)
+            own |= both & np.all(np.abs(dif) <= 1e-9 * (np.abs(plev) + gap), axis=2)
+        remaining = pfin & ~own
+        n_left = remaining.sum(axis=1)
+        covered |= other & (n_left == 0)
+        if np.any(other & (n_left > 1)):
+            face = int(np.flatnonzero(other & (n_left > 1))[0] // 4)
+            raise InputError(
+                f"contact of a cut body: cell {face} meets a part that two cuts bound across a "
+                "face, where neither cut crosses it (both cuts end there); the contact surface "
+                "of that is not built: let one cut go on through, or cut without contact"
+            )
+        pick = np.argmax(remaining, axis=1)
+        lev = np.where((other & (n_left == 1))[:, None], plev[rows, pick], -np.inf)
+        constraints.append(gap - lev)  # -inf: no constraint
+    empty = np.any(np.all(slev - gap < 0.0, axis=2), axis=1)
+    live = ~covered & ~empty & ~hollow  # some of it can be exposed
     idx = np.flatnonzero(live)
     # the face's corners in outward order, as weights over its sorted nodes
     inverse_order = np.argsort(order[idx], axis=1)  # outward corner i is sorted position
@@ -164,8 +210,41 @@ def _clip(W: np.ndarray, count: np.ndarray, values: np.ndarray):
 
 
 def _sections(points: np.ndarray, cells: np.ndarray, levels: np.ndarray, gap: float):
+    """Inside each copy, the level set {level_i = gap} of each of its levels (m, C, 4) where
+    it crosses the copy, clipped to where its other levels are >= gap (where two cuts meet),
+    oriented outward: (nodes (p, K, 4), weights (p, K, 4), counts (p,))."""
+    m, C, _ = levels.shape
+    parts = []
+    for i in range(C):
+        nodes, W, count, idx = _one_section(points, cells, levels[:, i], gap)
+        others = [levels[idx, j] - gap for j in range(C) if j != i]
+        if others:
+            W = np.concatenate([W, np.zeros((len(W), len(others), 4))], axis=1)
+            nodes = np.concatenate([nodes, nodes[:, :1].repeat(len(others), axis=1)], axis=1)
+            clip = [np.where(np.isfinite(v), v, 1.0) for v in others]
+            todo = np.flatnonzero(np.any([np.any(v < 0.0, axis=1) for v in clip], axis=0))
+            Wc, count_c = W[todo], count[todo]
+            for v in clip:
+                Wc, count_c = _clip(Wc, count_c, v[todo])
+            W[todo], count[todo] = Wc, count_c
+        keep = count >= 3
+        parts.append((nodes[keep], W[keep], count[keep]))
+    K = max(p[1].shape[1] for p in parts)
+
+    def pad(a: np.ndarray) -> np.ndarray:
+        return np.concatenate([a, np.zeros((len(a), K - a.shape[1], 4), a.dtype)], axis=1)
+
+    return (
+        np.concatenate([pad(p[0]) for p in parts]),
+        np.concatenate([pad(p[1]) for p in parts]),
+        np.concatenate([p[2] for p in parts]),
+    )
+
+
+def _one_section(points: np.ndarray, cells: np.ndarray, levels: np.ndarray, gap: float):
     """The level set {level = gap} inside each cell it crosses, oriented outward (towards
-    lower level): (nodes (p, 4, 4), weights (p, 4, 4), counts (p,) 3 or 4)."""
+    lower level): (nodes (p, 4, 4), weights (p, 4, 4), counts (p,) 3 or 4, the rows crossed
+    (p,))."""
     finite = np.all(np.isfinite(levels), axis=1)
     v = levels - gap
     crossed = finite & (v.max(axis=1) > 0.0) & (v.min(axis=1) < 0.0)
@@ -211,7 +290,7 @@ def _sections(points: np.ndarray, cells: np.ndarray, levels: np.ndarray, gap: fl
         reversed_[tri] = np.roll(reversed_[tri], -1, axis=1)
         W[flip] = reversed_
     nodes = np.broadcast_to(cells[idx][:, None, :], W.shape).copy()
-    return nodes, W, count
+    return nodes, W, count, idx
 
 
 def _level_gradients(X: np.ndarray, levels: np.ndarray) -> np.ndarray:

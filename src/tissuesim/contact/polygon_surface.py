@@ -46,19 +46,23 @@ def polygon_surface(
     merge: float,
 ) -> tuple[sp.csr_matrix, np.ndarray]:
     """(W (k, n_points), triangles (t, 3)) of the polygons whose corners are weights
-    ``weights`` (p, K, 4) over ``nodes`` (p, K, 4) (at most two nonzero: a point on a mesh edge
-    or a node), ``count`` (p,) corners each, in outward order; ``rest`` the node positions at
-    rest (n_points, 3), ``merge`` the distance (m) under which points are made one."""
-    p_lo, p_hi, p_w, corner, count, lo, hi = _points(nodes, weights, count)
-    k = len(p_lo)
+    ``weights`` (p, K, 4) over ``nodes`` (p, K, 4) (a node, a point on a mesh edge, or, where
+    two cuts meet, a point inside a face of a cell), ``count`` (p,) corners each, in outward
+    order; ``rest`` the node positions at rest (n_points, 3), ``merge`` the distance (m) under
+    which points are made one."""
+    p_lo, p_hi, p_w, corner, count, lo, hi, W_face = _points(nodes, weights, count, n_points)
+    edge = np.flatnonzero(p_lo >= 0)  # nodes and points on mesh edges; then points in faces
     W = sp.csr_matrix(
         (
-            np.column_stack([1.0 - p_w, p_w]).ravel(),  # a node: lo == hi, 1 in all
-            (np.repeat(np.arange(k), 2), np.column_stack([p_lo, p_hi]).ravel()),
+            np.column_stack([1.0 - p_w[edge], p_w[edge]]).ravel(),  # a node: lo == hi, 1 in all
+            (np.repeat(edge, 2), np.column_stack([p_lo[edge], p_hi[edge]]).ravel()),
         ),
-        shape=(k, n_points),
+        shape=(len(p_lo), n_points),
     )
-    ring, size, mended = _rings(n_points, corner, count, lo, hi, p_lo, p_hi, p_w)
+    if W_face is not None:
+        W = (W + W_face).tocsr()
+    inserts = _face_junctions(W, corner, count, len(edge))
+    ring, size, mended = _rings(n_points, corner, count, lo, hi, p_lo, p_hi, p_w, inserts)
     label, W = _merge(W, ring, size, rest, merge)
     ring = np.where(ring >= 0, label[np.maximum(ring, 0)], -1)
     ring, size, mended = _distinct(ring, size, mended)
@@ -73,14 +77,19 @@ def polygon_surface(
     return W[used], local[tri]
 
 
-def _points(nodes: np.ndarray, weights: np.ndarray, count: np.ndarray):
+def _points(nodes: np.ndarray, weights: np.ndarray, count: np.ndarray, n_points: int):
     """The polygons' points: corners on one mesh edge with the same weight (to _MERGE) are one
-    point. Returns each point's edge (p_lo, p_hi; a node: both the same) and weight of p_hi,
-    then the polygons' corners as points (P, K) (-1 padding, a corner repeated by its
-    neighbour dropped), their counts, and each corner's edge (lo, hi)."""
+    point, and so are corners inside one face with the same weights (where two cuts meet).
+    Returns each point's edge (p_lo, p_hi; a node: both the same; -1 for a point inside a
+    face) and weight of p_hi, then the polygons' corners as points (P, K) (-1 padding, a
+    corner repeated by its neighbour dropped), their counts, each corner's edge (lo, hi; -1
+    inside a face), and the weights of the points inside faces (rows of a (points,
+    n_points) matrix, None when there are none)."""
     P, K, _ = weights.shape
     weights = np.where(weights > _ZERO, weights, 0.0)
     weights /= np.maximum(weights.sum(axis=2, keepdims=True), 1e-300)
+    valid = np.arange(K)[None, :] < count[:, None]
+    in_face = valid & (np.count_nonzero(weights, axis=2) > 2)
     # each corner: its (up to two) nodes and the weight of the larger-numbered one
     big = np.argsort(-weights, axis=2)[:, :, :2]  # the two largest weights
     w2 = np.take_along_axis(weights, big, axis=2)
@@ -89,8 +98,9 @@ def _points(nodes: np.ndarray, weights: np.ndarray, count: np.ndarray):
     n2[:, :, 1] = np.where(single, n2[:, :, 0], n2[:, :, 1])
     lo, hi = n2.min(axis=2), n2.max(axis=2)
     w_hi = np.where(single, 0.0, np.where(n2[:, :, 0] == hi, w2[:, :, 0], w2[:, :, 1]))
-    valid = np.arange(K)[None, :] < count[:, None]
-    vlo, vhi, vw = lo[valid], hi[valid], w_hi[valid]
+    lo[in_face], hi[in_face], w_hi[in_face] = -1, -1, 0.0
+    on_edge = valid & ~in_face
+    vlo, vhi, vw = lo[on_edge], hi[on_edge], w_hi[on_edge]
     # merge: sort by (edge, weight); a new point where the edge changes or the weight jumps
     order = np.lexsort((vw, vhi, vlo))
     new = np.ones(order.size, dtype=bool)
@@ -103,8 +113,17 @@ def _points(nodes: np.ndarray, weights: np.ndarray, count: np.ndarray):
     point = np.empty(order.size, dtype=np.int64)
     point[order] = label
     corner = np.full((P, K), -1)
-    corner[valid] = point
+    corner[on_edge] = point
     first = order[new]
+    p_lo, p_hi, p_w = vlo[first], vhi[first], vw[first]
+    W_face = None
+    if in_face.any():  # few: where two cuts meet
+        face_point, W_face = _face_points(nodes[in_face], weights[in_face], len(p_lo), n_points)
+        corner[in_face] = face_point
+        extra = W_face.shape[0] - len(p_lo)
+        p_lo = np.concatenate([p_lo, np.full(extra, -1)])
+        p_hi = np.concatenate([p_hi, np.full(extra, -1)])
+        p_w = np.concatenate([p_w, np.zeros(extra)])
     # corners that merged with their neighbour are one corner; a polygon left with fewer than
     # three is empty (a face between copies whose regions only touch along a line)
     prev = np.where(np.arange(K)[None, :] == 0, np.maximum(count[:, None] - 1, 0), np.arange(K) - 1)
@@ -114,16 +133,91 @@ def _points(nodes: np.ndarray, weights: np.ndarray, count: np.ndarray):
     packed = np.full((P, K), -1)
     r, c = np.nonzero(keep_corner)
     packed[r, slot[r, c]] = corner[r, c]
-    packed_lo, packed_hi = np.zeros((P, K), np.int64), np.zeros((P, K), np.int64)
+    packed_lo, packed_hi = np.full((P, K), -1, np.int64), np.full((P, K), -1, np.int64)
     packed_lo[r, slot[r, c]] = lo[r, c]
     packed_hi[r, slot[r, c]] = hi[r, c]
-    return vlo[first], vhi[first], vw[first], packed, keep_corner.sum(axis=1), packed_lo, packed_hi
+    return p_lo, p_hi, p_w, packed, keep_corner.sum(axis=1), packed_lo, packed_hi, W_face
 
 
-def _rings(n_points, corner, count, lo, hi, p_lo, p_hi, p_w):
+def _face_points(nodes: np.ndarray, weights: np.ndarray, start: int, n_points: int):
+    """Corners (c, 4) with three or more nonzero weights merged by (nodes, weights to
+    _MERGE): their point indices from ``start`` on, and the weights as rows (start + new
+    points, n_points), the first ``start`` rows empty."""
+    order = np.argsort(np.where(weights > 0.0, nodes, n_points), axis=1)  # support first
+    n = np.take_along_axis(nodes, order, axis=1)
+    w = np.take_along_axis(weights, order, axis=1)
+    n = np.where(w > 0.0, n, -1)
+    keys = np.column_stack([n, w])
+    by = np.lexsort(keys.T[::-1])
+    ks = keys[by]
+    new = np.ones(len(ks), dtype=bool)
+    new[1:] = np.any(ks[1:, :4] != ks[:-1, :4], axis=1) | np.any(
+        np.abs(ks[1:, 4:] - ks[:-1, 4:]) > _MERGE, axis=1
+    )
+    label = np.cumsum(new) - 1
+    point = np.empty(len(ks), dtype=np.int64)
+    point[by] = start + label
+    first = by[new]
+    rows = np.repeat(start + np.arange(len(first)), 4)
+    cols, vals = n[first].ravel(), w[first].ravel()
+    keep = cols >= 0
+    W = sp.csr_matrix((vals[keep], (rows[keep], cols[keep])), shape=(start + len(first), n_points))
+    return point, W
+
+
+def _face_junctions(W: sp.csr_matrix, corner: np.ndarray, count: np.ndarray, n_edge: int):
+    """{(polygon, side i): points to insert between its corners i and i+1, in order}: a
+    polygon side across a face of a cell (its ends' nodes three) that passes through points
+    inside that face (where two cuts meet, the sections and faces of the parts on either
+    side of one cut end there), so that no T-junction is left."""
+    if W.shape[0] == n_edge:
+        return {}
+    P, K = corner.shape
+    support = (W != 0).astype(np.int8).tocsr()
+    face_pts = np.arange(n_edge, W.shape[0])
+    key_of = {}
+    for q in face_pts:  # few
+        cols = tuple(support.indices[support.indptr[q] : support.indptr[q + 1]].tolist())
+        if len(cols) == 3:
+            key_of.setdefault(tuple(sorted(cols)), []).append(int(q))
+    if not key_of:
+        return {}
+    valid = np.arange(K)[None, :] < count[:, None]
+    nxt = np.where(np.arange(K)[None, :] + 1 < count[:, None], np.arange(K) + 1, 0)
+    pr, pc = np.nonzero(valid)
+    a, b = corner[pr, pc], corner[pr, nxt[pr, pc]]
+    union = ((support[a] + support[b]) != 0).tocsr()
+    three = np.flatnonzero(np.diff(union.indptr) == 3)
+    faces = set(key_of)
+    out: dict = {}
+    for s in three:
+        cols = tuple(sorted(union.indices[union.indptr[s] : union.indptr[s + 1]].tolist()))
+        if cols not in faces:
+            continue
+        wa = W[int(a[s])].toarray()[0, list(cols)]
+        wb = W[int(b[s])].toarray()[0, list(cols)]
+        d = wb - wa
+        dd = float(d @ d)
+        if dd <= 0.0:
+            continue
+        hits = []
+        for q in key_of[cols]:
+            if q in (a[s], b[s]):
+                continue
+            wq = W[q].toarray()[0, list(cols)]
+            t = float((wq - wa) @ d) / dd
+            if _MERGE < t < 1.0 - _MERGE and np.abs(wa + t * d - wq).max() <= 1e-9:
+                hits.append((t, q))
+        if hits:
+            out[(int(pr[s]), int(pc[s]))] = [q for _, q in sorted(hits)]
+    return out
+
+
+def _rings(n_points, corner, count, lo, hi, p_lo, p_hi, p_w, inserts: dict):
     """Each polygon's ring of points (R, L) (-1 padding), its size (R,), and whether it got
     points inserted along a side (``mended``: it is fanned from its centroid, since inserted
-    points lie on a line with its corners); polygons with fewer than three corners dropped."""
+    points lie on a line with its corners); polygons with fewer than three corners dropped.
+    ``inserts``: points to insert along sides across faces (``_face_junctions``)."""
     P, K = corner.shape
     valid = np.arange(K)[None, :] < count[:, None]
     alive = count >= 3
@@ -142,8 +236,10 @@ def _rings(n_points, corner, count, lo, hi, p_lo, p_hi, p_w):
         # along one mesh edge: both corners' nodes within {e_lo, e_hi}, and two nodes in all
         along = np.all((ends == e_lo[..., None]) | (ends == e_hi[..., None]), axis=2)
         along &= (e_lo != e_hi) & valid
-        split = along & np.isin(e_lo * n_points + e_hi, sorted_key)
+        split = along & (e_lo >= 0) & np.isin(e_lo * n_points + e_hi, sorted_key)
     plain = alive & ~split.any(axis=1)
+    if inserts:
+        plain[[poly for poly, _ in inserts]] = False
     mended_rows = []
     for poly in np.flatnonzero(alive & ~plain):  # few: polygons with a T-junction to mend
         ring = []
@@ -151,6 +247,7 @@ def _rings(n_points, corner, count, lo, hi, p_lo, p_hi, p_w):
         for i in range(n):
             a = int(corner[poly, i])
             ring.append(a)
+            ring.extend(inserts.get((int(poly), i), []))
             if not split[poly, i]:
                 continue
             b = int(corner[poly, (i + 1) % n])

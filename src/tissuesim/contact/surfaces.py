@@ -165,11 +165,6 @@ def fem_surface(
         from tissuesim.contact.cut_surface import BLADE_GAP, GAP, cut_surface
         from tissuesim.contact.cut_surface_2d import cut_boundary
 
-        if model.mesh.several_cuts is not None:
-            raise InputError(
-                f"contact surface of {name!r}: cells of the body are crossed by two cuts; the "
-                "contact surface where cuts meet is not built yet: cut it without contact"
-            )
         if choice is not None:
             raise InputError(
                 f"contact surface of {name!r}: the body has been cut, and its contact surface "

@@ -54,8 +54,8 @@ class Mesh:
     cell_levels: (m, d + 1) with ``cell_fractions``: each copy's material level at its
         vertices (material where its linear interpolation is >= 0); whole cells next to the
         cut carry their distance to its plane on their side, the others +inf.
-    several_cuts: (m,) with ``cell_levels``: the copies of cells several cuts cross; their
-        level is the least of their cuts' at each vertex.
+    cell_more_levels: (rows (r,), levels (r, d + 1)) with ``cell_levels``: further levels of
+        the cells several cuts bound (a copy's material is where all of its levels are >= 0).
     surface_projection: the exact curved surface the boundary approximates, as a projection
         of points onto it ((k, d) -> (k, d)), when a generator knows it (``ellipsoid``);
         elevating the mesh to order 2 puts the boundary's midside nodes on it. None (files,
@@ -80,10 +80,20 @@ class Mesh:
     # their distance on their side, others +inf rows. The cut faces' contact surfaces are level
     # sets of it (contact/cut_surface.py)
     cell_levels: np.ndarray | None = None
-    # (m,) bool with cell_levels: copies of cells several cuts cross; their cell_levels are
-    # the least of their levels at each vertex (exact at the vertices, drawn as one plane
-    # between them), so their contact surface is not built (contact/surfaces.py refuses)
-    several_cuts: np.ndarray | None = None
+    # (cell of each row (r,), levels (r, d+1)) with cell_levels: the further levels of cells
+    # several cuts bound (copies of cells several cuts cross; whole cells next to several
+    # cuts): a copy's material, and its contact region, are where all its levels allow
+    cell_more_levels: tuple[np.ndarray, np.ndarray] | None = None
+
+    @property
+    def least_levels(self) -> np.ndarray | None:
+        """``cell_levels`` with each cell's further levels folded in: the least at each vertex
+        (exact at the vertices; between them one plane, as a picture draws a copy)."""
+        if self.cell_levels is None or self.cell_more_levels is None:
+            return self.cell_levels
+        out = np.array(self.cell_levels, dtype=float)
+        np.minimum.at(out, self.cell_more_levels[0], self.cell_more_levels[1])
+        return out
 
     def __repr__(self) -> str:
         kind = {2: "triangles", 3: "tetrahedra"}.get(self.dim, "cells")

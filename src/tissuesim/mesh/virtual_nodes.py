@@ -86,6 +86,9 @@ class VirtualNodeMesh:
     level: np.ndarray | None = None
     #: the further cuts of copies of cells several cuts cross (their first is ``cut``/``side``)
     extra: Constraints | None = None
+    #: whole cells next to several cuts: their distance to each further one on their side
+    #: (``level`` holds the first), which the cut faces' contact surfaces shave them by
+    shave: Constraints | None = None
 
     def constraints(self) -> Constraints:
         """Every (copy, cut) pair of the cut copies: each copy's first cut, then the further
@@ -154,18 +157,20 @@ class VirtualNodeMesh:
             cell_sets=cell_sets,
             source=f"{mesh.source} (cut)",
             cell_fractions=self.fraction,
-            cell_levels=self._drawn_levels(),
-            several_cuts=None if self.extra is None else self.several,
+            cell_levels=self.level,
+            cell_more_levels=self._more_levels(),
         )
 
-    def _drawn_levels(self) -> np.ndarray | None:
-        """``level``, where a copy several cuts bound the least of its levels at each vertex:
-        its material's vertices exactly, the part between them as one plane (for pictures)."""
-        if self.extra is None or self.level is None:
-            return self.level
-        out = self.level.copy()
-        np.minimum.at(out, self.extra.copy, self.extra.level)
-        return out
+    def _more_levels(self) -> tuple[np.ndarray, np.ndarray] | None:
+        """The further levels of copies (``extra``) and of whole cells next to several cuts
+        (``shave``), as rows (copy, level), for the mesh's ``cell_more_levels``."""
+        rows = [r for r in (self.extra, self.shave) if r is not None]
+        if not rows:
+            return None
+        return (
+            np.concatenate([r.copy for r in rows]),
+            np.concatenate([r.level for r in rows]),
+        )
 
     def _facet_set(self, mesh, ids: np.ndarray) -> np.ndarray:
         """The boundary facets (k, d) of the cut mesh whose original nodes make a facet of
@@ -259,11 +264,13 @@ def _levels(x_cell, cells, cuts, d_all, taken, copy_cut, parent, side, origin) -
     node with a cell it cuts, or a node it parts on its plane (a cut along faces), its distance
     on that side (the cut faces' contact surfaces shave such cells where they come close to the
     plane: contact/cut_surface.py); +inf else. d_all (cuts, m, d+1): the cells' vertex
-    distances; ``taken`` (m, cuts) which cuts cut each cell."""
+    distances; ``taken`` (m, cuts) which cuts cut each cell. Returns the levels and, for whole
+    cells next to several cuts, the further ones as rows (``VirtualNodeMesh.shave``)."""
     copies, k = len(parent), cells.shape[1]
     level = np.full((copies, k), np.inf)
+    shave: list = []
     if not len(d_all):
-        return level
+        return level, None
     copied = side != 0
     level[copied] = d_all[copy_cut[copied], parent[copied]] * side[copied, None]
     whole = np.flatnonzero(~copied)
@@ -279,11 +286,23 @@ def _levels(x_cell, cells, cuts, d_all, taken, copy_cut, parent, side, origin) -
         near[parted[on_plane]] = True
         e = parent[whole]
         d = d_all[j][e]
-        pick = rows_any(near[cells[e]]) & np.isinf(level[whole, 0])
+        pick = rows_any(near[cells[e]])
         up, down = pick & rows_all(d >= 0.0), pick & rows_all(d <= 0.0)
-        level[whole[up]] = d[up]
-        level[whole[down]] = -d[down]
-    return level
+        side_j = np.where(up, 1, np.where(down, -1, 0))
+        more = (side_j != 0) & np.isfinite(level[whole, 0])  # a further cut next to it
+        level_j = d * side_j[:, None]
+        first = (side_j != 0) & ~more
+        level[whole[first]] = level_j[first]
+        if more.any():
+            shave.append((whole[more], np.full(more.sum(), j), side_j[more], level_j[more]))
+    return level, _rows(shave, k)
+
+
+def _rows(rows: list, k: int) -> Constraints | None:
+    """Lists of (copy, cut, side, level) arrays as one ``Constraints``, None for none."""
+    if not rows:
+        return None
+    return Constraints(*(np.concatenate(part) for part in zip(*rows, strict=True)))
 
 
 def _taken(prior, m: int, n_cuts: int) -> np.ndarray:
@@ -417,7 +436,7 @@ def virtual_node_cut(
     origin = np.concatenate([np.arange(len(x3)), pairs[dup, 0]])
     new_cells = node[group.reshape(-1)]
     pts = np.asarray(points, dtype=float)[origin]
-    level = _levels(x_cell, cells, cuts, d_all, taken, copy_cut, parent, side, origin)
+    level, shave = _levels(x_cell, cells, cuts, d_all, taken, copy_cut, parent, side, origin)
     return VirtualNodeMesh(
         level=level,
         points=pts,
@@ -428,4 +447,5 @@ def virtual_node_cut(
         cut=copy_cut,
         origin=origin,
         extra=more if len(extra) else None,
+        shave=shave,
     )

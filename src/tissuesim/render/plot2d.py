@@ -202,7 +202,8 @@ def _cell_polygons(mesh: Mesh, x: np.ndarray) -> np.ndarray:
     each copy's material part."""
     if mesh.cell_levels is None:
         return x[mesh.cells]
-    return np.einsum("mkv,mvd->mkd", _material_weights(mesh.cell_levels), x[mesh.cells])
+    # a copy several cuts bound: drawn by the least of its levels (exact at its vertices)
+    return np.einsum("mkv,mvd->mkd", _material_weights(mesh.least_levels), x[mesh.cells])
 
 
 def _setup_2d(
