@@ -16,6 +16,14 @@ the fresh faces pressed together take more iterations). Medians over ``--repeats
     python3 benchmarks/cut_cost.py                   # 10,368 tetrahedra, 3 repeats
     python3 benchmarks/cut_cost.py --divisions 8 12 17
     python3 benchmarks/cut_cost.py --contact --out benchmarks/results/cut_cost_contact.md
+
+``--second``: then a second cut, the plane y = 3 mm across the first (the cells along the
+line where they cross are split into four parts), timed the same way, with the number of
+cells both cuts cross.
+
+    python3 benchmarks/cut_cost.py --second --out benchmarks/results/cut_cost_second.md
+    python3 benchmarks/cut_cost.py --second --contact \
+        --out benchmarks/results/cut_cost_second_contact.md
 """
 
 from __future__ import annotations
@@ -49,21 +57,39 @@ def organ(divisions: int, contact: bool = False) -> ts.Simulation:
     return sim
 
 
-def once(divisions: int, before: int = 4, after: int = 4, contact: bool = False) -> dict:
+def plane_cut(point: tuple, normal: tuple) -> PlanarCut:
+    """The plane through ``point`` with ``normal`` (along an axis) across the whole organ."""
+    p, n = np.array(point, dtype=float), np.array(normal, dtype=float)
+    axis = int(np.argmax(np.abs(n)))
+    corners = []
+    for a, b in ((-1, -1), (1, -1), (1, 1), (-1, 1)):
+        c = p.copy()
+        u, w = [i for i in range(3) if i != axis]
+        c[u], c[w] = a, b
+        corners.append(c)
+    return PlanarCut(p, n, np.array(corners))
+
+
+def once(
+    divisions: int, before: int = 4, after: int = 4, contact: bool = False, second: bool = False
+) -> dict:
     sim = organ(divisions, contact)
     walls = []
     for _ in range(before):
         start = time.perf_counter()
         sim.step()
         walls.append(time.perf_counter() - start)
-    x = 0.011
-    blade = PlanarCut(
-        np.array([x, 0.0, 0.0]),
-        np.array([1.0, 0.0, 0.0]),
-        np.array([[x, -1, -1], [x, 1, -1], [x, 1, 1], [x, -1, 1]], dtype=float),
-    )
+    blade = plane_cut((0.011, 0.0, 0.0), (1.0, 0.0, 0.0))
+    if second:  # the first cut, and steps after it, untimed: the second is the event
+        sim.cut_body(blade, body="organ")
+        walls = []
+        for _ in range(before):
+            start = time.perf_counter()
+            sim.step()
+            walls.append(time.perf_counter() - start)
+        blade = plane_cut((0.0, 0.003, 0.0), (0.0, 1.0, 0.0))
     start = time.perf_counter()
-    report = sim.cut_body(blade, body="organ")
+    report = sim.cut_body(blade, body="organ", name="second" if second else "cut")
     cut_s = time.perf_counter() - start
     start = time.perf_counter()
     _ = sim.system  # the cut body's rebuild: kinematics, sparsity pattern, contact surface
@@ -74,7 +100,10 @@ def once(divisions: int, before: int = 4, after: int = 4, contact: bool = False)
         sim.step()
         after_walls.append(time.perf_counter() - start)
     step_after = statistics.median(after_walls[1:])
+    vn = sim.bodies["organ"].cut_state.vn
+    meet = 0 if vn.extra is None else len(np.unique(vn.parent[vn.extra.copy]))
     return {
+        "cells_both": meet,
         "tetrahedra": int(organ(divisions).bodies["organ"].mesh.n_cells),
         "cells_cut": report["cells_cut"],
         "pieces": report["pieces"],
@@ -92,25 +121,28 @@ def main() -> None:
     parser.add_argument("--divisions", type=int, nargs="+", default=[12])
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--contact", action="store_true", help="the organ on a table, contact on")
+    parser.add_argument("--second", action="store_true", help="time a second cut across it")
     parser.add_argument("--out", type=Path, default=HERE / "results" / "cut_cost.md")
     args = parser.parse_args()
     lines = [
         "# Cost of a cut event (benchmarks/cut_cost.py)",
         "",
         f"`python3 benchmarks/cut_cost.py --divisions {' '.join(map(str, args.divisions))}"
-        f"{' --contact' if args.contact else ''}`; "
+        f"{' --contact' if args.contact else ''}{' --second' if args.second else ''}`; "
         f"medians of {args.repeats} repeats, each a fresh simulation; this machine, one process.",
         "",
-        "| tetrahedra | cells cut | pieces | step (s) | cut (s) | rebuild (s) "
-        "| first step after (s) | step after (s) | cut event (s) | event / step "
+        "| tetrahedra | cells cut | cells both cuts cross | pieces | step (s) | cut (s) "
+        "| rebuild (s) | first step after (s) | step after (s) | cut event (s) | event / step "
         "| (cut + rebuild) / step |",
-        "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |",
+        "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |",
     ]
     for divisions in args.divisions:
-        runs = [once(divisions, contact=args.contact) for _ in range(args.repeats)]
+        runs = [
+            once(divisions, contact=args.contact, second=args.second) for _ in range(args.repeats)
+        ]
         med = {k: statistics.median(r[k] for r in runs) for k in runs[0]}
         lines.append(
-            f"| {med['tetrahedra']:,} | {med['cells_cut']} | {med['pieces']} "
+            f"| {med['tetrahedra']:,} | {med['cells_cut']} | {med['cells_both']} | {med['pieces']} "
             f"| {med['step_s']:.3f} | {med['cut_s']:.3f} | {med['rebuild_s']:.3f} "
             f"| {med['first_step_after_s']:.3f} | {med['step_after_s']:.3f} | {med['event_s']:.3f} "
             f"| {med['event_s'] / med['step_s']:.2f} "

@@ -31,6 +31,7 @@ import scipy.sparse as sp
 
 from tissuesim.contact.polygon_surface import polygon_surface
 from tissuesim.errors import InputError
+from tissuesim.mesh.polygon_clip import clip_polygons
 from tissuesim.mesh.rows import unique_rows
 
 __all__ = ["cut_surface"]
@@ -173,7 +174,7 @@ def _exposed_faces(cells: np.ndarray, levels: np.ndarray, gap: float):
     clipped = np.flatnonzero(np.any([np.any(v < 0.0, axis=1) for v in values], axis=0))
     Wc, count_c = W[clipped], count[clipped]
     for v in values:  # +inf (no constraint) keeps everything
-        Wc, count_c = _clip(Wc, count_c, v[clipped])
+        Wc, count_c = clip_polygons(Wc, count_c, v[clipped])
     W[clipped], count[clipped] = Wc, count_c
     keep = count >= 3
     nodes = np.zeros((keep.sum(), K, 4), dtype=np.int64)
@@ -181,32 +182,6 @@ def _exposed_faces(cells: np.ndarray, levels: np.ndarray, gap: float):
     weights = np.zeros((keep.sum(), K, 4))
     weights[:, :, :3] = W[keep]
     return nodes, weights, count[keep]
-
-
-def _clip(W: np.ndarray, count: np.ndarray, values: np.ndarray):
-    """Convex polygons (corners as weights W (p, K, n) over n nodes, ``count`` (p,) corners)
-    clipped to where the linear function with node values ``values`` (p, n) is >= 0
-    (Sutherland-Hodgman, one corner slot at a time over all polygons)."""
-    p, K, n = W.shape
-    val = np.einsum("pkn,pn->pk", W, values)
-    out = np.zeros_like(W)
-    got = np.zeros(p, dtype=np.int64)
-    rows = np.arange(p)
-    for i in range(K):
-        active = i < count
-        nxt = np.where(i + 1 < count, i + 1, 0)
-        a, b = W[:, i], W[rows, nxt]
-        va, vb = val[:, i], val[rows, nxt]
-        inside = active & (va >= 0.0)
-        put = np.minimum(got, K - 1)
-        out[rows[inside], put[inside]] = a[inside]
-        got = got + inside
-        cross = active & ((va >= 0.0) != (vb >= 0.0))
-        t = np.where(cross, va / np.where(cross, va - vb, 1.0), 0.0)
-        put = np.minimum(got, K - 1)
-        out[rows[cross], put[cross]] = a[cross] + t[cross, None] * (b[cross] - a[cross])
-        got = got + cross
-    return out, np.minimum(got, K)
 
 
 def _sections(points: np.ndarray, cells: np.ndarray, levels: np.ndarray, gap: float):
@@ -225,7 +200,7 @@ def _sections(points: np.ndarray, cells: np.ndarray, levels: np.ndarray, gap: fl
             todo = np.flatnonzero(np.any([np.any(v < 0.0, axis=1) for v in clip], axis=0))
             Wc, count_c = W[todo], count[todo]
             for v in clip:
-                Wc, count_c = _clip(Wc, count_c, v[todo])
+                Wc, count_c = clip_polygons(Wc, count_c, v[todo])
             W[todo], count[todo] = Wc, count_c
         keep = count >= 3
         parts.append((nodes[keep], W[keep], count[keep]))

@@ -19,6 +19,7 @@ from scipy.sparse.csgraph import connected_components
 from tissuesim.mesh.interior_faces import InteriorFaces, interior_faces
 from tissuesim.mesh.planar_cut import EMPTY, PLANE_TOLERANCE, PlanarCut
 from tissuesim.mesh.plane_split import positive_fraction
+from tissuesim.mesh.polygon_clip import clip_polygons, polygon_measures
 from tissuesim.mesh.rows import rows_all
 from tissuesim.mesh.swept_cut import SweptCut
 
@@ -69,7 +70,7 @@ def node_groups(x3, x_cell, cells, cuts, taken, d_all, parent, side, copy_cut, m
             ca.append(by_parent[first[cell_a[f]] + i])
             cb.append(by_parent[first[cell_b[f]] + j])
     f, ca, cb = np.concatenate(fa), np.concatenate(ca), np.concatenate(cb)
-    part = _face_parts(x3, cells, copy_cut, more, d_all, parent, side, faces, f, ca, cb)
+    part = _face_parts(x3, copy_cut, more, d_all, parent, side, faces, f, ca, cb)
     meet = f[part > EMPTY]
     ca, cb = ca[part > EMPTY], cb[part > EMPTY]
     rows.append((ca[:, None] * k + faces.slot_a[meet]).ravel())
@@ -107,7 +108,7 @@ def _on_cuts(x_cell: np.ndarray, faces: InteriorFaces, cuts: list, d_all) -> np.
     return on_cut
 
 
-def _face_parts(x3, cells, copy_cut, more, d_all, parent, side, faces, f, ca, cb) -> np.ndarray:
+def _face_parts(x3, copy_cut, more, d_all, parent, side, faces, f, ca, cb) -> np.ndarray:
     """The fraction (f,) of each face ``faces``[f] where the material of copy ca (of its cell
     a) and of copy cb (of its cell b) both lie: 1 for two whole cells, the face's part on the
     side of the one cut copy, or on the common side of two copies of one cut (none on
@@ -143,77 +144,52 @@ def _face_parts(x3, cells, copy_cut, more, d_all, parent, side, faces, f, ca, cb
     part[agree] = np.minimum(pa, pb)
     part[same & (side[ca] != side[cb]) & ~flat] = 0.0
     meet = np.flatnonzero(odd | (cut_a & cut_b & (~same | flat)))  # where cuts meet
-    nodes = faces.nodes[f[meet]]
-    rows_of = {}
-    for r, c in enumerate(more.copy):
-        rows_of.setdefault(int(c), []).append(r)
-    for i, face_nodes in zip(meet, nodes, strict=True):
-        face = x3[face_nodes]
-        constraints = []
-        for c in (int(ca[i]), int(cb[i])):
-            if side[c] == 0:
-                continue
-            e = int(parent[c])
-            where = [int(np.flatnonzero(cells[e] == v)[0]) for v in face_nodes]
-            constraints.append((d_all[copy_cut[c]][e][where], int(side[c])))
-            for r in rows_of.get(c, []):
-                constraints.append((d_all[more.cut[r]][e][where], int(more.side[r])))
-        part[i] = _face_part(face, constraints) / max(_face_part(face, []), 1e-300)
+    if meet.size:
+        table_cut, table_side = _constraint_table(copy_cut, side, more)
+        va = _copy_values(d_all, table_cut[ca[meet]], table_side[ca[meet]], parent[ca[meet]],
+                          faces.slot_a[f[meet]])  # fmt: skip
+        vb = _copy_values(d_all, table_cut[cb[meet]], table_side[cb[meet]], parent[cb[meet]],
+                          faces.slot_b[f[meet]])  # fmt: skip
+        part[meet] = _clipped_parts(x3[faces.nodes[f[meet]]], np.concatenate([va, vb], axis=1))
     return part
 
 
-def _measure(points: np.ndarray) -> float:
-    """Volume (3D) or area (2D, points in a plane) of the convex hull of ``points``."""
-    from scipy.spatial import ConvexHull, QhullError
-
-    if len(points) < 3:
-        return 0.0
-    centred = points - points.mean(axis=0)
-    # the points' own dimension: drop the directions they do not span (a 2D mesh's z)
-    _, s, vt = np.linalg.svd(centred, full_matrices=False)
-    rank = int(np.sum(s > 1e-12 * max(s[0], 1e-300)))
-    if rank < 2 or len(points) <= rank:
-        return 0.0
-    try:
-        return float(ConvexHull(centred @ vt[:rank].T).volume)
-    except QhullError:  # flat within round-off
-        return 0.0
+def _constraint_table(copy_cut, side, more) -> tuple[np.ndarray, np.ndarray]:
+    """Each copy's cuts and sides (copies, C), -1 / 0 padding: its first cut, then its
+    further ones (``more``)."""
+    copies = len(side)
+    order = np.argsort(more.copy, kind="stable")
+    rows = more.copy[order]
+    rank = np.arange(len(rows)) - np.searchsorted(rows, rows)
+    C = 1 + (int(rank.max()) + 1 if len(rows) else 0)
+    cut = np.full((copies, C), -1)
+    sides = np.zeros((copies, C), dtype=np.int64)
+    cut[:, 0], sides[:, 0] = np.where(side != 0, copy_cut, -1), side
+    cut[rows, 1 + rank], sides[rows, 1 + rank] = more.cut[order], more.side[order]
+    return cut, sides
 
 
-def _clip(poly: np.ndarray, d: np.ndarray, side: int) -> tuple[np.ndarray, np.ndarray]:
-    """A convex polygon (k, 3) with signed distances d (k,) clipped to ``side`` of the plane
-    (Sutherland-Hodgman); returns the polygon and its points' distances (0 on the plane)."""
-    out, dist = [], []
-    k = len(poly)
-    for i in range(k):
-        p, q, dp, dq = poly[i], poly[(i + 1) % k], side * d[i], side * d[(i + 1) % k]
-        if dp >= 0.0:
-            out.append(p)
-            dist.append(d[i])
-        if dp * dq < 0.0:
-            t = dp / (dp - dq)
-            out.append(p + t * (q - p))
-            dist.append(0.0)
-    return np.array(out).reshape(-1, poly.shape[1]), np.array(dist)
+def _copy_values(d_all, cut, sides, cell, slots) -> np.ndarray:
+    """The copies' signed levels (p, C, d) at a face's nodes (``slots``: their places in the
+    cell), +inf where a copy has no such cut."""
+    values = d_all[np.maximum(cut, 0)[:, :, None], cell[:, None, None], slots[:, None, :]]
+    return np.where((cut >= 0)[:, :, None], values * sides[:, :, None], np.inf)
 
 
-def _face_part(face: np.ndarray, constraints: list) -> float:
-    """Area of a face (3, 3) (2D: the length of an edge (2, 3)) where every constraint
-    (distances of its points to a cut (3,), side) holds; the distances are linear on the face."""
-    poly = face
-    dists = [np.asarray(d, dtype=float) for d, _ in constraints]
-    for k, (_, side) in enumerate(constraints):
-        carried = np.column_stack([poly, *[dd[:, None] for dd in dists]])
-        clipped, _ = _clip(carried, dists[k], side)
-        if len(clipped) == 0:
-            return 0.0
-        poly = clipped[:, :3]
-        dists = [clipped[:, 3 + j] for j in range(len(dists))]
-    if face.shape[0] == 2:  # an edge of a triangle mesh: the length of what is left
-        if len(poly) < 2:
-            return 0.0
-        return float(np.linalg.norm(poly.max(axis=0) - poly.min(axis=0)))
-    return _measure(poly)
+def _clipped_parts(face: np.ndarray, values: np.ndarray) -> np.ndarray:
+    """The fraction (p,) of each face (p, d, 3) (an edge in 2D) where every linear function
+    with node values ``values`` (p, R, d) is >= 0 (+inf: none)."""
+    p, d, _ = face.shape
+    W = np.zeros((p, d + values.shape[1], d))
+    W[:, np.arange(d), np.arange(d)] = 1.0
+    count = np.full(p, d)
+    for r in range(values.shape[1]):
+        v = np.where(np.isfinite(values[:, r]), values[:, r], 1.0)
+        W, count = clip_polygons(W, count, v)
+    whole = np.zeros_like(W)
+    whole[:, np.arange(d), np.arange(d)] = 1.0
+    full = polygon_measures(whole, np.full(p, d), face)
+    return polygon_measures(W, count, face) / np.maximum(full, 1e-300)
 
 
 def _face_on_cut(face_now: np.ndarray, cut: PlanarCut) -> bool:
