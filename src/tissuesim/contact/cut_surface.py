@@ -75,6 +75,15 @@ def cut_surface(mesh, dhat: float, gap: float = GAP) -> tuple[sp.csr_matrix, np.
             "contact, or simulate the cut in 3D"
         )
     cells, levels = mesh.cells, _level_stack(mesh)
+    cut = np.asarray(mesh.cell_fractions) < 1.0 if mesh.cell_fractions is not None else None
+    if cut is not None and levels.shape[1] > 2:
+        three = np.flatnonzero(cut & (np.all(np.isfinite(levels), axis=2).sum(axis=1) > 2))
+        if three.size:
+            raise InputError(
+                f"contact of a cut body: cell {int(three[0])} is crossed by three cuts; the "
+                "contact surface where three cuts meet in a cell is not built: keep the third "
+                "cut an element away from where the other two cross, or cut without contact"
+            )
     snap = (levels >= gap - SNAP_OUT * dhat) & (levels <= gap + SNAP_IN * dhat)
     levels = np.where(snap, gap, levels)
     face_polys = _exposed_faces(cells, levels, gap)
