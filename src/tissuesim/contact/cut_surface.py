@@ -130,36 +130,42 @@ def _exposed_faces(cells: np.ndarray, levels: np.ndarray, gap: float):
     by_group = np.argsort(group, kind="stable")
     start = np.concatenate([[0], np.cumsum(size)])
     most = int(size.max(initial=1))
-    # constraints per face, in the sorted node order: each own level - gap >= 0, and for each
-    # partner (a copy holding the same face nodes) gap - level_p >= 0 for its one level that
-    # is not also one of the face's own (the others hold wherever the own ones do): its
-    # region is left out; a partner with no such level covers the face entirely
-    constraints = [slev[:, i] - gap for i in range(C)]
     finite = np.all(np.isfinite(slev), axis=2)  # (4m, C)
     # a copy whose level is gap all over a face and lower at the opposite vertex (nodes
     # snapped onto the level set) holds no volume next to it: its face is not exposed, and as
     # a partner it covers nothing (face i of a cell is the one opposite its vertex i)
     opposite = levels.transpose(0, 2, 1).reshape(4 * m, C)
     hollow = np.any(finite & np.all(slev == gap, axis=2) & (opposite < gap), axis=1)
-    covered = np.zeros(4 * m, dtype=bool)
-    rows = np.arange(4 * m)
+    # faces away from every cut (no copy holding them has a level): inside where two copies
+    # share them, else whole boundary faces; only the others are looked at below
+    near = np.bincount(group, weights=finite.any(axis=1), minlength=len(size)) > 0
+    sub = np.flatnonzero(near[group])
+    covered = size[group] >= 2
+    covered[sub] = False
+    # constraints per face near a cut, in the sorted node order: each own level - gap >= 0,
+    # and for each partner (a copy holding the same face nodes) gap - level_p >= 0 for its one
+    # level that is not also one of the face's own (the others hold wherever the own ones
+    # do): its region is left out; a partner with no such level covers the face entirely
+    s_lev, s_fin, s_group = slev[sub], finite[sub], group[sub]
+    constraints = [s_lev[:, i] - gap for i in range(C)]
+    rows = np.arange(len(sub))
     for j in range(most):  # the j-th member of each face's group, skipping the face itself
-        has = j < size[group]
-        member = np.where(has, by_group[np.minimum(start[group] + j, len(by_group) - 1)], 0)
-        other = has & (member != rows) & ~hollow[member]
+        has = j < size[s_group]
+        member = np.where(has, by_group[np.minimum(start[s_group] + j, len(by_group) - 1)], 0)
+        other = has & (member != sub) & ~hollow[member]
         plev, pfin = slev[member], finite[member]
         # partner level a holds on the whole face, or is one of the face's own
         own = np.all(plev >= gap, axis=2)
         for b in range(C):
-            both = pfin & finite[:, b : b + 1]
+            both = pfin & s_fin[:, b : b + 1]
             with np.errstate(invalid="ignore"):  # inf - inf where a level is none: not used
-                dif = np.where(both[:, :, None], plev - slev[:, b : b + 1], np.inf)
+                dif = np.where(both[:, :, None], plev - s_lev[:, b : b + 1], np.inf)
             own |= both & np.all(np.abs(dif) <= 1e-9 * (np.abs(plev) + gap), axis=2)
         remaining = pfin & ~own
         n_left = remaining.sum(axis=1)
-        covered |= other & (n_left == 0)
+        covered[sub] |= other & (n_left == 0)
         if np.any(other & (n_left > 1)):
-            face = int(np.flatnonzero(other & (n_left > 1))[0] // 4)
+            face = int(sub[np.flatnonzero(other & (n_left > 1))[0]] // 4)
             raise InputError(
                 f"contact of a cut body: cell {face} meets a part that two cuts bound across a "
                 "face, where neither cut crosses it (both cuts end there); the contact surface "
@@ -175,15 +181,18 @@ def _exposed_faces(cells: np.ndarray, levels: np.ndarray, gap: float):
     inverse_order = np.argsort(order[idx], axis=1)  # outward corner i is sorted position
     K = 3 + len(constraints)
     W = np.zeros((len(idx), K, 3))
-    rows = np.arange(len(idx))[:, None]
-    W[rows, np.arange(3)[None, :], inverse_order] = 1.0
+    W[np.arange(len(idx))[:, None], np.arange(3)[None, :], inverse_order] = 1.0
     count = np.full(len(idx), 3)
     # only faces some constraint cuts into are clipped (most faces are whole: away from a cut)
-    values = [np.where(np.isfinite(v), v, 1.0) for v in (c[idx] for c in constraints)]
-    clipped = np.flatnonzero(np.any([np.any(v < 0.0, axis=1) for v in values], axis=0))
+    at = np.full(4 * m, -1)
+    at[sub] = np.arange(len(sub))
+    mine = np.flatnonzero(at[idx] >= 0)  # live faces near a cut
+    values = [np.where(np.isfinite(v), v, 1.0) for v in (c[at[idx[mine]]] for c in constraints)]
+    cut_into = np.any([np.any(v < 0.0, axis=1) for v in values], axis=0)
+    clipped = mine[cut_into]
     Wc, count_c = W[clipped], count[clipped]
     for v in values:  # +inf (no constraint) keeps everything
-        Wc, count_c = clip_polygons(Wc, count_c, v[clipped])
+        Wc, count_c = clip_polygons(Wc, count_c, v[cut_into])
     W[clipped], count[clipped] = Wc, count_c
     keep = count >= 3
     nodes = np.zeros((keep.sum(), K, 4), dtype=np.int64)
