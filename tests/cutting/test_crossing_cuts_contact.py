@@ -59,6 +59,18 @@ def ending_at(point, normal, x_end: float) -> PlanarCut:
     return PlanarCut(p0, n, np.array(corners))
 
 
+def v_side(slope: float, x_apex=0.5, z_apex=0.15, toward=1.0, past=0.0) -> PlanarCut:
+    """One side of a V: the plane through the line x = x_apex, z = z_apex (along y) rising
+    by ``slope`` towards ``toward`` x (+1 or -1), from ``past`` (m) beyond that line on to
+    beyond the box (a blade that stopped there)."""
+    n = np.array([-slope, 0.0, toward]) / np.hypot(slope, 1.0)
+    w = np.array([toward, 0.0, slope]) / np.hypot(slope, 1.0)
+    u = np.array([0.0, 1.0, 0.0])
+    p0 = np.array([x_apex, 0.2, z_apex])
+    corners = [p0 + a * u + b * w for a, b in ((-3, -past), (3, -past), (3, 3), (-3, 3))]
+    return PlanarCut(p0, n, np.array(corners))
+
+
 CASES = {
     # two through cuts crossing: along the line x = 0.47, y = 0.23 (through cells)
     "cross": [plane_cut((0.47, 0, 0), (1, 0, 0)), plane_cut((0, 0.23, 0), (0, 1, 0))],
@@ -73,6 +85,9 @@ CASES = {
         tilted((0.47, 0.2, 0.15), (1, 0.2, 0.1)),
         ending_at((0.3, 0.23, 0.15), (0.2, 1, 0.25), 0.48),
     ],
+    # a V: two cuts end at the same line, so the faces of the cells beyond it meet parts that
+    # two cuts bound, neither of which crosses those cells (their exposed parts are not convex)
+    "vee": [v_side(0.4), v_side(-0.4)],
     "oblique-cross": [
         tilted((0.47, 0.2, 0.15), (1, 0.3, 0.2)),
         tilted((0.5, 0.23, 0.15), (0.2, 1, 0.4)),
@@ -82,6 +97,8 @@ CASES = {
 
 def surface(name, dhat=DHAT):
     cut = virtual_node_cut(BOX.points, BOX.cells, CASES[name])
+    if name == "vee":
+        assert cut.n_pieces == 2  # the wedge comes out
     assert cut.extra is not None  # cells both cuts cross
     cm = cut.to_mesh(BOX)
     W, tri = cut_surface(cm, dhat)
@@ -164,3 +181,38 @@ def test_three_cuts_through_one_cell_are_refused_with_contact():
     cm = virtual_node_cut(BOX.points, BOX.cells, cuts).to_mesh(BOX)
     with pytest.raises(InputError, match="crossed by three cuts"):
         cut_surface(cm, DHAT)
+
+
+def test_a_wedge_cut_out_of_a_beam_rests_in_its_groove():
+    """Two cuts from the top of a held beam cross 13 cm down (a V, each cut 5 cm past the
+    other): the wedge between them is free and sinks into its groove under gravity, where the
+    groove's two faces hold it (free, it would fall 20 cm in these 0.2 s); no surface passes
+    through another."""
+    mesh = ts.box((0.0, 0.0, 0.05), (1.0, 0.2, 0.25), (10, 2, 4))
+    material = ts.make_material("neo_hookean", youngs_modulus=1e7, poisson_ratio=0.3)
+    sim = ts.Simulation(mesh, material, density=1000.0, integrator="backward_euler",
+                        time_step=0.01, gravity=(0.0, 0.0, -G))  # fmt: skip
+    sim.fix(np.flatnonzero(mesh.points[:, 0] < 1e-9), name="wall")
+    sim.set_contact(dhat=1e-3)
+    sim.step()
+    sim.cut_body(v_side(1.0, 0.53, 0.12, toward=-1.0, past=0.05), name="left")
+    report = sim.cut_body(v_side(1.0, 0.53, 0.12, past=0.05), name="right")
+    assert report["pieces"] == 2
+    body = sim.bodies["body"]
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    cells, n = body.mesh.cells, body.mesh.n_points
+    graph = coo_matrix((np.ones(cells.size), (np.repeat(cells[:, 0], 4), cells.ravel())), (n, n))
+    label = connected_components(graph, directed=False)[1]
+    wedge = label != label[np.flatnonzero(body.mesh.points[:, 0] < 1e-9)[0]]
+    beam = ~wedge
+    contact = sim.system.contact
+    start = sim.positions[:, 2].copy()
+    for _ in range(20):
+        record = sim.step()
+        assert record.converged and not contact.intersecting(sim.state.x)
+    sink = start - sim.positions[:, 2]
+    around = beam & (np.abs(body.mesh.points[:, 0] - 0.53) < 0.15)
+    # the wedge goes down with the beam around it (its sag there), not 20 cm
+    assert np.mean(sink[wedge]) == pytest.approx(np.mean(sink[around]), abs=0.01)

@@ -149,6 +149,7 @@ def _exposed_faces(cells: np.ndarray, levels: np.ndarray, gap: float):
     s_lev, s_fin, s_group = slev[sub], finite[sub], group[sub]
     constraints = [s_lev[:, i] - gap for i in range(C)]
     rows = np.arange(len(sub))
+    several: dict = {}  # face (row of sub) -> [partner levels - gap (k, 3): its region >= 0]
     for j in range(most):  # the j-th member of each face's group, skipping the face itself
         has = j < size[s_group]
         member = np.where(has, by_group[np.minimum(start[s_group] + j, len(by_group) - 1)], 0)
@@ -164,18 +165,18 @@ def _exposed_faces(cells: np.ndarray, levels: np.ndarray, gap: float):
         remaining = pfin & ~own
         n_left = remaining.sum(axis=1)
         covered[sub] |= other & (n_left == 0)
-        if np.any(other & (n_left > 1)):
-            face = int(sub[np.flatnonzero(other & (n_left > 1))[0]] // 4)
-            raise InputError(
-                f"contact of a cut body: cell {face} meets a part that two cuts bound across a "
-                "face, where neither cut crosses it (both cuts end there); the contact surface "
-                "of that is not built: let one cut go on through, or cut without contact"
-            )
+        # a partner that two cuts bound and this face's copy has neither (both cuts end there,
+        # as at the apex of a V): what it leaves exposed need not be convex; such faces are
+        # cut into convex pieces one by one below (few)
+        for r in np.flatnonzero(other & (n_left >= 2)):
+            several.setdefault(int(r), []).append(plev[r][remaining[r]] - gap)
         pick = np.argmax(remaining, axis=1)
         lev = np.where((other & (n_left == 1))[:, None], plev[rows, pick], -np.inf)
         constraints.append(gap - lev)  # -inf: no constraint
     empty = np.any(np.all(slev - gap < 0.0, axis=2), axis=1)
     live = ~covered & ~empty & ~hollow  # some of it can be exposed
+    odd = sub[list(several)]
+    live[odd] = False
     idx = np.flatnonzero(live)
     # the face's corners in outward order, as weights over its sorted nodes
     inverse_order = np.argsort(order[idx], axis=1)  # outward corner i is sorted position
@@ -194,12 +195,62 @@ def _exposed_faces(cells: np.ndarray, levels: np.ndarray, gap: float):
     for v in values:  # +inf (no constraint) keeps everything
         Wc, count_c = clip_polygons(Wc, count_c, v[cut_into])
     W[clipped], count[clipped] = Wc, count_c
+    if several:
+        face_of, W_odd, count_odd = _pieces(
+            odd[~covered[odd] & ~empty[odd] & ~hollow[odd]], at, order, constraints, several
+        )
+        K = max(K, W_odd.shape[1])
+        W = np.concatenate([_pad(W, K), _pad(W_odd, K)])
+        count = np.concatenate([count, count_odd])
+        idx = np.concatenate([idx, face_of])
     keep = count >= 3
     nodes = np.zeros((keep.sum(), K, 4), dtype=np.int64)
     nodes[:, :, :3] = snodes[idx[keep]][:, None, :]
     weights = np.zeros((keep.sum(), K, 4))
     weights[:, :, :3] = W[keep]
     return nodes, weights, count[keep]
+
+
+def _pad(W: np.ndarray, K: int) -> np.ndarray:
+    return np.concatenate([W, np.zeros((len(W), K - W.shape[1], W.shape[2]))], axis=1)
+
+
+def _pieces(faces, at, order, constraints, several):
+    """The exposed part of each face in ``faces`` whose partners include one that several
+    cuts bound, as convex pieces: the face clipped by its own constraints and its other
+    partners', then less each such partner's region (where all its levels - gap are >= 0):
+    a piece P less a region {a_1 >= 0, ..., a_r >= 0} is the pieces P with a_1 < 0, then
+    a_1 >= 0 and a_2 < 0, and so on. Returns (the face of each piece, corner weights
+    (p, K, 3) over the face's sorted nodes, corner counts)."""
+    out_face, out_W, out_count = [], [], []
+    K = 3 + len(constraints) + max(sum(map(len, regions)) for regions in several.values())
+    for face in faces:
+        r = int(at[face])
+        start = np.zeros((1, K, 3))
+        start[0, np.arange(3), np.argsort(order[face])] = 1.0
+        piece_W, piece_n = start, np.array([3])
+        for c in constraints:
+            v = np.where(np.isfinite(c[r]), c[r], 1.0)[None, :]
+            piece_W, piece_n = clip_polygons(piece_W, piece_n, v)
+        pieces = [(piece_W, piece_n)] if piece_n[0] >= 3 else []
+        for region in several[r]:
+            left = []
+            for Wp, n in pieces:
+                for i in range(len(region)):
+                    Q, q = Wp, n
+                    for k in range(i):
+                        Q, q = clip_polygons(Q, q, region[k][None, :])
+                    Q, q = clip_polygons(Q, q, -region[i][None, :])
+                    if q[0] >= 3:
+                        left.append((Q, q))
+            pieces = left
+        for Wp, n in pieces:
+            out_face.append(face)
+            out_W.append(Wp[0])
+            out_count.append(int(n[0]))
+    if not out_W:
+        return np.zeros(0, dtype=np.int64), np.zeros((0, K, 3)), np.zeros(0, dtype=np.int64)
+    return np.array(out_face), np.stack(out_W), np.array(out_count)
 
 
 def _sections(points: np.ndarray, cells: np.ndarray, levels: np.ndarray, gap: float):
