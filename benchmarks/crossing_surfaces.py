@@ -7,7 +7,7 @@ the first, give or take 3 cm). For each: how many cut surfaces are closed and co
 oriented (each directed edge once with its reverse), manifold, free of intersection (ipctk's
 exact test), how many came within 0.3 dhat of themselves at rest (two primitives that share
 no vertex; IPC's barrier pushes such pairs apart) and the closest such pair, and how many
-were refused (the two cuts end at the same cell face: ``contact/cut_surface.py``).
+were refused (``contact/cut_surface.py`` refuses a face where three cuts end).
 
     python3 benchmarks/crossing_surfaces.py      # writes benchmarks/results/crossing_surfaces.md
 """
