@@ -9,10 +9,10 @@ from __future__ import annotations
 import ipctk
 import numpy as np
 import pytest
+from test_cut_contact import block_on_floor  # pytest puts this folder on the path
 
 import tissuesim as ts
 from tissuesim.contact.cut_surface import GAP, cut_surface
-from tissuesim.contact.obstacles import plane
 from tissuesim.errors import InputError
 from tissuesim.mesh.virtual_nodes import PlanarCut, virtual_node_cut
 
@@ -146,19 +146,7 @@ def test_four_pieces_of_two_cuts_fall_onto_the_floor_and_onto_each_other():
     """A beam held at x = 0 is cut across at x = 0.47 and along its length at z = 0.17: the
     two pieces beyond x = 0.47 fall 5 cm, the lower onto the floor and the upper onto it, and
     rest there; the floor carries both, and no surface ever passes through another."""
-    mesh = ts.box((0.0, 0.0, 0.05), (1.0, 0.2, 0.25), (10, 2, 2))
-    material = ts.make_material("neo_hookean", youngs_modulus=1e6, poisson_ratio=0.3)
-    sim = ts.Simulation(
-        mesh,
-        material,
-        density=1000.0,
-        integrator="backward_euler",
-        time_step=0.01,
-        gravity=(0.0, 0.0, -G),
-    )
-    sim.fix(np.flatnonzero(mesh.points[:, 0] < 1e-9), name="wall")
-    sim.set_contact(dhat=1e-3)
-    sim.add_obstacle("floor", plane((0.5, 0.1, 0.0), (0, 0, 1), 3.0))
+    sim = block_on_floor()
     sim.step()
     mass = sim.system.bodies[0].mass.lumped.sum() / 3
     sim.cut_body(plane_cut((0.47, 0, 0), (1, 0, 0)), name="across")
