@@ -215,8 +215,7 @@ class BodyCalls:
         cut boundary (``contact/cut_surface.py``, in 2D ``contact/cut_surface_2d.py``: each
         side's cut face a little inside it, so the two never pass through each other). A
         tissue's attachment points on the body follow the copy on their side of the cut. A
-        cell several cuts cross is split into the parts between them (with contact on in 2D
-        refused: the contact surface where cuts meet is built in 3D only)."""
+        cell several cuts cross is split into the parts between them."""
         from tissuesim.bodies.cut_state import CutState, recut
 
         b = self.body(body, ("fem",))
@@ -267,8 +266,8 @@ class BodyCalls:
 
     def _cut_check(self, b, name: str):
         """With contact on, a check of a cut of body ``b`` before it is taken: where cuts meet
-        in a cell, the contact surface must be one that can be built (in 3D; in 2D it is not
-        built yet), else the cut is refused with nothing changed."""
+        in a cell, the contact surface must be one that can be built, else the cut is refused
+        with nothing changed."""
         if self.contact is None:
             return None
         state = b.cut_state
@@ -276,16 +275,11 @@ class BodyCalls:
         def check(vn) -> None:
             if vn.extra is None:
                 return
-            cell = int(vn.parent[vn.extra.copy[0]])
-            if b.mesh.dim == 2:
-                raise InputError(
-                    f"cut {name!r}: cell {cell} of {b.name!r} is crossed by two cuts; the "
-                    "contact surface where cuts meet is built in 3D only: keep the cuts an "
-                    "element apart, or cut without contact"
-                )
             from tissuesim.contact.cut_surface import cut_surface
+            from tissuesim.contact.cut_surface_2d import cut_boundary
 
-            cut_surface(vn.to_mesh(state.original), self._contact_dhat())
+            build = cut_boundary if b.mesh.dim == 2 else cut_surface
+            build(vn.to_mesh(state.original), self._contact_dhat())
 
         return check
 

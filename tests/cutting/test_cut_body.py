@@ -124,22 +124,25 @@ def test_a_second_cut_across_cells_cut_before_splits_them_further():
     np.testing.assert_allclose(np.diff(z, 2) / sim.time_step**2, -G, rtol=1e-2)
 
 
-def test_a_second_cut_across_a_cut_cell_is_refused_in_2d_with_contact_on():
-    """Where two cuts meet, the contact surface is built in 3D only: in 2D with contact on the
-    second cut is refused, and nothing changes."""
+def test_crossing_cuts_in_2d_with_contact_on_part_the_strip_in_four():
+    """A 2D strip held at x = 0 cut across (x = 0.47) and along (y = 0.23) with contact on:
+    four pieces, the mass kept, and the steps after the cuts keep every cut edge apart from
+    every other (2D contact where cuts meet: contact/cut_boundary_several.py)."""
     mesh = ts.rectangle((0.0, 0.0), (1.0, 0.4), (10, 4))
     material = ts.make_material("neo_hookean", youngs_modulus=1e6, poisson_ratio=0.3)
     sim = ts.Simulation(mesh, material, density=1000.0, integrator="backward_euler",
-                        time_step=0.01)  # fmt: skip
+                        time_step=0.01, gravity=(0.0, -G))  # fmt: skip
     sim.fix(np.flatnonzero(mesh.points[:, 0] < 1e-9), name="wall")
     sim.set_contact(dhat=1e-3)
     sim.cut_body(through(0.47))
     mass = sim.model.mass.lumped.sum()
     along = PlanarCut.swept_segment((-1, 0.23, 1), (2, 0.23, 1), (-1, 0.23, -1), (2, 0.23, -1))
-    with pytest.raises(InputError, match="crossed by two cuts.*3D only"):
-        sim.cut_body(along, name="along")
-    assert sim.model.mass.lumped.sum() == mass
-    assert sim.bodies["body"].cut_state.vn.extra is None  # nothing changed
+    report = sim.cut_body(along, name="along")
+    assert report["pieces"] == 4
+    assert sim.model.mass.lumped.sum() == pytest.approx(mass, rel=1e-12)
+    for _ in range(5):
+        record = sim.step()
+        assert record.converged and not sim.system.contact.intersecting(sim.state.x)
 
 
 def test_a_second_cut_and_a_blade_going_on_step_by_step():

@@ -192,3 +192,36 @@ def test_contact_energy_of_a_cut_2d_body_matches_finite_differences():
         h = 1e-9
         fd = (s.contact.evaluate(x + h * d, 1)[1] - s.contact.evaluate(x - h * d, 1)[1]) / (2 * h)
         assert np.linalg.norm(fd - exact @ d) <= 1e-6 * np.linalg.norm(exact @ d)
+
+
+def along(y0: float, x1: float = 2.0) -> PlanarCut:
+    """The line y = y0 from x = -1 to x1 (a blade that stopped there)."""
+    return PlanarCut.swept_segment((-1, y0, 1.0), (x1, y0, 1.0), (-1, y0, -1.0), (x1, y0, -1.0))
+
+
+@pytest.mark.parametrize(
+    ("cuts", "pieces", "lengths"),
+    [
+        ([across(0.47), along(0.23)], 4, (0.4, 1.0)),  # crossing
+        ([across(0.47), along(0.23, 0.5)], 3, (0.4, 0.5)),  # a T ending at a column of nodes
+        ([along(0.23, 0.53), along(0.27, 0.53)], 1, None),  # two notches 4 cm apart in one row
+    ],
+    ids=["cross", "tee", "parallel"],
+)
+def test_where_cuts_meet_the_boundary_is_closed_and_free_of_intersection(cuts, pieces, lengths):
+    """Where two cuts cross a cell, its copies are bounded by both levels: the boundary is
+    closed and oriented, free of intersection, and encloses the strip less both strips of
+    width 2 gap (their square of overlap counted once)."""
+    vn = virtual_node_cut(STRIP.points, STRIP.cells, cuts)
+    assert vn.extra is not None and vn.n_pieces == pieces
+    W, edges = cut_boundary(vn.to_mesh(STRIP), 0.01)
+    V = W @ vn.points
+    k = len(V)
+    np.testing.assert_array_equal(np.bincount(edges[:, 0], minlength=k), 1)
+    np.testing.assert_array_equal(np.bincount(edges[:, 1], minlength=k), 1)
+    mesh = ipctk.CollisionMesh(np.asfortranarray(V), edges)
+    assert not ipctk.has_intersections(mesh, V)
+    if lengths is not None:
+        g = GAP * 0.01
+        expected = 0.4 - 2 * g * sum(lengths) + (2 * g) ** 2
+        assert area(V, edges) == pytest.approx(expected, rel=1e-12)

@@ -25,7 +25,15 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
-from tissuesim.contact.cut_surface import _MERGE, _ZERO, GAP, MERGE, SNAP_IN, SNAP_OUT
+from tissuesim.contact.cut_surface import (
+    _MERGE,
+    _ZERO,
+    GAP,
+    MERGE,
+    SNAP_IN,
+    SNAP_OUT,
+    _level_stack,
+)
 from tissuesim.errors import InputError
 from tissuesim.mesh.rows import unique_rows
 
@@ -44,16 +52,18 @@ def cut_boundary(mesh, dhat: float) -> tuple[sp.csr_matrix, np.ndarray]:
     (SNAP_IN, SNAP_OUT) and merging (MERGE) as the 3D surface (``cut_surface``)."""
     if mesh.dim != 2 or mesh.cells.shape[1] != 3:
         raise InputError("cut_boundary: a 2D mesh of P1 triangles is needed; use cut_surface in 3D")
-    more = mesh.cell_more_levels
-    if more is not None and np.any(np.asarray(mesh.cell_fractions)[more[0]] < 1.0):
-        raise InputError(
-            "contact of a 2D body with cells crossed by two cuts is not built yet: keep the "
-            "cuts an element apart, cut it without contact, or simulate the cut in 3D"
-        )
-    gap = GAP * dhat  # (whole cells next to two cuts are shaved by the first one only)
-    cells, levels = mesh.cells, np.asarray(mesh.cell_levels, dtype=float)
+    gap = GAP * dhat
+    cells, levels = mesh.cells, _level_stack(mesh)
     snap = (levels >= gap - SNAP_OUT * dhat) & (levels <= gap + SNAP_IN * dhat)
     levels = np.where(snap, gap, levels)
+    if levels.shape[1] > 1:  # where cuts meet: every copy bounded by all its levels
+        from tissuesim.contact.cut_boundary_several import assemble, several_boundary
+
+        nodes, weights = several_boundary(mesh.points, cells, levels, gap)
+        W, seg = assemble(mesh.n_points, nodes, weights)
+        W, seg = _tidy(W, seg)
+        return _cluster(W, seg, mesh.points, MERGE * dhat)
+    levels = levels[:, 0]
     ends = [_exposed_edges(cells, levels, gap), _sections(mesh.points, cells, levels, gap)]
     lo, hi, w = (np.concatenate([e[i] for e in ends]) for i in range(3))  # (s, 2) each
     W, seg = _assemble(mesh.n_points, lo, hi, w)
