@@ -160,20 +160,24 @@ def test_a_blade_swept_down_through_the_block_is_a_planar_cut(block):
         PlanarCut.swept_segment((0, 0, 0), (1, 0, 0), (2, 0, 0), (3, 0, 0))
 
 
-def test_a_cut_2d_strip_is_drawn_as_its_material_with_the_cut_open(tmp_path):
-    """The 2D pictures draw each copy as its material part (a triangle or a quadrilateral):
-    every drawn polygon's area is its copy's fraction of the triangle, so the pieces do not
-    overlap at the cut, and the picture is written."""
+@pytest.mark.parametrize("crossing", [False, True], ids=["one cut", "crossing cuts"])
+def test_a_cut_2d_strip_is_drawn_as_its_material_with_the_cut_open(tmp_path, crossing):
+    """The 2D pictures draw each copy as its material part (the triangle clipped by its
+    levels; where two cuts cross, by both): every drawn polygon's area is its copy's fraction
+    of the triangle, so the pieces do not overlap at the cut, and the picture is written."""
     from tissuesim.render.plot2d import _cell_polygons, render_frame_png
 
     strip = ts.rectangle((0.0, 0.0), (1.0, 0.2), (10, 2))
-    mesh = virtual_node_cut(strip.points, strip.cells, [plane_x(0.53)]).to_mesh(strip)
+    cuts = [plane_x(0.53)] + ([plane_y(0.07)] if crossing else [])
+    mesh = virtual_node_cut(strip.points, strip.cells, cuts).to_mesh(strip)
+    assert (mesh.cell_more_levels is not None) == crossing
     P = _cell_polygons(mesh, mesh.points)
     x, y = P[..., 0], P[..., 1]
     area = 0.5 * np.abs(np.sum(x * np.roll(y, -1, axis=1) - y * np.roll(x, -1, axis=1), axis=1))
     whole = volumes(mesh.points, mesh.cells)
     np.testing.assert_allclose(area, mesh.cell_fractions * whole, rtol=1e-12, atol=1e-15)
     assert area.sum() == pytest.approx(0.2, rel=1e-12)
-    assert np.all(np.ptp(P[mesh.cell_fractions < 1][..., 0], axis=1) < 0.08)  # parts, not whole
+    if not crossing:  # the copies of the cut x = 0.53: parts, not whole triangles
+        assert np.all(np.ptp(P[mesh.cell_fractions < 1][..., 0], axis=1) < 0.08)
     png = render_frame_png(mesh, mesh.points, mesh.cell_fractions, tmp_path / "cut.png")
     assert png.stat().st_size > 1000

@@ -85,16 +85,6 @@ class Mesh:
     # cuts): a copy's material, and its contact region, are where all its levels allow
     cell_more_levels: tuple[np.ndarray, np.ndarray] | None = None
 
-    @property
-    def least_levels(self) -> np.ndarray | None:
-        """``cell_levels`` with each cell's further levels folded in: the least at each vertex
-        (exact at the vertices; between them one plane, as a picture draws a copy)."""
-        if self.cell_levels is None or self.cell_more_levels is None:
-            return self.cell_levels
-        out = np.array(self.cell_levels, dtype=float)
-        np.minimum.at(out, self.cell_more_levels[0], self.cell_more_levels[1])
-        return out
-
     def __repr__(self) -> str:
         kind = {2: "triangles", 3: "tetrahedra"}.get(self.dim, "cells")
         if self.cell_type == "wedge":

@@ -202,8 +202,28 @@ def _cell_polygons(mesh: Mesh, x: np.ndarray) -> np.ndarray:
     each copy's material part."""
     if mesh.cell_levels is None:
         return x[mesh.cells]
-    # a copy several cuts bound: drawn by the least of its levels (exact at its vertices)
-    return np.einsum("mkv,mvd->mkd", _material_weights(mesh.least_levels), x[mesh.cells])
+    if mesh.cell_more_levels is not None:  # copies several cuts bound: clipped by each level
+        return np.einsum("mkv,mvd->mkd", _clipped_weights(mesh), x[mesh.cells])
+    return np.einsum("mkv,mvd->mkd", _material_weights(mesh.cell_levels), x[mesh.cells])
+
+
+def _clipped_weights(mesh: Mesh) -> np.ndarray:
+    """(m, K, 3) vertex weights of each triangle's material part where several levels bound
+    it (``Mesh.cell_more_levels``): the triangle clipped by each of its levels, shorter
+    polygons padded with their last corner."""
+    from tissuesim.contact.cut_surface import _level_stack
+    from tissuesim.mesh.polygon_clip import clip_polygons
+
+    levels = _level_stack(mesh)
+    m, C, _ = levels.shape
+    W = np.zeros((m, 3 + C, 3))
+    W[:, np.arange(3), np.arange(3)] = 1.0
+    count = np.full(m, 3)
+    for i in range(C):
+        W, count = clip_polygons(W, count, np.where(np.isfinite(levels[:, i]), levels[:, i], 1.0))
+    last = np.take_along_axis(W, np.maximum(count - 1, 0)[:, None, None], axis=1)
+    pad = np.arange(W.shape[1])[None, :, None] >= count[:, None, None]
+    return np.where(pad, last, W)
 
 
 def _setup_2d(
