@@ -4,6 +4,8 @@ a piece cut off falls onto a floor and rests there with its weight on it."""
 
 from __future__ import annotations
 
+import warnings
+
 import ipctk
 import numpy as np
 import pytest
@@ -189,3 +191,20 @@ def test_contact_energy_of_a_cut_body_matches_finite_differences():
         h = 1e-9
         fd = (s.contact.evaluate(x + h * d, 1)[1] - s.contact.evaluate(x - h * d, 1)[1]) / (2 * h)
         assert np.linalg.norm(fd - exact @ d) <= 1e-6 * np.linalg.norm(exact @ d)
+
+
+def test_a_sliver_thinner_than_the_gap_is_reported_as_without_contact():
+    """A cut 5 mm from the end of a bar with dhat = 10 mm leaves a sliver whose contact region
+    (shaved 1 dhat from the cut face) is empty: the rebuild warns that it has no contact
+    surface; a cut 30 mm from the end does not."""
+    for x0, bare in ((0.995, True), (0.97, False)):
+        sim = ts.Simulation(BOX, ts.NeoHookean(youngs_modulus=1e5, poisson_ratio=0.3),
+                            density=1000.0, integrator="quasistatic", time_step=1.0)  # fmt: skip
+        sim.fix(np.flatnonzero(BOX.points[:, 0] < 1e-9))
+        sim.set_contact(dhat=0.01)
+        sim.cut_body(across(x0))
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            _ = sim.system
+        messages = [str(w.message) for w in caught]
+        assert any("has no contact surface" in m for m in messages) == bare

@@ -174,6 +174,7 @@ def fem_surface(
             W, tri = cut_boundary(model.mesh, dhat)
         else:
             W, tri = cut_surface(model.mesh, dhat, BLADE_GAP if blade else GAP)
+        _warn_bare_pieces(name, model.mesh, W, tri)
         n = model.mesh.n_points * model.mesh.dim
         return CutFemSurface(
             name,
@@ -231,3 +232,30 @@ def frame_surface(name: str, model, embedding, triangles, config: slice, tangent
         config,
         tangent,
     )
+
+
+def _warn_bare_pieces(name: str, mesh, W, tri: np.ndarray) -> None:
+    """Warn when a piece of a cut body has no contact surface: a sliver thinner than twice
+    the cut faces' gap (their contact surfaces sit that far inside each side) is shaved away
+    entirely, and then passes through obstacles and other bodies."""
+    import warnings
+
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    cells, n = mesh.cells, mesh.n_points
+    k = cells.shape[1]
+    graph = coo_matrix((np.ones(cells.size), (np.repeat(cells[:, 0], k), cells.ravel())), (n, n))
+    _, label = connected_components(graph, directed=False)
+    used = np.zeros(n, dtype=bool)
+    used[cells.ravel()] = True
+    pieces = np.unique(label[used])
+    held = np.unique(label[W[np.unique(tri)].indices])
+    bare = np.setdiff1d(pieces, held)
+    if bare.size:
+        warnings.warn(
+            f"contact surface of {name!r}: a piece of the cut body is thinner than twice the "
+            "gap of its cut faces (2 dhat) and has no contact surface, so it passes through "
+            "obstacles and other bodies; a smaller dhat keeps such slivers in contact",
+            stacklevel=2,
+        )
