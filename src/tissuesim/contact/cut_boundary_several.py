@@ -14,15 +14,16 @@ a cut are taken one by one (a 2D cut crosses few cells)."""
 from __future__ import annotations
 
 import numpy as np
-import scipy.sparse as sp
 
-__all__ = ["several_boundary"]
+from tissuesim.contact.cut_surface import _MERGE, _ZERO
+from tissuesim.contact.polygon_surface import merge_weighted_points
 
-#: the edges of a positively oriented triangle, outward, and the node opposite each
+__all__ = ["assemble", "several_boundary"]
+
+#: the edges of a positively oriented triangle, outward, and the node opposite each (also
+#: ``cut_surface_2d``'s)
 _TRI_EDGES = np.array([[0, 1], [1, 2], [2, 0]])
 _OPPOSITE = np.array([2, 0, 1])
-#: weights below this are round-off; ends closer than _MERGE in every weight are one point
-_ZERO, _MERGE = 1e-12, 1e-9
 
 
 def several_boundary(points: np.ndarray, cells: np.ndarray, levels: np.ndarray, gap: float):
@@ -174,25 +175,7 @@ def _sections(points, cells, levels, gap):
 def assemble(n_points: int, nodes: np.ndarray, weights: np.ndarray):
     """Segment ends (s, 2, 3) nodes and weights -> (W (k, n_points), segments (s, 2)): ends
     with the same nodes and weights (to _MERGE) are one point."""
-    n = nodes.reshape(-1, 3)
     w = np.where(weights.reshape(-1, 3) > _ZERO, weights.reshape(-1, 3), 0.0)
     w /= w.sum(axis=1, keepdims=True)
-    order = np.argsort(np.where(w > 0.0, n, n_points), axis=1)
-    n = np.take_along_axis(n, order, axis=1)
-    w = np.take_along_axis(w, order, axis=1)
-    n = np.where(w > 0.0, n, -1)
-    keys = np.column_stack([n, w])
-    by = np.lexsort(keys.T[::-1])
-    ks = keys[by]
-    new = np.ones(len(ks), dtype=bool)
-    new[1:] = np.any(ks[1:, :3] != ks[:-1, :3], axis=1) | np.any(
-        np.abs(ks[1:, 3:] - ks[:-1, 3:]) > _MERGE, axis=1
-    )
-    label = np.empty(len(ks), dtype=np.int64)
-    label[by] = np.cumsum(new) - 1
-    first = by[new]
-    rows = np.repeat(np.arange(len(first)), 3)
-    cols, vals = n[first].ravel(), w[first].ravel()
-    keep = cols >= 0
-    W = sp.csr_matrix((vals[keep], (rows[keep], cols[keep])), shape=(len(first), n_points))
-    return W, label.reshape(-1, 2)
+    point, W = merge_weighted_points(nodes.reshape(-1, 3), w, 0, n_points)
+    return W, point.reshape(-1, 2)

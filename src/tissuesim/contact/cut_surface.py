@@ -34,7 +34,7 @@ from tissuesim.errors import InputError
 from tissuesim.mesh.polygon_clip import clip_polygons
 from tissuesim.mesh.rows import unique_rows
 
-__all__ = ["cut_surface"]
+__all__ = ["cut_surface", "level_stack"]
 
 #: the cut faces' contact surfaces lie GAP dhat inside each side: the fresh faces start
 #: 2 GAP dhat apart, outside each other's barrier, and overlap by at most that when pressed
@@ -74,7 +74,7 @@ def cut_surface(mesh, dhat: float, gap: float = GAP) -> tuple[sp.csr_matrix, np.
             "contact of a cut body: only 3D P1 tetrahedra are built so far; cut it without "
             "contact, or simulate the cut in 3D"
         )
-    cells, levels = mesh.cells, _level_stack(mesh)
+    cells, levels = mesh.cells, level_stack(mesh)
     cut = np.asarray(mesh.cell_fractions) < 1.0 if mesh.cell_fractions is not None else None
     if cut is not None and levels.shape[1] > 2:
         three = np.flatnonzero(cut & (np.all(np.isfinite(levels), axis=2).sum(axis=1) > 2))
@@ -99,7 +99,7 @@ def cut_surface(mesh, dhat: float, gap: float = GAP) -> tuple[sp.csr_matrix, np.
     return polygon_surface(mesh.n_points, nodes, weights, count, mesh.points, MERGE * dhat)
 
 
-def _level_stack(mesh) -> np.ndarray:
+def level_stack(mesh) -> np.ndarray:
     """Each cell's levels (m, C, 4): ``cell_levels`` first, then its further ones
     (``cell_more_levels``: cells several cuts bound), +inf padding."""
     first = np.asarray(mesh.cell_levels, dtype=float)

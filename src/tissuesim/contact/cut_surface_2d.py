@@ -25,6 +25,7 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
+from tissuesim.contact.cut_boundary_several import _OPPOSITE, _TRI_EDGES, assemble, several_boundary
 from tissuesim.contact.cut_surface import (
     _MERGE,
     _ZERO,
@@ -32,16 +33,12 @@ from tissuesim.contact.cut_surface import (
     MERGE,
     SNAP_IN,
     SNAP_OUT,
-    _level_stack,
+    level_stack,
 )
 from tissuesim.errors import InputError
 from tissuesim.mesh.rows import unique_rows
 
 __all__ = ["cut_boundary"]
-
-#: the edges of a positively oriented triangle, outward, and the node opposite each
-_TRI_EDGES = np.array([[0, 1], [1, 2], [2, 0]])
-_OPPOSITE = np.array([2, 0, 1])
 
 
 def cut_boundary(mesh, dhat: float) -> tuple[sp.csr_matrix, np.ndarray]:
@@ -53,12 +50,10 @@ def cut_boundary(mesh, dhat: float) -> tuple[sp.csr_matrix, np.ndarray]:
     if mesh.dim != 2 or mesh.cells.shape[1] != 3:
         raise InputError("cut_boundary: a 2D mesh of P1 triangles is needed; use cut_surface in 3D")
     gap = GAP * dhat
-    cells, levels = mesh.cells, _level_stack(mesh)
+    cells, levels = mesh.cells, level_stack(mesh)
     snap = (levels >= gap - SNAP_OUT * dhat) & (levels <= gap + SNAP_IN * dhat)
     levels = np.where(snap, gap, levels)
     if levels.shape[1] > 1:  # where cuts meet: every copy bounded by all its levels
-        from tissuesim.contact.cut_boundary_several import assemble, several_boundary
-
         nodes, weights = several_boundary(mesh.points, cells, levels, gap)
         W, seg = assemble(mesh.n_points, nodes, weights)
         W, seg = _tidy(W, seg)

@@ -29,7 +29,7 @@ from scipy.sparse.csgraph import connected_components
 
 from tissuesim.mesh.rows import unique_rows
 
-__all__ = ["polygon_surface"]
+__all__ = ["merge_weighted_points", "polygon_surface"]
 
 #: weights below this are round-off (a point on an edge has two, a node one)
 _ZERO = 1e-12
@@ -118,7 +118,9 @@ def _points(nodes: np.ndarray, weights: np.ndarray, count: np.ndarray, n_points:
     p_lo, p_hi, p_w = vlo[first], vhi[first], vw[first]
     W_face = None
     if in_face.any():  # few: where two cuts meet
-        face_point, W_face = _face_points(nodes[in_face], weights[in_face], len(p_lo), n_points)
+        face_point, W_face = merge_weighted_points(
+            nodes[in_face], weights[in_face], len(p_lo), n_points
+        )
         corner[in_face] = face_point
         extra = W_face.shape[0] - len(p_lo)
         p_lo = np.concatenate([p_lo, np.full(extra, -1)])
@@ -139,10 +141,11 @@ def _points(nodes: np.ndarray, weights: np.ndarray, count: np.ndarray, n_points:
     return p_lo, p_hi, p_w, packed, keep_corner.sum(axis=1), packed_lo, packed_hi, W_face
 
 
-def _face_points(nodes: np.ndarray, weights: np.ndarray, start: int, n_points: int):
-    """Corners (c, 4) with three or more nonzero weights merged by (nodes, weights to
-    _MERGE): their point indices from ``start`` on, and the weights as rows (start + new
-    points, n_points), the first ``start`` rows empty."""
+def merge_weighted_points(nodes: np.ndarray, weights: np.ndarray, start: int, n_points: int):
+    """Points given as weights (c, k) over ``nodes`` (c, k) merged by (nodes, weights to
+    _MERGE): each one's point index from ``start`` on, and the merged points' weights as rows
+    (start + new points, n_points) of a matrix, the first ``start`` rows empty."""
+    k = nodes.shape[1]
     order = np.argsort(np.where(weights > 0.0, nodes, n_points), axis=1)  # support first
     n = np.take_along_axis(nodes, order, axis=1)
     w = np.take_along_axis(weights, order, axis=1)
@@ -151,14 +154,14 @@ def _face_points(nodes: np.ndarray, weights: np.ndarray, start: int, n_points: i
     by = np.lexsort(keys.T[::-1])
     ks = keys[by]
     new = np.ones(len(ks), dtype=bool)
-    new[1:] = np.any(ks[1:, :4] != ks[:-1, :4], axis=1) | np.any(
-        np.abs(ks[1:, 4:] - ks[:-1, 4:]) > _MERGE, axis=1
+    new[1:] = np.any(ks[1:, :k] != ks[:-1, :k], axis=1) | np.any(
+        np.abs(ks[1:, k:] - ks[:-1, k:]) > _MERGE, axis=1
     )
     label = np.cumsum(new) - 1
     point = np.empty(len(ks), dtype=np.int64)
     point[by] = start + label
     first = by[new]
-    rows = np.repeat(start + np.arange(len(first)), 4)
+    rows = np.repeat(start + np.arange(len(first)), k)
     cols, vals = n[first].ravel(), w[first].ravel()
     keep = cols >= 0
     W = sp.csr_matrix((vals[keep], (rows[keep], cols[keep])), shape=(start + len(first), n_points))

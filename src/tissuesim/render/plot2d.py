@@ -211,10 +211,10 @@ def _clipped_weights(mesh: Mesh) -> np.ndarray:
     """(m, K, 3) vertex weights of each triangle's material part where several levels bound
     it (``Mesh.cell_more_levels``): the triangle clipped by each of its levels, shorter
     polygons padded with their last corner."""
-    from tissuesim.contact.cut_surface import _level_stack
+    from tissuesim.contact.cut_surface import level_stack
     from tissuesim.mesh.polygon_clip import clip_polygons
 
-    levels = _level_stack(mesh)
+    levels = level_stack(mesh)
     m, C, _ = levels.shape
     W = np.zeros((m, 3 + C, 3))
     W[:, np.arange(3), np.arange(3)] = 1.0
