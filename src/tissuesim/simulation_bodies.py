@@ -397,9 +397,10 @@ class BodyCalls:
 
     def _organ_cut_step(self, t0: float, forces: dict) -> dict:
         """After a step t0 -> now: each blade cutting a FEM body cuts what it has swept
-        (bodies/organ_cut.py), its cutting force joining ``forces``; each tearing body's crack
-        grows (bodies/organ_tear.py). Returns the step's {"cuts": {name: {"area_m2",
-        "new_area_m2", "cells_cut", "pieces"}}} (a tear as "body.tear")."""
+        (bodies/organ_cut.py), its cutting force joining ``forces``; each tearing body's cracks
+        grow or a new one starts (bodies/organ_tear.py). Returns the step's {"cuts": {name:
+        {"area_m2", "new_area_m2", "cells_cut", "pieces"}}} (a body's cracks as "body.tear",
+        "body.tear2", ...)."""
         out = {}
         for blade in self.organ_cuts:
             blade.record(t0, self.time)  # an obstacle's blade, sampled as it went
@@ -423,16 +424,31 @@ class BodyCalls:
             forces[blade.name] = force.tolist()
             out[blade.name] = report
         for tear in self.organ_tears:
-            b, c, _ = self.body_state(tear.body)
-            crack = tear.grow(b, c)
-            area = 0.0 if b.cut_state is None else b.cut_state.area(tear.name)
-            report = {"area_m2": area, "cells_cut": 0}
-            if crack is not None:
-                done = self.cut_body(crack, body=tear.body, name=tear.name)
-                report = {"area_m2": done["area_m2"], "cells_cut": done["cells_cut"],
-                          "pieces": done["pieces"]}  # fmt: skip
-            out[f"{tear.body}.{tear.name}"] = report
+            out.update(self._grow_cracks(tear))
         return {"cuts": out}
+
+    def _grow_cracks(self, tear) -> dict:
+        """Grow the cracks of a tearing body (``BodyTearing``) where it is now, or start a new
+        one when none grew (cut no new element). Returns each crack's report, as
+        ``_organ_cut_step``'s."""
+        b, c, _ = self.body_state(tear.body)
+        done = {name: self.cut_body(surface, body=tear.body, name=name)
+                for name, surface in tear.grow(b, c)}  # fmt: skip
+        if not any(d["cells_cut"] for d in done.values()):
+            b, c, _ = self.body_state(tear.body)
+            new = tear.start(b, c)
+            if new is not None:
+                done[new[0]] = self.cut_body(new[1], body=tear.body, name=new[0])
+        out = {}
+        for k in range(max(len(tear.cracks), 1)):
+            name = tear.crack_name(k)
+            if name in done:
+                report = {key: done[name][key] for key in ("area_m2", "cells_cut", "pieces")}
+            else:
+                area = 0.0 if b.cut_state is None else b.cut_state.area(name)
+                report = {"area_m2": area, "cells_cut": 0}
+            out[f"{tear.body}.{name}"] = report
+        return out
 
     def remove_body(self, name: str) -> None:
         """Take a body (and, for the tissue, its attachments and cuts) out, before the first

@@ -521,7 +521,9 @@ class SetupCalls:
         tears where its largest principal Cauchy stress exceeds ``stress`` (Pa, its strength)
         or its largest principal stretch exceeds ``stretch``: a crack normal to that stress
         grows through the elements over the threshold, cut like a blade's cut
-        (``bodies/organ_tear.py``); reported as the cut ``tear`` in ``extra["cuts"]``."""
+        (``bodies/organ_tear.py``); once its cracks stop, a new one may start far from them.
+        Reported as the cuts ``body.tear`` (``body.tear2``, ... for later cracks) in
+        ``extra["cuts"]``."""
         if body is None:
             if threshold is None or stress is not None or stretch is not None:
                 raise InputError(
