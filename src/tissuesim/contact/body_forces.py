@@ -15,6 +15,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from tissuesim.contact.sliver_points import weigh_points
+
 __all__ = ["body_contact_forces"]
 
 
@@ -55,6 +57,8 @@ def _collisions(model, V: np.ndarray):
     col = model._ipctk.NormalCollisions()
     col.use_area_weighting = True
     col.build(model.mesh, V, model.dhat, broad_phase=model.broad_phase)
+    if model.point_areas is not None:
+        weigh_points(col, model.point_areas, model.mesh.edges, model.mesh.faces)
     return col
 
 

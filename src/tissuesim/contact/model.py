@@ -32,6 +32,7 @@ import scipy.sparse as sp
 from tissuesim.contact.candidates import StepCandidates
 from tissuesim.contact.ccd_queries import CollisionQueries
 from tissuesim.contact.friction_lag import FrictionLag
+from tissuesim.contact.sliver_points import weigh_points
 from tissuesim.contact.stiffness import AdaptiveStiffness
 from tissuesim.contact.surfaces import CutFemSurface, FemSurface
 from tissuesim.errors import InputError
@@ -123,6 +124,13 @@ class ContactModel(FrictionLag, CollisionQueries):
             self.slices[ob.name] = (slice(start, start + len(ob.rest)), None)
             start += len(ob.rest)
         self.group = np.concatenate(groups)  # collision-mesh vertex -> body / obstacle index
+        # the areas of contact points without faces (slivers of cut bodies), NaN elsewhere
+        self.point_areas = None
+        if any(getattr(s, "point_areas", None) is not None for s in self.surfaces):
+            self.point_areas = np.full(start + sum(len(ob.rest) for ob in self.obstacles), np.nan)
+            for surface in self.surfaces:
+                if getattr(surface, "point_areas", None) is not None:
+                    self.point_areas[self.slices[surface.name][0]] = surface.point_areas
         self.table = PairTable(
             [s.name for s in self.surfaces],
             self.obstacles,
@@ -338,6 +346,8 @@ class ContactModel(FrictionLag, CollisionQueries):
             col.build(self.mesh, V, self.dhat, broad_phase=self.broad_phase)
         else:
             col.build(candidates, self.mesh, V, self.dhat)
+        if self.point_areas is not None:
+            weigh_points(col, self.point_areas, self.mesh.edges, self.mesh.faces)
         return col
 
     # -- the energy -------------------------------------------------------------------------------

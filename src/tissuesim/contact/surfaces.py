@@ -72,6 +72,9 @@ class CutFemSurface:
     embedding: sp.csr_matrix
     config: slice
     tangent: slice
+    #: per point: NaN for the surface's, the area of a contact point of a piece too thin for
+    #: a surface (``contact/sliver_points.py``: points without faces, after the surface's)
+    point_areas: np.ndarray | None = None
     linear = True
 
     @property
@@ -164,6 +167,7 @@ def fem_surface(
     if model.mesh.cell_levels is not None:
         from tissuesim.contact.cut_surface import BLADE_GAP, GAP, cut_surface
         from tissuesim.contact.cut_surface_2d import cut_boundary
+        from tissuesim.contact.sliver_points import sliver_points
 
         if choice is not None:
             raise InputError(
@@ -174,7 +178,12 @@ def fem_surface(
             W, tri = cut_boundary(model.mesh, dhat)
         else:
             W, tri = cut_surface(model.mesh, dhat, BLADE_GAP if blade else GAP)
-        _warn_bare_pieces(name, model.mesh, W, tri)
+        areas = None
+        points = sliver_points(model.mesh, W, tri, dhat)
+        if points is not None:  # pieces too thin for a surface: contact points
+            _warn_bare_pieces(name, len(points[1]))
+            areas = np.concatenate([np.full(W.shape[0], np.nan), points[1]])
+            W = sp.vstack([W, points[0]], format="csr")
         n = model.mesh.n_points * model.mesh.dim
         return CutFemSurface(
             name,
@@ -184,6 +193,7 @@ def fem_surface(
             W,
             slice(config_offset, config_offset + n),
             slice(tangent_offset, tangent_offset + n),
+            areas,
         )
 
     d = model.mesh.dim
@@ -234,28 +244,16 @@ def frame_surface(name: str, model, embedding, triangles, config: slice, tangent
     )
 
 
-def _warn_bare_pieces(name: str, mesh, W, tri: np.ndarray) -> None:
-    """Warn when a piece of a cut body has no contact surface: a sliver thinner than twice
-    the cut faces' gap (their contact surfaces sit that far inside each side) is shaved away
-    entirely, and then passes through obstacles and other bodies."""
+def _warn_bare_pieces(name: str, points: int) -> None:
+    """Warn that a piece of a cut body is too thin for a contact surface (thinner than twice
+    the gap of its cut faces: its region is shaved away) and is in contact by ``points``
+    points instead (``contact/sliver_points.py``)."""
     import warnings
 
-    from scipy.sparse import coo_matrix
-    from scipy.sparse.csgraph import connected_components
-
-    cells, n = mesh.cells, mesh.n_points
-    k = cells.shape[1]
-    graph = coo_matrix((np.ones(cells.size), (np.repeat(cells[:, 0], k), cells.ravel())), (n, n))
-    _, label = connected_components(graph, directed=False)
-    used = np.zeros(n, dtype=bool)
-    used[cells.ravel()] = True
-    pieces = np.unique(label[used])
-    held = np.unique(label[W[np.unique(tri)].indices])
-    bare = np.setdiff1d(pieces, held)
-    if bare.size:
-        warnings.warn(
-            f"contact surface of {name!r}: a piece of the cut body is thinner than twice the "
-            "gap of its cut faces (2 dhat) and has no contact surface, so it passes through "
-            "obstacles and other bodies; a smaller dhat keeps such slivers in contact",
-            stacklevel=2,
-        )
+    warnings.warn(
+        f"contact surface of {name!r}: a piece of the cut body is thinner than twice the gap "
+        f"of its cut faces (2 dhat) and has no contact surface; it is in contact by {points} "
+        "points inside it instead, which an edge narrower than an element can pass between "
+        "(a smaller dhat gives it a surface)",
+        stacklevel=2,
+    )

@@ -146,13 +146,25 @@ def section_measures(points: np.ndarray, cells: np.ndarray, values: np.ndarray) 
 def region_fractions(d: np.ndarray) -> np.ndarray:
     """Fraction (r,) of each simplex where several linear functions are all >= 0: d (r, C, n+1)
     their values at the simplex's vertices (C functions; +inf values: no constraint), n = 2
-    or 3. The region is a convex polytope: its vertices are enumerated (every n of the
-    simplex's faces and the functions' zero sets meeting in a point inside all of them, in
-    barycentric coordinates) and its volume is their convex hull's. A cell crossed by several
-    cuts (``virtual_nodes.py``) is rare (where cuts meet), so this is a loop over rows."""
+    or 3. The region is a convex polytope: its vertices are enumerated (``region_vertices``)
+    and its volume is their convex hull's. A cell crossed by several cuts
+    (``virtual_nodes.py``) is rare (where cuts meet), so this is a loop over rows."""
     from math import factorial
 
     d = np.asarray(d, dtype=float)
+    n = d.shape[2] - 1
+    points = region_vertices(d)
+    out = np.array([_hull_measure(p[:, 1:]) * factorial(n) for p in points])
+    return np.clip(out, 0.0, 1.0)
+
+
+def region_vertices(d: np.ndarray) -> list[np.ndarray]:
+    """The vertices of each simplex's region where the linear functions d (r, C, n+1) are all
+    >= 0 (+inf values: no constraint), in barycentric coordinates, one (p_i, n+1) array per
+    row: every n of the simplex's faces and the functions' zero sets that meet in a point
+    inside all of them."""
+    from itertools import combinations
+
     r, C, k = d.shape
     n = k - 1
     # constraints a . y + b >= 0 on y = (l_1 .. l_n), l_0 = 1 - sum(y): the barycentric
@@ -166,8 +178,6 @@ def region_fractions(d: np.ndarray) -> np.ndarray:
     scale = np.maximum(np.abs(finite).max(axis=(1, 2)), 1e-300)[:, None]
     a[:, k:, :] = (finite[:, :, 1:] - finite[:, :, :1]) / scale[:, :, None]
     b[:, k:] = finite[:, :, 0] / scale
-    from itertools import combinations
-
     points = [[] for _ in range(r)]
     for combo in combinations(range(k + C), n):
         A, B = a[:, combo, :], -b[:, combo]
@@ -179,10 +189,11 @@ def region_fractions(d: np.ndarray) -> np.ndarray:
         ok &= np.all(slack >= -1e-12, axis=1)
         for i in np.flatnonzero(ok):
             points[i].append(y[i])
-    out = np.zeros(r)
-    for i, p in enumerate(points):
-        out[i] = _hull_measure(np.array(p).reshape(-1, n)) * factorial(n)
-    return np.clip(out, 0.0, 1.0)
+    out = []
+    for p in points:
+        y = np.array(p).reshape(-1, n)
+        out.append(np.column_stack([1.0 - y.sum(axis=1), y]))
+    return out
 
 
 def _hull_measure(points: np.ndarray) -> float:

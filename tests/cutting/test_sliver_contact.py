@@ -1,0 +1,108 @@
+"""A piece of a cut body too thin for a contact surface (thinner than 2 dhat) is in contact by
+points (``contact/sliver_points.py``): it falls onto the floor and rests there with its weight
+on it instead of passing through; its points start outside every barrier; their barrier's
+derivatives match finite differences; the points cover a 2D sliver too."""
+
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+import pytest
+from test_cut_contact import G, across, block_on_floor
+
+import tissuesim as ts
+from tissuesim.contact.sliver_points import LIFT, MERGE
+
+DHAT = 1e-3  # block_on_floor's
+
+
+def _sliver_on_floor(x0: float):
+    """block_on_floor held rigid but for its last 5 cm, cut at x0 near its end: the sliver
+    beyond x0 (1 - x0 thick) falls 5 cm onto the floor."""
+    sim = block_on_floor()
+    sim.fix(np.flatnonzero(sim.mesh.points[:, 0] < 0.95), name="held")
+    sim.cut_body(across(x0))  # at rest: the levels are distances at rest
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        contact = sim.system.contact
+    surface = contact.surfaces[0]
+    points = np.flatnonzero(np.isfinite(surface.point_areas))
+    return sim, contact, surface, points, [str(w.message) for w in caught]
+
+
+def _point_positions(sim, contact, surface, points):
+    return contact.vertices(sim.state.x)[contact.slices[surface.name][0]][points]
+
+
+@pytest.mark.parametrize("x0", [0.9995, 0.9985])
+def test_a_sliver_falls_onto_the_floor_and_rests_on_its_points(x0):
+    sim, contact, surface, points, messages = _sliver_on_floor(x0)
+    assert any(f"in contact by {len(points)} points" in m for m in messages)
+    assert len(points) >= 20
+    rest = surface.rest[points]
+    # in the sliver, off its cut face by LIFT dhat or half its thickness, a dhat apart
+    thickness = 1.0 - x0
+    assert rest[:, 0].max() <= 1.0 + 1e-12
+    assert rest[:, 0].min() >= x0 + min(LIFT * DHAT, thickness / 2) - 1e-12
+    gaps = np.linalg.norm(rest[:, None] - rest[None], axis=2) + np.eye(len(rest))
+    assert gaps.min() >= MERGE * DHAT * (1 - 1e-9)
+    # their areas share the cut face's: 0.2 x 0.2
+    assert surface.point_areas[points].sum() == pytest.approx(0.04, rel=1e-9)
+    # nothing pushes at rest: the points start outside the barrier of the block's cut face
+    assert contact.evaluate(sim.state.x, 0)[0] == 0.0
+    weight = 1000.0 * 0.2 * 0.2 * thickness * G
+    floor = []
+    for _ in range(80):
+        record = sim.step()
+        z = _point_positions(sim, contact, surface, points)[:, 2]
+        assert z.min() > 0.0  # never through the floor
+        floor.append(record.extra["forces"]["floor"][2])
+    assert floor[0] == 0.0  # 5 cm above the floor: not yet
+    assert z.min() < DHAT  # on it
+    assert np.median(floor[-10:]) == pytest.approx(weight, rel=1e-3)  # resting with its weight
+
+
+def test_the_barrier_on_a_slivers_points_matches_finite_differences():
+    """The points' barrier (their weights set to their areas) against central differences,
+    the sliver resting on the floor: gradient and exact Hessian over the body's nodes."""
+    sim, contact, surface, points, _ = _sliver_on_floor(0.9995)
+    for _ in range(30):
+        sim.step()
+    x = sim.state.x
+    value, grad, _ = contact.evaluate(x, 2)
+    assert value > 0.0
+    rng = np.random.default_rng(3)
+    # small steps: the points rest where the barrier is steep (its differences converge as
+    # h^2 with the error 1 % at h = 1e-7, 1e-6 at 1e-9)
+    for _ in range(5):
+        d = rng.standard_normal(x.size)
+        h = 1e-10
+        fd = (contact.evaluate(x + h * d, 0)[0] - contact.evaluate(x - h * d, 0)[0]) / (2 * h)
+        assert fd == pytest.approx(grad @ d, rel=1e-6, abs=1e-9 * abs(value))
+    exact = contact.evaluate(x, 2, project=False)[2]
+    for _ in range(3):
+        d = rng.standard_normal(x.size)
+        h = 1e-10
+        fd = (contact.evaluate(x + h * d, 1)[1] - contact.evaluate(x - h * d, 1)[1]) / (2 * h)
+        assert np.linalg.norm(fd - exact @ d) <= 1e-5 * np.linalg.norm(exact @ d)
+
+
+def test_a_2d_sliver_gets_points_along_its_cut_edge():
+    """A 2D strip cut 0.5 mm from its end with dhat 1 mm: points in the sliver, a dhat apart,
+    whose lengths share the cut's (the strip's height)."""
+    mesh = ts.rectangle((0.0, 0.0), (1.0, 0.2), (10, 2))
+    sim = ts.Simulation(mesh, ts.NeoHookean(youngs_modulus=1e5, poisson_ratio=0.3),
+                        density=1000.0, integrator="quasistatic")  # fmt: skip
+    sim.fix(np.flatnonzero(mesh.points[:, 0] < 1e-9))
+    sim.set_contact(dhat=DHAT)
+    sim.cut_body(across(0.9995))
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        surface = sim.system.contact.surfaces[0]
+    assert any("points" in str(w.message) for w in caught)
+    points = np.flatnonzero(np.isfinite(surface.point_areas))
+    rest = surface.rest[points]
+    assert len(points) >= 2
+    assert (rest[:, 0] >= 0.9995 + 0.25 * DHAT - 1e-12).all() and (rest[:, 0] <= 1.0).all()
+    assert surface.point_areas[points].sum() == pytest.approx(0.2, rel=1e-9)
