@@ -58,7 +58,7 @@ def _collisions(model, V: np.ndarray):
     col.use_area_weighting = True
     col.build(model.mesh, V, model.dhat, broad_phase=model.broad_phase)
     if model.point_areas is not None:
-        weigh_points(col, model.point_areas, model.mesh.edges, model.mesh.faces)
+        weigh_points(col, model.point_areas)
     return col
 
 

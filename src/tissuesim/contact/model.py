@@ -347,7 +347,7 @@ class ContactModel(FrictionLag, CollisionQueries):
         else:
             col.build(candidates, self.mesh, V, self.dhat)
         if self.point_areas is not None:
-            weigh_points(col, self.point_areas, self.mesh.edges, self.mesh.faces)
+            weigh_points(col, self.point_areas)
         return col
 
     # -- the energy -------------------------------------------------------------------------------
