@@ -13,8 +13,9 @@ body's), so the piece rests on what it falls onto, though an edge narrower than 
 spacing (about an element) can pass between them.
 
 IPC's area weighting gives a vertex without faces an area of 1 (m^2); ``weigh_points`` sets
-each such collision's weight to the point's own area instead: the largest section of its part
-by a cut (the face it would touch with), so its barrier is as stiff as a surface's. That is a
+each such collision's weight to the point's own area instead: its share of the piece's cut
+area (each part's largest section by a cut: the face it would touch with), so the piece's
+barrier is as stiff as a surface of that area. That is a
 Python loop over the collisions while a body has such points: 24 ms for 36,581 collisions
 against 65 ms for building them (a 2-core machine).
 """
