@@ -2,10 +2,11 @@
 against the same run without the cut, step for step (like for like: the same scene, the same
 steps, only the cut differs).
 
-1. The shipped ``liver_resection`` example over its cutting phase (t = 0.1 .. 0.24 s, before
-   the lobe comes off and falls, which changes the motion itself): with the blade, and with
-   the ``[[cuts]]`` table removed; and ``liver_instrument`` over the same phase, the scalpel in
-   contact with the liver against the same scalpel passing through it (``contact = false``).
+1. The shipped ``liver_resection`` example (and ``liver_wedge_resection``) over its cutting
+   phase (t = 0.1 .. 0.24 s, before the lobe comes off and falls, which changes the motion
+   itself): with the blade, and with the ``[[cuts]]`` table removed; and ``liver_instrument``
+   over the same phase, the scalpel in contact with the liver against the same scalpel passing
+   through it (``contact = false``).
 2. The organ of ``benchmarks/cut_cost.py`` (12 divisions: 10,368 tetrahedra; ellipsoid under
    gravity, Backward Euler) cut at step 4 by planes at several positions, chosen to pass close
    to nodes (copies of fractions down to 1e-7: the slivers a cut can make), then 8 more steps.
@@ -31,9 +32,9 @@ HERE = Path(__file__).resolve().parent
 EXAMPLES = HERE.parent / "src" / "tissuesim" / "examples"
 
 
-def liver(cut: bool, steps: int = 24) -> list[int]:
+def liver(cut: bool, steps: int = 24, name: str = "liver_resection") -> list[int]:
     """Newton iterations of each of the example's first ``steps`` steps."""
-    path = EXAMPLES / "liver_resection.toml"
+    path = EXAMPLES / f"{name}.toml"
     data = tomllib.loads(path.read_text())
     if not cut:
         del data["cuts"]
@@ -97,6 +98,13 @@ def main() -> None:
     lines.append(
         row("liver_resection, steps 11-24 (cutting)", with_cut[phase], without[phase],
             f"per step, cut: {with_cut[phase]}; uncut: {without[phase]}")
+    )  # fmt: skip
+    print(lines[-1], flush=True)
+    wedge = "liver_wedge_resection"
+    with_cut, without = liver(True, name=wedge), liver(False, name=wedge)
+    lines.append(
+        row("liver_wedge_resection, steps 11-24 (two crossing cuts)", with_cut[phase],
+            without[phase], f"per step, cut: {with_cut[phase]}; uncut: {without[phase]}")
     )  # fmt: skip
     print(lines[-1], flush=True)
     touching, passing = liver_instrument(True), liver_instrument(False)
