@@ -5,32 +5,17 @@ blades cross, elements both cut are split into the parts between them."""
 
 from __future__ import annotations
 
-import tomllib
-
 import numpy as np
 import pytest
+from test_liver_resection import run_coarse
 
-from tissuesim.cli import example_path
 from tissuesim.contact.sliver_points import node_pieces
-from tissuesim.scene.loader import build_scene
 
 G = 9.81
 
 
 def test_two_crossing_blades_part_a_wedge_that_falls_onto_the_table_and_rests():
-    path = example_path("liver_wedge_resection")
-    data = tomllib.loads(path.read_text())
-    data["bodies"][0]["mesh"]["divisions"] = 6  # 1,296 tetrahedra instead of 3,072
-    sim = build_scene(data, base_dir=path.parent).simulation
-    body = sim.bodies["liver"]
-    mass = body.model.mass.lumped.sum() / 3
-    table, pieces = [], []
-    for _ in range(80):
-        record = sim.step()
-        assert not sim.system.contact.intersecting(sim.state.x)
-        table.append(record.extra["forces"]["table"][2])
-        cuts = record.extra["cuts"]
-        pieces.append(max(c.get("pieces", pieces[-1] if pieces else 1) for c in cuts.values()))
+    sim, body, mass, table, pieces = run_coarse("liver_wedge_resection")
     assert pieces[-1] == 2
     assert body.model.mass.lumped.sum() / 3 == pytest.approx(mass, rel=1e-12)
     state = body.cut_state

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from test_tear_turning import _plate
 from test_tearing import STEP, STRENGTH, H, L, W, predicted_force, strip
 
 import tissuesim as ts
@@ -63,14 +64,6 @@ def test_a_bar_pulled_in_two_spans_tears_in_each_at_its_strength():
     after = sim.step().extra["forces"]["right"][0]
     assert abs(after) < 1e-6 * F  # parted: the far end carries nothing
     assert sim.model.mass.lumped.sum() == pytest.approx(mass, rel=1e-12)
-
-
-def _plate() -> ts.Simulation:
-    mesh = ts.rectangle((0.0, 0.0), (1.0, 1.0), (20, 20))
-    sim = ts.Simulation(mesh, ts.NeoHookean(youngs_modulus=1e3, poisson_ratio=0.3),
-                        integrator="quasistatic")  # fmt: skip
-    sim.set_tearing(body="body", stress=1.0)
-    return sim
 
 
 def _field(over):
