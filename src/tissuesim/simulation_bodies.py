@@ -271,15 +271,20 @@ class BodyCalls:
         if self.contact is None:
             return None
         state = b.cut_state
+        # the gap the rebuild will use (``Simulation._contact_model``)
+        blade = any(c.body == b.name and self._cuts_ahead(c) for c in self.organ_cuts)
 
         def check(vn) -> None:
             if vn.extra is None:
                 return
-            from tissuesim.contact.cut_surface import cut_surface
+            from tissuesim.contact.cut_surface import BLADE_GAP, GAP, cut_surface
             from tissuesim.contact.cut_surface_2d import cut_boundary
 
-            build = cut_boundary if b.mesh.dim == 2 else cut_surface
-            build(vn.to_mesh(state.original), self._contact_dhat())
+            mesh, dhat = vn.to_mesh(state.original), self._contact_dhat()
+            if b.mesh.dim == 2:
+                cut_boundary(mesh, dhat)
+            else:
+                cut_surface(mesh, dhat, BLADE_GAP if blade else GAP)
 
         return check
 

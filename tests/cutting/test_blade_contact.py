@@ -183,3 +183,34 @@ def test_the_lead_follows_the_blades_next_step_when_its_motion_is_known():
     live, blades = lead(swept, x_cell, [first, last])
     assert np.allclose(blades[-1], last + [0.1, 0.0, 0.0])  # this step's travel, < an edge
     assert live.polygon[:, 0].max() == pytest.approx(0.4)
+
+
+@pytest.mark.parametrize("x0", [0.04, 0.0437])
+def test_a_blade_crossing_an_earlier_cut_moves_in_its_kerf_and_is_checked_as_rebuilt(
+    x0, monkeypatch
+):
+    """The instrument's cut crosses an earlier cut across the block, along the mesh's faces
+    (x0 = 0.04: it parted nodes and copied no cell) or through cells: no step intersects.
+    Where cells both cross, ``cut_body`` builds the prospective contact surface to check it
+    before taking the cut: with the kerf's gap (BLADE_GAP), as the rebuild then does, not the
+    plain cut faces' gap."""
+    import tissuesim.contact.cut_surface as cut_surface_module
+    from tissuesim.contact.cut_surface import BLADE_GAP
+
+    built = cut_surface_module.cut_surface
+    gaps = []
+
+    def recording(mesh, dhat, gap=cut_surface_module.GAP):
+        gaps.append(gap)
+        return built(mesh, dhat, gap)
+
+    monkeypatch.setattr(cut_surface_module, "cut_surface", recording)
+    sim = _block(True, math.inf)
+    sim.cut_body(PlanarCut.swept_segment((x0, -1, 1), (x0, 1, 1), (x0, -1, -1), (x0, 1, -1)),
+                 body="body", name="across")  # fmt: skip
+    for _ in range(4):
+        record = sim.step()
+        assert not sim.system.contact.intersecting(sim.state.x)
+    assert record.extra["cuts"]["incision"]["blade_contact"]
+    assert sim.bodies["body"].cut_state.vn.several.any()  # cells both cuts cross
+    assert gaps and set(gaps) == {BLADE_GAP}

@@ -204,3 +204,44 @@ def test_a_wedge_cut_out_of_a_beam_rests_in_its_groove():
     around = beam & (np.abs(body.mesh.points[:, 0] - 0.53) < 0.15)
     # the wedge goes down with the beam around it (its sag there), not 20 cm
     assert np.mean(sink[wedge]) == pytest.approx(np.mean(sink[around]), abs=0.01)
+
+
+ALONG_FACES = {
+    # a cut along the mesh plane x = 0.5 (it parts nodes, copies no cell) crossed by one
+    # through cells: the copies next to the first are shaved by it as whole cells are
+    "along-faces-then-through": [
+        plane_cut((0.5, 0, 0), (1, 0, 0)),
+        plane_cut((0, 0.23, 0), (0, 1, 0)),
+    ],
+    "through-then-along-faces": [
+        plane_cut((0, 0.23, 0), (0, 1, 0)),
+        plane_cut((0.5, 0, 0), (1, 0, 0)),
+    ],
+    "both-along-faces": [plane_cut((0.5, 0, 0), (1, 0, 0)), plane_cut((0, 0.2, 0), (0, 1, 0))],
+}
+
+
+@pytest.mark.parametrize("name", list(ALONG_FACES))
+def test_a_cut_along_faces_crossed_by_another_leaves_a_closed_surface(name, monkeypatch):
+    """Closed, oriented, free of intersection, nothing within 0.3 dhat at rest, and the
+    enclosed volume the block's less both slabs plus their shared prism (exact: no merging)."""
+    import tissuesim.contact.cut_surface as module
+
+    monkeypatch.setattr(module, "MERGE", 0.0)
+    cm = virtual_node_cut(BOX.points, BOX.cells, ALONG_FACES[name]).to_mesh(BOX)
+    W, tri = cut_surface(cm, DHAT)
+    V = W @ cm.points
+    edges = np.concatenate([tri[:, [0, 1]], tri[:, [1, 2]], tri[:, [2, 0]]])
+    directed = edges[:, 0] * len(V) + edges[:, 1]
+    reverse = edges[:, 1] * len(V) + edges[:, 0]
+    assert np.unique(directed).size == directed.size
+    assert np.isin(reverse, directed).all()
+    mesh = ipctk.CollisionMesh(np.asfortranarray(V), ipctk.edges(tri.astype(np.int32)), tri)
+    assert not ipctk.has_intersections(mesh, V)
+    collisions = ipctk.NormalCollisions()
+    collisions.build(mesh, V, 0.3 * DHAT)
+    assert len(collisions) == 0
+    volume = np.einsum("ij,ij->i", V[tri[:, 0]], np.cross(V[tri[:, 1]], V[tri[:, 2]])).sum() / 6
+    g = GAP * DHAT
+    expected = 0.12 - 2 * g * (0.4 * 0.3 + 1.0 * 0.3) + (2 * g) ** 2 * 0.3
+    assert volume == pytest.approx(expected, rel=1e-12)
