@@ -1,13 +1,15 @@
 """How well the contact surface of a cut body holds up where two cuts meet: random oblique cut
 pairs through a 1 x 0.4 x 0.3 m box of 10 x 4 x 3 cells (720 tetrahedra), dhat = 10 mm.
 
-Three families of 40 each (one seeded generator each, so the runs repeat): one oblique cut
-(for reference), two oblique through cuts crossing, and a T (the second cut ends where it meets
-the first, give or take 3 cm). For each: how many cut surfaces are closed and consistently
-oriented (each directed edge once with its reverse), manifold, free of intersection (ipctk's
-exact test), how many came within 0.3 dhat of themselves at rest (two primitives that share
-no vertex; IPC's barrier pushes such pairs apart) and the closest such pair, and how many
-were refused (``contact/cut_surface.py`` refuses a face where three cuts end).
+Four families of 40 each (one seeded generator each, so the runs repeat): one oblique cut
+(for reference), two oblique through cuts crossing, a T (the second cut ends where it meets
+the first, give or take 3 cm), and a cut along a mesh plane (through a layer of nodes: it
+parts nodes and copies no cell) crossed by an oblique one. For each: how many cut surfaces
+are closed and consistently oriented (each directed edge once with its reverse), manifold,
+free of intersection (ipctk's exact test), how many came within 0.3 dhat of themselves at
+rest (two primitives that share no vertex; IPC's barrier pushes such pairs apart) and the
+closest such pair, and how many were refused (``contact/cut_surface.py`` refuses a face
+where three cuts end).
 
     python3 benchmarks/crossing_surfaces.py      # writes benchmarks/results/crossing_surfaces.md
 """
@@ -35,6 +37,8 @@ def plane(point: np.ndarray, normal: np.ndarray, up_to: float = 3.0) -> PlanarCu
     in-plane direction that goes with +x (and 3 m everywhere else)."""
     n = normal / np.linalg.norm(normal)
     u = np.cross(n, [0.0, 0.0, 1.0])
+    if np.linalg.norm(u) < 1e-9:  # a horizontal plane
+        u = np.cross(n, [0.0, 1.0, 0.0])
     u /= np.linalg.norm(u)
     u = u if u[0] > 0 else -u
     w = np.cross(n, u)
@@ -52,6 +56,15 @@ def family(kind: str, seed: int) -> list[list[PlanarCut]]:
         first = plane(p1, n1)
         if kind == "one cut":
             out.append([first])
+        elif kind == "along faces":  # a mesh plane (it parts nodes, copies no cell), crossed
+            axis = int(rng.integers(3))
+            value = rng.choice(
+                {0: [0.3, 0.4, 0.5, 0.6, 0.7], 1: [0.1, 0.2, 0.3], 2: [0.1, 0.2]}[axis]
+            )
+            normal = np.eye(3)[axis]
+            along = plane(normal * value, normal)
+            oblique = np.eye(3)[(axis + 1) % 3] + 0.4 * rng.normal(size=3)
+            out.append([along, plane(p1, oblique)])
         elif kind == "crossing":
             out.append([first, plane(p1 + [0.02, 0, 0], n2)])
         else:  # a T: the second from the far side to about the first
@@ -103,7 +116,7 @@ def main() -> None:
         "| intersecting | within 0.3 dhat at rest (cases) | closest pair (dhat) |",
         "| --- | --- | --- | --- | --- | --- | --- | --- |",
     ]
-    for seed, kind in enumerate(("one cut", "crossing", "T")):
+    for seed, kind in enumerate(("one cut", "crossing", "T", "along faces")):
         results = [check(cuts) for cuts in family(kind, 11 + seed)]
         done = [r for r in results if r is not None]
         closest = min((r["closest"] for r in done), default=np.inf)

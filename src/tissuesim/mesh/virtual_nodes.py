@@ -86,8 +86,8 @@ class VirtualNodeMesh:
     level: np.ndarray | None = None
     #: the further cuts of copies of cells several cuts cross (their first is ``cut``/``side``)
     extra: Constraints | None = None
-    #: whole cells next to several cuts, and copies next to a cut that does not cross their
-    #: cell (a cut along faces crossed by one through cells): their distance to each such
+    #: whole cells next to several cuts, and copies with a node a cut along faces parts (one
+    #: that does not cross their cell): their distance to each such
     #: further cut on their side (``level`` holds the first), which the cut faces' contact
     #: surfaces shave them by; never their material
     shave: Constraints | None = None
@@ -267,8 +267,8 @@ def _levels(x_cell, cells, cuts, d_all, taken, copy_cut, parent, side, origin) -
     on that side (the cut faces' contact surfaces shave such cells where they come close to the
     plane: contact/cut_surface.py); +inf else. d_all (cuts, m, d+1): the cells' vertex
     distances; ``taken`` (m, cuts) which cuts cut each cell. Returns the levels and, for whole
-    cells next to several cuts and for copies next to a cut that does not cross their cell, the
-    further ones as rows (``VirtualNodeMesh.shave``)."""
+    cells next to several cuts and for copies with a node a cut along faces parts, the further
+    ones as rows (``VirtualNodeMesh.shave``)."""
     copies, k = len(parent), cells.shape[1]
     level = np.full((copies, k), np.inf)
     shave: list = []
@@ -298,12 +298,16 @@ def _levels(x_cell, cells, cuts, d_all, taken, copy_cut, parent, side, origin) -
         level[whole[first]] = level_j[first]
         if more.any():
             shave.append((whole[more], np.full(more.sum(), j), side_j[more], level_j[more]))
-        # copies of cells other cuts cross, next to this one but not crossed by it (a cut
-        # along faces crossed by one through cells): shaved by it as a whole cell would be
+        # copies of cells other cuts cross with a node this one parts on its plane (a cut
+        # along faces, which copies no cell, crossed by one through cells): shaved by it as
+        # a whole cell there is (copies next to the cells a cut crosses are bounded by those
+        # cells' own levels, and shaving them too brought faces together where a T ends)
+        on_faces = np.zeros(n, dtype=bool)
+        on_faces[parted[on_plane]] = True
         cut_copies = np.flatnonzero(copied)
         e = parent[cut_copies]
         d = d_all[j][e]
-        pick = rows_any(near[cells[e]]) & ~taken[e, j]
+        pick = rows_any(on_faces[cells[e]]) & ~taken[e, j]
         side_j = np.where(pick & rows_all(d >= 0.0), 1, np.where(pick & rows_all(d <= 0.0), -1, 0))
         nearby = side_j != 0
         if nearby.any():
