@@ -70,7 +70,8 @@ def sliver_points(
         (lam.ravel(), (np.repeat(np.arange(len(rows)), cells.shape[1]), cells[rows].ravel())),
         shape=(len(rows), mesh.n_points),
     )
-    piece = node_pieces(mesh)[cells[rows, 0]]
+    label = node_pieces(mesh)[cells[:, 0]]  # each bare cell's piece
+    piece = label[rows]
     keep = _thinned(P @ mesh.points, piece, MERGE * dhat)
     # each piece's cut area (each part's largest section by one of its levels), shared
     # evenly by its points
@@ -83,14 +84,13 @@ def sliver_points(
     whole = area == 0.0  # a whole cell in a sliver (elements thinner than 2 dhat)
     if whole.any():
         area[whole] = _measures(mesh.points[cells[whole]]) ** ((mesh.dim - 1) / mesh.dim)
-    label = node_pieces(mesh)[cells[:, 0]]
     total = np.bincount(label, weights=area, minlength=label.max() + 1)
     count = np.bincount(piece[keep], minlength=label.max() + 1)
     return sp.csr_matrix(P[keep]), total[piece[keep]] / count[piece[keep]]
 
 
 def _lifted(vertices: np.ndarray, levels: np.ndarray, lift: float) -> np.ndarray:
-    """A part's region vertices (p, k, barycentric) moved towards its deepest one (the
+    """A part's region vertices (p, k: barycentric) moved towards its deepest one (the
     highest least level) until their least level is at least ``lift`` or half the deepest's:
     a point on a cut face would sit within the barrier of the other side's face (GAP -
     SNAP_OUT dhat off the plane) and push the pieces apart at rest."""
