@@ -136,3 +136,35 @@ def test_a_2d_sliver_falls_onto_a_floor_body_and_rests_on_its_points():
     weight = 1000.0 * 0.2 * 0.0005 * G
     assert abs(support[0]) < 1e-3 * weight  # 5 cm above the floor: not yet (its own settling)
     assert np.median(support[-20:]) == pytest.approx(weight, rel=1e-3)
+
+
+def test_a_point_weighs_as_a_surface_vertex_of_its_area():
+    """ipctk weighs a vertex without edges or faces as 1 m^2 (a surface vertex: its area,
+    a third of its triangles', over 4 in a vertex-face collision); ``weigh_points`` makes a
+    point of area A weigh as a surface vertex of area A, so the barrier's value scales by A."""
+    import ipctk
+
+    from tissuesim.contact.sliver_points import weigh_points
+
+    V = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0.2, 0.2, 0.004], [0.6, 0.1, 0.02],
+                  [0.9, 0.1, 0.02], [0.6, 0.4, 0.02]], dtype=float)  # fmt: skip
+    F = np.array([[0, 1, 2], [4, 5, 6]], dtype=np.int32)
+    mesh = ipctk.CollisionMesh(V, ipctk.edges(F), F)
+    assert list(mesh.codim_vertices) == [3] and mesh.vertex_areas[3] == 1.0
+
+    def collisions():
+        col = ipctk.NormalCollisions()
+        col.use_area_weighting = True
+        col.build(mesh, V, 0.01)
+        return col
+
+    plain, weighed = collisions(), collisions()
+    (fv,) = [c for c in plain.fv_collisions if c.vertex_id == 3]
+    assert fv.weight == pytest.approx(0.25)  # 1 m^2 / 4
+    area = np.full(len(V), np.nan)
+    area[3] = 2.5e-4
+    weigh_points(weighed, area)
+    (fv,) = [c for c in weighed.fv_collisions if c.vertex_id == 3]
+    assert fv.weight == pytest.approx(2.5e-4 / 4)
+    barrier = ipctk.BarrierPotential(0.01, 1.0)
+    assert barrier(weighed, mesh, V) == pytest.approx(2.5e-4 * barrier(plain, mesh, V))
