@@ -168,3 +168,33 @@ def test_a_point_weighs_as_a_surface_vertex_of_its_area():
     assert fv.weight == pytest.approx(2.5e-4 / 4)
     barrier = ipctk.BarrierPotential(0.01, 1.0)
     assert barrier(weighed, mesh, V) == pytest.approx(2.5e-4 * barrier(plain, mesh, V))
+
+
+def test_a_sliver_with_friction_stands_on_its_edge_with_its_weight():
+    """The 0.5 mm slice with friction 0.5 on the floor: the friction, built from the points'
+    weighed collisions, keeps it standing on its edge; the floor carries its weight to 1e-3
+    with a sideways force within the friction cone."""
+    from tissuesim.contact.obstacles import plane
+
+    mesh = ts.box((0.0, 0.0, 0.05), (1.0, 0.2, 0.25), (10, 2, 2))
+    sim = ts.Simulation(mesh, ts.make_material("neo_hookean", youngs_modulus=1e6,
+                        poisson_ratio=0.3), density=1000.0, integrator="backward_euler",
+                        time_step=0.01, gravity=(0.0, 0.0, -G))  # fmt: skip
+    sim.fix(np.flatnonzero(mesh.points[:, 0] < 0.95), name="held")
+    sim.set_contact(dhat=DHAT, friction=0.5)
+    sim.add_obstacle("floor", plane((0.5, 0.1, 0.0), (0, 0, 1), 3.0))
+    sim.cut_body(across(0.9995))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        contact = sim.system.contact
+    surface = contact.surfaces[0]
+    points = np.flatnonzero(np.isfinite(surface.point_areas))
+    for _ in range(60):
+        record = sim.step()
+        assert _point_positions(sim, contact, surface, points)[:, 2].min() > 0.0
+    floor = np.array(record.extra["forces"]["floor"])
+    weight = 1000.0 * 0.2 * 0.2 * 0.0005 * G
+    assert floor[2] == pytest.approx(weight, rel=1e-3)
+    assert 0.0 < np.hypot(floor[0], floor[1]) <= 0.5 * floor[2]
+    x = _point_positions(sim, contact, surface, points)[:, 0]
+    assert np.ptp(x) < 1e-3  # still upright: its points in one vertical plane

@@ -105,3 +105,23 @@ def test_a_new_crack_starts_only_far_from_the_cracks_and_only_when_they_stop():
     assert abs(second.point[1] - y0) < FAR_CELLS * size + 2 * 0.05  # the nearest far row
     assert second.point[0] < 0.05  # at the left edge, where the stress is largest
     assert body.cut_state.area("tear2") == pytest.approx(1.0, rel=1e-9)  # across too
+
+
+def test_the_two_spans_tear_in_turn_with_contact_on():
+    """The same with contact on (dhat 0.2 mm): both cracks' faces are contact surfaces, no
+    step intersects, and the bar still tears first in the near span, then in the far one."""
+    sim = two_spans()
+    sim.set_tearing(body="body", stress=STRENGTH)
+    sim.set_contact(dhat=2e-4)
+    started = {}
+    for k in range(40):
+        record = sim.step()
+        assert not sim.system.contact.intersecting(sim.state.x)
+        for key, report in record.extra["cuts"].items():
+            if report["cells_cut"] and key not in started:
+                started[key] = k
+        if "body.tear2" in started:
+            break
+    assert list(started) == ["body.tear", "body.tear2"]
+    assert started["body.tear"] < started["body.tear2"]
+    assert record.extra["cuts"]["body.tear2"]["pieces"] == 3
