@@ -70,23 +70,25 @@ def plane_cut(point: tuple, normal: tuple) -> PlanarCut:
     return PlanarCut(p, n, np.array(corners))
 
 
+def timed_steps(sim: ts.Simulation, n: int) -> list[float]:
+    """The wall times (s) of ``n`` steps of ``sim``."""
+    walls = []
+    for _ in range(n):
+        start = time.perf_counter()
+        sim.step()
+        walls.append(time.perf_counter() - start)
+    return walls
+
+
 def once(
     divisions: int, before: int = 4, after: int = 4, contact: bool = False, second: bool = False
 ) -> dict:
     sim = organ(divisions, contact)
-    walls = []
-    for _ in range(before):
-        start = time.perf_counter()
-        sim.step()
-        walls.append(time.perf_counter() - start)
+    walls = timed_steps(sim, before)
     blade = plane_cut((0.011, 0.0, 0.0), (1.0, 0.0, 0.0))
     if second:  # the first cut, and steps after it, untimed: the second is the event
         sim.cut_body(blade, body="organ")
-        walls = []
-        for _ in range(before):
-            start = time.perf_counter()
-            sim.step()
-            walls.append(time.perf_counter() - start)
+        walls = timed_steps(sim, before)
         blade = plane_cut((0.0, 0.003, 0.0), (0.0, 1.0, 0.0))
     start = time.perf_counter()
     report = sim.cut_body(blade, body="organ", name="second" if second else "cut")
@@ -94,11 +96,7 @@ def once(
     start = time.perf_counter()
     _ = sim.system  # the cut body's rebuild: kinematics, sparsity pattern, contact surface
     rebuild_s = time.perf_counter() - start
-    after_walls = []
-    for _ in range(after):
-        start = time.perf_counter()
-        sim.step()
-        after_walls.append(time.perf_counter() - start)
+    after_walls = timed_steps(sim, after)
     step_after = statistics.median(after_walls[1:])
     vn = sim.bodies["organ"].cut_state.vn
     meet = 0 if vn.extra is None else len(np.unique(vn.parent[vn.extra.copy]))

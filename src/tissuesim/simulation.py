@@ -257,7 +257,7 @@ class Simulation(BodyCalls, SetupCalls, StepChecks, BodyResults, Stepping):
             body, choice = self.bodies[name], settings.surfaces.get(name)
             config, tangent = s.config_slices[j], s.tangent_slices[j]
             if body.kind == "fem":
-                blade = any(c.body == name and self._cuts_ahead(c) for c in self.organ_cuts)
+                blade = self._blade_in(name)
                 surfaces.append(
                     fem_surface(name, s.bodies[j], config.start, tangent.start, choice, dhat, blade)
                 )

@@ -271,22 +271,21 @@ class BodyCalls:
         if self.contact is None:
             return None
         state = b.cut_state
-        # the gap the rebuild will use (``Simulation._contact_model``)
-        blade = any(c.body == b.name and self._cuts_ahead(c) for c in self.organ_cuts)
 
         def check(vn) -> None:
             if vn.extra is None:
                 return
-            from tissuesim.contact.cut_surface import BLADE_GAP, GAP, cut_surface
-            from tissuesim.contact.cut_surface_2d import cut_boundary
+            from tissuesim.contact.surfaces import cut_faces
 
-            mesh, dhat = vn.to_mesh(state.original), self._contact_dhat()
-            if b.mesh.dim == 2:
-                cut_boundary(mesh, dhat)
-            else:
-                cut_surface(mesh, dhat, BLADE_GAP if blade else GAP)
+            # as the rebuild will build it (``Simulation._contact_model``)
+            cut_faces(vn.to_mesh(state.original), self._contact_dhat(), self._blade_in(b.name))
 
         return check
+
+    def _blade_in(self, body: str) -> bool:
+        """Whether an instrument in contact cuts FEM body ``body`` (its cut faces then sit
+        further in: ``contact/cut_surface.py`` BLADE_GAP)."""
+        return any(c.body == body and self._cuts_ahead(c) for c in self.organ_cuts)
 
     def _cuts_ahead(self, blade) -> bool:
         """Whether ``blade`` is in contact with the body it cuts (an obstacle's, contact on):

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 from test_liver_resection import run_coarse
 
-from tissuesim.contact.sliver_points import node_pieces
+from tissuesim.mesh.virtual_nodes import node_pieces
 
 G = 9.81
 
@@ -24,7 +24,7 @@ def test_two_crossing_blades_part_a_wedge_that_falls_onto_the_table_and_rests():
     # elements both blades cross, split into the parts between the two cuts
     assert body.cut_state.vn.several.any()
     # the wedge: the piece without the hanger's vertices
-    label = node_pieces(body.mesh)
+    label = node_pieces(body.mesh.cells, body.mesh.n_points)
     held = np.unique(label[body.conditions[0][1].vertices])
     wedge = ~np.isin(label, held)
     weight = body.model.mass.lumped.reshape(-1, 3)[wedge, 0].sum() * G

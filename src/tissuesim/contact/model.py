@@ -127,7 +127,7 @@ class ContactModel(FrictionLag, CollisionQueries):
         # the areas of contact points without faces (slivers of cut bodies), NaN elsewhere
         self.point_areas = None
         if any(getattr(s, "point_areas", None) is not None for s in self.surfaces):
-            self.point_areas = np.full(start + sum(len(ob.rest) for ob in self.obstacles), np.nan)
+            self.point_areas = np.full(start, np.nan)  # start: every vertex by now
             for surface in self.surfaces:
                 if getattr(surface, "point_areas", None) is not None:
                     self.point_areas[self.slices[surface.name][0]] = surface.point_areas

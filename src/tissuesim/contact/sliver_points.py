@@ -25,7 +25,7 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
-__all__ = ["bare_pieces", "node_pieces", "sliver_points", "weigh_points"]
+__all__ = ["bare_pieces", "sliver_points", "weigh_points"]
 
 #: points of one piece are kept at least MERGE dhat apart at rest
 MERGE = 1.0
@@ -39,7 +39,9 @@ def bare_pieces(mesh, W: sp.spmatrix, tri: np.ndarray) -> np.ndarray:
     """Which cells (m,) belong to a piece of the cut body with no contact surface: a
     connected component of its cells (sharing nodes) none of whose nodes a surface vertex is
     interpolated from."""
-    label = node_pieces(mesh)
+    from tissuesim.mesh.virtual_nodes import node_pieces
+
+    label = node_pieces(mesh.cells, mesh.n_points)
     held = np.zeros(label.max() + 1, dtype=bool)
     held[label[sp.csr_matrix(W)[np.unique(tri)].indices]] = True
     return ~held[label[mesh.cells[:, 0]]]
@@ -52,6 +54,7 @@ def sliver_points(
     the pieces without a contact surface (``bare_pieces``), or None when every piece has one."""
     from tissuesim.contact.cut_surface import level_stack
     from tissuesim.mesh.plane_split import region_vertices, section_measures
+    from tissuesim.mesh.virtual_nodes import node_pieces
 
     bare = np.flatnonzero(bare_pieces(mesh, W, tri))
     if bare.size == 0:
@@ -70,7 +73,7 @@ def sliver_points(
         (lam.ravel(), (np.repeat(np.arange(len(rows)), cells.shape[1]), cells[rows].ravel())),
         shape=(len(rows), mesh.n_points),
     )
-    label = node_pieces(mesh)[cells[:, 0]]  # each bare cell's piece
+    label = node_pieces(mesh.cells, mesh.n_points)[cells[:, 0]]  # each bare cell's piece
     piece = label[rows]
     keep = _thinned(P @ mesh.points, piece, MERGE * dhat)
     # each piece's cut area (each part's largest section by one of its levels), shared
@@ -140,16 +143,6 @@ def weigh_points(collisions, area: np.ndarray) -> None:
         a = [points[i] for i in (collision.vertex0_id, collision.vertex1_id) if i in points]
         if a:
             collision.weight = collision.weight * min(a)
-
-
-def node_pieces(mesh) -> np.ndarray:
-    """Each node's piece (n_points,): the connected components of the cells (sharing nodes)."""
-    from scipy.sparse.csgraph import connected_components
-
-    cells, n = mesh.cells, mesh.n_points
-    k = cells.shape[1]
-    graph = sp.coo_matrix((np.ones(cells.size), (np.repeat(cells[:, 0], k), cells.ravel())), (n, n))
-    return connected_components(graph, directed=False)[1]
 
 
 def _measures(X: np.ndarray) -> np.ndarray:

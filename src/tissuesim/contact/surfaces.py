@@ -23,7 +23,14 @@ import scipy.sparse as sp
 
 from tissuesim.errors import InputError
 
-__all__ = ["CutFemSurface", "FemSurface", "FrameSurface", "fem_surface", "frame_surface"]
+__all__ = [
+    "CutFemSurface",
+    "FemSurface",
+    "FrameSurface",
+    "cut_faces",
+    "fem_surface",
+    "frame_surface",
+]
 
 
 @dataclass(frozen=True, eq=False)
@@ -148,6 +155,18 @@ class FrameSurface:
         return rows.ravel(), cols.ravel(), K.ravel()
 
 
+def cut_faces(mesh, dhat: float, blade: bool = False) -> tuple[sp.csr_matrix, np.ndarray]:
+    """A cut mesh's contact surface (weights over its nodes, facets): ``cut_surface`` in 3D,
+    with the gap of a body an instrument in contact cuts (``blade``) or the plain one;
+    ``cut_boundary`` in 2D. The rebuild and ``cut_body``'s check before a cut both build it."""
+    from tissuesim.contact.cut_surface import BLADE_GAP, GAP, cut_surface
+    from tissuesim.contact.cut_surface_2d import cut_boundary
+
+    if mesh.dim == 2:
+        return cut_boundary(mesh, dhat)
+    return cut_surface(mesh, dhat, BLADE_GAP if blade else GAP)
+
+
 def fem_surface(
     name: str,
     model,
@@ -165,8 +184,6 @@ def fem_surface(
     from tissuesim.contact.pairs import contact_facets
 
     if model.mesh.cell_levels is not None:
-        from tissuesim.contact.cut_surface import BLADE_GAP, GAP, cut_surface
-        from tissuesim.contact.cut_surface_2d import cut_boundary
         from tissuesim.contact.sliver_points import sliver_points
 
         if choice is not None:
@@ -174,10 +191,7 @@ def fem_surface(
                 f"contact surface of {name!r}: the body has been cut, and its contact surface "
                 "is its whole boundary with the cut faces; leave its surface out of [contact]"
             )
-        if model.mesh.dim == 2:
-            W, tri = cut_boundary(model.mesh, dhat)
-        else:
-            W, tri = cut_surface(model.mesh, dhat, BLADE_GAP if blade else GAP)
+        W, tri = cut_faces(model.mesh, dhat, blade)
         areas = None
         points = sliver_points(model.mesh, W, tri, dhat)
         if points is not None:  # pieces too thin for a surface: contact points

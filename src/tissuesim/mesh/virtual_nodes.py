@@ -248,15 +248,21 @@ def _as3d(points: np.ndarray) -> np.ndarray:
     return points
 
 
-def _components(cells: np.ndarray, n_points: int) -> int:
-    """Connected components of cells joined through shared points."""
+def node_pieces(cells: np.ndarray, n_points: int) -> np.ndarray:
+    """Each point's piece (n_points,): the connected components of the cells joined through
+    shared points (a point of no cell is a piece of its own)."""
     from scipy.sparse import coo_matrix
     from scipy.sparse.csgraph import connected_components
 
-    m, k = cells.shape  # a cell's points joined to its first: the pieces of the points used
+    m, k = cells.shape  # a cell's points joined to its first
     rows = np.repeat(cells[:, 0], k - 1)
     graph = coo_matrix((np.ones(m * (k - 1)), (rows, cells[:, 1:].ravel())), shape=(n_points,) * 2)
-    _, labels = connected_components(graph, directed=False)
+    return connected_components(graph, directed=False)[1]
+
+
+def _components(cells: np.ndarray, n_points: int) -> int:
+    """Connected components of cells joined through shared points."""
+    labels = node_pieces(cells, n_points)
     return int(np.count_nonzero(np.bincount(labels[cells[:, 0]])))  # the labels used
 
 
