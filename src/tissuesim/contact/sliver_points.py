@@ -16,8 +16,8 @@ IPC's area weighting gives a vertex without faces an area of 1 (m^2); ``weigh_po
 each such collision's weight to the point's own area instead: its share of the piece's cut
 area (each part's largest section by a cut: the face it would touch with), so the piece's
 barrier is as stiff as a surface of that area. That is a
-Python loop over the collisions while a body has such points: 24 ms for 36,581 collisions
-against 65 ms for building them (a 2-core machine).
+Python loop over the collisions while a body has such points: 12 ms for 36,581 collisions
+against 27-31 ms for building them (``benchmarks/sliver_weights.py``, a 2-core machine).
 """
 
 from __future__ import annotations
