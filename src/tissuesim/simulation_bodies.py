@@ -235,7 +235,7 @@ class BodyCalls:
         old_vn = b.cut_state.vn
         before_cells = b.cut_state.vn.n_cell_cuts if b.cut_state.vn else 0
         before = b.mesh.n_points
-        done = recut(b.cut_state, cut, name, current, self._cut_check(b, name))
+        done = recut(b.cut_state, cut, name, current)
         if done is None:  # no new cell crossed completely: nothing changes
             vn, names = b.cut_state.vn, b.cut_state.names
             area = 0.0
@@ -263,24 +263,6 @@ class BodyCalls:
             "area_m2": float(b.cut_state.areas(vn)[index]),
             "origin": carry,
         }
-
-    def _cut_check(self, b, name: str):
-        """With contact on, a check of a cut of body ``b`` before it is taken: where cuts meet
-        in a cell, the contact surface must be one that can be built, else the cut is refused
-        with nothing changed."""
-        if self.contact is None:
-            return None
-        state = b.cut_state
-
-        def check(vn) -> None:
-            if vn.extra is None:
-                return
-            from tissuesim.contact.surfaces import cut_faces
-
-            # as the rebuild will build it (``Simulation._contact_model``)
-            cut_faces(vn.to_mesh(state.original), self._contact_dhat(), self._blade_in(b.name))
-
-        return check
 
     def _blade_in(self, body: str) -> bool:
         """Whether an instrument in contact cuts FEM body ``body`` (its cut faces then sit

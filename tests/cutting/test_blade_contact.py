@@ -186,14 +186,11 @@ def test_the_lead_follows_the_blades_next_step_when_its_motion_is_known():
 
 
 @pytest.mark.parametrize("x0", [0.04, 0.0437])
-def test_a_blade_crossing_an_earlier_cut_moves_in_its_kerf_and_is_checked_as_rebuilt(
-    x0, monkeypatch
-):
+def test_a_blade_crossing_an_earlier_cut_moves_in_its_kerf_with_the_kerf_gap(x0, monkeypatch):
     """The instrument's cut crosses an earlier cut across the block, along the mesh's faces
     (x0 = 0.04: it parted nodes and copied no cell) or through cells: no step intersects.
-    Where cells both cross, ``cut_body`` builds the prospective contact surface to check it
-    before taking the cut: with the kerf's gap (BLADE_GAP), as the rebuild then does, not the
-    plain cut faces' gap."""
+    Where cells both cross, the contact surface is built with the kerf's gap (BLADE_GAP)
+    every time, not the plain cut faces' gap."""
     import tissuesim.contact.cut_surface as cut_surface_module
     from tissuesim.contact.cut_surface import BLADE_GAP
 

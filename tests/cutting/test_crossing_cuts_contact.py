@@ -13,7 +13,6 @@ from test_cut_contact import block_on_floor  # pytest puts this folder on the pa
 
 import tissuesim as ts
 from tissuesim.contact.cut_surface import GAP, cut_surface
-from tissuesim.errors import InputError
 from tissuesim.mesh.virtual_nodes import PlanarCut, virtual_node_cut
 
 G = 9.81
@@ -162,13 +161,6 @@ def test_four_pieces_of_two_cuts_fall_onto_the_floor_and_onto_each_other():
     pieces = 1000.0 * 0.2 * 0.2 * (1 - 0.47) * G
     assert floor[0] == 0.0
     assert np.median(floor[-10:]) == pytest.approx(pieces, rel=1e-3)
-
-
-def test_three_cuts_through_one_cell_are_refused_with_contact():
-    cuts = [*CASES["cross"], plane_cut((0, 0, 0.17), (0, 0, 1))]
-    cm = virtual_node_cut(BOX.points, BOX.cells, cuts).to_mesh(BOX)
-    with pytest.raises(InputError, match="crossed by three cuts"):
-        cut_surface(cm, DHAT)
 
 
 def test_a_wedge_cut_out_of_a_beam_rests_in_its_groove():

@@ -152,14 +152,12 @@ def recut(
     cut: PlanarCut | SweptCut,
     name: str,
     positions: np.ndarray,
-    check=None,
 ):
     """Cut again: ``cut`` as the cut called ``name`` (a new one, or the same plane with its
     swept polygon grown: a blade advancing; or the surface a blade swept once it left its
-    plane), the body's nodes at ``positions`` now. ``check``: called with the new
-    ``VirtualNodeMesh`` before anything changes, raising ``InputError`` to refuse it. Returns
-    (the new VirtualNodeMesh, the current node each new node continues, the cut's index), or
-    None when no new cell is cut."""
+    plane), the body's nodes at ``positions`` now. Returns (the new VirtualNodeMesh, the
+    current node each new node continues, the cut's index), or None when no new cell is
+    cut."""
     cuts = list(state.cuts)
     if name in state.names and isinstance(cut, SweptCut):  # a blade off its plane goes on
         index = state.names.index(name)
@@ -190,8 +188,6 @@ def recut(
     points = state.original.n_points if state.vn is None else len(state.vn.points)
     if vn.n_cell_cuts == before and len(vn.points) == points:
         return None  # no new element cut, no node parted (a cut along faces parts nodes only)
-    if check is not None:
-        check(vn)
     carry, state.source = _carry(state.vn, vn)
     state.vn, state.cuts = vn, cuts
     if name not in state.names:

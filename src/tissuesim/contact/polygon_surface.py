@@ -358,8 +358,16 @@ def _loops(ring: list[int]) -> list[list[int]]:
 
 def _triangulate(W: sp.csr_matrix, ring: np.ndarray, size: np.ndarray, mended: np.ndarray):
     """(W with the mended rings' centroids appended, triangles): fans from the first point,
-    and from a new centroid point for mended rings with more than three points."""
+    and from a new centroid point for mended rings with more than three points. Rings over
+    the same points (the two sides of a collapsed sliver, opposite ways round) are fanned
+    alike, from their smallest point or from one shared centroid, so that their triangles are
+    each other's reverse and cancel."""
     L = ring.shape[1]
+    valid = np.arange(L)[None, :] < size[:, None]
+    key = np.sort(np.where(valid, ring, -1), axis=1)
+    _, twin_of, count = unique_rows(key, return_inverse=True, return_counts=True)
+    twin_of = twin_of.ravel()
+    ring = _start_at_smallest(ring, size, count[twin_of] > 1)
     tris = []
     corner_fan = ~mended | (size == 3)
     for i in range(1, L - 1):
@@ -368,13 +376,35 @@ def _triangulate(W: sp.csr_matrix, ring: np.ndarray, size: np.ndarray, mended: n
     fan = np.flatnonzero(~corner_fan)
     if len(fan):
         k = W.shape[0]
-        valid = np.arange(L)[None, :] < size[fan, None]
-        r, c = np.nonzero(valid)
+        # one centroid per point set, in the order the sets first appear
+        _, first, centre_of = np.unique(twin_of[fan], return_index=True, return_inverse=True)
+        rank = np.empty(len(first), dtype=np.int64)
+        rank[np.argsort(first)] = np.arange(len(first))
+        centre_of = rank[centre_of.ravel()]
+        rep = fan[np.sort(first)]
+        vr, vc = np.nonzero(np.arange(L)[None, :] < size[rep, None])
         # each centroid: its ring's point weights, averaged
-        average = sp.csr_matrix((1.0 / size[fan][r], (r, ring[fan][r, c])), shape=(len(fan), k))
+        average = sp.csr_matrix((1.0 / size[rep][vr], (vr, ring[rep][vr, vc])), shape=(len(rep), k))
         W = sp.vstack([W, average @ W]).tocsr()
-        centre = k + r
+        r, c = np.nonzero(np.arange(L)[None, :] < size[fan, None])
         nxt = np.where(c + 1 < size[fan][r], c + 1, 0)
-        tris.append(np.column_stack([centre, ring[fan][r, c], ring[fan][r, nxt]]))
+        tris.append(np.column_stack([k + centre_of[r], ring[fan][r, c], ring[fan][r, nxt]]))
     tri = np.concatenate(tris).astype(np.int64) if tris else np.zeros((0, 3), dtype=np.int64)
     return W, tri
+
+
+def _start_at_smallest(ring: np.ndarray, size: np.ndarray, which: np.ndarray) -> np.ndarray:
+    """The rings ``which`` turned round (order kept) to start at their smallest point."""
+    rows = np.flatnonzero(which)
+    if not len(rows):
+        return ring
+    L = ring.shape[1]
+    ring = ring.copy()
+    sub, n = ring[rows], size[rows]
+    shift = np.argmin(
+        np.where(np.arange(L)[None, :] < n[:, None], sub, np.iinfo(np.int64).max), axis=1
+    )
+    cols = np.arange(L)[None, :]
+    src = np.where(cols < n[:, None], (cols + shift[:, None]) % np.maximum(n[:, None], 1), cols)
+    ring[rows] = np.take_along_axis(sub, src, axis=1)
+    return ring
