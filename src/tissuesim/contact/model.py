@@ -161,6 +161,7 @@ class ContactModel(FrictionLag, CollisionQueries):
         self.clear_path = None
         diag = float(np.linalg.norm(np.ptp(self.rest, axis=0)))
         self.dhat = self.settings.dhat if self.settings.dhat is not None else 1e-3 * diag
+        self._leave_out_rest_pairs(ipctk)
         default = max(_youngs(s.material) for s in self.surfaces)
         self.adaptive = None  # contact/stiffness.py, unless a fixed stiffness is given
         if self.settings.stiffness in (None, "adaptive"):
@@ -337,6 +338,20 @@ class ContactModel(FrictionLag, CollisionQueries):
         (run-to-run spread) on every scene of ``benchmarks/contact_candidates.py``, and needs
         no motion estimate."""
         self.candidates.begin(self.dhat)
+
+    def _leave_out_rest_pairs(self, ipctk) -> None:
+        """Cut bodies' surface pairs of one piece that touch at rest do not collide
+        (``contact/rest_proximity.py``)."""
+        from tissuesim.contact.rest_proximity import rest_proximity_filter
+
+        cut = np.zeros(len(self.rest), dtype=bool)
+        for surface in self.surfaces:
+            if isinstance(surface, CutFemSurface):
+                cut[self.slices[surface.name][0]] = True
+        rest_pairs = rest_proximity_filter(ipctk, self.mesh, self.rest, cut, self.dhat)
+        if rest_pairs is not None:
+            kept = self.mesh.can_collide if self.table.filtered else None
+            self.mesh.can_collide = rest_pairs if kept is None else kept & rest_pairs
 
     def _collisions(self, V: np.ndarray):
         col = self._ipctk.NormalCollisions()
