@@ -6,7 +6,7 @@ vertex lie within dhat of each other at rest (34 of 40 random crossings had a pa
 0.3 dhat, ``benchmarks/crossing_surfaces.py``). IPC's barrier then pushes them apart from the
 first step: a spurious force inside the piece, large at a small distance, which moved a cut
 block that nothing loaded and which Newton had to fight in every step (three blades meeting
-in the liver took 27-170 iterations a step before the pieces parted, 8-14 without it). Such
+in the liver took 7-168 iterations a step before the pieces parted, 3-14 without it). Such
 pairs are one piece's own surface on either side of its material: they cannot reach each
 other without that material collapsing, so their vertex pairs are left out of the collision
 mesh (a compiled sparse filter, ``ipctk.make_sparse_filter``). Pairs of different pieces,
