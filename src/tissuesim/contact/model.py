@@ -344,11 +344,11 @@ class ContactModel(FrictionLag, CollisionQueries):
         (``contact/rest_proximity.py``)."""
         from tissuesim.contact.rest_proximity import rest_proximity_filter
 
-        cut = np.zeros(len(self.rest), dtype=bool)
+        near = np.zeros(len(self.rest), dtype=bool)
         for surface in self.surfaces:
-            if isinstance(surface, CutFemSurface):
-                cut[self.slices[surface.name][0]] = True
-        rest_pairs = rest_proximity_filter(ipctk, self.mesh, self.rest, cut, self.dhat)
+            if isinstance(surface, CutFemSurface) and surface.near_cut is not None:
+                near[self.slices[surface.name][0]] = surface.near_cut
+        rest_pairs = rest_proximity_filter(ipctk, self.mesh, self.rest, near, self.dhat)
         if rest_pairs is not None:
             kept = self.mesh.can_collide if self.table.filtered else None
             self.mesh.can_collide = rest_pairs if kept is None else kept & rest_pairs

@@ -363,11 +363,8 @@ def _triangulate(W: sp.csr_matrix, ring: np.ndarray, size: np.ndarray, mended: n
     alike, from their smallest point or from one shared centroid, so that their triangles are
     each other's reverse and cancel."""
     L = ring.shape[1]
-    valid = np.arange(L)[None, :] < size[:, None]
-    key = np.sort(np.where(valid, ring, -1), axis=1)
-    _, twin_of, count = unique_rows(key, return_inverse=True, return_counts=True)
-    twin_of = twin_of.ravel()
-    ring = _start_at_smallest(ring, size, count[twin_of] > 1)
+    twin_of, twins = _twins(ring, size)
+    ring = _start_at_smallest(ring, size, twins)
     tris = []
     corner_fan = ~mended | (size == 3)
     for i in range(1, L - 1):
@@ -391,6 +388,34 @@ def _triangulate(W: sp.csr_matrix, ring: np.ndarray, size: np.ndarray, mended: n
         tris.append(np.column_stack([k + centre_of[r], ring[fan][r, c], ring[fan][r, nxt]]))
     tri = np.concatenate(tris).astype(np.int64) if tris else np.zeros((0, 3), dtype=np.int64)
     return W, tri
+
+
+def _twins(ring: np.ndarray, size: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(each ring's label, the same for rings over the same points; whether another ring has
+    its points). Rings are first told apart by size, sum, least and largest point (cheap),
+    and only those alike in all four are compared point by point."""
+    R, L = ring.shape
+    valid = np.arange(L)[None, :] < size[:, None]
+    big = np.iinfo(np.int64).max
+    rough = np.column_stack([
+        size,
+        np.where(valid, ring, 0).sum(axis=1),
+        np.where(valid, ring, big).min(axis=1),
+        np.where(valid, ring, -1).max(axis=1),
+    ])  # fmt: skip
+    _, rough_of, rough_count = unique_rows(rough, return_inverse=True, return_counts=True)
+    rough_of = rough_of.ravel()
+    label = np.arange(R)
+    alike = np.flatnonzero(rough_count[rough_of] > 1)
+    if not len(alike):
+        return label, np.zeros(R, dtype=bool)
+    key = np.sort(np.where(valid[alike], ring[alike], -1), axis=1)
+    _, exact_of, exact_count = unique_rows(key, return_inverse=True, return_counts=True)
+    exact_of = exact_of.ravel()
+    twins = np.zeros(R, dtype=bool)
+    twins[alike] = exact_count[exact_of] > 1
+    label[alike] = R + exact_of  # past every lone ring's own label
+    return label, twins
 
 
 def _start_at_smallest(ring: np.ndarray, size: np.ndarray, which: np.ndarray) -> np.ndarray:

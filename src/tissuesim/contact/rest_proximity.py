@@ -26,47 +26,55 @@ __all__ = ["REST_GAP", "rest_proximity_filter"]
 REST_GAP = 1.0
 
 
-def rest_proximity_filter(ipctk, mesh, rest: np.ndarray, cut: np.ndarray, dhat: float):
+def rest_proximity_filter(ipctk, mesh, rest: np.ndarray, near: np.ndarray, dhat: float):
     """A CollisionFilter that leaves out the vertex pairs of primitives closer than
     REST_GAP dhat at ``rest`` (n, d) whose vertices all lie on one connected piece of the
-    surface of ``mesh`` (an ipctk CollisionMesh) and are all ``cut`` (n,) vertices (of a cut
-    body's surface); None when there is no such pair.
+    surface of ``mesh`` (an ipctk CollisionMesh) and are all ``near`` (n,) a cut (vertices of
+    a cut body's surface embedded in its cut cells); None when there is no such pair. Only
+    the elements round those vertices are searched (the rest of the surface is as it was
+    meshed).
 
     ipctk reports a close pair by its closest features (a point near a triangle's edge as a
     point-edge pair) and lets a pair of primitives collide when any of their vertex pairs may,
     so each side is widened to the elements round it: its vertices against every vertex of
     the elements (triangles, or edges in 2D) that hold the other side's."""
-    rest = np.asfortranarray(rest, dtype=float)
     E, F = mesh.edges, mesh.faces
     elements = F if F.shape[0] else E
-    if not cut.any() or not elements.shape[0]:
+    if not near.any() or not elements.shape[0]:
+        return None
+    touching = elements[near[elements].any(axis=1)]
+    if not len(touching):
+        return None
+    # the pairs within REST_GAP dhat among the elements round the cut, in compiled code
+    used, local = np.unique(touching, return_inverse=True)
+    local = local.reshape(touching.shape).astype(np.int32)
+    V = np.asfortranarray(rest[used], dtype=float)
+    if F.shape[0]:
+        part = ipctk.CollisionMesh(V, ipctk.edges(local), local)
+    else:
+        part = ipctk.CollisionMesh(V, local, np.zeros((0, 3), dtype=np.int32))
+    close = ipctk.NormalCollisions()
+    close.build(part, V, REST_GAP * dhat)
+    if not len(close):
         return None
     n = len(rest)
     ring = np.roll(elements, -1, axis=1)
     graph = sp.coo_matrix((np.ones(elements.size), (elements.ravel(), ring.ravel())), (n, n))
     _, piece = connected_components(graph, directed=False)
-    close = ipctk.NormalCollisions()  # the pairs within REST_GAP dhat, found in compiled code
-    close.build(mesh, rest, REST_GAP * dhat)
-    # vertex -> the vertices of the elements holding it (itself included)
-    incidence = sp.csr_matrix(
-        (
-            np.ones(elements.size),
-            (elements.ravel(), np.repeat(np.arange(len(elements)), elements.shape[1])),
-        ),
-        shape=(n, len(elements)),
-    )
-    around = (incidence @ incidence.T).tocsr()
+    order = np.argsort(elements.ravel(), kind="stable")  # vertex -> the elements holding it
+    start = np.searchsorted(elements.ravel()[order], np.arange(n + 1))
+    owner = order // elements.shape[1]
     excluded: dict[tuple[int, int], bool] = {}
     for k in range(len(close)):
-        ids = np.array([i for i in close[k].vertex_ids(E, F) if i >= 0])
-        if not cut[ids].all() or np.any(piece[ids] != piece[ids[0]]):
+        ids = used[[i for i in close[k].vertex_ids(part.edges, part.faces) if i >= 0]]
+        if not near[ids].all() or np.any(piece[ids] != piece[ids[0]]):
             continue
         split = 2 if close.is_edge_edge(k) else 1  # edge-edge: two and two, else one first
         a, b = ids[:split], ids[split:]
         for side, other in ((a, b), (b, a)):
-            wide = np.unique(around[other].indices)
+            held = np.concatenate([owner[start[v] : start[v + 1]] for v in other])
             for i in side:
-                for j in wide:
+                for j in np.unique(elements[held]):
                     if i != j:
                         excluded[(int(min(i, j)), int(max(i, j)))] = False
     return ipctk.make_sparse_filter(excluded, True) if excluded else None

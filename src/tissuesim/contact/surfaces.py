@@ -82,6 +82,8 @@ class CutFemSurface:
     #: per point: NaN for the surface's, the area of a contact point of a piece too thin for
     #: a surface (``contact/sliver_points.py``: points without faces, after the surface's)
     point_areas: np.ndarray | None = None
+    #: per point: whether it is embedded in a cell a cut bounds (where the cut faces are)
+    near_cut: np.ndarray | None = None
     linear = True
 
     @property
@@ -199,6 +201,11 @@ def fem_surface(
             areas = np.concatenate([np.full(W.shape[0], np.nan), points[1]])
             W = sp.vstack([W, points[0]], format="csr")
         n = model.mesh.n_points * model.mesh.dim
+        from tissuesim.contact.cut_surface import level_stack
+
+        bounded = np.isfinite(level_stack(model.mesh)).all(axis=2).any(axis=1)
+        copied = np.zeros(model.mesh.n_points)  # nodes of cells a cut bounds
+        copied[model.mesh.cells[bounded]] = 1.0
         return CutFemSurface(
             name,
             model.material,
@@ -208,6 +215,7 @@ def fem_surface(
             slice(config_offset, config_offset + n),
             slice(tangent_offset, tangent_offset + n),
             areas,
+            abs(W) @ copied > 0.0,
         )
 
     d = model.mesh.dim
