@@ -151,6 +151,13 @@ def test_four_pieces_of_two_cuts_fall_onto_the_floor_and_onto_each_other():
     sim.cut_body(plane_cut((0.47, 0, 0), (1, 0, 0)), name="across")
     report = sim.cut_body(plane_cut((0, 0, 0.17), (0, 0, 1)), name="along")
     assert report["pieces"] == 4
+    outer_pieces_fall_and_rest(sim, mass)
+
+
+def outer_pieces_fall_and_rest(sim, mass: float) -> None:
+    """The beam of ``block_on_floor``, cut across at x = 0.47 (and more): its mass is kept,
+    no step intersects over 40, the floor carries nothing at first and then the weight of
+    everything beyond x = 0.47 to 1e-3."""
     assert sim.system.bodies[0].mass.lumped.sum() / 3 == pytest.approx(mass, rel=1e-12)
     contact = sim.system.contact
     floor = []
