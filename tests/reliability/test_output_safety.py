@@ -86,6 +86,10 @@ def test_a_rerun_removes_the_previous_runs_files_and_only_those(tmp_path):
     out = tmp_path / "out"
     _run_into(out, "alpha")
     (out / "notes.txt").write_text("mine")  # a user's file: never touched
+    (out / ".mine.tmp-notes").write_text("mine")  # not a writer's temporary name either
+    # what a run killed while writing leaves: hidden temporary files (io/atomic.py)
+    (out / ".alpha.tmp-0123abcd.pvd").write_text("")
+    (out / ".summary.tmp-89abcdef.json").write_text("{")
     before = sorted(p.name for p in out.iterdir())
     assert "alpha.pvd" in before and "final.png" in before and "forces.png" in before
     _run_into(out, "beta", render=False)
@@ -93,6 +97,8 @@ def test_a_rerun_removes_the_previous_runs_files_and_only_those(tmp_path):
     assert not [n for n in after if n.startswith("alpha")], after  # no stale series
     assert "final.png" not in after and "run.gif" not in after  # no stale pictures
     assert (out / "notes.txt").read_text() == "mine"
+    assert (out / ".mine.tmp-notes").read_text() == "mine"
+    assert not [n for n in after if ".tmp-" in n and n != ".mine.tmp-notes"], after
     summary = assert_consistent(out)
     assert summary["status"] == "completed" and list(summary["simulation"]["bodies"]) == ["beta"]
     manifest = json.loads((out / "manifest.json").read_text())

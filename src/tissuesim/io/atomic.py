@@ -4,7 +4,8 @@ Every writer here writes to a hidden temporary file in the target's directory, f
 fsyncs it, then ``os.replace``-s it over the target (atomic on POSIX and Windows within one
 file system). A crash can leave a hidden ``.{stem}.tmp-XXXX{suffix}`` file behind, never a torn
 target. Temporary names keep the target's suffix, so tools that infer the format from the
-extension (Pillow, meshio, matplotlib) still work on them.
+extension (Pillow, meshio, matplotlib) still work on them; the next run into the directory
+removes such leftovers (``remove_leftovers``).
 """
 
 from __future__ import annotations
@@ -12,6 +13,7 @@ from __future__ import annotations
 import json
 import math
 import os
+import re
 import secrets
 from collections.abc import Iterator, Mapping
 from contextlib import contextmanager
@@ -20,11 +22,31 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["atomic_output", "to_json_compatible", "write_json_atomic", "write_text_atomic"]
+__all__ = [
+    "atomic_output",
+    "remove_leftovers",
+    "to_json_compatible",
+    "write_json_atomic",
+    "write_text_atomic",
+]
+
+#: the temporary files of these writers (``_tmp_path``): only they match it
+_LEFTOVER = re.compile(r"\..+\.tmp-[0-9a-f]{8}(\.[A-Za-z0-9]+)?")
 
 
 def _tmp_path(path: Path) -> Path:
     return path.with_name(f".{path.stem}.tmp-{secrets.token_hex(4)}{path.suffix}")
+
+
+def remove_leftovers(directory: str | os.PathLike[str]) -> list[str]:
+    """Delete the temporary files a killed writer left in ``directory`` (hidden, named as
+    ``_tmp_path`` names them, nothing else); returns their names."""
+    removed = []
+    for path in Path(directory).glob(".*.tmp-*"):
+        if _LEFTOVER.fullmatch(path.name) and path.is_file():
+            path.unlink(missing_ok=True)
+            removed.append(path.name)
+    return removed
 
 
 def _fsync_file(path: Path) -> None:

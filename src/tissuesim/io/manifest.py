@@ -18,7 +18,7 @@ import secrets
 from pathlib import Path
 
 from tissuesim.errors import OutputError
-from tissuesim.io.atomic import write_json_atomic
+from tissuesim.io.atomic import remove_leftovers, write_json_atomic
 from tissuesim.io.vtu_series import remove_series
 
 __all__ = ["prepare_directory", "Manifest", "OUTPUT_FILES", "MANIFEST"]
@@ -87,8 +87,9 @@ class Manifest:
 
     def remove_previous(self, keep: tuple[str, ...] = ("summary.json", MANIFEST)) -> list[str]:
         """Delete what the previous run listed (its series index first, then frames, then
-        files), except ``keep``; returns what was removed."""
-        removed = []
+        files), except ``keep``, and the temporary files a killed run left (hidden
+        ``.NAME.tmp-XXXXXXXX.EXT``: ``io/atomic.py``); returns what was removed."""
+        removed = remove_leftovers(self.directory)
         for name in self.previous["series"]:
             remove_series(self.directory, name)
             removed.append(f"{name}.pvd")
