@@ -170,8 +170,11 @@ def test_kill_mid_run_then_resume(tmp_path, cli, scene):
     summary = json.loads((killed / "summary.json").read_text())
     assert summary["status"] == "running"
     assert 20 <= len(_frames(killed)) < 61
+    leftover = killed / ".body_0007.tmp-0123abcd.vtu"  # what a kill in mid-write leaves
+    leftover.write_text("")
     result = cli("run", path, "--out", killed, "--quiet", "--resume")
     assert result.code == 0, result.err
+    assert not leftover.exists()
     _assert_same_output(whole, killed)
     assert len(list(killed.glob("body_*.vtu"))) == 61
 

@@ -28,7 +28,7 @@ from typing import Any
 import numpy as np
 
 from tissuesim.errors import InputError, TissueSimError
-from tissuesim.io.atomic import write_json_atomic
+from tissuesim.io.atomic import remove_leftovers, write_json_atomic
 from tissuesim.io.body_series import series_for
 from tissuesim.io.checkpoint import CHECKPOINT, HISTORY, RunCheckpoint, restore, unsupported
 from tissuesim.io.interrupts import deferred_interrupts, interrupts_as_keyboard_interrupt
@@ -133,7 +133,9 @@ class RunOutput:
         self.metadata["resumed_at_step"] = len(history) - self._first_step
 
     def _start_resumed(self) -> None:
-        """Go on writing into the resumed run's directory: its files stay listed."""
+        """Go on writing into the resumed run's directory: its files stay listed, the
+        temporaries the kill left (if it landed mid-write) are removed."""
+        remove_leftovers(self.directory)
         self.checkpoint.resumed()
         self.manifest.files = list(self.manifest.previous["files"])
         self.manifest.series = list(self.manifest.previous["series"])
