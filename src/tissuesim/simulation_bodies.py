@@ -249,6 +249,11 @@ class BodyCalls:
                 "origin": np.arange(before),
             }
         vn, carry, index = done
+        if self.contact is not None:  # pieces too small to move on their own stay attached
+            from tissuesim.bodies.cut_state import attach_crumbs_in_contact
+
+            dhat, blade = self._contact_dhat(), self._blade_in(b.name)
+            vn, carry = attach_crumbs_in_contact(b.cut_state, vn, carry, dhat, blade)
         b.apply_cut(vn, carry, b.cut_state)
         if self.tissue is not None:  # its attachment points follow their side of the cut
             from tissuesim.bodies.cut_state import follow_cells

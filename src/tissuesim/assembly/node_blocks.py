@@ -59,7 +59,7 @@ class NodeBlocks:
         out = np.repeat(pair.reshape(s, b2 * d), d, axis=0)  # (s d, b' d)
         row = ((d * d - d) * self.vptr[r])[:, None] + np.arange(d) * (d * self.count[r])[:, None]
         out += row.reshape(-1, 1)  # (s d,): d^2 vptr[r] - d vptr[r] + a d L_r
-        return out.reshape(s, -1)
+        return out.reshape(s, d * b2 * d)  # s may be 0 (no row changed)
 
     def diagonal_positions(self, j: np.ndarray, r: np.ndarray) -> np.ndarray:
         """Data positions (p, d) of the diagonal entries (a, a) of the blocks of node pairs

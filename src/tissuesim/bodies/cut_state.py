@@ -24,7 +24,7 @@ from tissuesim.mesh.rows import rows_any
 from tissuesim.mesh.swept_cut import SweptCut
 from tissuesim.mesh.virtual_nodes import PlanarCut, VirtualNodeMesh, virtual_node_cut
 
-__all__ = ["CutState", "follow_cells", "recut"]
+__all__ = ["CutState", "attach_crumbs_in_contact", "follow_cells", "recut"]
 
 
 @dataclass
@@ -194,6 +194,30 @@ def recut(
         state.names.append(name)
     state._count_faces(vn, index)
     return vn, carry, index
+
+
+def attach_crumbs_in_contact(
+    state: CutState, vn: VirtualNodeMesh, carry: np.ndarray, dhat: float, blade: bool
+) -> tuple[VirtualNodeMesh, np.ndarray]:
+    """The cut ``vn`` (and ``carry``) with its crumbs attached (``mesh/crumbs.py``): small
+    pieces that have no contact surface at the barrier's ``dhat`` (``blade``: the gap of a body
+    an instrument in contact cuts). Kept as the state's current cut. Unchanged when there is
+    none (the contact surface is built to tell only when a small piece exists)."""
+    from tissuesim.contact.sliver_points import bare_pieces
+    from tissuesim.contact.surfaces import cut_faces
+    from tissuesim.mesh.crumbs import attach_crumbs, small_pieces
+
+    small = small_pieces(vn, state.original.points)
+    if not small.any():
+        return vn, carry
+    mesh = vn.to_mesh(state.original)
+    W, tri = cut_faces(mesh, dhat, blade)
+    crumbs = small & bare_pieces(mesh, W, tri)
+    done = attach_crumbs(vn, carry, crumbs) if crumbs.any() else None
+    if done is None:
+        return vn, carry
+    state.vn = done[0]
+    return done[0], done[1]
 
 
 def _carry(old: VirtualNodeMesh | None, new: VirtualNodeMesh) -> tuple[np.ndarray, np.ndarray]:

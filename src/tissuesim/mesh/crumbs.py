@@ -1,0 +1,112 @@
+"""Crumbs: pieces a cut frees that are too small for the mesh to carry as bodies of their own.
+
+Where three cuts meet near one line the virtual node algorithm can free a piece of a few cubic
+millimetres made of element parts of fractions 1e-4 (2.3 mm^3 in the liver's lobe, 3e-4 of
+the cells it lies in). Its nodes are mostly virtual and held by that much mass and stiffness.
+With contact on it is also thinner than the cut faces' kerf (2 dhat): it has no contact
+surface of its own, only points (``contact/sliver_points.py``). Squeezed between the pieces
+round it, a Newton iteration moved it 0.2 m against their millimetres; CCD then cut each
+iteration's step, of the whole system, to a thousandth, and the step failed after six
+halvings.
+
+Such a piece stays attached to the piece it was part of before the cut that freed it. In the
+cells where both have a part, the crumb's copy takes the other's nodes wherever the two
+continue the same node of the mesh before the cut; nothing moves when they join. The crumb's
+copies and their fractions stay, so no mass or volume is lost, and the cuts keep their place.
+Its parts add no contact faces (it had none) and take none away: a copy whose region at the
+kerf's gap is empty covers nothing as a partner (``contact/cut_surface.py``). What changes is
+that the crumb no longer moves on its own. A thin slice that is not small (a grazing cut along
+the organ's side) is not a crumb: it comes off, in contact by points.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+
+from tissuesim.mesh.checks import signed_volumes
+from tissuesim.mesh.virtual_nodes import VirtualNodeMesh, node_pieces
+
+__all__ = ["CRUMB", "attach_crumbs", "small_pieces"]
+
+#: a piece is small when its volume is under this fraction of the mean volume of the cells
+#: it lies in (a crumb where cuts meet: 3e-4; a thin slice of one cut: its own fraction)
+CRUMB = 0.01
+
+
+def small_pieces(vn: VirtualNodeMesh, original_points: np.ndarray) -> np.ndarray:
+    """(copies,) whether each copy of ``vn`` belongs to a small piece: its volume under CRUMB
+    of the mean volume of the original cells its copies lie in. Only pieces of cut copies can
+    be (a whole cell is not small next to itself)."""
+    cells = vn.cells
+    label = node_pieces(cells, len(vn.points))[cells[:, 0]]
+    volume = np.abs(signed_volumes(original_points, _original_cells(vn)))
+    n = label.max() + 1
+    material = np.bincount(label, weights=vn.fraction * volume, minlength=n)
+    cell_volume = np.bincount(label, weights=volume, minlength=n)
+    count = np.bincount(label, minlength=n)
+    small = material < CRUMB * cell_volume / np.maximum(count, 1)
+    return small[label]
+
+
+def attach_crumbs(
+    vn: VirtualNodeMesh, carry: np.ndarray, crumbs: np.ndarray
+) -> tuple[VirtualNodeMesh, np.ndarray, np.ndarray] | None:
+    """Attach each piece of the copies ``crumbs`` (copies,) marks to the piece it was part of
+    before the cut: (the new mesh, the current node each of its nodes continues, the node of
+    the new mesh each node of ``vn`` became), or None when none can be (no piece shares a cell
+    with it and continues a node it continues). ``carry`` (points,): the node of the current
+    mesh each node of ``vn`` continues."""
+    n = len(vn.points)
+    label = node_pieces(vn.cells, n)
+    piece = label[vn.cells[:, 0]]
+    crumb_pieces = np.unique(piece[crumbs])
+    target = np.arange(n)
+    attached = False
+    for p in crumb_pieces:
+        pairs = _pairs(vn, carry, piece, p, crumb_pieces)
+        if pairs is None:
+            continue
+        mine, theirs = pairs
+        for a, b in zip(mine, theirs, strict=True):
+            keep, drop = (a, b) if a < b else (b, a)  # originals (first copies) stay first
+            target[target == target[drop]] = target[keep]
+        attached = True
+    if not attached:
+        return None
+    used = np.unique(target)
+    index = np.full(n, -1)
+    index[used] = np.arange(len(used))
+    renamed = index[target]
+    glued = replace(vn, points=vn.points[used], cells=renamed[vn.cells], origin=vn.origin[used])
+    return glued, carry[used], renamed
+
+
+def _pairs(vn, carry, piece, p, crumb_pieces) -> tuple[np.ndarray, np.ndarray] | None:
+    """The node pairs (crumb's, other piece's) that attach crumb piece ``p``: in the cells it
+    shares with one other piece (the one with the most such pairs), its copy's node and that
+    piece's copy's node at each vertex where both continue the same current node."""
+    mine = np.flatnonzero(piece == p)
+    others = np.flatnonzero(np.isin(vn.parent, vn.parent[mine]) & ~np.isin(piece, crumb_pieces))
+    if not len(others):
+        return None
+    best = None
+    for q in np.unique(piece[others]):
+        a_list, b_list = [], []
+        for c in others[piece[others] == q]:
+            for m in mine[vn.parent[mine] == vn.parent[c]]:
+                same = carry[vn.cells[m]] == carry[vn.cells[c]]
+                a_list.append(vn.cells[m][same])
+                b_list.append(vn.cells[c][same])
+        a, b = np.concatenate(a_list), np.concatenate(b_list)
+        a, first = np.unique(a, return_index=True)  # a crumb node joins one node only
+        b = b[first]
+        if len(a) and (best is None or len(a) > len(best[0])):
+            best = (a, b)
+    return best
+
+
+def _original_cells(vn: VirtualNodeMesh) -> np.ndarray:
+    """Each copy's vertices as original node indices (its parent cell's)."""
+    return vn.origin[vn.cells]

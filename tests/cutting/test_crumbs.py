@@ -1,0 +1,110 @@
+"""Crumbs (mesh/crumbs.py): a piece a cut frees that is too small for the mesh to carry on its
+own (under 1 % of the cells it lies in) and too thin for a contact surface stays attached to
+the piece it was part of. Three cuts that nearly meet in a line leave a prism 0.5 mm across in
+the middle: with contact on it stays with a neighbour (6 pieces, not 7), nothing moves when it
+joins, no gram is lost, the contact surface is the one without it, and the steps after it
+converge as they do without such a piece; without contact it is a piece of its own."""
+
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+import pytest
+from test_crossing_cuts_contact import tilted
+from test_cut_contact import block_on_floor
+from test_several_cuts_contact import closed_and_free
+
+import tissuesim.bodies.cut_state as cut_state
+from tissuesim.contact.sliver_points import bare_pieces
+from tissuesim.contact.surfaces import cut_faces
+from tissuesim.mesh.crumbs import CRUMB, attach_crumbs, small_pieces
+from tissuesim.mesh.virtual_nodes import PlanarCut, virtual_node_cut
+
+#: the prism's axis (along z, through the beam of block_on_floor) and its inradius (m)
+CENTRE, INRADIUS = np.array([0.47, 0.1, 0.15]), 3e-4
+
+
+def three_cuts() -> list[tuple[str, PlanarCut]]:
+    """Three planes along z, 120 degrees apart, each INRADIUS from the axis: a triangular
+    prism 1 mm on a side between them (dhat 1 mm: thinner than the kerf, 2 dhat)."""
+    cuts = []
+    for name, angle in zip("abc", (90.0, 210.0, 330.0), strict=True):
+        n = np.array([np.cos(np.radians(angle)), np.sin(np.radians(angle)), 0.0])
+        cuts.append((name, tilted(CENTRE + INRADIUS * n, n)))
+    return cuts
+
+
+def cut_three_ways(contact: bool = True):
+    """block_on_floor cut by the three planes, one after another: (the simulation, its mass
+    before, each cut's report, the warnings)."""
+    sim = block_on_floor()
+    if not contact:
+        sim.contact = None
+    mass = sim.system.bodies[0].mass.lumped.sum() / 3
+    reports = []
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        for name, cut in three_cuts():
+            before = sim.body_positions("body")
+            report = sim.cut_body(cut, name=name)
+            report["moved"] = np.abs(sim.body_positions("body") - before[report["origin"]]).max()
+            reports.append(report)
+        assert (sim.system.contact is not None) == contact  # built with the cut surface
+    return sim, mass, reports, [str(w.message) for w in caught]
+
+
+def test_a_crumb_where_three_cuts_meet_stays_with_the_piece_it_came_from():
+    sim, mass, reports, messages = cut_three_ways()
+    assert [r["pieces"] for r in reports] == [2, 4, 6]  # 7 with the crumb on its own
+    assert all(r["moved"] == 0.0 for r in reports)  # nothing moves when it joins
+    assert sim.system.bodies[0].mass.lumped.sum() / 3 == pytest.approx(mass, rel=1e-12)
+    assert not any("no contact surface" in m for m in messages)
+    # the crumb's element parts are all kept (as many copies as the cut without contact)
+    original = sim.bodies["body"].cut_state.original
+    alone = virtual_node_cut(original.points, original.cells, [c for _, c in three_cuts()])
+    assert len(sim.bodies["body"].cut_state.vn.cells) == len(alone.cells)
+
+
+def test_without_contact_the_crumb_is_a_piece_of_its_own():
+    _, _, reports, _ = cut_three_ways(contact=False)
+    assert [r["pieces"] for r in reports] == [2, 4, 7]
+
+
+def test_the_crumb_is_small_and_bare_and_its_host_keeps_its_contact_surface():
+    """The crumb is under CRUMB of its cells and has no surface; attached, the contact
+    surface is the same points and triangles as without it, closed and free of intersection."""
+    sim = block_on_floor()
+    original = sim.bodies["body"].mesh
+    vn = virtual_node_cut(original.points, original.cells, [cut for _, cut in three_cuts()])
+    mesh = vn.to_mesh(original)
+    W, tri = cut_faces(mesh, 1e-3)
+    small, bare = small_pieces(vn, original.points), bare_pieces(mesh, W, tri)
+    assert vn.n_pieces == 7 and (small & bare).any()
+    assert not (small & ~bare).any() and CRUMB == 0.01
+    glued, carry, renamed = attach_crumbs(vn, vn.origin, small & bare)  # all from the uncut
+    assert glued.n_pieces == 6 and np.array_equal(carry[renamed], vn.origin)
+    assert np.array_equal(glued.points[renamed], vn.points)  # a node joins a copy of itself
+    W2, tri2 = cut_faces(glued.to_mesh(original), 1e-3)
+    V, V2 = W @ mesh.points, W2 @ glued.points
+    assert len(tri2) == len(tri)
+    assert np.array_equal(np.unique(V, axis=0), np.unique(V2, axis=0))
+    assert closed_and_free(tri2, V2) == (True, True)
+
+
+def test_steps_after_the_crumb_converge_as_without_one(monkeypatch):
+    """The cut beam's outer pieces fall onto the floor: five steps, no intersection, 2-15
+    Newton iterations a step; with the crumb left on its own (contact by points, squeezed
+    between the pieces) the same steps took 15-79."""
+    sim, _, _, _ = cut_three_ways()
+    iterations = []
+    for _ in range(5):
+        iterations.append(sim.step().newton_iterations)
+        assert not sim.system.contact.intersecting(sim.state.x)
+    assert max(iterations) <= 20
+    monkeypatch.setattr(cut_state, "attach_crumbs_in_contact", lambda s, vn, c, d, b: (vn, c))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        loose, _, reports, _ = cut_three_ways()
+        assert reports[-1]["pieces"] == 7
+        assert max(loose.step().newton_iterations for _ in range(5)) > 20
