@@ -41,12 +41,18 @@ def small_pieces(vn: VirtualNodeMesh, original_points: np.ndarray) -> np.ndarray
     be (a whole cell is not small next to itself)."""
     cells = vn.cells
     label = node_pieces(cells, len(vn.points))[cells[:, 0]]
-    volume = np.abs(signed_volumes(original_points, _original_cells(vn)))
     n = label.max() + 1
-    material = np.bincount(label, weights=vn.fraction * volume, minlength=n)
-    cell_volume = np.bincount(label, weights=volume, minlength=n)
-    count = np.bincount(label, minlength=n)
-    small = material < CRUMB * cell_volume / np.maximum(count, 1)
+    whole = np.zeros(n, dtype=bool)
+    whole[label[vn.side == 0]] = True
+    candidate = ~whole[label]  # only the copies of pieces without a whole cell are measured
+    if not candidate.any():
+        return candidate
+    part = label[candidate]
+    volume = np.abs(signed_volumes(original_points, vn.origin[cells[candidate]]))
+    material = np.bincount(part, weights=vn.fraction[candidate] * volume, minlength=n)
+    cell_volume = np.bincount(part, weights=volume, minlength=n)
+    count = np.bincount(part, minlength=n)
+    small = ~whole & (material < CRUMB * cell_volume / np.maximum(count, 1))
     return small[label]
 
 
@@ -105,8 +111,3 @@ def _pairs(vn, carry, piece, p, crumb_pieces) -> tuple[np.ndarray, np.ndarray] |
         if len(a) and (best is None or len(a) > len(best[0])):
             best = (a, b)
     return best
-
-
-def _original_cells(vn: VirtualNodeMesh) -> np.ndarray:
-    """Each copy's vertices as original node indices (its parent cell's)."""
-    return vn.origin[vn.cells]
