@@ -408,6 +408,7 @@ class BodyCalls:
                 report = {"area_m2": blade.area, "new_area_m2": new,
                           "cells_cut": done["cells_cut"], "pieces": done["pieces"]}  # fmt: skip
                 force = blade.force(new, t0, self.time)
+            report.update(self._body_totals(blade.body))
             if ahead:
                 report["blade_contact"] = not blade.suspended
             if blade.obstacle is not None:  # and the bodies' contact force on the instrument
@@ -438,8 +439,17 @@ class BodyCalls:
             else:
                 area = 0.0 if b.cut_state is None else b.cut_state.area(name)
                 report = {"area_m2": area, "cells_cut": 0}
+            report.update(self._body_totals(tear.body))
             out[f"{tear.body}.{name}"] = report
         return out
+
+    def _body_totals(self, name: str) -> dict:
+        """A cut body's pieces (of material, crumbs not counted) and mass (kg) now, for every
+        step's cut report: the mass stays the uncut body's to round-off."""
+        b = self.bodies[name]
+        vn = None if b.cut_state is None else b.cut_state.vn
+        mass = float(b.model.mass.lumped.sum()) / b.mesh.dim
+        return {"pieces": 1 if vn is None else vn.n_pieces, "mass_kg": mass}
 
     def remove_body(self, name: str) -> None:
         """Take a body (and, for the tissue, its attachments and cuts) out, before the first

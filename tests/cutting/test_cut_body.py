@@ -244,9 +244,10 @@ def test_the_run_after_a_cut_writes_the_cut_mesh_with_its_material_fractions(tmp
 
 def test_a_blade_moving_through_the_beam_cuts_it_step_by_step_and_reports_its_force():
     """add_cut(body=...): a straight blade going down through the beam at x = 0.47 from t =
-    0.01 to 0.04 s; after each step the cells it has swept are cut; the beam parts on the last
-    step; the cut's area grows to the beam's section (0.04 m^2, rest) and the blade's force is
-    the toughness times the new area over its travel, upward (against its motion)."""
+    0.01 to 0.04 s; after each step the cells it has swept are cut; the beam parts at 0.04 s,
+    and every step reports the pieces and the mass (kg, kept); the cut's area grows to the
+    beam's section (0.04 m^2, rest) and the blade's force is the toughness times the new area
+    over its travel, upward (against its motion)."""
     sim = cantilever()
     mass = sim.model.mass.lumped.sum()
     G_c = 500.0  # J/m^2
@@ -256,9 +257,12 @@ def test_a_blade_moving_through_the_beam_cuts_it_step_by_step_and_reports_its_fo
         return np.array([[0.47, -0.5, z], [0.47, 0.7, z]])
 
     sim.add_cut(blade, 0.01, 0.04, body="body", name="scalpel", toughness=G_c)
-    records = [sim.step() for _ in range(5)]
+    records = [sim.step() for _ in range(8)]
     cuts = [r.extra["cuts"]["scalpel"] for r in records]
     assert [c["cells_cut"] for c in cuts][0] == 0  # t = 0.01: not started
+    # every step reports the body's pieces and mass, after the blade has stopped too
+    assert [c["pieces"] for c in cuts] == [1, 1, 1, 2, 2, 2, 2, 2]
+    assert [c["mass_kg"] for c in cuts] == pytest.approx([mass / 3] * 8, rel=1e-12)
     # the section's rest area, cut where the sagging beam is (its plane a little tilted in rest)
     assert cuts[-1]["pieces"] == 2 and cuts[-1]["area_m2"] == pytest.approx(0.04, rel=2e-3)
     assert sum(c["new_area_m2"] for c in cuts) == pytest.approx(cuts[-1]["area_m2"], rel=1e-12)

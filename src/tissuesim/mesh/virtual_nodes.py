@@ -34,6 +34,7 @@ passes again through a cell cut before.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
@@ -133,7 +134,7 @@ class VirtualNodeMesh:
         out[self.cells[self.material_slots]] = True
         return out
 
-    @property
+    @cached_property  # reported every step a body is cut (the mesh does not change)
     def n_pieces(self) -> int:
         """Connected pieces of material (cells joined through shared points)."""
         return _components(self.cells, len(self.points))
