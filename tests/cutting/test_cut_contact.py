@@ -194,11 +194,12 @@ def test_contact_energy_of_a_cut_body_matches_finite_differences():
 
 
 def test_a_sliver_thinner_than_the_gap_is_reported_as_in_contact_by_points():
-    """A cut 5 mm from the end of a bar with dhat = 10 mm leaves a sliver whose contact region
-    (shaved 1 dhat from the cut face) is empty: the rebuild warns that it has no contact
-    surface and is in contact by points (tests/cutting/test_sliver_contact.py); a cut 30 mm
-    from the end does not."""
-    for x0, bare in ((0.995, True), (0.97, False)):
+    """A cut 0.1 mm from the end of a bar with dhat = 10 mm leaves a sliver whose contact
+    region is empty even at dhat / 16 (contact/thin_pieces.py): the rebuild warns that it has
+    no contact surface and is in contact by points (tests/cutting/test_sliver_contact.py); a
+    cut 5 mm from the end leaves one that gets a surface of its own (empty at the gap, 1
+    dhat), and one 30 mm from the end a plain one."""
+    for x0, bare in ((0.9999, True), (0.995, False), (0.97, False)):
         sim = ts.Simulation(BOX, ts.NeoHookean(youngs_modulus=1e5, poisson_ratio=0.3),
                             density=1000.0, integrator="quasistatic", time_step=1.0)  # fmt: skip
         sim.fix(np.flatnonzero(BOX.points[:, 0] < 1e-9))
@@ -208,4 +209,5 @@ def test_a_sliver_thinner_than_the_gap_is_reported_as_in_contact_by_points():
             warnings.simplefilter("always")
             _ = sim.system
         messages = [str(w.message) for w in caught]
-        assert any("has no contact surface" in m and "points" in m for m in messages) == bare
+        warned = any("too thin for a contact surface" in m and "points" in m for m in messages)
+        assert warned == bare

@@ -1,7 +1,10 @@
-"""A piece of a cut body too thin for a contact surface (thinner than 2 dhat) is in contact by
-points (``contact/sliver_points.py``): it falls onto the floor and rests there with its weight
-on it instead of passing through; its points start outside every barrier; their barrier's
-derivatives match finite differences; the points cover a 2D sliver too."""
+"""A piece of a cut body too thin for a contact surface, even one built at the thin pieces'
+smallest scale (``contact/thin_pieces.py``), is in contact by points
+(``contact/sliver_points.py``): it falls onto the floor and rests there with its weight on it
+instead of passing through; its points start outside every barrier; their barrier's
+derivatives match finite differences; the points cover a 2D sliver too. The slivers here would
+get a surface of their own (``tests/cutting/test_thin_pieces.py``): every test takes that away
+(no scale is tried), so the points are what holds them."""
 
 from __future__ import annotations
 
@@ -15,6 +18,14 @@ import tissuesim as ts
 from tissuesim.contact.sliver_points import LIFT, MERGE
 
 DHAT = 1e-3  # block_on_floor's
+
+
+@pytest.fixture(autouse=True)
+def points_only(monkeypatch):
+    """No thin piece gets a surface of its own: contact points are all it has."""
+    import tissuesim.contact.thin_pieces as thin_pieces
+
+    monkeypatch.setattr(thin_pieces, "SCALES", ())
 
 
 def _sliver_on_floor(x0: float):

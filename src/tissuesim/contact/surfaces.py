@@ -187,6 +187,7 @@ def fem_surface(
 
     if model.mesh.cell_levels is not None:
         from tissuesim.contact.sliver_points import sliver_points
+        from tissuesim.contact.thin_pieces import thin_surfaces
 
         if choice is not None:
             raise InputError(
@@ -194,6 +195,8 @@ def fem_surface(
                 "is its whole boundary with the cut faces; leave its surface out of [contact]"
             )
         W, tri = cut_faces(model.mesh, dhat, blade)
+        # pieces thinner than the gap: a surface of their own at a smaller scale
+        W, tri = thin_surfaces(model.mesh, W, tri, dhat, lambda m, d: cut_faces(m, d, blade))
         areas = None
         points = sliver_points(model.mesh, W, tri, dhat)
         if points is not None:  # pieces too thin for a surface: contact points
@@ -267,15 +270,18 @@ def frame_surface(name: str, model, embedding, triangles, config: slice, tangent
 
 
 def _warn_bare_pieces(name: str, points: int) -> None:
-    """Warn that a piece of a cut body is too thin for a contact surface (thinner than twice
-    the gap of its cut faces: its region is shaved away) and is in contact by ``points``
-    points instead (``contact/sliver_points.py``)."""
+    """Warn that a piece of a cut body is too thin for a contact surface, even one built at
+    the thin pieces' smallest scale (``contact/thin_pieces.py``), and is in contact by
+    ``points`` points instead (``contact/sliver_points.py``)."""
     import warnings
 
+    from tissuesim.contact.thin_pieces import SCALES
+
+    smallest = f"dhat / {round(1 / min(SCALES))}" if SCALES else "dhat"
     warnings.warn(
-        f"contact surface of {name!r}: a piece of the cut body is thinner than twice the gap "
-        f"of its cut faces (2 dhat) and has no contact surface; it is in contact by {points} "
-        "points inside it instead, which an edge narrower than an element can pass between "
-        "(a smaller dhat gives it a surface)",
+        f"contact surface of {name!r}: a piece of the cut body is too thin for a contact "
+        f"surface (its cut faces {smallest} inside it leave nothing); it is in contact by "
+        f"{points} points inside it instead, which an edge narrower than an element can pass "
+        "between (a smaller dhat gives it a surface)",
         stacklevel=2,
     )

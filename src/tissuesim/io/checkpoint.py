@@ -38,6 +38,7 @@ import scipy.sparse as sp
 
 from tissuesim.errors import InputError
 from tissuesim.io.atomic import atomic_output, write_text_atomic
+from tissuesim.io.interrupts import deferred_interrupts
 
 __all__ = [
     "CHECKPOINT",
@@ -386,7 +387,9 @@ def restore(sim, meta: dict, arrays, history: list, path: Path) -> None:
 # -- files ----------------------------------------------------------------------------------
 def _write_npz(path: Path, meta: dict, arrays: dict) -> None:
     text = json.dumps(meta, allow_nan=True, default=_plain)
-    with atomic_output(path) as tmp, open(tmp, "wb") as f:
+    # a Ctrl-C waits for the file: raised inside savez, the zip's own cleanup replaced it by a
+    # ValueError ("an open writing handle"), and the run ended as an internal error
+    with deferred_interrupts(), atomic_output(path) as tmp, open(tmp, "wb") as f:
         np.savez(f, __meta__=np.array(text), **arrays)
         f.flush()
 
