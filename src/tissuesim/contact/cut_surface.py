@@ -29,6 +29,7 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
+from tissuesim.contact.edges import triangle_edges
 from tissuesim.contact.polygon_surface import polygon_surface
 from tissuesim.errors import InputError
 from tissuesim.mesh.polygon_clip import clip_polygons
@@ -105,7 +106,7 @@ def _intersecting(W: sp.csr_matrix, tri: np.ndarray, rest: np.ndarray) -> bool:
 
     V = np.asfortranarray(W @ rest)
     faces = np.asfortranarray(tri.astype(np.int32))
-    mesh = ipctk.CollisionMesh(V, ipctk.edges(faces), faces)
+    mesh = ipctk.CollisionMesh(V, triangle_edges(ipctk, faces), faces)
     return bool(ipctk.has_intersections(mesh, V))
 
 

@@ -31,6 +31,7 @@ import scipy.sparse as sp
 
 from tissuesim.contact.candidates import StepCandidates
 from tissuesim.contact.ccd_queries import CollisionQueries
+from tissuesim.contact.edges import triangle_edges
 from tissuesim.contact.friction_lag import FrictionLag
 from tissuesim.contact.sliver_points import weigh_points
 from tissuesim.contact.stiffness import AdaptiveStiffness
@@ -140,7 +141,7 @@ class ContactModel(FrictionLag, CollisionQueries):
         self.rest = np.vstack(rest)
         facets = np.ascontiguousarray(np.vstack(faces), dtype=np.int32)
         if self.dim == 3:
-            F, E = facets, ipctk.edges(facets)
+            F, E = facets, triangle_edges(ipctk, facets)
         else:  # 2D: the boundary edges, no faces (point-edge and edge-edge contact)
             F, E = np.zeros((0, 3), dtype=np.int32), facets
         self.mesh = ipctk.CollisionMesh(np.asfortranarray(self.rest), E, F)

@@ -19,6 +19,8 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
 
+from tissuesim.contact.edges import triangle_edges
+
 __all__ = ["REST_GAP", "rest_proximity_filter"]
 
 #: surface pairs of one piece closer than this many dhat at rest do not collide (all those
@@ -50,7 +52,7 @@ def rest_proximity_filter(ipctk, mesh, rest: np.ndarray, near: np.ndarray, dhat:
     local = local.reshape(touching.shape).astype(np.int32)
     V = np.asfortranarray(rest[used], dtype=float)
     if F.shape[0]:
-        part = ipctk.CollisionMesh(V, ipctk.edges(local), local)
+        part = ipctk.CollisionMesh(V, triangle_edges(ipctk, local), local)
     else:
         part = ipctk.CollisionMesh(V, local, np.zeros((0, 3), dtype=np.int32))
     close = ipctk.NormalCollisions()
