@@ -41,9 +41,14 @@ def bare_pieces(mesh, W: sp.spmatrix, tri: np.ndarray) -> np.ndarray:
     interpolated from."""
     from tissuesim.mesh.virtual_nodes import node_pieces
 
+    nodes = sp.csr_matrix(W)[np.unique(tri)].indices  # the nodes a surface vertex uses
+    used = np.zeros(mesh.n_points, dtype=bool)
+    used[nodes] = True
+    if used[mesh.cells].any(axis=1).all():  # a bare piece's cells use none: no such piece
+        return np.zeros(len(mesh.cells), dtype=bool)
     label = node_pieces(mesh.cells, mesh.n_points)
     held = np.zeros(label.max() + 1, dtype=bool)
-    held[label[sp.csr_matrix(W)[np.unique(tri)].indices]] = True
+    held[label[nodes]] = True
     return ~held[label[mesh.cells[:, 0]]]
 
 

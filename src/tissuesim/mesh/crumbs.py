@@ -27,7 +27,7 @@ from dataclasses import replace
 import numpy as np
 
 from tissuesim.mesh.checks import signed_volumes
-from tissuesim.mesh.virtual_nodes import VirtualNodeMesh, node_pieces
+from tissuesim.mesh.virtual_nodes import VirtualNodeMesh
 
 __all__ = ["CRUMB", "attach_crumbs", "small_pieces"]
 
@@ -41,7 +41,7 @@ def small_pieces(vn: VirtualNodeMesh, original_points: np.ndarray) -> np.ndarray
     of the mean volume of the original cells its copies lie in. Only pieces of cut copies can
     be (a whole cell is not small next to itself)."""
     cells = vn.cells
-    label = node_pieces(cells, len(vn.points))[cells[:, 0]]
+    label = vn.point_pieces[cells[:, 0]]
     n = label.max() + 1
     whole = np.zeros(n, dtype=bool)
     whole[label[vn.side == 0]] = True
@@ -66,8 +66,7 @@ def attach_crumbs(
     with it and continues a node it continues). ``carry`` (points,): the node of the current
     mesh each node of ``vn`` continues."""
     n = len(vn.points)
-    label = node_pieces(vn.cells, n)
-    piece = label[vn.cells[:, 0]]
+    piece = vn.point_pieces[vn.cells[:, 0]]
     crumb_pieces = np.unique(piece[crumbs])
     target = np.arange(n)
     attached = False

@@ -134,10 +134,15 @@ class VirtualNodeMesh:
         out[self.cells[self.material_slots]] = True
         return out
 
-    @cached_property  # reported every step a body is cut (the mesh does not change)
+    @cached_property  # the cut's report, its crumbs and every step's report ask for it
+    def point_pieces(self) -> np.ndarray:
+        """Each point's piece of material (``node_pieces``)."""
+        return node_pieces(self.cells, len(self.points))
+
+    @property
     def n_pieces(self) -> int:
         """Connected pieces of material (cells joined through shared points)."""
-        return _components(self.cells, len(self.points))
+        return int(np.count_nonzero(np.bincount(self.point_pieces[self.cells[:, 0]])))
 
     def to_mesh(self, mesh):
         """The cut as a ``Mesh`` of the original ``mesh``: its point sets hold every copy of
@@ -259,12 +264,6 @@ def node_pieces(cells: np.ndarray, n_points: int) -> np.ndarray:
     rows = np.repeat(cells[:, 0], k - 1)
     graph = coo_matrix((np.ones(m * (k - 1)), (rows, cells[:, 1:].ravel())), shape=(n_points,) * 2)
     return connected_components(graph, directed=False)[1]
-
-
-def _components(cells: np.ndarray, n_points: int) -> int:
-    """Connected components of cells joined through shared points."""
-    labels = node_pieces(cells, n_points)
-    return int(np.count_nonzero(np.bincount(labels[cells[:, 0]])))  # the labels used
 
 
 def _levels(x_cell, cells, cuts, d_all, taken, copy_cut, parent, side, origin) -> np.ndarray:
