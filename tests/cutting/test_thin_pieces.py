@@ -12,8 +12,8 @@ import numpy as np
 import pytest
 from test_cut_contact import G, across, block_on_floor
 from test_several_cuts_contact import closed_and_free
+from test_sliver_contact import strip_over_floor_2d
 
-import tissuesim as ts
 from tissuesim.contact.sliver_points import bare_pieces
 from tissuesim.contact.surfaces import cut_faces
 from tissuesim.contact.thin_pieces import SCALES, thin_surfaces
@@ -87,16 +87,7 @@ def test_a_2d_sliver_gets_a_closed_boundary_and_rests_on_a_floor_body():
     """A 0.5 mm slice of a 2D strip (its last 5 cm held, dhat 1 mm) gets a boundary of its own
     (every point starts one segment and ends one), falls 5 cm onto a floor body and rests
     there: the floor's support carries its weight (per metre of thickness) to 1e-3."""
-    material = ts.make_material("neo_hookean", youngs_modulus=1e6, poisson_ratio=0.3)
-    sim = ts.Simulation(integrator="backward_euler", time_step=0.01, gravity=(0.0, -G))
-    strip = sim.add_body("strip", ts.rectangle((0, 0.05), (1, 0.25), (10, 2)), material,
-                         density=1000.0)  # fmt: skip
-    floor = sim.add_body("floor", ts.rectangle((-0.1, -0.1), (1.6, 0), (17, 1)), material,
-                         density=1.0)  # fmt: skip
-    sim.fix("strip", np.flatnonzero(strip.mesh.points[:, 0] < 0.95), name="held")
-    sim.fix("floor", np.flatnonzero(floor.mesh.points[:, 1] < -0.1 + 1e-9), name="support")
-    sim.set_contact(dhat=DHAT)
-    sim.cut_body(across(0.9995), body="strip")
+    sim = strip_over_floor_2d()
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         contact = sim.system.contact
