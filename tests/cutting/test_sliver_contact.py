@@ -28,18 +28,25 @@ def points_only(monkeypatch):
     monkeypatch.setattr(thin_pieces, "SCALES", ())
 
 
-def _sliver_on_floor(x0: float):
+def sliver_on_floor(x0: float):
     """block_on_floor held rigid but for its last 5 cm, cut at x0 near its end: the sliver
-    beyond x0 (1 - x0 thick) falls 5 cm onto the floor."""
+    beyond x0 (1 - x0 thick) falls 5 cm onto the floor. (sim, its contact model, the
+    warnings of the rebuild)."""
     sim = block_on_floor()
     sim.fix(np.flatnonzero(sim.mesh.points[:, 0] < 0.95), name="held")
     sim.cut_body(across(x0))  # at rest: the levels are distances at rest
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         contact = sim.system.contact
+    return sim, contact, [str(w.message) for w in caught]
+
+
+def _sliver_on_floor(x0: float):
+    """sliver_on_floor with the contact surface and its points."""
+    sim, contact, messages = sliver_on_floor(x0)
     surface = contact.surfaces[0]
     points = np.flatnonzero(np.isfinite(surface.point_areas))
-    return sim, contact, surface, points, [str(w.message) for w in caught]
+    return sim, contact, surface, points, messages
 
 
 def _point_positions(sim, contact, surface, points):

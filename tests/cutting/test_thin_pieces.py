@@ -12,26 +12,13 @@ import numpy as np
 import pytest
 from test_cut_contact import G, across, block_on_floor
 from test_several_cuts_contact import closed_and_free
-from test_sliver_contact import strip_over_floor_2d
+from test_sliver_contact import sliver_on_floor, strip_over_floor_2d
 
 from tissuesim.contact.sliver_points import bare_pieces
 from tissuesim.contact.surfaces import cut_faces
 from tissuesim.contact.thin_pieces import SCALES, thin_surfaces
 
 DHAT = 1e-3  # block_on_floor's
-
-
-def sliver_on_floor(x0: float):
-    """block_on_floor held rigid but for its last 5 cm, cut at x0 near its end: the sliver
-    beyond x0 (1 - x0 thick) falls 5 cm onto the floor. (sim, its contact model, the
-    warnings of the rebuild)."""
-    sim = block_on_floor()
-    sim.fix(np.flatnonzero(sim.mesh.points[:, 0] < 0.95), name="held")
-    sim.cut_body(across(x0))  # at rest: the levels are distances at rest
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always")
-        contact = sim.system.contact
-    return sim, contact, [str(w.message) for w in caught]
 
 
 @pytest.mark.parametrize("x0, scale", [(0.9995, SCALES[1]), (0.9985, SCALES[0])])
