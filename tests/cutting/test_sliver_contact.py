@@ -195,10 +195,9 @@ def test_a_point_weighs_as_a_surface_vertex_of_its_area():
     assert barrier(weighed, mesh, V) == pytest.approx(2.5e-4 * barrier(plain, mesh, V))
 
 
-def test_a_sliver_with_friction_stands_on_its_edge_with_its_weight():
-    """The 0.5 mm slice with friction 0.5 on the floor: the friction, built from the points'
-    weighed collisions, keeps it standing on its edge; the floor carries its weight to 1e-3
-    with a sideways force within the friction cone."""
+def slice_with_friction() -> ts.Simulation:
+    """block_on_floor's beam held but for its last 5 cm, friction 0.5 on the floor, cut 0.5 mm
+    from its end: the slice is to fall onto its edge."""
     from tissuesim.contact.obstacles import plane
 
     mesh = ts.box((0.0, 0.0, 0.05), (1.0, 0.2, 0.25), (10, 2, 2))
@@ -209,6 +208,14 @@ def test_a_sliver_with_friction_stands_on_its_edge_with_its_weight():
     sim.set_contact(dhat=DHAT, friction=0.5)
     sim.add_obstacle("floor", plane((0.5, 0.1, 0.0), (0, 0, 1), 3.0))
     sim.cut_body(across(0.9995))
+    return sim
+
+
+def test_a_sliver_with_friction_stands_on_its_edge_with_its_weight():
+    """The 0.5 mm slice with friction 0.5 on the floor: the friction, built from the points'
+    weighed collisions, keeps it standing on its edge; the floor carries its weight to 1e-3
+    with a sideways force within the friction cone."""
+    sim = slice_with_friction()
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         contact = sim.system.contact

@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 from test_cut_contact import G, across, block_on_floor
 from test_several_cuts_contact import closed_and_free
-from test_sliver_contact import sliver_on_floor, strip_over_floor_2d
+from test_sliver_contact import slice_with_friction, sliver_on_floor, strip_over_floor_2d
 
 from tissuesim.contact.sliver_points import bare_pieces
 from tissuesim.contact.surfaces import cut_faces
@@ -92,3 +92,24 @@ def test_a_2d_sliver_gets_a_closed_boundary_and_rests_on_a_floor_body():
         support.append(record.extra["forces"]["support"][1] - floor_weight)
     weight = 1000.0 * 0.2 * 0.0005 * G
     assert np.median(support[-20:]) == pytest.approx(weight, rel=1e-3)
+
+
+def test_a_thin_slice_with_friction_stands_on_its_edge_with_its_weight():
+    """The 0.5 mm slice with friction 0.5 on the floor, its own surface in contact: it stands
+    on its edge, the floor carrying its weight to 1e-3 with a sideways force within the
+    friction cone, and no surface passes through another."""
+    sim = slice_with_friction()
+    contact = sim.system.contact
+    surface = contact.surfaces[0]
+    assert surface.point_areas is None  # a surface, no points
+    tri = surface.triangles
+    sliver = np.unique(tri[(surface.rest[tri][:, :, 0] > 0.9995).all(axis=1)])
+    for _ in range(60):
+        record = sim.step()
+        assert not contact.intersecting(sim.state.x)
+    floor = np.array(record.extra["forces"]["floor"])
+    weight = 1000.0 * 0.2 * 0.2 * 0.0005 * G
+    assert floor[2] == pytest.approx(weight, rel=1e-3)
+    assert 0.0 < np.hypot(floor[0], floor[1]) <= 0.5 * floor[2]
+    x = contact.vertices(sim.state.x)[sliver, 0]
+    assert np.ptp(x) < 1e-3  # still upright: its surface in one vertical slab
