@@ -444,8 +444,8 @@ class BodyCalls:
         return out
 
     def _body_totals(self, name: str) -> dict:
-        """A cut body's pieces (of material, crumbs not counted) and mass (kg) now, for every
-        step's cut report: the mass stays the uncut body's to round-off."""
+        """A cut body's pieces (of material, crumbs not counted) and mass (kg; in 2D per metre
+        of thickness) now, for every step's cut report: the uncut body's to round-off."""
         b = self.bodies[name]
         vn = None if b.cut_state is None else b.cut_state.vn
         mass = float(b.model.mass.lumped.sum()) / b.mesh.dim
