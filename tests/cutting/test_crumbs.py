@@ -18,7 +18,7 @@ from test_several_cuts_contact import closed_and_free
 import tissuesim.bodies.cut_state as cut_state
 from tissuesim.contact.sliver_points import bare_pieces
 from tissuesim.contact.surfaces import cut_faces
-from tissuesim.mesh.crumbs import CRUMB, attach_crumbs, small_pieces
+from tissuesim.mesh.crumbs import CRUMB, attach_crumbs, joined, small_pieces
 from tissuesim.mesh.virtual_nodes import PlanarCut, virtual_node_cut
 
 #: the prism's axis (along z, through the beam of block_on_floor) and its inradius (m)
@@ -85,6 +85,8 @@ def test_the_crumb_is_small_and_bare_and_its_host_keeps_its_contact_surface():
     glued, carry, renamed = attach_crumbs(vn, vn.origin, small & bare)  # all from the uncut
     assert glued.n_pieces == 6 and np.array_equal(carry[renamed], vn.origin)
     assert np.array_equal(glued.points[renamed], vn.points)  # a node joins a copy of itself
+    n = original.n_points
+    assert np.array_equal(glued.origin[:n], np.arange(n))  # the originals stay first
     W2, tri2 = cut_faces(glued.to_mesh(original), 1e-3)
     V, V2 = W @ mesh.points, W2 @ glued.points
     assert len(tri2) == len(tri)
@@ -108,3 +110,11 @@ def test_steps_after_the_crumb_converge_as_without_one(monkeypatch):
         loose, _, reports, _ = cut_three_ways()
         assert reports[-1]["pieces"] == 7
         assert max(loose.step().newton_iterations for _ in range(5)) > 20
+
+
+def test_joined_nodes_take_the_smallest_of_their_class():
+    """The node a class of joined nodes becomes is its smallest, whatever order the pairs
+    come in: an original node (index below every copy's) is never dropped for a copy. Joining
+    (2, 7) then (5, 7) used to make 2 and 7 into 5."""
+    target = joined(9, np.array([2, 5, 8]), np.array([7, 7, 6]))
+    assert target.tolist() == [0, 1, 2, 3, 4, 2, 6, 2, 6]

@@ -25,11 +25,13 @@ from __future__ import annotations
 from dataclasses import replace
 
 import numpy as np
+import scipy.sparse as sp
+from scipy.sparse.csgraph import connected_components
 
 from tissuesim.mesh.checks import signed_volumes
 from tissuesim.mesh.virtual_nodes import VirtualNodeMesh
 
-__all__ = ["CRUMB", "attach_crumbs", "small_pieces"]
+__all__ = ["CRUMB", "attach_crumbs", "joined", "small_pieces"]
 
 #: a piece is small when its volume is under this fraction of the mean volume of the cells
 #: it lies in (a crumb where cuts meet: 3e-4; a thin slice of one cut: its own fraction)
@@ -68,19 +70,11 @@ def attach_crumbs(
     n = len(vn.points)
     piece = vn.point_pieces[vn.cells[:, 0]]
     crumb_pieces = np.unique(piece[crumbs])
-    target = np.arange(n)
-    attached = False
-    for p in crumb_pieces:
-        pairs = _pairs(vn, carry, piece, p, crumb_pieces)
-        if pairs is None:
-            continue
-        mine, theirs = pairs
-        for a, b in zip(mine, theirs, strict=True):
-            keep, drop = (a, b) if a < b else (b, a)  # originals (first copies) stay first
-            target[target == target[drop]] = target[keep]
-        attached = True
-    if not attached:
+    joins = [_pairs(vn, carry, piece, p, crumb_pieces) for p in crumb_pieces]
+    joins = [pair for pair in joins if pair is not None]
+    if not joins:
         return None
+    target = joined(n, np.concatenate([a for a, _ in joins]), np.concatenate([b for _, b in joins]))
     used = np.unique(target)
     index = np.full(n, -1)
     index[used] = np.arange(len(used))
@@ -111,3 +105,14 @@ def _pairs(vn, carry, piece, p, crumb_pieces) -> tuple[np.ndarray, np.ndarray] |
         if len(a) and (best is None or len(a) > len(best[0])):
             best = (a, b)
     return best
+
+
+def joined(n: int, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """(n,) each node's node once nodes a[i] and b[i] are made one: the smallest of its class,
+    so a node of the original mesh (the first copy of itself, its index below any copy's)
+    stays where it was and the points keep the originals first."""
+    graph = sp.coo_matrix((np.ones(len(a)), (a, b)), shape=(n, n))
+    _, label = connected_components(graph, directed=False)
+    smallest = np.full(label.max() + 1, n)
+    np.minimum.at(smallest, label, np.arange(n))
+    return smallest[label]
