@@ -133,31 +133,38 @@ def _exposed_faces(cells: np.ndarray, levels: np.ndarray, gap: float):
     ``levels`` (m, C, 4) each copy's levels (+inf: none)."""
     m, C, _ = levels.shape
     fnodes = cells[:, _TET_FACES].reshape(-1, 3)  # (4m, 3), outward order
-    flev = levels[:, :, _TET_FACES].transpose(0, 2, 1, 3).reshape(4 * m, C, 3)
     order = np.argsort(fnodes, axis=1)
     snodes = np.take_along_axis(fnodes, order, axis=1)  # sorted: partners align node by node
-    slev = np.take_along_axis(flev, order[:, None, :], axis=2)
     _, group, size = unique_rows(snodes, return_inverse=True, return_counts=True)
     by_group = np.argsort(group, kind="stable")
     start = np.concatenate([[0], np.cumsum(size)])
     most = int(size.max(initial=1))
-    finite = np.all(np.isfinite(slev), axis=2)  # (4m, C)
-    # a copy whose level is gap all over a face and lower at the opposite vertex (nodes
-    # snapped onto the level set) holds no volume next to it: its face is not exposed, and as
-    # a partner it covers nothing (face i of a cell is the one opposite its vertex i)
-    opposite = levels.transpose(0, 2, 1).reshape(4 * m, C)
-    hollow = np.any(finite & np.all(slev == gap, axis=2) & (opposite < gap), axis=1)
+    # a copy's levels are finite at all its vertices or at none (+inf: no such level)
+    finite = np.repeat(np.isfinite(levels[:, :, 0]), 4, axis=0)  # (4m, C)
     # faces away from every cut (no copy holding them has a level): inside where two copies
-    # share them, else whole boundary faces; only the others are looked at below
+    # share them, else whole boundary faces; only the others (``sub``, most faces are not)
+    # are looked at below, and their levels gathered alone
     near = np.bincount(group, weights=finite.any(axis=1), minlength=len(size)) > 0
     sub = np.flatnonzero(near[group])
     covered = size[group] >= 2
     covered[sub] = False
+    at = np.full(4 * m, -1)
+    at[sub] = np.arange(len(sub))
+    cell, face = np.divmod(sub, 4)
+    s_lev = levels[cell[:, None, None], np.arange(C)[None, :, None], _TET_FACES[face][:, None, :]]
+    s_lev = np.take_along_axis(s_lev, order[sub][:, None, :], axis=2)  # (sub, C, 3) sorted
+    s_fin, s_group = finite[sub], group[sub]
+    # a copy whose level is gap all over a face and lower at the opposite vertex (nodes
+    # snapped onto the level set) holds no volume next to it: its face is not exposed, and as
+    # a partner it covers nothing (face i of a cell is the one opposite its vertex i)
+    opposite = levels[cell, :, face]  # (sub, C)
+    s_hollow = np.any(s_fin & np.all(s_lev == gap, axis=2) & (opposite < gap), axis=1)
+    hollow = np.zeros(4 * m, dtype=bool)
+    hollow[sub] = s_hollow
     # constraints per face near a cut, in the sorted node order: each own level - gap >= 0,
     # and for each partner (a copy holding the same face nodes) gap - level_p >= 0 for its one
     # level that is not also one of the face's own (the others hold wherever the own ones
     # do): its region is left out; a partner with no such level covers the face entirely
-    s_lev, s_fin, s_group = slev[sub], finite[sub], group[sub]
     constraints = [s_lev[:, i] - gap for i in range(C)]
     rows = np.arange(len(sub))
     several: dict = {}  # face (row of sub) -> [partner levels - gap (k, 3): its region >= 0]
@@ -165,7 +172,7 @@ def _exposed_faces(cells: np.ndarray, levels: np.ndarray, gap: float):
         has = j < size[s_group]
         member = np.where(has, by_group[np.minimum(start[s_group] + j, len(by_group) - 1)], 0)
         other = has & (member != sub) & ~hollow[member]
-        plev, pfin = slev[member], finite[member]
+        plev, pfin = s_lev[np.maximum(at[member], 0)], s_fin[np.maximum(at[member], 0)]
         # partner level a holds on the whole face, or is one of the face's own
         own = np.all(plev >= gap, axis=2)
         for b in range(C):
@@ -184,7 +191,8 @@ def _exposed_faces(cells: np.ndarray, levels: np.ndarray, gap: float):
         pick = np.argmax(remaining, axis=1)
         lev = np.where((other & (n_left == 1))[:, None], plev[rows, pick], -np.inf)
         constraints.append(gap - lev)  # -inf: no constraint
-    empty = np.any(np.all(slev - gap < 0.0, axis=2), axis=1)
+    empty = np.zeros(4 * m, dtype=bool)
+    empty[sub] = np.any(np.all(s_lev - gap < 0.0, axis=2), axis=1)
     live = ~covered & ~empty & ~hollow  # some of it can be exposed
     odd = sub[list(several)]
     live[odd] = False
@@ -196,8 +204,6 @@ def _exposed_faces(cells: np.ndarray, levels: np.ndarray, gap: float):
     W[np.arange(len(idx))[:, None], np.arange(3)[None, :], inverse_order] = 1.0
     count = np.full(len(idx), 3)
     # only faces some constraint cuts into are clipped (most faces are whole: away from a cut)
-    at = np.full(4 * m, -1)
-    at[sub] = np.arange(len(sub))
     mine = np.flatnonzero(at[idx] >= 0)  # live faces near a cut
     values = [np.where(np.isfinite(v), v, 1.0) for v in (c[at[idx[mine]]] for c in constraints)]
     cut_into = np.any([np.any(v < 0.0, axis=1) for v in values], axis=0)

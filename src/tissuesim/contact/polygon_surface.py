@@ -239,48 +239,67 @@ def _rings(n_points, corner, count, lo, hi, p_lo, p_hi, p_w, inserts: dict):
         # along one mesh edge: both corners' nodes within {e_lo, e_hi}, and two nodes in all
         along = np.all((ends == e_lo[..., None]) | (ends == e_hi[..., None]), axis=2)
         along &= (e_lo != e_hi) & valid
-        split = along & (e_lo >= 0) & np.isin(e_lo * n_points + e_hi, sorted_key)
+        maybe = along & (e_lo >= 0)
+        key = e_lo[maybe] * n_points + e_hi[maybe]
+        at = np.minimum(np.searchsorted(sorted_key, key), len(sorted_key) - 1)
+        split[maybe] = sorted_key[at] == key
     plain = alive & ~split.any(axis=1)
     if inserts:
         plain[[poly for poly, _ in inserts]] = False
-    mended_rows = []
-    for poly in np.flatnonzero(alive & ~plain):  # few: polygons with a T-junction to mend
-        ring = []
-        n = int(count[poly])
-        for i in range(n):
-            a = int(corner[poly, i])
-            ring.append(a)
-            ring.extend(inserts.get((int(poly), i), []))
-            if not split[poly, i]:
-                continue
-            b = int(corner[poly, (i + 1) % n])
-            e0 = int(min(p_lo[a], p_lo[b]))
-            e1 = int(max(p_hi[a], p_hi[b]))
-            wa, wb = _along(a, e0, e1, p_lo, p_w), _along(b, e0, e1, p_lo, p_w)
-            key = e0 * n_points + e1
-            run = by_edge[
-                np.searchsorted(sorted_key, key) : np.searchsorted(sorted_key, key, "right")
-            ]
-            w = p_w[run]  # ascending
-            inside = run[(w > min(wa, wb) + _MERGE) & (w < max(wa, wb) - _MERGE)]
-            ring.extend((inside[::-1] if wa > wb else inside).tolist())
-        mended_rows.append(ring)
-    L = max([K] + [len(r) for r in mended_rows])
-    rings = np.full((int(plain.sum()) + len(mended_rows), L), -1)
-    rings[: int(plain.sum()), :K] = corner[plain]
-    for i, r in enumerate(mended_rows):
-        rings[int(plain.sum()) + i, : len(r)] = r
-    size = np.concatenate([count[plain], [len(r) for r in mended_rows]]).astype(np.int64)
-    mended = np.arange(len(rings)) >= int(plain.sum())
+    # polygons with a T-junction to mend: each corner, then the points inserted after it
+    # (across a face, ``inserts``; along a split mesh edge, in order from it to the next)
+    fix = np.flatnonzero(alive & ~plain)
+    n_fix = count[fix]
+    poly = np.repeat(fix, n_fix)
+    side = np.arange(int(n_fix.sum())) - np.repeat(np.cumsum(n_fix) - n_fix, n_fix)
+    a = corner[poly, side]
+    parts = [(poly, side, np.zeros(len(poly), dtype=np.int64), a)]
+    for (q, i), points in inserts.items():  # few: where two cuts meet
+        if not alive[q]:
+            continue
+        k = len(points)
+        parts.append((np.full(k, q), np.full(k, i), 1 + np.arange(k), np.asarray(points)))
+    on = split[poly, side]
+    if on.any():
+        q, i, a = poly[on], side[on], a[on]
+        b = corner[q, (i + 1) % count[q]]
+        e0, e1 = np.minimum(p_lo[a], p_lo[b]), np.maximum(p_hi[a], p_hi[b])
+        wa, wb = _along(a, e0, p_lo, p_w), _along(b, e0, p_lo, p_w)
+        key = e0 * n_points + e1
+        first = np.searchsorted(sorted_key, key)
+        run = np.searchsorted(sorted_key, key, "right") - first
+        owner = np.repeat(np.arange(len(q)), run)
+        point = by_edge[
+            np.repeat(first, run) + np.arange(int(run.sum())) - np.repeat(np.cumsum(run) - run, run)
+        ]
+        w = p_w[point]  # ascending within each run
+        lo_w, hi_w = np.minimum(wa, wb)[owner], np.maximum(wa, wb)[owner]
+        inside = (w > lo_w + _MERGE) & (w < hi_w - _MERGE)
+        owner, point, w = owner[inside], point[inside], w[inside]
+        # after the inserts across faces; from a towards b (descending where wa > wb)
+        rank = np.where(wa[owner] > wb[owner], -w, w)
+        parts.append((q[owner], i[owner], 1 + len(p_lo) + rank, point))
+    q_all, i_all, sub_all, pt_all = (np.concatenate(x) for x in zip(*parts, strict=True))
+    by = np.lexsort((sub_all, i_all, q_all))
+    q_all, pt_all = q_all[by], pt_all[by]
+    row = np.searchsorted(fix, q_all)  # the mended polygon's row among them
+    sizes = np.bincount(row, minlength=len(fix))
+    slot = np.arange(len(row)) - np.repeat(np.cumsum(sizes) - sizes, sizes)
+    n_plain = int(plain.sum())
+    L = max(K, int(sizes.max(initial=0)))
+    rings = np.full((n_plain + len(fix), L), -1)
+    rings[:n_plain, :K] = corner[plain]
+    rings[n_plain + row, slot] = pt_all
+    size = np.concatenate([count[plain], sizes]).astype(np.int64)
+    mended = np.arange(len(rings)) >= n_plain
     return rings, size, mended
 
 
-def _along(j: int, e0: int, e1: int, p_lo: np.ndarray, p_w: np.ndarray) -> float:
-    """Where point j lies along mesh edge (e0, e1): 0 at node e0, 1 at node e1, else its
-    weight (a point inside that edge)."""
-    if p_w[j] == 0.0:  # a node
-        return 0.0 if p_lo[j] == e0 else 1.0
-    return float(p_w[j])
+def _along(j: np.ndarray, e0: np.ndarray, p_lo: np.ndarray, p_w: np.ndarray) -> np.ndarray:
+    """Where points j lie along their mesh edges (e0, e1): 0 at node e0, 1 at node e1, else
+    their weights (points inside that edge)."""
+    node = p_w[j] == 0.0
+    return np.where(node, np.where(p_lo[j] == e0, 0.0, 1.0), p_w[j])
 
 
 def _merge(W: sp.csr_matrix, ring: np.ndarray, size: np.ndarray, rest: np.ndarray, merge: float):

@@ -186,7 +186,7 @@ def fem_surface(
     from tissuesim.contact.pairs import contact_facets
 
     if model.mesh.cell_levels is not None:
-        from tissuesim.contact.sliver_points import sliver_points
+        from tissuesim.contact.sliver_points import bare_pieces, sliver_points
         from tissuesim.contact.thin_pieces import thin_surfaces
 
         if choice is not None:
@@ -195,10 +195,11 @@ def fem_surface(
                 "is its whole boundary with the cut faces; leave its surface out of [contact]"
             )
         W, tri = cut_faces(model.mesh, dhat, blade)
-        # pieces thinner than the gap: a surface of their own at a smaller scale
-        W, tri = thin_surfaces(model.mesh, W, tri, dhat, lambda m, d: cut_faces(m, d, blade))
-        areas = None
-        points = sliver_points(model.mesh, W, tri, dhat)
+        areas, points = None, None
+        if bare_pieces(model.mesh, W, tri).any():  # pieces with no surface (most cuts: none)
+            # pieces thinner than the gap: a surface of their own at a smaller scale
+            W, tri = thin_surfaces(model.mesh, W, tri, dhat, lambda m, d: cut_faces(m, d, blade))
+            points = sliver_points(model.mesh, W, tri, dhat)
         if points is not None:  # pieces too thin for a surface: contact points
             _warn_bare_pieces(name, len(points[1]))
             areas = np.concatenate([np.full(W.shape[0], np.nan), points[1]])
