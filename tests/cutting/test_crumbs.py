@@ -94,6 +94,26 @@ def test_the_crumb_is_small_and_bare_and_its_host_keeps_its_contact_surface():
     assert closed_and_free(tri2, V2) == (True, True)
 
 
+@pytest.mark.parametrize("dhat", [1e-3, 1e-5])
+def test_small_pieces_are_found_bare_from_the_surface_round_them_as_from_the_whole(dhat):
+    """``bare_small_pieces`` builds the contact surface of the cells round the small pieces
+    only: it finds the crumb bare at dhat 1 mm as the whole surface does, and at dhat 0.01 mm
+    (a kerf thinner than the prism) neither finds it bare; the same with a blade's gap."""
+    sim = block_on_floor()
+    state = cut_state.CutState.of_model(sim.bodies["body"].model)
+    vn = virtual_node_cut(
+        state.original.points, state.original.cells, [cut for _, cut in three_cuts()]
+    )
+    small = small_pieces(vn, state.original.points)
+    mesh = vn.to_mesh(state.original)
+    for blade in (False, True):
+        W, tri = cut_faces(mesh, dhat, blade)
+        whole = small & bare_pieces(mesh, W, tri)
+        local = cut_state.bare_small_pieces(state, vn, small, dhat, blade)
+        assert np.array_equal(local, whole)
+        assert whole.any() == (dhat == 1e-3)
+
+
 def test_steps_after_the_crumb_converge_as_without_one(monkeypatch):
     """The cut beam's outer pieces fall onto the floor: five steps, no intersection, 2-15
     Newton iterations a step; with the crumb left on its own (contact by points, squeezed

@@ -21,7 +21,7 @@ from dataclasses import replace
 import numpy as np
 import scipy.sparse as sp
 
-__all__ = ["SCALES", "thin_surfaces"]
+__all__ = ["SCALES", "cells_of", "thin_surfaces"]
 
 #: the fractions of dhat at which a thin piece's surface is tried, in turn
 SCALES = (0.25, 1.0 / 16.0)
@@ -50,7 +50,7 @@ def thin_surfaces(
     for piece in np.unique(label[bare]):
         cells = np.flatnonzero(label == piece)
         for scale in SCALES:
-            W_p, f_p = build(_cells_of(mesh, cells), scale * dhat)
+            W_p, f_p = build(cells_of(mesh, cells), scale * dhat)
             if len(f_p):
                 used = np.unique(f_p)
                 index = np.full(W_p.shape[0], -1)
@@ -64,7 +64,7 @@ def thin_surfaces(
     return sp.vstack(blocks, format="csr"), np.concatenate(pieces)
 
 
-def _cells_of(mesh, cells: np.ndarray):
+def cells_of(mesh, cells: np.ndarray):
     """The mesh with only ``cells`` (all its points kept, so weights stay over its nodes)."""
     more = None
     if mesh.cell_more_levels is not None:
