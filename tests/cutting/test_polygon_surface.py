@@ -6,8 +6,9 @@ sliver polygon along a mesh edge never leaves a folded triangle; points inserted
 from __future__ import annotations
 
 import numpy as np
+import scipy.sparse as sp
 
-from tissuesim.contact.polygon_surface import _loops, polygon_surface
+from tissuesim.contact.polygon_surface import _face_junctions, _loops, polygon_surface
 
 A, B, C, D, E = range(5)
 REST = np.array([[0, 0, 0], [0, 10, 0], [-10, 0, 0], [-2.5, -1, 0], [3, 2, 0]], dtype=float)
@@ -84,3 +85,23 @@ def test_a_ring_that_meets_itself_splits_into_loops():
     assert _loops([1, 2, 3, 1, 4, 5]) == [[1, 2, 3], [1, 4, 5]]
     assert _loops([1, 2, 3]) == [[1, 2, 3]]
     assert _loops([1, 2, 1, 3, 4]) == [[1, 3, 4]]  # a loop of two points is no polygon
+
+
+def test_points_inside_a_face_on_a_side_across_it_are_inserted_in_order():
+    """A side from the middle of edge 0-1 to node 2 crosses the face (0, 1, 2): the points
+    inside that face on it (t = 0.5 and 0.25 along it) go in after its first corner, nearest
+    first; a point inside the face off the side, and the sides along edges, get none."""
+    W = sp.csr_matrix(
+        np.array(
+            [
+                [0.5, 0.5, 0.0],  # 0: a, on edge 0-1
+                [0.0, 0.0, 1.0],  # 1: b, node 2
+                [1.0, 0.0, 0.0],  # 2: c, node 0
+                [0.25, 0.25, 0.5],  # 3: inside the face, halfway from a to b
+                [0.375, 0.375, 0.25],  # 4: a quarter of the way
+                [0.5, 0.25, 0.25],  # 5: inside the face, off the side
+            ]
+        )
+    )
+    corner = np.array([[0, 1, 2]])
+    assert _face_junctions(W, corner, np.array([3]), n_edge=3) == {(0, 0): [4, 3]}

@@ -27,7 +27,7 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
 
-from tissuesim.mesh.rows import unique_rows
+from tissuesim.mesh.rows import row_keys, unique_rows
 
 __all__ = ["merge_weighted_points", "polygon_surface"]
 
@@ -172,47 +172,61 @@ def _face_junctions(W: sp.csr_matrix, corner: np.ndarray, count: np.ndarray, n_e
     """{(polygon, side i): points to insert between its corners i and i+1, in order}: a
     polygon side across a face of a cell (its ends' nodes three) that passes through points
     inside that face (where two cuts meet, the sections and faces of the parts on either
-    side of one cut end there), so that no T-junction is left."""
+    side of one cut end there), so that no T-junction is left. In array passes: where cuts
+    nearly coincide there are thousands of such points."""
     if W.shape[0] == n_edge:
         return {}
     P, K = corner.shape
     support = (W != 0).astype(np.int8).tocsr()
-    face_pts = np.arange(n_edge, W.shape[0])
-    key_of = {}
-    for q in face_pts:  # few
-        cols = tuple(support.indices[support.indptr[q] : support.indptr[q + 1]].tolist())
-        if len(cols) == 3:
-            key_of.setdefault(tuple(sorted(cols)), []).append(int(q))
-    if not key_of:
+    support.sort_indices()
+    # the points inside faces, by the face's three nodes (sorted)
+    q = np.arange(n_edge, W.shape[0])
+    q = q[np.diff(support.indptr)[q] == 3]
+    if not len(q):
         return {}
+    q_nodes = support.indices[support.indptr[q][:, None] + np.arange(3)]
+    # polygon sides whose two ends span three nodes: across a face
     valid = np.arange(K)[None, :] < count[:, None]
     nxt = np.where(np.arange(K)[None, :] + 1 < count[:, None], np.arange(K) + 1, 0)
     pr, pc = np.nonzero(valid)
     a, b = corner[pr, pc], corner[pr, nxt[pr, pc]]
     union = ((support[a] + support[b]) != 0).tocsr()
+    union.sort_indices()
     three = np.flatnonzero(np.diff(union.indptr) == 3)
-    faces = set(key_of)
+    s_nodes = union.indices[union.indptr[three][:, None] + np.arange(3)]
+    # each side against the points inside its face: joined on the face's key
+    keys = row_keys(np.concatenate([q_nodes, s_nodes]))
+    if keys is None:  # node numbers too wide for one key: rank the rows instead
+        keys = unique_rows(np.concatenate([q_nodes, s_nodes]), return_inverse=True)[1]
+    q_key, s_key = keys[: len(q)], keys[len(q) :]
+    by = np.argsort(q_key, kind="stable")
+    first = np.searchsorted(q_key[by], s_key)
+    last = np.searchsorted(q_key[by], s_key, "right")
+    n = last - first
+    side = np.repeat(np.arange(len(three)), n)
+    point = by[np.repeat(first, n) + np.arange(int(n.sum())) - np.repeat(np.cumsum(n) - n, n)]
+    s_id = three[side]
+    qq = q[point]
+    keep = (qq != a[s_id]) & (qq != b[s_id])
+    side, s_id, qq = side[keep], s_id[keep], qq[keep]
+    if not len(side):
+        return {}
+    cols = s_nodes[side]  # (c, 3)
+
+    def weights(rows: np.ndarray) -> np.ndarray:
+        return np.asarray(W[np.repeat(rows, 3), cols.ravel()]).reshape(-1, 3)
+
+    wa, wb, wq = weights(a[s_id]), weights(b[s_id]), weights(qq)
+    d = wb - wa
+    dd = np.einsum("ij,ij->i", d, d)
+    t = np.einsum("ij,ij->i", wq - wa, d) / np.where(dd > 0.0, dd, 1.0)
+    off = np.abs(wa + t[:, None] * d - wq).max(axis=1)
+    hit = (dd > 0.0) & (t > _MERGE) & (t < 1.0 - _MERGE) & (off <= 1e-9)
+    s_id, t, qq = s_id[hit], t[hit], qq[hit]
+    order = np.lexsort((t, s_id))
     out: dict = {}
-    for s in three:
-        cols = tuple(sorted(union.indices[union.indptr[s] : union.indptr[s + 1]].tolist()))
-        if cols not in faces:
-            continue
-        wa = W[int(a[s])].toarray()[0, list(cols)]
-        wb = W[int(b[s])].toarray()[0, list(cols)]
-        d = wb - wa
-        dd = float(d @ d)
-        if dd <= 0.0:
-            continue
-        hits = []
-        for q in key_of[cols]:
-            if q in (a[s], b[s]):
-                continue
-            wq = W[q].toarray()[0, list(cols)]
-            t = float((wq - wa) @ d) / dd
-            if _MERGE < t < 1.0 - _MERGE and np.abs(wa + t * d - wq).max() <= 1e-9:
-                hits.append((t, q))
-        if hits:
-            out[(int(pr[s]), int(pc[s]))] = [q for _, q in sorted(hits)]
+    for s_, q_ in zip(s_id[order].tolist(), qq[order].tolist(), strict=True):
+        out.setdefault((int(pr[s_]), int(pc[s_])), []).append(q_)
     return out
 
 

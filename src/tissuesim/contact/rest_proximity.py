@@ -63,20 +63,37 @@ def rest_proximity_filter(ipctk, mesh, rest: np.ndarray, near: np.ndarray, dhat:
     ring = np.roll(elements, -1, axis=1)
     graph = sp.coo_matrix((np.ones(elements.size), (elements.ravel(), ring.ravel())), (n, n))
     _, piece = connected_components(graph, directed=False)
-    order = np.argsort(elements.ravel(), kind="stable")  # vertex -> the elements holding it
-    start = np.searchsorted(elements.ravel()[order], np.arange(n + 1))
-    owner = order // elements.shape[1]
-    excluded: dict[tuple[int, int], bool] = {}
+    # each close pair's vertices (-1 padding) and where its second side starts: edge-edge two
+    # and two, else one first (a point against an edge or a triangle)
+    ids = np.full((len(close), 4), -1)
+    split = np.ones(len(close), dtype=np.int64)
     for k in range(len(close)):
-        ids = used[[i for i in close[k].vertex_ids(part.edges, part.faces) if i >= 0]]
-        if not near[ids].all() or np.any(piece[ids] != piece[ids[0]]):
-            continue
-        split = 2 if close.is_edge_edge(k) else 1  # edge-edge: two and two, else one first
-        a, b = ids[:split], ids[split:]
-        for side, other in ((a, b), (b, a)):
-            held = np.concatenate([owner[start[v] : start[v + 1]] for v in other])
-            for i in side:
-                for j in np.unique(elements[held]):
-                    if i != j:
-                        excluded[(int(min(i, j)), int(max(i, j)))] = False
+        v = [i for i in close[k].vertex_ids(part.edges, part.faces) if i >= 0]
+        ids[k, : len(v)] = used[v]
+        split[k] = 2 if close.is_edge_edge(k) else 1
+    real = ids >= 0
+    at = np.maximum(ids, 0)
+    first = piece[at[:, 0]]
+    mine = np.all(~real | (near[at] & (piece[at] == first[:, None])), axis=1)
+    ids, real, split = ids[mine], real[mine], split[mine]
+    if not len(ids):
+        return None
+    # each side against every vertex of the elements that hold the other side's vertices
+    slot = np.arange(4)[None, :]
+    side_a = real & (slot < split[:, None])
+    side_b = real & (slot >= split[:, None])
+
+    def incidence(mask: np.ndarray) -> sp.csr_matrix:  # (pairs, n) the vertices in mask
+        r, c = np.nonzero(mask)
+        return sp.csr_matrix((np.ones(len(r)), (r, ids[r, c])), shape=(len(ids), n))
+
+    e = np.repeat(np.arange(len(elements)), elements.shape[1])
+    holds = sp.csr_matrix((np.ones(e.size), (elements.ravel(), e)), (n, len(elements)))
+    A, B = incidence(side_a), incidence(side_b)
+    around_a = ((A @ holds) @ holds.T).astype(bool).astype(float)  # (pairs, n)
+    around_b = ((B @ holds) @ holds.T).astype(bool).astype(float)
+    pairs = (A.T @ around_b + B.T @ around_a).tocoo()
+    i, j = np.minimum(pairs.row, pairs.col), np.maximum(pairs.row, pairs.col)
+    key = np.unique(i[i != j] * n + j[i != j])
+    excluded = dict.fromkeys(zip((key // n).tolist(), (key % n).tolist(), strict=True), False)
     return ipctk.make_sparse_filter(excluded, True) if excluded else None
