@@ -143,7 +143,10 @@ def touched_cells(
     reach = np.full(valid.shape, np.inf)
     reach[valid] = swept.reach(points[valid])
     hit = crossed & np.any(reach <= margin, axis=1)
-    hit |= crossed & _holding(x_cell, size, _blade_points(blades, size), margin)
+    # only a cell the surface crosses counts: the others are not searched (0.03 s a step
+    # over the whole organ of liver_instrument, a seventh of its run)
+    c = np.flatnonzero(crossed)
+    hit[c] |= _holding(x_cell[c], size[c], _blade_points(blades, size), margin)
     return hit, points, valid, d
 
 
@@ -180,10 +183,24 @@ def _holding(x_cell: np.ndarray, size: np.ndarray, points: np.ndarray, margin: f
     if not len(cell):
         return held
     X = x_cell[cell]
-    T = np.swapaxes(X[:, 1:] - X[:, :1], 1, 2)  # (pairs, 3, 3): columns the edges from vertex 0
-    ok = np.abs(np.linalg.det(T)) > 1e-300
-    lam = np.zeros((len(cell), 3))
-    lam[ok] = np.linalg.solve(T[ok], (points[point] - X[:, 0])[ok][..., None])[..., 0]
+    # barycentric coordinates by Cramer's rule on the edges from vertex 0 (a batched LAPACK
+    # solve of 3 x 3 systems cost 5x more)
+    e1, e2, e3 = X[:, 1] - X[:, 0], X[:, 2] - X[:, 0], X[:, 3] - X[:, 0]
+    r = points[point] - X[:, 0]
+    c23 = np.cross(e2, e3)
+    det = np.einsum("ij,ij->i", e1, c23)
+    ok = np.abs(det) > 1e-300
+    safe = np.where(ok, det, 1.0)[:, None]
+    lam = (
+        np.column_stack(
+            [
+                np.einsum("ij,ij->i", r, c23),
+                np.einsum("ij,ij->i", e1, np.cross(r, e3)),
+                np.einsum("ij,ij->i", e1, np.cross(e2, r)),
+            ]
+        )
+        / safe
+    )
     bary = np.column_stack([1.0 - lam.sum(axis=1), lam])
     inside = ok & np.all(bary >= -margin / np.maximum(size[cell], 1e-300)[:, None], axis=1)
     held[cell[inside]] = True

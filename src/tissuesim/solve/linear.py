@@ -96,10 +96,16 @@ def has_pardiso() -> bool:
 @functools.cache
 def _mkl_pardiso():
     """MKL's pardiso function, located once per process: pypardiso finds mkl_rt by globbing
-    the whole environment (0.2-0.5 s each time), and a new solver is made after every cut."""
+    the whole environment (0.2-0.5 s each time), and a new solver is made after every cut.
+    Its import already made one (its scipy aliases' solver): that one's library is taken
+    where present, not located a second time."""
     import pypardiso  # locates mkl_rt; we call PARDISO ourselves to control the phases
 
-    return pypardiso.PyPardisoSolver().libmkl.pardiso
+    made = getattr(getattr(pypardiso, "scipy_aliases", None), "pypardiso_solver", None)
+    libmkl = getattr(made, "libmkl", None)
+    if libmkl is None:
+        libmkl = pypardiso.PyPardisoSolver().libmkl
+    return libmkl.pardiso
 
 
 class PardisoSolver(LinearSolver):
