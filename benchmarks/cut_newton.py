@@ -118,6 +118,12 @@ def organ_run(x: float | None, before: int = 4, after: int = 8) -> tuple[list[in
     return [sim.step().newton_iterations for _ in range(after)], smallest
 
 
+def emit(lines: list[str], line: str) -> None:
+    """Add a table row to ``lines`` and show it at once (the runs take minutes)."""
+    lines.append(line)
+    print(line, flush=True)
+
+
 def row(name: str, cut: list[int], uncut: list[int], note: str = "") -> str:
     a, b = float(np.mean(cut)), float(np.mean(uncut))
     return (
@@ -137,67 +143,67 @@ def main() -> None:
     ]
     with_cut, without = liver(True), liver(False)
     phase = slice(10, 24)  # t = 0.1 .. 0.24 s: the blade cutting, the lobe not yet off
-    lines.append(
+    emit(
+        lines,
         row("liver_resection, steps 11-24 (cutting)", with_cut[phase], without[phase],
             f"per step, cut: {with_cut[phase]}; uncut: {without[phase]}")
     )  # fmt: skip
-    print(lines[-1], flush=True)
     wedge = "liver_wedge_resection"
     with_cut, without = liver(True, name=wedge), liver(False, name=wedge)
-    lines.append(
+    emit(
+        lines,
         row("liver_wedge_resection, steps 11-24 (two crossing cuts)", with_cut[phase],
             without[phase], f"per step, cut: {with_cut[phase]}; uncut: {without[phase]}")
     )  # fmt: skip
-    print(lines[-1], flush=True)
     touching, passing = liver_instrument(True), liver_instrument(False)
-    lines.append(
+    emit(
+        lines,
         row("liver_instrument, steps 11-24: the scalpel in contact (with) against passing "
             "through (without)", touching[phase], passing[phase],
             f"per step, in contact: {touching[phase]}; passing through: {passing[phase]}")
     )  # fmt: skip
-    print(lines[-1], flush=True)
     with raised_fractions():
         floored = liver_instrument(True)
-    lines.append(
+    emit(
+        lines,
         row("liver_instrument, steps 11-24, scalpel in contact: the cut as it is (with) against "
             "every element part raised to 5 % of its cell (without: no sliver; a diagnostic, "
             "mass not kept)", touching[phase], floored[phase],
             f"per step, raised: {floored[phase]}")
     )  # fmt: skip
-    print(lines[-1], flush=True)
     torn, parted = strip_tearing(True)
     whole, _ = strip_tearing(False)
     after = slice(max(parted - 3, 0), len(torn))  # the crack's growth and the steps after
-    lines.append(
+    emit(
+        lines,
         row(f"strip_tearing, steps {after.start + 1}-{len(torn)} (the tear, parted at step "
             f"{parted + 1}, and after): torn (with) against not torn (without)", torn[after],
             whole[after], f"per step, torn: {torn[after]}")
     )  # fmt: skip
-    print(lines[-1], flush=True)
     with raised_fractions():
         floored, _ = strip_tearing(True)
-    lines.append(
+    emit(
+        lines,
         row("strip_tearing, the same steps: as it is (with) against every part raised to 5 % "
             "of its cell (without; a diagnostic)", torn[after], floored[after],
             f"per step, raised: {floored[after]}")
     )  # fmt: skip
-    print(lines[-1], flush=True)
     uncut, _ = organ_run(None)
     for x in (0.011, -0.02137, 0.0, 0.0301):
         cut, smallest = organ_run(x)
-        lines.append(
+        emit(
+            lines,
             row(f"organ cut at x = {1e3 * x:g} mm, 8 steps after", cut, uncut,
                 f"smallest copy fraction {smallest:.2g}")
         )  # fmt: skip
-        print(lines[-1], flush=True)
         if smallest < 0.05:
             with raised_fractions():
                 raised, _ = organ_run(x)
-            lines.append(
+            emit(
+                lines,
                 row(f"organ cut at x = {1e3 * x:g} mm: as it is (with) against every part "
                     "raised to 5 % of its cell (without; a diagnostic)", cut, raised)
             )  # fmt: skip
-            print(lines[-1], flush=True)
     lines.append("")
     out = HERE / "results" / "cut_newton.md"
     out.write_text("\n".join(lines))
