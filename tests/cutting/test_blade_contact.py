@@ -131,6 +131,10 @@ def test_touched_cells_are_those_the_blade_reaches_within_the_margin():
     # a margin of 0.6 reaches across into cube 2 from the polygon's edge at x = 1.5
     hit, *_ = touched_cells(planar, x_cell, [edge], 0.6)
     assert set(cube[hit]) == {0, 1, 2}
+    # a plane beside the body crosses no cell: nothing is touched (its tip is not looked for)
+    beside = PlanarCut(np.array([0.0, 5.0, 0.0]), n, ring + [0.0, 4.5, 0.0])
+    hit, *_ = touched_cells(beside, x_cell, [tip + [0.0, 4.5, 0.0]], 1e-3)
+    assert not hit.any()
 
 
 def test_an_instrument_driven_off_its_plane_cuts_along_its_sweep_in_contact():

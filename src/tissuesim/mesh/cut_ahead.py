@@ -173,7 +173,7 @@ def _holding(x_cell: np.ndarray, size: np.ndarray, points: np.ndarray, margin: f
 
     m = len(x_cell)
     held = np.zeros(m, dtype=bool)
-    if not len(points) or x_cell.shape[1] != 4:
+    if not len(points) or not m or x_cell.shape[1] != 4:
         return held
     centre = x_cell.mean(axis=1)
     radius = float(np.linalg.norm(x_cell - centre[:, None], axis=2).max()) + margin
