@@ -51,6 +51,30 @@ def test_contact_energy_gradient_and_hessian_match_finite_differences():
     assert eig.min() >= -1e-9 * eig.max()
 
 
+def test_the_collision_set_of_the_positions_just_built_is_reused():
+    """Newton evaluates a point's Hessian right after its line search evaluated the gradient
+    there: the same positions take the set just built (the same object), other positions
+    build their own, and the reused set gives what a fresh build does (to round-off)."""
+    sim = two_blocks()
+    contact = sim.system.contact
+    x = sim.state.x.copy()
+    V = contact.vertices(x)
+    first = contact._collisions(V)
+    assert len(first) > 0 and contact._collisions(V.copy()) is first
+    moved = contact._collisions(contact.vertices(x + 1e-5))
+    assert moved is not first
+    contact.evaluate(x, 1)  # a line search's trial at x builds the set ...
+    built = contact._last_collisions[1]
+    value, grad, hess = contact.evaluate(x, 2)  # ... which the Hessian there reuses
+    assert contact._last_collisions[1] is built
+    contact._last_collisions = None
+    fresh = contact.evaluate(x, 2)  # built afresh
+    # to round-off: ipctk sums the barrier over threads, in no fixed order
+    assert value == pytest.approx(fresh[0], rel=1e-12)
+    assert np.allclose(grad, fresh[1], rtol=1e-12, atol=1e-12 * np.abs(grad).max())
+    assert abs(hess - fresh[2]).max() <= 1e-12 * abs(hess).max()
+
+
 def test_the_system_energy_includes_contact_and_its_gradient_is_consistent():
     sim = two_blocks()
     s = sim.system
