@@ -91,15 +91,22 @@ def _pairs(vn, carry, piece, p, crumb_pieces) -> tuple[np.ndarray, np.ndarray] |
     others = np.flatnonzero(np.isin(vn.parent, vn.parent[mine]) & ~np.isin(piece, crumb_pieces))
     if not len(others):
         return None
+    # every (crumb copy, other copy) of one cell, in the order of the other copies
+    by_cell = mine[np.argsort(vn.parent[mine], kind="stable")]
+    start = np.searchsorted(vn.parent[by_cell], vn.parent[others])
+    stop = np.searchsorted(vn.parent[by_cell], vn.parent[others], "right")
+    count = stop - start
+    c = np.repeat(others, count)
+    m = by_cell[
+        np.repeat(start, count)
+        + np.arange(count.sum())
+        - np.repeat(np.cumsum(count) - count, count)
+    ]
+    same = carry[vn.cells[m]] == carry[vn.cells[c]]  # (pairs, k): vertices they both continue
     best = None
-    for q in np.unique(piece[others]):
-        a_list, b_list = [], []
-        for c in others[piece[others] == q]:
-            for m in mine[vn.parent[mine] == vn.parent[c]]:
-                same = carry[vn.cells[m]] == carry[vn.cells[c]]
-                a_list.append(vn.cells[m][same])
-                b_list.append(vn.cells[c][same])
-        a, b = np.concatenate(a_list), np.concatenate(b_list)
+    for q in np.unique(piece[others]):  # the few pieces it shares a cell with
+        mask = same & (piece[c] == q)[:, None]
+        a, b = vn.cells[m][mask], vn.cells[c][mask]
         a, first = np.unique(a, return_index=True)  # a crumb node joins one node only
         b = b[first]
         if len(a) and (best is None or len(a) > len(best[0])):
