@@ -16,7 +16,10 @@ from tissuesim.validate import short, vector
 if TYPE_CHECKING:
     from tissuesim.coupling.tissue import TissueBody
 
-__all__ = ["SetupCalls"]
+__all__ = ["SetupCalls", "CONTACT_MODES"]
+
+#: ``set_contact(mode=...)`` and scene ``[contact] mode`` (``time/contact_step.py``)
+CONTACT_MODES = ("auto", "accurate", "interactive", "barrier")
 
 
 class SetupCalls:
@@ -34,6 +37,7 @@ class SetupCalls:
         friction_iterations: int = 2,
         surfaces: dict | None = None,
         pairs: Sequence | None = None,
+        mode: str = "auto",
     ) -> None:
         """Barrier contact (IPC) between every FEM body's surface, itself and the obstacles
         (``contact/model.py``): ``dhat`` the activation distance (m; default 1e-3 of the
@@ -46,8 +50,12 @@ class SetupCalls:
         name (e.g. "zmax") or (k, 3) vertex indices (default: its whole boundary; leave out
         symmetry planes and faces that cannot touch). ``pairs``: ``ContactPair(a, b,
         enabled=, friction=)`` or ``{"bodies": [a, b], "enabled": ..., "friction": ...}``
-        per pair of bodies / a body and an obstacle / a body with itself (a == b). Needs
-        ``pip install "tissuesim[contact]"`` (ipctk)."""
+        per pair of bodies / a body and an obstacle / a body with itself (a == b).
+        ``mode`` (``time/contact_step.py``): "accurate" (the step's contacts predicted on the
+        compliance, then the barrier's Newton from there: the barrier's answer and guarantee),
+        "interactive" (the prediction, certified free of intersection by CCD, is the step;
+        forces are its multipliers), "barrier" (the barrier's Newton alone), "auto" (the
+        default: the barrier, interactive for steps with a budget)."""
         import importlib.util
 
         from tissuesim.contact.model import ContactSettings
@@ -70,8 +78,11 @@ class SetupCalls:
         friction = real(friction, "contact friction", low=0.0)
         eps_v = real(eps_v, "contact eps_v", low=0.0, low_open=True, unit="m/s")
         iterations = integer(friction_iterations, "contact friction_iterations", low=1, high=20)
+        from tissuesim.validate import choice
+
+        mode = choice(mode, "contact mode", CONTACT_MODES)
         settings = ContactSettings(
-            dhat, stiffness, friction, eps_v, iterations, _surfaces(surfaces), _pairs(pairs)
+            dhat, stiffness, friction, eps_v, iterations, _surfaces(surfaces), _pairs(pairs), mode
         )
         self.contact = settings if enabled else None
         self._changed()

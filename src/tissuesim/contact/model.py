@@ -56,6 +56,10 @@ class ContactSettings:
     # the whole boundary)
     surfaces: dict = field(default_factory=dict)
     pairs: tuple = ()  # contact/pairs.py ContactPair: a pair switched off or with its own mu
+    # how a step treats contact (time/contact_step.py): "auto" (the barrier, interactive under
+    # a budget), "accurate" (the barrier's Newton from the predicted contacts), "interactive"
+    # (the certified prediction is the step), "barrier" (the barrier's Newton alone)
+    mode: str = "auto"
 
 
 @dataclass
@@ -176,6 +180,9 @@ class ContactModel(FrictionLag, CollisionQueries):
         self._last_collisions = None  # (V, its collision set): see _collisions
         self.ccd = ipctk.AdditiveCCD()
         self.candidates = StepCandidates(ipctk, self.mesh, self.broad_phase, self.dhat, self.stats)
+        self.predictor = None  # contact/predict/predictor.py ContactPredictor, made when used
+        self.predicted_forces = None  # (x, Prediction) of an interactive step, for the report
+        self.prediction_report: dict | None = None  # the step's predictor figures
 
     def carry_over(self, old: ContactModel) -> None:
         """Continue ``old``'s state after the system was rebuilt (a cut changes a body's
@@ -340,6 +347,8 @@ class ContactModel(FrictionLag, CollisionQueries):
         (run-to-run spread) on every scene of ``benchmarks/contact_candidates.py``, and needs
         no motion estimate."""
         self.candidates.begin(self.dhat)
+        self.predicted_forces = None
+        self.prediction_report = None
 
     def _leave_out_rest_pairs(self, ipctk) -> None:
         """Cut bodies' surface pairs of one piece that touch at rest do not collide
@@ -456,6 +465,9 @@ class ContactModel(FrictionLag, CollisionQueries):
         friction its parts ``name.normal`` (the barrier's gradient with respect to the
         obstacle's vertices, summed: the bodies' side is its negative) and ``name.friction``
         (the last step's lagged friction potential's, likewise)."""
+        predicted = self._predicted_forces(c)
+        if predicted is not None:
+            return predicted
         V = self.vertices(c)
         col = self._collisions(V)
         normal = (
@@ -478,6 +490,23 @@ class ContactModel(FrictionLag, CollisionQueries):
             if self.has_friction:
                 out[f"{ob.name}.normal"] = n
                 out[f"{ob.name}.friction"] = f
+        return out
+
+    def _predicted_forces(self, c: np.ndarray) -> dict[str, np.ndarray] | None:
+        """An interactive step's obstacle forces, its multipliers (``time/contact_step.py``),
+        when c is the state it accepted; else None."""
+        if self.predicted_forces is None:
+            return None
+        x, prediction = self.predicted_forces
+        if x.shape != c.shape or not np.array_equal(x, c):
+            return None
+        out = {}
+        for name, force in prediction.forces.items():
+            out[name] = force
+            if self.has_friction:
+                normal = prediction.normal_forces[name]
+                out[f"{name}.normal"] = normal
+                out[f"{name}.friction"] = force - normal
         return out
 
 

@@ -9,6 +9,7 @@
                           # from the largest Young's modulus E, within [E, 100 E])
     friction = 0.3        # Coulomb mu (default 0); eps_v (m/s), friction_iterations
     surfaces = { block = "zmax" }   # a body's contact surface: a facet set (default: boundary)
+    mode = "accurate"     # or "interactive", "barrier", "auto" (the default): time/contact_step.py
 
     [[contact.pairs]]     # per pair of bodies (a body twice: its self contact; or an obstacle)
     bodies = ["liver", "gallbladder"]
@@ -40,6 +41,7 @@ CONTACT_KEYS = {
     "friction_iterations",
     "surfaces",
     "pairs",
+    "mode",
 }
 SHAPES = {
     "plane": {"point", "normal", "size"},
@@ -71,7 +73,7 @@ def add_contact_tables(sim, data: dict, base_dir: Path, source: str) -> None:
     with _context(where):
         options = {
             k: contact[k]
-            for k in ("friction", "eps_v", "friction_iterations", "surfaces", "pairs")
+            for k in ("friction", "eps_v", "friction_iterations", "surfaces", "pairs", "mode")
             if k in contact
         }
         sim.set_contact(dhat=contact.get("dhat"), stiffness=contact.get("stiffness"), **options)

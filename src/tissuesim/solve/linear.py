@@ -130,7 +130,7 @@ class PardisoSolver(LinearSolver):
         self._upper: np.ndarray | None = None
         self._finalizer = None
 
-    def _call(self, phase: int, a: np.ndarray, b: np.ndarray, x: np.ndarray) -> int:
+    def _call(self, phase: int, a: np.ndarray, b: np.ndarray, x: np.ndarray, nrhs: int = 1) -> int:
         ct, i32 = self._ct, self._ct.c_int32
         error = i32(0)
         self._pardiso(
@@ -138,7 +138,7 @@ class PardisoSolver(LinearSolver):
             ct.byref(i32(1)), ct.byref(i32(1)), ct.byref(i32(self._MTYPE)),
             ct.byref(i32(phase)), ct.byref(i32(self._n)), a.ctypes.data,
             self._ia.ctypes.data_as(ct.POINTER(i32)), self._ja.ctypes.data_as(ct.POINTER(i32)),
-            self._perm.ctypes.data_as(ct.POINTER(i32)), ct.byref(i32(1)),
+            self._perm.ctypes.data_as(ct.POINTER(i32)), ct.byref(i32(nrhs)),
             self._iparm.ctypes.data_as(ct.POINTER(i32)), ct.byref(i32(0)),
             b.ctypes.data, x.ctypes.data, ct.byref(error),
         )  # fmt: skip
@@ -175,12 +175,19 @@ class PardisoSolver(LinearSolver):
             raise RuntimeError(f"PARDISO numeric factorisation failed (error {error})")
 
     def solve(self, b: np.ndarray) -> np.ndarray:
-        b = np.ascontiguousarray(b, dtype=float)
-        x = np.zeros_like(b)
-        error = self._call(33, self._a, b, x)
+        """x with A x = b; b (n,) or (n, k): k right-hand sides in one call (PARDISO reads
+        them column after column)."""
+        if b.ndim == 2:
+            B = np.asfortranarray(b, dtype=float)
+            X = np.zeros_like(B, order="F")
+            error = self._call(33, self._a, B, X, nrhs=B.shape[1])
+        else:
+            B = np.ascontiguousarray(b, dtype=float)
+            X = np.zeros_like(B)
+            error = self._call(33, self._a, B, X)
         if error != 0:
             raise RuntimeError(f"PARDISO solve failed (error {error})")
-        return x
+        return X
 
 
 def _same_pattern(analysed: tuple[np.ndarray, np.ndarray], A: sp.csr_matrix) -> bool:

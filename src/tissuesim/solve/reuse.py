@@ -46,6 +46,8 @@ class ReusedFactorSolver(LinearSolver):
         self._factored = False
         self._fresh = False  # the factor is of the current A
         self.factored_matrix: sp.csr_matrix | None = None  # the factor's matrix (checkpoints)
+        self.version = 0  # counts factorisations (what is kept from a factor is valid while
+        # the version is the same: contact/predict/compliance.py)
 
     def factorize(self, A: sp.csr_matrix) -> None:
         self._A = A
@@ -57,6 +59,7 @@ class ReusedFactorSolver(LinearSolver):
         self.direct.factorize(self._A)
         self.factored_matrix = self._A
         self.stats.factorizations += 1
+        self.version += 1
         self._factored = self._fresh = True
 
     def solve(self, b: np.ndarray) -> np.ndarray:

@@ -28,6 +28,7 @@ import scipy.sparse.linalg as spla
 from tissuesim.errors import InstabilityError
 from tissuesim.solve.newton import minimize
 from tissuesim.system import is_frame_body
+from tissuesim.time.contact_step import accurate_start, interactive_step, resolve_mode
 from tissuesim.time.implicit import choose_start
 from tissuesim.time.state import State, StepOutcome
 
@@ -77,6 +78,23 @@ def implicit_step(
                 y0 = contact.obstacle_positions(state.time)
             y1 = contact.obstacle_positions(t1)
         contact.begin_step()
+        # the step's contacts predicted on the compliance first (time/contact_step.py), except
+        # in pseudo-time steps and with a blade in its kerf (their starts are special)
+        mode = "barrier"
+        if t_end is None and friction_from is None and contact.clear_path is None:
+            mode = resolve_mode(contact, budget)
+        if mode == "interactive":
+            done = interactive_step(
+                system, state, h, solver, options, dynamic, body_energies, t1, y0, y1, budget
+            )
+            if done is not None:
+                return done
+        elif mode == "accurate":
+            predicted = accurate_start(
+                system, state, h, solver, options, dynamic, body_energies, t1, y0, y1
+            )
+            if predicted is not None:
+                candidates = (predicted, *candidates)
         # Newton must start where the bodies can get from x_n without crossing a surface, the
         # obstacles and prescribed vertices moving to their t1 places on the way: with moving
         # obstacles the prediction c_n + h v_n carries the surface under an instrument along

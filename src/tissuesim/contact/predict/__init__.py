@@ -1,0 +1,14 @@
+"""The contact predictor: a step's contacts solved on the compliance of the kept factorisation
+before (or instead of) the barrier's Newton solve, as SOFA's constraint-based contact does.
+
+One file per stage, read in this order:
+
+- ``rows.py``: which pairs the step makes (proximity at the step's start within the distance
+  the step can close) and their constraint rows J (a normal and, in 3D, two tangents each);
+- ``compliance.py``: W = J H^-1 J^T from the kept factor, its columns kept while the factor is;
+- ``signorini.py``: the Signorini-Coulomb problem on W (projected block Gauss-Seidel);
+- ``predictor.py``: the stages together: free motion in, corrected positions, multipliers and
+  the instrument forces out (``time/contact_step.py`` certifies and accepts them).
+
+Import the modules themselves; this package imports nothing.
+"""

@@ -1,0 +1,226 @@
+"""An implicit step with contact in stages (``contact/predict/``): free motion, detection,
+compliance, the contact problem, correction, certification; then either the barrier's Newton
+from there (accurate) or nothing more (interactive).
+
+    free motion:   Newton on Phi without contact (the contact-free step, kept factorisation)
+    predict:       pairs from x_n towards x_free, W = J H^-1 J^T, Signorini-Coulomb on W,
+                   x = x_free + H^-1 J^T lambda          (contact/predict/predictor.py)
+    certify:       exact CCD from (x_n, obstacles y0) to (x, y1): no surface crossed
+    interactive:   x is the step (its gaps held at INTERACTIVE_GAP dhat); forces = lambda
+    accurate:      x, with each pair at the gap where the barrier's force equals its
+                   multiplier, is a start of the barrier's Newton (time/steps.py): the
+                   barrier's answer and guarantee, from inside its quadratic basin
+
+A prediction that fails certification (or a free motion that does not converge) falls back
+to the barrier's Newton, within the step's budget, and the step's report says so
+(``extra["contact"]["prediction"]``).
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+from tissuesim.solve.newton import minimize
+from tissuesim.time.implicit import choose_start
+from tissuesim.time.state import State, StepOutcome
+
+__all__ = ["resolve_mode", "free_motion", "interactive_step", "accurate_start"]
+
+#: the gap (of dhat) an interactive step holds each pair at: inside the barrier's range, far
+#: enough from zero that the linearised gaps' error (curvature, rotation over a step) does not
+#: close it
+INTERACTIVE_GAP = 0.5
+#: detections again from the corrected positions when the prediction crosses a surface
+REDETECT = 2
+#: fixed-point passes between the multipliers and the barrier's equilibrium gaps (accurate)
+GAP_PASSES = 3
+
+
+def resolve_mode(contact, budget: dict | None) -> str:
+    """ "accurate", "interactive" or "barrier" for this step ("auto": interactive with a
+    budget, else the barrier: the accurate mode's start does not yet save more than it costs,
+    docs/guide/contact.md)."""
+    mode = contact.settings.mode
+    if mode == "auto":
+        return "interactive" if budget else "barrier"
+    return mode
+
+
+def free_motion(system, state: State, h, solver, options, dynamic, body_energies, t1, budget):
+    """(x_free, Newton record): the step without contact, from the better of the prediction
+    and x_n."""
+    c_pred = system.retract(state.x, h * state.v) if dynamic else None
+
+    def evaluate(c, order, project):
+        return system.evaluate(c, order, project, body_energies, contact=False)
+
+    candidates = (c_pred, state.x) if dynamic else (state.x,)
+    c0 = choose_start(evaluate, candidates, lambda c: system.apply_prescribed(c, t1))
+    return minimize(
+        evaluate,
+        c0,
+        system.elimination,
+        solver,
+        options,
+        force_scale=system.force_scale,
+        length_scale=system.length_scale,
+        retract=system.retract,
+        budget=budget,
+    )
+
+
+def _predictor(contact):
+    from tissuesim.contact.predict.predictor import ContactPredictor
+
+    if getattr(contact, "predictor", None) is None:
+        contact.predictor = ContactPredictor()
+    return contact.predictor
+
+
+def interactive_step(
+    system, state, h, solver, options, dynamic, body_energies, t1, y0, y1, budget
+) -> StepOutcome | None:
+    """The certified prediction as the step, or None (the caller falls back to the barrier's
+    Newton; ``contact.prediction_report`` says why)."""
+    contact = system.contact
+    start = time.perf_counter()
+    x_free, record = free_motion(
+        system, state, h, solver, options, dynamic, body_energies, t1, budget
+    )
+    free_s = time.perf_counter() - start
+    report = {"mode": "interactive", "free_motion_s": free_s, "free_iterations": record.iterations}
+    contact.prediction_report = report
+    if not (record.converged or record.budget_stop):
+        report["outcome"] = f"fell back to the barrier: free motion failed ({record.reason})"
+        return None
+    predictor, gap = _predictor(contact), INTERACTIVE_GAP * contact.dhat
+    certify_s, also, redetections = 0.0, None, 0
+    for redetections in range(1 + REDETECT):  # noqa: B007 (reported below)
+        prediction = predictor.predict(
+            system, solver, state.x, x_free, y0, y1, gap, also, body_energies
+        )
+        x = system.apply_prescribed(prediction.x, t1)
+        start = time.perf_counter()
+        certified = certify(contact, state.x, x, y0, y1)
+        certify_s += time.perf_counter() - start
+        if certified:
+            break
+        also = x  # pairs the correction made: detect them too
+    report.update(
+        _figures(prediction), certify_s=certify_s, redetections=redetections, certificate=certified
+    )
+    if not certified:
+        report["outcome"] = "fell back to the barrier: the prediction crosses a surface"
+        return None
+    report["outcome"] = "certified"
+    contact.predicted_forces = (x.copy(), prediction)
+    if contact.moving:
+        contact.obstacle_state = y1
+    # the reactions at prescribed DOFs: the elastic gradient at x less the contact forces
+    g = system.evaluate(x, 1, False, body_energies, contact=False).gradient
+    if prediction.rows.n_pairs:
+        g = g - prediction.J_all.T @ prediction.force.reshape(-1)
+    record.gradient = g
+    system.last_step_energies = body_energies
+    v1 = system.difference(x, state.x) / h if dynamic else np.zeros(system.n_dofs)
+    return StepOutcome(State(t1, x, v1), True, [record])
+
+
+def certify(contact, x0: np.ndarray, x: np.ndarray, y0, y1) -> str:
+    """How the bodies get from x0 to x, the obstacles from y0 to y1, without crossing a
+    surface ("" if not shown): along one straight move, or in two legs, the bodies first with
+    the obstacles where they were, then the obstacles (the proof ``time/steps.py`` accepts for
+    a Newton start; a stroke's straight move can cross where the legs do not: the surface under a
+    sliding probe moves along a line that cuts the probe's arc). Each move is free when
+    additive CCD (conservative: it never reports a later contact than the true one) finds no
+    contact in it, or else when tight-inclusion CCD proves it free (with its iterations
+    bounded, undecided counts as not free: between surfaces sliding 50 um apart it was
+    undecided where additive CCD found the move free). Else (3D): the end free of intersection
+    (ipctk's exact test) and every pair of the sweep on the side it started on
+    (``rows.sides_kept``), which rules out a surface tunnelled through."""
+
+    def free(a, b, ya, yb) -> bool:
+        return contact.max_step(a, b, ya, yb) >= 1.0 or contact.start_free(a, b, ya, yb)
+
+    if free(x0, x, y0, y1):
+        return "straight move"
+    if y0 is not None and y1 is not None and free(x0, x, y0, y0) and free(x, x, y0, y1):
+        return "two legs"
+    # a large step near a curved surface: the straight move of a point pushed round a probe
+    # is a chord through it, whatever the real motion; then the end must be free of
+    # intersection (exact) with every surface on the side it started on (3D)
+    if contact.dim == 3:
+        from tissuesim.contact.predict.rows import sides_kept
+
+        V0, V1 = contact.vertices(x0, obstacle=y0), contact.vertices(x, obstacle=y1)
+        if not contact._ipctk.has_intersections(contact.mesh, V1) and sides_kept(contact, V0, V1):
+            return "end state and sides"
+    return ""
+
+
+def accurate_start(
+    system, state, h, solver, options, dynamic, body_energies, t1, y0, y1
+) -> np.ndarray | None:
+    """A start for the barrier's Newton: the prediction with each pair at the barrier's
+    equilibrium gap for its multiplier (None if the free motion fails)."""
+    contact = system.contact
+    start = time.perf_counter()
+    x_free, record = free_motion(
+        system, state, h, solver, options, dynamic, body_energies, t1, None
+    )
+    report = {
+        "mode": "accurate",
+        "free_motion_s": time.perf_counter() - start,
+        "free_iterations": record.iterations,
+    }
+    contact.prediction_report = report
+    if not record.converged:
+        report["outcome"] = f"no prediction: free motion failed ({record.reason})"
+        return None
+    predictor = _predictor(contact)
+    target = INTERACTIVE_GAP * contact.dhat
+    prediction = predictor.predict(
+        system, solver, state.x, x_free, y0, y1, target, energies=body_energies
+    )
+    for _ in range(GAP_PASSES if prediction.rows.n_pairs else 0):
+        target = equilibrium_gap(contact, prediction.rows.weights, prediction.force[:, 0])
+        prediction = predictor.solve_again(system, target)
+    report.update(_figures(prediction))
+    report["outcome"] = "start"
+    return system.apply_prescribed(prediction.x, t1)
+
+
+def equilibrium_gap(contact, weights: np.ndarray, force: np.ndarray) -> np.ndarray:
+    """Per pair, the distance d in (0, dhat) at which the barrier's force w kappa f(d) equals
+    ``force`` (N); dhat where the force is zero. ipctk's physical barrier (contact/model.py):
+    f(d) = 2 d |b'(d^2)| / dhat^3, b(s) = -(s - dhat^2)^2 ln(s / dhat^2). By bisection on
+    log d (f falls monotonically from infinity to 0)."""
+    dhat = contact.dhat
+    s_hat = dhat * dhat
+    scale = contact.kappa * np.maximum(weights, 1e-300) / dhat**3
+
+    def pull(d):
+        s = d * d
+        db = -2.0 * (s - s_hat) * np.log(s / s_hat) - (s - s_hat) ** 2 / s
+        return scale * 2.0 * d * np.abs(db)
+
+    lo = np.full(len(force), 1e-9 * dhat)
+    hi = np.full(len(force), dhat)
+    for _ in range(60):
+        mid = np.sqrt(lo * hi)
+        above = pull(mid) > force
+        lo = np.where(above, mid, lo)
+        hi = np.where(above, hi, mid)
+    return np.where(force > 0.0, np.sqrt(lo * hi), dhat)
+
+
+def _figures(prediction) -> dict:
+    return {
+        "pairs": prediction.rows.n_pairs,
+        "sweeps": prediction.sweeps,
+        "contact_solve_converged": prediction.converged,
+        "columns_solved": prediction.columns_solved,
+        **{f"{k}_s": v for k, v in prediction.seconds.items()},
+    }
