@@ -55,8 +55,38 @@ def drop(divisions: int, newton=None):
     return sim, "table", 12
 
 
+def grasp(divisions: int, newton=None):
+    """Two capsule jaws (R = 4 mm) across the organ's end (x = 52 mm), 0.5 mm clear of its
+    surface under their whole footprint, close 3 mm each in 0.2 s, then lift 10 mm at 30 mm/s,
+    friction 0.5. (``palpation.py``'s grasp places them from the ellipsoid's crest there and
+    starts with the jaws through the organ's faces at x = 48 mm: ipctk's exact test finds
+    them intersecting before the first step.)"""
+    import numpy as np
+
+    from palpation import organ
+    from tissuesim.contact.obstacles import capsule
+
+    sim = organ(divisions, newton)
+    sim.set_contact(dhat=1e-4, friction=0.5)
+    points = sim.bodies["organ"].mesh.points
+    x, r = 0.052, 0.004
+    under = points[np.abs(points[:, 0] - x) <= r + 1e-3]
+    top, bottom = float(under[:, 2].max()), float(under[:, 2].min())
+    for name, z, sign in (("upper", top + r + 5e-4, -1.0), ("lower", bottom - r - 5e-4, 1.0)):
+        sim.add_obstacle(
+            name,
+            capsule((x, -0.03, z), (x, 0.03, z), r),
+            translation=lambda t, s=sign: (
+                0.0,
+                0.0,
+                s * 0.003 * min(t / 0.2, 1.0) + 0.03 * max(t - 0.2, 0.0),
+            ),
+        )
+    return sim, "upper", 16
+
+
 def scenes():
-    from palpation import grasp, palpation
+    from palpation import palpation
 
     return {"palpation": palpation, "grasp": grasp, "drop": drop}
 

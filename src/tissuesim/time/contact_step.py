@@ -6,10 +6,13 @@ from there (accurate) or nothing more (interactive).
     predict:       pairs from x_n towards x_free, W = J H^-1 J^T, Signorini-Coulomb on W,
                    x = x_free + H^-1 J^T lambda          (contact/predict/predictor.py)
     certify:       exact CCD from (x_n, obstacles y0) to (x, y1): no surface crossed
-    interactive:   x is the step (its gaps held at INTERACTIVE_GAP dhat); forces = lambda
-    accurate:      x, with each pair at the gap where the barrier's force equals its
-                   multiplier, is a start of the barrier's Newton (time/steps.py): the
-                   barrier's answer and guarantee, from inside its quadratic basin
+    gaps:          each pair held at the gap where the barrier's force equals its multiplier
+                   (a fixed point of a few passes), so the prediction lands on the barrier's
+                   own equilibrium
+    interactive:   x (refined on the nonlinear elasticity by lagged-matrix passes) is the
+                   step, its gaps at least MIN_GAP dhat; forces = lambda
+    accurate:      x is a start of the barrier's Newton (time/steps.py): the barrier's
+                   answer and guarantee, from inside its quadratic basin
 
 A prediction that fails certification (or a free motion that does not converge) falls back
 to the barrier's Newton, within the step's budget, and the step's report says so
@@ -32,8 +35,17 @@ __all__ = ["resolve_mode", "free_motion", "interactive_step", "accurate_start"]
 #: enough from zero that the linearised gaps' error (curvature, rotation over a step) does not
 #: close it
 INTERACTIVE_GAP = 0.5
+#: the smallest gap (of dhat) an interactive step holds a pair at, however hard it presses:
+#: room for the linearised gaps' error
+MIN_GAP = 0.1
+#: detections with the gaps linearised at the last prediction (``rows.detect_rows``'s at)
+RELINEARIZE = 1
 #: detections again from the corrected positions when the prediction crosses a surface
 REDETECT = 2
+#: passes of the prediction on the nonlinear elasticity (``_refined``), at most, and when to
+#: stop (the free point's move against the contact correction's largest)
+REFINE = 3
+REFINE_TOLERANCE = 1e-2
 #: fixed-point passes between the multipliers and the barrier's equilibrium gaps (accurate)
 GAP_PASSES = 3
 
@@ -101,6 +113,16 @@ def interactive_step(
         prediction = predictor.predict(
             system, solver, state.x, x_free, y0, y1, gap, also, body_energies
         )
+        for _ in range(RELINEARIZE):  # the gaps linearised again where the step ends
+            at = prediction.x
+            prediction, _, _ = _barrier_gaps(contact, predictor, system, prediction, MIN_GAP)
+            prediction = predictor.predict(
+                system, solver, state.x, x_free, y0, y1, gap, also, body_energies, at=at
+            )
+        prediction, target, soft = _barrier_gaps(contact, predictor, system, prediction, MIN_GAP)
+        prediction, refinements = _refined(
+            system, predictor, prediction, body_energies, target, soft
+        )
         x = system.apply_prescribed(prediction.x, t1)
         start = time.perf_counter()
         certified = certify(contact, state.x, x, y0, y1)
@@ -109,7 +131,11 @@ def interactive_step(
             break
         also = x  # pairs the correction made: detect them too
     report.update(
-        _figures(prediction), certify_s=certify_s, redetections=redetections, certificate=certified
+        _figures(prediction),
+        certify_s=certify_s,
+        redetections=redetections,
+        refinements=refinements,
+        certificate=certified,
     )
     if not certified:
         report["outcome"] = "fell back to the barrier: the prediction crosses a surface"
@@ -118,6 +144,9 @@ def interactive_step(
     contact.predicted_forces = (x.copy(), prediction)
     if contact.moving:
         contact.obstacle_state = y1
+    start = time.perf_counter()
+    predictor.calibrate(contact, x, lambda d: barrier_pull(contact, d))
+    report["calibrate_s"] = time.perf_counter() - start
     # the reactions at prescribed DOFs: the elastic gradient at x less the contact forces
     g = system.evaluate(x, 1, False, body_energies, contact=False).gradient
     if prediction.rows.n_pairs:
@@ -126,6 +155,58 @@ def interactive_step(
     system.last_step_energies = body_energies
     v1 = system.difference(x, state.x) / h if dynamic else np.zeros(system.n_dofs)
     return StepOutcome(State(t1, x, v1), True, [record])
+
+
+def _barrier_gaps(contact, predictor, system, prediction, floor: float):
+    """The prediction with each pair at the barrier's own equilibrium: its gap for a force f
+    is the barrier's, g(f) with w ``barrier_pull``(g) = f, linearised at the last pass's force
+    (GAP_PASSES passes): g ~ a - c f, a compliance c of the pair's own in the contact problem,
+    so that the load spreads over neighbouring pairs as the barrier spreads it (holding every
+    pair at dhat / 2 pressed a probe 4-8 % harder than the barrier at 1e4 tetrahedra; rigid
+    gaps from the forces oscillated between pairs that share a load). Pairs are then kept at
+    least ``floor`` dhat apart. Returns (prediction, its gap targets (m,), compliances (m,))."""
+    m = prediction.rows.n_pairs
+    target, soft = np.full(m, INTERACTIVE_GAP * contact.dhat), np.zeros(m)
+    if m == 0:
+        return prediction, target, soft
+    weights = prediction.rows.weights
+    for _ in range(GAP_PASSES):
+        force = prediction.force[:, 0]
+        loaded = force[force > 0]
+        reference = 0.1 * float(loaded.mean()) if loaded.size else 1e-9
+        f = np.maximum(force, reference)
+        g = equilibrium_gap(contact, weights, f)
+        soft = (g - equilibrium_gap(contact, weights, 1.01 * f)) / (0.01 * f)
+        target = g + soft * f
+        prediction = predictor.solve_again(system, target, soft)
+    held = target - soft * prediction.force[:, 0]
+    if floor > 0.0 and np.any(held < floor * contact.dhat):
+        target, soft = np.maximum(held, floor * contact.dhat), np.zeros(m)
+        prediction = predictor.solve_again(system, target)
+    return prediction, target, soft
+
+
+def _refined(system, predictor, prediction, body_energies, gap, soft=None):
+    """The prediction after up to REFINE passes (``ContactPredictor.refine``): the correction
+    is linear on the kept factor's matrix, the elasticity is not; each pass costs a gradient,
+    a back-solve and the contact problem. Stops when the free point moves less than
+    REFINE_TOLERANCE of the step's largest motion. Returns (prediction, passes)."""
+    if prediction.rows.n_pairs == 0:
+        return prediction, 0
+    held = system.elimination.dofs
+
+    def gradient(x):
+        g = system.evaluate(x, 1, False, body_energies, contact=False).gradient.copy()
+        g[held] = 0.0
+        return g
+
+    size = float(np.max(np.abs(system.difference(prediction.x, prediction.x_free)), initial=0.0))
+    passes = 0
+    for passes in range(1, REFINE + 1):  # noqa: B007 (returned)
+        prediction, moved = predictor.refine(system, gradient, gap, soft)
+        if moved <= REFINE_TOLERANCE * max(size, 1e-300):
+            break
+    return prediction, passes
 
 
 def certify(contact, x0: np.ndarray, x: np.ndarray, y0, y1) -> str:
@@ -184,27 +265,31 @@ def accurate_start(
     prediction = predictor.predict(
         system, solver, state.x, x_free, y0, y1, target, energies=body_energies
     )
-    for _ in range(GAP_PASSES if prediction.rows.n_pairs else 0):
-        target = equilibrium_gap(contact, prediction.rows.weights, prediction.force[:, 0])
-        prediction = predictor.solve_again(system, target)
+    prediction, _, _ = _barrier_gaps(contact, predictor, system, prediction, 0.0)
     report.update(_figures(prediction))
     report["outcome"] = "start"
     return system.apply_prescribed(prediction.x, t1)
 
 
-def equilibrium_gap(contact, weights: np.ndarray, force: np.ndarray) -> np.ndarray:
-    """Per pair, the distance d in (0, dhat) at which the barrier's force w kappa f(d) equals
-    ``force`` (N); dhat where the force is zero. ipctk's physical barrier (contact/model.py):
-    f(d) = 2 d |b'(d^2)| / dhat^3, b(s) = -(s - dhat^2)^2 ln(s / dhat^2). By bisection on
-    log d (f falls monotonically from infinity to 0)."""
+def barrier_pull(contact, d: np.ndarray) -> np.ndarray:
+    """The barrier's force per unit weight at distance d (N / m^2: weights are areas), ipctk's
+    physical barrier (contact/model.py): kappa 2 d |b'(d^2)| / dhat^3 with
+    b(s) = -(s - dhat^2)^2 ln(s / dhat^2), for 0 < d < dhat."""
     dhat = contact.dhat
-    s_hat = dhat * dhat
-    scale = contact.kappa * np.maximum(weights, 1e-300) / dhat**3
+    s_hat, s = dhat * dhat, d * d
+    db = -2.0 * (s - s_hat) * np.log(s / s_hat) - (s - s_hat) ** 2 / s
+    return contact.kappa * 2.0 * d * np.abs(db) / dhat**3
+
+
+def equilibrium_gap(contact, weights: np.ndarray, force: np.ndarray) -> np.ndarray:
+    """Per pair, the distance d in (0, dhat) at which the barrier's force w ``barrier_pull(d)``
+    equals ``force`` (N); dhat where the force is zero. By bisection on log d (the pull falls
+    monotonically from infinity to 0)."""
+    dhat = contact.dhat
+    weights = np.maximum(weights, 1e-300)
 
     def pull(d):
-        s = d * d
-        db = -2.0 * (s - s_hat) * np.log(s / s_hat) - (s - s_hat) ** 2 / s
-        return scale * 2.0 * d * np.abs(db)
+        return weights * barrier_pull(contact, d)
 
     lo = np.full(len(force), 1e-9 * dhat)
     hi = np.full(len(force), dhat)

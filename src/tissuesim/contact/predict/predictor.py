@@ -19,7 +19,7 @@ starts the barrier's Newton solve there (accurate mode).
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 import scipy.sparse as sp
@@ -34,19 +34,24 @@ __all__ = ["Prediction", "ContactPredictor"]
 @dataclass
 class Prediction:
     """One step's prediction: ``x`` the corrected configuration, ``dq`` its correction
-    (tangent DOFs), ``rows`` the pairs, ``force`` (m, d) their multipliers (N), ``J`` (m d,
-    n_dofs) the rows over the free DOFs (``J_all``: prescribed ones too), ``W`` the compliance,
-    ``forces`` per obstacle the force on the bodies (N), ``seconds`` per stage,
-    ``sweeps`` / ``converged`` of the contact solve, ``columns_solved`` compliance columns
-    solved this step."""
+    (tangent DOFs) from ``x_free``, ``rows`` the pairs, ``force`` (m, d) their multipliers
+    (N), ``J`` (m d, n_dofs) the rows over the free DOFs (``J_all``: prescribed ones too),
+    ``W`` the compliance, ``X`` its columns H^-1 E_D for the DOFs ``dofs`` J reaches, ``free``
+    (m, d) the gaps and slips at ``x_free`` before any force, ``forces`` per obstacle the force
+    on the bodies (N) and ``normal_forces`` its normal part, ``seconds`` per stage, ``sweeps``
+    / ``converged`` of the contact solve, ``columns_solved`` compliance columns solved."""
 
     x: np.ndarray
     dq: np.ndarray
+    x_free: np.ndarray
     rows: ContactRows
     force: np.ndarray
     J: sp.csr_matrix
     J_all: sp.csr_matrix
     W: np.ndarray
+    X: np.ndarray
+    dofs: np.ndarray
+    free: np.ndarray
     forces: dict[str, np.ndarray]
     normal_forces: dict[str, np.ndarray]
     sweeps: int = 0
@@ -90,6 +95,8 @@ class ContactPredictor:
         self.compliance = Compliance()
         self._warm: dict[tuple, np.ndarray] = {}
         self.last: Prediction | None = None
+        self._solve_through = None  # solve(B) through the factor of the last prediction
+        self._weights: dict[tuple, float] = {}  # the barrier's effective weight per pair
 
     def predict(
         self,
@@ -102,13 +109,15 @@ class ContactPredictor:
         target_gap,
         also: np.ndarray | None = None,
         energies=None,
+        at: np.ndarray | None = None,
     ) -> Prediction:
         """The prediction for the step x0 -> x_free (obstacles y0 -> y1, flat, or None where
         they do not move); ``target_gap`` (m, scalar or (m,) for the pairs of the last
         prediction when ``also`` is given): the gap each pair is held at or above; ``also``: a
         configuration whose sweep from x0 adds pairs (the last prediction's, when it crossed a
         surface the free motion did not reach); ``energies``: the step's body energies (for a
-        Hessian when the solver holds no factor)."""
+        Hessian when the solver holds no factor); ``at``: a configuration (obstacles at y1)
+        where the gaps are linearised (``rows.detect_rows``), default the step's start."""
         contact = system.contact
         seconds: dict[str, float] = {}
         start = time.perf_counter()
@@ -116,7 +125,12 @@ class ContactPredictor:
         V1 = contact.vertices(x_free, obstacle=y1)
         keep = float(np.max(target_gap)) if np.ndim(target_gap) else float(target_gap)
         V2 = None if also is None else contact.vertices(also, obstacle=y1)
-        rows = detect_rows(contact, V0, V1, keep + contact.dhat, V2)
+        V_at = None if at is None else contact.vertices(at, obstacle=y1)
+        rows = detect_rows(contact, V0, V1, keep + contact.dhat, V2, V_at)
+        if self._weights and rows.n_pairs:
+            known = [self._weights.get(k) for k in rows.keys(contact.group)]
+            weights = [w if w is not None else g for w, g in zip(known, rows.weights, strict=True)]
+            rows = replace(rows, weights=np.asarray(weights, dtype=float))
         S = contact.selection(x_free)
         J = J_all = sp.csr_matrix(rows.J @ S)
         held = system.elimination.dofs
@@ -132,55 +146,97 @@ class ContactPredictor:
         X = self.compliance.columns(solve, token, system.n_dofs, dofs)
         W = compliance_matrix(J, X, dofs)
         seconds["compliance"] = time.perf_counter() - start
-        return self._solve(system, contact, rows, J, J_all, W, X, dofs, x_free, target_gap, seconds)
-
-    def solve_again(self, system, target_gap) -> Prediction:
-        """The last prediction's pairs and compliance with other target gaps ((m,) or a
-        scalar): only the contact problem and the correction again."""
-        p = self.last
-        seconds = {k: v for k, v in p.seconds.items() if k in ("detect", "compliance")}
-        return self._solve(
-            system, system.contact, p.rows, p.J, p.J_all, p.W, p._X, p._dofs, p._x_free,
-            target_gap, seconds,
+        self._solve_through = solve
+        shell = Prediction(
+            x=x_free, dq=np.zeros(system.n_dofs), x_free=x_free, rows=rows,
+            force=np.zeros((rows.n_pairs, rows.dim)), J=J, J_all=J_all, W=W, X=X, dofs=dofs,
+            free=rows.free_values(), forces={}, normal_forces={}, seconds=seconds,
         )  # fmt: skip
+        return self._solve(system, shell, target_gap)
 
-    def _solve(self, system, contact, rows, J, J_all, W, X, dofs, x_free, target_gap, seconds):
+    def solve_again(self, system, target_gap, soft=None) -> Prediction:
+        """The last prediction's pairs and compliance with other target gaps ((m,) or a
+        scalar) and pair compliances ``soft`` (m,): only the contact problem and the
+        correction again."""
+        return self._solve(system, self.last, target_gap, soft)
+
+    def refine(self, system, gradient, target_gap, soft=None) -> tuple[Prediction, float]:
+        """One more pass of the last prediction on its pairs and compliance, from a new free
+        point: with K the kept factor's matrix and g(x) the step's gradient without contact,
+        x_free' = x - K^-1 g(x) (a Newton step on the elasticity's nonlinearity, lagged
+        matrix), its gaps J (x_free' - x_free) from the old ones (the rows are linear), then
+        the contact problem and the correction again. ``gradient(x)`` -> g, prescribed rows
+        zero. Returns (the prediction, the largest move of x_free)."""
+        p = self.last
+        delta = np.asarray(self._solve_through(gradient(p.x)))
+        x_free = system.retract(p.x, -delta)
+        shift = system.difference(x_free, p.x_free)
+        moved = float(np.max(np.abs(shift), initial=0.0))
+        free = p.free + (p.J @ shift).reshape(p.free.shape) if p.rows.n_pairs else p.free
+        shell = replace(p, x_free=x_free, free=free, seconds=dict(p.seconds))
+        return self._solve(system, shell, target_gap, soft), moved
+
+    def _solve(self, system, p: Prediction, target_gap, soft=None) -> Prediction:
+        """The contact problem on p's W for its free values less the target gaps, then the
+        correction from p.x_free: a new Prediction."""
+        contact, rows = system.contact, p.rows
         m, d = rows.n_pairs, rows.dim
+        seconds = dict(p.seconds)
         start = time.perf_counter()
-        target = np.broadcast_to(np.asarray(target_gap, dtype=float), (m,))
-        b = rows.free_values()
-        b[:, 0] -= target
-        keys = [tuple(v) for v in rows.vertices.tolist()]
+        b = p.free.copy()
+        b[:, 0] -= np.broadcast_to(np.asarray(target_gap, dtype=float), (m,))
+        keys = rows.keys(contact.group)
         warm = np.array([self._warm.get(k, np.zeros(d)) for k in keys]).reshape(m, d)
-        result = solve_signorini_coulomb(W, b, rows.mu, warm)
-        seconds["contact_solve"] = time.perf_counter() - start
+        result = solve_signorini_coulomb(p.W, b, rows.mu, warm, soft)
+        seconds["contact_solve"] = seconds.get("contact_solve", 0.0) + time.perf_counter() - start
         start = time.perf_counter()
         lam = result.force.reshape(-1)
-        dq = X @ (J[:, dofs].T @ lam) if m else np.zeros(system.n_dofs)
-        x = system.retract(x_free, dq)
-        forces = self._forces(contact, rows, result.force)
+        dq = p.X @ (p.J[:, p.dofs].T @ lam) if m else np.zeros(system.n_dofs)
         normal_only = np.zeros_like(result.force)
         normal_only[:, 0] = result.force[:, 0]
-        normal_forces = self._forces(contact, rows, normal_only)
-        seconds["correction"] = time.perf_counter() - start
         self._warm = dict(zip(keys, result.force, strict=True))
-        self.last = Prediction(
-            x=x,
+        self.last = replace(
+            p,
+            x=system.retract(p.x_free, dq),
             dq=dq,
-            rows=rows,
             force=result.force,
-            J=J,
-            J_all=J_all,
-            W=W,
-            forces=forces,
-            normal_forces=normal_forces,
+            forces=self._forces(contact, rows, result.force),
+            normal_forces=self._forces(contact, rows, normal_only),
             sweeps=result.sweeps,
             converged=result.converged,
             columns_solved=self.compliance.solved_columns,
             seconds=seconds,
         )
-        self.last._X, self.last._dofs, self.last._x_free = X, dofs, x_free
+        seconds["correction"] = seconds.get("correction", 0.0) + time.perf_counter() - start
         return self.last
+
+    def calibrate(self, contact, x: np.ndarray, pull) -> int:
+        """Learn each pair's effective barrier weight at the accepted state x from the
+        barrier itself: the barrier's force on the pair's point along its normal over the
+        force per unit weight at its gap, ``pull(d)`` (``time/contact_step.py``). The barrier
+        spreads a point's force over all its collisions (faces round it, edges), which a
+        pair's own area weight does not see. Returns the pairs calibrated."""
+        p = self.last
+        if p is None or p.rows.n_pairs == 0:
+            return 0
+        V = contact.vertices(x)
+        col = contact._collisions(V)
+        if len(col) == 0:
+            return 0
+        grad = contact.barrier.gradient(col, contact.mesh, V).reshape(-1, contact.dim)
+        rows = p.rows
+        point = rows.vertices[:, 0]
+        safe = np.where(rows.vertices >= 0, rows.vertices, 0)
+        gap = np.einsum(
+            "md,md->m", rows.normals, np.einsum("mk,mkd->md", rows.coefficients, V[safe])
+        )
+        force = -np.einsum("md,md->m", grad[point], rows.normals)
+        ok = (force > 0) & (gap > 0) & (gap < contact.dhat)
+        unit = pull(np.where(ok, gap, 0.5 * contact.dhat))
+        keys = rows.keys(contact.group)
+        for i in np.flatnonzero(ok).tolist():
+            self._weights[keys[i]] = float(force[i] / unit[i])
+        return int(ok.sum())
 
     @staticmethod
     def _forces(contact, rows: ContactRows, force: np.ndarray) -> dict[str, np.ndarray]:

@@ -33,7 +33,8 @@ class ContactRows:
     ``gap_start`` (m,) n . d at V0 (m); ``gap_free`` (m,) at V1; ``slip_free`` (m, d - 1) the
     tangential motion of the free step (m); ``mu`` (m,) Coulomb coefficients; ``normals``
     (m, d) and ``tangents`` (m, d - 1, d); ``vertices`` (m, 4) stencil vertex ids (-1 unused);
-    ``coefficients`` (m, 4); ``weights`` (m,) ipctk's area weights of the pairs (the barrier's
+    ``coefficients`` (m, 4); ``kinds`` (m,) 0 a point and a triangle, 1 two edges, 2 a point
+    and an edge (2D); ``weights`` (m,) ipctk's area weights of the pairs (the barrier's
     force on a pair at distance d is its weight times ``barrier.force_magnitude(d^2, 0)``)."""
 
     J: sp.csr_matrix
@@ -46,6 +47,19 @@ class ContactRows:
     vertices: np.ndarray
     coefficients: np.ndarray
     weights: np.ndarray
+    kinds: np.ndarray
+
+    def keys(self, group: np.ndarray) -> list[tuple]:
+        """A name per pair that survives a step: a point's pair by the point and the body (or
+        obstacle) it meets (its nearest triangle changes as it slides), two edges by their
+        four vertices. Warm starts and learnt weights follow pairs by it."""
+        other = group[np.maximum(self.vertices[:, 1], 0)]
+        return [
+            (1, *v) if k == 1 else (k, v[0], int(g))
+            for k, v, g in zip(
+                self.kinds.tolist(), self.vertices.tolist(), other.tolist(), strict=True
+            )
+        ]
 
     @property
     def n_pairs(self) -> int:
@@ -141,28 +155,35 @@ def _edge_edge(a, b, c, d):
     return np.column_stack([1.0 - s, s, -(1.0 - t), -t]), interior
 
 
-def _stencils(contact, V0: np.ndarray, V1: np.ndarray, inflation: float):
-    """(vertex ids (m, 4) with -1 unused, coefficients (m, 4)) of the pairs the step can
-    make: a point and the closest triangle of each other body (or obstacle) near it, two edges
-    whose closest points are inside both, in 2D a point and its closest edge per body."""
+def _stencils(contact, V0: np.ndarray, ends: list, inflation: float, at: np.ndarray):
+    """(vertex ids (m, 4) with -1 unused, coefficients (m, 4), kinds (m,)) of the pairs the
+    sweeps from V0
+    to each of ``ends`` can make, their closest points taken at ``at``: a point and the
+    closest triangle of each other body (or obstacle) near it, two edges whose closest points
+    are inside both, in 2D a point and its closest edge per body."""
     group = contact.group
-    ids, coefs = [], []
-    for kind, stencil in _candidates(contact, V0, V1, inflation):
+    parts: dict[int, list] = {}
+    for V1 in ends:
+        for kind, stencil in _candidates(contact, V0, V1, inflation):
+            parts.setdefault(kind, []).append(stencil)
+    ids, coefs, kinds = [], [], []
+    for kind, stencils in parts.items():
+        stencil = np.unique(np.vstack(stencils), axis=0) if len(stencils) > 1 else stencils[0]
         if kind == 1:
-            coef, interior = _edge_edge(*(V0[stencil[:, k]] for k in range(4)))
+            coef, interior = _edge_edge(*(at[stencil[:, k]] for k in range(4)))
             stencil, coef = stencil[interior], coef[interior]
         elif kind == 0:
-            coef = _point_triangle(*(V0[stencil[:, k]] for k in range(4)))
+            coef = _point_triangle(*(at[stencil[:, k]] for k in range(4)))
         else:
             ab = stencil[:, :3]
-            t = _segment_params(V0[ab[:, 0]], V0[ab[:, 1]], V0[ab[:, 2]])
+            t = _segment_params(at[ab[:, 0]], at[ab[:, 1]], at[ab[:, 2]])
             coef = np.column_stack([np.ones(len(t)), -(1.0 - t), -t, np.zeros(len(t))])
         if kind != 1 and len(stencil):
             # one pair per point and other body: the nearest of its triangles (edges in 2D);
             # the others repeat its constraint (W singular, Gauss-Seidel slow)
             used = stencil >= 0
             safe = np.where(used, stencil, 0)
-            dist = np.linalg.norm(np.einsum("mk,mkd->md", coef, V0[safe]), axis=1)
+            dist = np.linalg.norm(np.einsum("mk,mkd->md", coef, at[safe]), axis=1)
             key = stencil[:, 0] * (group.max() + 1) + group[stencil[:, 1]]
             order = np.lexsort((dist, key))
             first = np.ones(len(order), dtype=bool)
@@ -171,18 +192,23 @@ def _stencils(contact, V0: np.ndarray, V1: np.ndarray, inflation: float):
             stencil, coef = stencil[keep], coef[keep]
         ids.append(stencil)
         coefs.append(coef)
+        kinds.append(np.full(len(stencil), kind))
     if not ids:
-        return np.zeros((0, 4), dtype=np.int64), np.zeros((0, 4))
-    return np.vstack(ids), np.vstack(coefs)
+        return np.zeros((0, 4), dtype=np.int64), np.zeros((0, 4)), np.zeros(0, dtype=np.int64)
+    return np.vstack(ids), np.vstack(coefs), np.concatenate(kinds)
 
 
-def _weights(mesh, ids: np.ndarray) -> np.ndarray:
-    """The area weight IPC's barrier gives each pair (ipctk's area weighting): a point's
-    vertex area for a point's pair, half the two edges' areas for two edges."""
+def _weights(mesh, ids: np.ndarray, kinds: np.ndarray) -> np.ndarray:
+    """The area weight IPC's barrier gives each pair (ipctk 1.6's area weighting, measured: a
+    point and a triangle a quarter of the point's vertex area; two edges a quarter of the sum
+    of their edge areas, estimated here from their vertices' areas). ``calibrate`` in
+    ``predictor.py`` learns the weight the barrier really spreads over a pair."""
     if not len(ids):
         return np.zeros(0)
     areas = np.asarray(mesh.vertex_areas)
-    return areas[ids[:, 0]]
+    point = 0.25 * areas[ids[:, 0]]
+    edges = 0.25 * 0.5 * areas[np.maximum(ids, 0)].sum(axis=1)
+    return np.where(kinds == 1, edges, point)
 
 
 def _tangents(normals: np.ndarray) -> np.ndarray:
@@ -199,33 +225,45 @@ def _tangents(normals: np.ndarray) -> np.ndarray:
 
 
 def detect_rows(
-    contact, V0: np.ndarray, V1: np.ndarray, keep: float, also: np.ndarray | None = None
+    contact,
+    V0: np.ndarray,
+    V1: np.ndarray,
+    keep: float,
+    also: np.ndarray | None = None,
+    at: np.ndarray | None = None,
 ) -> ContactRows:
     """The pairs of ``contact`` (a ContactModel: its collision mesh, pair table, dhat) that the
     free motion V0 -> V1 (collision-mesh vertices, (n, d), obstacles included) can bring within
     ``keep`` (m) of each other, with their rows (module docstring); ``also``: further
     positions whose sweep from V0 adds candidates (a correction that moved vertices the free
-    motion did not bring near)."""
+    motion did not bring near); ``at``: where the closest points and normals are taken
+    (default V0: the step's start; a first prediction's positions linearise the gaps where
+    the step ends, which a probe sliding a millimetre over a face needs: the face's plane
+    frozen at the start stands off its sphere by the slide squared over twice the radius).
+    A pair whose closest-point vector at ``at`` points against the one at V0 (crossed by
+    these coefficients) is left out."""
     d = V0.shape[1]
     V0, V1 = np.asfortranarray(V0), np.asfortranarray(V1)
-    ids, coefs = _stencils(contact, V0, V1, keep)
-    if also is not None:
-        more_ids, more_coefs = _stencils(contact, V0, np.asfortranarray(also), keep)
-        ids, first = np.unique(np.vstack([ids, more_ids]), axis=0, return_index=True)
-        coefs = np.vstack([coefs, more_coefs])[first]
-    weights = _weights(contact.mesh, ids)
+    ends = [V1] if also is None else [V1, np.asfortranarray(also)]
+    geometry = V0 if at is None else np.asfortranarray(at)
+    ids, coefs, kinds = _stencils(contact, V0, ends, keep, geometry)
+    weights = _weights(contact.mesh, ids, kinds)
     used = ids >= 0
     safe = np.where(used, ids, 0)
     vec0 = np.einsum("mk,mkd->md", coefs, V0[safe])
-    length = np.linalg.norm(vec0, axis=1)
-    ok = length > 0.0
-    normals = vec0[ok] / length[ok, None]
+    vec_at = vec0 if at is None else np.einsum("mk,mkd->md", coefs, geometry[safe])
+    length = np.linalg.norm(vec_at, axis=1)
+    ok = (length > 0.0) & (np.einsum("md,md->m", vec_at, vec0) > 0.0)
+    normals = vec_at[ok] / length[ok, None]
     ids, coefs, safe, used, weights = ids[ok], coefs[ok], safe[ok], used[ok], weights[ok]
+    kinds = kinds[ok]
     vec1 = np.einsum("mk,mkd->md", coefs, V1[safe])
     gap_free = np.einsum("md,md->m", normals, vec1)
     near = gap_free < keep
     ids, coefs, safe, used, weights = ids[near], coefs[near], safe[near], used[near], weights[near]
-    normals, gap_free, gap_start = normals[near], gap_free[near], length[ok][near]
+    kinds = kinds[near]
+    gap_start = np.einsum("md,md->m", normals, vec0[ok])[near]
+    normals, gap_free = normals[near], gap_free[near]
     tangents = _tangents(normals)
     slip = np.einsum("mtd,md->mt", tangents, vec1[near] - vec0[ok][near])
     m = len(ids)
@@ -253,6 +291,7 @@ def detect_rows(
         vertices=np.where(used, ids, -1),
         coefficients=coefs,
         weights=weights,
+        kinds=kinds,
     )
 
 

@@ -3,7 +3,8 @@ projected block Gauss-Seidel (Jourdan, Alart & Jean 1998; Duriez et al. 2006, SO
 ``GenericConstraintSolver``), warm-started.
 
 Per pair i, unknown force lambda_i = (normal, tangents) in newtons, values u_i = b_i + sum_j
-W_ij lambda_j (m): the gap (normal) and the slip over the step (tangents). Sought:
+W_ij lambda_j (m) (+ soft_i lambda_i,n in the normal: a compliance of the pair's own): the gap
+above its target (normal) and the slip over the step (tangents). Sought:
 
     0 <= lambda_n  _|_  u_n >= 0                           (Signorini: target gap in b)
     |lambda_t| <= mu lambda_n, and u_t = -s lambda_t, s >= 0, where |lambda_t| = mu lambda_n
@@ -28,7 +29,7 @@ import numpy as np
 __all__ = ["solve_signorini_coulomb", "SignoriniResult"]
 
 
-def _gauss_seidel(W, b, mu, lam, d, max_sweeps, tolerance):  # pragma: no cover - compiled
+def _gauss_seidel(W, b, mu, soft, lam, d, max_sweeps, tolerance):  # pragma: no cover
     m = b.shape[0] // d
     sweeps = 0
     for sweep in range(max_sweeps):
@@ -38,11 +39,11 @@ def _gauss_seidel(W, b, mu, lam, d, max_sweeps, tolerance):  # pragma: no cover 
         for i in range(m):
             r = i * d
             # normal: u_n = b_n + W_n. lambda = 0 when the force is positive
-            u = b[r]
+            u = b[r] + soft[i] * lam[r]
             for j in range(b.shape[0]):
                 u += W[r, j] * lam[j]
             old = lam[r]
-            new = old - u / W[r, r]
+            new = old - u / (W[r, r] + soft[i])
             if new < 0.0:
                 new = 0.0
             lam[r] = new
@@ -145,20 +146,24 @@ def solve_signorini_coulomb(
     b: np.ndarray,
     mu: np.ndarray,
     warm: np.ndarray | None = None,
+    soft: np.ndarray | None = None,
     *,
     max_sweeps: int = 200,
     tolerance: float = 1e-6,
 ) -> SignoriniResult:
     """Forces for m pairs of dimension d: W (m d, m d) compliance (m/N), b (m, d) the values
-    without force (gap minus its target, slips), mu (m,), ``warm`` (m, d) a start."""
+    without force (gap minus its target, slips), mu (m,), ``warm`` (m, d) a start, ``soft``
+    (m,) a compliance of each pair's own (m/N, >= 0) added to its normal: the pair's gap
+    target falls by soft lambda_n as it is loaded (a barrier's gap, linearised)."""
     m, d = b.shape
     lam = np.zeros(m * d) if warm is None else np.array(warm, dtype=float).reshape(-1)
     if m == 0:
         return SignoriniResult(np.zeros((0, d)), np.zeros((0, d)), 0, True)
     W = np.ascontiguousarray(W, dtype=float)
     rhs = np.ascontiguousarray(b, dtype=float).reshape(-1)
-    sweeps, converged = _kernel()(
-        W, rhs, np.ascontiguousarray(mu, dtype=float), lam, d, int(max_sweeps), float(tolerance)
-    )
+    soft = np.zeros(m) if soft is None else np.ascontiguousarray(soft, dtype=float)
+    mu = np.ascontiguousarray(mu, dtype=float)
+    sweeps, converged = _kernel()(W, rhs, mu, soft, lam, d, int(max_sweeps), float(tolerance))
     values = (rhs + W @ lam).reshape(m, d)
+    values[:, 0] += soft * lam.reshape(m, d)[:, 0]
     return SignoriniResult(lam.reshape(m, d), values, int(sweeps), bool(converged))
