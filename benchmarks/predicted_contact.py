@@ -36,7 +36,17 @@ from pathlib import Path
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
 
-STAGES = ("free_motion", "detect", "compliance", "contact_solve", "correction", "certify")
+STAGES = (
+    "free_motion",
+    "detect",
+    "compliance",
+    "contact_solve",
+    "correction",
+    "refine",
+    "certify",
+    "calibrate",
+    "reactions",
+)
 
 
 def drop(divisions: int, newton=None):
@@ -62,8 +72,8 @@ def grasp(divisions: int, newton=None):
     starts with the jaws through the organ's faces at x = 48 mm: ipctk's exact test finds
     them intersecting before the first step.)"""
     import numpy as np
-
     from palpation import organ
+
     from tissuesim.contact.obstacles import capsule
 
     sim = organ(divisions, newton)
@@ -245,7 +255,10 @@ COLUMNS = [
     ("compliance_ms", "W ms", "{:.1f}"),
     ("contact_solve_ms", "solve ms", "{:.1f}"),
     ("correction_ms", "correction ms", "{:.1f}"),
+    ("refine_ms", "refine ms", "{:.1f}"),
     ("certify_ms", "certify ms", "{:.1f}"),
+    ("calibrate_ms", "calibrate ms", "{:.1f}"),
+    ("reactions_ms", "reactions ms", "{:.1f}"),
     ("position_error", "position error", "{:.1e}"),
     ("force_error_median", "force error (median)", "{:.2%}"),
     ("force_error_max", "force error (max)", "{:.2%}"),

@@ -19,13 +19,14 @@ starts the barrier's Newton solve there (accurate mode).
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field, replace
+from collections import defaultdict
+from dataclasses import dataclass, replace
 
 import numpy as np
 import scipy.sparse as sp
 
 from tissuesim.contact.predict.compliance import Compliance, compliance_matrix
-from tissuesim.contact.predict.rows import ContactRows, detect_rows
+from tissuesim.contact.predict.rows import ContactRows, detect_rows, sweep_candidates
 from tissuesim.contact.predict.signorini import solve_signorini_coulomb
 
 __all__ = ["Prediction", "ContactPredictor"]
@@ -38,8 +39,8 @@ class Prediction:
     (N), ``J`` (m d, n_dofs) the rows over the free DOFs (``J_all``: prescribed ones too),
     ``W`` the compliance, ``X`` its columns H^-1 E_D for the DOFs ``dofs`` J reaches, ``free``
     (m, d) the gaps and slips at ``x_free`` before any force, ``forces`` per obstacle the force
-    on the bodies (N) and ``normal_forces`` its normal part, ``seconds`` per stage, ``sweeps``
-    / ``converged`` of the contact solve, ``columns_solved`` compliance columns solved."""
+    on the bodies (N) and ``normal_forces`` its normal part, ``sweeps`` / ``converged`` of the
+    contact solve, ``columns_solved`` compliance columns solved."""
 
     x: np.ndarray
     dq: np.ndarray
@@ -57,7 +58,6 @@ class Prediction:
     sweeps: int = 0
     converged: bool = True
     columns_solved: int = 0
-    seconds: dict[str, float] = field(default_factory=dict)
 
 
 def _factor_solve(solver, matrix):
@@ -97,6 +97,8 @@ class ContactPredictor:
         self.last: Prediction | None = None
         self._solve_through = None  # solve(B) through the factor of the last prediction
         self._weights: dict[tuple, float] = {}  # the barrier's effective weight per pair
+        self._candidates = None  # (the sweep's key, sweep_candidates' answer) of the last
+        self.clock: defaultdict[str, float] = defaultdict(float)  # seconds per stage, summed
 
     def predict(
         self,
@@ -119,14 +121,20 @@ class ContactPredictor:
         Hessian when the solver holds no factor); ``at``: a configuration (obstacles at y1)
         where the gaps are linearised (``rows.detect_rows``), default the step's start."""
         contact = system.contact
-        seconds: dict[str, float] = {}
         start = time.perf_counter()
         V0 = contact.vertices(x0, obstacle=y0)
         V1 = contact.vertices(x_free, obstacle=y1)
         keep = float(np.max(target_gap)) if np.ndim(target_gap) else float(target_gap)
         V2 = None if also is None else contact.vertices(also, obstacle=y1)
         V_at = None if at is None else contact.vertices(at, obstacle=y1)
-        rows = detect_rows(contact, V0, V1, keep + contact.dhat, V2, V_at)
+        ends = [np.asfortranarray(V1)] + ([] if V2 is None else [np.asfortranarray(V2)])
+        key = (x0.tobytes(), x_free.tobytes(), None if also is None else also.tobytes())
+        if self._candidates is None or self._candidates[0] != key:
+            parts = sweep_candidates(contact, np.asfortranarray(V0), ends, keep + contact.dhat)
+            self._candidates = (key, parts)
+        rows = detect_rows(
+            contact, V0, V1, keep + contact.dhat, V2, V_at, candidates=self._candidates[1]
+        )
         if self._weights and rows.n_pairs:
             known = [self._weights.get(k) for k in rows.keys(contact.group)]
             weights = [w if w is not None else g for w, g in zip(known, rows.weights, strict=True)]
@@ -139,18 +147,18 @@ class ContactPredictor:
             keep_cols[held] = 0.0
             J = sp.csr_matrix(J @ sp.diags(keep_cols))
             J.eliminate_zeros()
-        seconds["detect"] = time.perf_counter() - start
+        self.clock["detect"] += time.perf_counter() - start
         start = time.perf_counter()
         dofs = np.unique(J.indices)
         solve, token = _factor_solve(solver, lambda: _hessian(system, x_free, energies))
         X = self.compliance.columns(solve, token, system.n_dofs, dofs)
         W = compliance_matrix(J, X, dofs)
-        seconds["compliance"] = time.perf_counter() - start
+        self.clock["compliance"] += time.perf_counter() - start
         self._solve_through = solve
         shell = Prediction(
             x=x_free, dq=np.zeros(system.n_dofs), x_free=x_free, rows=rows,
             force=np.zeros((rows.n_pairs, rows.dim)), J=J, J_all=J_all, W=W, X=X, dofs=dofs,
-            free=rows.free_values(), forces={}, normal_forces={}, seconds=seconds,
+            free=rows.free_values(), forces={}, normal_forces={},
         )  # fmt: skip
         return self._solve(system, shell, target_gap)
 
@@ -168,12 +176,14 @@ class ContactPredictor:
         the contact problem and the correction again. ``gradient(x)`` -> g, prescribed rows
         zero. Returns (the prediction, the largest move of x_free)."""
         p = self.last
+        start = time.perf_counter()
         delta = np.asarray(self._solve_through(gradient(p.x)))
         x_free = system.retract(p.x, -delta)
+        self.clock["refine"] += time.perf_counter() - start
         shift = system.difference(x_free, p.x_free)
         moved = float(np.max(np.abs(shift), initial=0.0))
         free = p.free + (p.J @ shift).reshape(p.free.shape) if p.rows.n_pairs else p.free
-        shell = replace(p, x_free=x_free, free=free, seconds=dict(p.seconds))
+        shell = replace(p, x_free=x_free, free=free)
         return self._solve(system, shell, target_gap, soft), moved
 
     def _solve(self, system, p: Prediction, target_gap, soft=None) -> Prediction:
@@ -181,14 +191,13 @@ class ContactPredictor:
         correction from p.x_free: a new Prediction."""
         contact, rows = system.contact, p.rows
         m, d = rows.n_pairs, rows.dim
-        seconds = dict(p.seconds)
         start = time.perf_counter()
         b = p.free.copy()
         b[:, 0] -= np.broadcast_to(np.asarray(target_gap, dtype=float), (m,))
         keys = rows.keys(contact.group)
         warm = np.array([self._warm.get(k, np.zeros(d)) for k in keys]).reshape(m, d)
         result = solve_signorini_coulomb(p.W, b, rows.mu, warm, soft)
-        seconds["contact_solve"] = seconds.get("contact_solve", 0.0) + time.perf_counter() - start
+        self.clock["contact_solve"] += time.perf_counter() - start
         start = time.perf_counter()
         lam = result.force.reshape(-1)
         dq = p.X @ (p.J[:, p.dofs].T @ lam) if m else np.zeros(system.n_dofs)
@@ -205,9 +214,8 @@ class ContactPredictor:
             sweeps=result.sweeps,
             converged=result.converged,
             columns_solved=self.compliance.solved_columns,
-            seconds=seconds,
         )
-        seconds["correction"] = seconds.get("correction", 0.0) + time.perf_counter() - start
+        self.clock["correction"] += time.perf_counter() - start
         return self.last
 
     def calibrate(self, contact, x: np.ndarray, pull) -> int:

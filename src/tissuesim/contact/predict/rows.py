@@ -24,7 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.sparse as sp
 
-__all__ = ["ContactRows", "detect_rows", "sides_kept"]
+__all__ = ["ContactRows", "detect_rows", "sides_kept", "sweep_candidates"]
 
 
 @dataclass(frozen=True)
@@ -98,6 +98,16 @@ def _candidates(contact, V0: np.ndarray, V1: np.ndarray, inflation: float):
     return parts
 
 
+def sweep_candidates(contact, V0: np.ndarray, ends: list, inflation: float) -> dict:
+    """{kind: [stencils]} of the sweeps from V0 to each of ``ends`` (``_candidates``): kept
+    by the predictor so that the gaps can be linearised again without a broad phase."""
+    parts: dict[int, list] = {}
+    for V1 in ends:
+        for kind, stencil in _candidates(contact, V0, V1, inflation):
+            parts.setdefault(kind, []).append(stencil)
+    return parts
+
+
 def _segment_params(p, a, b):
     """Closest point of segments a b to points p: the clamped parameter (k,)."""
     ab = b - a
@@ -155,17 +165,14 @@ def _edge_edge(a, b, c, d):
     return np.column_stack([1.0 - s, s, -(1.0 - t), -t]), interior
 
 
-def _stencils(contact, V0: np.ndarray, ends: list, inflation: float, at: np.ndarray):
+def _stencils(contact, V0: np.ndarray, ends, inflation: float, at: np.ndarray):
     """(vertex ids (m, 4) with -1 unused, coefficients (m, 4), kinds (m,)) of the pairs the
-    sweeps from V0
-    to each of ``ends`` can make, their closest points taken at ``at``: a point and the
-    closest triangle of each other body (or obstacle) near it, two edges whose closest points
-    are inside both, in 2D a point and its closest edge per body."""
+    sweeps from V0 to each of ``ends`` (or ``sweep_candidates``' answer) can make, their
+    closest points taken at ``at``: a point and the closest triangle of each other body (or
+    obstacle) near it, two edges whose closest points are inside both, in 2D a point and its
+    closest edge per body."""
     group = contact.group
-    parts: dict[int, list] = {}
-    for V1 in ends:
-        for kind, stencil in _candidates(contact, V0, V1, inflation):
-            parts.setdefault(kind, []).append(stencil)
+    parts = ends if isinstance(ends, dict) else sweep_candidates(contact, V0, ends, inflation)
     ids, coefs, kinds = [], [], []
     for kind, stencils in parts.items():
         stencil = np.unique(np.vstack(stencils), axis=0) if len(stencils) > 1 else stencils[0]
@@ -231,6 +238,7 @@ def detect_rows(
     keep: float,
     also: np.ndarray | None = None,
     at: np.ndarray | None = None,
+    candidates: dict | None = None,
 ) -> ContactRows:
     """The pairs of ``contact`` (a ContactModel: its collision mesh, pair table, dhat) that the
     free motion V0 -> V1 (collision-mesh vertices, (n, d), obstacles included) can bring within
@@ -241,10 +249,13 @@ def detect_rows(
     the step ends, which a probe sliding a millimetre over a face needs: the face's plane
     frozen at the start stands off its sphere by the slide squared over twice the radius).
     A pair whose closest-point vector at ``at`` points against the one at V0 (crossed by
-    these coefficients) is left out."""
+    these coefficients) is left out. ``candidates``: ``sweep_candidates``' answer for these
+    sweeps, when known (the broad phase is skipped)."""
     d = V0.shape[1]
     V0, V1 = np.asfortranarray(V0), np.asfortranarray(V1)
     ends = [V1] if also is None else [V1, np.asfortranarray(also)]
+    if candidates is not None:
+        ends = candidates
     geometry = V0 if at is None else np.asfortranarray(at)
     ids, coefs, kinds = _stencils(contact, V0, ends, keep, geometry)
     weights = _weights(contact.mesh, ids, kinds)

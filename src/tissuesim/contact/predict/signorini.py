@@ -30,7 +30,15 @@ __all__ = ["solve_signorini_coulomb", "SignoriniResult"]
 
 
 def _gauss_seidel(W, b, mu, soft, lam, d, max_sweeps, tolerance):  # pragma: no cover
-    m = b.shape[0] // d
+    # w = W lambda kept up to date as forces change (W symmetric: row r is column r), so a
+    # pair whose force stays zero costs O(1) a sweep, a changed one O(rows)
+    n = b.shape[0]
+    m = n // d
+    w = np.zeros(n)
+    for j in range(n):
+        if lam[j] != 0.0:
+            for k in range(n):
+                w[k] += W[j, k] * lam[j]
     sweeps = 0
     for sweep in range(max_sweeps):
         sweeps = sweep + 1
@@ -38,86 +46,79 @@ def _gauss_seidel(W, b, mu, soft, lam, d, max_sweeps, tolerance):  # pragma: no 
         largest = 1e-300
         for i in range(m):
             r = i * d
-            # normal: u_n = b_n + W_n. lambda = 0 when the force is positive
-            u = b[r] + soft[i] * lam[r]
-            for j in range(b.shape[0]):
-                u += W[r, j] * lam[j]
+            # normal: u_n = b_n + (W lambda)_n (+ soft lambda_n) = 0 when the force is positive
+            u = b[r] + w[r] + soft[i] * lam[r]
             old = lam[r]
             new = old - u / (W[r, r] + soft[i])
             if new < 0.0:
                 new = 0.0
-            lam[r] = new
+            if new != old:
+                delta = new - old
+                lam[r] = new
+                for k in range(n):
+                    w[k] += W[r, k] * delta
             if abs(new - old) > change:
                 change = abs(new - old)
-            if abs(new) > largest:
-                largest = abs(new)
+            if new > largest:
+                largest = new
             if d == 1:
                 continue
             limit = mu[i] * new
-            if limit <= 0.0:
-                for a in range(1, d):
-                    if abs(lam[r + a]) > change:
-                        change = abs(lam[r + a])
-                    lam[r + a] = 0.0
-                continue
-            # tangents: the block's own solve for zero slip, then onto the disc
             nt = d - 1
-            ut = np.zeros(nt)
-            for a in range(nt):
-                s = b[r + 1 + a]
-                for j in range(b.shape[0]):
-                    s += W[r + 1 + a, j] * lam[j]
-                ut[a] = s
-            old_t = np.empty(nt)
-            for a in range(nt):
-                old_t[a] = lam[r + 1 + a]
-            if nt == 1:
-                step0 = ut[0] / W[r + 1, r + 1]
-                t0 = old_t[0] - step0
-                t1 = 0.0
-            else:
-                a11, a12 = W[r + 1, r + 1], W[r + 1, r + 2]
-                a22 = W[r + 2, r + 2]
-                det = a11 * a22 - a12 * a12
-                s0 = (a22 * ut[0] - a12 * ut[1]) / det
-                s1 = (a11 * ut[1] - a12 * ut[0]) / det
-                t0 = old_t[0] - s0
-                t1 = old_t[1] - s1
-                norm = np.sqrt(t0 * t0 + t1 * t1)
-                if norm > limit:
-                    # sliding: the force on the disc's edge whose slip opposes it, the
-                    # block's (A + sigma I) t = -c with |t| = limit (Newton on sigma >= 0),
-                    # c = u_t - A t_old the slip without this pair's tangential force
-                    c0 = ut[0] - a11 * old_t[0] - a12 * old_t[1]
-                    c1 = ut[1] - a12 * old_t[0] - a22 * old_t[1]
-                    sigma = 0.0
-                    for _ in range(30):
-                        p11, p22 = a11 + sigma, a22 + sigma
-                        dd = p11 * p22 - a12 * a12
-                        t0 = -(p22 * c0 - a12 * c1) / dd
-                        t1 = -(p11 * c1 - a12 * c0) / dd
-                        norm = np.sqrt(t0 * t0 + t1 * t1)
-                        # d|t|/dsigma = -t.(A + sigma I)^-1 t / |t|
-                        q0 = (p22 * t0 - a12 * t1) / dd
-                        q1 = (p11 * t1 - a12 * t0) / dd
-                        slope = -(t0 * q0 + t1 * q1) / norm
-                        step = (norm - limit) / slope
-                        sigma = max(sigma - step, 0.5 * sigma)
-                        if abs(norm - limit) <= 1e-12 * limit:
-                            break
-                    t0 *= limit / norm
-                    t1 *= limit / norm
-            norm = np.sqrt(t0 * t0 + t1 * t1)
-            if norm > limit:
-                t0 *= limit / norm
-                t1 *= limit / norm
-            lam[r + 1] = t0
-            if nt == 2:
-                lam[r + 2] = t1
-            for a in range(nt):
-                diff = abs(lam[r + 1 + a] - old_t[a])
-                if diff > change:
-                    change = diff
+            t0, t1 = 0.0, 0.0
+            old0 = lam[r + 1]
+            old1 = lam[r + 2] if nt == 2 else 0.0
+            if limit > 0.0:
+                # tangents: the block's own solve for zero slip, then onto the disc
+                u0 = b[r + 1] + w[r + 1]
+                if nt == 1:
+                    t0 = old0 - u0 / W[r + 1, r + 1]
+                    if abs(t0) > limit:
+                        t0 = limit if t0 > 0.0 else -limit
+                else:
+                    u1 = b[r + 2] + w[r + 2]
+                    a11, a12 = W[r + 1, r + 1], W[r + 1, r + 2]
+                    a22 = W[r + 2, r + 2]
+                    det = a11 * a22 - a12 * a12
+                    t0 = old0 - (a22 * u0 - a12 * u1) / det
+                    t1 = old1 - (a11 * u1 - a12 * u0) / det
+                    norm = np.sqrt(t0 * t0 + t1 * t1)
+                    if norm > limit:
+                        # sliding: the force on the disc's edge whose slip opposes it, the
+                        # block's (A + sigma I) t = -c with |t| = limit (Newton on sigma >= 0),
+                        # c = u_t - A t_old the slip without this pair's tangential force
+                        c0 = u0 - a11 * old0 - a12 * old1
+                        c1 = u1 - a12 * old0 - a22 * old1
+                        sigma = 0.0
+                        for _ in range(30):
+                            p11, p22 = a11 + sigma, a22 + sigma
+                            dd = p11 * p22 - a12 * a12
+                            t0 = -(p22 * c0 - a12 * c1) / dd
+                            t1 = -(p11 * c1 - a12 * c0) / dd
+                            norm = np.sqrt(t0 * t0 + t1 * t1)
+                            # d|t|/dsigma = -t.(A + sigma I)^-1 t / |t|
+                            q0 = (p22 * t0 - a12 * t1) / dd
+                            q1 = (p11 * t1 - a12 * t0) / dd
+                            slope = -(t0 * q0 + t1 * q1) / norm
+                            sigma = max(sigma - (norm - limit) / slope, 0.5 * sigma)
+                            if abs(norm - limit) <= 1e-12 * limit:
+                                break
+                        t0 *= limit / norm
+                        t1 *= limit / norm
+                    norm = np.sqrt(t0 * t0 + t1 * t1)
+                    if norm > limit:
+                        t0 *= limit / norm
+                        t1 *= limit / norm
+            for a, (new_t, old_t) in enumerate(((t0, old0), (t1, old1))):
+                if a >= nt:
+                    break
+                if new_t != old_t:
+                    lam[r + 1 + a] = new_t
+                    delta = new_t - old_t
+                    for k in range(n):
+                        w[k] += W[r + 1 + a, k] * delta
+                    if abs(delta) > change:
+                        change = abs(delta)
         if change <= tolerance * largest:
             return sweeps, True
     return sweeps, False
