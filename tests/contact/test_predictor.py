@@ -234,3 +234,43 @@ def test_the_contact_mode_is_checked_and_read_from_a_scene(tmp_path):
     with pytest.raises(ts.InputError, match="contact mode must be one of"):
         sim.set_contact(dhat=1e-4, mode="fast")
     assert replace(sim.contact, mode="accurate").mode == "accurate"
+
+
+def test_the_haptic_re_solve_gives_the_step_force_and_follows_a_full_step():
+    sim = pressed_block(0.2, "interactive")
+    _press(sim, [1e-4, 4e-4, 6e-4])
+    haptic = sim.haptic_contact("probe")
+    reported = np.asarray(sim.history[-1].extra["forces"]["probe"])
+    assert np.allclose(haptic.force0, reported, rtol=1e-3, atol=1e-6)
+    d = np.array([0.0, 0.0, -1e-4])
+    predicted = haptic.force(d)
+    record, _ = _press(sim, [7e-4])
+    full = np.asarray(record.extra["forces"]["probe"])
+    assert predicted[2] < haptic.force0[2] < 0  # pressing further pushes harder
+    assert np.linalg.norm(predicted - full) <= 0.1 * np.linalg.norm(full)
+
+
+def test_the_haptic_force_grows_continuously_as_a_contact_appears():
+    sim = pressed_block(0.0, "interactive")
+    # the probe 2e-4 above the block, then a step that leaves it 1.2e-4 above (beyond dhat:
+    # no force, its pairs in the step's problem all the same)
+    sim.drive_obstacle("probe", translation=(0.0, 0.0, -0.8e-4))
+    sim.step()
+    haptic = sim.haptic_contact("probe")
+    assert len(haptic._b) > 0
+    assert np.linalg.norm(haptic.force0) < 1e-12
+    depths = np.linspace(0.0, 3e-4, 61)
+    forces = np.array([haptic.force(np.array([0.0, 0.0, -z]))[2] for z in depths])
+    assert forces[0] == 0.0 and forces[-1] < 0.0
+    assert np.all(np.diff(forces) <= 1e-12)  # monotone: pressing further never pulls
+    jumps = np.abs(np.diff(forces))
+    assert jumps.max() <= 0.2 * abs(forces[-1])  # no step in the force
+
+
+def test_haptic_contact_needs_a_predicted_step():
+    sim = pressed_block(0.0, "barrier")
+    _press(sim, [1e-4])
+    with pytest.raises(ts.InputError, match="not a predicted one"):
+        sim.haptic_contact("probe")
+    with pytest.raises(ts.InputError, match="no obstacle 'knife'"):
+        sim.haptic_contact("knife")

@@ -55,6 +55,8 @@ class Prediction:
     free: np.ndarray
     forces: dict[str, np.ndarray]
     normal_forces: dict[str, np.ndarray]
+    rhs: np.ndarray | None = None  # (m, d) the contact problem's b: free values less targets
+    soft: np.ndarray | None = None  # (m,) the pairs' own compliances in it
     sweeps: int = 0
     converged: bool = True
     columns_solved: int = 0
@@ -162,11 +164,12 @@ class ContactPredictor:
         )  # fmt: skip
         return self._solve(system, shell, target_gap)
 
-    def solve_again(self, system, target_gap, soft=None) -> Prediction:
+    def solve_again(self, system, target_gap, soft=None, correct: bool = True) -> Prediction:
         """The last prediction's pairs and compliance with other target gaps ((m,) or a
-        scalar) and pair compliances ``soft`` (m,): only the contact problem and the
+        scalar) and pair compliances ``soft`` (m,): only the contact problem and (unless
+        ``correct`` is False: the forces alone are wanted, x and dq are left as they were) the
         correction again."""
-        return self._solve(system, self.last, target_gap, soft)
+        return self._solve(system, self.last, target_gap, soft, correct)
 
     def refine(self, system, gradient, target_gap, soft=None) -> tuple[Prediction, float]:
         """One more pass of the last prediction on its pairs and compliance, from a new free
@@ -186,7 +189,7 @@ class ContactPredictor:
         shell = replace(p, x_free=x_free, free=free)
         return self._solve(system, shell, target_gap, soft), moved
 
-    def _solve(self, system, p: Prediction, target_gap, soft=None) -> Prediction:
+    def _solve(self, system, p: Prediction, target_gap, soft=None, correct=True) -> Prediction:
         """The contact problem on p's W for its free values less the target gaps, then the
         correction from p.x_free: a new Prediction."""
         contact, rows = system.contact, p.rows
@@ -200,13 +203,15 @@ class ContactPredictor:
         self.clock["contact_solve"] += time.perf_counter() - start
         start = time.perf_counter()
         lam = result.force.reshape(-1)
-        dq = p.X @ (p.J[:, p.dofs].T @ lam) if m else np.zeros(system.n_dofs)
+        dq = p.dq
+        if correct:
+            dq = p.X @ (p.J[:, p.dofs].T @ lam) if m else np.zeros(system.n_dofs)
         normal_only = np.zeros_like(result.force)
         normal_only[:, 0] = result.force[:, 0]
         self._warm = dict(zip(keys, result.force, strict=True))
         self.last = replace(
             p,
-            x=system.retract(p.x_free, dq),
+            x=system.retract(p.x_free, dq) if correct else p.x,
             dq=dq,
             force=result.force,
             forces=self._forces(contact, rows, result.force),
@@ -214,6 +219,8 @@ class ContactPredictor:
             sweeps=result.sweeps,
             converged=result.converged,
             columns_solved=self.compliance.solved_columns,
+            rhs=b,
+            soft=None if soft is None else np.asarray(soft, dtype=float),
         )
         self.clock["correction"] += time.perf_counter() - start
         return self.last

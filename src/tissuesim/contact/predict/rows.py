@@ -306,13 +306,15 @@ def detect_rows(
     )
 
 
-def sides_kept(contact, V0: np.ndarray, V1: np.ndarray) -> bool:
+def sides_kept(contact, V0: np.ndarray, V1: np.ndarray, slack: float) -> bool:
     """Whether no point passed through a triangle and no edge through an edge between V0 and
     V1, judged at the two ends: for every candidate pair of the swept boxes, a point that lies
     over its triangle at the end (its projection inside) is on the side of the triangle's
     plane it started on, and two edges whose closest points are inside both at the end keep
-    the sign of their triple product. With the end free of intersection (exact test), this
-    rules out a surface tunnelled through in the step."""
+    the side of each other they started on; an end within ``slack`` (m) of the plane (or the
+    other edge's line) counts as on either side (a point grazing a face's edge next to the
+    face it meets lies a hair under the first face's plane). With the end free of
+    intersection (exact test), this rules out a surface tunnelled through in the step."""
     V0, V1 = np.asfortranarray(V0), np.asfortranarray(V1)
     for kind, stencil in _candidates(contact, V0, V1, 0.0):
         if kind == 0:
@@ -321,16 +323,25 @@ def sides_kept(contact, V0: np.ndarray, V1: np.ndarray) -> bool:
             n1 = np.cross(V1[stencil[:, 2]] - a1, V1[stencil[:, 3]] - a1)
             side0 = np.einsum("kd,kd->k", n0, V0[stencil[:, 0]] - a0)
             side1 = np.einsum("kd,kd->k", n1, V1[stencil[:, 0]] - a1)
-            coef = _point_triangle(*(V1[stencil[:, k]] for k in range(4)))
-            over = np.all(coef[:, 1:] < 0.0, axis=1)  # the projection inside the triangle
+            # the projection inside the triangle at both ends
+            over = np.all(
+                _point_triangle(*(V1[stencil[:, k]] for k in range(4)))[:, 1:] < 0, axis=1
+            )
+            over &= np.all(
+                _point_triangle(*(V0[stencil[:, k]] for k in range(4)))[:, 1:] < 0, axis=1
+            )
         elif kind == 1:
             a, b, c, d = (V0[stencil[:, k]] for k in range(4))
-            side0 = np.einsum("kd,kd->k", np.cross(b - a, d - c), a - c)
-            a, b, c, d = (V1[stencil[:, k]] for k in range(4))
-            side1 = np.einsum("kd,kd->k", np.cross(b - a, d - c), a - c)
+            n0 = np.cross(b - a, d - c)
+            side0 = np.einsum("kd,kd->k", n0, a - c)
             _, over = _edge_edge(a, b, c, d)
+            a, b, c, d = (V1[stencil[:, k]] for k in range(4))
+            n1 = np.cross(b - a, d - c)
+            side1 = np.einsum("kd,kd->k", n1, a - c)
+            over &= _edge_edge(a, b, c, d)[1]  # closest points inside both edges at both ends
         else:
             continue
-        if np.any(over & (side0 * side1 < 0.0)):
+        beyond = np.abs(side1) > slack * np.linalg.norm(n1, axis=1)
+        if np.any(over & beyond & (side0 * side1 < 0.0)):
             return False
     return True

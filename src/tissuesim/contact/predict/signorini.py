@@ -131,7 +131,7 @@ def _kernel():
         import numba
     except ImportError:
         return _gauss_seidel
-    return numba.njit(cache=True)(_gauss_seidel)
+    return numba.njit(cache=True, nogil=True)(_gauss_seidel)  # nogil: a haptic thread
 
 
 class SignoriniResult:
@@ -150,7 +150,7 @@ def solve_signorini_coulomb(
     soft: np.ndarray | None = None,
     *,
     max_sweeps: int = 200,
-    tolerance: float = 1e-6,
+    tolerance: float = 1e-5,
 ) -> SignoriniResult:
     """Forces for m pairs of dimension d: W (m d, m d) compliance (m/N), b (m, d) the values
     without force (gap minus its target, slips), mu (m,), ``warm`` (m, d) a start, ``soft``
