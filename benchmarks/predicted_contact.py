@@ -31,6 +31,7 @@ import statistics
 import subprocess
 import sys
 import time
+from dataclasses import replace
 from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
@@ -124,7 +125,8 @@ def run(scene: str, divisions: int, mode: str, tight: bool) -> dict:
     newton = ts.NewtonOptions()
     newton = newton.tighter(100.0) if tight else newton
     sim, instrument, steps = scenes()[scene](divisions, newton)
-    sim.set_contact(**{**_contact_kwargs(sim.contact), "mode": mode})
+    sim.contact = replace(sim.contact, mode=mode)
+    sim._changed()
     free = alone(scene, divisions)
     rows = []
     for _ in range(steps):
@@ -164,16 +166,6 @@ def run(scene: str, divisions: int, mode: str, tight: bool) -> dict:
         "largest_displacement": float(
             np.max(np.linalg.norm((sim.state.x - rest).reshape(-1, 3), axis=1))
         ),
-    }
-
-
-def _contact_kwargs(settings) -> dict:
-    return {
-        "dhat": settings.dhat,
-        "stiffness": settings.stiffness,
-        "friction": settings.friction,
-        "eps_v": settings.eps_v,
-        "friction_iterations": settings.friction_iterations,
     }
 
 

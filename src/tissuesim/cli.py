@@ -160,25 +160,39 @@ def _play(args) -> int:
 
         raise InputError("play needs an implicit scene (contact): integrator = backward_euler")
     off = args.off_screen is not None
-    session = LiveSession(sim, args.obstacle, budget_s=args.budget, off_screen=off)
+    path = None
+    if args.path is not None:
+        from tissuesim.io.device_path import read_device_path
+
+        path = read_device_path(args.path)
+    if not off:
+        _check_display()
+    session = LiveSession(sim, args.obstacle, budget_s=args.budget, off_screen=off, path=path)
     if off:
-        records = session.run_off_screen(args.frames or 10, Path(args.off_screen))
-        print(
-            json.dumps(
-                {
-                    "frames": len(records),
-                    "obstacle": session.name,
-                    "force_N": session.last_force.tolist(),
-                    "real_time_factor": session.real_time_factor,
-                    "early_stops": session.early_stops,
-                    "pictures": args.off_screen,
-                },
-                indent=2,
-            )
-        )
+        session.run_off_screen(args.frames or 10, Path(args.off_screen))
+        print(json.dumps({**session.report(), "pictures": args.off_screen}, indent=2))
         return 0
     session.run_window(args.frames)
+    print(json.dumps(session.report(), indent=2))
     return 0
+
+
+def _check_display() -> None:
+    """A window needs a display: without one (a server, CI) say how to run off screen, not
+    VTK's MismatchedInteractorError."""
+    import os
+    import sys
+
+    from tissuesim.errors import InputError
+
+    if sys.platform.startswith("linux") and not (
+        os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")
+    ):
+        raise InputError(
+            "play: no display to open a window on (DISPLAY is not set); run off screen with "
+            "--off-screen DIR (frames saved as PNG there), e.g. tissuesim play SCENE "
+            "--off-screen out/play --frames 30"
+        )
 
 
 def _add_mesh_parser(sub, common) -> None:
@@ -261,6 +275,13 @@ def _seconds(text: str) -> float:
     return value
 
 
+def _frames(text: str) -> int:
+    value = _steps(text)
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"must be an integer >= 1, not {text!r}")
+    return value
+
+
 def _steps(text: str) -> int:
     try:
         value = int(text)
@@ -339,7 +360,13 @@ def main(argv: list[str] | None = None) -> int:
     )
     p_play.add_argument("--obstacle", help="the obstacle to drive (default the first)")
     p_play.add_argument("--budget", type=_seconds, help="wall-clock budget per step (s)")
-    p_play.add_argument("--frames", type=_steps, help="stop after this many frames")
+    p_play.add_argument("--frames", type=_frames, help="stop after this many frames (>= 1)")
+    p_play.add_argument(
+        "--path",
+        metavar="CSV",
+        help="a recorded device path for the instrument: rows of time_s,x_m,y_m,z_m "
+        "(optionally rx,ry,rz rad); off screen the default is the scene's own motion",
+    )
     p_play.add_argument(
         "--off-screen",
         metavar="DIR",

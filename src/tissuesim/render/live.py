@@ -8,12 +8,17 @@ in the screen's plane with the mouse, ``mouse_scale`` m per pixel); q closes the
 Each frame drives the instrument to its new place (``Simulation.drive_obstacle``), takes one
 step (with a wall-clock budget when given: an early stop is shown as such, and is never an
 intersection) and redraws. Off-screen (tests, headless machines) the same session runs a
-number of frames and can save each as a PNG.
+number of frames, the instrument following a recorded device path (``io/device_path.py``) or
+else the scene's own motion of it, and can save each frame as a PNG. Contact runs in the
+predicted "interactive" mode (``time/contact_step.py``) unless the scene sets a mode; the
+heads-up display and ``report()`` give the instrument's force and the real-time factor.
 """
 
 from __future__ import annotations
 
+import statistics
 import time
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -37,7 +42,8 @@ KEY_DIRECTIONS = {
 class LiveSession:
     """``sim``: a Simulation with contact and at least one obstacle; ``obstacle``: the name
     of the one to drive (default the first); ``budget_s``: each step's wall-clock budget (None:
-    to convergence)."""
+    to convergence); ``path``: a DevicePath the instrument follows (``io/device_path.py``;
+    default off screen: the scene's own motion of the instrument; in a window: the keys)."""
 
     def __init__(
         self,
@@ -49,6 +55,7 @@ class LiveSession:
         budget_s: float | None = None,
         off_screen: bool = False,
         window_size: tuple[int, int] = (1024, 768),
+        path=None,
     ) -> None:
         from tissuesim.render.pyvista3d import _import_pyvista
 
@@ -61,6 +68,9 @@ class LiveSession:
         if obstacle not in names:
             raise InputError(f"play: no obstacle {obstacle!r} (obstacles: {', '.join(names)})")
         self.name = obstacle
+        if sim.contact is not None and sim.contact.mode == "auto":
+            sim.contact = replace(sim.contact, mode="interactive")
+            sim._changed()
         sim.build()
         size = sim.system.length_scale
         self.key_step = float(key_step) if key_step is not None else 0.01 * size
@@ -70,6 +80,12 @@ class LiveSession:
         self.offset = (
             np.zeros(3) if ob.translation is None else np.asarray(ob.translation(sim.time), float)
         )
+        self.path = path
+        # the scene's own motion of the instrument, followed off screen without a path
+        self.scene_motion = ob.translation
+        self.off_screen = off_screen
+        self.factors: list[float] = []  # each frame's real-time factor
+        self.outcomes: list[str] = []  # each frame's contact prediction outcome
         self.mouse = False
         self._last_mouse: tuple[int, int] | None = None
         self.frames = 0
@@ -140,7 +156,7 @@ class LiveSession:
             f"t = {self.sim.time:.3f} s   frame {self.frames}{early}\n"
             f"{self.name} force: |F| = {np.linalg.norm(f):.4f} N  "
             f"({f[0]:+.4f}, {f[1]:+.4f}, {f[2]:+.4f}) N\n"
-            f"real-time factor {self.real_time_factor:.2f} (simulated s per wall s)\n"
+            f"real-time factor {self.real_time_factor:.3g} (simulated s per wall s)\n"
             "arrows: x / y, PgUp / PgDn: z, m: mouse, q: quit"
         )
 
@@ -170,20 +186,53 @@ class LiveSession:
         self._last_mouse = (x, y)
 
     # -- stepping ------------------------------------------------------------------------
+    def _commanded(self) -> None:
+        """The instrument's place at the next step's end: the device path's, else off screen
+        the scene's motion's, else where the keys and mouse put it."""
+        t = self.sim.time + self.sim.time_step
+        if self.path is not None:
+            self.offset = self.path.translation(t)
+        elif self.off_screen and self.scene_motion is not None:
+            self.offset = np.asarray(self.scene_motion(t), dtype=float)
+
     def advance(self):
         """Drive the instrument to its commanded place, take one step, redraw; the record."""
         sim = self.sim
-        sim.drive_obstacle(self.name, translation=self.offset)
+        self._commanded()
+        rotation = None if self.path is None else self.path.rotation(sim.time + sim.time_step)
+        sim.drive_obstacle(self.name, translation=self.offset, rotation=rotation)
         start = time.perf_counter()
         record = sim.step(budget_s=self.budget_s)
         wall = time.perf_counter() - start
         self.frames += 1
         self.real_time_factor = sim.time_step / max(wall, 1e-9)
+        self.factors.append(self.real_time_factor)
+        report = None if sim.system.contact is None else sim.system.contact.prediction_report
+        self.outcomes.append("" if report is None else str(report.get("outcome", "")))
         self.last_force = np.asarray(record.extra["forces"].get(self.name, np.zeros(3)), float)
         self.early_stops += bool(record.extra.get("early_stop"))
         self._update_actors()
         self.text.SetText(2, self.status())  # 2: vtkCornerAnnotation's upper left
         return record
+
+    def report(self) -> dict:
+        """What a run of the session did: frames, the instrument and its last force (N), the
+        real-time factor (the median of the frames', and the last, 3 significant digits), the
+        early stops and the frames whose contact prediction was certified."""
+        predicted = [o for o in self.outcomes if o]
+        return {
+            "frames": self.frames,
+            "obstacle": self.name,
+            "force_N": [round(float(v), 6) for v in self.last_force],
+            "real_time_factor": float(f"{statistics.median(self.factors):.3g}")
+            if self.factors
+            else 0.0,
+            "real_time_factor_last": float(f"{self.real_time_factor:.3g}"),
+            "early_stops": self.early_stops,
+            "contact_mode": None if self.sim.contact is None else self.sim.contact.mode,
+            "certified_frames": sum(o == "certified" for o in predicted),
+            "fallback_frames": sum(o.startswith("fell back") for o in predicted),
+        }
 
     def run_off_screen(self, frames: int, pictures: Path | None = None) -> list:
         """``frames`` frames without a window; each saved as PNG in ``pictures`` if given."""
