@@ -168,6 +168,7 @@ def minimize(
     retract: Retract | None = None,
     max_step: Callable[[np.ndarray, np.ndarray], float] | None = None,
     reference_rows: slice | None = None,
+    reference_norm: float | None = None,
     path_free: Callable[[np.ndarray, np.ndarray], bool] | None = None,
     contact_projection: bool = False,
     relag: Callable[[np.ndarray], bool] | None = None,
@@ -191,6 +192,9 @@ def minimize(
     reference_rows: the gradient rows whose starting norm sets the relative tolerance and
     whose values the physical criterion checks (default all): the moving-obstacle solve leaves
     out its obstacles' rows, whose penalty forces at the start dwarf the bodies'.
+    reference_norm: the gradient norm the relative tolerance is taken of, instead of the
+    start's: a start near the solution (the contact predictor's) would otherwise be held to
+    a tighter absolute tolerance the better it is.
     contact_projection: try "contact" before shifting an indefinite exact Hessian.
     physical_default: whether criterion "auto" uses the physical criterion (contact steps).
     relag(x) -> whether re-lagging at x changed Phi (then up to ``max_relags`` times).
@@ -213,10 +217,10 @@ def minimize(
         result.reason = "the starting point has infinite energy (an inverted element?)"
         return x, result
     g0 = float(np.linalg.norm(current.gradient[free]))
-    target = (
-        options.gradient_tolerance * float(np.linalg.norm(current.gradient[checked]))
-        + options.absolute_tolerance * force_scale
-    )
+    reference = float(np.linalg.norm(current.gradient[checked]))
+    if reference_norm is not None:
+        reference = max(reference, float(reference_norm))
+    target = options.gradient_tolerance * reference + options.absolute_tolerance * force_scale
     use_physical = options.criterion == "physical" or (
         options.criterion == "auto" and physical_default
     )
@@ -256,7 +260,7 @@ def minimize(
     # lagged terms are re-lagged once the solve is loosely converged, not at the tight target:
     # the lag only needs the point to about RELAG_AT of the start's residual, and re-lagging
     # there saves the iterations from it to the target (they are redone after the re-lag)
-    relag_target = max(target, RELAG_AT * float(np.linalg.norm(current.gradient[checked])))
+    relag_target = max(target, RELAG_AT * reference)
     iteration = 0
     while True:
         gnorm = result.gradient_norms[-1]

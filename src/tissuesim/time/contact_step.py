@@ -38,6 +38,9 @@ INTERACTIVE_GAP = 0.5
 #: the smallest gap (of dhat) an interactive step holds a pair at, however hard it presses:
 #: room for the linearised gaps' error
 MIN_GAP = 0.1
+#: the same for an accurate step's start (Newton closes the rest): a start at the barrier's
+#: own gap of a few micrometres crossed surfaces by the linearisation's error
+ACCURATE_MIN_GAP = 0.05
 #: detections with the gaps linearised at the last prediction (``rows.detect_rows``'s at)
 RELINEARIZE = 1
 #: detections again from the corrected positions when the prediction crosses a surface
@@ -258,9 +261,11 @@ def certify(contact, x0: np.ndarray, x: np.ndarray, y0, y1) -> str:
 
 def accurate_start(
     system, state, h, solver, options, dynamic, body_energies, t1, y0, y1
-) -> np.ndarray | None:
-    """A start for the barrier's Newton: the prediction with each pair at the barrier's
-    equilibrium gap for its multiplier (None if the free motion fails)."""
+) -> tuple[np.ndarray | None, float | None]:
+    """(a start for the barrier's Newton: the prediction with each pair at the barrier's
+    equilibrium gap for its multiplier, None if the free motion fails; the gradient norm at
+    the free motion's start, which Newton's relative tolerance is taken of: the start's own
+    would hold a good start to a tighter tolerance the better it is)."""
     contact = system.contact
     start = time.perf_counter()
     x_free, record = free_motion(
@@ -274,17 +279,17 @@ def accurate_start(
     contact.prediction_report = report
     if not record.converged:
         report["outcome"] = f"no prediction: free motion failed ({record.reason})"
-        return None
+        return None, None
     predictor = _predictor(contact)
     predictor.clock.clear()
     target = INTERACTIVE_GAP * contact.dhat
     prediction = predictor.predict(
         system, solver, state.x, x_free, y0, y1, target, energies=body_energies
     )
-    prediction, _, _ = _barrier_gaps(contact, predictor, system, prediction, 0.0)
+    prediction, _, _ = _barrier_gaps(contact, predictor, system, prediction, ACCURATE_MIN_GAP)
     report.update(_figures(prediction), **{f"{k}_s": v for k, v in predictor.clock.items()})
     report["outcome"] = "start"
-    return system.apply_prescribed(prediction.x, t1)
+    return system.apply_prescribed(prediction.x, t1), record.gradient_norms[0]
 
 
 def barrier_pull(contact, d: np.ndarray) -> np.ndarray:

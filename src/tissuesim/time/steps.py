@@ -28,7 +28,12 @@ import scipy.sparse.linalg as spla
 from tissuesim.errors import InstabilityError
 from tissuesim.solve.newton import minimize
 from tissuesim.system import is_frame_body
-from tissuesim.time.contact_step import accurate_start, interactive_step, resolve_mode
+from tissuesim.time.contact_step import (
+    accurate_start,
+    certify,
+    interactive_step,
+    resolve_mode,
+)
 from tissuesim.time.implicit import choose_start
 from tissuesim.time.state import State, StepOutcome
 
@@ -69,6 +74,7 @@ def implicit_step(
     candidates = (c_pred, state.x) if dynamic else (state.x,)
     contact = system.contact
     max_step = None
+    reference_norm, lag_at = None, None
     if contact is not None:
         contact.time = t1
         y0, y1 = None, None
@@ -78,6 +84,7 @@ def implicit_step(
                 y0 = contact.obstacle_positions(state.time)
             y1 = contact.obstacle_positions(t1)
         contact.begin_step()
+        predicted, reference_norm, lag_at = None, None, None
         # the step's contacts predicted on the compliance first (time/contact_step.py), except
         # in pseudo-time steps and with a blade in its kerf (their starts are special)
         mode = "barrier"
@@ -90,7 +97,7 @@ def implicit_step(
             if done is not None:
                 return done
         elif mode == "accurate":
-            predicted = accurate_start(
+            predicted, reference_norm = accurate_start(
                 system, state, h, solver, options, dynamic, body_energies, t1, y0, y1
             )
             if predicted is not None:
@@ -100,14 +107,23 @@ def implicit_step(
         # obstacles the prediction c_n + h v_n carries the surface under an instrument along
         # with it, so the obstacles can sit at their targets from the start (one solve)
         starts = []
-        for c in candidates:
+        for k, c in enumerate(candidates):
             c = system.apply_prescribed(c, t1)
-            if contact.moving:
+            if k == 0 and predicted is not None:
+                # the predictor's start, certified as an interactive step is (its straight
+                # move from x_n is a chord through a curved instrument)
+                ok = bool(certify(contact, state.x, c, y0, y1))
+            elif contact.moving:
                 ok = contact.start_free(state.x, c, y0, y1)
             else:
                 ok = contact.reachable(state.x, state.time, c, t1)
             if ok:
                 starts.append(c)
+                if k == 0 and predicted is not None:
+                    lag_at = c  # the predicted start: Newton's only one, friction lagged there
+                    break
+        if lag_at is None:
+            reference_norm = None
         if not starts and contact.moving and contact.clear_path is not None:
             starts = _cleared_starts(system, contact, state.x, candidates, y0, y1, t1)
         if not starts and contact.moving:  # an instrument runs into a body at rest: pull it in
@@ -143,7 +159,9 @@ def implicit_step(
         _initialize_stiffness(system, c0, body_energies)
         if contact.has_friction:
             # friction lagged at the last solution (IPC): normal forces, tangent bases
-            friction = _start_friction(contact, state.x, y0, h, friction_from, friction_h)
+            friction = _start_friction(
+                contact, state.x, y0, h, friction_from, friction_h, lag_at, y1
+            )
     lags = _Lags(system, body_energies, c0, options, contact, friction)
     relag, max_relags = lags.newton_relag(), lags.max_relags
 
@@ -157,6 +175,7 @@ def implicit_step(
         length_scale=system.length_scale,
         retract=system.retract,
         max_step=max_step,
+        reference_norm=reference_norm,
         path_free=None if contact is None or contact.linear else contact.path_free,
         contact_projection=contact is not None,
         physical_default=contact is not None,
@@ -198,15 +217,19 @@ def _cleared_starts(system, contact, x0, candidates, y0, y1, t1) -> list[np.ndar
     return starts
 
 
-def _start_friction(contact, x0, y0, h, friction_from=None, friction_h=None):
-    """Lag friction at the step's start (the configuration x0, obstacles at y0): slip measured
-    from ``friction_from`` (default those vertices), smoothed with ``friction_h`` (default h).
-    Returns relag(c, y) that re-lags it at c (obstacles at y, or where they are) and says it
-    changed, for Newton's ``relag``."""
+def _start_friction(
+    contact, x0, y0, h, friction_from=None, friction_h=None, lag_at=None, y_lag=None
+):
+    """Lag friction at the step's start (the configuration x0, obstacles at y0), or at
+    ``lag_at`` (obstacles at ``y_lag``: the contact predictor's start, whose normal forces are
+    the step's own): slip measured from ``friction_from`` (default x0's vertices), smoothed
+    with ``friction_h`` (default h). Returns relag(c, y) that re-lags it at c (obstacles at y,
+    or where they are) and says it changed, for Newton's ``relag``."""
     V_here = contact.vertices(x0, obstacle=y0)
     V_start = V_here if friction_from is None else friction_from
     h_f = h if friction_h is None else friction_h
-    contact.lag_friction(V_start, V_here, h_f)
+    V_lag = V_here if lag_at is None else contact.vertices(lag_at, obstacle=y_lag)
+    contact.lag_friction(V_start, V_lag, h_f)
 
     def relag(c: np.ndarray, y: np.ndarray | None) -> bool:
         contact.lag_friction(V_start, contact.vertices(c, obstacle=y), h_f)

@@ -26,6 +26,12 @@ from tissuesim.errors import InputError
 
 __all__ = ["HapticContact"]
 
+#: a device needs the force to about a percent, on time: sweeps per call at most, and the
+#: relative change of the forces at which a call stops (warm-started from the last call, a
+#: few sweeps suffice while the device moves smoothly)
+SWEEPS = 60
+TOLERANCE = 1e-4
+
 
 class HapticContact:
     """The contact problem of the last step for obstacle ``name`` (a snapshot: later steps do
@@ -67,7 +73,9 @@ class HapticContact:
             self.last_solve_s = time.perf_counter() - start
             return np.zeros(self.dim)
         b = self._b + self._A @ disp
-        out = solve_signorini_coulomb(self._W, b, self._mu, self._lam, self._soft)
+        out = solve_signorini_coulomb(
+            self._W, b, self._mu, self._lam, self._soft, max_sweeps=SWEEPS, tolerance=TOLERANCE
+        )
         self._lam = out.force
         force = -np.einsum("mad,ma->d", self._A, out.force)
         self.last_solve_s = time.perf_counter() - start
