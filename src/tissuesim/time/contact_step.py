@@ -91,6 +91,28 @@ def free_motion(system, state: State, h, solver, options, dynamic, body_energies
     )
 
 
+def lagged_free_motion(system, state: State, h, solver, dynamic, body_energies, t1):
+    """(x_free, record) by one step on the kept factor's matrix K from the prediction
+    x_n + h v_n: x_free = x0 - K^-1 g(x0), a gradient and a back-solve (Newton's first
+    iteration costs an assembly and a preconditioned CG on the current matrix); the
+    refinement passes that follow are the same kind of step with the contacts in. None when
+    there is no kept factor yet."""
+    from tissuesim.solve.newton import NewtonResult
+    from tissuesim.solve.reuse import ReusedFactorSolver
+
+    if not isinstance(solver, ReusedFactorSolver) or not solver._factored:
+        return None
+    c0 = system.retract(state.x, h * state.v) if dynamic else state.x
+    c0 = system.apply_prescribed(c0, t1)
+    acc = system.evaluate(c0, 1, False, body_energies, contact=False)
+    g = acc.gradient.copy()
+    g[system.elimination.dofs] = 0.0
+    dx = np.asarray(solver.direct.solve(-g))
+    record = NewtonResult(converged=True, iterations=1, reason="lagged matrix")
+    record.gradient_norms.append(float(np.linalg.norm(g)))
+    return system.retract(c0, dx), record
+
+
 def _predictor(contact):
     from tissuesim.contact.predict.predictor import ContactPredictor
 
@@ -108,18 +130,28 @@ def interactive_step(
     start = time.perf_counter()
     # the free motion need not converge: the refinement passes are Newton iterations of the
     # step with its contacts (lagged matrix), so FREE_ITERATIONS suffice
-    free_budget = dict(budget or {})
-    free_budget["iterations"] = min(free_budget.get("iterations", FREE_ITERATIONS), FREE_ITERATIONS)
-    x_free, record = free_motion(
-        system, state, h, solver, options, dynamic, body_energies, t1, free_budget
-    )
+    predictor = _predictor(contact)
+    lagged = None
+    if not predictor.refresh:
+        lagged = lagged_free_motion(system, state, h, solver, dynamic, body_energies, t1)
+    if lagged is not None:
+        x_free, record = lagged
+    else:  # no kept factor yet, or the last step's passes did not settle: Newton's iteration
+        free_budget = dict(budget or {})
+        free_budget["iterations"] = min(
+            free_budget.get("iterations", FREE_ITERATIONS), FREE_ITERATIONS
+        )
+        x_free, record = free_motion(
+            system, state, h, solver, options, dynamic, body_energies, t1, free_budget
+        )
+        predictor.refresh = False
     free_s = time.perf_counter() - start
     report = {"mode": "interactive", "free_motion_s": free_s, "free_iterations": record.iterations}
     contact.prediction_report = report
     if not (record.converged or record.budget_stop):
         report["outcome"] = f"fell back to the barrier: free motion failed ({record.reason})"
         return None
-    predictor, gap = _predictor(contact), INTERACTIVE_GAP * contact.dhat
+    gap = INTERACTIVE_GAP * contact.dhat
     predictor.clock.clear()
     clock = predictor.clock
     also, redetections = None, 0
@@ -221,6 +253,8 @@ def _refined(system, predictor, prediction, body_energies, gap, soft=None):
         prediction, moved = predictor.refine(system, gradient, gap, soft)
         if moved <= REFINE_TOLERANCE * max(size, 1e-300):
             break
+    else:  # the kept factor's matrix is too far from the step's: Newton's next step
+        predictor.refresh = True
     return prediction, passes
 
 

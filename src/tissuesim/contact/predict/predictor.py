@@ -101,6 +101,9 @@ class ContactPredictor:
         self._weights: dict[tuple, float] = {}  # the barrier's effective weight per pair
         self._candidates = None  # (the sweep's key, sweep_candidates' answer) of the last
         self.clock: defaultdict[str, float] = defaultdict(float)  # seconds per stage, summed
+        # the next free motion by Newton (its PCG refreshes the kept factor) rather than on
+        # the kept factor's matrix (time/contact_step.py)
+        self.refresh = False
 
     def predict(
         self,
