@@ -3,8 +3,6 @@ the per-step candidate set, the live-driven instrument, step budgets and the liv
 
 from __future__ import annotations
 
-import json
-
 import numpy as np
 import pytest
 import scipy.sparse as sp
@@ -223,41 +221,3 @@ def test_the_live_session_moves_the_instrument_with_keys_and_the_mouse_headless(
     image = session.plotter.screenshot(return_img=True)
     assert image.shape[:2] == (240, 320) and image.std() > 0  # something was drawn
     session.plotter.close()
-
-
-def test_play_off_screen_runs_frames_and_saves_them(tmp_path, capsys):
-    pytest.importorskip("pyvista")
-    from tissuesim.cli import main
-
-    scene = tmp_path / "probe.toml"
-    scene.write_text(
-        """
-[mesh]
-generator = "box"
-lower = [0.0, 0.0, 0.0]
-upper = [0.02, 0.02, 0.01]
-divisions = [3, 3, 2]
-[material]
-model = "neo_hookean"
-youngs_modulus = 1e4
-poisson_ratio = 0.3
-[simulation]
-integrator = "backward_euler"
-time_step = 0.02
-density = 1000.0
-[[dirichlet]]
-name = "base"
-vertices = { on_plane = { axis = 2, value = 0.0 } }
-[contact]
-dhat = 1e-4
-[[obstacles]]
-name = "probe"
-sphere = { center = [0.01, 0.01, 0.0152], radius = 0.005, refinement = 2 }
-"""
-    )
-    pictures = tmp_path / "frames"
-    code = main(["play", str(scene), "--off-screen", str(pictures), "--frames", "2"])
-    assert code == 0
-    report = json.loads(capsys.readouterr().out)
-    assert report["frames"] == 2 and report["obstacle"] == "probe"
-    assert sorted(p.name for p in pictures.iterdir()) == ["frame_0000.png", "frame_0001.png"]

@@ -109,3 +109,10 @@ def test_play_refuses_zero_frames(tmp_path, capsys):
     with pytest.raises(SystemExit):
         main(["play", str(scene), "--off-screen", str(tmp_path / "f"), "--frames", "0"])
     assert ">= 1" in capsys.readouterr().err
+
+
+def test_play_off_screen_runs_frames_and_saves_them(tmp_path, capsys):
+    report = _play(tmp_path, capsys, SCENE, "--frames", "2")
+    assert report["frames"] == 2 and report["obstacle"] == "probe"
+    frames = tmp_path / "frames"
+    assert sorted(p.name for p in frames.iterdir()) == ["frame_0000.png", "frame_0001.png"]
