@@ -274,3 +274,47 @@ def test_haptic_contact_needs_a_predicted_step():
         sim.haptic_contact("probe")
     with pytest.raises(ts.InputError, match="no obstacle 'knife'"):
         sim.haptic_contact("knife")
+
+
+def test_accurate_mode_converges_to_the_barriers_state():
+    """From the same state (the first touch taken by the barrier in both: its augmented
+    moving-obstacle solve leaves the probe within 0.01 dhat of its target, the prediction
+    puts it there exactly), every later step lands where the barrier's Newton lands."""
+    tight = ts.NewtonOptions().tighter(100.0)
+    sims = [pressed_block(0.0, "barrier"), pressed_block(0.0, "barrier")]
+    for sim in sims:
+        sim.newton = tight
+        _press(sim, [1e-4, 2e-4])
+    sims[1].set_contact(dhat=1e-4, mode="accurate")
+    moved = 0.0
+    for depth in (2.5e-4, 3e-4, 3.5e-4, 4e-4):
+        for sim in sims:
+            _press(sim, [depth])
+        rest = sims[0].system.bodies[0].rest_config()
+        moved = max(moved, np.abs(sims[0].state.x - rest).max())
+        assert np.abs(sims[1].state.x - sims[0].state.x).max() <= 1e-8 * moved
+        assert sims[1].system.contact.prediction_report["outcome"] == "start"
+
+
+def test_a_prediction_that_fails_certification_falls_back_to_the_barrier(monkeypatch):
+    import tissuesim.time.contact_step as stages
+
+    sim = pressed_block(0.0, "interactive")
+    _press(sim, [1e-4, 4e-4])
+    monkeypatch.setattr(stages, "certify", lambda *args: "")
+    record, _ = _press(sim, [7e-4])  # _press checks that the state does not intersect
+    report = sim.system.contact.prediction_report
+    assert report["outcome"].startswith("fell back to the barrier")
+    assert record.newton_iterations > 1  # the barrier's Newton took the step
+
+
+def test_the_compliance_of_a_step_is_its_rows_through_the_inverse_of_the_kept_matrix():
+    sim = pressed_block(0.0, "interactive")
+    _press(sim, [1e-4, 5e-4])
+    prediction = sim.system.contact.predictor.last
+    solver = sim._linear_solver()
+    K = solver.factored_matrix.toarray()
+    J = prediction.J.toarray()
+    dense = J @ np.linalg.solve(K, J.T)
+    assert prediction.rows.n_pairs > 0
+    assert np.allclose(prediction.W, dense, rtol=1e-8, atol=1e-10 * np.abs(dense).max())

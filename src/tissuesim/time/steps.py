@@ -84,7 +84,7 @@ def implicit_step(
                 y0 = contact.obstacle_positions(state.time)
             y1 = contact.obstacle_positions(t1)
         contact.begin_step()
-        predicted, reference_norm, lag_at = None, None, None
+        predicted, reference_norm, lag_at, plain = None, None, None, None
         # the step's contacts predicted on the compliance first (time/contact_step.py), except
         # in pseudo-time steps and with a blade in its kerf (their starts are special)
         mode = "barrier"
@@ -101,6 +101,7 @@ def implicit_step(
                 system, state, h, solver, options, dynamic, body_energies, t1, y0, y1
             )
             if predicted is not None:
+                plain = candidates
                 candidates = (predicted, *candidates)
         # Newton must start where the bodies can get from x_n without crossing a surface, the
         # obstacles and prescribed vertices moving to their t1 places on the way: with moving
@@ -156,7 +157,13 @@ def implicit_step(
     c0 = choose_start(evaluate, candidates, lambda c: system.apply_prescribed(c, t1))
     friction = None
     if contact is not None:
-        _initialize_stiffness(system, c0, body_energies)
+        # IPC's adaptive kappa balances the other forces at the start the barrier alone would
+        # take, also when Newton starts at the prediction: the same kappa, the same answer
+        start = c0
+        if lag_at is not None and contact.adaptive is not None:
+            if not contact.adaptive.initialized:
+                start = _plain_start(system, state, evaluate, plain, t1, y0, y1)
+        _initialize_stiffness(system, start, body_energies)
         if contact.has_friction:
             # friction lagged at the last solution (IPC): normal forces, tangent bases
             friction = _start_friction(
@@ -198,6 +205,23 @@ def implicit_step(
     system.last_step_energies = body_energies  # the step's Phi, for haptics.py's linearisation
     v1 = system.difference(c1, state.x) / h if dynamic else np.zeros(system.n_dofs)
     return StepOutcome(State(t1, c1, v1), True, [record])
+
+
+def _plain_start(system, state, evaluate, candidates, t1, y0, y1) -> np.ndarray:
+    """The start the barrier's Newton takes without a prediction: the candidate of lowest
+    energy among those reached from x_n without crossing a surface (x_n if none is)."""
+    contact = system.contact
+    starts = []
+    for c in candidates:
+        c = system.apply_prescribed(c, t1)
+        if contact.moving:
+            ok = contact.start_free(state.x, c, y0, y1)
+        else:
+            ok = contact.reachable(state.x, state.time, c, t1)
+        if ok:
+            starts.append(c)
+    starts = starts or [system.apply_prescribed(state.x, t1)]
+    return choose_start(evaluate, tuple(starts), lambda c: c)
 
 
 def _cleared_starts(system, contact, x0, candidates, y0, y1, t1) -> list[np.ndarray]:
