@@ -93,7 +93,7 @@ def grasp(divisions: int, newton=None):
                 s * 0.003 * min(t / 0.2, 1.0) + 0.03 * max(t - 0.2, 0.0),
             ),
         )
-    return sim, "upper", 16
+    return sim, "lower", 16  # the jaw that lifts the organ
 
 
 def scenes():
@@ -150,6 +150,8 @@ def run(scene: str, divisions: int, mode: str, tight: bool) -> dict:
                 "substeps": record.substeps,
                 "touching": bool(extra["active_pairs"] or report.get("pairs")),
                 "outcome": report.get("outcome"),
+                "pairs": report.get("pairs", 0),
+                "columns_solved": report.get("columns_solved", 0),
                 "stages": {k: report.get(f"{k}_s", 0.0) for k in STAGES},
                 "force": np.asarray(record.extra["forces"][instrument]).tolist(),
                 "intersecting": bool(contact.intersecting(sim.state.x)),
@@ -198,6 +200,10 @@ def summarise(result: dict, reference: dict) -> dict:
             else float("nan")
         ),
         "intersecting_steps": sum(r["intersecting"] for r in rows),
+        "pairs_median": statistics.median(r["pairs"] for r in predicted) if predicted else 0,
+        "columns_per_step": statistics.mean(r["columns_solved"] for r in predicted)
+        if predicted
+        else 0,
     }
     for stage in STAGES:
         values = [r["stages"][stage] for r in predicted[1:]] or [0.0]
@@ -255,6 +261,8 @@ COLUMNS = [
     ("force_error_median", "force error (median)", "{:.2%}"),
     ("force_error_max", "force error (max)", "{:.2%}"),
     ("intersecting_steps", "intersecting steps", "{}"),
+    ("pairs_median", "pairs", "{:.0f}"),
+    ("columns_per_step", "W columns solved / step", "{:.0f}"),
 ]
 
 

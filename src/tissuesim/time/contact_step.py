@@ -153,6 +153,7 @@ def interactive_step(
         return None
     gap = INTERACTIVE_GAP * contact.dhat
     predictor.clock.clear()
+    predictor.columns = 0
     clock = predictor.clock
     also, redetections = None, 0
     for redetections in range(1 + REDETECT):  # noqa: B007 (reported below)
@@ -177,6 +178,7 @@ def interactive_step(
         also = x  # pairs the correction made: detect them too
     report.update(
         _figures(prediction),
+        columns_solved=predictor.columns,
         redetections=redetections,
         refinements=refinements,
         certificate=certified,
@@ -316,12 +318,17 @@ def accurate_start(
         return None, None
     predictor = _predictor(contact)
     predictor.clock.clear()
+    predictor.columns = 0
     target = INTERACTIVE_GAP * contact.dhat
     prediction = predictor.predict(
         system, solver, state.x, x_free, y0, y1, target, energies=body_energies
     )
     prediction, _, _ = _barrier_gaps(contact, predictor, system, prediction, ACCURATE_MIN_GAP)
-    report.update(_figures(prediction), **{f"{k}_s": v for k, v in predictor.clock.items()})
+    report.update(
+        _figures(prediction),
+        columns_solved=predictor.columns,
+        **{f"{k}_s": v for k, v in predictor.clock.items()},
+    )
     report["outcome"] = "start"
     return system.apply_prescribed(prediction.x, t1), record.gradient_norms[0]
 
@@ -361,5 +368,4 @@ def _figures(prediction) -> dict:
         "pairs": prediction.rows.n_pairs,
         "sweeps": prediction.sweeps,
         "contact_solve_converged": prediction.converged,
-        "columns_solved": prediction.columns_solved,
     }

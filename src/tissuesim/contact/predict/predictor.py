@@ -40,7 +40,7 @@ class Prediction:
     ``W`` the compliance, ``X`` its columns H^-1 E_D for the DOFs ``dofs`` J reaches, ``free``
     (m, d) the gaps and slips at ``x_free`` before any force, ``forces`` per obstacle the force
     on the bodies (N) and ``normal_forces`` its normal part, ``sweeps`` / ``converged`` of the
-    contact solve, ``columns_solved`` compliance columns solved."""
+    contact solve."""
 
     x: np.ndarray
     dq: np.ndarray
@@ -59,7 +59,6 @@ class Prediction:
     soft: np.ndarray | None = None  # (m,) the pairs' own compliances in it
     sweeps: int = 0
     converged: bool = True
-    columns_solved: int = 0
 
 
 def _factor_solve(solver, matrix):
@@ -101,6 +100,7 @@ class ContactPredictor:
         self._weights: dict[tuple, float] = {}  # the barrier's effective weight per pair
         self._candidates = None  # (the sweep's key, sweep_candidates' answer) of the last
         self.clock: defaultdict[str, float] = defaultdict(float)  # seconds per stage, summed
+        self.columns = 0  # compliance columns solved since the caller last set it to 0
         # the next free motion by Newton (its PCG refreshes the kept factor) rather than on
         # the kept factor's matrix (time/contact_step.py)
         self.refresh = False
@@ -157,6 +157,7 @@ class ContactPredictor:
         dofs = np.unique(J.indices)
         solve, token = _factor_solve(solver, lambda: _hessian(system, x_free, energies))
         X = self.compliance.columns(solve, token, system.n_dofs, dofs)
+        self.columns += self.compliance.solved_columns
         W = compliance_matrix(J, X, dofs)
         self.clock["compliance"] += time.perf_counter() - start
         self._solve_through = solve
@@ -221,7 +222,6 @@ class ContactPredictor:
             normal_forces=self._forces(contact, rows, normal_only),
             sweeps=result.sweeps,
             converged=result.converged,
-            columns_solved=self.compliance.solved_columns,
             rhs=b,
             soft=None if soft is None else np.asarray(soft, dtype=float),
         )
