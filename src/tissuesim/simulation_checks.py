@@ -114,6 +114,8 @@ class StepChecks:
             "friction_solves": stats.friction_solves,
             "stiffness_Pa": contact.kappa,
             "indentation_depth": depths,
+            # the contact predictor's figures for the step (time/contact_step.py), or None
+            "prediction": contact.prediction_report,
         }
         contact.reset_stats()
         return report

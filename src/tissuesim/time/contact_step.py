@@ -2,21 +2,23 @@
 compliance, the contact problem, correction, certification; then either the barrier's Newton
 from there (accurate) or nothing more (interactive).
 
-    free motion:   Newton on Phi without contact (the contact-free step, kept factorisation)
-    predict:       pairs from x_n towards x_free, W = J H^-1 J^T, Signorini-Coulomb on W,
-                   x = x_free + H^-1 J^T lambda          (contact/predict/predictor.py)
-    certify:       exact CCD from (x_n, obstacles y0) to (x, y1): no surface crossed
+    free motion:   the step without contact: interactive, one step on the kept factor's
+                   matrix (``lagged_free_motion``: a gradient and a back-solve); accurate,
+                   Newton to convergence
+    predict:       pairs from x_n towards x_free, W = J K^-1 J^T, Signorini-Coulomb on W,
+                   x = x_free + K^-1 J^T lambda          (contact/predict/predictor.py)
     gaps:          each pair held at the gap where the barrier's force equals its multiplier
-                   (a fixed point of a few passes), so the prediction lands on the barrier's
-                   own equilibrium
-    interactive:   x (refined on the nonlinear elasticity by lagged-matrix passes) is the
-                   step, its gaps at least MIN_GAP dhat; forces = lambda
-    accurate:      x is a start of the barrier's Newton (time/steps.py): the barrier's
-                   answer and guarantee, from inside its quadratic basin
+                   (linearised per pair, GAP_PASSES passes), so the prediction lands on the
+                   barrier's own equilibrium; the gaps linearised again at x (RELINEARIZE)
+    interactive:   x, refined by lagged-matrix passes of the step with its contacts (REFINE),
+                   its gaps at least MIN_GAP dhat, certified (``certify``), is the step;
+                   forces = lambda; the barrier's weights learnt at x for the next step
+    accurate:      x (gaps at least ACCURATE_MIN_GAP dhat), certified, is the start of the
+                   barrier's Newton (time/steps.py): the barrier's answer and guarantee
 
-A prediction that fails certification (or a free motion that does not converge) falls back
-to the barrier's Newton, within the step's budget, and the step's report says so
-(``extra["contact"]["prediction"]``).
+A prediction that fails certification (after REDETECT detections more) or a free motion that
+fails falls back to the barrier's Newton, within the step's budget; the step's report says so
+(``record.extra["contact"]["prediction"]``, ``ContactModel.prediction_report``).
 """
 
 from __future__ import annotations
@@ -48,13 +50,17 @@ REDETECT = 2
 #: how far (of dhat) past a face's plane an end may lie and count as not through it
 #: (``rows.sides_kept``): a point grazing the edge between two faces
 SIDE_SLACK = 0.1
+#: steps on the kept factor's matrix an interactive free motion takes at most, and the
+#: factor by which one must shrink the gradient to end it (``lagged_free_motion``)
+LAGGED_STEPS = 2
+LAGGED_CONTRACTION = 0.2
 #: Newton iterations of an interactive step's free motion, at most
 FREE_ITERATIONS = 1
 #: passes of the prediction on the nonlinear elasticity (``_refined``), at most, and when to
 #: stop (the free point's move against the contact correction's largest)
 REFINE = 3
 REFINE_TOLERANCE = 1e-2
-#: fixed-point passes between the multipliers and the barrier's equilibrium gaps (accurate)
+#: passes between the multipliers and the barrier's equilibrium gaps (``_barrier_gaps``)
 GAP_PASSES = 2
 
 
@@ -95,22 +101,35 @@ def lagged_free_motion(system, state: State, h, solver, dynamic, body_energies, 
     """(x_free, record) by one step on the kept factor's matrix K from the prediction
     x_n + h v_n: x_free = x0 - K^-1 g(x0), a gradient and a back-solve (Newton's first
     iteration costs an assembly and a preconditioned CG on the current matrix); the
-    refinement passes that follow are the same kind of step with the contacts in. None when
-    there is no kept factor yet."""
+    refinement passes that follow are the same kind of step with the contacts in. A step
+    that does not shrink the gradient by LAGGED_CONTRACTION is followed by another, at most
+    LAGGED_STEPS in all; None when there is no kept factor yet or they do not (an organ
+    swinging under gravity: the lagged step folded its surface)."""
     from tissuesim.solve.newton import NewtonResult
     from tissuesim.solve.reuse import ReusedFactorSolver
 
     if not isinstance(solver, ReusedFactorSolver) or not solver._factored:
         return None
-    c0 = system.retract(state.x, h * state.v) if dynamic else state.x
-    c0 = system.apply_prescribed(c0, t1)
-    acc = system.evaluate(c0, 1, False, body_energies, contact=False)
-    g = acc.gradient.copy()
-    g[system.elimination.dofs] = 0.0
-    dx = np.asarray(solver.direct.solve(-g))
-    record = NewtonResult(converged=True, iterations=1, reason="lagged matrix")
+    held = system.elimination.dofs
+
+    def gradient(c):
+        g = system.evaluate(c, 1, False, body_energies, contact=False).gradient.copy()
+        g[held] = 0.0
+        return g
+
+    x = system.retract(state.x, h * state.v) if dynamic else state.x
+    x = system.apply_prescribed(x, t1)
+    g = gradient(x)
+    record = NewtonResult(converged=True, reason="lagged matrix")
     record.gradient_norms.append(float(np.linalg.norm(g)))
-    return system.retract(c0, dx), record
+    for _ in range(LAGGED_STEPS):
+        x = system.retract(x, np.asarray(solver.direct.solve(-g)))
+        g = gradient(x)
+        record.iterations += 1
+        record.gradient_norms.append(float(np.linalg.norm(g)))
+        if record.gradient_norms[-1] <= LAGGED_CONTRACTION * record.gradient_norms[-2]:
+            return x, record
+    return None  # the kept matrix is too far from the step's: Newton's free motion
 
 
 def _predictor(contact):
@@ -125,64 +144,46 @@ def interactive_step(
     system, state, h, solver, options, dynamic, body_energies, t1, y0, y1, budget
 ) -> StepOutcome | None:
     """The certified prediction as the step, or None (the caller falls back to the barrier's
-    Newton; ``contact.prediction_report`` says why)."""
+    Newton; ``contact.prediction_report`` says why). The free motion is first one step on the
+    kept factor's matrix; a prediction from it that fails certification is made again from
+    Newton's free motion (FREE_ITERATIONS on the current matrix: an organ swinging under
+    gravity folded its own surface in the lagged one) before the step falls back."""
     contact = system.contact
-    start = time.perf_counter()
-    # the free motion need not converge: the refinement passes are Newton iterations of the
-    # step with its contacts (lagged matrix), so FREE_ITERATIONS suffice
     predictor = _predictor(contact)
-    lagged = None
-    if not predictor.refresh:
-        lagged = lagged_free_motion(system, state, h, solver, dynamic, body_energies, t1)
-    if lagged is not None:
-        x_free, record = lagged
-    else:  # no kept factor yet, or the last step's passes did not settle: Newton's iteration
-        free_budget = dict(budget or {})
-        free_budget["iterations"] = min(
-            free_budget.get("iterations", FREE_ITERATIONS), FREE_ITERATIONS
-        )
-        x_free, record = free_motion(
-            system, state, h, solver, options, dynamic, body_energies, t1, free_budget
-        )
-        predictor.refresh = False
-    free_s = time.perf_counter() - start
-    report = {"mode": "interactive", "free_motion_s": free_s, "free_iterations": record.iterations}
+    report: dict = {"mode": "interactive"}
     contact.prediction_report = report
-    if not (record.converged or record.budget_stop):
-        report["outcome"] = f"fell back to the barrier: free motion failed ({record.reason})"
-        return None
-    gap = INTERACTIVE_GAP * contact.dhat
     predictor.clock.clear()
     predictor.columns = 0
     clock = predictor.clock
-    also, redetections = None, 0
-    for redetections in range(1 + REDETECT):  # noqa: B007 (reported below)
-        prediction = predictor.predict(
-            system, solver, state.x, x_free, y0, y1, gap, also, body_energies
-        )
-        for _ in range(RELINEARIZE):  # the gaps linearised again where the step ends
-            at = prediction.x
-            prediction = predictor.predict(
-                system, solver, state.x, x_free, y0, y1, gap, also, body_energies, at=at
-            )
-        prediction, target, soft = _barrier_gaps(contact, predictor, system, prediction, MIN_GAP)
-        prediction, refinements = _refined(
-            system, predictor, prediction, body_energies, target, soft
-        )
-        x = system.apply_prescribed(prediction.x, t1)
+    kinds = ["newton"] if predictor.refresh else ["lagged", "newton"]
+    for kind in kinds:
         start = time.perf_counter()
-        certified = certify(contact, state.x, x, y0, y1)
-        clock["certify"] += time.perf_counter() - start
-        if certified:
+        free = None
+        if kind == "lagged":
+            free = lagged_free_motion(system, state, h, solver, dynamic, body_energies, t1)
+        if free is None:
+            kind = "newton"
+            free_budget = dict(budget or {})
+            free_budget["iterations"] = min(
+                free_budget.get("iterations", FREE_ITERATIONS), FREE_ITERATIONS
+            )
+            free = free_motion(
+                system, state, h, solver, options, dynamic, body_energies, t1, free_budget
+            )
+            predictor.refresh = False
+        x_free, record = free
+        clock["free_motion"] += time.perf_counter() - start
+        report.update(free_motion=kind, free_iterations=record.iterations)
+        if not (record.converged or record.budget_stop):
+            report["outcome"] = f"fell back to the barrier: free motion failed ({record.reason})"
+            return None
+        prediction, x, certified = _predict_and_certify(
+            system, predictor, solver, state, x_free, y0, y1, t1, body_energies, report
+        )
+        if certified or kind == "newton":
             break
-        also = x  # pairs the correction made: detect them too
-    report.update(
-        _figures(prediction),
-        columns_solved=predictor.columns,
-        redetections=redetections,
-        refinements=refinements,
-        certificate=certified,
-    )
+    report.update(_figures(prediction), columns_solved=predictor.columns, certificate=certified)
+    report.update({f"{k}_s": v for k, v in clock.items()})
     if not certified:
         report["outcome"] = "fell back to the barrier: the prediction crosses a surface"
         return None
@@ -258,6 +259,40 @@ def _refined(system, predictor, prediction, body_energies, gap, soft=None):
     else:  # the kept factor's matrix is too far from the step's: Newton's next step
         predictor.refresh = True
     return prediction, passes
+
+
+def _predict_and_certify(
+    system, predictor, solver, state, x_free, y0, y1, t1, body_energies, report
+):
+    """(prediction, its configuration with prescribed values, the certificate or "") for the
+    free motion x_free: detect, gaps linearised again at the first prediction, the barrier's
+    gaps, the refinement passes, certification; the detection again from the corrected
+    positions (REDETECT times) when it fails."""
+    contact, clock = system.contact, predictor.clock
+    gap = INTERACTIVE_GAP * contact.dhat
+    also = None
+    for redetections in range(1 + REDETECT):  # noqa: B007 (reported)
+        prediction = predictor.predict(
+            system, solver, state.x, x_free, y0, y1, gap, also, body_energies
+        )
+        for _ in range(RELINEARIZE):  # the gaps linearised again where the step ends
+            at = prediction.x
+            prediction = predictor.predict(
+                system, solver, state.x, x_free, y0, y1, gap, also, body_energies, at=at
+            )
+        prediction, target, soft = _barrier_gaps(contact, predictor, system, prediction, MIN_GAP)
+        prediction, refinements = _refined(
+            system, predictor, prediction, body_energies, target, soft
+        )
+        x = system.apply_prescribed(prediction.x, t1)
+        start = time.perf_counter()
+        certified = certify(contact, state.x, x, y0, y1)
+        clock["certify"] += time.perf_counter() - start
+        report.update(redetections=redetections, refinements=refinements)
+        if certified:
+            break
+        also = x  # pairs the correction made: detect them too
+    return prediction, x, certified
 
 
 def certify(contact, x0: np.ndarray, x: np.ndarray, y0, y1) -> str:

@@ -84,7 +84,7 @@ def implicit_step(
                 y0 = contact.obstacle_positions(state.time)
             y1 = contact.obstacle_positions(t1)
         contact.begin_step()
-        predicted, reference_norm, lag_at, plain = None, None, None, None
+        predicted = None
         # the step's contacts predicted on the compliance first (time/contact_step.py), except
         # in pseudo-time steps and with a blade in its kerf (their starts are special)
         mode = "barrier"
@@ -100,31 +100,22 @@ def implicit_step(
             predicted, reference_norm = accurate_start(
                 system, state, h, solver, options, dynamic, body_energies, t1, y0, y1
             )
-            if predicted is not None:
-                plain = candidates
-                candidates = (predicted, *candidates)
-        # Newton must start where the bodies can get from x_n without crossing a surface, the
-        # obstacles and prescribed vertices moving to their t1 places on the way: with moving
-        # obstacles the prediction c_n + h v_n carries the surface under an instrument along
-        # with it, so the obstacles can sit at their targets from the start (one solve)
         starts = []
-        for k, c in enumerate(candidates):
-            c = system.apply_prescribed(c, t1)
-            if k == 0 and predicted is not None:
-                # the predictor's start, certified as an interactive step is (its straight
-                # move from x_n is a chord through a curved instrument)
-                ok = bool(certify(contact, state.x, c, y0, y1))
-            elif contact.moving:
-                ok = contact.start_free(state.x, c, y0, y1)
-            else:
-                ok = contact.reachable(state.x, state.time, c, t1)
-            if ok:
-                starts.append(c)
-                if k == 0 and predicted is not None:
-                    lag_at = c  # the predicted start: Newton's only one, friction lagged there
-                    break
+        if predicted is not None:
+            # the predictor's start, certified as an interactive step is (its straight move
+            # from x_n is a chord through a curved instrument): Newton's only start, friction
+            # lagged there
+            c = system.apply_prescribed(predicted, t1)
+            if certify(contact, state.x, c, y0, y1):
+                starts, lag_at = [c], c
         if lag_at is None:
             reference_norm = None
+            # Newton must start where the bodies can get from x_n without crossing a surface,
+            # the obstacles and prescribed vertices moving to their t1 places on the way: with
+            # moving obstacles the prediction c_n + h v_n carries the surface under an
+            # instrument along with it, so the obstacles can sit at their targets from the
+            # start (one solve)
+            starts = _reachable_starts(system, state, candidates, t1, y0, y1)
         if not starts and contact.moving and contact.clear_path is not None:
             starts = _cleared_starts(system, contact, state.x, candidates, y0, y1, t1)
         if not starts and contact.moving:  # an instrument runs into a body at rest: pull it in
@@ -162,7 +153,9 @@ def implicit_step(
         start = c0
         if lag_at is not None and contact.adaptive is not None:
             if not contact.adaptive.initialized:
-                start = _plain_start(system, state, evaluate, plain, t1, y0, y1)
+                plain = _reachable_starts(system, state, candidates, t1, y0, y1)
+                plain = plain or [system.apply_prescribed(state.x, t1)]
+                start = choose_start(evaluate, tuple(plain), lambda c: c)
         _initialize_stiffness(system, start, body_energies)
         if contact.has_friction:
             # friction lagged at the last solution (IPC): normal forces, tangent bases
@@ -207,9 +200,10 @@ def implicit_step(
     return StepOutcome(State(t1, c1, v1), True, [record])
 
 
-def _plain_start(system, state, evaluate, candidates, t1, y0, y1) -> np.ndarray:
-    """The start the barrier's Newton takes without a prediction: the candidate of lowest
-    energy among those reached from x_n without crossing a surface (x_n if none is)."""
+def _reachable_starts(system, state, candidates, t1, y0, y1) -> list[np.ndarray]:
+    """The candidates (prescribed values applied) that the bodies reach from x_n without
+    crossing a surface, the obstacles moving from y0 to y1 (or from their places at the
+    step's start to t1 when they do not move)."""
     contact = system.contact
     starts = []
     for c in candidates:
@@ -220,8 +214,7 @@ def _plain_start(system, state, evaluate, candidates, t1, y0, y1) -> np.ndarray:
             ok = contact.reachable(state.x, state.time, c, t1)
         if ok:
             starts.append(c)
-    starts = starts or [system.apply_prescribed(state.x, t1)]
-    return choose_start(evaluate, tuple(starts), lambda c: c)
+    return starts
 
 
 def _cleared_starts(system, contact, x0, candidates, y0, y1, t1) -> list[np.ndarray]:

@@ -165,12 +165,13 @@ def _edge_edge(a, b, c, d):
     return np.column_stack([1.0 - s, s, -(1.0 - t), -t]), interior
 
 
-def _stencils(contact, V0: np.ndarray, ends, inflation: float, at: np.ndarray):
+def _stencils(contact, V0: np.ndarray, ends, inflation: float, at: np.ndarray, later=None):
     """(vertex ids (m, 4) with -1 unused, coefficients (m, 4), kinds (m,)) of the pairs the
     sweeps from V0 to each of ``ends`` (or ``sweep_candidates``' answer) can make, their
     closest points taken at ``at``: a point and the closest triangle of each other body (or
     obstacle) near it, two edges whose closest points are inside both, in 2D a point and its
-    closest edge per body."""
+    closest edge per body; ``later``: positions where two edges' closest points inside both
+    also count (taken there)."""
     group = contact.group
     parts = ends if isinstance(ends, dict) else sweep_candidates(contact, V0, ends, inflation)
     ids, coefs, kinds = [], [], []
@@ -178,6 +179,12 @@ def _stencils(contact, V0: np.ndarray, ends, inflation: float, at: np.ndarray):
         stencil = np.unique(np.vstack(stencils), axis=0) if len(stencils) > 1 else stencils[0]
         if kind == 1:
             coef, interior = _edge_edge(*(at[stencil[:, k]] for k in range(4)))
+            if later is not None:
+                # two edges that meet inside both only later in the step (a long edge swept
+                # across a small instrument's): their closest points there
+                coef_later, interior_later = _edge_edge(*(later[stencil[:, k]] for k in range(4)))
+                coef = np.where(interior[:, None], coef, coef_later)
+                interior = interior | interior_later
             stencil, coef = stencil[interior], coef[interior]
         elif kind == 0:
             coef = _point_triangle(*(at[stencil[:, k]] for k in range(4)))
@@ -257,7 +264,7 @@ def detect_rows(
     if candidates is not None:
         ends = candidates
     geometry = V0 if at is None else np.asfortranarray(at)
-    ids, coefs, kinds = _stencils(contact, V0, ends, keep, geometry)
+    ids, coefs, kinds = _stencils(contact, V0, ends, keep, geometry, V1)
     weights = _weights(contact.mesh, ids, kinds)
     used = ids >= 0
     safe = np.where(used, ids, 0)
