@@ -71,7 +71,7 @@ def implicit_step(
     def evaluate(c: np.ndarray, order: int, project):
         return system.evaluate(c, order, project, body_energies)
 
-    candidates = (c_pred, state.x) if dynamic else (state.x,)
+    candidates = plain = (c_pred, state.x) if dynamic else (state.x,)
     contact = system.contact
     max_step = None
     reference_norm, lag_at = None, None
@@ -153,9 +153,9 @@ def implicit_step(
         start = c0
         if lag_at is not None and contact.adaptive is not None:
             if not contact.adaptive.initialized:
-                plain = _reachable_starts(system, state, candidates, t1, y0, y1)
-                plain = plain or [system.apply_prescribed(state.x, t1)]
-                start = choose_start(evaluate, tuple(plain), lambda c: c)
+                reached = _reachable_starts(system, state, plain, t1, y0, y1)
+                reached = reached or [system.apply_prescribed(state.x, t1)]
+                start = choose_start(evaluate, tuple(reached), lambda c: c)
         _initialize_stiffness(system, start, body_energies)
         if contact.has_friction:
             # friction lagged at the last solution (IPC): normal forces, tangent bases
