@@ -165,13 +165,33 @@ def test_nearly_incompressible_python_example_runs(tmp_path):
 
 
 def test_interactive_python_example_drives_the_probe(tmp_path):
-    code = block("python", "drive_obstacle")
+    code = block("python", "lin = sim.instrument_linearization(")
     result = subprocess.run(
         [sys.executable, "-c", code], cwd=tmp_path, capture_output=True, text=True, timeout=600
     )
     assert result.returncode == 0, result.stderr
     # pressing down, no intersection; the linearised force grows with a further press
     assert result.stdout.split()[-3:] == ["True", "False", "True"]
+
+
+def test_contact_modes_python_example_runs(tmp_path):
+    """The contact page's interactive mode: the palpation's probe pressed, every step certified."""
+    code = block("python", 'report = record.extra["contact"]["prediction"]')
+    result = subprocess.run(
+        [sys.executable, "-c", code], cwd=tmp_path, capture_output=True, text=True, timeout=600
+    )
+    assert result.returncode == 0, result.stderr
+    assert result.stdout.split()[-2:] == ["certified", "True"]
+
+
+def test_haptic_thread_python_example_runs(tmp_path):
+    """The contact page's device thread: it renders forces while the steps run, pushed up."""
+    code = block("python", 'sim.haptic_contact("probe")')
+    result = subprocess.run(
+        [sys.executable, "-c", code], cwd=tmp_path, capture_output=True, text=True, timeout=600
+    )
+    assert result.returncode == 0, result.stderr
+    assert result.stdout.split()[-2:] == ["True", "True"]
 
 
 def test_contact_python_example_runs_as_shown(tmp_path):
@@ -260,7 +280,9 @@ TESTED_PYTHON_BLOCKS = {
     'sim.attach("fat", "muscle"': "test_several_bodies_python_example_runs",
     "Simulation.from_frames": "test_frames_python_example_runs",
     "sim.set_contact(dhat=0.005": "test_contact_python_example_runs_as_shown",
-    "drive_obstacle": "test_interactive_python_example_drives_the_probe",
+    "lin = sim.instrument_linearization(": "test_interactive_python_example_drives_the_probe",
+    'report = record.extra["contact"]["prediction"]': "test_contact_modes_python_example_runs",
+    'sim.haptic_contact("probe")': "test_haptic_thread_python_example_runs",
     "add_tissue": "test_coupled_python_example_runs",
     'formulation="mean_dilatation"': "test_nearly_incompressible_python_example_runs",
     'sim.save("beam.npz")': "test_save_and_load_python_example_is_bit_identical",
