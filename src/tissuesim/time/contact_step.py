@@ -53,7 +53,7 @@ SIDE_SLACK = 0.1
 #: steps on the kept factor's matrix an interactive free motion takes at most, and the
 #: factor by which one must shrink the gradient to end it (``lagged_free_motion``)
 LAGGED_STEPS = 2
-LAGGED_CONTRACTION = 0.2
+LAGGED_CONTRACTION = 0.5
 #: Newton iterations of an interactive step's free motion, at most
 FREE_ITERATIONS = 1
 #: passes of the prediction on the nonlinear elasticity (``_refined``), at most, and when to
