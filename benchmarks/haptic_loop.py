@@ -81,7 +81,7 @@ def part1(divisions: int, steps: int = 26) -> dict:
             haptic = sim.haptic_contact("probe")
         except Exception:  # a step that fell back to the barrier: no snapshot
             haptic = None
-        if haptic is not None and not haptic._b.size:
+        if haptic is not None and not haptic.n_pairs:
             haptic = None
     times_ms = sorted(1e3 * t for t in times)
     return {

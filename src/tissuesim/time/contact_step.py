@@ -258,6 +258,7 @@ def _refined(system, predictor, prediction, body_energies, gap, soft=None):
             break
     else:  # the kept factor's matrix is too far from the step's: Newton's next step
         predictor.refresh = True
+        predictor.own_factor["stale"] = True
     return prediction, passes
 
 

@@ -58,6 +58,11 @@ class HapticContact:
         self.force0 = self.force(np.zeros(d))
         self.last_solve_s = 0.0
 
+    @property
+    def n_pairs(self) -> int:
+        """The pairs of the step's contact problem (touching or near)."""
+        return len(self._b)
+
     def force(self, displacement) -> np.ndarray:
         """The force (N, d-vector) the instrument exerts on the bodies after a further
         translation ``displacement`` (m) since the step; a device renders its negative."""

@@ -61,10 +61,14 @@ class Prediction:
     converged: bool = True
 
 
-def _factor_solve(solver, matrix):
-    """(solve(B) through the factor a prediction uses, the factor's token or None);
-    ``matrix()`` the step's eliminated Hessian, factorised when there is no factor yet (a free
-    motion that needed no Newton iteration)."""
+def _factor_solve(solver, matrix, own):
+    """(solve(B) through the factor a prediction uses, the factor's token); ``matrix()`` the
+    step's eliminated Hessian, factorised when there is no factor yet (a free motion that
+    needed no Newton iteration). An iterative step solver (CG, AMG: no factor to reuse, one
+    vector a solve) gets a direct factor of the predictor's own, ``own`` (a dict kept on the
+    predictor: a SuperLU factor of the Hessian when it was first needed, made again when its
+    ``stale`` flag is set), since a compliance needs many right-hand sides."""
+    from tissuesim.solve.linear import SuperLUSolver
     from tissuesim.solve.reuse import ReusedFactorSolver, is_direct
 
     if isinstance(solver, ReusedFactorSolver):
@@ -74,11 +78,11 @@ def _factor_solve(solver, matrix):
         return solver.direct.solve, (id(solver.direct), solver.version)
     if is_direct(solver):
         return solver.solve, None
-
-    def one_by_one(B: np.ndarray) -> np.ndarray:  # iterative solvers take one vector at a time
-        return np.column_stack([solver.solve(B[:, k]) for k in range(B.shape[1])])
-
-    return one_by_one, None
+    if own.get("solver") is None or own.get("stale", False):
+        direct = SuperLUSolver()
+        direct.factorize(matrix())
+        own.update(solver=direct, stale=False, version=own.get("version", 0) + 1)
+    return own["solver"].solve, ("own", own["version"])
 
 
 def _hessian(system, x: np.ndarray, energies) -> sp.csr_matrix:
@@ -104,6 +108,8 @@ class ContactPredictor:
         # the next free motion by Newton (its PCG refreshes the kept factor) rather than on
         # the kept factor's matrix (time/contact_step.py)
         self.refresh = False
+        # a direct factor of the predictor's own, for step solvers without one (CG, AMG)
+        self.own_factor: dict = {}
 
     def predict(
         self,
@@ -155,7 +161,9 @@ class ContactPredictor:
         self.clock["detect"] += time.perf_counter() - start
         start = time.perf_counter()
         dofs = np.unique(J.indices)
-        solve, token = _factor_solve(solver, lambda: _hessian(system, x_free, energies))
+        solve, token = _factor_solve(
+            solver, lambda: _hessian(system, x_free, energies), self.own_factor
+        )
         X = self.compliance.columns(solve, token, system.n_dofs, dofs)
         self.columns += self.compliance.solved_columns
         W = compliance_matrix(J, X, dofs)
