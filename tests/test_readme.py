@@ -174,24 +174,29 @@ def test_interactive_python_example_drives_the_probe(tmp_path):
     assert result.stdout.split()[-3:] == ["True", "False", "True"]
 
 
-def test_contact_modes_python_example_runs(tmp_path):
-    """The contact page's interactive mode: the palpation's probe pressed, every step certified."""
-    code = block("python", 'report = record.extra["contact"]["prediction"]')
+def _run_block(marker: str, tmp_path) -> list[str]:
+    """Run the one Python block holding ``marker`` in tmp_path; its printed words."""
     result = subprocess.run(
-        [sys.executable, "-c", code], cwd=tmp_path, capture_output=True, text=True, timeout=600
+        [sys.executable, "-c", block("python", marker)],
+        cwd=tmp_path,
+        capture_output=True,
+        text=True,
+        timeout=600,
     )
     assert result.returncode == 0, result.stderr
-    assert result.stdout.split()[-2:] == ["certified", "True"]
+    return result.stdout.split()
+
+
+def test_contact_modes_python_example_runs(tmp_path):
+    """The contact page's interactive mode: the palpation's probe pressed, every step certified."""
+    words = _run_block('report = record.extra["contact"]["prediction"]', tmp_path)
+    assert words[-2:] == ["certified", "True"]
 
 
 def test_haptic_thread_python_example_runs(tmp_path):
     """The contact page's device thread: it renders forces while the steps run, pushed up."""
-    code = block("python", 'sim.haptic_contact("probe")')
-    result = subprocess.run(
-        [sys.executable, "-c", code], cwd=tmp_path, capture_output=True, text=True, timeout=600
-    )
-    assert result.returncode == 0, result.stderr
-    assert result.stdout.split()[-2:] == ["True", "True"]
+    words = _run_block('sim.haptic_contact("probe")', tmp_path)
+    assert words[-2:] == ["True", "True"]
 
 
 def test_contact_python_example_runs_as_shown(tmp_path):
