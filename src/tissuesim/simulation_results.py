@@ -171,9 +171,10 @@ class BodyResults:
         if s.contact is not None:
             t0, s.contact.time = s.contact.time, self.time
             for name, force in s.contact.obstacle_forces(self._state.x).items():
-                out[name] = force.tolist()
+                out[name] = _as_3_vector(force)
             for name, force in s.contact.body_forces(self._state.x).items():
-                out[name] = force.tolist()
+                # 2D contact gives 2-vectors; every force here is a 3-vector (z = 0 in 2D)
+                out[name] = _as_3_vector(force)
             s.contact.time = t0
         return out
 
@@ -312,3 +313,11 @@ class BodyResults:
             if not hasattr(b, "frame_type"):
                 mass[s.tangent_slices[j]] = b.mass.lumped
         return float(np.max(rows / mass))
+
+
+def _as_3_vector(force) -> list[float]:
+    """A force as a 3-vector list (a 2D force gets z = 0, as the supports' do)."""
+    f = np.zeros(3)
+    v = np.asarray(force, dtype=float).ravel()
+    f[: v.size] = v
+    return f.tolist()

@@ -28,7 +28,10 @@ def force_table(history: Sequence) -> tuple[list[str], np.ndarray, np.ndarray]:
     for i, r in enumerate(history):
         for j, name in enumerate(names):
             if name in r.extra.get("forces", {}):
-                table[i, j] = r.extra["forces"][name]
+                # a 2D force (2 components) fills x, y; z stays 0
+                f = np.asarray(r.extra["forces"][name], dtype=float).ravel()
+                table[i, j] = 0.0
+                table[i, j, : f.size] = f
     return names, times, table
 
 
