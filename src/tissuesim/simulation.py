@@ -489,7 +489,8 @@ class Simulation(BodyCalls, SetupCalls, StepChecks, BodyResults, Stepping):
             self, output, every=every, render=render, field=field, metadata=metadata, resume=resume
         )
         self.run_time_split = writer.time_split  # filled in as the run goes (s)
-        return writer.run(steps, progress=progress)
+        with writer.lock:  # the directory's run lock (io/lock.py), released however it ends
+            return writer.run(steps, progress=progress)
 
     def save(self, path: str | Path) -> Path:
         """Write the state, history and linear solver's state to ``path`` (.npz, atomically;

@@ -22,6 +22,7 @@ from __future__ import annotations
 import os
 import sys
 import time
+from contextlib import ExitStack
 from dataclasses import asdict
 from typing import Any
 
@@ -32,6 +33,7 @@ from tissuesim.io.atomic import remove_leftovers, write_json_atomic
 from tissuesim.io.body_series import series_for
 from tissuesim.io.checkpoint import CHECKPOINT, HISTORY, RunCheckpoint, restore, unsupported
 from tissuesim.io.interrupts import deferred_interrupts, interrupts_as_keyboard_interrupt
+from tissuesim.io.lock import run_lock
 from tissuesim.io.manifest import MANIFEST, Manifest, prepare_directory
 
 __all__ = ["RunOutput", "OBSTACLES"]
@@ -81,6 +83,18 @@ class RunOutput:
         self.render_time = 0.0  # s spent drawing final.png and run.gif
         self.description = None
         self.directory = None if directory is None else prepare_directory(directory)
+        # one run at a time per directory (io/lock.py): a second run refuses here, before it
+        # touches anything; the caller releases it when the run ends (``with writer.lock``)
+        self.lock = ExitStack()
+        if self.directory is not None:
+            self.lock.enter_context(run_lock(self.directory))
+        try:
+            self._start(sim, resume)
+        except BaseException:
+            self.lock.close()
+            raise
+
+    def _start(self, sim: Any, resume: bool) -> None:
         self.resume = bool(resume)
         if self.resume and self.directory is None:
             raise InputError("resume needs the output directory of the run to continue")
