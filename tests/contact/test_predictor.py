@@ -40,13 +40,19 @@ def test_the_compliance_from_kept_columns_is_j_h_inverse_j_transposed():
     J = sp.random(9, n, density=0.05, random_state=rng, format="csr")
     dofs = np.unique(J.indices)
     cache = Compliance()
-    X = cache.columns(solver.solve, ("factor", 1), n, dofs)
-    dense = J.toarray() @ np.linalg.inv(A.toarray()) @ J.toarray().T
-    assert np.allclose(compliance_matrix(J, X, dofs), dense, rtol=1e-10, atol=1e-14)
-    # the same factor: kept columns, none solved again; a new factor: all solved again
-    cache.columns(solver.solve, ("factor", 1), n, dofs[:3])
+    inverse = np.linalg.inv(A.toarray())
+    # built in two steps (the block grows by the second step's new DOFs, by symmetry)
+    cache.block(solver.solve, ("factor", 1), n, dofs[: len(dofs) // 2])
+    G = cache.block(solver.solve, ("factor", 1), n, dofs)
+    assert cache.solved_columns == len(dofs) - len(dofs) // 2
+    assert np.allclose(G, inverse[np.ix_(dofs, dofs)], rtol=1e-10, atol=1e-14)
+    dense = J.toarray() @ inverse @ J.toarray().T
+    assert np.allclose(compliance_matrix(J, G, dofs), dense, rtol=1e-10, atol=1e-14)
+    # the same factor: kept block, none solved again, any order; a new factor: all again
+    G3 = cache.block(solver.solve, ("factor", 1), n, dofs[2::-1])
     assert cache.solved_columns == 0
-    cache.columns(solver.solve, ("factor", 2), n, dofs[:3])
+    assert np.allclose(G3, inverse[np.ix_(dofs[2::-1], dofs[2::-1])], rtol=1e-10, atol=1e-14)
+    cache.block(solver.solve, ("factor", 2), n, dofs[:3])
     assert cache.solved_columns == 3
 
 

@@ -32,16 +32,47 @@ class StepCandidates:
         self.margin: float | None = None
         self.margin_used = 0.0
         self._cached = None
+        self._sweep = None  # (V0, V1, the set of that sweep): ``hold_sweep``
 
     def begin(self, margin: float) -> None:
         """A new step: the set is built at the first query, inflated by ``margin`` (m)."""
-        self.margin, self._cached = float(margin), None
+        self.margin, self._cached, self._sweep = float(margin), None, None
+
+    def hold_sweep(self, V0: np.ndarray, V1: np.ndarray):
+        """The set of the straight move V0 -> V1 (swept boxes inflated by dhat / 2), built
+        once and answered to every query at exactly these positions: a predicted step's
+        certification (CCD of that move, the sides test) and the barrier's collisions at V1
+        (calibration) share one broad phase. Returns the set."""
+        held = self._sweep
+        if held is not None and np.array_equal(held[0], V0) and np.array_equal(held[1], V1):
+            return held[2]
+        start = time.perf_counter()
+        candidates = self._ipctk.Candidates()
+        V0, V1 = np.asfortranarray(V0), np.asfortranarray(V1)
+        candidates.build(self.mesh, V0, V1, 0.5 * self.dhat, broad_phase=self.broad_phase)
+        self._sweep = (V0.copy(), V1.copy(), candidates)
+        self.stats.candidate_builds += 1
+        self.stats.candidates_s += time.perf_counter() - start
+        return candidates
+
+    def held(self, *V: np.ndarray):
+        """The set ``hold_sweep`` built, if every array of V is one of its two ends."""
+        if self._sweep is None:
+            return None
+        V0, V1, candidates = self._sweep
+        ends = (V0, V1)
+        if all(any(v.shape == e.shape and np.array_equal(v, e) for e in ends) for v in V):
+            return candidates
+        return None
 
     def get(self, *V: np.ndarray):
         """The candidates valid for every vertex array in V (built or rebuilt if needed), or
         None when caching is off."""
         if self.margin is None:
             return None
+        held = self.held(*V)
+        if held is not None:
+            return held
         low = np.minimum.reduce(V) if len(V) > 1 else V[0]
         high = np.maximum.reduce(V) if len(V) > 1 else V[0]
         spread = 0.5 * float(np.max(high - low, initial=0.0))

@@ -62,9 +62,13 @@ class CollisionQueries:
         V0, V1 = self.vertices(c0, obstacle=y0), self.vertices(c1, obstacle=y1)
         start = time.perf_counter()
         ccd = self._ipctk.TightInclusionCCD(TIGHT_TOLERANCE, TIGHT_ITERATIONS)
-        free = self._ipctk.is_step_collision_free(
-            self.mesh, V0, V1, broad_phase=self.broad_phase, narrow_phase_ccd=ccd
-        )
+        held = self.candidates.held(V0, V1)
+        if held is not None:
+            free = held.is_step_collision_free(self.mesh, V0, V1, 0.0, ccd)
+        else:
+            free = self._ipctk.is_step_collision_free(
+                self.mesh, V0, V1, broad_phase=self.broad_phase, narrow_phase_ccd=ccd
+            )
         self.stats.ccd_s += time.perf_counter() - start
         self.stats.ccd_calls += 1
         return bool(free)

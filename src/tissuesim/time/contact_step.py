@@ -220,7 +220,7 @@ def _barrier_gaps(contact, predictor, system, prediction, floor: float):
     if m == 0:
         return prediction, target, soft
     weights = prediction.rows.weights
-    for k in range(GAP_PASSES):
+    for _ in range(GAP_PASSES):
         force = prediction.force[:, 0]
         loaded = force[force > 0]
         reference = 0.1 * float(loaded.mean()) if loaded.size else 1e-9
@@ -228,12 +228,12 @@ def _barrier_gaps(contact, predictor, system, prediction, floor: float):
         g = equilibrium_gap(contact, weights, f)
         soft = (g - equilibrium_gap(contact, weights, 1.01 * f)) / (0.01 * f)
         target = g + soft * f
-        prediction = predictor.solve_again(system, target, soft, correct=k == GAP_PASSES - 1)
+        prediction = predictor.solve_again(system, target, soft, correct=False)
     held = target - soft * prediction.force[:, 0]
     if floor > 0.0 and np.any(held < floor * contact.dhat):
         target, soft = np.maximum(held, floor * contact.dhat), np.zeros(m)
-        prediction = predictor.solve_again(system, target)
-    return prediction, target, soft
+        prediction = predictor.solve_again(system, target, correct=False)
+    return predictor.correct(system), target, soft
 
 
 def _refined(system, predictor, prediction, body_energies, gap, soft=None):
@@ -312,6 +312,11 @@ def certify(contact, x0: np.ndarray, x: np.ndarray, y0, y1) -> str:
     def free(a, b, ya, yb) -> bool:
         return contact.max_step(a, b, ya, yb) >= 1.0 or contact.start_free(a, b, ya, yb)
 
+    # one broad phase for the straight move's CCD, the sides test and the calibration's
+    # collisions at x (``contact/candidates.py``)
+    V0, V1 = contact.vertices(x0, obstacle=y0), contact.vertices(x, obstacle=y1)
+    if contact.candidates.margin is not None:
+        contact.candidates.hold_sweep(V0, V1)
     if free(x0, x, y0, y1):
         return "straight move"
     if y0 is not None and y1 is not None and free(x0, x, y0, y0) and free(x, x, y0, y1):
@@ -322,7 +327,6 @@ def certify(contact, x0: np.ndarray, x: np.ndarray, y0, y1) -> str:
     if contact.dim == 3:
         from tissuesim.contact.predict.rows import sides_kept
 
-        V0, V1 = contact.vertices(x0, obstacle=y0), contact.vertices(x, obstacle=y1)
         slack = SIDE_SLACK * contact.dhat
         if not contact._ipctk.has_intersections(contact.mesh, V1) and sides_kept(
             contact, V0, V1, slack

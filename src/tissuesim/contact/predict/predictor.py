@@ -37,7 +37,7 @@ class Prediction:
     """One step's prediction: ``x`` the corrected configuration, ``dq`` its correction
     (tangent DOFs) from ``x_free``, ``rows`` the pairs, ``force`` (m, d) their multipliers
     (N), ``J`` (m d, n_dofs) the rows over the free DOFs (``J_all``: prescribed ones too),
-    ``W`` the compliance, ``X`` its columns H^-1 E_D for the DOFs ``dofs`` J reaches, ``free``
+    ``W`` the compliance over the DOFs ``dofs`` J reaches, ``free``
     (m, d) the gaps and slips at ``x_free`` before any force, ``forces`` per obstacle the force
     on the bodies (N) and ``normal_forces`` its normal part, ``sweeps`` / ``converged`` of the
     contact solve."""
@@ -50,7 +50,6 @@ class Prediction:
     J: sp.csr_matrix
     J_all: sp.csr_matrix
     W: np.ndarray
-    X: np.ndarray
     dofs: np.ndarray
     free: np.ndarray
     forces: dict[str, np.ndarray]
@@ -164,14 +163,14 @@ class ContactPredictor:
         solve, token = _factor_solve(
             solver, lambda: _hessian(system, x_free, energies), self.own_factor
         )
-        X = self.compliance.columns(solve, token, system.n_dofs, dofs)
+        G = self.compliance.block(solve, token, system.n_dofs, dofs)
         self.columns += self.compliance.solved_columns
-        W = compliance_matrix(J, X, dofs)
+        W = compliance_matrix(J, G, dofs)
         self.clock["compliance"] += time.perf_counter() - start
         self._solve_through = solve
         shell = Prediction(
             x=x_free, dq=np.zeros(system.n_dofs), x_free=x_free, rows=rows,
-            force=np.zeros((rows.n_pairs, rows.dim)), J=J, J_all=J_all, W=W, X=X, dofs=dofs,
+            force=np.zeros((rows.n_pairs, rows.dim)), J=J, J_all=J_all, W=W, dofs=dofs,
             free=rows.free_values(), forces={}, normal_forces={},
         )  # fmt: skip
         return self._solve(system, shell, target_gap)
@@ -182,6 +181,19 @@ class ContactPredictor:
         ``correct`` is False: the forces alone are wanted, x and dq are left as they were) the
         correction again."""
         return self._solve(system, self.last, target_gap, soft, correct)
+
+    def correct(self, system) -> Prediction:
+        """The last prediction with its correction for its multipliers (after solves with
+        ``correct`` False: one back-solve for the last of several)."""
+        p = self.last
+        m = p.rows.n_pairs
+        dq = np.zeros(system.n_dofs)
+        if m:
+            start = time.perf_counter()
+            dq = np.asarray(self._solve_through(p.J.T @ p.force.reshape(-1))).reshape(-1)
+            self.clock["correction"] += time.perf_counter() - start
+        self.last = replace(p, x=system.retract(p.x_free, dq), dq=dq)
+        return self.last
 
     def refine(self, system, gradient, target_gap, soft=None) -> tuple[Prediction, float]:
         """One more pass of the last prediction on its pairs and compliance, from a new free
@@ -216,8 +228,10 @@ class ContactPredictor:
         start = time.perf_counter()
         lam = result.force.reshape(-1)
         dq = p.dq
-        if correct:
-            dq = p.X @ (p.J[:, p.dofs].T @ lam) if m else np.zeros(system.n_dofs)
+        if correct:  # one back-solve through the factor W came from
+            dq = np.zeros(system.n_dofs)
+            if m:
+                dq = np.asarray(self._solve_through(p.J.T @ lam)).reshape(-1)
         normal_only = np.zeros_like(result.force)
         normal_only[:, 0] = result.force[:, 0]
         self._warm = dict(zip(keys, result.force, strict=True))

@@ -81,13 +81,14 @@ def _candidates(contact, V0: np.ndarray, V1: np.ndarray, inflation: float):
     (3D), 2 a point and an edge [p, a, b, -1] (2D). ipctk hands candidates out one at a time;
     only their ids are read here, the geometry is batched (``_closest``)."""
     ipctk = contact._ipctk
-    cand = ipctk.Candidates()
-    cand.build(contact.mesh, V0, V1, inflation, broad_phase=contact.broad_phase)
+    cand = contact.candidates.held(V0, V1) if inflation <= 0.5 * contact.dhat else None
+    if cand is None:
+        cand = ipctk.Candidates()
+        cand.build(contact.mesh, V0, V1, inflation, broad_phase=contact.broad_phase)
     E, F = contact.mesh.edges, contact.mesh.faces
     fv = np.array([(c.vertex_id, c.face_id) for c in cand.fv_candidates], dtype=np.int64)
     ee = np.array([(c.edge0_id, c.edge1_id) for c in cand.ee_candidates], dtype=np.int64)
     ev = np.array([(c.vertex_id, c.edge_id) for c in cand.ev_candidates], dtype=np.int64)
-    del cand
     parts = []
     if len(fv):
         parts.append((0, np.column_stack([fv[:, 0], F[fv[:, 1]]])))
