@@ -24,6 +24,7 @@ import numpy as np
 
 __all__ = [
     "atomic_output",
+    "atomic_outputs",
     "remove_leftovers",
     "to_json_compatible",
     "write_json_atomic",
@@ -87,6 +88,45 @@ def atomic_output(path: str | os.PathLike[str]) -> Iterator[Path]:
         tmp.unlink(missing_ok=True)
         raise
     _fsync_dir(target.parent)
+
+
+@contextmanager
+def atomic_outputs(paths: list[Path]) -> Iterator[list[Path]]:
+    """``atomic_output`` for files that belong together (a scene and its meshes): yield one
+    temporary path per target; on success all of them replace their targets, and if anything
+    fails (writing, or moving one into place) every target is left as it was before.
+
+    Moving several files is not one operation: the old targets are first moved aside to
+    hidden names, the new files moved in, and the old ones deleted only once all are in; a
+    failure moves the old ones back. A crash in that short window can leave hidden leftovers
+    (``remove_leftovers``), never a new file beside an old one silently."""
+    targets = [Path(p) for p in paths]
+    tmps = [_tmp_path(t) for t in targets]
+    saved: list[tuple[Path, Path]] = []  # (target, where its old file was moved)
+    placed: list[Path] = []
+    try:
+        yield tmps
+        for tmp in tmps:
+            _fsync_file(tmp)
+        for target, tmp in zip(targets, tmps, strict=True):
+            if target.exists():
+                aside = _tmp_path(target)
+                os.replace(target, aside)
+                saved.append((target, aside))
+            os.replace(tmp, target)
+            placed.append(target)
+    except BaseException:
+        for target in placed:
+            target.unlink(missing_ok=True)
+        for target, aside in saved:
+            os.replace(aside, target)
+        for tmp in tmps:
+            tmp.unlink(missing_ok=True)
+        raise
+    for _, aside in saved:
+        aside.unlink(missing_ok=True)
+    for directory in {t.parent for t in targets}:
+        _fsync_dir(directory)
 
 
 def write_text_atomic(path: str | os.PathLike[str], text: str) -> Path:
