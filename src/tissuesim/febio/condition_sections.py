@@ -5,7 +5,15 @@ from __future__ import annotations
 
 import numpy as np
 
-from tissuesim.febio.model import Curve, FebModel, Load, _flag, _floats, _unsupported
+from tissuesim.febio.model import (
+    Curve,
+    FebModel,
+    Load,
+    _flag,
+    _floats,
+    _int_attr,
+    _unsupported,
+)
 from tissuesim.febio.xml import Node
 
 __all__ = ["SECTIONS", "CONTACT_TYPES", "INTERPOLATIONS"]
@@ -41,8 +49,8 @@ def _node_set(model: FebModel, node: Node, attr: str = "node_set") -> str:
 
 def _load(model: FebModel, node: Node, count: int) -> Load:
     """value * curve: the element's numbers and its lc attribute."""
-    curve = node.attrib.get("lc")
-    return Load(_floats(node, count), None if curve is None else int(curve), model.window)
+    curve = _int_attr(node, "lc", "a load curve id (a <load_controller>'s id)")
+    return Load(_floats(node, count), curve, model.window)
 
 
 def _children(node: Node, allowed: set[str]) -> dict[str, Node]:
@@ -124,14 +132,12 @@ def _loads(model: FebModel, section: Node) -> None:
             _surface_load(model, load, kind)
         elif load.tag == "body_load" and kind == "const":  # FEBio 3: x, y, z
             p = _children(load, {"x", "y", "z"})
-            curves = {c.attrib.get("lc") for c in p.values()}
+            curves = {_int_attr(c, "lc", "a load curve id") for c in p.values()}
             if len(curves) > 1:
                 raise load.error("x, y and z must share one load curve (or none)")
             value = np.array([_floats(p[a], 1)[0] if a in p else 0.0 for a in "xyz"])
             curve = curves.pop() if curves else None
-            model.body_loads.append(
-                Load(value, None if curve is None else int(curve), model.window)
-            )
+            model.body_loads.append(Load(value, curve, model.window))
         elif load.tag == "body_load" and kind == "body force":  # FEBio 4: force vector
             p = _children(load, {"force"})
             if "force" not in p:
@@ -224,7 +230,8 @@ def _load_data(model: FebModel, section: Node) -> None:
         points = np.array(rows).reshape(-1, 2)
         if len(points) == 0 or np.any(np.diff(points[:, 0]) <= 0):
             raise p["points"].error("a load curve needs points with increasing times")
-        model.curves[int(lc.attrib.get("id", len(model.curves) + 1))] = Curve(
+        number = _int_attr(lc, "id", "a load curve id")
+        model.curves[len(model.curves) + 1 if number is None else number] = Curve(
             points, interpolate, extend
         )
 

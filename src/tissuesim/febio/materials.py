@@ -17,7 +17,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from tissuesim.febio.model import FebModel, _floats, _ints, _unsupported
+from tissuesim.febio.model import FebModel, _floats, _int_attr, _ints, _unsupported
 from tissuesim.febio.xml import Node
 
 __all__ = ["MATERIAL_TYPES", "UNCOUPLED", "FIBRE_TYPES", "Orientation", "read_materials"]
@@ -234,7 +234,7 @@ def read_mesh_data(model: FebModel, section: Node) -> None:
         for e in data.children:
             if e.tag not in ("e", "elem") or "lid" not in e.attrib:
                 raise _unsupported(e, "expected <e lid=...>")
-            lid = int(e.attrib["lid"])
+            lid = _int_attr(e, "lid", "an element's local id")
             if not 1 <= lid <= len(members):
                 raise e.error(f"lid {lid} is outside the element set (1..{len(members)})")
             if kind == "fiber":

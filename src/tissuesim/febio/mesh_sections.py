@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from tissuesim.febio.model import FebModel, _floats, _ints, _unsupported
+from tissuesim.febio.model import FebModel, _floats, _int_attr, _ints, _unsupported
 from tissuesim.febio.xml import Node
 
 __all__ = ["SECTIONS", "ELEMENTS", "PERMUTATIONS", "FACETS"]
@@ -51,7 +51,7 @@ def _id_list(model: FebModel, node: Node) -> list[int]:
         for c in node.children:
             if c.tag not in ("n", "node", "e", "elem") or "id" not in c.attrib:
                 raise _unsupported(c, "expected <n id=...> entries")
-            ids.append(int(c.attrib["id"]))
+            ids.append(_int_attr(c, "id", "an id"))
         return ids
     return _ints(node)
 
@@ -71,7 +71,7 @@ def _nodes(model: FebModel, node: Node) -> None:
     for c in node.children:
         if c.tag != "node" or "id" not in c.attrib:
             raise _unsupported(c, "expected <node id=...>x,y,z</node>")
-        i = int(c.attrib["id"])
+        i = _int_attr(c, "id", "a node id")
         if i in model._node_index:
             raise c.error(f"node id {i} is defined twice")
         model._node_index[i] = len(model.nodes) + len(rows)
@@ -102,7 +102,7 @@ def _elements(model: FebModel, node: Node) -> None:
         cells.append(_index(model, c, conn))
         if kind in PERMUTATIONS:
             cells[-1] = cells[-1][PERMUTATIONS[kind]]
-        eid = int(c.attrib["id"])
+        eid = _int_attr(c, "id", "an element id")
         if eid in model._element_index:
             raise c.error(f"element id {eid} is defined twice")
         model._element_index[eid] = (name, len(ids))

@@ -97,6 +97,18 @@ def _ints(node: Node, text: str | None = None) -> list[int]:
         raise node.error(f"expected integers separated by commas, got {node.text[:60]!r}") from None
 
 
+def _int_attr(node: Node, key: str, what: str) -> int | None:
+    """The integer attribute ``key`` (None if absent); a FebError naming the element, its line
+    and the attribute for one that is not an integer (``lc="one"``, ``id="five"``)."""
+    text = node.attrib.get(key)
+    if text is None:
+        return None
+    try:
+        return int(text)
+    except ValueError:
+        raise node.error(f'{key}="{text}": {what} must be an integer') from None
+
+
 def _flag(node: Node) -> bool:
     text = node.text.strip().lower()
     if text not in ("0", "1", "true", "false"):

@@ -4,6 +4,7 @@ that every refusal can name the element and where it is."""
 from __future__ import annotations
 
 import os
+import re
 from dataclasses import dataclass, field
 from xml.parsers import expat
 
@@ -74,6 +75,13 @@ def parse_feb(path: str | os.PathLike[str]) -> Node:
     except expat.ExpatError as exc:
         raise FebError(
             f"{path}:{exc.lineno}: not well-formed XML ({expat.ErrorString(exc.code)})"
+        ) from None
+    except LookupError:  # the declaration names an encoding Python does not know
+        found = re.search(rb"encoding\s*=\s*[\"']([^\"']*)", data[:400])
+        name = found.group(1).decode("ascii", "replace") if found else "?"
+        raise FebError(
+            f"{path}:{parser.CurrentLineNumber} <?xml?>: unknown encoding {name!r}; save the "
+            'file as UTF-8 and declare encoding="UTF-8" (or "ISO-8859-1")'
         ) from None
     if not root or root[0].tag != "febio_spec":
         tag = root[0].tag if root else "nothing"

@@ -1,0 +1,59 @@
+"""Issue 41: FEBio input that ended in an internal error or was silently dropped is refused
+with one line naming the file, the element and its line."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from tissuesim.cli import main
+from tissuesim.febio import FebError, read_feb
+
+MODELS = Path(__file__).parent / "models"
+
+
+def refusal(tmp_path, text: str, model: str = "uniaxial_neo_hookean.feb") -> str:
+    """The one-line FebError reading ``text`` (a changed copy of ``model``) gives."""
+    feb = tmp_path / "bad.feb"
+    feb.write_text(text)
+    with pytest.raises(FebError) as info:
+        read_feb(feb)
+    said = str(info.value)
+    assert "\n" not in said and said.startswith(f"{feb}:")
+    return said
+
+
+def line_of(text: str, needle: str) -> int:
+    return next(i for i, s in enumerate(text.splitlines(), 1) if needle in s)
+
+
+BAD_IDS = {
+    "lc": ('lc="1"', 'lc="one"', "<value>", 'lc="one": a load curve id'),
+    "node": ('<node id="5">', '<node id="five">', "<node>", 'id="five": a node id'),
+    "elem": ('<elem id="1">', '<elem id="1a">', "<elem>", 'id="1a": an element id'),
+    "curve": ('<load_controller id="1"', '<load_controller id="x"', "<load_controller>", "id"),
+}
+
+
+@pytest.mark.parametrize("case", sorted(BAD_IDS))
+def test_an_id_that_is_not_an_integer_names_the_element_and_line(case, tmp_path):
+    old, new, tag, message = BAD_IDS[case]
+    text = (MODELS / "uniaxial_neo_hookean.feb").read_text()
+    assert old in text
+    text = text.replace(old, new, 1)
+    said = refusal(tmp_path, text)
+    assert f"bad.feb:{line_of(text, new)} {tag}" in said and message in said
+    assert "must be an integer" in said
+
+
+def test_an_unknown_encoding_is_one_line(tmp_path, capsys):
+    text = (MODELS / "uniaxial_neo_hookean.feb").read_text()
+    head, rest = text.split("\n", 1)
+    assert head.startswith("<?xml")
+    feb = tmp_path / "bad.feb"
+    feb.write_text('<?xml version="1.0" encoding="klingon"?>\n' + rest)
+    assert main(["convert", str(feb), str(tmp_path / "scene.toml")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.count("\n") == 0 and "internal error" not in err
+    assert f"{feb}:1 <?xml?>: unknown encoding 'klingon'" in err and "UTF-8" in err
