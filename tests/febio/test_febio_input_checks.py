@@ -57,3 +57,73 @@ def test_an_unknown_encoding_is_one_line(tmp_path, capsys):
     err = capsys.readouterr().err.strip()
     assert err.count("\n") == 0 and "internal error" not in err
     assert f"{feb}:1 <?xml?>: unknown encoding 'klingon'" in err and "UTF-8" in err
+
+
+SILENT = {
+    # a condition on an empty set fixed nothing: the block slid away with no reaction
+    "empty set": (
+        '<NodeSet name="x0">1,4,7,10,13,16,19,22,25</NodeSet>',
+        '<NodeSet name="x0"></NodeSet>',
+        '<bc name="symmetry_x"',
+        "<bc>",
+        "node set 'x0' is empty",
+    ),
+    # a misspelt lc dropped the load curve: the full load acted from the first step
+    "misspelt lc": ('<value lc="1">', '<value lcc="1">', "<value lcc", "<value>", "lc?"),
+    "unknown attribute": (
+        '<SolidDomain name="block" mat="tissue"/>',
+        '<SolidDomain name="block" mat="tissue" elem_type="UT4"/>',
+        "<SolidDomain",
+        "<SolidDomain>",
+        "elem_type",
+    ),
+    "bc attribute": (
+        'node_set="x0" type="zero displacement">',
+        'node_set="x0" typ="x" type="zero displacement">',
+        'typ="x"',
+        "<bc>",
+        'attribute typ="x" is not one tissuesim reads on <bc>: correct or remove it',
+    ),
+    # a parameter given twice kept the second without a word
+    "parameter twice": ("<E>10000</E>", "<E>10000</E>\n      <E>20000</E>", "<E>2", "<E>", "twice"),
+    "bc parameter twice": (
+        "<dof>x</dof>",
+        "<dof>x</dof>\n      <dof>y</dof>",
+        "<dof>y",
+        "<dof>",
+        "<dof> is given twice in <bc> (first at line",
+    ),
+    # convert wrote density = -1000, which run then refused
+    "density": (
+        "<density>1000</density>",
+        "<density>-1000</density>",
+        "<density>",
+        "<density>",
+        "density -1000: a density must be > 0",
+    ),  # fmt: skip
+}
+
+
+@pytest.mark.parametrize("case", sorted(SILENT))
+def test_dropped_or_doubled_input_is_refused_with_its_line(case, tmp_path):
+    old, new, needle, tag, message = SILENT[case]
+    text = (MODELS / "uniaxial_neo_hookean.feb").read_text()
+    assert old in text
+    text = text.replace(old, new, 1)
+    said = refusal(tmp_path, text)
+    assert f"bad.feb:{line_of(text, needle)} {tag}" in said and message in said, said
+
+
+def test_convert_writes_no_scene_that_run_refuses(tmp_path, capsys):
+    text = (MODELS / "uniaxial_neo_hookean.feb").read_text()
+    feb = tmp_path / "bad.feb"
+    feb.write_text(text.replace("<density>1000</density>", "<density>-1000</density>"))
+    assert main(["convert", str(feb), str(tmp_path / "scene.toml")]) == 2
+    assert "density" in capsys.readouterr().err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["bad.feb"]
+
+
+def test_labels_and_noted_sections_are_not_refused():
+    # name / id only label elements; <Output>'s plotfile attributes belong to a noted section
+    for model in sorted(MODELS.glob("*.feb")):
+        read_feb(model)

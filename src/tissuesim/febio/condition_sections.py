@@ -12,6 +12,7 @@ from tissuesim.febio.model import (
     _flag,
     _floats,
     _int_attr,
+    _once,
     _unsupported,
 )
 from tissuesim.febio.xml import Node
@@ -44,6 +45,11 @@ def _node_set(model: FebModel, node: Node, attr: str = "node_set") -> str:
         model.node_sets.setdefault(name, np.unique(model.surfaces[surface][0]))
     elif name not in model.node_sets:
         raise node.error(f"no NodeSet named {name!r}")
+    if len(model.node_sets[name]) == 0:  # FEBio would run it on nothing: a silent no-op
+        raise node.error(
+            f"node set {name!r} is empty, so this <{node.tag}> would act on no node: give the "
+            "set its nodes, or remove the condition"
+        )
     return name
 
 
@@ -54,12 +60,10 @@ def _load(model: FebModel, node: Node, count: int) -> Load:
 
 
 def _children(node: Node, allowed: set[str]) -> dict[str, Node]:
-    found = {}
     for c in node.children:
         if c.tag not in allowed:
             raise _unsupported(c, f"this parameter of <{node.tag}> is not supported by tissuesim")
-        found[c.tag] = c
-    return found
+    return _once(node)
 
 
 def _boundary(model: FebModel, section: Node) -> None:

@@ -17,7 +17,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from tissuesim.febio.model import FebModel, _floats, _int_attr, _ints, _unsupported
+from tissuesim.febio.model import FebModel, _floats, _int_attr, _ints, _once, _unsupported
 from tissuesim.febio.xml import Node
 
 __all__ = ["MATERIAL_TYPES", "UNCOUPLED", "FIBRE_TYPES", "Orientation", "read_materials"]
@@ -99,6 +99,7 @@ def _law(model: FebModel, mat: Node, top: bool) -> tuple:
     params: dict = {}
     density = 1.0
     orientation = Orientation(FIBRE_TYPES[kind]) if kind in FIBRE_TYPES else None
+    _once(mat)
     for p in mat.children:
         if p.tag in ("mat_axis", "fiber") and orientation is not None:
             _direction(orientation, p, kind)
@@ -106,7 +107,7 @@ def _law(model: FebModel, mat: Node, top: bool) -> tuple:
         if p.children or "lc" in p.attrib or p.attrib.get("type") not in (None, "const"):
             raise _unsupported(p, "a material parameter that is a field, a curve or a table")
         if p.tag == "density":
-            density = float(_floats(p, 1)[0])
+            density = _density(p)
             continue
         if p.tag == "pressure_model":
             params[p.tag] = int(p.text) if p.text.isdigit() else p.text
@@ -122,12 +123,20 @@ def _law(model: FebModel, mat: Node, top: bool) -> tuple:
     return (model_name, params, density, kind, orientation)
 
 
+def _density(p: Node) -> float:
+    """A material's <density>, > 0 (a scene refuses any other, so convert must not write it)."""
+    density = float(_floats(p, 1)[0])
+    if not density > 0.0:
+        raise p.error(f"density {density:g}: a density must be > 0 (kg/m^3 in SI units)")
+    return density
+
+
 def _direction(orientation: Orientation, p: Node, kind: str) -> None:
     """<mat_axis type="vector"|"local"> or <fiber type="vector"> of a fibre law."""
     how = p.attrib.get("type", "vector")
     if p.tag == "mat_axis":
         if how == "vector":
-            parts = {c.tag: c for c in p.children}
+            parts = _once(p)
             if set(parts) != {"a", "d"}:
                 raise p.error('a mat_axis type="vector" needs <a> and <d>')
             a, d = _floats(parts["a"], 3), _floats(parts["d"], 3)
@@ -173,6 +182,7 @@ def _viscoelastic(model: FebModel, mat: Node, kind: str) -> tuple:
     g = [0.0] * 6
     tau = [1.0] * 6  # FEBio's defaults: g_i = 0, t_i = 1
     g0, k, density, elastic = 1.0, 0.0, 1.0, None
+    _once(mat)
     for p in mat.children:
         if p.tag == "elastic":
             if elastic is not None:
@@ -183,7 +193,7 @@ def _viscoelastic(model: FebModel, mat: Node, kind: str) -> tuple:
             raise _unsupported(p, "a material parameter that is a field, a curve or a table")
         value = float(_floats(p, 1)[0])
         if p.tag == "density":
-            density = value
+            density = _density(p)
         elif p.tag == "g0":
             g0 = value
         elif p.tag == "k" and kind == "uncoupled viscoelastic":
@@ -242,7 +252,7 @@ def read_mesh_data(model: FebModel, section: Node) -> None:
                 if not np.linalg.norm(value) > 0.0:
                     raise e.error("a fiber must be a non-zero vector")
             else:
-                parts = {c.tag: c for c in e.children}
+                parts = _once(e)
                 if set(parts) != {"a", "d"}:
                     raise e.error("a mat_axis entry needs <a> and <d>")
                 a, d = _floats(parts["a"], 3), _floats(parts["d"], 3)

@@ -70,12 +70,15 @@ class FebModel:
     phases: list = field(default_factory=list)
     #: the time window (t0, t1] of the <step> being read (None: the whole run)
     window: tuple[float, float] | None = None
+    #: elements kept as notes: their attributes and children are not read (not refused)
+    noted: list = field(default_factory=list, repr=False)
     _node_index: dict = field(default_factory=dict, repr=False)  # FEBio node id -> row
     _element_index: dict = field(default_factory=dict, repr=False)  # id -> (part, row)
 
     def note(self, node: Node, text: str) -> None:
         """Keep a note about an accepted element that tissuesim does not use."""
         self.notes.append(f"{node.where()}: {text}")
+        self.noted.append(node)
 
 
 def _floats(node: Node, count: int | None = None) -> np.ndarray:
@@ -107,6 +110,20 @@ def _int_attr(node: Node, key: str, what: str) -> int | None:
         return int(text)
     except ValueError:
         raise node.error(f'{key}="{text}": {what} must be an integer') from None
+
+
+def _once(node: Node) -> dict[str, Node]:
+    """``node``'s children by tag, each given once: a parameter given twice (FEBio would
+    keep one of them) is refused with its line."""
+    found: dict[str, Node] = {}
+    for c in node.children:
+        if c.tag in found:
+            raise c.error(
+                f"<{c.tag}> is given twice in <{node.tag}> (first at line {found[c.tag].line}): "
+                "keep one"
+            )
+        found[c.tag] = c
+    return found
 
 
 def _flag(node: Node) -> bool:

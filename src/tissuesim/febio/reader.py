@@ -10,7 +10,7 @@ import math
 import os
 
 from tissuesim.febio.materials import MATERIAL_TYPES, UNCOUPLED, read_materials, read_mesh_data
-from tissuesim.febio.model import FebModel, Node, _floats, _ints, _unsupported
+from tissuesim.febio.model import FebModel, Node, _floats, _ints, _once, _unsupported
 from tissuesim.febio.xml import parse_feb
 
 __all__ = ["read_feb", "MATERIAL_TYPES", "UNCOUPLED"]
@@ -46,7 +46,36 @@ def read_feb(path: str | os.PathLike[str]) -> FebModel:
     for load in loads:
         if load.curve is not None and load.curve not in model.curves:
             raise root.error(f"load curve {load.curve} is used but not defined in <LoadData>")
+    _check_attributes(root, {id(n) for n in model.noted})
     return model
+
+
+#: attributes that only label an element (FEBio refers to some by name; tissuesim reads the
+#: names it needs), accepted where tissuesim does not read them
+LABELS = {"name", "id"}
+
+
+def _check_attributes(root: Node, skipped: set[int]) -> None:
+    """Refuse the first attribute the reader never looked at (a misspelt ``lcc="1"`` would
+    drop the load curve silently), except labels; elements kept as notes are not checked."""
+    import difflib
+
+    stack = [root]
+    while stack:
+        node = stack.pop()
+        if id(node) in skipped:
+            continue
+        unread = [k for k in node.attrib.unread() if k not in LABELS]
+        if unread:
+            key = unread[0]
+            known = [k for k in node.attrib.read if not dict.__contains__(node.attrib, k)]
+            near = difflib.get_close_matches(key, known, n=1)
+            hint = f" (did you mean {near[0]}?)" if near else ""
+            raise node.error(
+                f'attribute {key}="{node.attrib[key]}" is not one tissuesim reads on '
+                f"<{node.tag}>{hint}: correct or remove it"
+            )
+        stack.extend(reversed(node.children))
 
 
 def _step(model: FebModel, section: Node) -> None:
@@ -96,8 +125,12 @@ def _solver(model: FebModel, node: Node) -> None:
     """<solver>: Newmark's beta and gamma (read as FEBio's FESolidSolver2 sets them up for
     a DYNAMIC step: rhoi = -2, its default, takes beta and gamma as given, rhoi = -1 the
     trapezoidal rule); everything else tunes FEBio's own Newton iterations (a note)."""
+    kind = node.attrib.get("type", "solid")
+    if kind != "solid":
+        raise node.error(f"solver type {kind!r}: tissuesim runs FEBio's 'solid' solver")
     values = dict(INTEGRATOR_PARAMETERS)
     tuning = []
+    _once(node)
     for c in node.children:
         if c.tag in INTEGRATOR_PARAMETERS:
             values[c.tag] = float(_floats(c, 1)[0])
@@ -146,6 +179,7 @@ def _module(model: FebModel, node: Node) -> None:
 
 def _control(model: FebModel, node: Node) -> None:
     model.newmark_parameters = None  # FEBio makes each step's solver anew, with its defaults
+    _once(node)
     for child in node.children:
         tag = child.tag
         if tag == "analysis":

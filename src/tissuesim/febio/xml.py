@@ -17,6 +17,38 @@ class FebError(InputError):
     """A FEBio file tissuesim cannot read or does not support (one line: file, element, line)."""
 
 
+class Attributes(dict):
+    """An element's attributes, remembering which ones the reader looked at (``get``, ``[]``,
+    ``in``): after reading, one that was never looked at was dropped (a misspelt ``lcc="1"``),
+    and ``read_feb`` refuses it."""
+
+    __slots__ = ("read",)
+
+    def __init__(self, *args, **kwargs) -> None:
+        super().__init__(*args, **kwargs)
+        self.read: tuple[str, ...] = ()  # a tuple: a million <node>s each keep one
+
+    def _mark(self, key: object) -> None:
+        if key not in self.read and isinstance(key, str):
+            self.read += (key,)
+
+    def __getitem__(self, key: str) -> str:
+        self._mark(key)
+        return super().__getitem__(key)
+
+    def get(self, key: str, default=None):
+        self._mark(key)
+        return super().get(key, default)
+
+    def __contains__(self, key: object) -> bool:
+        self._mark(key)
+        return super().__contains__(key)
+
+    def unread(self) -> list[str]:
+        """The attributes never looked at, in the file's order."""
+        return [k for k in self.keys() if k not in self.read]
+
+
 @dataclass
 class Node:
     """One XML element: its tag, attributes, text (stripped), children and line."""
@@ -55,7 +87,7 @@ def parse_feb(path: str | os.PathLike[str]) -> Node:
     root: list[Node] = []
 
     def start(tag: str, attrib: dict[str, str]) -> None:
-        node = Node(tag, dict(attrib), parser.CurrentLineNumber, path)
+        node = Node(tag, Attributes(attrib), parser.CurrentLineNumber, path)
         (stack[-1].children if stack else root).append(node)
         stack.append(node)
 
