@@ -127,3 +127,40 @@ def test_labels_and_noted_sections_are_not_refused():
     # name / id only label elements; <Output>'s plotfile attributes belong to a noted section
     for model in sorted(MODELS.glob("*.feb")):
         read_feb(model)
+
+
+def test_reading_is_linear_in_the_number_of_text_chunks(tmp_path):
+    # every line is a text chunk for the XML parser: the reader appended each one to the
+    # element's string (O(n^2): a 200k-id set one id per line took 18-27 s, these 400k lines
+    # 25 s and more); joined once they take a fraction of a second
+    import time
+
+    from tissuesim.febio.xml import parse_feb
+
+    n = 400_000
+    feb = tmp_path / "big_set.feb"
+    ids = "".join(f"{i},\n" for i in range(1, n + 1))
+    feb.write_text(f'<febio_spec version="4.0"><Mesh><NodeSet name="s">\n{ids}</NodeSet></Mesh>'
+                   "</febio_spec>\n")  # fmt: skip
+    start = time.perf_counter()
+    root = parse_feb(feb)
+    elapsed = time.perf_counter() - start
+    text = root.children[0].children[0].text
+    assert text.count(",") == n and text.startswith("1,") and text.endswith(f"{n},")
+    assert elapsed < 5.0, f"{elapsed:.1f} s to parse {n} lines"
+
+
+def test_fast_and_slow_paths_read_the_same_mesh(tmp_path):
+    # nodes and elements are parsed all at once; odd spacing, ';' separators and a trailing
+    # comma take the element-by-element path, with the same result
+    text = (MODELS / "uniaxial_neo_hookean.feb").read_text()
+    fast = read_feb(MODELS / "uniaxial_neo_hookean.feb")
+    odd = text.replace('<node id="2">0.5,0.0,0.0</node>', '<node id="2"> 0.5; 0.0 ,0.0 </node>')
+    odd = odd.replace('<elem id="1">1,2,5,4,10,11,14,13</elem>',
+                      '<elem id="1"> 1, 2,5,4,10,11,14,13,</elem>')  # fmt: skip
+    assert odd != text
+    feb = tmp_path / "odd.feb"
+    feb.write_text(odd)
+    slow = read_feb(feb)
+    assert (slow.nodes == fast.nodes).all()
+    assert (slow.parts["block"][1] == fast.parts["block"][1]).all()

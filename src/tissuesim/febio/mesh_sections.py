@@ -67,17 +67,31 @@ def _mesh(model: FebModel, section: Node) -> None:
 
 
 def _nodes(model: FebModel, node: Node) -> None:
-    rows = []
-    for c in node.children:
+    first = len(model.nodes)
+    for k, c in enumerate(node.children):
         if c.tag != "node" or "id" not in c.attrib:
             raise _unsupported(c, "expected <node id=...>x,y,z</node>")
         i = _int_attr(c, "id", "a node id")
         if i in model._node_index:
             raise c.error(f"node id {i} is defined twice")
-        model._node_index[i] = len(model.nodes) + len(rows)
-        rows.append(_floats(c, 3))
-    if rows:
-        model.nodes = np.vstack([model.nodes, np.array(rows)])
+        model._node_index[i] = first + k
+    if node.children:
+        model.nodes = np.vstack([model.nodes, _coordinates(node.children)])
+
+
+def _coordinates(nodes: list[Node]) -> np.ndarray:
+    """(n, 3) coordinates of <node>s: all parsed at once (a million in a second), and node by
+    node only to name the first bad one and its line."""
+    texts = [c.text for c in nodes]
+    flat = ",".join(texts).replace(";", ",").split(",")
+    if len(flat) == 3 * len(nodes) and all(t.count(",") + t.count(";") == 2 for t in texts):
+        try:
+            values = np.array(flat, dtype=float).reshape(-1, 3)
+        except ValueError:
+            values = None
+        if values is not None and np.isfinite(values).all():
+            return values
+    return np.array([_floats(c, 3) for c in nodes])
 
 
 def _elements(model: FebModel, node: Node) -> None:
@@ -92,29 +106,52 @@ def _elements(model: FebModel, node: Node) -> None:
     name = node.attrib.get("name") or f"Part{len(model.parts) + 1}"
     if name in model.parts:
         raise node.error(f"a second <Elements> part named {name!r}")
-    cells, ids, elems = [], [], []
-    for c in node.children:
+    ids, elems = [], node.children
+    for c in elems:
         if c.tag not in ("elem", kind) or "id" not in c.attrib:
             raise _unsupported(c, f"expected <elem id=...> with {nv} node ids")
-        conn = _ints(c)
-        if len(conn) != nv:
-            raise c.error(f"a {kind} element has {nv} nodes, got {len(conn)}")
-        cells.append(_index(model, c, conn))
-        if kind in PERMUTATIONS:
-            cells[-1] = cells[-1][PERMUTATIONS[kind]]
         eid = _int_attr(c, "id", "an element id")
         if eid in model._element_index:
             raise c.error(f"element id {eid} is defined twice")
         model._element_index[eid] = (name, len(ids))
         ids.append(eid)
-        elems.append(c)
-    if not cells:
+    if not elems:
         raise node.error("no elements in this part")
+    cells = _connectivity(model, elems, kind, nv)
+    if kind in PERMUTATIONS:
+        cells = cells[:, PERMUTATIONS[kind]]
     if kind in ORDERS:
-        _check_order(model, kind, np.array(cells, dtype=np.int64), elems)
-    model.parts[name] = (cell_type, np.array(cells, dtype=np.int64), np.array(ids), node)
+        _check_order(model, kind, cells, elems)
+    model.parts[name] = (cell_type, cells, np.array(ids), node)
     if "mat" in node.attrib:  # FEBio 2.5 style: the material on the part
         model.domains[name] = (node.attrib["mat"], None, node)
+
+
+def _connectivity(model: FebModel, elems: list[Node], kind: str, nv: int) -> np.ndarray:
+    """(k, nv) 0-based node rows of the elements: all parsed and looked up at once, and
+    element by element only to name the first bad one and its line."""
+    texts = [c.text for c in elems]
+    flat = ",".join(texts).split(",")
+    if len(flat) == nv * len(elems) and all(t.count(",") == nv - 1 for t in texts):
+        try:
+            given = np.array(flat, dtype=np.int64)
+        except ValueError:
+            given = None
+        if given is not None and model._node_index:
+            known = np.fromiter(model._node_index, dtype=np.int64, count=len(model._node_index))
+            rows = np.fromiter(model._node_index.values(), np.int64, count=len(known))
+            order = np.argsort(known)
+            at = np.searchsorted(known, given, sorter=order).clip(max=len(known) - 1)
+            found = order[at]
+            if (known[found] == given).all():
+                return rows[found].reshape(-1, nv)
+    cells = []
+    for c in elems:
+        conn = _ints(c)
+        if len(conn) != nv:
+            raise c.error(f"a {kind} element has {nv} nodes, got {len(conn)}")
+        cells.append(_index(model, c, conn))
+    return np.array(cells, dtype=np.int64)
 
 
 #: the node order, in words, of the elements checked as they are read (the quadratic
