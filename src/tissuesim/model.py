@@ -97,7 +97,9 @@ class Model:
         self.density = positive_field(self.density, "density", self.mesh.n_cells, "kg/m^3")
         self.kinematics = _kinematics(self.mesh, self.rest)
         if hasattr(self.material, "bind"):  # internal variables per integration point
-            self.material = self.material.bind(self.kinematics.weights.size, self.mesh.dim)
+            self.material = self.material.bind(
+                self.kinematics.weights.size, self.mesh.dim, self.mesh.n_cells
+            )
         self.backend, self.backend_reason = resolve_backend(
             self.backend, self.mesh.n_cells, self.mesh.dim
         )

@@ -32,7 +32,21 @@ from tissuesim.materials._hyperelastic import HyperelasticMaterial, inverted_err
 from tissuesim.materials.base import MaterialResponse
 from tissuesim.validate import short
 
-__all__ = ["FibreLaw", "unit_vectors", "local_axes"]
+__all__ = ["FibreLaw", "unit_vectors", "local_axes", "planar_keys"]
+
+
+def planar_keys(**values: object) -> tuple[str, ...]:
+    """The direction keys given with 2 components (a 2D body's in-plane form): ``bind`` refuses
+    them on a 3D body, where a third component was meant and lost."""
+    out = []
+    for key, value in values.items():
+        try:
+            shape = np.shape(value)
+        except ValueError:  # ragged: unit_vectors says so
+            continue
+        if shape[-1:] == (2,):
+            out.append(key)
+    return tuple(out)
 
 
 def unit_vectors(law: str, key: str, value: object) -> np.ndarray:
@@ -61,11 +75,20 @@ def local_axes(law: str, a: object, d: object) -> tuple[np.ndarray, np.ndarray]:
     """FEBio's ``mat_axis type="vector"``: e1 = a/|a|, e3 = a x d / |a x d|, e2 = e3 x e1;
     returns (e1, e2), each (3,) or (m, 3)."""
     a, d = unit_vectors(law, "mat_axis_a", a), unit_vectors(law, "mat_axis_d", d)
+    if a.ndim == d.ndim == 2 and len(a) != len(d) and 1 not in (len(a), len(d)):
+        raise MaterialError(
+            f"{law}: mat_axis_a gives {len(a)} vectors and mat_axis_d {len(d)}: give each one "
+            "per element (the same number) or one vector for the whole body"
+        )
     a, d = np.broadcast_arrays(a, d)
     e3 = np.cross(a, d)
     n3 = np.linalg.norm(e3, axis=-1, keepdims=True)
     if np.any(n3 < 1e-12):
-        raise MaterialError(f"{law}: mat_axis_a and mat_axis_d must not be parallel")
+        where = ""
+        if a.ndim == 2 and len(a) > 1:  # a list of the wrong length is often the cause
+            at = int(np.flatnonzero(n3.ravel() < 1e-12)[0])
+            where = f" (at direction {at} of the {len(a)} given, one per element)"
+        raise MaterialError(f"{law}: mat_axis_a and mat_axis_d must not be parallel{where}")
     e3 = e3 / n3
     return a, np.cross(e3, a)
 
@@ -88,11 +111,26 @@ class FibreLaw(HyperelasticMaterial):
         """(U, U', U'') of the volumetric term at J > 0."""
         raise NotImplementedError
 
-    def bind(self, n_points: int, dim: int) -> FibreLaw:
+    #: direction keys given with 2 components (``planar_keys``), refused on a 3D body
+    planar: tuple[str, ...] = ()
+
+    def bind(self, n_points: int, dim: int, n_cells: int | None = None) -> FibreLaw:
         """This law with per-element directions expanded to ``n_points`` integration points
         (each element's points consecutive); itself when the directions are global or
-        already per point."""
+        already per point. ``n_cells``: the body's elements, which per-element directions
+        must match."""
         p = self.fibres.shape[0]
+        if dim == 3 and self.planar:
+            raise MaterialError(
+                f"{self.name}: {', '.join(self.planar)} has 2 components on a 3D body; give "
+                "[x, y, z]"
+            )
+        if n_cells is not None and p not in (1, n_cells, n_points):
+            raise MaterialError(
+                f"{self.name}: {p} fibre directions given, read as one per element, but the "
+                f"body has {n_cells} elements: give one per element or one vector for the "
+                "whole body"
+            )
         if p in (1, n_points):
             return self
         if n_points % p:

@@ -27,7 +27,7 @@ from __future__ import annotations
 import numpy as np
 
 from tissuesim.errors import MaterialError
-from tissuesim.materials._fibres import FibreLaw, local_axes
+from tissuesim.materials._fibres import FibreLaw, local_axes, planar_keys
 from tissuesim.materials._hyperelastic import (
     BULK_KINDS,
     PRESSURE_MODELS,
@@ -73,6 +73,7 @@ class HolzapfelGasserOgden(FibreLaw):
         self.gamma = parameter(law, "gamma", gamma, unit="degrees")
         self.k = parameter(law, "k", k, positive=True, meaning="bulk modulus")
         self._axes = (mat_axis_a, mat_axis_d)
+        self.planar = planar_keys(mat_axis_a=mat_axis_a, mat_axis_d=mat_axis_d)
         e1, e2 = local_axes(law, mat_axis_a, mat_axis_d)
         g = np.radians(self.gamma)
         fibres = np.stack([e1 * np.cos(g) + e2 * np.sin(g), e1 * np.cos(g) - e2 * np.sin(g)], -2)

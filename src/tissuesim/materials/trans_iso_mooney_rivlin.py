@@ -25,7 +25,7 @@ import numpy as np
 from scipy.special import expi
 
 from tissuesim.errors import MaterialError
-from tissuesim.materials._fibres import FibreLaw, unit_vectors
+from tissuesim.materials._fibres import FibreLaw, planar_keys, unit_vectors
 from tissuesim.materials._hyperelastic import (
     BULK_KINDS,
     PRESSURE_MODELS,
@@ -71,6 +71,7 @@ class TransIsoMooneyRivlin(FibreLaw):
             raise MaterialError(f"{law}: c4 must be > 0 for a fibre with c3 or c5 > 0")
         self.k = parameter(law, "k", k, positive=True, meaning="bulk modulus")
         self.fiber = unit_vectors(law, "fiber", fiber)
+        self.planar = planar_keys(fiber=fiber)
         self.fibres = self.fiber.reshape(-1, 1, 3)
         self.bulk_kind = _pressure_model(law, pressure_model)
         self._c3 = self.c3

@@ -120,12 +120,12 @@ class Viscoelastic(Material):
         """True when the law holds a state for a body's integration points (``bind``)."""
         return self._n is not None
 
-    def bind(self, n_points: int, dim: int) -> Viscoelastic:
+    def bind(self, n_points: int, dim: int, n_cells: int | None = None) -> Viscoelastic:
         """A copy holding the state of ``n_points`` integration points in ``dim`` dimensions,
-        at rest (no history)."""
+        at rest (no history); ``n_cells`` goes to the elastic law's ``bind``."""
         out = copy.copy(self)
         if hasattr(self.elastic, "bind"):  # a law with data per point (fibre directions)
-            out.elastic = self.elastic.bind(n_points, dim)
+            out.elastic = self.elastic.bind(n_points, dim, n_cells)
         out._n = int(n_points)
         out._H = np.zeros((len(self.g), out._n, dim, dim))
         out._Se = np.zeros((out._n, dim, dim))

@@ -33,7 +33,24 @@ def resolve_directions(table: dict, mesh, where: str) -> dict:
             out[key] = _cell_data(value, mesh, f"{where} {key}")
         elif isinstance(value, list) and any(isinstance(v, str) for v in value):
             out[key] = _expressions(value, mesh, f"{where} {key}")
+        elif isinstance(value, list) and mesh is not None:
+            _check_vectors(value, mesh, f"{where} {key}")
     return out
+
+
+def _check_vectors(value: list, mesh, where: str) -> None:
+    """A direction given as numbers: a vector of the body's dimension (a 2-vector on a 3D
+    body lost its third component) or one per cell (a list of the wrong length is said so,
+    before the law reads it as per-cell axes that may look parallel)."""
+    per_cell = bool(value) and all(isinstance(v, list) for v in value)
+    rows = value if per_cell else [value]
+    if per_cell and len(rows) not in (1, mesh.n_cells):
+        raise SceneError(
+            f"{where}: {len(rows)} vectors given, read as one per cell, but the body has "
+            f"{mesh.n_cells} cells: give one per cell or one vector [x, y, z] for the whole body"
+        )
+    if mesh.dim == 3 and any(isinstance(r, list) and len(r) == 2 for r in rows):
+        raise SceneError(f"{where}: {short(value)} has 2 components on a 3D body; give [x, y, z]")
 
 
 def _need_mesh(mesh, where: str, form: str) -> None:
