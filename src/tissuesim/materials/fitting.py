@@ -183,15 +183,17 @@ def fit_material(
         values = np.atleast_1d(np.asarray(value, dtype=float))
         layout.append((pname, values.size, np.ndim(value) > 0))
         x0.extend(values.tolist())
-    lower, upper = np.full(len(x0), -np.inf), np.full(len(x0), np.inf)
-    start = 0
-    for pname, size, _ in layout:
-        if bounds and pname in bounds:
-            lower[start : start + size], upper[start : start + size] = bounds[pname]
-        start += size
     unknown = set(bounds or {}) - set(initial)
     if unknown:
         raise InputError(f"bounds given for parameters not fitted: {', '.join(sorted(unknown))}")
+    lower, upper = _bounds(layout, x0, bounds or {})
+    n = sum(x.size for _, x, _ in curves)
+    if n < len(x0):  # always underdetermined: any fit would be one of infinitely many
+        raise InputError(
+            f"{n} data point{'s' * (n != 1)} for {len(x0)} fitted parameters "
+            f"({', '.join(p for p, _, _ in layout)}): the fit is underdetermined; give at "
+            "least as many points as parameters, or hold some in fixed"
+        )
 
     def parameters(x: np.ndarray) -> dict[str, Any]:
         out, start = dict(fixed), 0
@@ -202,7 +204,6 @@ def fit_material(
         return out
 
     make_material(name, **parameters(np.array(x0)))  # the start must be a valid law
-    n = sum(x.size for _, x, _ in curves)
 
     def residual(x: np.ndarray) -> np.ndarray:
         try:
@@ -219,12 +220,63 @@ def fit_material(
         gtol=1e-14, max_nfev=2000 * max(1, len(x0)),
     )  # fmt: skip
     params = parameters(result.x)
+    success, message = bool(result.success), str(result.message)
+    rank = _rank(result.jac)
+    if rank < len(x0):  # enough points, but they do not tell the parameters apart
+        success = False
+        message = (
+            f"underdetermined: the data determine only {rank} combination"
+            f"{'s' * (rank != 1)} of the {len(x0)} fitted parameters (points at too few "
+            "stretches, or a test that does not tell them apart); the values returned are one "
+            f"fit of many. Add data or hold some parameters in fixed. ({message})"
+        )
     return FitResult(
         model=name,
         parameters=params,
         material=make_material(name, **params),
         rms=float(np.sqrt(np.mean(result.fun**2))),
-        success=bool(result.success),
-        message=str(result.message),
+        success=success,
+        message=message,
         optimizer=result,
     )
+
+
+def _bounds(layout: list, x0: list, bounds: Mapping) -> tuple[np.ndarray, np.ndarray]:
+    """(lower, upper) per fitted value; InputError naming the parameter whose bounds are
+    not a pair, inverted, or exclude its initial value."""
+    lower, upper = np.full(len(x0), -np.inf), np.full(len(x0), np.inf)
+    start = 0
+    for pname, size, _ in layout:
+        if pname in bounds:
+            try:
+                low, high = (float(v) for v in bounds[pname])
+            except (TypeError, ValueError):
+                raise InputError(
+                    f"bounds for {pname}: expected (low, high), got {short(bounds[pname])}"
+                ) from None
+            if not low < high:
+                raise InputError(
+                    f"bounds for {pname}: low {low:g} must be below high {high:g} (swap them)"
+                )
+            outside = [v for v in x0[start : start + size] if not low <= v <= high]
+            if outside:
+                raise InputError(
+                    f"initial {pname} = {outside[0]:g} is outside its bounds ({low:g}, {high:g})"
+                )
+            lower[start : start + size], upper[start : start + size] = low, high
+        start += size
+    return lower, upper
+
+
+def _rank(jac: np.ndarray) -> int:
+    """The numerical rank of the residual's Jacobian at the fit (columns scaled to unit norm,
+    so parameters of different units compare)."""
+    jac = np.asarray(jac, dtype=float)
+    norms = np.linalg.norm(jac, axis=0)
+    if not np.all(np.isfinite(jac)):
+        return jac.shape[1]  # nothing to judge by
+    scaled = jac[:, norms > 0] / norms[norms > 0]
+    if scaled.size == 0:
+        return 0
+    s = np.linalg.svd(scaled, compute_uv=False)
+    return int(np.sum(s > 1e-8 * s[0]))
