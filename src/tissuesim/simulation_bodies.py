@@ -24,12 +24,42 @@ if TYPE_CHECKING:
 __all__ = ["BodyCalls", "RESERVED_NAMES"]
 
 _NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9_.-]*")
+#: a body's size (m, its largest extent) outside these is most likely in other units than
+#: metres (a surface in millimetres read as metres is 1000x too large): warned, once
+BODY_SIZE_RANGE = (1e-3, 5.0)
 #: series the output writes besides the bodies'; no body may take these names
 RESERVED_NAMES = ("cut", "summary", "forces", "manifest")
 
 
 class BodyCalls:
     """Mixed into ``Simulation``."""
+
+    _units_warned = False  # the units warning is given once per simulation
+
+    def _check_units(self, name: str, points: np.ndarray) -> None:
+        """Warn (once) of a body larger than a few metres or smaller than a millimetre: with
+        SI moduli and gravity such a run goes on silently, off by factors of 1e3 and more."""
+        import warnings
+
+        if self._units_warned or not len(points):
+            return
+        size = float(np.max(np.ptp(np.asarray(points, dtype=float), axis=0)))
+        low, high = BODY_SIZE_RANGE
+        if low <= size <= high or not np.isfinite(size):
+            return
+        self._units_warned = True
+        hint = (
+            "a mesh in millimetres read as metres is 1000x too large: scale its points by 1e-3"
+            if size > high
+            else "a mesh in metres is meant here: scale its points if they are in other units"
+        )
+        side = f"larger than {high:g} m" if size > high else f"smaller than {low * 1e3:g} mm"
+        warnings.warn(
+            f"body {name!r} is {size:.3g} m across ({side}); tissuesim works in SI units (m, "
+            f"Pa, kg/m^3, N): {hint} (this is said once)",
+            UserWarning,
+            stacklevel=3,
+        )
 
     def _new_name(self, name: str, what: str, kind: str = "fem") -> str:
         """A body name that is valid as a file stem and clashes with no other body's output
@@ -151,6 +181,7 @@ class BodyCalls:
         for g in self.gravity:
             body.add_gravity(g)
         self.bodies[name] = body
+        self._check_units(name, mesh.points)
         self._changed()
         return body
 
