@@ -88,7 +88,7 @@ def test_vector_of_expressions_matches_numpy():
         ("1 < x < 2", "chained comparison"),
         ("x if y else 1", "IfExp"),
         ("[x, y]", "List"),
-        ("x and y", "BoolOp"),
+        ("x is y", "Is"),
         ("f'{x}'", "JoinedStr"),
         ("sin(*[x])", "Starred"),
         ("__builtins__", "__builtins__"),

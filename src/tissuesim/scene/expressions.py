@@ -1,7 +1,8 @@
 """Safe, vectorised expressions in x, y, z, t for scene files, e.g. "x * sin(t)".
 
 The text is parsed with ``ast`` and only numbers, the variables x, y, z, t (rest coordinates
-and time), the constants pi and e, arithmetic (+ - * / ** %), comparisons, unary minus and
+and time), the constants pi and e, arithmetic (+ - * / ** %), comparisons, ``and``, ``or``,
+``not`` (element by element: NumPy's logical_and, logical_or, logical_not), unary minus and
 calls of a fixed set of NumPy functions are allowed; anything else (attributes, names,
 subscripts, lambdas, imports) is refused before anything runs. Nothing goes through ``eval``
 of user text: the checked tree is compiled and run with no builtins and only the names above.
@@ -58,7 +59,32 @@ _ALLOWED = (
     ast.Eq,
     ast.NotEq,
     ast.FloorDiv,
+    ast.BoolOp,
+    ast.And,
+    ast.Or,
+    ast.Not,
 )
+#: what and, or, not become: Python's would ask an array for one truth value
+_LOGIC = {"_and": np.logical_and, "_or": np.logical_or, "_not": np.logical_not}
+
+
+class _Logic(ast.NodeTransformer):
+    """``a and b`` -> _and(a, b), ``a or b`` -> _or(a, b), ``not a`` -> _not(a)."""
+
+    def visit_BoolOp(self, node: ast.BoolOp) -> ast.AST:
+        self.generic_visit(node)
+        name = "_and" if isinstance(node.op, ast.And) else "_or"
+        out = node.values[0]
+        for value in node.values[1:]:
+            out = ast.Call(ast.Name(name, ast.Load()), [out, value], [])
+        return ast.copy_location(out, node)
+
+    def visit_UnaryOp(self, node: ast.UnaryOp) -> ast.AST:
+        self.generic_visit(node)
+        if isinstance(node.op, ast.Not):
+            call = ast.Call(ast.Name("_not", ast.Load()), [node.operand], [])
+            return ast.copy_location(call, node)
+        return node
 
 
 class _FloatLiterals(ast.NodeTransformer):
@@ -88,14 +114,14 @@ def compile_expression(text: str | float | int, where: str) -> Callable:
         if not isinstance(node, _ALLOWED):
             raise SceneError(
                 f"{where}: {type(node).__name__} is not allowed in expression {short(text)}; use "
-                "numbers, x, y, z, t, pi, e, arithmetic and functions "
+                "numbers, x, y, z, t, pi, e, arithmetic, comparisons, and, or, not and functions "
                 f"{', '.join(sorted(FUNCTIONS))}"
             )
         if isinstance(node, ast.Constant) and not isinstance(node.value, (int, float)):
             raise SceneError(f"{where}: only numeric constants are allowed in {short(text)}")
         if isinstance(node, ast.Compare) and len(node.ops) > 1:
             raise SceneError(
-                f"{where}: chained comparison in {short(text)}; write e.g. (0 < x) * (x < 1)"
+                f"{where}: chained comparison in {short(text)}; write e.g. 0 < x and x < 1"
             )
         if isinstance(node, ast.Call):
             if not (isinstance(node.func, ast.Name) and node.func.id in FUNCTIONS):
@@ -127,14 +153,14 @@ def compile_expression(text: str | float | int, where: str) -> Callable:
     # Integer literals become floats so that "9**9**9" overflows at once instead of running
     # Python's unbounded integer power.
     try:
-        tree = ast.fix_missing_locations(_FloatLiterals().visit(tree))
+        tree = ast.fix_missing_locations(_Logic().visit(_FloatLiterals().visit(tree)))
         code = compile(tree, f"<{where}>", "eval")
     except (RecursionError, MemoryError):
         raise SceneError(f"{where}: expression {short(text)} is too deeply nested") from None
 
     def f(X: np.ndarray, t: float) -> np.ndarray:
         X = np.array(X, dtype=float)  # a copy: nothing here may write into the caller's array
-        names = {**CONSTANTS, **FUNCTIONS, "t": float(t)}
+        names = {**CONSTANTS, **FUNCTIONS, **_LOGIC, "t": float(t)}
         for i, v in enumerate(VARIABLES[:3]):
             names[v] = X[:, i] if i < X.shape[1] else np.zeros(X.shape[0])
         try:
