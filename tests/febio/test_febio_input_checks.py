@@ -164,3 +164,33 @@ def test_fast_and_slow_paths_read_the_same_mesh(tmp_path):
     slow = read_feb(feb)
     assert (slow.nodes == fast.nodes).all()
     assert (slow.parts["block"][1] == fast.parts["block"][1]).all()
+
+
+@pytest.mark.parametrize("steps", ["-4", "0", "", "2,3"])
+def test_time_steps_are_refused_at_their_feb_line(steps, tmp_path, capsys):
+    # -4 was refused by the converted scene, naming a deleted temporary model.toml
+    text = (MODELS / "uniaxial_neo_hookean.feb").read_text()
+    text = text.replace("<time_steps>4</time_steps>", f"<time_steps>{steps}</time_steps>")
+    feb = tmp_path / "bad.feb"
+    feb.write_text(text)
+    out = tmp_path / "out"
+    assert main(["run", str(feb), "--out", str(out), "--quiet"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()[-1]
+    assert f"bad.feb:{line_of(text, '<time_steps>')} <time_steps>: time_steps must be" in err
+    assert "tissuesim-febio-" not in err and ".toml" not in err
+
+
+def test_a_converted_scene_refused_names_the_model_not_a_temporary_file(tmp_path, monkeypatch):
+    import tissuesim.scene.loader as loader
+    from tissuesim.errors import SceneError
+    from tissuesim.febio import load_febio
+
+    def refuse(path):  # whatever the scene refuses names its (temporary) file
+        raise SceneError(f"{path} [run]: steps must be an integer >= 0, not -4")
+
+    monkeypatch.setattr(loader, "load_scene", refuse)
+    with pytest.raises(SceneError) as info:
+        load_febio(MODELS / "uniaxial_neo_hookean.feb")
+    said = str(info.value)
+    assert said.startswith(f"{MODELS / 'uniaxial_neo_hookean.feb'} (its converted scene) [run]")
+    assert "tissuesim-febio-" not in said

@@ -188,7 +188,10 @@ def _control(model: FebModel, node: Node) -> None:
                 raise child.error(f"analysis {kind!r}: tissuesim runs STATIC and DYNAMIC")
             model.analysis = kind
         elif tag == "time_steps":
-            model.time_steps = int(_ints(child)[0])
+            steps = _ints(child)
+            if len(steps) != 1 or steps[0] < 1:
+                raise child.error(f"time_steps must be one integer >= 1, got {child.text[:40]!r}")
+            model.time_steps = steps[0]
         elif tag == "step_size":
             model.step_size = float(_floats(child, 1)[0])
             if not model.step_size > 0:

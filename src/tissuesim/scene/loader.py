@@ -32,10 +32,11 @@ other tables are present (a [mesh] or [frames] table beside it is then an error)
 
 from __future__ import annotations
 
+import os
 import tomllib
 from pathlib import Path
 
-from tissuesim.errors import SceneError, TissueSimError
+from tissuesim.errors import InputError, SceneError, TissueSimError
 from tissuesim.scene.common import (  # re-exported: the readers' shared names
     RUN_KEYS,
     SIMULATION_KEYS,
@@ -116,7 +117,13 @@ def load_febio(path: str | Path) -> Scene:
         convert_febio(path, scene_path)
         for note in read_feb(path).notes:
             warnings.warn(f"not used: {note}", UserWarning, stacklevel=2)
-        scene = load_scene(scene_path)
+        try:
+            scene = load_scene(scene_path)
+        except InputError as exc:  # name the model, never the temporary scene (deleted now)
+            if tmp not in str(exc):
+                raise
+            text = str(exc).replace(str(scene_path), f"{path} (its converted scene)")
+            raise SceneError(text.replace(f"{tmp}{os.sep}", "")) from None
     scene.source = str(path)
     return scene
 
