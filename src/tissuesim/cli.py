@@ -245,6 +245,7 @@ def _mesh(args) -> int:
             f"{out}: cannot write the volume mesh there ({why}); give -o a file path in an "
             "existing directory, e.g. -o organ.vtu"
         )
+    _check_volume_format(out)  # before a minute of meshing, not after it
     result = tetrahedralize(args.surface, args.size, mesher=args.mesher)
     with atomic_output(out) as tmp:
         write_mesh(result.mesh, tmp)
@@ -253,6 +254,28 @@ def _mesh(args) -> int:
     keys += ("volume", "surface_volume", "volume_ratio", "surface", "seconds")
     print(json.dumps({"output": str(out), **{k: r[k] for k in keys}}, indent=2))
     return 0
+
+
+#: meshio's formats that hold surfaces only: a tetrahedral mesh cannot be written to them
+SURFACE_FORMATS = (".stl", ".obj", ".ply", ".off", ".svg", ".wkt")
+
+
+def _check_volume_format(out: Path) -> None:
+    """OutputError (the file, its extension and the formats there are) unless meshio writes
+    a volume mesh to ``out``'s extension."""
+    import meshio
+
+    from tissuesim.errors import OutputError
+
+    name = out.name.lower()
+    known = sorted(meshio.extension_to_filetypes, key=len, reverse=True)
+    ext = next((e for e in known if name.endswith(e)), None)
+    if ext is None or ext in SURFACE_FORMATS:
+        what = f"{out.suffix!r} is not a mesh format" if ext is None else f"{ext} holds surfaces"
+        raise OutputError(
+            f"{out}: {what}; give -o a volume mesh file: .vtu (VTK), .msh (Gmsh 2.2), .mesh "
+            "(medit), .xdmf, ..."
+        )
 
 
 def _length(text: str) -> float:
