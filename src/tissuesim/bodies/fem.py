@@ -162,9 +162,16 @@ class FemBody:
         return self._prescribe(vertices, displacement, components, name, default, window)
 
     def _prescribe(
-        self, vertices, displacement, components, name, default: str, window=None
+        self,
+        vertices,
+        displacement,
+        components,
+        name,
+        default: str,
+        window=None,
+        call: str = "add_dirichlet",
     ) -> str:
-        v = vertex_indices(vertices, self.mesh.n_points, "add_dirichlet")
+        v = vertex_indices(vertices, self.mesh.n_points, call)  # errors name the call made
         if displacement is None:
             displacement = np.zeros(self.dim)
         g = displacement if callable(displacement) else constant_displacement(displacement)
@@ -192,7 +199,7 @@ class FemBody:
     def fix(self, vertices, name: str | None = None) -> str:
         """Clamp ``vertices`` (a support); its reaction is reported as ``name`` (default
         "<body>.support")."""
-        return self._prescribe(vertices, None, None, name, f"{self.name}.support")
+        return self._prescribe(vertices, None, None, name, f"{self.name}.support", call="fix")
 
     def grasp(
         self,
@@ -208,19 +215,21 @@ class FemBody:
         springs to the moving targets. The grasper's force is reported per step until it lets
         go at time ``release`` (s; None: never): from the first step that starts at or after it,
         its vertices are free."""
-        v = vertex_indices(vertices, self.mesh.n_points, f"grasp {name!r}")
+        # a grasper without a name yet (it gets one below) is "grasp", not "grasper None"
+        who = "grasp" if name is None else f"grasper {name!r}"
+        v = vertex_indices(vertices, self.mesh.n_points, who)
         if not callable(displacement):
-            const = _vector(displacement, self.dim, f"grasper {name!r} displacement")
+            const = _vector(displacement, self.dim, f"{who} displacement")
             displacement = functools.partial(lambda c, t: c, const)
-        _vector(displacement(0.0), self.dim, f"grasper {name!r} displacement at t = 0")
+        _vector(displacement(0.0), self.dim, f"{who} displacement at t = 0")
         if stiffness is not None and not (np.isfinite(stiffness) and stiffness > 0):
-            raise InputError(f"grasper {name!r}: stiffness must be > 0 N/m, got {short(stiffness)}")
+            raise InputError(f"{who}: stiffness must be > 0 N/m, got {short(stiffness)}")
         if stiffness is not None and self.dim != 3:
-            raise InputError(f"grasper {name!r}: spring graspers need a 3D body")
+            raise InputError(f"{who}: spring graspers need a 3D body")
         if release is not None:
             from tissuesim.validate import real
 
-            release = real(release, f"grasper {name!r} release", unit="s")
+            release = real(release, f"{who} release", unit="s")
         name = self._claim(name, "grasper")
         g = Grasper(name, self.name, v, displacement, stiffness, release)
         self.graspers.append(g)
