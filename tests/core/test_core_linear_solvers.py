@@ -16,6 +16,7 @@ from tissuesim.solve import linear
 from tissuesim.solve.linear import (
     CGSolver,
     NotPositiveDefiniteError,
+    SuperLUSolver,
     make_linear_solver,
     rigid_body_modes,
 )
@@ -222,3 +223,61 @@ def test_superlu_pivots_on_the_diagonal_and_reports_a_singular_matrix_as_not_def
     assert np.linalg.norm(A @ x - b) <= 1e-6 * np.linalg.norm(b)
     with pytest.raises(NotPositiveDefiniteError):
         SuperLUSolver().factorize(sp.csr_matrix(np.array([[1.0, 1.0], [1.0, 1.0]])))
+
+
+def _spd_matrix(n: int, seed: int) -> sp.csr_matrix:
+    rng = np.random.default_rng(seed)
+    B = sp.random(n, n, density=0.05, random_state=rng)
+    return (B @ B.T + sp.eye(n) * n * 0.1).tocsr()
+
+
+def _local_update(n: int, dofs: np.ndarray, seed: int) -> sp.csr_matrix:
+    """A PSD matrix over ``dofs`` only (contact's Hessian: a few vertices, stiff)."""
+    rng = np.random.default_rng(seed)
+    L = rng.standard_normal((len(dofs), 3))
+    block = 1e3 * (L @ L.T)
+    rows, cols = np.meshgrid(dofs, dofs, indexing="ij")
+    return sp.csr_matrix((block.ravel(), (rows.ravel(), cols.ravel())), shape=(n, n))
+
+
+def test_a_reused_factor_applies_a_local_update_by_woodbury_without_refactorising():
+    from tissuesim.solve.reuse import ReusedFactorSolver
+
+    n = 80
+    K = _spd_matrix(n, 1)
+    b = np.random.default_rng(2).standard_normal(n)
+    solver = ReusedFactorSolver(SuperLUSolver())
+    C1 = _local_update(n, np.array([3, 4, 5, 40]), 3)
+    solver.factorize((K + C1).tocsr(), update=C1)
+    x = solver.solve(b)  # factorises K alone, applies C1 by Woodbury: exact
+    assert np.allclose((K + C1) @ x, b, rtol=0, atol=1e-10 * np.linalg.norm(b))
+    assert solver.stats.factorizations == 1 and not solver.factor_holds_update
+    assert np.allclose(solver.factored_matrix.toarray(), K.toarray())
+    # the contact moves to other DOFs and stiffens: the factor is kept, CG preconditioned
+    # with K + C2 converges at once (a factor holding C1 failed CG and was made again)
+    C2 = _local_update(n, np.array([4, 5, 6, 7, 70]), 4)
+    solver.factorize((K + 1.001 * C2).tocsr(), update=1.001 * C2)
+    x = solver.solve(b)
+    assert np.allclose((K + 1.001 * C2) @ x, b, rtol=0, atol=1e-5 * np.linalg.norm(b))
+    assert solver.stats.factorizations == 1 and solver.stats.cg_iterations <= 2
+    plain = ReusedFactorSolver(SuperLUSolver())
+    plain.factorize((K + C1).tocsr())
+    plain.solve(b)
+    plain.factorize((K + 1.001 * C2).tocsr())
+    plain.solve(b)
+    assert plain.stats.factorizations == 2
+
+
+def test_a_reused_factor_takes_a_too_large_update_into_the_factor(monkeypatch):
+    from tissuesim.solve import reuse
+
+    monkeypatch.setattr(reuse, "MAX_UPDATE_DOFS", 3)
+    n = 40
+    K = _spd_matrix(n, 5)
+    C = _local_update(n, np.array([1, 2, 3, 4, 5]), 6)
+    solver = reuse.ReusedFactorSolver(SuperLUSolver())
+    solver.factorize((K + C).tocsr(), update=C)
+    b = np.ones(n)
+    x = solver.solve(b)
+    assert solver.factor_holds_update
+    assert np.allclose((K + C) @ x, b, atol=1e-10)

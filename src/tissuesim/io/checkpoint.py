@@ -206,6 +206,13 @@ def _solver_state(solver, key: str, arrays: dict) -> dict | None:
         meta["factored"] = A is not None
         if A is not None:
             _put_matrix(arrays, f"{key}.factored", A)
+            # the factor's columns kept for the contact update (solve/reuse.py): solved again
+            # in other batches they could differ in the last bit
+            meta["holds_update"] = bool(solver.factor_holds_update)
+            if solver.columns.slot:
+                order = sorted(solver.columns.slot, key=solver.columns.slot.get)
+                arrays[f"{key}.column_dofs"] = np.asarray(order, dtype=np.int64)
+                arrays[f"{key}.columns"] = solver.columns.X
         meta["direct"] = _solver_state(solver.direct, f"{key}.direct", arrays)
     elif isinstance(solver, SuperLUSolver) and solver._lu is not None:
         meta["ordered"] = solver._perm is not None
@@ -231,6 +238,11 @@ def _restore_solver(solver, meta: dict, arrays, key: str, A: sp.csr_matrix | Non
         if A is not None:
             solver._A = solver.factored_matrix = A
             solver._factored, solver._fresh = True, False
+            solver.factor_holds_update = bool(meta.get("holds_update", False))
+            if f"{key}.column_dofs" in arrays:
+                dofs = np.array(arrays[f"{key}.column_dofs"]).tolist()
+                solver.columns.X = np.array(arrays[f"{key}.columns"], order="F")
+                solver.columns.slot = {int(j): k for k, j in enumerate(dofs)}
         solver.stats = LinearStats()
     elif isinstance(solver, SuperLUSolver):
         if meta.get("ordered"):

@@ -48,6 +48,7 @@ from tissuesim.constraints.dirichlet import Elimination
 from tissuesim.energies.accumulator import Accumulator
 from tissuesim.errors import InputError
 from tissuesim.solve.linear import LinearSolver, NotPositiveDefiniteError
+from tissuesim.solve.reuse import ReusedFactorSolver
 
 __all__ = ["NewtonOptions", "NewtonResult", "minimize"]
 
@@ -399,10 +400,15 @@ def _try_direction(
         diag = acc.pattern.diagonal
         H[diag] += shift * np.abs(H[diag])
     A = acc.pattern.matrix(H)
-    if acc.extra_hessian is not None:
-        A = A + elimination.eliminate_matrix(acc.extra_hessian)
+    update = None
+    if acc.extra_hessian is not None:  # contact's, local: a reused factor takes it apart
+        update = elimination.eliminate_matrix(acc.extra_hessian).tocsr()
+        A = A + update
     try:
-        solver.factorize(A.tocsr())
+        if update is not None and isinstance(solver, ReusedFactorSolver):
+            solver.factorize(A.tocsr(), update=update)
+        else:
+            solver.factorize(A.tocsr())
         dx = solver.solve(-g)
     except NotPositiveDefiniteError:
         return None

@@ -363,7 +363,12 @@ def accurate_start(
     prediction = predictor.predict(
         system, solver, state.x, x_free, y0, y1, target, energies=body_energies
     )
-    prediction, _, _ = _barrier_gaps(contact, predictor, system, prediction, ACCURATE_MIN_GAP)
+    for _ in range(RELINEARIZE):  # the gaps linearised again where the step ends
+        prediction = predictor.predict(
+            system, solver, state.x, x_free, y0, y1, target, None, body_energies, at=prediction.x
+        )
+    prediction, gap, soft = _barrier_gaps(contact, predictor, system, prediction, ACCURATE_MIN_GAP)
+    prediction, _ = _refined(system, predictor, prediction, body_energies, gap, soft)
     report.update(
         _figures(prediction),
         columns_solved=predictor.columns,

@@ -30,6 +30,7 @@ from tissuesim.solve.newton import minimize
 from tissuesim.system import is_frame_body
 from tissuesim.time.contact_step import (
     accurate_start,
+    barrier_pull,
     certify,
     interactive_step,
     resolve_mode,
@@ -194,6 +195,8 @@ def implicit_step(
     if contact is not None:
         if record.budget_stop and contact.moving:
             contact.obstacle_state = y1
+        if lag_at is not None:  # the barrier's own weights per pair, for the next prediction
+            contact.predictor.calibrate(contact, c1, lambda d: barrier_pull(contact, d))
         contact.update_stiffness(c1)
     system.last_step_energies = body_energies  # the step's Phi, for haptics.py's linearisation
     v1 = system.difference(c1, state.x) / h if dynamic else np.zeros(system.n_dofs)
