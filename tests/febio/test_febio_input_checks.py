@@ -194,3 +194,24 @@ def test_a_converted_scene_refused_names_the_model_not_a_temporary_file(tmp_path
     said = str(info.value)
     assert said.startswith(f"{MODELS / 'uniaxial_neo_hookean.feb'} (its converted scene) [run]")
     assert "tissuesim-febio-" not in said
+
+
+def test_reading_leaves_the_garbage_collector_as_it_was(tmp_path):
+    # read_feb pauses Python's cyclic collector (it rescanned a large model's XML tree again
+    # and again: half of a 1e6-node read); it must be back on afterwards, an error or not
+    import gc
+
+    assert gc.isenabled()
+    read_feb(MODELS / "uniaxial_neo_hookean.feb")
+    assert gc.isenabled()
+    bad = tmp_path / "bad.feb"
+    bad.write_text('<febio_spec version="4.0"><Rigid/></febio_spec>')
+    with pytest.raises(FebError):
+        read_feb(bad)
+    assert gc.isenabled()
+    gc.disable()
+    try:
+        read_feb(MODELS / "uniaxial_neo_hookean.feb")
+        assert not gc.isenabled()  # left off when it was off
+    finally:
+        gc.enable()
