@@ -85,6 +85,7 @@ def _linearize(system, contact, x, name, energies, solver, time):
     import scipy.sparse as sp
 
     from tissuesim.solve.linear import NotPositiveDefiniteError
+    from tissuesim.solve.reuse import ReusedFactorSolver
 
     rows = contact.slices[name][0]
     dim = contact.dim
@@ -109,10 +110,16 @@ def _linearize(system, contact, x, name, energies, solver, time):
             acc = system.evaluate(x, 2, project, energies)
             system.elimination.apply(acc.hessian, acc.gradient)
             matrix = acc.pattern.matrix(acc.hessian)
+            update = None
             if acc.extra_hessian is not None:
-                matrix = matrix + system.elimination.eliminate_matrix(acc.extra_hessian)
+                update = system.elimination.eliminate_matrix(acc.extra_hessian).tocsr()
+                matrix = matrix + update
             try:
-                solver.factorize(matrix.tocsr())
+                if update is not None and isinstance(solver, ReusedFactorSolver):
+                    # the kept factor stays the elasticity's (solve/reuse.py)
+                    solver.factorize(matrix.tocsr(), update=update)
+                else:
+                    solver.factorize(matrix.tocsr())
                 Z = np.column_stack([solver.solve(C[:, k]) for k in range(dim)])
                 break
             except NotPositiveDefiniteError:

@@ -63,6 +63,7 @@ class ReusedFactorSolver(LinearSolver):
         self.name = direct.name
         self.max_cg = int(max_cg)
         self.rtol = float(rtol)
+        self._rtol = self.rtol  # the current matrix's (``factorize``)
         self.stats = LinearStats()
         self._A: sp.csr_matrix | None = None
         self._factored = False
@@ -75,8 +76,13 @@ class ReusedFactorSolver(LinearSolver):
         self.columns = FactorColumns()  # K^-1 e_j of the factor at the update's DOFs
         self._woodbury: tuple | None | bool = None  # _woodbury_terms; False: not usable
 
-    def factorize(self, A: sp.csr_matrix, update: sp.csr_matrix | None = None) -> None:
-        """Record A (and its fast-changing local part ``update``, included in A)."""
+    def factorize(
+        self, A: sp.csr_matrix, update: sp.csr_matrix | None = None, rtol: float | None = None
+    ) -> None:
+        """Record A (and its fast-changing local part ``update``, included in A); ``rtol``:
+        the relative residual the solves of this matrix need (default the solver's own;
+        never tighter)."""
+        self._rtol = self.rtol if rtol is None else max(float(rtol), self.rtol)
         self._A = A
         self._update = update if update is not None and update.nnz else None
         self._fresh = False
@@ -195,7 +201,7 @@ class ReusedFactorSolver(LinearSolver):
             alpha = rz / curvature
             x += alpha * p
             r -= alpha * Ap
-            if float(np.linalg.norm(r)) <= self.rtol * norm_b:
+            if float(np.linalg.norm(r)) <= self._rtol * norm_b:
                 return x
             z = M(r)
             self.stats.back_solves += 1
