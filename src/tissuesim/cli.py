@@ -349,7 +349,9 @@ def main(argv: list[str] | None = None) -> int:
     )
     p_run.add_argument("--out", help="output directory (default out/<scene name>)")
     p_run.add_argument("--steps", type=_steps, help="number of time steps (overrides [run] steps)")
-    p_run.add_argument("--no-render", action="store_true", help="skip the PNG and GIF")
+    p_run.add_argument(
+        "--no-render", action="store_true", help="draw no picture (forces.png, final.png, run.gif)"
+    )
     p_run.add_argument(
         "--quiet", action="store_true", help="no progress lines (the final report is printed)"
     )
@@ -368,7 +370,9 @@ def main(argv: list[str] | None = None) -> int:
     p_demo.add_argument(
         "--steps", type=_steps, help="number of time steps (default the example's 200)"
     )
-    p_demo.add_argument("--no-render", action="store_true", help="skip the PNG and GIF")
+    p_demo.add_argument(
+        "--no-render", action="store_true", help="draw no picture (forces.png, final.png, run.gif)"
+    )
     p_demo.add_argument(
         "--quiet", action="store_true", help="no progress lines (the final report is printed)"
     )

@@ -474,7 +474,7 @@ class Simulation(BodyCalls, SetupCalls, StepChecks, BodyResults, Stepping):
         resume: bool = False,
     ) -> list[StepRecord]:
         """Run ``steps`` time steps; with ``output``, write per body a VTU series on rest
-        positions, summary.json, forces.csv / forces.png and (``render``) final.png and run.gif
+        positions, summary.json, forces.csv and (``render``) forces.png, final.png and run.gif
         coloured by ``field`` ("J", "von_mises", "displacement", "green_strain";
         ``io/run_output.py``), and checkpoint.npz at every frame. Returns this run's step
         records. Steps taken before by ``step()`` are not part of the run's output: its series,

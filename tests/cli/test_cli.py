@@ -89,6 +89,9 @@ def test_beam_3d_tip_moves_down(tmp_path, capsys):
     assert code == 0
     assert not (out / "final.png").exists() and not (out / "run.gif").exists()
     summary = json.loads((out / "summary.json").read_text())
+    # --no-render draws no picture at all: the forces are in forces.csv only (issue 41)
+    assert (out / "forces.csv").is_file() and not (out / "forces.png").exists()
+    assert not any(p.suffix in (".png", ".gif") for p in out.iterdir())
     assert summary["status"] == "completed" and summary["totals"]["steps"] == 2
     frames = pvd_files(out)
     last = meshio.read(frames[-1][1])

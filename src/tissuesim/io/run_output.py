@@ -47,8 +47,9 @@ SUMMARY_COST_RATIO = 20.0
 class RunOutput:
     """Runs a Simulation's steps and writes its output into ``directory`` (None: nothing).
 
-    every: write a frame every this many steps (and the last). render: draw final.png and
-    run.gif, coloured by ``field`` ("J", "von_mises", "displacement", "green_strain").
+    every: write a frame every this many steps (and the last). render: draw forces.png,
+    final.png and run.gif, coloured by ``field`` ("J", "von_mises", "displacement",
+    "green_strain"); False draws no picture at all (forces.csv is still written).
     """
 
     def __init__(
@@ -398,7 +399,10 @@ class RunOutput:
     def _draw(self, progress: bool) -> None:
         from tissuesim.io.forces import render_forces_png
 
-        render_forces_png(self.directory / "forces.png", self.window())  # none: no file
+        # render=False / --no-render: no picture at all, forces.png included (matplotlib's
+        # import and drawing were half of a short run's time)
+        if self.render:
+            render_forces_png(self.directory / "forces.png", self.window())  # none: no file
         if self.render and self.frames:
             from tissuesim.render.scene import MAX_GIF_FRAMES, gif_frames_3d, render_run
 
