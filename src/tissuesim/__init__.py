@@ -6,6 +6,8 @@ The names users need most are re-exported here; each lives in one module (see do
 from __future__ import annotations
 
 from tissuesim._version import __version__
+from tissuesim.contact.obstacles import capsule, cylinder, plane, sphere
+from tissuesim.contact.pairs import ContactPair
 from tissuesim.errors import (
     ConvergenceError,
     InputError,
@@ -19,6 +21,7 @@ from tissuesim.errors import (
     SceneError,
     TissueSimError,
 )
+from tissuesim.frames.sampling import read_surface
 from tissuesim.materials import (
     ArrudaBoyce,
     CoupledArrudaBoyce,
@@ -56,6 +59,7 @@ __all__ = [
     "ResourceError",
     "RunError",
     "ArrudaBoyce",
+    "ContactPair",
     "CoupledArrudaBoyce",
     "CoupledMooneyRivlin",
     "CoupledVerondaWestmann",
@@ -84,11 +88,16 @@ __all__ = [
     "Viscoelastic",
     "Yeoh",
     "box",
+    "capsule",
+    "cylinder",
     "ellipsoid",
     "fit_material",
     "make_material",
     "mesh_surface",
+    "plane",
     "read_mesh",
+    "read_surface",
     "rectangle",
     "select",
+    "sphere",
 ]

@@ -55,14 +55,19 @@ class SetupCalls:
         compliance, then the barrier's Newton from there: the barrier's answer and guarantee),
         "interactive" (the prediction, certified free of intersection by CCD, is the step;
         forces are its multipliers), "barrier" (the barrier's Newton alone), "auto" (the
-        default: the barrier, interactive for steps with a budget)."""
+        default: the barrier, interactive for steps with a budget). Contact needs no extra:
+        the IPC Toolkit (ipctk) is installed with tissuesim."""
         import importlib.util
 
         from tissuesim.contact.model import ContactSettings
         from tissuesim.validate import real
 
         if enabled and importlib.util.find_spec("ipctk") is None:
-            raise InputError('contact needs the IPC Toolkit: pip install "tissuesim[contact]"')
+            # ipctk is a dependency of tissuesim: missing only if it was uninstalled
+            raise InputError(
+                "contact needs the IPC Toolkit (ipctk, a dependency of tissuesim that is "
+                "missing here): pip install ipctk"
+            )
         if self.explicit and enabled:
             raise InputError("contact needs an implicit integrator (backward_euler, quasistatic)")
         if dhat is not None:
@@ -91,12 +96,13 @@ class SetupCalls:
         self, name: str, surface, *, translation=None, rotation=None, friction=None
     ) -> str:
         """A kinematic rigid obstacle (``contact/obstacles.py``): a triangle ``surface``
-        (``contact.obstacles.plane`` / ``sphere``, ``frames.sampling.box_surface``,
-        ``read_surface``) moved by ``translation(t)`` (m) and ``rotation(t)`` (a rotation
-        vector about its centroid, rad), with its own Coulomb ``friction`` against every body
-        (default the scene's). Its force on the bodies is reported as ``name`` (and its
-        normal and friction parts as ``name.normal``, ``name.friction``). Switches contact
-        on (``set_contact``) if it is off."""
+        (``tissuesim.plane`` / ``sphere`` / ``capsule`` / ``cylinder``, ``read_surface``,
+        ``frames.sampling.box_surface``) moved by ``translation`` (m) and ``rotation`` (a
+        rotation vector about its centroid, rad), each a function of t or three numbers (a
+        fixed offset from where the surface was made), with its own Coulomb ``friction``
+        against every body (default the scene's). Its force on the bodies is reported as
+        ``name`` (and its normal and friction parts as ``name.normal``, ``name.friction``).
+        Switches contact on (``set_contact``) if it is off."""
         from tissuesim.contact.obstacles import Obstacle
         from tissuesim.frames.sampling import Surface
 
@@ -104,9 +110,10 @@ class SetupCalls:
             raise InputError(
                 f"add_obstacle: surface must be a Surface, not {type(surface).__name__}"
             )
-        for motion, what in ((translation, "translation"), (rotation, "rotation")):
-            if motion is not None and not callable(motion):
-                raise InputError(f"add_obstacle: {what} must be a function of t or None")
+        # a fixed place as numbers (a 3-vector, as a scene's constant expressions give) or a
+        # function of t
+        translation = _motion(translation, "translation", "m")
+        rotation = _motion(rotation, "rotation", "rad")
         # a file stem clashing with no body, obstacle or internal series; then its force name
         if friction is not None:
             from tissuesim.validate import real
@@ -613,3 +620,26 @@ def _body_first(method: str, args: tuple, n: int, body: str | None) -> tuple[str
             f"{'s' if n > 1 else ''} (or the body's name first), not {len(args)}"
         )
     return body, args
+
+
+class _Fixed:
+    """A motion that stays put: the numbers ``add_obstacle`` was given, at every t (a class,
+    not a lambda, so that an obstacle pickles)."""
+
+    def __init__(self, value: np.ndarray) -> None:
+        self.value = value
+
+    def __call__(self, t: float) -> np.ndarray:
+        return self.value.copy()
+
+
+def _motion(value, what: str, unit: str):
+    """``add_obstacle``'s translation / rotation: None, a function of t, or three numbers."""
+    if value is None or callable(value):
+        return value
+    if isinstance(value, str) or not hasattr(value, "__len__"):
+        raise InputError(
+            f"add_obstacle: {what} must be a function of t, three numbers ({unit}) or None, "
+            f"not {short(value)}"
+        )
+    return _Fixed(vector(value, f"add_obstacle {what}", 3, unit=unit))
