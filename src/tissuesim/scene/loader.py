@@ -12,6 +12,7 @@ Every key is the name of an argument of the Python API (see docs/reference/scene
     [gravity]       Simulation.add_gravity(acceleration)
     [[body_force]]  Simulation.add_body_force(force_density)
     [initial]       Simulation.set_velocity(velocity)
+    [[graspers]]    Simulation.grasp(vertices, displacement, stiffness, name, release)
     [run]           Simulation.run(steps, every, render)
 
 Vertex and facet sets are selector tables, e.g. ``{ on_plane = { axis = 0, value = -1.0 } }``,
@@ -24,7 +25,7 @@ tables are read by ``tissuesim.scene.frames``, which shares [material], [simulat
 [gravity] and [run] with this module.
 
 A scene with ``[[bodies]]`` (or ``[[organs]]``) tables has many bodies (organs joined
-by connective tissue, with [[graspers]], [tissue], [[cuts]] and [tearing]): its tables are read
+by connective tissue, with [tissue], [[cuts]] and [tearing]): its tables are read
 by ``tissuesim.scene.coupled``, which shares [simulation], [newton], [gravity], [run], the
 material tables and the vertex selectors with this module. ``[[organs]]`` decides even when
 other tables are present (a [mesh] or [frames] table beside it is then an error).
@@ -50,6 +51,7 @@ from tissuesim.scene.common import (  # re-exported: the readers' shared names
     wrong_form,
 )
 from tissuesim.scene.contact import CONTACT_KEYS, OBSTACLE_KEYS
+from tissuesim.scene.coupled import GRASPER_KEYS
 from tissuesim.scene.fem_body import (
     FEM_BODY_KEYS,
     FEM_BODY_OPTIONS,
@@ -70,11 +72,13 @@ SCENE_KEYS = {
     "run": set(RUN_KEYS),
     "contact": set(CONTACT_KEYS),
     "obstacles": set(OBSTACLE_KEYS),
+    "graspers": set(GRASPER_KEYS),
 }
 # Tables of frame scenes ([frames], tissuesim.scene.frames) that mean nothing for a [mesh] body.
 FRAME_ONLY_KEYS = ("region", "fixed_frames", "prescribed_frames", "springs", "point_forces")
 # Tables of coupled scenes ([[organs]], tissuesim.scene.coupled) that mean nothing for one body.
-COUPLED_ONLY_KEYS = ("graspers", "tissue", "cuts", "tearing")
+# [[graspers]] is not one of them: a grasper is the most basic interaction, on any FEM body.
+COUPLED_ONLY_KEYS = ("tissue", "cuts", "tearing")
 
 
 def load_scene(path: str | Path) -> Scene:
@@ -199,6 +203,12 @@ def _build(data: dict, base_dir: Path, source: str, name: str) -> Scene:
         _unknown(gravity, SCENE_KEYS["gravity"], f"{source} [gravity]")
         with _context(f"{source} [gravity]"):
             sim.add_gravity(gravity["acceleration"])
+    from tissuesim.scene.coupled import _grasper
+
+    for i, item in enumerate(_table(data, "graspers", source, array=True), start=1):
+        if "body" not in item and "organ" not in item:  # the scene's one body, "body"
+            item = {**item, "body": "body"}
+        _grasper(sim, item, f"{source} [[graspers]] #{i}")
     from tissuesim.scene.contact import add_contact_tables
 
     add_contact_tables(sim, data, base_dir, source)
