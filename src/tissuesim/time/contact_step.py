@@ -277,9 +277,9 @@ def _predict_and_certify(
             system, solver, state.x, x_free, y0, y1, gap, also, body_energies
         )
         for _ in range(RELINEARIZE):  # the gaps linearised again where the step ends
-            at = prediction.x
+            at = prediction.x  # (corrected by _barrier_gaps: one back-solve less)
             prediction = predictor.predict(
-                system, solver, state.x, x_free, y0, y1, gap, also, body_energies, at=at
+                system, solver, state.x, x_free, y0, y1, gap, also, body_energies, at, False
             )
         prediction, target, soft = _barrier_gaps(contact, predictor, system, prediction, MIN_GAP)
         prediction, refinements = _refined(
@@ -365,8 +365,9 @@ def accurate_start(
     )
     for _ in range(RELINEARIZE):  # the gaps linearised again where the step ends
         prediction = predictor.predict(
-            system, solver, state.x, x_free, y0, y1, target, None, body_energies, at=prediction.x
-        )
+            system, solver, state.x, x_free, y0, y1, target, None, body_energies,
+            prediction.x, False,
+        )  # fmt: skip
     prediction, gap, soft = _barrier_gaps(contact, predictor, system, prediction, ACCURATE_MIN_GAP)
     prediction, _ = _refined(system, predictor, prediction, body_energies, gap, soft)
     report.update(

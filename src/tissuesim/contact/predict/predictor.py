@@ -122,6 +122,7 @@ class ContactPredictor:
         also: np.ndarray | None = None,
         energies=None,
         at: np.ndarray | None = None,
+        correct: bool = True,
     ) -> Prediction:
         """The prediction for the step x0 -> x_free (obstacles y0 -> y1, flat, or None where
         they do not move); ``target_gap`` (m, scalar or (m,) for the pairs of the last
@@ -129,7 +130,8 @@ class ContactPredictor:
         configuration whose sweep from x0 adds pairs (the last prediction's, when it crossed a
         surface the free motion did not reach); ``energies``: the step's body energies (for a
         Hessian when the solver holds no factor); ``at``: a configuration (obstacles at y1)
-        where the gaps are linearised (``rows.detect_rows``), default the step's start."""
+        where the gaps are linearised (``rows.detect_rows``), default the step's start;
+        ``correct`` False: the forces alone (``correct`` later gives x)."""
         contact = system.contact
         start = time.perf_counter()
         V0 = contact.vertices(x0, obstacle=y0)
@@ -173,7 +175,7 @@ class ContactPredictor:
             force=np.zeros((rows.n_pairs, rows.dim)), J=J, J_all=J_all, W=W, dofs=dofs,
             free=rows.free_values(), forces={}, normal_forces={},
         )  # fmt: skip
-        return self._solve(system, shell, target_gap)
+        return self._solve(system, shell, target_gap, correct=correct)
 
     def solve_again(self, system, target_gap, soft=None, correct: bool = True) -> Prediction:
         """The last prediction's pairs and compliance with other target gaps ((m,) or a

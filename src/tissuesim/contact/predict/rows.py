@@ -26,6 +26,9 @@ import scipy.sparse as sp
 
 __all__ = ["ContactRows", "detect_rows", "sides_kept", "sweep_candidates"]
 
+#: pairs are kept where the step ends (``at``) within this many times the keep distance
+AT_KEEP = 2.0
+
 
 @dataclass(frozen=True)
 class ContactRows:
@@ -279,6 +282,10 @@ def detect_rows(
     vec1 = np.einsum("mk,mkd->md", coefs, V1[safe])
     gap_free = np.einsum("md,md->m", normals, vec1)
     near = gap_free < keep
+    if at is not None:
+        # and near where the step ends (a first prediction's positions): a probe pressing an
+        # organ sweeps over 3-10x the pairs that carry force there, and W costs their square
+        near &= length[ok] < AT_KEEP * keep
     ids, coefs, safe, used, weights = ids[near], coefs[near], safe[near], used[near], weights[near]
     kinds = kinds[near]
     gap_start = np.einsum("md,md->m", normals, vec0[ok])[near]
