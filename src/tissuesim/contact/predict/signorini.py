@@ -15,7 +15,9 @@ clamped at 0, then the tangential force from the 2 x 2 (2D: 1 x 1) block, projec
 disc of radius mu lambda_n: in 2D by clamping, in 3D (two tangents) as the point of the disc's
 edge where the block's slip opposes the force, (A + sigma I) t = -c, |t| = mu lambda_n (a
 radial clamp would not: the block A is not isotropic). The sweeps stop when no force changes
-by more than ``tolerance`` of the largest. Compiled with numba when installed
+by more than ``tolerance`` of the largest, or no value u by more than ``tolerance`` of the
+largest free value |b| over 10 (pairs that share a load redundantly: the forces drift, the motion
+does not). Compiled with numba when installed
 (``tissuesim[fast]``), else the same function runs in Python (fine for tens of pairs, slow for
 hundreds).
 """
@@ -29,7 +31,9 @@ import numpy as np
 __all__ = ["solve_signorini_coulomb", "SignoriniResult"]
 
 
-def _gauss_seidel(W, b, mu, soft, lam, d, max_sweeps, tolerance):  # pragma: no cover
+def _gauss_seidel(
+    W, b, mu, soft, lam, d, max_sweeps, tolerance, value_tolerance
+):  # pragma: no cover
     # w = W lambda kept up to date as forces change (W symmetric: row r is column r), so a
     # pair whose force stays zero costs O(1) a sweep, a changed one O(rows)
     n = b.shape[0]
@@ -44,6 +48,7 @@ def _gauss_seidel(W, b, mu, soft, lam, d, max_sweeps, tolerance):  # pragma: no 
         sweeps = sweep + 1
         change = 0.0
         largest = 1e-300
+        w_start = w.copy()
         for i in range(m):
             r = i * d
             # normal: u_n = b_n + (W lambda)_n (+ soft lambda_n) = 0 when the force is positive
@@ -121,6 +126,14 @@ def _gauss_seidel(W, b, mu, soft, lam, d, max_sweeps, tolerance):  # pragma: no 
                         change = abs(delta)
         if change <= tolerance * largest:
             return sweeps, True
+        # or no gap or slip moved: redundant pairs (a body resting on many points) share
+        # their load in ways W cannot tell apart, where the forces drift but not the motion
+        moved = 0.0
+        for k in range(n):
+            if abs(w[k] - w_start[k]) > moved:
+                moved = abs(w[k] - w_start[k])
+        if moved <= value_tolerance:
+            return sweeps, True
     return sweeps, False
 
 
@@ -164,7 +177,11 @@ def solve_signorini_coulomb(
     rhs = np.ascontiguousarray(b, dtype=float).reshape(-1)
     soft = np.zeros(m) if soft is None else np.ascontiguousarray(soft, dtype=float)
     mu = np.ascontiguousarray(mu, dtype=float)
-    sweeps, converged = _kernel()(W, rhs, mu, soft, lam, d, int(max_sweeps), float(tolerance))
+    # values to the tolerance of the largest free value (the step's largest gap or slip)
+    value_tolerance = 0.1 * float(tolerance) * float(np.max(np.abs(rhs), initial=0.0))
+    sweeps, converged = _kernel()(
+        W, rhs, mu, soft, lam, d, int(max_sweeps), float(tolerance), value_tolerance
+    )
     values = (rhs + W @ lam).reshape(m, d)
     values[:, 0] += soft * lam.reshape(m, d)[:, 0]
     return SignoriniResult(lam.reshape(m, d), values, int(sweeps), bool(converged))
