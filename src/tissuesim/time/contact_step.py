@@ -343,20 +343,34 @@ def accurate_start(
     the free motion's start, which Newton's relative tolerance is taken of: the start's own
     would hold a good start to a tighter tolerance the better it is)."""
     contact = system.contact
+    predictor = _predictor(contact)
     start = time.perf_counter()
-    x_free, record = free_motion(
-        system, state, h, solver, options, dynamic, body_energies, t1, None
+    # the free motion as the interactive mode's (the refinement passes below take the
+    # elasticity's nonlinearity; Newton on the barrier then corrects what is left)
+    free = (
+        None
+        if predictor.refresh
+        else lagged_free_motion(system, state, h, solver, dynamic, body_energies, t1)
     )
+    kind = "lagged"
+    if free is None:
+        kind = "newton"
+        free = free_motion(
+            system, state, h, solver, options, dynamic, body_energies, t1,
+            {"iterations": FREE_ITERATIONS},
+        )  # fmt: skip
+        predictor.refresh = False
+    x_free, record = free
     report = {
         "mode": "accurate",
+        "free_motion": kind,
         "free_motion_s": time.perf_counter() - start,
         "free_iterations": record.iterations,
     }
     contact.prediction_report = report
-    if not record.converged:
+    if not (record.converged or record.budget_stop):
         report["outcome"] = f"no prediction: free motion failed ({record.reason})"
         return None, None
-    predictor = _predictor(contact)
     predictor.clock.clear()
     predictor.columns = 0
     target = INTERACTIVE_GAP * contact.dhat
