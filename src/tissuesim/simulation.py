@@ -411,6 +411,7 @@ class Simulation(BodyCalls, SetupCalls, StepChecks, BodyResults, Stepping):
             self._cut_ahead()  # blades in contact with what they cut: the cut goes first
         s = self.system
         by_contact = self.integrator == "quasistatic" and self._check_supported()
+        self._check_contact_start()  # dhat, and surfaces apart, before the first step
         if self.explicit and self._stability_checked is not s:
             self._check_stability()
             self._stability_checked = s

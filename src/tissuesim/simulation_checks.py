@@ -94,6 +94,80 @@ class StepChecks:
                 stacklevel=3,
             )
 
+    _contact_start_checked = False  # the contact start is checked once, before the first step
+
+    def _check_contact_start(self) -> None:
+        """Before the first step with contact: a dhat the bodies' edges cannot hold (the run
+        crawled: 0 steps in 300 s), and a start that intersects (a probe inside the organ failed
+        after six halvings as "did not converge ... try a smaller time_step") are refused."""
+        contact = self.system.contact
+        if contact is None or self._contact_start_checked:
+            return
+        self._check_dhat(contact)
+        self._check_start_apart(contact)
+        self._contact_start_checked = True
+
+    def _check_dhat(self, contact) -> None:
+        """dhat must be below the median boundary edge of every FEM body in contact: larger,
+        the barrier acts between most of a body's surface at rest and the steps barely move."""
+        if self.contact.dhat is None:
+            return  # the default, 1e-3 of the scene's size
+        from tissuesim.simulation_setup import _median_boundary_edge
+
+        dhat = float(contact.dhat)
+        for body in self._active():
+            if body.kind != "fem" or body.name not in contact.slices:
+                continue
+            edge = _median_boundary_edge(body.mesh)
+            if dhat < edge:
+                continue
+            extent = " x ".join(f"{v:.3g}" for v in np.ptp(body.mesh.points, axis=0))
+            diagonal = float(np.linalg.norm(np.ptp(contact.rest, axis=0)))
+            suggested = float(f"{min(1e-3 * diagonal, 0.1 * edge):.1g}")
+            raise InputError(
+                f"contact dhat = {dhat:g} m is not below the edges of body {body.name!r} "
+                f"({extent} m, boundary edges {edge:.3g} m median): the barrier would act "
+                f"across its surface at rest; use dhat = {suggested:g} m or less ([contact] "
+                "dhat, set_contact(dhat=...)), or leave it out (1e-3 of the scene's size)"
+            )
+
+    def _check_start_apart(self, contact) -> None:
+        """The bodies and obstacles must start apart: name the first pair that intersects."""
+        x, t = self._state.x, self.time
+        if not contact.intersecting(x, t):
+            return
+        import ipctk
+
+        names = list(contact.table.names)  # the bodies' surfaces, then the obstacles
+        n_bodies = len(contact.surfaces)
+        V = contact.vertices(x, t)
+        for i in range(n_bodies):
+            for j in range(i, len(names)):
+                if not contact.table.enabled[i, j]:
+                    continue
+                rest = np.asfortranarray(contact.rest)
+                mesh = ipctk.CollisionMesh(rest, contact.mesh.edges, contact.mesh.faces)
+                if i == j:  # the body with itself
+                    mesh.can_collide = ~_not_in(ipctk, contact.group, i)
+                else:
+                    mesh.can_collide = contact.table.pair_filter(ipctk, contact.group, i, j)
+                if not ipctk.has_intersections(mesh, V):
+                    continue
+                what = f"obstacle {names[j]!r}" if j >= n_bodies else f"body {names[j]!r}"
+                if i == j:
+                    said = f"body {names[i]!r} intersects itself"
+                else:
+                    said = f"{what} intersects body {names[i]!r}"
+                raise InputError(
+                    f"{said} at t = {t:g} s, before the first step: contact keeps surfaces "
+                    "apart and cannot separate ones that start crossed; move them apart (an "
+                    "obstacle's translation at the start, the meshes' placement)"
+                )
+        raise InputError(
+            f"the contact surfaces intersect at t = {t:g} s, before the first step: contact "
+            "keeps surfaces apart and cannot separate ones that start crossed; move them apart"
+        )
+
     def _contact_report(self, contact, x: np.ndarray, forces: dict) -> dict[str, Any]:
         """The step's contact figures, and the time split since the last report."""
         stats = contact.stats
@@ -151,3 +225,11 @@ class StepChecks:
             "attachments": int(sum(a.n for a in self.system.attachments)),
             "events": events,
         }
+
+
+def _not_in(ipctk, group: np.ndarray, i: int):
+    """An ipctk CollisionFilter accepting a vertex pair unless both are in group i (its
+    complement: both in group i, a body's pairs with itself)."""
+    from tissuesim.contact.pairs import _not_both_in
+
+    return _not_both_in(ipctk, group, [i])
