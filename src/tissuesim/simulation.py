@@ -249,7 +249,9 @@ class Simulation(BodyCalls, SetupCalls, StepChecks, BodyResults, Stepping):
         surface (a frame body without one, and the tissue, take no part)."""
         from tissuesim.contact.model import ContactModel
         from tissuesim.contact.surfaces import fem_surface, frame_surface
+        from tissuesim.io.third_party_logs import quiet_ipctk
 
+        quiet_ipctk()  # before contact's first ipctk call: its warnings stay off stderr
         s, settings = self._system, self.contact
         surfaces = []
         dhat = self._contact_dhat()
