@@ -8,7 +8,10 @@ so; other 3D scenes are not drawn.
 
 Every picture is coloured by one field, chosen by ``field``: ``J``, ``von_mises`` (Pa),
 ``displacement`` (its magnitude, m) or ``green_strain`` (the largest principal Green strain),
-on one colour range for the whole run, with a labelled colour bar; the title gives the time in
+with a labelled colour bar: final.png on its own frame's range (a torn strip's relaxed last
+frame was uniformly dark on the range of the run's peak), run.gif on one range for the run, so
+its frames compare (``_range``: J spans 1, the others their minimum or 0 to their 99th
+percentile); the title gives the time in
 seconds (and the first grasper's force). A GIF holds at most ``MAX_GIF_FRAMES`` (2D) frames,
 or in 3D as many as the simulation's own wall time pays for at ``SECONDS_PER_3D_FRAME`` (6 to
 ``MAX_GIF_FRAMES_3D``), evenly subsampled, so drawing costs about what the simulation cost
@@ -148,8 +151,9 @@ def _render_2d(bodies, frames, directory, field, label) -> str:
     lo, hi = _range([v for _, _, v in series], field)
     t, x, v = series[-1]
     title = f"t = {t:.4g} s{frames[-1][3]}"
+    last = _range([v], field)  # final.png: its own frame's range
     render_frame_png(
-        mesh, x, v, directory / "final.png", title=title, label=label, vmin=lo, vmax=hi
+        mesh, x, v, directory / "final.png", title=title, label=label, vmin=last[0], vmax=last[1]
     )
     if len(series) > 1:
         render_gif(
@@ -165,8 +169,8 @@ def _render_2d(bodies, frames, directory, field, label) -> str:
 
 
 def _range(values: list[np.ndarray], field: str) -> tuple[float, float]:
-    """One colour range for the run: J spans 1; others the 99th percentile (a few points at
-    the lips of a cut would wash out the rest)."""
+    """A colour range for these values (a frame's, or a run's): J spans 1; others the 99th
+    percentile (a few points at the lips of a cut would wash out the rest)."""
     v = np.concatenate([np.asarray(a, dtype=float).ravel() for a in values])
     v = v[np.isfinite(v)]
     if not v.size:
@@ -299,8 +303,9 @@ def _render_pyvista(sim, bodies, frames, directory, field, label) -> str:
         b.name: _range([v for f in picked for v in _field_values([b], f[1], field)], field)
         for b in bodies
     }
-    camera = render_frame_png(
-        directory / "final.png", _frame3d(bodies, frames[-1], field, label, clim, surfaces)
+    last = {b.name: _range(_field_values([b], frames[-1][1], field), field) for b in bodies}
+    camera = render_frame_png(  # final.png: its own frame's range
+        directory / "final.png", _frame3d(bodies, frames[-1], field, label, last, surfaces)
     )
     if len(frames) > 1:
         # the last frame spans the scene (a retracted organ is farthest away)
@@ -325,6 +330,7 @@ def _render_matplotlib_3d(b, frames, directory, field, label) -> str:
         series = [(t, data[b.name]["positions"], vals(data[b.name])) for t, data, _, _ in picked]
         lo, hi = _range([v for _, _, v in series], field)
         t, x, v = series[-1]
+        last = _range([v], field)  # final.png: its own frame's range
         render_frame_png_3d(
             b.mesh.linear_view,
             x,
@@ -332,8 +338,8 @@ def _render_matplotlib_3d(b, frames, directory, field, label) -> str:
             directory / "final.png",
             title=f"t = {t:.4g} s",
             label=label,
-            vmin=lo,
-            vmax=hi,
+            vmin=last[0],
+            vmax=last[1],
         )
         if len(series) > 1:
             render_gif_3d(
@@ -361,8 +367,9 @@ def _render_matplotlib_3d(b, frames, directory, field, label) -> str:
         "vmax": max(max(float(np.nanmax(f[2], initial=0.0)) for f in series), 1e-12),
     }
     t, x, mag, origins = series[-1]
+    final = {**drawing, "vmax": max(float(np.nanmax(mag, initial=0.0)), 1e-12)}  # its own range
     render_points_png(
-        x, mag, directory / "final.png", markers=origins, title=f"t = {t:.4g} s", **drawing
+        x, mag, directory / "final.png", markers=origins, title=f"t = {t:.4g} s", **final
     )
     if len(series) > 1:
         render_points_gif(series, directory / "run.gif", **drawing)
