@@ -116,8 +116,8 @@ def test_the_compiled_sweep_equals_the_python_one():
     W, b, mu = _random_problem(6, 3, 11)
     lam_py = np.zeros(18)
     lam_c = np.zeros(18)
-    _gauss_seidel(W, b.reshape(-1), mu, np.zeros(6), lam_py, 3, 30, 0.0, 0.0)
-    out = solve_signorini_coulomb(W, b, mu, max_sweeps=30, tolerance=0.0)
+    _gauss_seidel(W, b.reshape(-1), mu, np.zeros(6), np.full(6, 1e-6), lam_py, 3, 30, 0.0, 0.0)
+    out = solve_signorini_coulomb(W, b, mu, smoothing=1e-6, max_sweeps=30, tolerance=0.0)
     lam_c = out.force.reshape(-1)
     assert np.allclose(lam_py, lam_c, rtol=1e-12, atol=1e-15)
 

@@ -154,6 +154,7 @@ def interactive_step(
     contact.prediction_report = report
     predictor.clock.clear()
     predictor.columns = 0
+    predictor.smoothing = 0.5 * contact.settings.eps_v * h
     clock = predictor.clock
     kinds = ["newton"] if predictor.refresh else ["lagged", "newton"]
     for kind in kinds:
@@ -373,6 +374,7 @@ def accurate_start(
         return None, None
     predictor.clock.clear()
     predictor.columns = 0
+    predictor.smoothing = 0.5 * contact.settings.eps_v * h
     target = INTERACTIVE_GAP * contact.dhat
     prediction = predictor.predict(
         system, solver, state.x, x_free, y0, y1, target, energies=body_energies

@@ -53,6 +53,7 @@ class HapticContact:
         self._b = np.zeros((rows.n_pairs, d)) if prediction.rhs is None else prediction.rhs
         self._mu = rows.mu
         self._soft = prediction.soft
+        self._smoothing = prediction.smoothing
         self._lam = prediction.force.copy()
         self.dim = d
         self.force0 = self.force(np.zeros(d))
@@ -79,8 +80,9 @@ class HapticContact:
             return np.zeros(self.dim)
         b = self._b + self._A @ disp
         out = solve_signorini_coulomb(
-            self._W, b, self._mu, self._lam, self._soft, max_sweeps=SWEEPS, tolerance=TOLERANCE
-        )
+            self._W, b, self._mu, self._lam, self._soft, self._smoothing,
+            max_sweeps=SWEEPS, tolerance=TOLERANCE,
+        )  # fmt: skip
         self._lam = out.force
         force = -np.einsum("mad,ma->d", self._A, out.force)
         self.last_solve_s = time.perf_counter() - start

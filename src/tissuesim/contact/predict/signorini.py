@@ -32,7 +32,7 @@ __all__ = ["solve_signorini_coulomb", "SignoriniResult"]
 
 
 def _gauss_seidel(
-    W, b, mu, soft, lam, d, max_sweeps, tolerance, value_tolerance
+    W, b, mu, soft, smooth, lam, d, max_sweeps, tolerance, value_tolerance
 ):  # pragma: no cover
     # w = W lambda kept up to date as forces change (W symmetric: row r is column r), so a
     # pair whose force stays zero costs O(1) a sweep, a changed one O(rows)
@@ -74,16 +74,19 @@ def _gauss_seidel(
             old0 = lam[r + 1]
             old1 = lam[r + 2] if nt == 2 else 0.0
             if limit > 0.0:
-                # tangents: the block's own solve for zero slip, then onto the disc
-                u0 = b[r + 1] + w[r + 1]
+                # tangents: the block's own solve for zero slip, then onto the disc; IPC's
+                # smoothed static friction lets a pair slip up to eps_v h at a force growing
+                # as 2 mu lambda_n / (eps_v h) per metre: a compliance of the pair's own
+                own = smooth[i] / limit
+                u0 = b[r + 1] + w[r + 1] + own * old0
                 if nt == 1:
-                    t0 = old0 - u0 / W[r + 1, r + 1]
+                    t0 = old0 - u0 / (W[r + 1, r + 1] + own)
                     if abs(t0) > limit:
                         t0 = limit if t0 > 0.0 else -limit
                 else:
-                    u1 = b[r + 2] + w[r + 2]
-                    a11, a12 = W[r + 1, r + 1], W[r + 1, r + 2]
-                    a22 = W[r + 2, r + 2]
+                    u1 = b[r + 2] + w[r + 2] + own * old1
+                    a11, a12 = W[r + 1, r + 1] + own, W[r + 1, r + 2]
+                    a22 = W[r + 2, r + 2] + own
                     det = a11 * a22 - a12 * a12
                     t0 = old0 - (a22 * u0 - a12 * u1) / det
                     t1 = old1 - (a11 * u1 - a12 * u0) / det
@@ -161,6 +164,7 @@ def solve_signorini_coulomb(
     mu: np.ndarray,
     warm: np.ndarray | None = None,
     soft: np.ndarray | None = None,
+    smoothing: float | np.ndarray = 0.0,
     *,
     max_sweeps: int = 200,
     tolerance: float = 1e-5,
@@ -168,7 +172,9 @@ def solve_signorini_coulomb(
     """Forces for m pairs of dimension d: W (m d, m d) compliance (m/N), b (m, d) the values
     without force (gap minus its target, slips), mu (m,), ``warm`` (m, d) a start, ``soft``
     (m,) a compliance of each pair's own (m/N, >= 0) added to its normal: the pair's gap
-    target falls by soft lambda_n as it is loaded (a barrier's gap, linearised)."""
+    target falls by soft lambda_n as it is loaded (a barrier's gap, linearised);
+    ``smoothing`` (m, scalar or (m,)): half the slip over which friction reaches mu lambda_n,
+    eps_v h / 2 for IPC's smoothed friction (0: exact Coulomb, no slip while sticking)."""
     m, d = b.shape
     lam = np.zeros(m * d) if warm is None else np.array(warm, dtype=float).reshape(-1)
     if m == 0:
@@ -177,10 +183,11 @@ def solve_signorini_coulomb(
     rhs = np.ascontiguousarray(b, dtype=float).reshape(-1)
     soft = np.zeros(m) if soft is None else np.ascontiguousarray(soft, dtype=float)
     mu = np.ascontiguousarray(mu, dtype=float)
+    smooth = np.ascontiguousarray(np.broadcast_to(np.asarray(smoothing, dtype=float), (m,)))
     # values to the tolerance of the largest free value (the step's largest gap or slip)
     value_tolerance = 0.1 * float(tolerance) * float(np.max(np.abs(rhs), initial=0.0))
     sweeps, converged = _kernel()(
-        W, rhs, mu, soft, lam, d, int(max_sweeps), float(tolerance), value_tolerance
+        W, rhs, mu, soft, smooth, lam, d, int(max_sweeps), float(tolerance), value_tolerance
     )
     values = (rhs + W @ lam).reshape(m, d)
     values[:, 0] += soft * lam.reshape(m, d)[:, 0]
