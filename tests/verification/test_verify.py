@@ -19,7 +19,7 @@ def test_every_problem_passes():
     """The whole set, run once in the suite (about 5 s; its Hertz check is looked at here too,
     as xdist would run a shared fixture once per worker)."""
     checks = run()
-    expected = 3 * len(laws.LAWS) + len(fibres.CASES) + 3 + 4 + 2 + len(cook.CASES) + 1
+    expected = 3 * len(laws.LAWS) + len(fibres.CASES) + 3 + 4 + 2 + len(cook.CASES) + 2
     assert len(checks) == expected
     failed = [c for c in checks if not c.passed]
     assert failed == []
@@ -28,6 +28,7 @@ def test_every_problem_passes():
         "Cook's membrane", "Hertz sphere", "holzapfel_gasser_ogden", "trans_iso_mooney_rivlin",
     }  # fmt: skip
     _hertz_check_is_sharp([c for c in checks if c.problem.startswith("Hertz")])
+    _press_check_is_sharp([c for c in checks if c.problem.startswith("Rigid plane")])
 
 
 def test_every_registered_law_is_verified():
@@ -80,6 +81,37 @@ def _hertz_check_is_sharp(found: list) -> None:
     for factor in (1 - 0.3**2, 0.25):
         wrong = Check(check.problem, check.quantity, factor * check.reference, check.result, tol)
         assert not wrong.passed
+
+
+def _press_check_is_sharp(found: list) -> None:
+    """Issue 41: the Hertz row passed at 13 % against 20 %. The flat press is exact for Q1
+    elements: its force is met to 1e-4 (it reads 2.5e-5); the modulus E for the oedometric
+    M (factor 1.35), or the depth off by the barrier's dhat (1e-3), fail it."""
+    (check,) = found
+    assert check.tolerance == hertz.PRESS_TOL == 1e-4 and check.error < 1e-4
+    assert hertz.press_force(1e-4) == pytest.approx(1e4 * 0.7 / (1.3 * 0.4) * 0.01 * 1e-4)
+    for factor in (1.3 * 0.4 / 0.7, 1 - hertz.PRESS_DHAT / 1e-4):
+        wrong = Check(check.problem, check.quantity, factor * check.reference, check.result, 1e-4)
+        assert not wrong.passed
+
+
+def test_the_hertz_row_says_what_it_checks():
+    """The Hertz row names its mesh's error and its tolerance is within 3 % of it."""
+    assert hertz.TOL == 0.15
+    d, force = hertz.indentation()
+    ratio = force / hertz.hertz_force(d)
+    assert ratio == pytest.approx(1.126, abs=0.001)  # the "+12.6 %" its name says
+    assert hertz.TOL - 0.03 < ratio - 1 < hertz.TOL
+
+
+def test_verify_prints_no_warning(capsys):
+    """Cook's membrane is in the benchmark's own units: no "60 m across" units warning."""
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert main(["verify", "--only", "cook"]) == 0
+    assert "warning" not in capsys.readouterr().err
 
 
 def test_every_family_can_be_chosen(capsys):
