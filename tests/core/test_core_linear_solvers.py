@@ -281,3 +281,19 @@ def test_a_reused_factor_takes_a_too_large_update_into_the_factor(monkeypatch):
     x = solver.solve(b)
     assert solver.factor_holds_update
     assert np.allclose((K + C) @ x, b, atol=1e-10)
+
+
+def test_the_kept_factor_columns_are_bounded(monkeypatch):
+    from tissuesim.solve import reuse
+
+    monkeypatch.setattr(reuse, "MAX_KEPT_COLUMNS", 5)
+    n = 30
+    K = _spd_matrix(n, 8)
+    solver = SuperLUSolver()
+    solver.factorize(K)
+    columns = reuse.FactorColumns()
+    inverse = np.linalg.inv(K.toarray())
+    columns.take(solver.solve, n, np.array([1, 2, 3]))
+    X = columns.take(solver.solve, n, np.array([4, 5, 6]))  # 6 > 5: the old ones let go
+    assert len(columns.slot) == 3 and columns.solved == 3
+    assert np.allclose(X, inverse[:, [4, 5, 6]], atol=1e-12)

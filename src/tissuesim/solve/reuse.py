@@ -45,6 +45,8 @@ __all__ = ["ReusedFactorSolver", "LinearStats", "MAX_UPDATE_DOFS", "MAX_NEW_COLU
 #: organ, paid once while the contact stays where it is)
 MAX_UPDATE_DOFS = 600
 MAX_NEW_COLUMNS = 96
+#: columns kept per factor at most (1,000 of a 1e4-tetrahedron organ's 6,600 DOFs: 53 MB)
+MAX_KEPT_COLUMNS = 1000
 
 
 @dataclass
@@ -233,8 +235,12 @@ class FactorColumns:
         return sum(1 for j in dofs.tolist() if j not in self.slot)
 
     def take(self, solve, n: int, dofs: np.ndarray) -> np.ndarray:
-        """(n, len(dofs)): the columns at ``dofs``, the missing ones solved through ``solve``."""
+        """(n, len(dofs)): the columns at ``dofs``, the missing ones solved through ``solve``
+        (past MAX_KEPT_COLUMNS kept, the others are let go: a long stroke over a surface)."""
         new = np.array([j for j in dofs.tolist() if j not in self.slot], dtype=np.int64)
+        if len(self.slot) + len(new) > MAX_KEPT_COLUMNS:
+            self.clear()
+            new = np.asarray(dofs, dtype=np.int64)
         self.solved = len(new)
         if len(new):
             E = np.zeros((n, len(new)))
