@@ -246,7 +246,7 @@ def test_a_reused_factor_applies_a_local_update_by_woodbury_without_refactorisin
     n = 80
     K = _spd_matrix(n, 1)
     b = np.random.default_rng(2).standard_normal(n)
-    solver = ReusedFactorSolver(SuperLUSolver())
+    solver = ReusedFactorSolver(SuperLUSolver(), woodbury=True)
     C1 = _local_update(n, np.array([3, 4, 5, 40]), 3)
     solver.factorize((K + C1).tocsr(), update=C1)
     x = solver.solve(b)  # factorises K alone, applies C1 by Woodbury: exact
@@ -260,7 +260,7 @@ def test_a_reused_factor_applies_a_local_update_by_woodbury_without_refactorisin
     x = solver.solve(b)
     assert np.allclose((K + 1.001 * C2) @ x, b, rtol=0, atol=1e-5 * np.linalg.norm(b))
     assert solver.stats.factorizations == 1 and solver.stats.cg_iterations <= 2
-    plain = ReusedFactorSolver(SuperLUSolver())
+    plain = ReusedFactorSolver(SuperLUSolver())  # SuperLU: no Woodbury by default
     plain.factorize((K + C1).tocsr())
     plain.solve(b)
     plain.factorize((K + 1.001 * C2).tocsr())
@@ -275,7 +275,7 @@ def test_a_reused_factor_takes_a_too_large_update_into_the_factor(monkeypatch):
     n = 40
     K = _spd_matrix(n, 5)
     C = _local_update(n, np.array([1, 2, 3, 4, 5]), 6)
-    solver = reuse.ReusedFactorSolver(SuperLUSolver())
+    solver = reuse.ReusedFactorSolver(SuperLUSolver(), woodbury=True)
     solver.factorize((K + C).tocsr(), update=C)
     b = np.ones(n)
     x = solver.solve(b)

@@ -25,6 +25,9 @@ iteration it was made at (38 % of the barrier's step). A C over more than MAX_UP
 DOFs, or needing more than MAX_NEW_COLUMNS new columns at once, is factorised with A instead
 (the factor then holds that C, and Woodbury waits for the next factorisation).
 
+Woodbury is used with the Cholesky solvers (PARDISO, CHOLMOD) only: SuperLU's LU factors the
+elasticity of a body held by contact alone (nearly singular) without a word.
+
 Counts per step (``take_stats``): factorisations, back-solves, CG iterations.
 """
 
@@ -60,8 +63,22 @@ class LinearStats:
 class ReusedFactorSolver(LinearSolver):
     """Wraps a direct ``LinearSolver`` (PARDISO, CHOLMOD, SuperLU); see the module docstring."""
 
-    def __init__(self, direct: LinearSolver, max_cg: int = 8, rtol: float = 1e-6) -> None:
+    def __init__(
+        self,
+        direct: LinearSolver,
+        max_cg: int = 8,
+        rtol: float = 1e-6,
+        woodbury: bool | None = None,
+    ) -> None:
         self.direct = direct
+        # the update apart by Woodbury (default: with the Cholesky solvers, PARDISO and
+        # CHOLMOD; SuperLU's LU factors the elasticity of a body only contact holds, nearly
+        # singular, without a word, and four contact tests then lost their descent directions)
+        if woodbury is None:
+            from tissuesim.solve.linear import CholmodSolver, PardisoSolver
+
+            woodbury = isinstance(direct, PardisoSolver | CholmodSolver)
+        self.woodbury = bool(woodbury)
         self.name = direct.name
         self.max_cg = int(max_cg)
         self.rtol = float(rtol)
@@ -95,7 +112,12 @@ class ReusedFactorSolver(LinearSolver):
         (``hold``: with it; raises NotPositiveDefiniteError)."""
         self._factored = False
         base, holds = self._A, True
-        if self._update is not None and not hold and self._woodbury_dofs() is not None:
+        if (
+            self.woodbury
+            and self._update is not None
+            and not hold
+            and self._woodbury_dofs() is not None
+        ):
             base, holds = (self._A - self._update).tocsr(), False
         try:
             self.direct.factorize(base)
@@ -146,7 +168,7 @@ class ReusedFactorSolver(LinearSolver):
         definite (H = G^-1 + C_D is not: an exact barrier Hessian), as its factorisation would."""
         if self._woodbury is None:
             self._woodbury = False
-            if self._update is not None and not self.factor_holds_update:
+            if self.woodbury and self._update is not None and not self.factor_holds_update:
                 dofs = np.unique(self._update.indices)
                 if len(dofs) <= MAX_UPDATE_DOFS and self.columns.missing(dofs) <= MAX_NEW_COLUMNS:
                     import scipy.linalg as sla
