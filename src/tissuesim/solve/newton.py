@@ -32,7 +32,8 @@ force (the Hertz example stopped with its probe force 4x too large), so it is no
 If a step moves no DOF by more than step_tolerance * length_scale while ||g_free|| is within
 1e3 of the target, the iteration is at round-off and counts as converged.
 Linear solves: exact with a direct solver; with a reused factor (``solve/reuse.py``) CG to a
-relative residual of 1e-6, or, in steps with contact after a full step (or at the start), to
+relative residual of 1e-6, or, in steps with contact whose Hessian the factor takes by Woodbury
+(PARDISO, CHOLMOD) after a full step (or at the start), to
 the forcing term min(FORCING, ||g|| / ||g_0||) (an inexact Newton method; Eisenstat & Walker):
 loose while far from the solution, proportional to the gradient near it, which keeps the
 quadratic rate.
@@ -429,7 +430,9 @@ def _try_direction(
         A = A + update
     try:
         if update is not None and isinstance(solver, ReusedFactorSolver):
-            solver.factorize(A.tocsr(), update=update, rtol=forcing)
+            # inexact only where the contact rides on the factor (Woodbury): with a plain stale
+            # factor a loose CG took a cut beam's falling pieces 23 iterations a step, not 15
+            solver.factorize(A.tocsr(), update=update, rtol=forcing if solver.woodbury else None)
         else:
             solver.factorize(A.tocsr())
         dx = solver.solve(-g)
