@@ -35,14 +35,6 @@ def test_contact_names_import_from_tissuesim():
         assert name in ts.__all__
 
 
-@pytest.fixture
-def sim():
-    sim = ts.Simulation(integrator="quasistatic", time_step=0.1)
-    material = ts.make_material("neo_hookean", youngs_modulus=1e4, poisson_ratio=0.3)
-    sim.add_body("organ", ts.box((0, 0, 0), (0.1, 0.05, 0.05), (2, 1, 1)), material)
-    return sim
-
-
 def test_add_obstacle_takes_a_fixed_translation_as_numbers(sim):
     probe = ts.sphere((0.05, 0.025, 0.07), 0.01)
     name = sim.add_obstacle("probe", probe, translation=[0.0, 0.0, 0.01], rotation=(0, 0, 0))

@@ -5,16 +5,7 @@ from __future__ import annotations
 
 import pytest
 
-import tissuesim as ts
 from tissuesim.errors import InputError
-
-
-@pytest.fixture
-def sim():
-    sim = ts.Simulation(integrator="quasistatic", time_step=0.1)
-    material = ts.make_material("neo_hookean", youngs_modulus=1e4, poisson_ratio=0.3)
-    sim.add_body("organ", ts.box((0, 0, 0), (0.1, 0.05, 0.05), (2, 1, 1)), material)
-    return sim
 
 
 def test_fix_with_a_mask_names_fix(sim):

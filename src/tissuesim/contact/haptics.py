@@ -85,7 +85,7 @@ def _linearize(system, contact, x, name, energies, solver, time):
     import scipy.sparse as sp
 
     from tissuesim.solve.linear import NotPositiveDefiniteError
-    from tissuesim.solve.reuse import ReusedFactorSolver
+    from tissuesim.solve.reuse import factorize_with_update
 
     rows = contact.slices[name][0]
     dim = contact.dim
@@ -114,12 +114,8 @@ def _linearize(system, contact, x, name, energies, solver, time):
             if acc.extra_hessian is not None:
                 update = system.elimination.eliminate_matrix(acc.extra_hessian).tocsr()
                 matrix = matrix + update
-            try:
-                if update is not None and isinstance(solver, ReusedFactorSolver):
-                    # the kept factor stays the elasticity's (solve/reuse.py)
-                    solver.factorize(matrix.tocsr(), update=update)
-                else:
-                    solver.factorize(matrix.tocsr())
+            try:  # the kept factor stays the elasticity's (solve/reuse.py)
+                factorize_with_update(solver, matrix.tocsr(), update)
                 Z = np.column_stack([solver.solve(C[:, k]) for k in range(dim)])
                 break
             except NotPositiveDefiniteError:

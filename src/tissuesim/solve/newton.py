@@ -33,10 +33,9 @@ If a step moves no DOF by more than step_tolerance * length_scale while ||g_free
 1e3 of the target, the iteration is at round-off and counts as converged.
 Linear solves: exact with a direct solver; with a reused factor (``solve/reuse.py``) CG to a
 relative residual of 1e-6, or, in steps with contact whose Hessian the factor takes by Woodbury
-(PARDISO, CHOLMOD) after a full step (or at the start), to
-the forcing term min(FORCING, ||g|| / ||g_0||) (an inexact Newton method; Eisenstat & Walker):
-loose while far from the solution, proportional to the gradient near it, which keeps the
-quadratic rate.
+(PARDISO, CHOLMOD), after a full step (or at the start), to the forcing term min(FORCING,
+||g|| / ||g_0||) (an inexact Newton method; Eisenstat & Walker): loose while far from the
+solution, proportional to the gradient near it, which keeps the quadratic rate.
 ``relag(x)``: lagged terms (friction) re-lagged at a converged point inside the same solve;
 the solve goes on until a point converges with the lag unchanged (or the relags run out).
 """
@@ -54,7 +53,7 @@ from tissuesim.constraints.dirichlet import Elimination
 from tissuesim.energies.accumulator import Accumulator
 from tissuesim.errors import InputError
 from tissuesim.solve.linear import LinearSolver, NotPositiveDefiniteError
-from tissuesim.solve.reuse import ReusedFactorSolver
+from tissuesim.solve.reuse import factorize_with_update
 
 __all__ = ["NewtonOptions", "NewtonResult", "minimize"]
 
@@ -381,7 +380,7 @@ def minimize(
 
 #: the relative residual a contact step's linear solve needs at most (``forcing`` in
 #: ``minimize``): at 1e4 tetrahedra half the back-solves of the barrier's palpation, grasp and
-#: drop for 0.2-0.8 more Newton iterations a step; a contact-free step (1.85 iterations) took
+#: drop for 0-1 more Newton iterations a step; a contact-free step (1.85 iterations) took
 #: 3.05 with it and is solved to the solver's own tolerance
 FORCING = 0.1
 
@@ -429,12 +428,9 @@ def _try_direction(
         update = elimination.eliminate_matrix(acc.extra_hessian).tocsr()
         A = A + update
     try:
-        if update is not None and isinstance(solver, ReusedFactorSolver):
-            # inexact only where the contact rides on the factor (Woodbury): with a plain stale
-            # factor a loose CG took a cut beam's falling pieces 23 iterations a step, not 15
-            solver.factorize(A.tocsr(), update=update, rtol=forcing if solver.woodbury else None)
-        else:
-            solver.factorize(A.tocsr())
+        # inexact only where the contact rides on the factor (Woodbury): with a plain stale
+        # factor a loose CG took a cut beam's falling pieces 23 iterations a step, not 15
+        factorize_with_update(solver, A.tocsr(), update, forcing)
         dx = solver.solve(-g)
     except NotPositiveDefiniteError:
         return None

@@ -40,7 +40,13 @@ import scipy.sparse as sp
 
 from tissuesim.solve.linear import LinearSolver, NotPositiveDefiniteError
 
-__all__ = ["ReusedFactorSolver", "LinearStats", "MAX_UPDATE_DOFS", "MAX_NEW_COLUMNS"]
+__all__ = [
+    "ReusedFactorSolver",
+    "LinearStats",
+    "MAX_UPDATE_DOFS",
+    "MAX_NEW_COLUMNS",
+    "factorize_with_update",
+]
 
 #: the largest local part applied by Woodbury (its dense Cholesky factors are of this size),
 #: and the most new factor columns one solve may ask for (each about a fifth of a back-solve
@@ -273,6 +279,17 @@ class FactorColumns:
             self.slot.update({int(j): k + i for i, j in enumerate(new.tolist())})
         take = [self.slot[j] for j in dofs.tolist()]
         return self.X[:, take]
+
+
+def factorize_with_update(
+    solver: LinearSolver, A: sp.csr_matrix, update: sp.csr_matrix | None, rtol: float | None = None
+) -> None:
+    """``solver.factorize(A)``, A including ``update`` (contact's eliminated Hessian, or None):
+    a reused factor takes the update apart (Woodbury) and, where it does, solves to ``rtol``."""
+    if update is not None and isinstance(solver, ReusedFactorSolver):
+        solver.factorize(A, update=update, rtol=rtol if solver.woodbury else None)
+    else:
+        solver.factorize(A)
 
 
 def is_direct(solver: LinearSolver) -> bool:

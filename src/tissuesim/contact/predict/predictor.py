@@ -37,10 +37,9 @@ class Prediction:
     """One step's prediction: ``x`` the corrected configuration, ``dq`` its correction
     (tangent DOFs) from ``x_free``, ``rows`` the pairs, ``force`` (m, d) their multipliers
     (N), ``J`` (m d, n_dofs) the rows over the free DOFs (``J_all``: prescribed ones too),
-    ``W`` the compliance over the DOFs ``dofs`` J reaches, ``free``
-    (m, d) the gaps and slips at ``x_free`` before any force, ``forces`` per obstacle the force
-    on the bodies (N) and ``normal_forces`` its normal part, ``sweeps`` / ``converged`` of the
-    contact solve."""
+    ``W`` the compliance, ``free`` (m, d) the gaps and slips at ``x_free`` before any force,
+    ``forces`` per obstacle the force on the bodies (N) and ``normal_forces`` its normal part,
+    ``sweeps`` / ``converged`` of the contact solve."""
 
     x: np.ndarray
     dq: np.ndarray
@@ -50,7 +49,6 @@ class Prediction:
     J: sp.csr_matrix
     J_all: sp.csr_matrix
     W: np.ndarray
-    dofs: np.ndarray
     free: np.ndarray
     forces: dict[str, np.ndarray]
     normal_forces: dict[str, np.ndarray]
@@ -176,7 +174,7 @@ class ContactPredictor:
         self._solve_through = solve
         shell = Prediction(
             x=x_free, dq=np.zeros(system.n_dofs), x_free=x_free, rows=rows,
-            force=np.zeros((rows.n_pairs, rows.dim)), J=J, J_all=J_all, W=W, dofs=dofs,
+            force=np.zeros((rows.n_pairs, rows.dim)), J=J, J_all=J_all, W=W,
             free=rows.free_values(), forces={}, normal_forces={},
         )  # fmt: skip
         return self._solve(system, shell, target_gap, correct=correct)
