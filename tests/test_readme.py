@@ -297,7 +297,21 @@ TESTED_PYTHON_BLOCKS = {
     'element="hex20"': "test_quadratic_hexahedra_python_example_runs",
     'element="wedge"': "test_wedges_python_example_runs",
     "from tissuesim.time.phases import Phase": "test_phases_python_example_runs",
+    "sim.add_visual_surface(": "test_visual_surface_python_example_runs",
 }
+
+
+def test_visual_surface_python_example_runs(tmp_path):
+    """The output page's fine surface on a coarse liver: its series, and the shape it prints."""
+    code = block("python", "sim.add_visual_surface(")
+    result = subprocess.run(
+        [sys.executable, "-c", code], cwd=tmp_path, capture_output=True, text=True, timeout=300
+    )
+    assert result.returncode == 0, result.stderr
+    assert result.stdout.split()[-2:] == ["(10242,", "3)"]
+    out = tmp_path / "out/liver_fine"
+    assert (out / "liver_fine.pvd").read_text().count("<DataSet") == 5
+    assert (out / "final.png").is_file()
 
 
 def test_phases_python_example_runs(tmp_path):

@@ -130,6 +130,7 @@ class Simulation(BodyCalls, SetupCalls, StepChecks, BodyResults, Stepping):
         self._indentation = IndentationTracker()  # probes' touch points, across rebuilds
         self.organ_cuts: list = []  # blades cutting FEM bodies (bodies/organ_cut.py)
         self.organ_tears: list = []  # FEM bodies that tear (bodies/organ_tear.py)
+        self.visual_surfaces: dict = {}  # name -> bodies/visual_surface.py VisualSurface
         self.schedule: Schedule | None = None  # time/phases.py: a run in phases
         if phases is not None:
             self.set_phases(phases)
@@ -530,6 +531,7 @@ class Simulation(BodyCalls, SetupCalls, StepChecks, BodyResults, Stepping):
             "newton": asdict(self.newton),
             "linear_solver": self.linear_solver_info(),
             "contact": None if s.contact is None else s.contact.describe(),
+            "visual_surfaces": {n: v.describe() for n, v in self.visual_surfaces.items()},
         }
 
 

@@ -75,6 +75,8 @@ class BodyCalls:
         if taken or name in RESERVED_NAMES or (name == "tissue" != what):
             raise InputError(f"{what} name {name!r} is taken; choose another")
         mine = set(series_names(name, kind))
+        if mine & set(self.visual_surfaces):
+            raise InputError(f"{what} name {name!r} is a visual surface's series; choose another")
         for other in self.bodies.values():
             clash = mine & set(series_names(other.name, other.kind))
             if clash:
@@ -250,6 +252,7 @@ class BodyCalls:
         from tissuesim.bodies.cut_state import CutState, recut
 
         b = self.body(body, ("fem",))
+        self._no_cut_with_visual(b.name, "cut_body")
         if b.mesh.order != 1 or not b.mesh.simplicial:
             raise InputError(
                 f"cut_body: body {b.name!r} has {b.mesh.cell_type} cells; cuts apply to P1 "
@@ -489,6 +492,7 @@ class BodyCalls:
             raise RuntimeError("remove_body must come before the first step")
         body = self.body(name)
         del self.bodies[name]
+        self.visual_surfaces = {k: v for k, v in self.visual_surfaces.items() if v.body != name}
         if body is self.tissue:
             self.tissue = None
         self._state = None

@@ -1,14 +1,20 @@
 """What ``Simulation`` tells about its bodies between steps: positions, fields, forces,
-energies, the stability limit (name the body with ``body=`` when there are several)."""
+energies, the stability limit (name the body with ``body=`` when there are several); the
+visual surfaces bodies carry for the output (``add_visual_surface``)."""
 
 from __future__ import annotations
 
 import copy
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from tissuesim.errors import InputError
 from tissuesim.mesh.mesh import Mesh
+from tissuesim.validate import short
+
+if TYPE_CHECKING:
+    from tissuesim.bodies.visual_surface import VisualSurface
 
 __all__ = ["BodyResults"]
 
@@ -127,6 +133,86 @@ class BodyResults:
         """The only frame body's embedded point sets by name (``embed``, ``embed_surface``:
         "surface"); their current positions: ``embedded_positions(name)``."""
         return self.body(None, ("frames",)).embedded
+
+    # -- visual surfaces (bodies/visual_surface.py) -------------------------------------------
+    def add_visual_surface(
+        self,
+        surface: Any,
+        *,
+        body: str | None = None,
+        name: str | None = None,
+        max_outside: float | None = None,
+    ) -> VisualSurface:
+        """Carry a fine triangle surface (in 2D a polyline) with FEM body ``body`` (SOFA's
+        barycentric mapping): ``surface`` a file (STL, OBJ, PLY, any meshio reads), a
+        ``Surface`` or a (points, cells) pair, at the body's rest place. It is embedded once
+        in the body's elements; points outside the mesh (up to ``max_outside`` m, default one
+        element) are carried by the closest element with extrapolated coordinates. It moves
+        with the body, is written as the series ``name`` (default ``<body>_visual``) with
+        ``displacement`` on its rest points, and is drawn instead of the body's coarse surface
+        in the 3D pictures. No mechanics: no mass, stiffness or contact. A body that is cut
+        or tears cannot carry one. Returns the VisualSurface."""
+        from tissuesim.bodies.visual_surface import make_visual_surface
+
+        b = self.body(body, ("fem",))
+        self._no_cut_with_visual(b.name, "add_visual_surface", adding=True)
+        name = f"{b.name}_visual" if name is None else name
+        self._visual_name(name)
+        visual = make_visual_surface(name, b.name, b.mesh, surface, max_outside)
+        self.visual_surfaces[name] = visual
+        return visual
+
+    def visual_positions(self, name: str) -> np.ndarray:
+        """Current positions (q, d) of visual surface ``name`` (``add_visual_surface``)."""
+        if name not in self.visual_surfaces:
+            raise InputError(
+                f"no visual surface named {name!r}; known: {sorted(self.visual_surfaces)}"
+            )
+        v = self.visual_surfaces[name]
+        return v.positions(self.body_positions(v.body))
+
+    def _visual_name(self, name: Any) -> None:
+        """A visual surface's series name: a file stem no body, obstacle, internal series or
+        other visual surface writes."""
+        from tissuesim.io.body_series import series_names
+        from tissuesim.simulation_bodies import _NAME, RESERVED_NAMES
+
+        if not isinstance(name, str) or not _NAME.fullmatch(name):
+            raise InputError(
+                f"visual surface name {short(name)} must be letters, digits, '_', '-' or '.', "
+                "starting with a letter or digit (it names output files)"
+            )
+        taken = {s for b in self.bodies.values() for s in series_names(b.name, b.kind)}
+        taken |= {o.name for o in self.obstacles} | set(RESERVED_NAMES) | {"tissue"}
+        if name in taken or name in self.visual_surfaces:
+            raise InputError(
+                f"visual surface name {name!r} is taken (a body, obstacle, series or visual "
+                "surface writes it); choose another with name="
+            )
+
+    def _no_cut_with_visual(self, body: str, what: str, adding: bool = False) -> None:
+        """A body carrying a visual surface is never cut (the surface's triangles would bridge
+        the opening and hide the cut), nor is a visual surface given to a body that is."""
+        if adding:
+            b = self.bodies[body]
+            cutters = [c.name for c in self.organ_cuts if c.body == body]
+            cutters += [f"{body}.tear" for t in self.organ_tears if t.body == body]
+            if b.cut_state is not None:
+                cutters.append("cut_body")
+            if cutters:
+                raise InputError(
+                    f"{what}: body {body!r} is cut ({cutters[0]}); a visual surface does not "
+                    "follow a cut (its triangles would bridge the opening and hide it): show "
+                    "the cut body's own surface, or leave the cut out"
+                )
+            return
+        carried = [v.name for v in self.visual_surfaces.values() if v.body == body]
+        if carried:
+            raise InputError(
+                f"{what}: body {body!r} carries the visual surface {carried[0]!r}, which does "
+                "not follow a cut (its triangles would bridge the opening and hide it): leave "
+                "out the visual surface or the cut"
+            )
 
     @property
     def graspers(self) -> list:

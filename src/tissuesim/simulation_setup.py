@@ -468,6 +468,7 @@ class SetupCalls:
             from tissuesim.bodies.organ_cut import OrganCut
 
             b = self.body(body, ("fem",))
+            self._no_cut_with_visual(b.name, f"add_cut {name!r}")
             if kerf is not None:
                 raise InputError(
                     f"add_cut: kerf is for cuts of the connective tissue; a cut of body "
@@ -553,6 +554,7 @@ class SetupCalls:
         from tissuesim.bodies.organ_tear import BodyTearing
 
         b = self.body(body, ("fem",))
+        self._no_cut_with_visual(b.name, "set_tearing")
         if threshold is not None:
             raise InputError(
                 f"set_tearing: body {b.name!r} tears at a stress (stress=, Pa) or a stretch "

@@ -11,6 +11,9 @@ data of FEM elements or point data at integration points.
 - tissue ``<name>_points``: every original integration point, with ``alive`` (0 once cut away or
   torn; such points keep their last displacement) and ``max_principal_strain``; threshold on
   ``alive`` to see the parted tissue.
+- a visual surface a FEM body carries (``Simulation.add_visual_surface``), its own name
+  (``<body>_visual`` by default): its triangles (lines in 2D) on their rest points with
+  ``displacement`` and ``velocity`` (``VisualSeries``).
 
 Each writer's ``write`` returns what the pictures need of that frame (``render/scene.py``).
 """
@@ -25,7 +28,7 @@ import numpy as np
 from tissuesim.io.vtu_series import VTUSeriesWriter, remove_series
 from tissuesim.materials.measures import FIELD_NAMES
 
-__all__ = ["series_for", "BodySeries", "series_names"]
+__all__ = ["series_for", "BodySeries", "VisualSeries", "series_names"]
 
 
 def _vertices(n: int) -> tuple[str, np.ndarray]:
@@ -242,6 +245,49 @@ class TissueSeries(BodySeries):
             "max_principal_strain": self._strain.copy(),
             "displacement": self._last_u.copy(),
         }
+
+
+class VisualSeries(BodySeries):
+    """A visual surface carried by FEM body ``body`` (``bodies/visual_surface.py``): its rest
+    points (z = 0 in 2D) with ``displacement`` and ``velocity``, triangles (lines in 2D)."""
+
+    def __init__(self, body, visual) -> None:
+        super().__init__(body)
+        self.visual = visual
+
+    def open(self, directory: Path, keep: dict | None = None) -> None:
+        v = self.visual
+        self.writers = [
+            VTUSeriesWriter(
+                directory,
+                None,
+                v.name,
+                cells=(v.cell_type, v.cells),
+                n_points=len(v.points),
+                keep=_kept(keep, v.name),
+            )
+        ]
+
+    def write(self, sim, t: float) -> dict[str, Any]:
+        v = self.visual
+        _, c, vel = sim.body_state(v.body)
+        shape = self.body.mesh.points.shape
+        x = v.positions(c.reshape(shape))
+        if self.writers:
+            self.writers[0].write(
+                t,
+                _in_3d(v.points),
+                point_data={
+                    "displacement": _in_3d(x - v.points),
+                    "velocity": _in_3d(v.positions(vel.reshape(shape))),
+                },
+            )
+        return {"positions": x}
+
+
+def _in_3d(a: np.ndarray) -> np.ndarray:
+    """Points or vectors (n, 2) padded with z = 0; (n, 3) as they are."""
+    return a if a.shape[1] == 3 else np.column_stack([a, np.zeros(len(a))])
 
 
 def series_for(body) -> BodySeries:

@@ -1,6 +1,6 @@
 """Running a Simulation with output, the same for every scene: per body a VTU series + PVD on rest
-positions (``io/body_series.py``), the cut surface, summary.json, forces.csv and forces.png, a
-progress bar and the pictures (``render/scene.py``).
+positions (``io/body_series.py``), per visual surface one, the cut surface, summary.json,
+forces.csv and forces.png, a progress bar and the pictures (``render/scene.py``).
 
 The directory is checked before anything is written (``io/manifest.py``). summary.json is
 written the moment the run starts (before the model is assembled), rewritten atomically after a
@@ -30,7 +30,7 @@ import numpy as np
 
 from tissuesim.errors import InputError, TissueSimError
 from tissuesim.io.atomic import remove_leftovers, write_json_atomic
-from tissuesim.io.body_series import series_for
+from tissuesim.io.body_series import VisualSeries, series_for
 from tissuesim.io.checkpoint import CHECKPOINT, HISTORY, RunCheckpoint, restore, unsupported
 from tissuesim.io.interrupts import deferred_interrupts, interrupts_as_keyboard_interrupt
 from tissuesim.io.lock import run_lock
@@ -78,6 +78,7 @@ class RunOutput:
         self.frames: list[tuple[Any, ...]] = []  # what the pictures draw, one per written frame
         self.cut_series = None
         self.obstacle_series: list = []  # (Obstacle, VTUSeriesWriter), opened with the series
+        self.visual_series: list = []  # io/body_series.py VisualSeries, one per visual surface
         self.status = "running"
         self.error = None
         self.pictures = "not rendered" if render else "not asked for (render = false)"
@@ -121,6 +122,9 @@ class RunOutput:
         try:
             sim.build()
             self.series = [series_for(b) for b in sim.bodies.values()]
+            self.visual_series = [  # surfaces carried by FEM bodies, written beside them
+                VisualSeries(sim.bodies[v.body], v) for v in sim.visual_surfaces.values()
+            ]
             if self.resume:
                 self._restore()  # reads and checks the checkpoint; writes nothing
             self.description = sim.describe()  # once: ~1 s for meshes of 1e5 cells
@@ -161,7 +165,7 @@ class RunOutput:
         from tissuesim.io.vtu_series import VTUSeriesWriter, remove_series
 
         keep = self._kept_series
-        for s in self.series:
+        for s in self.series + self.visual_series:
             s.open(self.directory, keep)
         for ob in self.sim.obstacles:  # rest surface + displacement, like the bodies
             writer = VTUSeriesWriter(
@@ -191,6 +195,8 @@ class RunOutput:
         for s in self.series:
             if s.body.model is not None or s.body.kind == "tissue":
                 data[s.body.name] = s.write(sim, t)
+        for s in self.visual_series:  # the pictures carry them from the bodies' positions
+            s.write(sim, t)
         obstacles = {}
         for ob in sim.obstacles:
             obstacles[ob.name] = (ob.positions(t), ob.triangles)
@@ -212,7 +218,7 @@ class RunOutput:
         self.frames.append((t, data, cut.copy(), suffix))
 
     def _writers(self) -> list:
-        writers = [w for s in self.series for w in s.writers]
+        writers = [w for s in self.series + self.visual_series for w in s.writers]
         writers += [w for _, w in self.obstacle_series]
         return writers + ([self.cut_series] if self.cut_series is not None else [])
 

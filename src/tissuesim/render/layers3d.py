@@ -4,7 +4,8 @@
 ``pyvista3d.py`` (PNG) and ``gif3d.py`` (GIF).
 
 Shapes: SurfaceLayer points (n, 3), triangles (m, 3) ids into points, scalars (n,); PointLayer
-points (q, 3), scalars (q,); each cut (m, 3, 3) triangle corners.
+points (q, 3), scalars (q,); each cut (m, 3, 3) triangle corners; each cut outline (k, 2, 3)
+segment ends.
 """
 
 from __future__ import annotations
@@ -139,7 +140,10 @@ class Frame3D:
     """One moment of a coupled scene: organ surfaces, point layers, cuts and a title.
 
     ``cuts`` is a sequence of (m, 3, 3) arrays of triangle corners (a single (m, 3, 3) array is
-    taken as one cut); any of the three sequences may be empty. Stored as tuples.
+    taken as one cut), drawn as translucent sheets; ``cut_outlines`` a sequence of (k, 2, 3)
+    line segments, the border of a cut that has ended, drawn as lines only (a sheet would hide
+    the organs under it for the rest of the run); any of the sequences may be empty. Stored
+    as tuples.
     """
 
     surfaces: Sequence[SurfaceLayer] = ()
@@ -148,6 +152,7 @@ class Frame3D:
     title: str = ""
     # what the colour bars show, written once above them when each bar is titled by its body
     bar_heading: str = ""
+    cut_outlines: Sequence[np.ndarray] = ()
 
     def __post_init__(self) -> None:
         for what, items, kind in (
@@ -168,9 +173,18 @@ class Frame3D:
             if a.ndim != 3 or a.shape[1:] != (3, 3):
                 raise InputError(f"cut {i} has shape {a.shape}; expected (m, 3, 3)")
             arrays.append(a)
+        lines = []
+        for i, c in enumerate(self.cut_outlines):
+            a = _frozen_array(c, float, f"cut outline {i}")
+            if a.size == 0:
+                continue
+            if a.ndim != 3 or a.shape[1:] != (2, 3):
+                raise InputError(f"cut outline {i} has shape {a.shape}; expected (k, 2, 3)")
+            lines.append(a)
         object.__setattr__(self, "surfaces", tuple(self.surfaces))
         object.__setattr__(self, "points", tuple(self.points))
         object.__setattr__(self, "cuts", tuple(arrays))
+        object.__setattr__(self, "cut_outlines", tuple(lines))
         object.__setattr__(self, "title", str(self.title))
 
 
@@ -183,7 +197,7 @@ def _scene_points(frame: Frame3D) -> np.ndarray:
     cut corners, and of context layers (obstacles) the points within CONTEXT_MARGIN of the
     bodies' size around their box (all of them when there is no body)."""
     arrays = [s.points for s in frame.surfaces if not s.context] + [p.points for p in frame.points]
-    arrays += [c.reshape(-1, 3) for c in frame.cuts]
+    arrays += [c.reshape(-1, 3) for c in (*frame.cuts, *frame.cut_outlines)]
     own = np.concatenate([np.zeros((0, 3)), *arrays])
     context = [s.points for s in frame.surfaces if s.context]
     if not context:

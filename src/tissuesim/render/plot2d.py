@@ -227,7 +227,13 @@ def _clipped_weights(mesh: Mesh) -> np.ndarray:
 
 
 def _setup_2d(
-    mesh: Mesh, all_positions: Sequence[np.ndarray], label: str, cmap, norm, rest_outline
+    mesh: Mesh,
+    all_positions: Sequence[np.ndarray],
+    label: str,
+    cmap,
+    norm,
+    rest_outline,
+    lines: np.ndarray | None = None,
 ):
     from matplotlib.cm import ScalarMappable
     from matplotlib.collections import LineCollection, PolyCollection
@@ -254,6 +260,8 @@ def _setup_2d(
                 LineCollection(segs, colors="0.35", linewidths=0.8, linestyles="--", zorder=3)
             )
         )
+    if lines is not None:  # visual polylines, over the mesh
+        overlay.append(ax.add_collection(LineCollection(lines, colors="k", linewidths=1.2)))
     ax.set_xlim(lo[0], hi[0])
     ax.set_ylim(lo[1], hi[1])
     ax.set_aspect("equal")
@@ -275,17 +283,19 @@ def render_frame_png(
     vmax: float | None = None,
     rest_outline: bool = True,
     dpi: int = 150,
+    lines: np.ndarray | None = None,
 ) -> Path:
     """Draw the deformed triangles (positions (n, 2)) coloured by cell_values (m,) to a PNG.
 
-    The rest configuration's boundary is drawn as a dashed grey outline when ``rest_outline``.
+    The rest configuration's boundary is drawn as a dashed grey outline when ``rest_outline``;
+    ``lines`` (k, 2, 2), segments drawn over the mesh in black (visual polylines).
     Returns the path written.
     """
     x = np.asarray(positions, dtype=float)
     vals = np.asarray(cell_values, dtype=float)
     _check(mesh, x, vals, 2)
     cmap, norm = _colour_map([vals], label, vmin, vmax)
-    fig, ax, coll, _ = _setup_2d(mesh, [x], label, cmap, norm, rest_outline)
+    fig, ax, coll, _ = _setup_2d(mesh, [x], label, cmap, norm, rest_outline, lines)
     coll.set_array(vals)
     if title:
         ax.set_title(title)
@@ -308,22 +318,32 @@ def render_gif(
     title: str = "",
     rest_outline: bool = True,
     dpi: int = 80,
+    lines: Sequence[np.ndarray] | None = None,
 ) -> Path:
     """Animate frames [(time, positions (n, 2), cell_values (m,)), ...] into a GIF.
 
     Axis limits and the colour range are fixed over the whole run; each frame's title shows t
     (after ``title`` if given). More than ``max_frames`` frames are subsampled evenly (first and
-    last kept). Note that GIF writers merge pixel-identical consecutive frames.
+    last kept). ``lines``: one (k, 2, 2) array of segments per frame, drawn over the mesh in
+    black (visual polylines). Note that GIF writers merge pixel-identical consecutive frames.
     """
     if not frames:
         raise InputError("render_gif needs at least one frame")
-    sel = [frames[i] for i in _subsample(len(frames), max_frames)]
+    picked = _subsample(len(frames), max_frames)
+    segments = None if lines is None else [lines[i] for i in picked]
+    sel = [frames[i] for i in picked]
     data = [(float(t), np.asarray(x, dtype=float), np.asarray(v, dtype=float)) for t, x, v in sel]
     for _, x, v in data:
         _check(mesh, x, v, 2)
     cmap, norm = _colour_map([v for _, _, v in data], label, vmin, vmax)
     fig, ax, coll, overlay = _setup_2d(
-        mesh, [x for _, x, _ in data], label, cmap, norm, rest_outline
+        mesh,
+        [x for _, x, _ in data],
+        label,
+        cmap,
+        norm,
+        rest_outline,
+        None if segments is None else segments[0],
     )
     prefix = f"{title}   " if title else ""
 
@@ -331,6 +351,8 @@ def render_gif(
         t, x, v = data[i]
         coll.set_verts(_cell_polygons(mesh, x))
         coll.set_array(v)
+        if segments is not None:
+            overlay[-1].set_segments(segments[i])
         ax.set_title(f"{prefix}t = {t:.4g} s")
         return (coll, *overlay, ax.title)
 

@@ -2,7 +2,8 @@
 
 A scene (``Frame3D``) holds organs as triangle surfaces (``SurfaceLayer``), connective tissue as
 points (``PointLayer``, e.g. integration points coloured by strain) and cut surfaces (triangle
-soups, drawn semi-transparent red, with dark red edges if they have few triangles). Organs are
+soups, drawn semi-transparent red, with dark red edges if they have few triangles; a cut that
+has ended as its red outline only, ``Frame3D.cut_outlines``). Organs are
 smooth-shaded in their colour (or coloured by their ``scalars``), without edges; points are
 rendered as small spheres. Translucent meshes are drawn back to front (no depth peeling). The
 title is centred at the top; a right-hand column, which the default camera keeps the scene clear
@@ -262,6 +263,12 @@ def _draw(
         )
         add_surface(corners, np.arange(len(corners)).reshape(-1, 3), style)
         legend.append(("cut", _CUT_COLOUR))
+    if frame.cut_outlines:  # a cut that has ended: its border only, hiding nothing
+        ends = np.concatenate(frame.cut_outlines).reshape(-1, 3)
+        pairs = np.arange(len(ends)).reshape(-1, 2)
+        lines = np.column_stack([np.full(len(pairs), 2), pairs]).ravel()
+        add(pv.PolyData(ends, lines=lines), dict(color=_CUT_COLOUR, line_width=2.0))
+        legend.append(("cut (done)", _CUT_COLOUR))
     for _, mesh, style, bar in sorted(translucent, key=lambda item: -item[0]):
         add(mesh, style, bar)
 

@@ -4,7 +4,11 @@
 with PyVista (``pyvista3d``): FEM bodies as their boundary surfaces, frame bodies as their
 embedded surface (or their integration points), the tissue as points, cuts in red. Without
 PyVista, a 3D scene of one FEM or one frame body falls back to matplotlib and the summary says
-so; other 3D scenes are not drawn.
+so; other 3D scenes are not drawn. A FEM body carrying visual surfaces
+(``Simulation.add_visual_surface``) is drawn as them instead of its coarse surface, coloured
+by its vertex values carried the same way. A cut of the tissue is a translucent red sheet
+while its blade sweeps, and its outline only once every cut has ended (the sheet hid the
+organs under it for the rest of the run).
 
 Every picture is coloured by one field, chosen by ``field``: ``J``, ``von_mises`` (Pa),
 ``displacement`` (its magnitude, m) or ``green_strain`` (the largest principal Green strain),
@@ -30,6 +34,13 @@ from typing import Any
 import numpy as np
 
 from tissuesim.errors import InputError
+from tissuesim.render.overlays import (
+    cut_outline,
+    cutting_at,
+    polylines_2d,
+    visual_layers,
+    visuals_of,
+)
 
 __all__ = ["FIELDS", "render_run", "field_label", "MAX_GIF_FRAMES"]
 
@@ -85,7 +96,7 @@ def render_run(sim, frames: list, directory: Path, field: str = "J") -> str:
     label = field_label(field)
     bodies = [sim.bodies[n] for n in frames[-1][1] if n in sim.bodies]
     if all(b.kind == "fem" and b.dim == 2 for b in bodies):
-        return _render_2d(bodies, frames, directory, field, label)
+        return _render_2d(bodies, frames, directory, field, label, visuals_of(sim))
     try:
         import pyvista  # noqa: F401
     except ImportError:
@@ -135,10 +146,13 @@ def _cell_values_2d(bodies, data, field) -> np.ndarray:
     return np.concatenate(out)
 
 
-def _render_2d(bodies, frames, directory, field, label) -> str:
+def _render_2d(bodies, frames, directory, field, label, visuals=None) -> str:
     from tissuesim.render.plot2d import render_frame_png, render_gif
 
     frames = _on_final_meshes(bodies, frames)
+    lines = [polylines_2d(bodies, data, visuals or {}) for _, data, _, _ in frames]
+    if any(s is None for s in lines):
+        lines = None
     mesh = _merged_mesh(bodies)
     series = [
         (
@@ -153,17 +167,27 @@ def _render_2d(bodies, frames, directory, field, label) -> str:
     title = f"t = {t:.4g} s{frames[-1][3]}"
     last = _range([v], field)  # final.png: its own frame's range
     render_frame_png(
-        mesh, x, v, directory / "final.png", title=title, label=label, vmin=last[0], vmax=last[1]
+        mesh,
+        x,
+        v,
+        directory / "final.png",
+        title=title,
+        label=label,
+        vmin=last[0],
+        vmax=last[1],
+        lines=None if lines is None else lines[-1],
     )
     if len(series) > 1:
+        picked = _subsample(len(series), MAX_GIF_FRAMES)
         render_gif(
             mesh,
-            [series[i] for i in _subsample(len(series), MAX_GIF_FRAMES)],
+            [series[i] for i in picked],
             directory / "run.gif",
             label=label,
             vmin=lo,
             vmax=hi,
             max_frames=MAX_GIF_FRAMES,
+            lines=None if lines is None else [lines[i] for i in picked],
         )
     return f"final.png, run.gif (matplotlib, coloured by {field})"
 
@@ -211,7 +235,11 @@ def _drawn_surface(mesh, cache: dict):
     return cache[key][1]
 
 
-def _frame3d(bodies, frame, field, label, clim, surfaces):
+def _frame3d(bodies, frame, field, label, clim, surfaces, visuals=None, cutting=True):
+    """One picture of a run (``Frame3D``). visuals: body name -> its visual surfaces, drawn
+    instead of its coarse surface. cutting: whether a blade is cutting at the frame's time;
+    after every cut has ended the swept surface is drawn as its outline only, so it hides
+    nothing (``Frame3D.cut_outlines``)."""
     from tissuesim.render.pyvista3d import Frame3D, PointLayer, SurfaceLayer
 
     t, data, cut, suffix = frame
@@ -229,6 +257,12 @@ def _frame3d(bodies, frame, field, label, clim, surfaces):
                 vals = np.linalg.norm(d["displacement"], axis=1)
             else:
                 vals = _vertex_values(b, _values(d, field, "cells"), d)
+            fine = visual_layers(
+                b, d, None if field == "displacement" else vals, visuals or {}, bar(b), clim[b.name]
+            )
+            if fine:  # the fine surfaces instead of the coarse mesh's
+                layers += fine
+                continue
             W, tri = _drawn_surface(d.get("mesh", b.mesh), surfaces)
             x = d["positions"]
             if W is not None:
@@ -277,7 +311,9 @@ def _frame3d(bodies, frame, field, label, clim, surfaces):
                 )
             )
     heading = label if len(bodies) > 1 else ""  # the bars are titled by their bodies then
-    return Frame3D(layers, points, [cut] if len(cut) else [], f"t = {t:.4g} s{suffix}", heading)
+    sheets = [cut] if len(cut) and cutting else []
+    outlines = [cut_outline(cut)] if len(cut) and not cutting else []
+    return Frame3D(layers, points, sheets, f"t = {t:.4g} s{suffix}", heading, outlines)
 
 
 def _field_values(bodies, data, field) -> list[np.ndarray]:
@@ -304,14 +340,17 @@ def _render_pyvista(sim, bodies, frames, directory, field, label) -> str:
         for b in bodies
     }
     last = {b.name: _range(_field_values([b], frames[-1][1], field), field) for b in bodies}
-    camera = render_frame_png(  # final.png: its own frame's range
-        directory / "final.png", _frame3d(bodies, frames[-1], field, label, last, surfaces)
-    )
+    visuals, cutting = visuals_of(sim), cutting_at(sim)
+
+    def draw(frame, ranges):
+        return _frame3d(bodies, frame, field, label, ranges, surfaces, visuals, cutting(frame[0]))
+
+    camera = render_frame_png(directory / "final.png", draw(frames[-1], last))  # its own range
     if len(frames) > 1:
         # the last frame spans the scene (a retracted organ is farthest away)
         gif = GifWriter(directory / "run.gif", camera=camera, window_size=GIF_WINDOW)
         for frame in picked:
-            gif.add(_frame3d(bodies, frame, field, label, clim, surfaces))
+            gif.add(draw(frame, clim))
         gif.close()
     return f"final.png, run.gif (PyVista, coloured by {field})"
 

@@ -29,6 +29,8 @@ argument of the Python API of ``tissuesim.coupling.simulation.CoupledSimulation`
                    that organ, with its toughness (J/m^2, optional)
     [tearing]      set_tearing(threshold): the tissue; with body = "organ" and stress (Pa) or
                    stretch, that organ tears
+    [[visual_surfaces]] add_visual_surface(file, body, name, max_outside): a fine surface
+                   carried by a FEM body for the output (``scene/visual.py``)
     [run]          run(steps, every, render), as for every scene
 
 Vertex selectors (fix, graspers' vertices) pick vertices of one organ's rest mesh: the
@@ -70,6 +72,7 @@ from tissuesim.scene.common import (
 from tissuesim.scene.common import condition as _condition
 from tissuesim.scene.contact import CONTACT_KEYS, OBSTACLE_KEYS
 from tissuesim.scene.fem_body import _mesh, _select
+from tissuesim.scene.visual import VISUAL_KEYS, add_visual_surfaces
 from tissuesim.validate import short
 
 __all__ = ["build_bodies_scene", "COUPLED_SCENE_KEYS"]
@@ -119,8 +122,9 @@ COUPLED_SCENE_KEYS: dict[str, Any] = {
     "run": set(RUN_KEYS),
     "contact": set(CONTACT_KEYS),
     "obstacles": set(OBSTACLE_KEYS),
+    "visual_surfaces": set(VISUAL_KEYS),
 }
-ARRAYS = ("organs", "bodies", "graspers", "attachments", "cuts", "obstacles")
+ARRAYS = ("organs", "bodies", "graspers", "attachments", "cuts", "obstacles", "visual_surfaces")
 MESH_GENERATORS = {
     "ellipsoid": ("center", "radii", "divisions"),
     "box": ("lower", "upper", "divisions", "element"),
@@ -212,6 +216,7 @@ def build_bodies_scene(data: dict, base_dir: Path, source: str, name: str) -> Sc
             )
     for i, item in enumerate(cuts, start=1):
         _cut(sim, item, f"{source} cuts[{i}]")
+    add_visual_surfaces(sim, data, base_dir, source)
     tearing = _table(data, "tearing", source)
     if tearing:
         where = f"{source} [tearing]"

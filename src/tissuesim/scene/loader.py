@@ -13,6 +13,7 @@ Every key is the name of an argument of the Python API (see docs/reference/scene
     [[body_force]]  Simulation.add_body_force(force_density)
     [initial]       Simulation.set_velocity(velocity)
     [[graspers]]    Simulation.grasp(vertices, displacement, stiffness, name, release)
+    [[visual_surfaces]] Simulation.add_visual_surface(file, body, name, max_outside)
     [run]           Simulation.run(steps, every, render)
 
 Vertex and facet sets are selector tables, e.g. ``{ on_plane = { axis = 0, value = -1.0 } }``,
@@ -59,6 +60,7 @@ from tissuesim.scene.fem_body import (
     MESH_KEYS,
     add_fem_body,
 )
+from tissuesim.scene.visual import VISUAL_KEYS, add_visual_surfaces
 
 __all__ = ["Scene", "load_scene", "build_scene", "SCENE_KEYS"]
 
@@ -73,6 +75,7 @@ SCENE_KEYS = {
     "contact": set(CONTACT_KEYS),
     "obstacles": set(OBSTACLE_KEYS),
     "graspers": set(GRASPER_KEYS),
+    "visual_surfaces": set(VISUAL_KEYS),
 }
 # Tables of frame scenes ([frames], tissuesim.scene.frames) that mean nothing for a [mesh] body.
 FRAME_ONLY_KEYS = ("region", "fixed_frames", "prescribed_frames", "springs", "point_forces")
@@ -212,4 +215,5 @@ def _build(data: dict, base_dir: Path, source: str, name: str) -> Scene:
     from tissuesim.scene.contact import add_contact_tables
 
     add_contact_tables(sim, data, base_dir, source)
+    add_visual_surfaces(sim, data, base_dir, source, "body")
     return Scene(sim, name, source, _run_table(data, source))
