@@ -29,6 +29,7 @@ from tissuesim.materials import (
     CoupledVerondaWestmann,
     CoupledYeoh,
     CourseNeoHookean,
+    EnergyLaw,
     FixedCorotated,
     HGOUnconstrained,
     HolzapfelGasserOgden,
@@ -44,6 +45,7 @@ from tissuesim.materials import (
     Viscoelastic,
     Yeoh,
     fit_material,
+    from_energy,
     make_material,
 )
 from tissuesim.mesh import Mesh, box, ellipsoid, mesh_surface, read_mesh, rectangle, select
@@ -65,6 +67,7 @@ __all__ = [
     "CoupledVerondaWestmann",
     "CoupledYeoh",
     "CourseNeoHookean",
+    "EnergyLaw",
     "FixedCorotated",
     "HGOUnconstrained",
     "HolzapfelGasserOgden",
@@ -92,6 +95,7 @@ __all__ = [
     "cylinder",
     "ellipsoid",
     "fit_material",
+    "from_energy",
     "make_material",
     "mesh_surface",
     "plane",

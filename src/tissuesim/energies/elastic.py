@@ -6,7 +6,8 @@ With ``project`` the tangent dP/dF is clamped to positive semi-definite per poin
 every local Hessian PSD (w B^T A B with A PSD).
 
 Two implementations (``backend.py``): the batched NumPy one below, and the fused Numba loop of
-``assembly/fused_p1.py`` for the laws that have a point kernel; both compute the same sums.
+``assembly/fused_p1.py`` for the laws that have a point kernel (``assembly/fused_energy.py`` for
+a law from its energy, whose kernel is generated); both compute the same sums.
 """
 
 from __future__ import annotations
@@ -32,6 +33,7 @@ class ElasticEnergy:
     stencil_id: int = 0
     backend: str = "numpy"  # "numba" or "numpy", resolved (see backend.py)
     _law: int = field(init=False, default=-1)  # point-kernel id when the fused path applies
+    _kernel: object = field(init=False, default=None)  # a generated kernel (EnergyLaw)
 
     def __post_init__(self) -> None:
         if self.backend == "numba":
@@ -46,14 +48,17 @@ class ElasticEnergy:
                 and (type(self.material).evaluate is registered.evaluate)
             ):
                 object.__setattr__(self, "_law", law)
+            elif law < 0 and _generated_kernel_law(self.material):
+                kernel = self.material.point_kernel(self.kinematics.grads.shape[2])
+                object.__setattr__(self, "_kernel", kernel)
 
     @property
     def fused(self) -> bool:
         """True when order-0/1/2 evaluations without projection run the Numba loop."""
-        return self._law >= 0
+        return self._law >= 0 or self._kernel is not None
 
     def accumulate(self, x: np.ndarray, acc: Accumulator) -> None:
-        if self._law >= 0 and not acc.project:
+        if self.fused and not acc.project:
             self._accumulate_fused(x, acc)
             return
         F = self.kinematics.deformation_gradients(x)
@@ -78,6 +83,24 @@ class ElasticEnergy:
 
     def _accumulate_fused(self, x: np.ndarray, acc: Accumulator) -> None:
         K, empty = self.kinematics, np.empty(0)
+        if self._kernel is not None:
+            from tissuesim.assembly.fused_energy import assemble_energy
+
+            energy, bad = assemble_energy(
+                self._kernel,
+                self.material.values,
+                x,
+                K.cells,
+                K.grads,
+                K.weights,
+                K.points_per_cell,
+                min(acc.order, 2),
+                acc.pattern.scatters[self.stencil_id],
+                acc.gradient if acc.order >= 1 else empty,
+                acc.hessian if acc.order >= 2 else empty,
+            )
+            acc.add_value("elastic", float(np.inf) if bad >= 0 else float(energy))
+            return
         args = [
             self._law,
             float(self.material.mu),
@@ -139,6 +162,13 @@ def scatter_point_hessians(K: NodalKinematics, A: np.ndarray, acc: Accumulator, 
         acc.hessian += np.bincount(
             scatter[start:stop].ravel(), weights=blocks.ravel(), minlength=acc.pattern.nnz
         )
+
+
+def _generated_kernel_law(material: Material) -> bool:
+    """A law from its energy (``EnergyLaw``, not a subclass that overrides evaluate)."""
+    from tissuesim.materials.energy import EnergyLaw
+
+    return isinstance(material, EnergyLaw) and type(material).evaluate is EnergyLaw.evaluate
 
 
 def _registered_class(material: Material):

@@ -1,9 +1,11 @@
-"""Hyperelastic material laws: psi(F), P(F) and dP/dF, batched over integration points."""
+"""Hyperelastic material laws: psi(F), P(F) and dP/dF, batched over integration points (and a
+law from its energy, ``EnergyLaw``, whose P and dP/dF SymPy derives)."""
 
 from tissuesim.materials.arruda_boyce import ArrudaBoyce, CoupledArrudaBoyce
 from tissuesim.materials.base import Material, MaterialResponse
 from tissuesim.materials.corotated import FixedCorotated
 from tissuesim.materials.course_neo_hookean import CourseNeoHookean
+from tissuesim.materials.energy import EnergyLaw, from_energy
 from tissuesim.materials.fitting import FitResult, fit_material, nominal_stress
 from tissuesim.materials.holzapfel_gasser_ogden import HGOUnconstrained, HolzapfelGasserOgden
 from tissuesim.materials.lame import lame_parameters
@@ -48,6 +50,8 @@ __all__ = [
     "TransIsoMooneyRivlin",
     "Viscoelastic",
     "UncoupledViscoelastic",
+    "EnergyLaw",
+    "from_energy",
     "lame_parameters",
     "project_psd",
     "project_tangent_psd",

@@ -59,6 +59,7 @@ __all__ = [
     "parameter",
     "parameter_list",
     "inverted_error",
+    "invariant_tensors",
 ]
 
 
@@ -275,41 +276,67 @@ class InvariantLaw(HyperelasticMaterial):
         else:
             W = (r.w1, r.w2, 0.0, r.w11, r.w12, r.w22, 0.0, 0.0, 0.0)
             WJ = dU - self._rest_slope / J
-        W1, W2 = np.broadcast_to(W[0], J.shape), np.broadcast_to(W[1], J.shape)
-        g1 = 2.0 * F
-        P = bcast(W1, 3) * g1 + bcast(WJ, 3) * cof
-        if self.uses_i2:
-            FC = F @ C
-            g2 = 2.0 * (bcast(I1, 3) * F - FC)
-            P = P + bcast(W2, 3) * g2
         if order == 1:
+            P, _ = invariant_tensors(F, I1, C if self.uses_i2 else None, cof, J, W[:2] + (WJ,), 1)
             return MaterialResponse(psi, P)
         WJJ = ddU + (W[8] if self.uncoupled else self._rest_slope / J**2)
-        W11, W1J = np.broadcast_to(W[3], J.shape), np.broadcast_to(W[6], J.shape)
-        q, n = F.shape[0], d * d
-        # sum_ab W_ab dI_a (x) dI_b as one batched product G^T H, G = rows dI_a, H = sum_b W_ab dI_b
-        h1 = bcast(W11, 3) * g1 + bcast(W1J, 3) * cof
-        hJ = bcast(W1J, 3) * g1 + bcast(WJJ, 3) * cof
-        iso = 2.0 * W1  # coefficient of delta_ik delta_jl
-        if self.uses_i2:
-            W12, W22 = np.broadcast_to(W[4], J.shape), np.broadcast_to(W[5], J.shape)
-            W2J = np.broadcast_to(W[7], J.shape)
-            # the 4 W2 F (x) F of W2 d2I2 is W2 g1 (x) g1: it joins h1
-            h1 = h1 + bcast(W12, 3) * g2 + bcast(W2, 3) * g1
-            hJ = hJ + bcast(W2J, 3) * g2
-            h2 = bcast(W12, 3) * g1 + bcast(W22, 3) * g2 + bcast(W2J, 3) * cof
-            G, H = np.stack([g1, g2, cof], 1), np.stack([h1, h2, hJ], 1)
-            iso = iso + 2.0 * W2 * I1
-        else:
-            G, H = np.stack([g1, cof], 1), np.stack([h1, hJ], 1)
-        A = (np.swapaxes(G.reshape(q, -1, n), 1, 2) @ H.reshape(q, -1, n)).reshape(q, d, d, d, d)
-        A += bcast(iso, 5) * IDENTITY[d] + bcast(WJ, 5) * det_hessian(F)
-        if self.uses_i2:
-            # the rest of W2 d2I2: -2 W2 (delta_ik C_lj + F_il F_kj + B_ik delta_jl)
-            I = np.eye(d)
-            B = F @ np.swapaxes(F, 1, 2)
-            rest = I[None, :, None, :, None] * C[:, None, :, None, :]
-            rest = rest + F[:, :, None, None, :] * np.swapaxes(F, 1, 2)[:, None, :, :, None]
-            rest = rest + B[:, :, None, :, None] * I[None, None, :, None, :]
-            A -= bcast(2.0 * W2, 5) * rest
+        W = W[:2] + (WJ,) + tuple(W[3:8]) + (WJJ,)
+        P, A = invariant_tensors(F, I1, C if self.uses_i2 else None, cof, J, W, 2)
         return MaterialResponse(psi, P, A)
+
+
+def invariant_tensors(
+    F: np.ndarray,
+    I1: np.ndarray,
+    C: np.ndarray | None,
+    cof: np.ndarray,
+    J: np.ndarray,
+    W: Sequence,
+    order: int,
+) -> tuple[np.ndarray, np.ndarray | None]:
+    """P and (order 2) dP/dF of W(I1, I2, J) from its derivatives in the invariants.
+
+    ``W`` = (W1, W2, WJ) for order 1, (W1, W2, WJ, W11, W12, W22, W1J, W2J, WJJ) for order 2,
+    arrays (q,) or scalars; ``C`` = F^T F, or None when W does not depend on I2 (its terms are
+    then skipped). ``I1`` is the 3D invariant (plane strain: |F|^2 + 1), ``cof`` = dJ/dF."""
+    d = F.shape[-1]
+    uses_i2 = C is not None
+    W1, W2 = np.broadcast_to(W[0], J.shape), np.broadcast_to(W[1], J.shape)
+    WJ = np.broadcast_to(W[2], J.shape)
+    g1 = 2.0 * F
+    P = bcast(W1, 3) * g1 + bcast(WJ, 3) * cof
+    if uses_i2:
+        FC = F @ C
+        g2 = 2.0 * (bcast(I1, 3) * F - FC)
+        P = P + bcast(W2, 3) * g2
+    if order == 1:
+        return P, None
+    W11, W1J = np.broadcast_to(W[3], J.shape), np.broadcast_to(W[6], J.shape)
+    WJJ = np.broadcast_to(W[8], J.shape)
+    q, n = F.shape[0], d * d
+    # sum_ab W_ab dI_a (x) dI_b as one batched product G^T H, G = rows dI_a, H = sum_b W_ab dI_b
+    h1 = bcast(W11, 3) * g1 + bcast(W1J, 3) * cof
+    hJ = bcast(W1J, 3) * g1 + bcast(WJJ, 3) * cof
+    iso = 2.0 * W1  # coefficient of delta_ik delta_jl
+    if uses_i2:
+        W12, W22 = np.broadcast_to(W[4], J.shape), np.broadcast_to(W[5], J.shape)
+        W2J = np.broadcast_to(W[7], J.shape)
+        # the 4 W2 F (x) F of W2 d2I2 is W2 g1 (x) g1: it joins h1
+        h1 = h1 + bcast(W12, 3) * g2 + bcast(W2, 3) * g1
+        hJ = hJ + bcast(W2J, 3) * g2
+        h2 = bcast(W12, 3) * g1 + bcast(W22, 3) * g2 + bcast(W2J, 3) * cof
+        G, H = np.stack([g1, g2, cof], 1), np.stack([h1, h2, hJ], 1)
+        iso = iso + 2.0 * W2 * I1
+    else:
+        G, H = np.stack([g1, cof], 1), np.stack([h1, hJ], 1)
+    A = (np.swapaxes(G.reshape(q, -1, n), 1, 2) @ H.reshape(q, -1, n)).reshape(q, d, d, d, d)
+    A += bcast(iso, 5) * IDENTITY[d] + bcast(WJ, 5) * det_hessian(F)
+    if uses_i2:
+        # the rest of W2 d2I2: -2 W2 (delta_ik C_lj + F_il F_kj + B_ik delta_jl)
+        I = np.eye(d)
+        B = F @ np.swapaxes(F, 1, 2)
+        rest = I[None, :, None, :, None] * C[:, None, :, None, :]
+        rest = rest + F[:, :, None, None, :] * np.swapaxes(F, 1, 2)[:, None, :, :, None]
+        rest = rest + B[:, :, None, :, None] * I[None, None, :, None, :]
+        A -= bcast(2.0 * W2, 5) * rest
+    return P, A

@@ -7,6 +7,8 @@ uncoupled laws; ``coupled_mooney_rivlin``, ``coupled_veronda_westmann`` and
 tissuesim's coupled forms where FEBio has none. ``<law>_uncoupled`` and ``<law>_coupled`` are
 accepted as aliases (``ALIASES``). ``viscoelastic`` and ``uncoupled_viscoelastic`` wrap another
 law given as ``elastic`` (a material or a table with its ``model``), ``VISCOELASTIC_LAWS``.
+``energy`` is a law from its strain-energy density ``psi`` (``EnergyLaw``), its other keys the
+parameters psi names.
 """
 
 from __future__ import annotations
@@ -19,6 +21,7 @@ from tissuesim.materials.arruda_boyce import ArrudaBoyce, CoupledArrudaBoyce
 from tissuesim.materials.base import Material
 from tissuesim.materials.corotated import FixedCorotated
 from tissuesim.materials.course_neo_hookean import CourseNeoHookean
+from tissuesim.materials.energy import EnergyLaw
 from tissuesim.materials.holzapfel_gasser_ogden import HGOUnconstrained, HolzapfelGasserOgden
 from tissuesim.materials.linear import LinearElastic
 from tissuesim.materials.mooney_rivlin import CoupledMooneyRivlin, MooneyRivlin
@@ -107,7 +110,8 @@ def _viscoelastic(key: str, params: dict) -> Material:
 
 def make_material(model: str, **params: object) -> Material:
     """Build the law registered as ``model`` with keyword parameters (e.g. E and nu, or a
-    soft-tissue law's own: ``make_material("ogden", c=[1e3], m=[8.0], k=1e5)``).
+    soft-tissue law's own: ``make_material("ogden", c=[1e3], m=[8.0], k=1e5)``; a law from its
+    energy: ``make_material("energy", psi="c1*(I1b - 3) + k/2*log(J)**2", c1=1e3, k=1e5)``).
 
     FEBio's law names work as written there (``"Mooney-Rivlin"``, ``"Ogden unconstrained"``):
     case, spaces and dashes do not matter."""
@@ -115,10 +119,16 @@ def make_material(model: str, **params: object) -> Material:
     key = ALIASES.get(key, key)
     if key in VISCOELASTIC_LAWS:
         return _viscoelastic(key, params)
+    if key == EnergyLaw.name:
+        if "psi" not in params:
+            raise MaterialError(
+                "energy needs psi, the strain-energy density, e.g. psi = "
+                "'mu/2*(I1 - 3) - mu*log(J) + lam/2*log(J)**2' with mu and lam"
+            )
+        return EnergyLaw(params.pop("psi"), **params)
     if key not in MATERIALS:
-        raise MaterialError(
-            f"unknown material model {short(model)}; {_suggest(key, list(MATERIALS))}"
-        )
+        names = [*MATERIALS, *VISCOELASTIC_LAWS, EnergyLaw.name]
+        raise MaterialError(f"unknown material model {short(model)}; {_suggest(key, names)}")
     cls = MATERIALS[key]
     sig = inspect.signature(cls.__init__).parameters
     allowed = [n for n, p in sig.items() if p.kind is inspect.Parameter.KEYWORD_ONLY]
