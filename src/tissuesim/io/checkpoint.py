@@ -209,6 +209,7 @@ def _solver_state(solver, key: str, arrays: dict) -> dict | None:
             # the factor's columns kept for the contact update (solve/reuse.py): solved again
             # in other batches they could differ in the last bit
             meta["holds_update"] = bool(solver.factor_holds_update)
+            meta["excess"] = int(solver.excess)  # when the next factor is taken
             if solver.columns.slot:
                 order = sorted(solver.columns.slot, key=solver.columns.slot.get)
                 arrays[f"{key}.column_dofs"] = np.asarray(order, dtype=np.int64)
@@ -239,6 +240,7 @@ def _restore_solver(solver, meta: dict, arrays, key: str, A: sp.csr_matrix | Non
             solver._A = solver.factored_matrix = A
             solver._factored, solver._fresh = True, False
             solver.factor_holds_update = bool(meta.get("holds_update", False))
+            solver.excess = int(meta.get("excess", 0))
             if f"{key}.column_dofs" in arrays:
                 dofs = np.array(arrays[f"{key}.column_dofs"]).tolist()
                 solver.columns.X = np.array(arrays[f"{key}.columns"], order="F")

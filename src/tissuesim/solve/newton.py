@@ -181,6 +181,7 @@ def minimize(
     max_relags: int = 0,
     budget: dict | None = None,
     physical_default: bool = False,
+    start: Accumulator | None = None,
 ) -> tuple[np.ndarray, NewtonResult]:
     """Minimise Phi from x0 (prescribed DOFs already at their values) over the free DOFs.
 
@@ -207,12 +208,13 @@ def minimize(
     budget: an interactive step's {"deadline": time.perf_counter() value, "iterations": n}
     (either may be left out); when it runs out after at least one iteration the solve stops
     with ``budget_stop`` set (every iterate is intersection-free: the caller may accept it).
+    start: evaluate(x0, 1, False) when the caller has it already.
     Returns the final x and the record. x0 must give a finite Phi.
     """
     result = NewtonResult()
     retract = retract or _add
     x = x0.copy()
-    current = evaluate(x, 1, False)
+    current = evaluate(x, 1, False) if start is None else start
     free = np.ones(current.gradient.size, dtype=bool)
     free[elimination.dofs] = False
     checked = free.copy()

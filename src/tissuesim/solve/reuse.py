@@ -28,6 +28,14 @@ DOFs, or needing more than MAX_NEW_COLUMNS new columns at once, is factorised wi
 Woodbury is used with the Cholesky solvers (PARDISO, CHOLMOD) only: SuperLU's LU factors the
 elasticity of a body held by contact alone (nearly singular) without a word.
 
+When to take a fresh factor: as the matrix drifts from the factor's, CG needs more
+iterations per solve. Each back-solve beyond the first of a solve is counted against the
+factor; once they add up to what a fresh factor costs (REFACTOR_AFTER back-solves, plus the
+kept Woodbury columns solved again), the next matrix is factorised (the ski-rental rule: at
+most twice the best schedule's cost). Counts, not timings, so runs stay bit-reproducible. A
+sagging organ's free steps at 1e4 tetrahedra used one factor for 30 steps at 5.7 back-solves
+a solve (8 was the old limit); with the rule they take 2.6 (``benchmarks/free_step.py``).
+
 Counts per step (``take_stats``): factorisations, back-solves, CG iterations.
 """
 
@@ -56,6 +64,12 @@ MAX_UPDATE_DOFS = 600
 MAX_NEW_COLUMNS = 96
 #: columns kept per factor at most (1,000 of a 1e4-tetrahedron organ's 6,600 DOFs: 53 MB)
 MAX_KEPT_COLUMNS = 1000
+#: back-solves beyond one per solve a stale factor may cost before the next matrix is
+#: factorised: a factorisation costs 22-38 back-solves at 2e3-2e4 DOFs in 3D (PARDISO, one
+#: thread, measured here), 20 keeps the rule on the side of fresh factors
+REFACTOR_AFTER = 20
+#: a kept column solved again costs about this share of a back-solve (one multi-column call)
+COLUMN_COST = 0.2
 
 
 @dataclass
@@ -100,6 +114,8 @@ class ReusedFactorSolver(LinearSolver):
         self.factor_holds_update = False  # the factor is of A with its update (no Woodbury)
         self.columns = FactorColumns()  # K^-1 e_j of the factor at the update's DOFs
         self._woodbury: tuple | None | bool = None  # _woodbury_terms; False: not usable
+        self.excess = 0  # back-solves beyond one per solve since the factor was made
+        self.refactor_after = REFACTOR_AFTER
 
     def factorize(
         self, A: sp.csr_matrix, update: sp.csr_matrix | None = None, rtol: float | None = None
@@ -112,6 +128,10 @@ class ReusedFactorSolver(LinearSolver):
         self._update = update if update is not None and update.nnz else None
         self._fresh = False
         self._woodbury = None
+        if self._factored and self.excess >= self.refactor_after + COLUMN_COST * len(
+            self.columns.slot
+        ):
+            self._factored = False  # the stale factor has cost a fresh one: refactorise
 
     def refactorize(self, hold: bool = False) -> None:
         """Factorise the current matrix now, without its update where Woodbury can apply it
@@ -138,6 +158,7 @@ class ReusedFactorSolver(LinearSolver):
         self.columns.clear()
         self._woodbury = None
         self.stats.factorizations += 1
+        self.excess = 0
         self.version += 1
         self._factored = self._fresh = True
 
@@ -145,6 +166,13 @@ class ReusedFactorSolver(LinearSolver):
         self.stats.solves += 1
         if not self._factored:
             self.refactorize()
+        start, version = self.stats.cg_iterations, self.version
+        x = self._solve(b)
+        if self.version == version:  # CG on this factor: its iterations beyond the first
+            self.excess += max(self.stats.cg_iterations - start - 1, 0)
+        return x
+
+    def _solve(self, b: np.ndarray) -> np.ndarray:
         exact = self._fresh and (self._update is None or self.factor_holds_update)
         if not exact:
             # CG preconditioned by the factor (with the update by Woodbury: one iteration on a

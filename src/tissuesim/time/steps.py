@@ -146,7 +146,14 @@ def implicit_step(
             contact.obstacle_state = y1
         candidates = tuple(starts)
         max_step = contact.max_step
-    c0 = choose_start(evaluate, candidates, lambda c: system.apply_prescribed(c, t1))
+    start_acc = None
+    if contact is None and not _lagged_pressure(body_energies):
+        # the start's gradient is Newton's first evaluation: kept (nothing is set at c0)
+        c0, start_acc = choose_start(
+            evaluate, candidates, lambda c: system.apply_prescribed(c, t1), keep=True
+        )
+    else:
+        c0 = choose_start(evaluate, candidates, lambda c: system.apply_prescribed(c, t1))
     friction = None
     if contact is not None:
         # IPC's adaptive kappa balances the other forces at the start the barrier alone would
@@ -183,6 +190,7 @@ def implicit_step(
         relag=relag,
         max_relags=max_relags,
         budget=budget,
+        start=start_acc if relag is None else None,
     )
     lags.check(c1, record)
     if contact is not None:
@@ -256,6 +264,13 @@ def _start_friction(
         return True
 
     return relag
+
+
+def _lagged_pressure(body_energies) -> bool:
+    """Whether a follower pressure is lagged this step (its lag is set at Newton's start)."""
+    from tissuesim.energies.pressure_lag import LaggedPressureEnergy
+
+    return any(isinstance(e, LaggedPressureEnergy) for body in body_energies for e in body)
 
 
 class _Lags:
