@@ -297,3 +297,33 @@ def test_the_kept_factor_columns_are_bounded(monkeypatch):
     X = columns.take(solver.solve, n, np.array([4, 5, 6]))  # 6 > 5: the old ones let go
     assert len(columns.slot) == 3 and columns.solved == 3
     assert np.allclose(X, inverse[:, [4, 5, 6]], atol=1e-12)
+
+
+def test_a_stale_factor_is_replaced_once_its_extra_iterations_cost_a_fresh_one():
+    from tissuesim.solve import reuse
+
+    n = 60
+    K = _spd_matrix(n, 9)
+    drift = sp.diags(np.random.default_rng(10).uniform(0.5, 1.5, n) * n * 0.1)
+    b = np.ones(n)
+
+    def run(refactor_after: int) -> tuple[list[int], list[np.ndarray]]:
+        solver = reuse.ReusedFactorSolver(SuperLUSolver(), max_cg=50)
+        solver.refactor_after = refactor_after
+        made, solutions = [], []
+        for k in range(12):  # a matrix drifting away from the first factor's
+            A = (K + 0.15 * k * drift).tocsr()
+            solver.factorize(A)
+            x = solver.solve(b)
+            assert np.allclose(A @ x, b, rtol=0, atol=1e-5 * np.linalg.norm(b))
+            made.append(solver.stats.factorizations)
+            solutions.append(x)
+        return made, solutions
+
+    never, _ = run(10**9)
+    assert never[-1] == 1  # CG on the first factor all along
+    ruled, solutions = run(4)
+    assert 1 < ruled[-1] < 12  # refreshed, but not every solve
+    again, repeated = run(4)  # counts, not timings: the same schedule, the same bits
+    assert again == ruled
+    assert all(np.array_equal(x, y) for x, y in zip(solutions, repeated, strict=True))
