@@ -360,6 +360,8 @@ class ContactModel(FrictionLag, CollisionQueries):
             if isinstance(surface, CutFemSurface) and surface.near_cut is not None:
                 near[self.slices[surface.name][0]] = surface.near_cut
         rest_pairs = rest_proximity_filter(ipctk, self.mesh, self.rest, near, self.dhat)
+        # a vertex filter beyond the pair table: the predictor's own broad phase cannot apply
+        self.rest_filtered = rest_pairs is not None
         if rest_pairs is not None:
             kept = self.mesh.can_collide if self.table.filtered else None
             self.mesh.can_collide = rest_pairs if kept is None else kept & rest_pairs

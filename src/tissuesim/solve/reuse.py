@@ -68,8 +68,9 @@ MAX_KEPT_COLUMNS = 1000
 #: factorised: a factorisation costs 22-38 back-solves at 2e3-2e4 DOFs in 3D (PARDISO, one
 #: thread, measured here), 20 keeps the rule on the side of fresh factors
 REFACTOR_AFTER = 20
-#: a kept column solved again costs about this share of a back-solve (one multi-column call)
-COLUMN_COST = 0.2
+#: a kept column solved again costs about this share of a back-solve (one multi-column call:
+#: 0.47 ms a column at 6,591 DOFs against 0.9-1.8 ms for one back-solve, PARDISO, measured)
+COLUMN_COST = 0.3
 
 
 @dataclass
@@ -116,6 +117,9 @@ class ReusedFactorSolver(LinearSolver):
         self._woodbury: tuple | None | bool = None  # _woodbury_terms; False: not usable
         self.excess = 0  # back-solves beyond one per solve since the factor was made
         self.refactor_after = REFACTOR_AFTER
+        # columns of the factor others keep (the contact predictor's compliance), by owner:
+        # a fresh factor solves them again, which the refresh rule counts
+        self.held_columns: dict[str, int] = {}
 
     def factorize(
         self, A: sp.csr_matrix, update: sp.csr_matrix | None = None, rtol: float | None = None
@@ -128,10 +132,13 @@ class ReusedFactorSolver(LinearSolver):
         self._update = update if update is not None and update.nnz else None
         self._fresh = False
         self._woodbury = None
-        if self._factored and self.excess >= self.refactor_after + COLUMN_COST * len(
-            self.columns.slot
-        ):
+        if self._factored and self.excess >= self.refresh_cost():
             self._factored = False  # the stale factor has cost a fresh one: refactorise
+
+    def refresh_cost(self) -> float:
+        """A fresh factor's cost in back-solves: the factorisation and the kept columns."""
+        held = len(self.columns.slot) + sum(self.held_columns.values())
+        return self.refactor_after + COLUMN_COST * held
 
     def refactorize(self, hold: bool = False) -> None:
         """Factorise the current matrix now, without its update where Woodbury can apply it

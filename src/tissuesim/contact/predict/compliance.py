@@ -41,6 +41,11 @@ class Compliance:
         self._G = np.zeros((0, 0))  # capacity x capacity; the first len(_slot) are filled
         self.solved_columns = 0  # columns solved in the last ``block`` call
 
+    @property
+    def held(self) -> int:
+        """The DOFs (columns) the block holds."""
+        return len(self._slot)
+
     def _reset(self, token, n: int) -> None:
         self._token, self._n, self._slot = token, n, {}
         self._dofs = np.zeros(0, dtype=np.int64)

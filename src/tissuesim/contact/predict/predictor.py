@@ -169,6 +169,8 @@ class ContactPredictor:
         )
         G = self.compliance.block(solve, token, system.n_dofs, dofs)
         self.columns += self.compliance.solved_columns
+        if hasattr(solver, "held_columns"):  # a fresh factor solves the block again
+            solver.held_columns["compliance"] = self.compliance.held
         W = compliance_matrix(J, G, dofs)
         self.clock["compliance"] += time.perf_counter() - start
         self._solve_through = solve

@@ -24,6 +24,8 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.sparse as sp
 
+from tissuesim.contact.predict.broad_phase import compiled_candidates
+
 __all__ = ["ContactRows", "detect_rows", "sides_kept", "sweep_candidates"]
 
 #: pairs are kept where the step ends (``at``) within this many times the keep distance (2
@@ -83,7 +85,11 @@ def _candidates(contact, V0: np.ndarray, V1: np.ndarray, inflation: float):
     """(kind, ids) of the broad phase's candidates over the swept boxes V0 -> V1 inflated by
     ``inflation``: kind 0 a point and a triangle [p, a, b, c] (3D), 1 two edges [a, b, c, d]
     (3D), 2 a point and an edge [p, a, b, -1] (2D). ipctk hands candidates out one at a time;
-    only their ids are read here, the geometry is batched (``_closest``)."""
+    only their ids are read here, the geometry is batched (``_closest``); with numba the same
+    pairs come as arrays from a compiled grid (``broad_phase.py``: a third of the time)."""
+    parts = compiled_candidates(contact, V0, V1, inflation)
+    if parts is not None:
+        return parts
     ipctk = contact._ipctk
     cand = contact.candidates.held(V0, V1) if inflation <= 0.5 * contact.dhat else None
     if cand is None:
