@@ -127,22 +127,3 @@ def test_scene_tearing_of_a_body_errors_name_the_key(table, message):
     with pytest.raises(SceneError, match=message) as error:
         build_scene(data)
     assert "[tearing]" in str(error.value) and "\n" not in str(error.value)
-
-
-def test_a_scene_that_tears_writes_no_checkpoint_and_refuses_resume_in_one_line(tmp_path):
-    """Cuts and tearing change the mesh, which a checkpoint does not carry: no checkpoint is
-    written, and --resume says so in one line, leaving the run's output as it was."""
-    import subprocess
-    import sys
-
-    out = tmp_path / "strip"
-    run = [sys.executable, "-m", "tissuesim", "run", "strip_tearing", "--out", str(out)]
-    first = subprocess.run([*run, "--steps", "4", "--quiet"], capture_output=True, text=True)
-    assert first.returncode == 0, first.stderr
-    before = sorted(p.name for p in out.iterdir())
-    assert not any("checkpoint" in name for name in before)
-    again = subprocess.run([*run, "--steps", "8", "--resume"], capture_output=True, text=True)
-    assert again.returncode != 0
-    errors = [line for line in again.stderr.splitlines() if "error" in line]
-    assert len(errors) == 1 and "cut or tears" in errors[0] and "Traceback" not in again.stderr
-    assert sorted(p.name for p in out.iterdir()) == before

@@ -391,6 +391,28 @@ class FemBody:
         self.pending_origin = carry
         self._set_conditions()
 
+    def restore_cut(self, state, held: dict[str, np.ndarray], velocity: np.ndarray) -> None:
+        """Take a checkpoint's cut (``io/checkpoint_cuts.py``): ``state`` (a ``CutState``
+        with its current cut) as this body's, the model made on its cut mesh afresh (the pattern
+        a cut renews equals it entry for entry), every support and grasper on the vertices it
+        held (``held``, by name), and ``velocity``."""
+        source, state.source = state.source, None  # no pattern to renew it from
+        self.apply_cut(state.vn, state.vn.origin, state)
+        state.source = source
+        self.cut_state, self.pending_origin, self.velocity = state, None, velocity
+        self.conditions = [
+            (n, DirichletCondition(held[n], c.displacement, c.components, c.name))
+            for n, c in self.conditions
+        ]
+        self.graspers = [
+            Grasper(g.name, g.body, held[g.name], g.displacement, g.stiffness, g.release)
+            for g in self.graspers
+        ]
+        self.spring_graspers = [
+            (g, g.springs(self.mesh.points)) for g in self.graspers if g.stiffness is not None
+        ]
+        self._set_conditions()
+
     pending_origin: np.ndarray | None = None  # set by apply_cut, taken by the next rebuild
     cut_state = None  # bodies/cut_state.CutState once the body is cut
 

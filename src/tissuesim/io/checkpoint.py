@@ -12,7 +12,12 @@ again from the same matrix with the same ordering (a fresh factor takes other it
 set-up (meshes, materials, supports, motions) is not kept: it is code and data the user
 already has. A checkpoint is loaded into a simulation set up the same way, checked by a
 ``fingerprint`` (integrator, Newton options, each body's mesh / material / density, contact and
-obstacles; the command line adds the scene file's hash).
+obstacles; the command line adds the scene file's hash; ``io/checkpoint_fingerprint.py``).
+
+Cut and torn bodies (issue 41): their current cut mesh and cuts, the vertices their supports
+and graspers hold, the blades' progress and the cracks (``io/checkpoint_cuts.py``); on load
+each cut body's model, the system, the contact surfaces and the linear solver are made again
+on the cut mesh, so a run killed mid-cut resumes bit-identically too.
 
 Files: ``Simulation.save(path)`` writes one ``.npz`` (history included). A run with output keeps
 ``checkpoint.npz`` in its directory, rewritten atomically after every frame, and the history
@@ -20,13 +25,15 @@ in ``checkpoint_history.jsonl``, appended (one JSON line per step) and fsynced b
 ``.npz`` that counts its lines is replaced: a kill at any moment leaves a checkpoint consistent
 with itself, and with frames up to those it lists (later frames are dropped on resume).
 
-Not supported: a tissue, and a body that is cut or tears (cuts and tearing change the model's
-topology, which a checkpoint does not carry); ``refuse_unsupported`` says so in one line.
+Format: ``FORMAT`` 2 since checkpoints keep cuts; format 1 (before) is read where nothing cuts
+or tears (it was never written where something did), any other is refused in one line.
+
+Not supported: a tissue (its frames rebuilt after cuts and tearing, its attachments to the
+organs); ``refuse_unsupported`` says so in one line.
 """
 
 from __future__ import annotations
 
-import hashlib
 import json
 import os
 from dataclasses import asdict
@@ -38,13 +45,19 @@ import scipy.sparse as sp
 
 from tissuesim.errors import InputError
 from tissuesim.io.atomic import atomic_output, write_text_atomic
+from tissuesim.io.checkpoint_cuts import capture_cuts, restore_cuts
+from tissuesim.io.checkpoint_fingerprint import FIX as _FIX
+from tissuesim.io.checkpoint_fingerprint import check_fingerprint as _check_fingerprint
+from tissuesim.io.checkpoint_fingerprint import fingerprint, scene_hash
 from tissuesim.io.interrupts import deferred_interrupts
 
 __all__ = [
     "CHECKPOINT",
     "HISTORY",
+    "FORMAT",
     "fingerprint",
     "refuse_unsupported",
+    "scene_hash",
     "unsupported",
     "save_simulation",
     "load_simulation",
@@ -53,19 +66,19 @@ __all__ = [
 
 CHECKPOINT = "checkpoint.npz"
 HISTORY = "checkpoint_history.jsonl"
-FORMAT = 1
-_FIX = "run without --resume to start afresh, or resume with the original scene"
+#: the checkpoint's layout: 2 keeps cut and torn bodies (1: before, never written for them)
+FORMAT = 2
+#: the layouts this version reads (``restore_cuts`` refuses a format 1 checkpoint for a run
+#: that cuts or tears in one line)
+READS = (1, 2)
 
 
 def unsupported(sim) -> str | None:
-    """What of ``sim`` a checkpoint cannot carry, or None: a tissue (its tearing and cuts), a
-    blade or tearing of a body, a body cut already (each changes the model's topology, which a
-    checkpoint does not carry)."""
+    """What of ``sim`` a checkpoint cannot carry, or None: a tissue (its frames rebuilt after
+    its tearing and cuts, its attachments to the organs). Cut and torn FEM bodies it carries
+    (``io/checkpoint_cuts.py``)."""
     if sim.tissue is not None:
         return "a tissue (its tearing and cuts change the model's topology"
-    cut = [b.name for b in sim.bodies.values() if getattr(b, "cut_state", None) is not None]
-    if sim.organ_cuts or sim.organ_tears or cut:
-        return "a body that is cut or tears (that changes the model's topology"
     return None
 
 
@@ -77,81 +90,6 @@ def refuse_unsupported(sim) -> None:
             f"resume and Simulation.save/load do not support {what}, which a checkpoint does "
             "not carry); rerun the scene from the start"
         )
-
-
-# -- the fingerprint of the set-up ------------------------------------------------------------
-def _digest(*arrays) -> str:
-    h = hashlib.sha256()
-    for a in arrays:
-        a = np.ascontiguousarray(a)
-        h.update(str((a.dtype.str, a.shape)).encode())
-        h.update(a.tobytes())
-    return h.hexdigest()[:16]
-
-
-def _scheme(sim) -> str:
-    """The time scheme as set up: integrator and time step, or the phases (whose current
-    ones change as the run goes), and Newmark's parameters where Newmark runs."""
-    schedule = getattr(sim, "schedule", None)
-    if schedule is None:
-        text = f"{sim.integrator}, time_step {sim.time_step!r} s"
-    else:
-        phases = [(p.steps, p.time_step, p.integrator) for p in schedule.phases]
-        text = f"{sim._base_integrator}, phases {phases}"
-    uses = [sim.integrator] if schedule is None else [p.integrator for p in schedule.phases]
-    if "newmark" in uses or sim.integrator == "newmark":
-        text += f", newmark {tuple(sim.newmark)}"
-    return text
-
-
-def fingerprint(sim, scene: str | None = None) -> dict[str, str]:
-    """Readable parts of the set-up a checkpoint must match (one per setting group and body);
-    ``scene``: the scene file's hash, when run from one."""
-    parts = {
-        "simulation settings": (
-            f"{_scheme(sim)}, start_time {sim.start_time!r} s, "
-            f"max_step_halvings {sim.max_step_halvings}, "
-            f"gravity {[g.tolist() for g in sim.gravity]}"
-        ),
-        "newton options": json.dumps(asdict(sim.newton), sort_keys=True),
-        "bodies": ", ".join(sim.bodies),
-    }
-    for name, b in sim.bodies.items():
-        material = repr(b.model.material) if b.model is not None else ""
-        if b.kind == "fem":
-            m = b.model
-            data = _digest(b.mesh.points, b.mesh.cells, np.asarray(m.density, float))
-            what = f"{b.mesh.n_points} points, {b.mesh.n_cells} cells, {m.mass_kind} mass"
-        elif b.kind == "frames":
-            data = _digest(b.config, b.model.samples.points, b.model.samples.volumes)
-            what = f"{b.model.n_frames} frames, {b.model.samples.n} points"
-        else:
-            data, what = _digest(b.samples.points), f"{b.samples.n} points"
-        parts[f"body {name!r}"] = f"{b.kind}: {what}, {material}, data {data}"
-    if sim.contact is not None:
-        parts["contact"] = repr(sim.contact)
-    for ob in sim.obstacles:
-        parts[f"obstacle {ob.name!r}"] = f"surface {_digest(ob.rest, ob.triangles)}"
-    if scene:
-        parts["scene file (all but [run])"] = scene
-    return parts
-
-
-def _check_fingerprint(saved: dict, now: dict, path: Path) -> None:
-    for key in sorted(set(saved) | set(now)):
-        if key.startswith("scene file") and (key not in saved or key not in now):
-            continue  # a run from a scene file resumed from Python, or the other way round
-        if saved.get(key) != now.get(key):
-            old = _clip(saved.get(key, "none")) if key in saved else "absent"
-            new = _clip(now.get(key, "none")) if key in now else "absent"
-            raise InputError(
-                f"{path} was written for a different scene; {key}: checkpoint {old}, now {new}; "
-                f"{_FIX}"
-            )
-
-
-def _clip(text: str, n: int = 120) -> str:
-    return text if len(text) <= n else text[: n - 3] + "..."
 
 
 # -- history: one JSON line per StepRecord ----------------------------------------------------
@@ -329,6 +267,7 @@ def capture(sim) -> tuple[dict, dict[str, np.ndarray]]:
                 arrays[f"driven.{ob.name}.{which}.start"] = motion.start
                 arrays[f"driven.{ob.name}.{which}.target"] = motion.target
     meta["driven"] = driven
+    meta["cuts"] = capture_cuts(sim, arrays)  # cut and torn bodies, blades, cracks
     return meta, arrays
 
 
@@ -345,6 +284,7 @@ def restore(sim, meta: dict, arrays, history: list, path: Path) -> None:
         for body in sim.bodies.values():
             if body.kind == "fem":
                 body.release_graspers(start + 1e-9 * sim.time_step)
+    restore_cuts(sim, meta.get("cuts"), arrays, path, _FIX)  # before the system is built
     s = sim.system
     x, v = np.array(arrays["x"]), np.array(arrays["v"])
     if x.shape != sim.state.x.shape or v.shape != sim.state.v.shape:
@@ -371,6 +311,7 @@ def restore(sim, meta: dict, arrays, history: list, path: Path) -> None:
             )
     contact = s.contact
     if contact is not None:
+        contact.time = sim._state.time  # as a step leaves it (and a rebuild carries it over)
         contact.set_stiffness(meta["kappa"])
         if meta["adaptive"] is not None and contact.adaptive is not None:
             contact.adaptive = AdaptiveStiffness(**meta["adaptive"])
@@ -419,13 +360,20 @@ def _read_npz(path: Path) -> tuple[dict, dict[str, np.ndarray]]:
         with np.load(path, allow_pickle=False) as data:
             arrays = {k: data[k] for k in data.files}
         meta = json.loads(str(arrays.pop("__meta__")))
-        if not isinstance(meta, dict) or meta.get("format") != FORMAT:
-            raise ValueError("unknown format")
+        if not isinstance(meta, dict) or "format" not in meta:
+            raise ValueError("no format")
     except Exception as exc:  # zip, npy or JSON errors: a torn or foreign file
         raise InputError(
             f"{path} is not a readable tissuesim checkpoint ({type(exc).__name__}); it may be "
             "damaged: run without --resume to start afresh"
         ) from None
+    if meta["format"] not in READS:
+        raise InputError(
+            f"{path} is a checkpoint of format {meta['format']!r} (tissuesim "
+            f"{meta.get('tissuesim_version', '?')}); this tissuesim reads formats "
+            f"{', '.join(map(str, READS))}: run without --resume to start afresh, or resume "
+            "with the version that wrote it"
+        )
     return meta, arrays
 
 
@@ -526,17 +474,6 @@ class RunCheckpoint:
             run=run,
         )
         _write_npz(self.path, meta, arrays)
-
-
-def scene_hash(path: str | os.PathLike[str]) -> str:
-    """The hash of a scene file's tables except [run] (steps, every, render, field may change
-    between a run and its resume)."""
-    import tomllib
-
-    data = tomllib.loads(Path(path).read_text(encoding="utf-8"))
-    data.pop("run", None)
-    text = json.dumps(data, sort_keys=True, default=str)
-    return hashlib.sha256(text.encode()).hexdigest()[:16]
 
 
 def completed_steps(directory: str | os.PathLike[str]) -> int | None:

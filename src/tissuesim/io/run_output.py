@@ -125,9 +125,11 @@ class RunOutput:
             self.visual_series = [  # surfaces carried by FEM bodies, written beside them
                 VisualSeries(sim.bodies[v.body], v) for v in sim.visual_surfaces.values()
             ]
+            # once (~1 s for meshes of 1e5 cells), of the set-up as the run started: a resumed
+            # run's is its uninterrupted run's (a cut body's mesh as set up, no solver yet)
+            self.description = sim.describe()
             if self.resume:
                 self._restore()  # reads and checks the checkpoint; writes nothing
-            self.description = sim.describe()  # once: ~1 s for meshes of 1e5 cells
         except BaseException as exc:
             if not self.resume:  # a resume that fails here leaves the directory as it was
                 self._fail(exc)
