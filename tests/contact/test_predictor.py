@@ -343,3 +343,31 @@ def test_redundant_pairs_stop_when_the_motion_has_settled():
     assert np.max(np.abs(out.values[:, 0])) <= 1e-4 * 1e-4
     # the load the rigid modes need: A^T lambda = C^-1 (the sink): 0.1 N of heave, no tilt
     assert np.allclose(A.T @ out.force[:, 0], [0.1, 0.0, 0.0], atol=1e-5)
+
+
+def test_the_last_forces_carried_into_the_free_motion_shorten_its_sweep(monkeypatch):
+    """A probe held pressed in a block: the free motion under the last step's contact forces
+    ends near the step's end (a short sweep, a small correction) and the state is the one
+    predicted from the plain free motion, to the linearisation's accuracy."""
+    from tissuesim.time import contact_step
+
+    depths = [1e-4, 4e-4, 7e-4, 7e-4, 7e-4, 7e-4]
+
+    def run(carry: bool):
+        if not carry:
+            monkeypatch.setattr(contact_step, "_carried", lambda *args: None)
+        sim = pressed_block(0.3, "interactive")
+        record, forces = _press(sim, depths)
+        report = dict(sim.system.contact.prediction_report)
+        monkeypatch.undo()
+        return sim, forces, report
+
+    carried, carried_forces, with_report = run(True)
+    plain, plain_forces, without_report = run(False)
+    assert with_report["carried"] and not without_report["carried"]
+    assert with_report["outcome"] == without_report["outcome"] == "certified"
+    assert with_report["correction_m"] < 0.2 * without_report["correction_m"]
+    moved = np.max(np.abs(plain.state.x - plain.system.rest_config()))
+    assert np.max(np.abs(carried.state.x - plain.state.x)) <= 1e-3 * moved
+    f, g = carried_forces[-1], plain_forces[-1]
+    assert np.linalg.norm(f - g) <= 5e-3 * np.linalg.norm(g)

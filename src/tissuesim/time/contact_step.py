@@ -27,6 +27,7 @@ import time
 
 import numpy as np
 
+from tissuesim.energies.loads import ExternalForce
 from tissuesim.solve.newton import minimize
 from tissuesim.time.implicit import choose_start
 from tissuesim.time.state import State, StepOutcome
@@ -156,39 +157,68 @@ def interactive_step(
     predictor.columns = 0
     predictor.smoothing = 0.5 * contact.settings.eps_v * h
     clock = predictor.clock
-    kinds = ["newton"] if predictor.refresh else ["lagged", "newton"]
-    for kind in kinds:
+    # the free motion under the last step's contact forces (held as dead loads): it ends
+    # near where this step does, a short sweep and a small, more nearly linear correction
+    carried = _carried(system, predictor, state.time)
+    free_energies = body_energies
+    if carried is not None:
+        free_energies = [
+            [*energies, ExternalForce(carried[where])]
+            for energies, where in zip(body_energies, system.tangent_slices, strict=True)
+        ]
+    # tries: on the kept factor's matrix, with the carried forces, then without (a landing
+    # step's forces change wholesale: carried, they can lead the prediction through a
+    # surface), then Newton's free motion (an organ swinging under gravity folded its own
+    # surface in the lagged one) likewise; each from the last step's multipliers
+    tries = [(kind, carry) for kind in ("lagged", "newton") for carry in (carried, None)]
+    tries = [(k, c) for k, c in tries if (c is None or carried is not None)]
+    tries = [(k, c) for k, c in tries if not (k == "lagged" and predictor.refresh)]
+    warm = predictor.warm_start
+    for kind, carry in tries:
+        predictor.warm_start = warm
+        energies = free_energies if carry is not None else body_energies
         start = time.perf_counter()
-        free = None
         if kind == "lagged":
-            free = lagged_free_motion(system, state, h, solver, dynamic, body_energies, t1)
-        if free is None:
-            kind = "newton"
+            free = lagged_free_motion(system, state, h, solver, dynamic, energies, t1)
+            if free is None:
+                clock["free_motion"] += time.perf_counter() - start
+                continue
+        else:
             free_budget = dict(budget or {})
             free_budget["iterations"] = min(
                 free_budget.get("iterations", FREE_ITERATIONS), FREE_ITERATIONS
             )
             free = free_motion(
-                system, state, h, solver, options, dynamic, body_energies, t1, free_budget
+                system, state, h, solver, options, dynamic, energies, t1, free_budget
             )
             predictor.refresh = False
         x_free, record = free
         clock["free_motion"] += time.perf_counter() - start
-        report.update(free_motion=kind, free_iterations=record.iterations)
+        report.update(
+            free_motion=kind, free_iterations=record.iterations, carried=carry is not None
+        )
         if not (record.converged or record.budget_stop):
             report["outcome"] = f"fell back to the barrier: free motion failed ({record.reason})"
+            predictor.carry(t1, None)
             return None
         prediction, x, certified = _predict_and_certify(
-            system, predictor, solver, state, x_free, y0, y1, t1, body_energies, report
+            system, predictor, solver, state, x_free, y0, y1, t1, body_energies, report, carry
         )
-        if certified or kind == "newton":
+        if certified:
             break
     report.update(_figures(prediction), columns_solved=predictor.columns, certificate=certified)
+    # how far the contact moved the bodies from the free motion (m): the sweep's excess
+    report["correction_m"] = float(np.max(np.abs(system.difference(x, x_free)), initial=0.0))
     report.update({f"{k}_s": v for k, v in clock.items()})
     if not certified:
         report["outcome"] = "fell back to the barrier: the prediction crosses a surface"
+        predictor.carry(t1, None)
         return None
     report["outcome"] = "certified"
+    if prediction.rows.n_pairs:
+        predictor.carry(t1, prediction.J.T @ prediction.force.reshape(-1))
+    else:
+        predictor.carry(t1, None)
     contact.predicted_forces = (x.copy(), prediction)
     if contact.moving:
         contact.obstacle_state = y1
@@ -263,8 +293,23 @@ def _refined(system, predictor, prediction, body_energies, gap, soft=None):
     return prediction, passes
 
 
+def _carried(system, predictor, t: float) -> np.ndarray | None:
+    """The last step's contact forces for this step's free motion (``ContactPredictor.carry``),
+    where every body's configuration is its DOFs (FEM: a dead load on positions), else None."""
+    force = predictor.carried_force(t)
+    # not after a step whose refinement ran out (a landing's impact: carried as a dead load
+    # it threw the organ off the table, and the prediction crossed a surface)
+    if force is None or len(force) != system.n_dofs or predictor.refresh:
+        return None
+    same = all(
+        (c.stop - c.start) == (d.stop - d.start)
+        for c, d in zip(system.config_slices, system.tangent_slices, strict=True)
+    )
+    return force if same else None
+
+
 def _predict_and_certify(
-    system, predictor, solver, state, x_free, y0, y1, t1, body_energies, report
+    system, predictor, solver, state, x_free, y0, y1, t1, body_energies, report, carried=None
 ):
     """(prediction, its configuration with prescribed values, the certificate or "") for the
     free motion x_free: detect, gaps linearised again at the first prediction, the barrier's
@@ -275,13 +320,14 @@ def _predict_and_certify(
     also = None
     for redetections in range(1 + REDETECT):  # noqa: B007 (reported)
         prediction = predictor.predict(
-            system, solver, state.x, x_free, y0, y1, gap, also, body_energies
+            system, solver, state.x, x_free, y0, y1, gap, also, body_energies, carried=carried
         )
         for _ in range(RELINEARIZE):  # the gaps linearised again where the step ends
             at = prediction.x  # (corrected by _barrier_gaps: one back-solve less)
             prediction = predictor.predict(
-                system, solver, state.x, x_free, y0, y1, gap, also, body_energies, at, False
-            )
+                system, solver, state.x, x_free, y0, y1, gap, also, body_energies, at, False,
+                carried,
+            )  # fmt: skip
         prediction, target, soft = _barrier_gaps(contact, predictor, system, prediction, MIN_GAP)
         prediction, refinements = _refined(
             system, predictor, prediction, body_energies, target, soft

@@ -111,6 +111,9 @@ class ContactPredictor:
         # friction smoothed as the barrier's (eps_v h / 2, set per step by the caller): exact
         # Coulomb stuck where IPC's friction slips a little, 2-7 % off its forces in a stroke
         self.smoothing = 0.0
+        # the last accepted step's contact forces (time, J^T lambda) and H^-1 of them
+        self._carried: tuple[float, np.ndarray] | None = None
+        self._shift = None
 
     def predict(
         self,
@@ -125,6 +128,7 @@ class ContactPredictor:
         energies=None,
         at: np.ndarray | None = None,
         correct: bool = True,
+        carried: np.ndarray | None = None,
     ) -> Prediction:
         """The prediction for the step x0 -> x_free (obstacles y0 -> y1, flat, or None where
         they do not move); ``target_gap`` (m, scalar or (m,) for the pairs of the last
@@ -133,16 +137,28 @@ class ContactPredictor:
         surface the free motion did not reach); ``energies``: the step's body energies (for a
         Hessian when the solver holds no factor); ``at``: a configuration (obstacles at y1)
         where the gaps are linearised (``rows.detect_rows``), default the step's start;
-        ``correct`` False: the forces alone (``correct`` later gives x)."""
+        ``correct`` False: the forces alone (``correct`` later gives x); ``carried``: the
+        forces (over the DOFs) the free motion x_free was solved under (the last step's
+        contact forces, ``carried_force``): the prediction is then made from x_free - H^-1
+        carried (the free motion without them, to first order), its pairs from the sweep to
+        x_free (near where the step ends: a resting organ's free motion springs back through
+        the table by millimetres, and its sweep met 4x the candidates)."""
         contact = system.contact
         start = time.perf_counter()
+        solve, token = _factor_solve(
+            solver, lambda: _hessian(system, x_free, energies), self.own_factor
+        )
+        sweep_to = x_free
+        if carried is not None:  # the free motion carried the last forces: take them off
+            x_free = system.retract(x_free, -self._carried_shift(solve, token, x_free, carried))
         V0 = contact.vertices(x0, obstacle=y0)
         V1 = contact.vertices(x_free, obstacle=y1)
         keep = float(np.max(target_gap)) if np.ndim(target_gap) else float(target_gap)
         V2 = None if also is None else contact.vertices(also, obstacle=y1)
         V_at = None if at is None else contact.vertices(at, obstacle=y1)
-        ends = [np.asfortranarray(V1)] + ([] if V2 is None else [np.asfortranarray(V2)])
-        key = (x0.tobytes(), x_free.tobytes(), None if also is None else also.tobytes())
+        V_to = V1 if carried is None else contact.vertices(sweep_to, obstacle=y1)
+        ends = [np.asfortranarray(V_to)] + ([] if V2 is None else [np.asfortranarray(V2)])
+        key = (x0.tobytes(), sweep_to.tobytes(), None if also is None else also.tobytes())
         if self._candidates is None or self._candidates[0] != key:
             parts = sweep_candidates(contact, np.asfortranarray(V0), ends, keep + contact.dhat)
             self._candidates = (key, parts)
@@ -164,9 +180,6 @@ class ContactPredictor:
         self.clock["detect"] += time.perf_counter() - start
         start = time.perf_counter()
         dofs = np.unique(J.indices)
-        solve, token = _factor_solve(
-            solver, lambda: _hessian(system, x_free, energies), self.own_factor
-        )
         G = self.compliance.block(solve, token, system.n_dofs, dofs)
         self.columns += self.compliance.solved_columns
         if hasattr(solver, "held_columns"):  # a fresh factor solves the block again
@@ -180,6 +193,36 @@ class ContactPredictor:
             free=rows.free_values(), forces={}, normal_forces={},
         )  # fmt: skip
         return self._solve(system, shell, target_gap, correct=correct)
+
+    @property
+    def warm_start(self) -> dict:
+        """The multipliers the next contact solve starts from, per pair (a copy)."""
+        return dict(self._warm)
+
+    @warm_start.setter
+    def warm_start(self, warm: dict) -> None:
+        self._warm = dict(warm)
+
+    def _carried_shift(self, solve, token, x_free: np.ndarray, carried: np.ndarray):
+        """H^-1 carried through the factor (one back-solve, kept for this free motion)."""
+        key = (token, x_free.tobytes())
+        if self._shift is None or self._shift[0] != key or token is None:
+            start = time.perf_counter()
+            self._shift = (key, np.asarray(solve(carried)).reshape(-1))
+            self.clock["correction"] += time.perf_counter() - start
+        return self._shift[1]
+
+    def carry(self, time_: float, force: np.ndarray | None) -> None:
+        """Keep an accepted step's contact forces (over the DOFs, at its end time) for the
+        next step's free motion (``carried_force``); None forgets them."""
+        self._carried = None if force is None else (float(time_), force)
+
+    def carried_force(self, time_: float) -> np.ndarray | None:
+        """The forces kept by ``carry`` at ``time_`` (the step's start), or None."""
+        # the simulation snaps its clock to whole steps (0.7999999999999999 -> 0.8)
+        if self._carried is None or abs(self._carried[0] - time_) > 1e-9 * max(1.0, abs(time_)):
+            return None
+        return self._carried[1]
 
     def solve_again(self, system, target_gap, soft=None, correct: bool = True) -> Prediction:
         """The last prediction's pairs and compliance with other target gaps ((m,) or a
