@@ -335,3 +335,11 @@ def test_a_notch_along_mesh_faces_reports_the_faces_it_opened():
     report = sim.cut_body(notch, name="notch")
     assert report["cells_cut"] == 0 and report["pieces"] == 1 and report["new_nodes"] == 3
     assert report["area_m2"] == pytest.approx(0.2 * 0.1, rel=1e-12)
+
+
+def test_a_cut_body_keeps_its_rayleigh_damping():
+    sim = cantilever()
+    sim.set_damping(mass=2.0, stiffness=1e-3)
+    sim.step()
+    sim.cut_body(through(0.47))
+    assert sim.bodies["body"].model.damping == (2.0, 1e-3)

@@ -367,6 +367,7 @@ class FemBody:
             renew=None if same is None else (old.pattern, old.mesh.cells, same),
         )
         model.loads = list(old.loads)  # nodal loads and tractions keep each node's first copy
+        model.damping = old.damping  # Rayleigh's, per body (it was lost at the first cut)
 
         material = cut.material_nodes  # a virtual node is held by nothing
 
