@@ -28,19 +28,27 @@ def overlap_pairs(lo_a, hi_a, lo_b, hi_b, same, a_ids, b_ids, group, enabled, ou
     bodies' pair enabled (a primitive's vertices are of one body), no shared vertex (a_ids
     (na, ka), b_ids (nb, kb): their vertices) and some vertex pair of the two whose groups
     are enabled. ``same``: a is b, each unordered pair once as (i < j). b's boxes go into a
-    uniform grid of cells the size of their median extent (those over LARGE cells along an
-    axis are tried against every a); each a tries the items of the cells its box covers, a
-    pair counted in the one cell that holds the lower corner of the boxes' intersection.
+    uniform grid of cells the size of the larger of a's and b's median extents (b's items
+    over LARGE cells along an axis are tried against every a instead); each a tries the
+    items of the cells its box covers, a pair counted in the one cell that holds the lower
+    corner of the boxes' intersection.
     Returns the count; writes the pairs to ``out`` while it has room (call again with room
     for the count when it had not)."""
     na, nb, dim = lo_a.shape[0], lo_b.shape[0], lo_a.shape[1]
     count = 0
     if na == 0 or nb == 0:
         return count
-    extent = np.empty(nb)
+    extent = np.zeros(nb)
     for j in range(nb):
-        extent[j] = np.max(hi_b[j] - lo_b[j])
-    size = max(np.median(extent), 1e-300)
+        for k in range(dim):
+            extent[j] = max(extent[j], hi_b[j, k] - lo_b[j, k])
+    # cells of the larger items' size: a query box then covers a few cells (a 7 mm organ
+    # edge in a grid of a jaw's 1.5 mm faces covered 125)
+    queried = np.zeros(na)
+    for i in range(na):
+        for k in range(dim):
+            queried[i] = max(queried[i], hi_a[i, k] - lo_a[i, k])
+    size = max(np.median(extent), np.median(queried), 1e-300)
     large = extent > LARGE * size
     origin = np.empty(dim)
     top = np.empty(dim)
@@ -61,6 +69,7 @@ def overlap_pairs(lo_a, hi_a, lo_b, hi_b, same, a_ids, b_ids, group, enabled, ou
     cells = shape[0] * shape[1] * shape[2]
     # the grid as compressed rows: cell -> b items
     start = np.zeros(cells + 1, dtype=np.int64)
+    r = np.zeros((3, 2), dtype=np.int64)  # an item's cell range per axis (unused axes 0)
     for pass_ in range(2):
         if pass_ == 1:
             for c in range(cells):
@@ -70,7 +79,6 @@ def overlap_pairs(lo_a, hi_a, lo_b, hi_b, same, a_ids, b_ids, group, enabled, ou
         for j in range(nb):
             if large[j]:
                 continue
-            r = np.zeros((3, 2), dtype=np.int64)
             for k in range(dim):
                 r[k, 0], r[k, 1] = _cell_range(lo_b[j, k], hi_b[j, k], origin, size, shape, k)
             for x in range(r[0, 0], r[0, 1] + 1):
@@ -84,7 +92,6 @@ def overlap_pairs(lo_a, hi_a, lo_b, hi_b, same, a_ids, b_ids, group, enabled, ou
                             fill[c] += 1
     large_items = np.flatnonzero(large)
     room = out.shape[0]
-    r = np.zeros((3, 2), dtype=np.int64)
     for i in range(na):
         ga = group[a_ids[i, 0]]
         outside = False
@@ -154,3 +161,21 @@ def _may_collide(a_ids, b_ids, i, j, group, enabled):
             if enabled[group[u], group[w]]:
                 allowed = True
     return allowed
+
+
+@njit(cache=True, nogil=True)
+def primitive_boxes(lo, hi, ids):
+    """(lo, hi) of each primitive (row of vertex ids): the union of its vertices' boxes."""
+    n, k, dim = ids.shape[0], ids.shape[1], lo.shape[1]
+    out_lo = np.empty((n, dim))
+    out_hi = np.empty((n, dim))
+    for i in range(n):
+        for c in range(dim):
+            a = lo[ids[i, 0], c]
+            b = hi[ids[i, 0], c]
+            for p in range(1, k):
+                a = min(a, lo[ids[i, p], c])
+                b = max(b, hi[ids[i, p], c])
+            out_lo[i, c] = a
+            out_hi[i, c] = b
+    return out_lo, out_hi

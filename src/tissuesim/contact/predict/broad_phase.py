@@ -30,39 +30,52 @@ __all__ = ["compiled_candidates"]
 def _kernel():
     """The compiled pair search (``box_grid.py``: numba, cached on disk), or None."""
     try:
-        from tissuesim.contact.predict.box_grid import overlap_pairs
+        from tissuesim.contact.predict.box_grid import overlap_pairs, primitive_boxes
     except ImportError:  # no numba
         return None
-    return overlap_pairs
+    return overlap_pairs, primitive_boxes
 
 
 def _pairs(kernel, lo_a, hi_a, lo_b, hi_b, same, a_ids, b_ids, group, enabled) -> np.ndarray:
-    """(k, 2) int64 pairs of ``box_grid.overlap_pairs``, in its order (the same inputs give
-    the same order)."""
+    """(k, 2) int64 pairs of ``box_grid.overlap_pairs``, body by body: each enabled pair of
+    bodies (or a body and an obstacle) in its own grid, sized to the second one's items (a
+    probe's 1 mm faces and an organ's 10 mm ones in one grid cost the palpation 12 ms a
+    step). The same inputs give the same pairs in the same order."""
     if not len(lo_a) or not len(lo_b):
         return np.zeros((0, 2), dtype=np.int64)
-    args = (lo_a, hi_a, lo_b, hi_b, same, a_ids, b_ids, group, enabled)
-    out = np.empty((8 * (len(lo_a) + len(lo_b)), 2), dtype=np.int64)
-    count = kernel(*args, out)
-    if count > len(out):  # more than guessed: again with room for all
-        out = np.empty((count, 2), dtype=np.int64)
-        kernel(*args, out)
-    return out[:count]
+    ga, gb = group[a_ids[:, 0]], group[b_ids[:, 0]]
+    found = []
+    for i in np.unique(ga).tolist():
+        a = np.flatnonzero(ga == i)
+        for j in np.unique(gb).tolist():
+            if not enabled[i, j] or (same and j < i):
+                continue
+            b = np.flatnonzero(gb == j)
+            one = same and i == j  # a with itself: each pair once
+            args = (lo_a[a], hi_a[a], lo_b[b], hi_b[b], one, a_ids[a], b_ids[b], group, enabled)
+            out = np.empty((8 * (len(a) + len(b)), 2), dtype=np.int64)
+            count = kernel(*args, out)
+            if count > len(out):  # more than guessed: again with room for all
+                out = np.empty((count, 2), dtype=np.int64)
+                kernel(*args, out)
+            found.append(np.column_stack([a[out[:count, 0]], b[out[:count, 1]]]))
+    return np.vstack(found) if found else np.zeros((0, 2), dtype=np.int64)
 
 
 def compiled_candidates(contact, V0: np.ndarray, V1: np.ndarray, inflation: float):
     """``rows._candidates``' answer, (kind, stencils) parts: kind 0 a point and a triangle
     [p, a, b, c] (3D), 1 two edges [a, b, c, d] (3D), 2 a point and an edge [p, a, b, -1]
     (2D); None when this search does not apply (no numba; a filter beyond the pair table)."""
-    kernel = _kernel()
-    if kernel is None or getattr(contact, "rest_filtered", False):
+    kernels = _kernel()
+    if kernels is None or getattr(contact, "rest_filtered", False):
         return None
+    kernel, primitive_boxes = kernels
     V0 = np.asarray(V0, dtype=float)
     V1 = np.asarray(V1, dtype=float)
     # ipctk's conservative inflation: one ulp outward (boxes of two faces that share a
     # coordinate computed two ways touch)
-    lo = np.nextafter(np.minimum(V0, V1) - inflation, -np.inf)
-    hi = np.nextafter(np.maximum(V0, V1) + inflation, np.inf)
+    lo = np.ascontiguousarray(np.nextafter(np.minimum(V0, V1) - inflation, -np.inf))
+    hi = np.ascontiguousarray(np.nextafter(np.maximum(V0, V1) + inflation, np.inf))
     E = np.asarray(contact.mesh.edges, dtype=np.int64)
     F = np.asarray(contact.mesh.faces, dtype=np.int64)
     group = np.asarray(contact.group, dtype=np.int64)
@@ -70,7 +83,7 @@ def compiled_candidates(contact, V0: np.ndarray, V1: np.ndarray, inflation: floa
     points = np.arange(len(V0), dtype=np.int64)[:, None]
 
     def boxes(ids):
-        return lo[ids].min(axis=1), hi[ids].max(axis=1)
+        return primitive_boxes(lo, hi, ids)
 
     parts = []
     if V0.shape[1] == 3:
