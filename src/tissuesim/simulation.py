@@ -51,10 +51,11 @@ from tissuesim.simulation_setup import SetupCalls
 from tissuesim.simulation_stepping import Stepping
 from tissuesim.solve.linear import make_linear_solver
 from tissuesim.solve.newton import NewtonOptions
+from tissuesim.time.adaptive import AdaptiveStepping
 from tissuesim.time.grid import check_time_resolution
 from tissuesim.time.newmark import check_newmark
 from tissuesim.time.phases import Phase, Schedule
-from tissuesim.time.retry import QUASISTATIC_ADVICE, advance, validate_stepping
+from tissuesim.time.retry import validate_stepping
 from tissuesim.time.state import State
 
 if TYPE_CHECKING:  # frames and the system pull in scipy.spatial: imported when first used
@@ -82,6 +83,7 @@ class Simulation(BodyCalls, SetupCalls, StepChecks, BodyResults, Stepping):
     gravity: (d,) m/s^2 on every body, or None. newton: NewtonOptions. max_step_halvings: how
     often a failing step is split in two before giving up. backend: "auto", "numba" or "numpy".
     phases: a run in phases (``set_phases``), each with its steps, time step and integrator.
+    adaptive: FEBio's adaptive steps (``set_adaptive``; ``time_step`` is then the first).
     """
 
     def __init__(
@@ -101,6 +103,7 @@ class Simulation(BodyCalls, SetupCalls, StepChecks, BodyResults, Stepping):
         backend: str = "auto",
         phases: Sequence[Phase | dict] | None = None,
         newmark: Sequence[float] = (0.25, 0.5),
+        adaptive: AdaptiveStepping | dict | None = None,
     ) -> None:
         self.integrator = validate.choice(integrator, "integrator", INTEGRATORS)
         self.newmark = check_newmark(newmark)
@@ -132,6 +135,9 @@ class Simulation(BodyCalls, SetupCalls, StepChecks, BodyResults, Stepping):
         self.organ_tears: list = []  # FEM bodies that tear (bodies/organ_tear.py)
         self.visual_surfaces: dict = {}  # name -> bodies/visual_surface.py VisualSurface
         self.schedule: Schedule | None = None  # time/phases.py: a run in phases
+        self.adaptive: AdaptiveStepping | None = None  # time/adaptive.py: FEBio's steps
+        self._controller = None  # the adaptive steps' TimeStepController now
+        self.set_adaptive(adaptive)
         if phases is not None:
             self.set_phases(phases)
         if self.newton.linear_solver != "auto" and not self.explicit:
@@ -422,17 +428,7 @@ class Simulation(BodyCalls, SetupCalls, StepChecks, BodyResults, Stepping):
         t0 = self.time
         explicit_gradient: dict = {}
         step_fn, solver = self._step_function(budget, explicit_gradient, by_contact)
-        self._state, records, substeps = advance(
-            step_fn,
-            s,
-            self._state,
-            self.time_step,
-            solver,
-            self.newton,
-            self.max_step_halvings,
-            self._end_time(),
-            QUASISTATIC_ADVICE if self.integrator == "quasistatic" else None,
-        )
+        self._state, records, substeps, adaptive = self._advance(step_fn, s, solver)
         if records:
             self._last_gradient = records[-1].gradient
         elif "gradient" in explicit_gradient:
@@ -445,6 +441,8 @@ class Simulation(BodyCalls, SetupCalls, StepChecks, BodyResults, Stepping):
         if hasattr(solver, "take_stats"):
             extra["linear"] = solver.take_stats()
         extra["early_stop"] = any(getattr(r, "budget_stop", False) for r in records)
+        if adaptive is not None:  # the step's length, retries and whether it hit a must point
+            extra["adaptive"] = adaptive
         if s.contact is not None:
             extra["contact"] = self._contact_report(s.contact, self._state.x, extra["forces"])
         if self.tissue is not None:
@@ -523,6 +521,7 @@ class Simulation(BodyCalls, SetupCalls, StepChecks, BodyResults, Stepping):
         return {
             "integrator": self.integrator,
             "time_step": self.time_step,
+            "adaptive": None if self.adaptive is None else asdict(self.adaptive),
             "start_time": self.start_time,
             "gravity": [g.tolist() for g in self.gravity],
             "bodies": {name: b.describe() for name, b in self.bodies.items()},

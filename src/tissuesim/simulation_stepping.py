@@ -1,16 +1,25 @@
 """How a Simulation steps (a mixin of ``simulation.Simulation``): the step function of its
 integrator (explicit, Backward Euler, Newmark, quasistatic, pseudo-time), the phases of a run
-(``time/phases.py``) and the end time of the next step."""
+(``time/phases.py``), the end time of the next step, and adaptive steps (FEBio's rule,
+``time/adaptive.py``: one controller per phase, or one for a run without phases)."""
 
 from __future__ import annotations
 
 import functools
+import math
 from collections.abc import Sequence
 
 import numpy as np
 
 from tissuesim.errors import InputError
+from tissuesim.time.adaptive import (
+    AdaptiveStepping,
+    TimeStepController,
+    advance_adaptive,
+    check_adaptive,
+)
 from tissuesim.time.phases import Phase, Schedule
+from tissuesim.time.retry import QUASISTATIC_ADVICE, advance
 
 __all__ = ["Stepping"]
 
@@ -88,9 +97,12 @@ class Stepping:
             self._state = replace(state, a=a0 if np.any(a0) else None)
 
     def _end_time(self) -> float:
-        """start + (k + 1) h for a state at start + k h (no running sum: ten steps of 0.1 end
+        """The end of the next step: an adaptive step's from its controller; otherwise
+        start + (k + 1) h for a state at start + k h (no running sum: ten steps of 0.1 end
         at 1.0); a state off that grid (set by hand, or a changed time_step) steps to t + h.
         In phases, the grid is the phase's and a step ends at its phase's end at the latest."""
+        if self._controller is not None:
+            return self._controller.t_end
         if self.schedule is not None:
             return self.schedule.end_time(self.time)
         h, t = self.time_step, self.time
@@ -114,9 +126,70 @@ class Stepping:
             self._enter_phase()
 
     def _enter_phase(self) -> None:
-        """The time step and integrator of the phase the next step belongs to."""
-        if self.schedule is None:
+        """The time step and integrator of the phase the next step belongs to; with adaptive
+        steps, its controller (a new one at each phase's start) and the step it plans."""
+        settings, start, end, dt0 = self.adaptive, self.start_time, math.inf, None
+        if self.schedule is not None:
+            phase, start, end = self.schedule.at(self.time)
+            self.time_step = dt0 = phase.time_step
+            self.integrator = phase.integrator or self._base_integrator
+            settings = phase.adaptive or self.adaptive
+        if settings is None:
+            self._controller = None
             return
-        phase, _, _ = self.schedule.at(self.time)
-        self.time_step = phase.time_step
-        self.integrator = phase.integrator or self._base_integrator
+        c = self._controller
+        if c is None or (c.settings, c.start, c.end) != (settings, start, end):
+            if dt0 is None:  # no phases: the first step is the time step set (kept from then)
+                self._dt0 = self._dt0 or self.time_step
+                dt0 = self._dt0
+            c = self._controller = TimeStepController(settings, dt0, self.time, end)
+            c.start = start  # the stretch it steps (the controller plans from self.time)
+            pending = getattr(self, "_pending_stepper", None)
+            if pending is not None and (pending["start"], pending["end"]) == (start, end):
+                c.set_state(pending)  # a resumed run: the controller where it was
+            self._pending_stepper = None
+        self.time_step = c.dt
+
+    def set_adaptive(self, adaptive: AdaptiveStepping | dict | None) -> None:
+        """Step adaptively as FEBio does (``time/adaptive.py``): ``AdaptiveStepping(dtmax=...,
+        dtmin=..., opt_iter=..., max_retries=..., dtmax_curve=..., must_points=...)`` or a dict
+        of those fields; None steps ``time_step`` again. It applies to a run without phases
+        (from ``time_step`` as the first step, with no end) and to every phase without its own
+        ``adaptive`` (over the phase's time, ending exactly at its end). Failed steps are cut
+        back as FEBio does instead of halved."""
+        if self.explicit and adaptive is not None:
+            raise InputError("adaptive steps need an implicit integrator, not 'explicit'")
+        self.adaptive = check_adaptive(adaptive)
+        self._controller = self._dt0 = None
+
+    def adaptive_end(self) -> float | None:
+        """Where an adaptive run in phases ends (the last phase's end; None: no such end)."""
+        s = self.schedule
+        if s is None or not any((p.adaptive or self.adaptive) for p in s.phases):
+            return None
+        return s.end
+
+    @property
+    def finished(self) -> bool:
+        """True when an adaptive run in phases has reached its end (``run`` stops there)."""
+        end = self.adaptive_end()
+        return end is not None and self.time >= end - 1e-12 * max(abs(end), self.time_step)
+
+    def _advance(self, step_fn, system, solver) -> tuple:
+        """One step (fixed: halved on failure; adaptive: FEBio's retries, then the next step
+        planned): (new state, Newton records, substeps, the adaptive step's report or None)."""
+        advice = QUASISTATIC_ADVICE if self.integrator == "quasistatic" else None
+        c = self._controller
+        if c is None:
+            state, records, substeps = advance(
+                step_fn, system, self._state, self.time_step, solver, self.newton,
+                self.max_step_halvings, self._end_time(), advice,
+            )  # fmt: skip
+            return state, records, substeps, None
+        state, records, retries, iterations = advance_adaptive(
+            step_fn, system, self._state, c, solver, self.newton
+        )
+        report = {"dt": c.dt, "retries": retries, "must_point": c.must_point}
+        c.accepted(state.time, iterations)
+        self.time_step = c.dt
+        return state, records, 1, report

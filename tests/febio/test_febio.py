@@ -26,6 +26,8 @@ def _run(scene, steps: int) -> np.ndarray:
     sim = scene.simulation
     for _ in range(steps):
         sim.step()
+        if sim.finished:  # an adaptive model's [run] steps is an upper bound
+            break
     return np.concatenate([sim.body_positions(name) for name in sim.bodies])
 
 

@@ -68,6 +68,9 @@ class FebModel:
     integrator_nodes: dict = field(default_factory=dict)
     #: one dict per <step> of a model of several (time_steps, step_size, analysis)
     phases: list = field(default_factory=list)
+    #: the <time_stepper> of the Control being read (febio/time_stepper.py), its plot_level
+    time_stepper: dict | None = None
+    plot_level: str | None = None
     #: the time window (t0, t1] of the <step> being read (None: the whole run)
     window: tuple[float, float] | None = None
     #: elements kept as notes: their attributes and children are not read (not refused)

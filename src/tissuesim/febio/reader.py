@@ -12,13 +12,14 @@ import os
 
 from tissuesim.febio.materials import MATERIAL_TYPES, UNCOUPLED, read_materials, read_mesh_data
 from tissuesim.febio.model import FebModel, Node, _floats, _ints, _once, _unsupported
+from tissuesim.febio.time_stepper import read_plot_level, read_time_stepper
 from tissuesim.febio.xml import parse_feb
 
 __all__ = ["read_feb", "MATERIAL_TYPES", "UNCOUPLED"]
 
 #: Control children that tune FEBio's own solver or its output (notes)
 CONTROL_NOTES = {
-    "time_stepper", "plot_level", "output_level", "plot_stride", "plot_range",
+    "output_level", "plot_stride", "plot_range",
     "plot_zero_state", "output_stride", "adaptor_re_solve", "title", "optimize_bw",
 }  # fmt: skip
 
@@ -60,6 +61,11 @@ def _read(path: str | os.PathLike[str]) -> FebModel:
     for load in loads:
         if load.curve is not None and load.curve not in model.curves:
             raise root.error(f"load curve {load.curve} is used but not defined in <LoadData>")
+    steppers = [p["time_stepper"] for p in model.phases] or [model.time_stepper]
+    for stepper in steppers:
+        number, node = (stepper or {}).get("curve", (None, None))
+        if number is not None and number not in model.curves:
+            raise node.error(f"load curve {number} is used but not defined in <LoadData>")
     _check_attributes(root, {id(n) for n in model.noted})
     return model
 
@@ -111,7 +117,8 @@ def _step(model: FebModel, section: Node) -> None:
         if len(steps) > 1:
             model.phases.append(
                 {"time_steps": model.time_steps, "step_size": model.step_size,
-                 "analysis": model.analysis, "newmark": model.newmark, "node": step}
+                 "analysis": model.analysis, "newmark": model.newmark, "node": step,
+                 "time_stepper": model.time_stepper, "plot_level": model.plot_level}
             )  # fmt: skip
             # the last step's conditions go on if the run is continued past its end
             model.window = (start, end if k < len(steps) - 1 else math.inf)
@@ -193,6 +200,7 @@ def _module(model: FebModel, node: Node) -> None:
 
 def _control(model: FebModel, node: Node) -> None:
     model.newmark_parameters = None  # FEBio makes each step's solver anew, with its defaults
+    model.time_stepper = model.plot_level = None  # and its time stepper (fixed steps if none)
     _once(node)
     for child in node.children:
         tag = child.tag
@@ -212,10 +220,14 @@ def _control(model: FebModel, node: Node) -> None:
                 raise child.error("step_size must be > 0")
         elif tag == "solver":
             _solver(model, child)
+        elif tag == "time_stepper":
+            read_time_stepper(model, child)
+        elif tag == "plot_level":
+            read_plot_level(model, child)
         elif tag in CONTROL_NOTES:
             names = ", ".join(c.tag for c in child.children) or child.text
-            model.note(child, f"FEBio's solver / output setting ({names}) not used: tissuesim's "
-                       "Newton converges to its own tolerances")  # fmt: skip
+            model.note(child, f"FEBio's solver / output setting ({names}) not used: tissuesim "
+                       "writes every step of its own output")  # fmt: skip
         else:
             raise _unsupported(child, "this Control setting is not supported by tissuesim")
     model.newmark = _newmark(model)

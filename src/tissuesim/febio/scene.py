@@ -14,6 +14,7 @@ from tissuesim.febio.curves import curve_expression
 from tissuesim.febio.materials import body_directions
 from tissuesim.febio.model import FebModel, Load
 from tissuesim.febio.reader import UNCOUPLED, read_feb
+from tissuesim.febio.time_stepper import adaptive_table, run_steps
 from tissuesim.febio.toml import dumps
 
 __all__ = ["febio_scene", "convert_febio"]
@@ -223,14 +224,22 @@ def febio_scene(model: FebModel, stem: str) -> tuple[dict, dict]:
         )
     if schemes:
         sim["newmark"] = list(schemes.pop())
-    if model.phases:  # several <step>s: one phase each
-        sim["integrator"] = INTEGRATORS[model.phases[0]["analysis"]]
-        sim["time_step"] = model.phases[0]["step_size"]
+    steps = model.phases or [
+        {"time_steps": model.time_steps, "step_size": model.step_size, "analysis": model.analysis,
+         "time_stepper": model.time_stepper, "plot_level": model.plot_level}
+    ]  # fmt: skip
+    adaptive = [adaptive_table(model, p["time_stepper"], p["plot_level"]) for p in steps]
+    if model.phases or adaptive[0] is not None:  # one phase per <step>; adaptive steps
+        sim["integrator"] = INTEGRATORS[steps[0]["analysis"]]
+        sim["time_step"] = steps[0]["step_size"]
         sim["phases"] = [
             {"steps": p["time_steps"], "time_step": p["step_size"],
              "integrator": INTEGRATORS[p["analysis"]]}
-            for p in model.phases
+            for p in steps
         ]  # fmt: skip
+        for phase, table in zip(sim["phases"], adaptive, strict=True):
+            if table is not None:  # FEBio's time stepper over the step's time
+                phase["adaptive"] = table
     data: dict = {}
     if len(bodies) == 1:
         ((_, tables),) = tables_per_body
@@ -244,7 +253,12 @@ def febio_scene(model: FebModel, stem: str) -> tuple[dict, dict]:
     if gravity.any():
         data["gravity"] = {"acceleration": (gravity * len(bodies)).tolist()}
     data.update(_contact(model, [n for n, _ in tables_per_body], bodies, meshes))
-    data["run"] = {"steps": sum(p["time_steps"] for p in model.phases) or model.time_steps}
+    data["run"] = {
+        "steps": sum(
+            run_steps(p["time_steps"], p["step_size"], table)
+            for p, table in zip(steps, adaptive, strict=True)
+        )
+    }
     return data, meshes
 
 

@@ -268,6 +268,8 @@ def capture(sim) -> tuple[dict, dict[str, np.ndarray]]:
                 arrays[f"driven.{ob.name}.{which}.target"] = motion.target
     meta["driven"] = driven
     meta["cuts"] = capture_cuts(sim, arrays)  # cut and torn bodies, blades, cracks
+    c = getattr(sim, "_controller", None)  # adaptive steps: the next step's length, ...
+    meta["stepper"] = None if c is None else {"start": c.start, "end": c.end, **c.state()}
     return meta, arrays
 
 
@@ -292,6 +294,7 @@ def restore(sim, meta: dict, arrays, history: list, path: Path) -> None:
     a = np.array(arrays["a"]) if "a" in arrays else None
     sim._state = State(float(arrays["time"]), x, v, a)
     sim._last_gradient = np.array(arrays["last_gradient"]) if "last_gradient" in arrays else None
+    sim._controller, sim._pending_stepper = None, meta.get("stepper")  # adaptive steps
     for name, material in _stateful_materials(sim):
         keys = [k for k in arrays if k.startswith(f"material.{name}.")]
         if not keys:

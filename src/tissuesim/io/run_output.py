@@ -329,7 +329,8 @@ class RunOutput:
                     f"{self.directory} holds a run of {done} steps, more than the {steps} asked "
                     f"for; when resuming, steps counts the whole run: ask for {done} or more"
                 )
-            if done == steps and self._previous_status == "completed":
+            finished = self.sim.finished  # an adaptive run that reached its end
+            if (done == steps or finished) and self._previous_status == "completed":
                 self.status = "completed"  # nothing to do: the directory is left as it is
                 return self.window()
             self._start_resumed()
@@ -358,7 +359,8 @@ class RunOutput:
                     record = self.sim.step()
                     stepped = time.perf_counter()
                     n = done + k + 1
-                    if n % self.every == 0 or n == end:
+                    last = n == end or self.sim.finished  # an adaptive run ends at its end
+                    if last or (n % self.every == 0 and _frame_due(self.sim, record)):
                         self._write_frame()
                         self._write_checkpoint(end)
                     self._write_summary_after_a_step()
@@ -370,6 +372,8 @@ class RunOutput:
                         minJ=f"{record.min_J:.3g}",
                     )
                     bar.update(1)
+                    if last:
+                        break
             except BaseException as exc:  # the summary must not still say "running"
                 self._fail(exc)
                 bar.close()
@@ -429,6 +433,15 @@ class RunOutput:
         for name in ("forces.png", "final.png", "run.gif"):
             if (self.directory / name).is_file():
                 self.manifest.add(file=name)
+
+
+def _frame_due(sim, record) -> bool:
+    """Whether a step's frame is written: every step's, except where adaptive steps write the
+    must points only (FEBio's plot_level PLOT_MUST_POINTS)."""
+    c = getattr(sim, "_controller", None)
+    if c is None or c.settings.frames != "must_points":
+        return True
+    return bool(record.extra.get("adaptive", {}).get("must_point"))
 
 
 def _promote_contact(step: dict) -> dict:

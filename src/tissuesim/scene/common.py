@@ -39,6 +39,7 @@ SIMULATION_KEYS = (
     "formulation",
     "phases",
     "newmark",
+    "adaptive",
 )
 
 #: what pictures can be coloured by

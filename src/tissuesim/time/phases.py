@@ -15,6 +15,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Any
 
 from tissuesim import validate
 from tissuesim.errors import InputError
@@ -27,11 +28,17 @@ PHASE_INTEGRATORS = ("quasistatic", "backward_euler", "newmark")
 
 @dataclass(frozen=True)
 class Phase:
-    """``steps`` steps of ``time_step`` s with ``integrator`` (None: the simulation's)."""
+    """``steps`` steps of ``time_step`` s with ``integrator`` (None: the simulation's).
+
+    adaptive: FEBio's adaptive steps over the phase's time (``time/adaptive.py``
+    AdaptiveStepping or a dict of its fields): ``time_step`` is then the first step and the
+    phase ends at start + steps time_step whatever steps the rule takes (None: the
+    simulation's ``adaptive``, or fixed steps)."""
 
     steps: int
     time_step: float
     integrator: str | None = None
+    adaptive: Any = None
 
 
 def check_window(window, what: str) -> tuple[float, float] | None:
@@ -61,6 +68,7 @@ class Schedule:
     """Phases from ``start`` (s); ``at(t)`` gives the phase a step starting at t belongs to."""
 
     def __init__(self, phases: Sequence[Phase | dict], start: float, explicit: bool) -> None:
+        from tissuesim.time.adaptive import check_adaptive
         from tissuesim.time.retry import validate_stepping
 
         if explicit:
@@ -76,15 +84,15 @@ class Schedule:
         for k, p in enumerate(phases, start=1):
             what = f"phase {k}"
             if isinstance(p, dict):
-                unknown = set(p) - {"steps", "time_step", "integrator"}
+                unknown = set(p) - {"steps", "time_step", "integrator", "adaptive"}
                 if unknown:
                     raise InputError(
                         f"{what}: unknown key {sorted(unknown)[0]!r}; a phase has steps, "
-                        "time_step and integrator"
+                        "time_step, integrator and adaptive"
                     )
                 if "steps" not in p or "time_step" not in p:
                     raise InputError(f"{what}: needs steps and time_step")
-                p = Phase(p["steps"], p["time_step"], p.get("integrator"))
+                p = Phase(p["steps"], p["time_step"], p.get("integrator"), p.get("adaptive"))
             elif not isinstance(p, Phase):
                 raise InputError(f"{what}: expected a Phase or a dict, not {p!r:.60}")
             steps = validate.integer(p.steps, f"{what} steps", low=1, high=10**9)
@@ -92,7 +100,8 @@ class Schedule:
             integrator = p.integrator
             if integrator is not None:
                 integrator = validate.choice(integrator, f"{what} integrator", PHASE_INTEGRATORS)
-            self.phases.append(Phase(steps, h, integrator))
+            adaptive = check_adaptive(p.adaptive, f"{what} adaptive")
+            self.phases.append(Phase(steps, h, integrator, adaptive))
             self.bounds.append((t, t + steps * h))
             t += steps * h
 
