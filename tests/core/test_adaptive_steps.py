@@ -225,3 +225,25 @@ def test_a_scene_runs_to_its_end_writes_the_must_points_and_resumes(tmp_path):
     bad["simulation"]["adaptive"] = {"dtmax": -1}
     with pytest.raises(Exception, match=r"\[simulation\].*dtmax must be > 0"):
         build_scene(bad, source="s.toml")
+
+
+def test_dynamic_steps_adapt_too_and_a_free_fall_stays_exact():
+    """Newmark's trapezoidal rule integrates a constant acceleration exactly for any steps, so
+    a free fall on adaptive steps (growing from 1 ms towards dtmax, a must point at 13 ms) is
+    at -g t^2 / 2 at every step's time; Backward Euler takes the same steps' times."""
+    for integrator in ("newmark", "backward_euler"):
+        mesh = ts.box((0, 0, 0), (0.1, 0.1, 0.1), (1, 1, 1))
+        sim = ts.Simulation(
+            mesh, ts.NeoHookean(youngs_modulus=1e4, poisson_ratio=0.3), density=1000.0,
+            integrator=integrator, gravity=(0.0, 0.0, -9.81),
+            phases=[Phase(50, 0.001, adaptive={"dtmax": 0.01, "must_points": [0.013]})],
+        )  # fmt: skip
+        records = []
+        while not sim.finished:
+            records.append(sim.step())
+        times = [r.time for r in records]
+        assert 0.013 in times and times[-1] == 0.05 and len(times) < 20
+        assert times[1] - times[0] > times[0]  # grown from the first step
+        if integrator == "newmark":
+            drop = sim.positions[:, 2] - mesh.points[:, 2]
+            assert np.allclose(drop, -9.81 * 0.05**2 / 2, rtol=1e-9)

@@ -118,3 +118,12 @@ def test_a_model_without_a_time_stepper_keeps_its_fixed_steps(tmp_path):
 def test_time_stepper_settings_tissuesim_does_not_run_are_refused(tmp_path, stepper, message):
     with pytest.raises(FebError, match=message):
         read_feb(_model(tmp_path, stepper=stepper))
+
+
+def test_tissuesim_run_stops_at_the_models_end(tmp_path, capsys):
+    from tissuesim.cli import main
+
+    feb = _model(tmp_path)
+    assert main(["run", str(feb), "--out", str(tmp_path / "out"), "--no-render", "--quiet"]) == 0
+    report = json.loads(capsys.readouterr().out)
+    assert report["end_time"] == 1.0 and report["steps"] < 15
