@@ -127,3 +127,26 @@ def test_tissuesim_run_stops_at_the_models_end(tmp_path, capsys):
     assert main(["run", str(feb), "--out", str(tmp_path / "out"), "--no-render", "--quiet"]) == 0
     report = json.loads(capsys.readouterr().out)
     assert report["end_time"] == 1.0 and report["steps"] < 15
+
+
+def test_each_step_of_several_keeps_its_own_time_stepper_or_fixed_steps(tmp_path):
+    """three_steps_pull_hold_release.feb with a time stepper in its first step only: that
+    step's phase steps adaptively to t = 1 exactly, the two others keep their fixed steps."""
+    text = (MODELS / "three_steps_pull_hold_release.feb").read_text()
+    stepper = "<step_size>0.25</step_size>\n        <time_stepper><dtmax>0.5</dtmax></time_stepper>"
+    feb = tmp_path / "steps.feb"
+    feb.write_text(text.replace("<step_size>0.25</step_size>", stepper, 1))
+    data, _ = febio_scene(read_feb(feb), "m")
+    phases = data["simulation"]["phases"]
+    assert phases[0]["adaptive"] == {"dtmin": 0.0, "dtmax": 0.5}
+    assert "adaptive" not in phases[1] and "adaptive" not in phases[2]
+    sim = _load(feb).simulation
+    records = []
+    while not sim.finished:
+        records.append(sim.step())
+    times = [r.time for r in records]
+    # 0.25, then 0.2 of the way to dtmax (Newton takes fewer than opt_iter = 11 / 1.44): 0.3,
+    # 0.34, and the step that would pass the phase's end lands on t = 1 exactly
+    assert times[:4] == pytest.approx([0.25, 0.55, 0.89, 1.0]) and times[3] == 1.0
+    assert times[4:] == pytest.approx([1.2, 1.4, 1.6, 1.8, 2.0] + [
+        2.0 + 0.002 * k for k in range(1, 6)])  # fmt: skip
