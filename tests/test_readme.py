@@ -12,6 +12,7 @@ import tomllib
 from pathlib import Path
 
 import numpy as np
+import pytest
 
 from tissuesim.cli import example_path
 from tissuesim.scene.loader import build_scene
@@ -298,7 +299,23 @@ TESTED_PYTHON_BLOCKS = {
     'element="wedge"': "test_wedges_python_example_runs",
     "from tissuesim.time.phases import Phase": "test_phases_python_example_runs",
     "sim.add_visual_surface(": "test_visual_surface_python_example_runs",
+    "import sympy as sp\nimport tissuesim as ts": "test_energy_law_python_example_runs",
 }
+
+
+def test_energy_law_python_example_runs(tmp_path):
+    """The materials page's laws from their energies: their small-strain moduli are the closed
+    forms (Mooney-Rivlin: mu = 2 (c1 + c2), lambda = k - 2 mu / 3; neo-Hookean: its own)."""
+    pytest.importorskip("sympy")
+    code = block("python", "import sympy as sp\nimport tissuesim as ts")
+    code += "\nprint(law.mu, law.lam, nh.mu, nh.lam)"
+    result = subprocess.run(
+        [sys.executable, "-c", code], cwd=tmp_path, capture_output=True, text=True, timeout=300
+    )
+    assert result.returncode == 0, result.stderr
+    mu, lam, mu_nh, lam_nh = map(float, result.stdout.split()[-4:])
+    assert mu == pytest.approx(2400.0, rel=1e-9) and lam == pytest.approx(1e5 - 1600.0, rel=1e-9)
+    assert mu_nh == pytest.approx(400.0, rel=1e-9) and lam_nh == pytest.approx(4e3, rel=1e-9)
 
 
 def test_visual_surface_python_example_runs(tmp_path):
