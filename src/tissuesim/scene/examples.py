@@ -3,8 +3,10 @@
 What an example shows is the first sentence of its scene file's opening comment; what it is
 made of (dimension, bodies, contact, frames, tissue, cuts) is read from its tables without
 building it; how long it takes is the scene's own ``# Runs in about ...`` comment line,
-measured with the plain install (SciPy's SuperLU, no Numba) on a 2-core machine. An example
-may also be a FEBio model (``.feb``): its opening ``<!-- ... -->`` comment says the same."""
+measured with the plain install (SciPy's solvers, no Numba) on one thread of a 2-core machine,
+pictures included (``benchmarks/examples_timing.py``; docs/examples.md has both installs' times).
+An example may also be a FEBio model (``.feb``): its opening ``<!-- ... -->`` comment says the
+same."""
 
 from __future__ import annotations
 
@@ -20,8 +22,8 @@ __all__ = ["example_path", "list_examples", "describe_example", "RUNTIME_NOTE"]
 _RUNTIME = re.compile(r"^#\s*Runs in about (\d+(?:\.\d+)? s)\b", re.MULTILINE)
 #: how the run times in the scenes' comments were measured
 RUNTIME_NOTE = (
-    "run times: the plain install (pip install .) on a 2-core machine; "
-    "tissuesim[fast] (Numba, PARDISO) is faster on the larger scenes"
+    "run times: the plain install (pip install .), one thread of a 2-core machine, pictures "
+    "included; with tissuesim[fast] (Numba, PARDISO): docs/examples.md"
 )
 _MESH_FILE_DIMS = {".msh": 3, ".vtu": 3}  # the shipped mesh files are tetrahedral
 
