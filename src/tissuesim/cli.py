@@ -14,6 +14,7 @@ import textwrap
 import warnings
 from pathlib import Path
 
+from tissuesim.cli_mesh import add_mesh_parser, mesh_command
 from tissuesim.scene.examples import example_path, list_examples
 from tissuesim.verification.check import FAMILIES as VERIFY_FAMILIES
 
@@ -195,99 +196,6 @@ def _check_display() -> None:
         )
 
 
-def _add_mesh_parser(sub, common) -> None:
-    """``tissuesim mesh SURFACE -o VOLUME``: tetrahedralise a surface (mesh/tetrahedralize.py)."""
-    from tissuesim.mesh.meshers import MESHERS
-
-    p = sub.add_parser(
-        "mesh",
-        parents=common,
-        help="tetrahedralise a closed surface (STL, OBJ, PLY, ...) into a volume mesh",
-        description="Mesh the solid a triangle surface encloses with tetrahedra, check the "
-        "result, write it and print a quality summary (JSON). The default mesher, "
-        "pytetwild (fTetWild), comes with tissuesim.",
-    )
-    p.add_argument("surface", help="the surface file, in metres (any format meshio reads)")
-    p.add_argument(
-        "-o",
-        "--output",
-        required=True,
-        metavar="VOLUME",
-        help="the volume mesh to write (.vtu, .msh, .xdmf, ...: format from the extension); "
-        "written atomically: an existing file is replaced only when meshing succeeds",
-    )
-    p.add_argument(
-        "--size",
-        type=_length,
-        help="target tetrahedron edge length in metres (default 0.05 of the surface's "
-        "bounding-box diagonal)",
-    )
-    p.add_argument(
-        "--mesher",
-        choices=("auto", *MESHERS),
-        default="auto",
-        help="auto (default): pytetwild if installed, else tetgen, else gmsh; pytetwild also "
-        "meshes surfaces with holes, flipped triangles or touching parts (docs/meshing.md)",
-    )
-
-
-def _mesh(args) -> int:
-    """``tissuesim mesh``: tetrahedralise, write atomically, print the quality summary."""
-    from tissuesim.errors import OutputError
-    from tissuesim.io.atomic import atomic_output
-    from tissuesim.mesh import write_mesh
-    from tissuesim.mesh.tetrahedralize import tetrahedralize
-
-    out = Path(args.output)
-    if out.is_dir() or not out.parent.is_dir():
-        why = "it is a directory" if out.is_dir() else f"no directory {out.parent}"
-        raise OutputError(
-            f"{out}: cannot write the volume mesh there ({why}); give -o a file path in an "
-            "existing directory, e.g. -o organ.vtu"
-        )
-    _check_volume_format(out)  # before a minute of meshing, not after it
-    result = tetrahedralize(args.surface, args.size, mesher=args.mesher)
-    with atomic_output(out) as tmp:
-        write_mesh(result.mesh, tmp)
-    r = result.report
-    keys = ("mesher", "size", "n_tets", "n_points", "min_dihedral_deg", "radius_ratio_min")
-    keys += ("volume", "surface_volume", "volume_ratio", "surface", "seconds")
-    print(json.dumps({"output": str(out), **{k: r[k] for k in keys}}, indent=2))
-    return 0
-
-
-#: meshio's formats that hold surfaces only: a tetrahedral mesh cannot be written to them
-SURFACE_FORMATS = (".stl", ".obj", ".ply", ".off", ".svg", ".wkt")
-
-
-def _check_volume_format(out: Path) -> None:
-    """OutputError (the file, its extension and the formats there are) unless meshio writes
-    a volume mesh to ``out``'s extension."""
-    import meshio
-
-    from tissuesim.errors import OutputError
-
-    name = out.name.lower()
-    known = sorted(meshio.extension_to_filetypes, key=len, reverse=True)
-    ext = next((e for e in known if name.endswith(e)), None)
-    if ext is None or ext in SURFACE_FORMATS:
-        what = f"{out.suffix!r} is not a mesh format" if ext is None else f"{ext} holds surfaces"
-        raise OutputError(
-            f"{out}: {what}; give -o a volume mesh file: .vtu (VTK), .msh (Gmsh 2.2), .mesh "
-            "(medit), .xdmf, ..."
-        )
-
-
-def _length(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        value = -1.0
-    if not 0.0 < value < float("inf"):
-        raise argparse.ArgumentTypeError(f"must be a length in metres > 0, not {text!r}")
-    return value
-
-
 def _seconds(text: str) -> float:
     try:
         value = float(text)
@@ -409,7 +317,7 @@ def main(argv: list[str] | None = None) -> int:
     p_convert.add_argument("--force", action="store_true", help="overwrite existing files")
     p_info = sub.add_parser("info", parents=common, help="describe a mesh file and check it")
     p_info.add_argument("mesh", help="a mesh file (.msh, .vtu, .vtk, .inp, ... as meshio reads)")
-    _add_mesh_parser(sub, common)
+    add_mesh_parser(sub, common)
     p_examples = sub.add_parser(
         "examples",
         parents=common,
@@ -513,7 +421,7 @@ def _dispatch(args) -> int:
     if args.command == "play":
         return _play(args)
     if args.command == "mesh":
-        return _mesh(args)
+        return mesh_command(args)
     if args.command == "convert":
         from tissuesim.febio import convert_febio
 

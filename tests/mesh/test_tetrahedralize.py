@@ -128,7 +128,7 @@ def test_gmsh_on_a_surface_with_a_hole_is_an_error_not_an_empty_mesh():
 
 def _fake(monkeypatch, output):
     monkeypatch.setattr(tet, "available_meshers", lambda: ["pytetwild"])
-    monkeypatch.setattr(tet, "run_mesher", lambda name, p, f, size, source: output(p, f))
+    monkeypatch.setattr(tet, "run_mesher", lambda name, p, f, size, source, *options: output(p, f))
 
 
 def _good_output(p, f):

@@ -86,7 +86,7 @@ def test_surface_key_meshes_the_file_and_the_scene_runs(scene_dir, tmp_path, mon
         ('surface = "organ.stl"\ndivisions = 4', "'surface' cannot be combined with"),
         ("surface = 4", "surface must be a path"),
         ('surface = "missing.stl"', "missing.stl: no such surface file"),
-        ('generator = "box"\nsize = 0.01', "size and mesher apply to surface"),
+        ('generator = "box"\nsize = 0.01', "size: options of meshing a surface"),
         ('surface = "organ.stl"\nsize = -1.0', "size must be > 0"),
     ],
 )

@@ -25,7 +25,7 @@ import numpy as np
 
 from tissuesim.errors import InputError, MeshError
 
-__all__ = ["MESHERS", "INSTALL_HINT", "available_meshers", "run_mesher"]
+__all__ = ["MESHERS", "INSTALL_HINT", "available_meshers", "mesh_threads", "run_mesher"]
 
 #: the meshers in the order ``mesher="auto"`` tries them (the first one installed is used)
 MESHERS = ("pytetwild", "tetgen", "gmsh")
@@ -73,12 +73,31 @@ except ModuleNotFoundError as exc:  # pytetwild's PyVista accessor; tetrahedrali
     import pytetwild
 d = np.load("surface.npz")
 v, t = pytetwild.tetrahedralize(d["points"], d["faces"], edge_length_abs=float(d["size"]),
-                                quiet=True)
+                                epsilon=float(d["epsilon"]), coarsen=bool(d["coarsen"]),
+                                num_threads=int(d["threads"]), quiet=True)
 np.savez("volume.npz", points=v, tets=t)
 """
 
+#: fTetWild's threads (0: all cores); its output varies a little from run to run, even on one
+THREADS_VARIABLE = "TISSUESIM_MESH_THREADS"
 
-def _pytetwild(points: np.ndarray, faces: np.ndarray, size: float) -> tuple:
+
+def mesh_threads() -> int:
+    """pytetwild's threads from TISSUESIM_MESH_THREADS (0, every core, when unset)."""
+    value = os.environ.get(THREADS_VARIABLE, "").strip()
+    if not value:
+        return 0
+    if not value.isdigit() or int(value) < 1:
+        raise InputError(
+            f"{THREADS_VARIABLE}={value!r}: give a whole number of threads >= 1 (or unset it "
+            "for every core)"
+        )
+    return int(value)
+
+
+def _pytetwild(
+    points: np.ndarray, faces: np.ndarray, size: float, epsilon: float = 1e-3, coarsen: bool = False
+) -> tuple:
     """fTetWild in a child process in a temporary directory: it writes __tracked_surface.stl
     into its working directory (not the user's), and a crash or an abort of the C++ code
     becomes an error here instead of ending the caller's process."""
@@ -90,10 +109,16 @@ def _pytetwild(points: np.ndarray, faces: np.ndarray, size: float) -> tuple:
     if importlib.util.find_spec(_PACKAGE["pytetwild"]) is None:
         raise InputError(f"mesher 'pytetwild' is not installed; install it with {INSTALL_HINT}")
     with tempfile.TemporaryDirectory(prefix="tissuesim-tetwild-") as tmp:
-        # edge_length_abs: the target edge length; the envelope (epsilon, 1e-3 of the
-        # bounding-box diagonal) bounds how far the boundary may lie from the input surface
+        # edge_length_abs: the target edge length; the envelope (epsilon, by default 1e-3 of
+        # the bounding-box diagonal) bounds how far the boundary may lie from the input surface
         np.savez(
-            os.path.join(tmp, "surface.npz"), points=points, faces=faces.astype(np.int32), size=size
+            os.path.join(tmp, "surface.npz"),
+            points=points,
+            faces=faces.astype(np.int32),
+            size=size,
+            epsilon=epsilon,
+            coarsen=coarsen,
+            threads=mesh_threads(),
         )
         run = subprocess.run(
             [sys.executable, "-c", _PYTETWILD_CHILD], cwd=tmp, capture_output=True, text=True
@@ -159,7 +184,7 @@ def _gmsh(points: np.ndarray, faces: np.ndarray, size: float) -> tuple:
     return pts, t
 
 
-_ADAPTERS: dict[str, Callable[[np.ndarray, np.ndarray, float], tuple]] = {
+_ADAPTERS: dict[str, Callable[..., tuple]] = {
     "pytetwild": _pytetwild,
     "tetgen": _tetgen,
     "gmsh": _gmsh,
@@ -167,9 +192,17 @@ _ADAPTERS: dict[str, Callable[[np.ndarray, np.ndarray, float], tuple]] = {
 
 
 def run_mesher(
-    name: str, points: np.ndarray, faces: np.ndarray, size: float, source: str
+    name: str,
+    points: np.ndarray,
+    faces: np.ndarray,
+    size: float,
+    source: str,
+    options: dict[str, float | bool] | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Run mesher ``name`` on the surface; (points (p, 3), tetrahedra (m, 4) int64), unchecked.
+
+    options: pytetwild's ``epsilon`` (the envelope relative to the bounding-box diagonal) and
+    ``coarsen``; the other meshers take none (``tetrahedralize`` refuses them).
 
     A missing mesher raises InputError with the install line; a mesher that raises is
     reported as a MeshError naming ``source`` and suggesting another mesher.
@@ -178,7 +211,9 @@ def run_mesher(
     if name != "pytetwild":  # (pytetwild is imported by its child process only)
         _import(name)  # a missing mesher is an install problem, not a meshing failure
     try:
-        v, t = adapter(np.ascontiguousarray(points), np.ascontiguousarray(faces), size)
+        v, t = adapter(
+            np.ascontiguousarray(points), np.ascontiguousarray(faces), size, **(options or {})
+        )
     except InputError:
         raise
     except Exception as exc:

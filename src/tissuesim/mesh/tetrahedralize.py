@@ -23,6 +23,8 @@ import numpy as np
 from tissuesim.errors import InputError, MeshError
 from tissuesim.mesh.mesh import Mesh
 from tissuesim.mesh.meshers import INSTALL_HINT, MESHERS, available_meshers, run_mesher
+from tissuesim.mesh.sizing import MAX_TETRAHEDRA, meshing_options, to_count
+from tissuesim.mesh.smoothing import DEFAULT_SMOOTHING_ITERATIONS, smooth_surface
 from tissuesim.validate import short
 
 __all__ = [
@@ -34,8 +36,6 @@ __all__ = [
     "tetrahedralize",
 ]
 
-#: a size that would make more tetrahedra than this (estimated) is refused
-MAX_TETRAHEDRA = 5_000_000
 #: default target edge length, as a fraction of the bounding-box diagonal (fTetWild's default)
 DEFAULT_SIZE_FRACTION = 0.05
 #: the volume of the tet mesh may differ from the surface's by this much before a warning
@@ -288,48 +288,13 @@ def _orient(v: np.ndarray, t: np.ndarray, name: str, source: str) -> np.ndarray:
     return t
 
 
-def tetrahedralize(
-    surface: Any,
-    size: float | None = None,
-    *,
-    mesher: str = "auto",
-    check_volume: bool = True,
-) -> SurfaceMeshing:
-    """Mesh the solid a triangle surface encloses with P1 tetrahedra; the mesh and its report.
-
-    surface: a file path (STL, OBJ, PLY, ... read with meshio) or a (points, faces) pair, in
-    metres. size: target edge length in metres (default 0.05 of the surface's bounding-box
-    diagonal). mesher: "auto" (the first installed of pytetwild, tetgen, gmsh: pytetwild
-    meshed every surface of docs/meshing.md), or one of them by name. check_volume: warn when
-    the mesh's volume differs from the surface's enclosed volume by more than 5 %, and raise
-    MeshError below half of it (a mesher that silently lost the solid); surfaces with flipped
-    triangles are not checked (their enclosed volume is unknown).
-
-    The mesh has the point and facet set "surface" (its boundary). The report holds mesher,
-    seconds, size, n_tets, n_points, min/max dihedral angle (degrees), radius ratio min/mean,
-    volume, surface_volume, volume_ratio and the surface's triangles, holes and non-manifold
-    edges. Raises InputError for a bad argument or a missing mesher (with its install line),
-    MeshError for a bad surface, a mesher failure, no tetrahedra or inverted ones.
-    """
+def _mesh_once(surf: Surface, name: str, h: float, options: dict[str, Any]) -> tuple[Mesh, float]:
+    """One run of mesher ``name`` at size ``h``, checked: the mesh and the mesher's seconds."""
     from tissuesim.mesh.boundary import boundary_facets
     from tissuesim.mesh.checks import validate_mesh
-    from tissuesim.mesh.io import describe_mesh
 
-    if not isinstance(check_volume, bool):
-        raise InputError(f"check_volume must be True or False, not {short(check_volume)}")
-    surf = read_surface(surface)
-    h = _size(size, surf)
-    name = _choose(mesher)
-    if not surf.closed:
-        warnings.warn(
-            f"{surf.source}: the surface is open ({surf.boundary_edges} boundary edges, a hole); "
-            f"{name} {'closes it by winding number' if name == 'pytetwild' else 'may fail'}: "
-            "check the volume of the mesh",
-            UserWarning,
-            stacklevel=2,
-        )
     started = time.perf_counter()
-    v, t = run_mesher(name, surf.points, surf.faces, h, surf.source)
+    v, t = run_mesher(name, surf.points, surf.faces, h, surf.source, options)
     seconds = time.perf_counter() - started
     if len(t) == 0:
         raise MeshError(
@@ -357,6 +322,93 @@ def tetrahedralize(
         raise MeshError(
             f"{exc} (the output of mesher {name!r}: try another size or mesher)"
         ) from exc
+    return mesh, seconds
+
+
+def tetrahedralize(
+    surface: Any,
+    size: float | None = None,
+    *,
+    mesher: str = "auto",
+    check_volume: bool = True,
+    target_elements: int | None = None,
+    epsilon: float | None = None,
+    envelope: float | None = None,
+    coarsen: bool = False,
+    smoothing: str | None = None,
+    smoothing_iterations: int = DEFAULT_SMOOTHING_ITERATIONS,
+) -> SurfaceMeshing:
+    """Mesh the solid a triangle surface encloses with P1 tetrahedra; the mesh and its report.
+
+    surface: a file path (STL, OBJ, PLY, ... read with meshio) or a (points, faces) pair, in
+    metres. size: target edge length in metres (default 0.05 of the surface's bounding-box
+    diagonal). mesher: "auto" (the first installed of pytetwild, tetgen, gmsh: pytetwild
+    meshed every surface of docs/meshing.md), or one of them by name. check_volume: warn when
+    the mesh's volume differs from the surface's enclosed volume by more than 5 %, and raise
+    MeshError below half of it (a mesher that silently lost the solid); surfaces with flipped
+    triangles are not checked (their enclosed volume is unknown).
+
+    target_elements: a number of tetrahedra instead of a size, reached within 30 % (at most 4
+    passes; else a warning and the closest mesh). epsilon: pytetwild's envelope relative to
+    the bounding-box diagonal (fTetWild's -e), or envelope: its width in metres (default
+    size / 20); coarsen: fTetWild's --coarsen. smoothing: "taubin" or "sinc" (VTK) smooths a
+    staircase (a voxel segmentation) before meshing, keeping the enclosed volume, over
+    smoothing_iterations (20). See mesh/sizing.py and mesh/smoothing.py.
+
+    The mesh has the point and facet set "surface" (its boundary). The report holds mesher,
+    seconds, size, n_tets, n_points, min/max dihedral angle (degrees), radius ratio min/mean,
+    volume, surface_volume, volume_ratio, the surface's triangles, holes and non-manifold
+    edges, the options (epsilon, envelope, coarsen, smoothing's report, target_elements) and
+    the passes made. Raises InputError for a bad argument (one line naming it) or a missing
+    mesher (with its install line), MeshError for a bad surface, a mesher failure, no
+    tetrahedra or inverted ones.
+    """
+    from tissuesim.mesh.io import describe_mesh
+
+    if not isinstance(check_volume, bool):
+        raise InputError(f"check_volume must be True or False, not {short(check_volume)}")
+    opts = meshing_options(
+        size=size,
+        epsilon=epsilon,
+        envelope=envelope,
+        coarsen=coarsen,
+        smoothing=smoothing,
+        smoothing_iterations=smoothing_iterations,
+        target_elements=target_elements,
+    )
+    surf = read_surface(surface)
+    h = None if opts.target_elements else _size(size, surf)
+    name = _choose(mesher)
+    if name != "pytetwild" and opts.tetwild():
+        raise InputError(
+            f"{' and '.join(opts.tetwild())}: options of mesher 'pytetwild' (fTetWild's envelope "
+            f"and coarsening), not of {name!r}; leave them out or use mesher 'pytetwild'"
+        )
+    if not surf.closed:
+        warnings.warn(
+            f"{surf.source}: the surface is open ({surf.boundary_edges} boundary edges, a hole); "
+            f"{name} {'closes it by winding number' if name == 'pytetwild' else 'may fail'}: "
+            "check the volume of the mesh",
+            UserWarning,
+            stacklevel=2,
+        )
+    smoothed = None
+    if opts.smoothing:
+        surf, smoothed = smooth_surface(surf, opts.smoothing, opts.smoothing_iterations)
+    diag = surf.diagonal
+
+    def once(size: float) -> tuple[Mesh, float]:
+        eps = opts.relative_epsilon(diag, size)
+        options = {"epsilon": eps, "coarsen": opts.coarsen} if name == "pytetwild" else {}
+        return _mesh_once(surf, name, size, options)
+
+    if opts.target_elements:
+        mesh, h, seconds, passes = to_count(once, opts.target_elements, surf, surf.source)
+    else:
+        assert h is not None
+        mesh, seconds = once(h)
+        passes = [{"size": h, "n_tets": mesh.n_cells, "seconds": round(seconds, 3)}]
+    eps = opts.relative_epsilon(diag, h) if name == "pytetwild" else None
     info = describe_mesh(mesh)
     angles = dihedral_angles(mesh.points, mesh.cells)
     sv = abs(surf.volume)  # an inside-out surface encloses the same solid
@@ -382,6 +434,12 @@ def tetrahedralize(
             "misoriented_edges": surf.misoriented_edges,
             "removed_faces": surf.removed_faces,
         },
+        "epsilon": eps,
+        "envelope": None if eps is None else eps * diag,
+        "coarsen": opts.coarsen,
+        "smoothing": smoothed,
+        "target_elements": opts.target_elements,
+        "passes": passes,
     }
     ratio = report["volume_ratio"]
     estimate = "" if surf.closed else " (an estimate: the surface is open)"
@@ -410,12 +468,31 @@ def mesh_surface(
     *,
     mesher: str = "auto",
     check_volume: bool = True,
+    target_elements: int | None = None,
+    epsilon: float | None = None,
+    envelope: float | None = None,
+    coarsen: bool = False,
+    smoothing: str | None = None,
+    smoothing_iterations: int = DEFAULT_SMOOTHING_ITERATIONS,
 ) -> Mesh:
     """Mesh the solid a triangle surface encloses: a checked P1 tetrahedral ``Mesh``.
 
     ``mesh_surface("organ.stl", 0.003)`` (size: target edge length in metres, default 0.05 of
-    the bounding-box diagonal; mesher "auto" = pytetwild if installed, else tetgen, else gmsh).
-    See ``tetrahedralize`` for the arguments, the checks and the errors; it also returns the
-    quality report.
+    the bounding-box diagonal; mesher "auto" = pytetwild if installed, else tetgen, else gmsh),
+    or ``mesh_surface("segmentation.stl", target_elements=10_000, smoothing="taubin")`` (about
+    1e4 tetrahedra, within 30 %, after smoothing the voxel staircase). See ``tetrahedralize``
+    for the arguments (epsilon, envelope, coarsen, smoothing_iterations), the checks and the
+    errors; it also returns the quality report.
     """
-    return tetrahedralize(surface, size, mesher=mesher, check_volume=check_volume).mesh
+    return tetrahedralize(
+        surface,
+        size,
+        mesher=mesher,
+        check_volume=check_volume,
+        target_elements=target_elements,
+        epsilon=epsilon,
+        envelope=envelope,
+        coarsen=coarsen,
+        smoothing=smoothing,
+        smoothing_iterations=smoothing_iterations,
+    ).mesh

@@ -44,6 +44,12 @@ MESH_KEYS = {
     "surface": "path of a closed surface (STL, OBJ, PLY) to tetrahedralise (relative to the scene)",
     "size": "surface: target tetrahedron edge length in metres (default 0.05 of the box diagonal)",
     "mesher": "surface: auto, pytetwild, tetgen or gmsh (mesh_surface)",
+    "target_elements": "surface: about this many tetrahedra (within 30 %) instead of a size",
+    "epsilon": "surface, pytetwild: the envelope relative to the bounding-box diagonal",
+    "envelope": "surface, pytetwild: the envelope in metres (default size / 20)",
+    "coarsen": "surface, pytetwild: coarsen as far as the quality allows (true / false)",
+    "smoothing": "surface: smooth a staircase before meshing: none, taubin or sinc",
+    "smoothing_iterations": "surface: iterations of the smoothing filter (default 20)",
     "lower": "generator: lower corner",
     "upper": "generator: upper corner",
     "divisions": "generator: cells per axis",
@@ -166,8 +172,12 @@ def _mesh(table: dict, base_dir: Path, where: str):
     _unknown(table, MESH_KEYS, where)
     if "surface" in table:
         return _surface_mesh(table, base_dir, where)
-    if "size" in table or "mesher" in table:
-        raise SceneError(f"{where}: size and mesher apply to surface = 'organ.stl' only")
+    surface_only = sorted(set(table) & set(SURFACE_OPTIONS))
+    if surface_only:
+        raise SceneError(
+            f"{where}: {', '.join(surface_only)}: options of meshing a surface "
+            "(surface = 'organ.stl') only"
+        )
     if "file" in table:
         extra = set(table) - {"file", "merge_coincident"}
         if extra:
@@ -203,14 +213,29 @@ def _mesh(table: dict, base_dir: Path, where: str):
     return generators[generator](**kwargs)
 
 
+#: the keys of mesh = { surface = ... } besides the path: tetrahedralize's keyword arguments
+SURFACE_OPTIONS = (
+    "size",
+    "mesher",
+    "target_elements",
+    "epsilon",
+    "envelope",
+    "coarsen",
+    "smoothing",
+    "smoothing_iterations",
+)
+
+
 def _surface_mesh(table: dict, base_dir: Path, where: str):
-    """mesh = { surface = "organ.stl", size = 0.004 }: mesh_surface (relative to the scene)."""
+    """mesh = { surface = "organ.stl", size = 0.004 }: mesh_surface (relative to the scene);
+    the other keys of SURFACE_OPTIONS go to it by name (it checks them, naming the key)."""
     from tissuesim.mesh.tetrahedralize import mesh_surface
 
-    extra = set(table) - {"surface", "size", "mesher"}
+    extra = set(table) - {"surface", *SURFACE_OPTIONS}
     if extra:
         raise SceneError(
-            f"{where}: 'surface' cannot be combined with {sorted(extra)}; it takes size and mesher"
+            f"{where}: 'surface' cannot be combined with {sorted(extra)}; it takes "
+            f"{', '.join(SURFACE_OPTIONS)}"
         )
     path = table["surface"]
     if not isinstance(path, str):
@@ -221,9 +246,10 @@ def _surface_mesh(table: dict, base_dir: Path, where: str):
     mesher = table.get("mesher", "auto")
     if not isinstance(mesher, str):
         raise SceneError(f"{where}: mesher must be a string such as 'auto', not {short(mesher)}")
+    options = {k: table[k] for k in SURFACE_OPTIONS[2:] if k in table}
     full = Path(path) if Path(path).is_absolute() else base_dir / path
     with _context(where):
-        return mesh_surface(full, size, mesher=mesher)
+        return mesh_surface(full, size, mesher=mesher, **options)
 
 
 def _select(mesh, kind: str, selector, where: str, key: str | None = None) -> np.ndarray:
