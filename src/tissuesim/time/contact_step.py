@@ -297,8 +297,7 @@ def _carried(system, predictor, t: float) -> np.ndarray | None:
     """The last step's contact forces for this step's free motion (``ContactPredictor.carry``),
     where every body's configuration is its DOFs (FEM: a dead load on positions), else None."""
     force = predictor.carried_force(t)
-    # not after a step whose refinement ran out (a landing's impact: carried as a dead load
-    # it threw the organ off the table, and the prediction crossed a surface)
+    # not after a step whose refinement ran out: its forces are a poor linearisation's
     if force is None or len(force) != system.n_dofs or predictor.refresh:
         return None
     same = all(

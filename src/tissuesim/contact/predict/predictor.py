@@ -142,7 +142,7 @@ class ContactPredictor:
         contact forces, ``carried_force``): the prediction is then made from x_free - H^-1
         carried (the free motion without them, to first order), its pairs from the sweep to
         x_free (near where the step ends: a resting organ's free motion springs back through
-        the table by millimetres, and its sweep met 4x the candidates)."""
+        the table by millimetres, and its sweep met 6x the candidates)."""
         contact = system.contact
         start = time.perf_counter()
         solve, token = _factor_solve(
@@ -205,7 +205,7 @@ class ContactPredictor:
 
     def _carried_shift(self, solve, token, x_free: np.ndarray, carried: np.ndarray):
         """H^-1 carried through the factor (one back-solve, kept for this free motion)."""
-        key = (token, x_free.tobytes())
+        key = (token, id(carried), x_free.tobytes())
         if self._shift is None or self._shift[0] != key or token is None:
             start = time.perf_counter()
             self._shift = (key, np.asarray(solve(carried)).reshape(-1))
