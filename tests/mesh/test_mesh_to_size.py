@@ -80,9 +80,12 @@ def test_target_elements_is_reached_within_30_percent_on_a_staircase(stairs, smo
 @needs_pytetwild
 def test_size_changes_the_count_of_a_staircase(stairs):
     """The symptom of issue 41: with fTetWild's fixed envelope (1e-3 of the diagonal) the
-    count barely follows the size; the default envelope (size / 20) follows it."""
+    count barely follows the size (102k / 97k / 98k at 14 / 10 / 7 mm); the default envelope
+    (size / 20) follows it. fTetWild is not deterministic: half the size gave more than 2x the
+    tetrahedra in the helper's runs and 1.88x in one CI run (7,256 against 3,855), so the
+    bound is 1.5x."""
     fine, coarse = (tet.tetrahedralize(stairs, h).report["n_tets"] for h in (0.012, 0.024))
-    assert fine > 2.0 * coarse
+    assert fine > 1.5 * coarse
 
 
 def _quadratic_counts(h: float) -> tuple:
