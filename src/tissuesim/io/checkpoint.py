@@ -36,7 +36,7 @@ from __future__ import annotations
 
 import json
 import os
-from dataclasses import asdict
+from dataclasses import asdict, replace
 from pathlib import Path
 from typing import Any
 
@@ -49,6 +49,7 @@ from tissuesim.io.checkpoint_cuts import capture_cuts, restore_cuts
 from tissuesim.io.checkpoint_fingerprint import FIX as _FIX
 from tissuesim.io.checkpoint_fingerprint import check_fingerprint as _check_fingerprint
 from tissuesim.io.checkpoint_fingerprint import fingerprint, scene_hash
+from tissuesim.io.checkpoint_predictor import capture_predictor, restore_predictor
 from tissuesim.io.interrupts import deferred_interrupts
 
 __all__ = [
@@ -248,6 +249,7 @@ def capture(sim) -> tuple[dict, dict[str, np.ndarray]]:
         meta["adaptive"] = None if contact.adaptive is None else asdict(contact.adaptive)
         if contact.obstacle_state is not None:
             arrays["contact.obstacle_state"] = contact.obstacle_state
+        meta["predictor"] = capture_predictor(contact, sim._solver, arrays)
         cached = contact.augmented_cache.get("solver")
         if cached is not None:
             meta["augmented_solver"] = [cached[0], _solver_state(cached[1], "augmented", arrays)]
@@ -277,6 +279,7 @@ def restore(sim, meta: dict, arrays, history: list, path: Path) -> None:
     """Put a captured state into ``sim`` (set up the same way, not stepped yet)."""
     import warnings
 
+    from tissuesim.contact.obstacles import DrivenMotion
     from tissuesim.contact.stiffness import AdaptiveStiffness
     from tissuesim.time.state import State
 
@@ -320,6 +323,7 @@ def restore(sim, meta: dict, arrays, history: list, path: Path) -> None:
             contact.adaptive = AdaptiveStiffness(**meta["adaptive"])
         if "contact.obstacle_state" in arrays:
             contact.obstacle_state = np.array(arrays["contact.obstacle_state"])
+        restore_predictor(contact, sim._solver, meta.get("predictor"), arrays)
         if meta.get("augmented_solver"):
             from tissuesim.solve.linear import make_linear_solver
 
@@ -335,8 +339,13 @@ def restore(sim, meta: dict, arrays, history: list, path: Path) -> None:
             table[name] = tuple(float(a) if a.ndim == 0 else a for a in items)
     for key, (t0, t1) in meta["driven"].items():
         name, which = key.rsplit(".", 1)
-        ob = next(o for o in sim.obstacles if o.name == name)
+        k, ob = next((k, o) for k, o in enumerate(sim.obstacles) if o.name == name)
         motion = getattr(ob, which)
+        if not isinstance(motion, DrivenMotion):  # driven during the run, not at set-up
+            motion = DrivenMotion(np.zeros(3))
+            sim.obstacles[k] = ob = replace(ob, **{which: motion})
+            if s.contact is not None:
+                s.contact.obstacles[k] = ob
         motion.start = np.array(arrays[f"driven.{key}.start"])
         motion.target = np.array(arrays[f"driven.{key}.target"])
         motion.start_time, motion.end_time = t0, t1
