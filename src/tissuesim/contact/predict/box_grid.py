@@ -12,6 +12,8 @@ __all__ = ["overlap_pairs"]
 #: item instead of entering the grid (a table's long triangles), and the grid's cells per axis
 LARGE = 16.0
 MAX_CELLS_PER_AXIS = 256
+#: the grid's cells per item at most (the cells grow past the median extent to keep to it)
+CELLS_PER_ITEM = 16
 
 
 @njit(cache=True, nogil=True)
@@ -63,8 +65,14 @@ def overlap_pairs(lo_a, hi_a, lo_b, hi_b, same, a_ids, b_ids, group, enabled, ou
                 top[k] = max(top[k], hi_b[j, k])
     n_small = nb - int(np.sum(large))
     if n_small:
-        for k in range(dim):
-            shape[k] = min(int((top[k] - origin[k]) / size) + 1, MAX_CELLS_PER_AXIS)
+        # surfaces fill few of a volume's cells: at most CELLS_PER_ITEM cells an item (else
+        # a fine surface spread over a large box would zero up to 256^3 cells a call)
+        while True:
+            for k in range(dim):
+                shape[k] = min(int((top[k] - origin[k]) / size) + 1, MAX_CELLS_PER_AXIS)
+            if shape[0] * shape[1] * shape[2] <= CELLS_PER_ITEM * n_small + 64:
+                break
+            size *= 1.5
         size = max(size, np.max((top[:dim] - origin[:dim]) / shape[:dim]))
     cells = shape[0] * shape[1] * shape[2]
     # the grid as compressed rows: cell -> b items
