@@ -42,7 +42,7 @@ import numpy as np
 
 from tissuesim.contact import ccd_queries
 from tissuesim.contact.candidates import StepCandidates
-from tissuesim.mesh.virtual_nodes import PlanarCut
+from tissuesim.mesh.cutting.virtual_nodes import PlanarCut
 from tissuesim.scene.loader import build_scene
 
 HERE = Path(__file__).resolve().parent

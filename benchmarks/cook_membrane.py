@@ -27,7 +27,7 @@ from tissuesim import Simulation  # noqa: E402
 from tissuesim.materials.registry import make_material  # noqa: E402
 from tissuesim.mesh import rectangle  # noqa: E402
 from tissuesim.mesh.checks import validate_mesh  # noqa: E402
-from tissuesim.mesh.select import facets_on_plane, vertices_on_plane  # noqa: E402
+from tissuesim.mesh.queries.select import facets_on_plane, vertices_on_plane  # noqa: E402
 from tissuesim.solve.newton import NewtonOptions  # noqa: E402
 
 MU = 80.194

@@ -25,7 +25,7 @@ import numpy as np
 import tissuesim as ts
 from tissuesim.contact.cut_surface import cut_surface
 from tissuesim.errors import InputError
-from tissuesim.mesh.virtual_nodes import PlanarCut, virtual_node_cut
+from tissuesim.mesh.cutting.virtual_nodes import PlanarCut, virtual_node_cut
 
 HERE = Path(__file__).resolve().parent
 BOX = ts.box((0.0, 0.0, 0.0), (1.0, 0.4, 0.3), (10, 4, 3))

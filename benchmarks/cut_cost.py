@@ -36,7 +36,7 @@ from pathlib import Path
 import numpy as np
 
 import tissuesim as ts
-from tissuesim.mesh.virtual_nodes import PlanarCut
+from tissuesim.mesh.cutting.virtual_nodes import PlanarCut
 
 HERE = Path(__file__).resolve().parent
 

@@ -29,7 +29,7 @@ from pathlib import Path
 
 import numpy as np
 
-from tissuesim.mesh.virtual_nodes import PlanarCut
+from tissuesim.mesh.cutting.virtual_nodes import PlanarCut
 from tissuesim.scene.loader import build_scene
 
 HERE = Path(__file__).resolve().parent
@@ -79,7 +79,7 @@ def raised_fractions(floor: float = 0.05):
     """Within: every element part's volume fraction raised to at least ``floor`` of its cell,
     so a cut makes no sliver anywhere: a like-for-like of what the cut's small parts cost. A
     diagnostic only: the mass and stiffness are not kept."""
-    import tissuesim.mesh.virtual_nodes as virtual_nodes
+    import tissuesim.mesh.cutting.virtual_nodes as virtual_nodes
 
     copies = virtual_nodes._copies
 

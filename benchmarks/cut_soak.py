@@ -9,7 +9,7 @@ case:
 - ``through``: one to three oblique planes through about one point near its middle (2-8
   pieces falling onto each other and the table);
 - ``thin``: two nearly parallel planes 0.1-3 dhat apart (a slab thinner than the cut faces'
-  gap: ``contact/thin_pieces.py``, or a crumb: ``mesh/crumbs.py``), in 4 of 10 cases a third
+  gap: ``contact/thin_pieces.py``, or a crumb: ``mesh/cutting/crumbs.py``), in 4 of 10 cases a third
   across them.
 
 Per case: the pieces, whether it failed (an error, or a step's exact intersection test), the
@@ -28,7 +28,7 @@ from pathlib import Path
 import numpy as np
 from cut_cost import organ
 
-from tissuesim.mesh.virtual_nodes import PlanarCut
+from tissuesim.mesh.cutting.virtual_nodes import PlanarCut
 
 HERE = Path(__file__).resolve().parent
 DHAT = 2e-4  # the organ's (cut_cost.organ with contact)

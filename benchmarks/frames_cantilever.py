@@ -141,8 +141,8 @@ def fitted_frequency(times: np.ndarray, y: np.ndarray, f0: float) -> tuple[float
 def fem_simulation(nd: int, load: float, integrator: str = "quasistatic", time_step: float = 1.0):
     from tissuesim import Simulation
     from tissuesim.mesh import box
-    from tissuesim.mesh.boundary import boundary_facets
-    from tissuesim.mesh.select import vertices_on_plane
+    from tissuesim.mesh.queries.boundary import boundary_facets
+    from tissuesim.mesh.queries.select import vertices_on_plane
 
     mesh = box([0, 0, 0], [A_SIDE, A_SIDE, LENGTH], (nd, nd, 5 * nd))
     sim = Simulation(mesh, material(), density=DENSITY, integrator=integrator, time_step=time_step)

@@ -43,7 +43,7 @@ def cube_face_nodes(mesh, n: int, top: bool) -> np.ndarray:
     corners = np.arange(first, first + layer)
     if mesh.order == 1:
         return corners
-    from tissuesim.mesh.quadratic import EDGES
+    from tissuesim.mesh.cells.quadratic import EDGES
 
     pairs = mesh.cells[:, EDGES[3]]  # (m, 6, 2) corner pairs of the midside nodes
     inside = np.isin(pairs, corners).all(axis=2)

@@ -87,7 +87,7 @@ def smooth(radii: tuple[float, float, float] = RADII) -> tuple[np.ndarray, np.nd
 
 def one(surface: tuple, **options) -> dict:
     """Mesh once; the figures of the report (and the warnings it gave)."""
-    from tissuesim.mesh.tetrahedralize import tetrahedralize
+    from tissuesim.mesh.from_surface.tetrahedralize import tetrahedralize
 
     started = time.perf_counter()
     with warnings.catch_warnings(record=True) as caught:
@@ -121,7 +121,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--part", choices=("sizes", "options", "counts", "all"), default="all")
     args = parser.parse_args(argv)
     os.environ.setdefault("TISSUESIM_MESH_THREADS", "1")
-    from tissuesim.mesh.smoothing import normal_variation
+    from tissuesim.mesh.from_surface.smoothing import normal_variation
 
     surfaces = {"smooth": smooth(), "staircase": staircase()}
     lines = [

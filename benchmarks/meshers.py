@@ -1,11 +1,11 @@
 """Robustness of the tetrahedral meshers behind ``tissuesim.mesh_surface`` on five surfaces.
 
 Each mesher (pytetwild, tetgen, gmsh; those installed) meshes each surface through
-``tissuesim.mesh.tetrahedralize.tetrahedralize`` at its default size (0.05 of the bounding-box
-diagonal), in a child process of its own (a crash or a hang is recorded, not fatal). Recorded:
-did it give a mesh (or the error), tetrahedra, seconds, min dihedral angle, min radius ratio,
-and the mesh's volume over the reference volume of the solid (analytic for a and b, the closed
-surface's enclosed volume for c and d, the intact surface's for e). The surfaces, in metres:
+``tissuesim.mesh.from_surface.tetrahedralize.tetrahedralize`` at its default size (0.05 of the
+bounding-box diagonal), in a child process of its own (a crash or a hang is recorded, not fatal).
+Recorded: did it give a mesh (or the error), tetrahedra, seconds, min dihedral angle, min radius
+ratio, and the mesh's volume over the reference volume of the solid (analytic for a and b, the
+closed surface's enclosed volume for c and d, the intact surface's for e). The surfaces, in metres:
 
 - a clean: an ellipsoid (semi-axes 50, 30, 20 mm), icosphere of 5120 triangles, scaled
 - b touching: two spheres (r = 20 mm) that share one vertex (a non-manifold vertex)
@@ -116,7 +116,7 @@ def one(path: str, mesher: str, reference: float) -> dict:
     """Mesh one file with one mesher (run in a child process)."""
     import warnings
 
-    from tissuesim.mesh.tetrahedralize import tetrahedralize
+    from tissuesim.mesh.from_surface.tetrahedralize import tetrahedralize
 
     started = time.perf_counter()
     try:
@@ -170,7 +170,7 @@ def main(argv: list[str] | None = None) -> int:
     if args.one:
         print(json.dumps(one(args.one[0], args.one[1], float(args.one[2]))))
         return 0
-    from tissuesim.mesh.meshers import available_meshers
+    from tissuesim.mesh.from_surface.meshers import available_meshers
 
     meshers = available_meshers()
     results: dict[tuple[str, str], dict] = {}

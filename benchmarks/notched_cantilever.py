@@ -17,8 +17,8 @@ from pathlib import Path
 import numpy as np
 
 import tissuesim as ts
+from tissuesim.mesh.cutting.virtual_nodes import PlanarCut, virtual_node_cut
 from tissuesim.mesh.mesh import Mesh
-from tissuesim.mesh.virtual_nodes import PlanarCut, virtual_node_cut
 
 MATERIAL = ts.make_material("neo_hookean", youngs_modulus=1e6, poisson_ratio=0.3)
 DEPTH = 0.2

@@ -43,7 +43,7 @@ def free_hessian(
 ):
     mesh = cook_mesh(n)
     if order == 2:
-        from tissuesim.mesh.elevate import elevate_mesh
+        from tissuesim.mesh.cells.elevate import elevate_mesh
 
         mesh = elevate_mesh(mesh)
     material = make_material("neo_hookean", youngs_modulus=2 * MU * (1 + nu), poisson_ratio=nu)

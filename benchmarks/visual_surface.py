@@ -5,7 +5,7 @@
 A liver-sized ellipsoid (0.12 x 0.08 x 0.04 m) of ``divisions`` 12 (10,368 tetrahedra)
 carries the true ellipsoid's surface as a UV sphere of 100,002 points and 200,000 triangles:
 every point lies outside the coarse mesh (its boundary is inscribed), by up to 0.2 mm. One
-thread. Per repeat (median): embedding the surface once (``mesh/embedding.py``), carrying
+thread. Per repeat (median): embedding the surface once (``mesh/queries/embedding.py``), carrying
 it to a deformed state (one sparse product), writing one frame of its VTU series, and
 drawing final.png with the fine surface and with the coarse one (PyVista).
 Results: ``results/visual_surface.md``.
@@ -56,7 +56,7 @@ def main() -> None:
     import tissuesim as ts
     from tissuesim.bodies.visual_surface import make_visual_surface
     from tissuesim.io.vtu_series import VTUSeriesWriter
-    from tissuesim.mesh.embedding import embed_points
+    from tissuesim.mesh.queries.embedding import embed_points
 
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--divisions", type=int, default=12)
@@ -89,7 +89,7 @@ def main() -> None:
 
 
 def render(mesh, visual, x, tmp: Path, repeats: int) -> dict[str, list[float]]:
-    from tissuesim.mesh.boundary import boundary_facets
+    from tissuesim.mesh.queries.boundary import boundary_facets
     from tissuesim.render.pyvista3d import Frame3D, SurfaceLayer, render_frame_png
 
     vals = np.linalg.norm(x - mesh.points, axis=1)

@@ -48,7 +48,8 @@ from tissuesim.materials import (
     from_energy,
     make_material,
 )
-from tissuesim.mesh import Mesh, box, ellipsoid, mesh_surface, read_mesh, rectangle, select
+from tissuesim.mesh import Mesh, box, ellipsoid, mesh_surface, read_mesh, rectangle
+from tissuesim.mesh.queries import select
 from tissuesim.simulation import Simulation
 from tissuesim.solve.newton import NewtonOptions
 

@@ -1,6 +1,7 @@
-"""``tissuesim mesh SURFACE -o VOLUME``: tetrahedralise a surface (mesh/tetrahedralize.py), its
-options (size or element count, pytetwild's envelope and coarsening, smoothing a staircase) and
-the checks of its output file; ``cli.py`` adds it to the command line."""
+"""``tissuesim mesh SURFACE -o VOLUME``: tetrahedralise a surface
+(mesh/from_surface/tetrahedralize.py), its options (size or element count, pytetwild's envelope and
+coarsening, smoothing a staircase) and the checks of its output file; ``cli.py`` adds it to the
+command line."""
 
 from __future__ import annotations
 
@@ -12,8 +13,9 @@ __all__ = ["add_mesh_parser", "mesh_command"]
 
 
 def add_mesh_parser(sub: argparse._SubParsersAction, common: list) -> None:
-    """``tissuesim mesh SURFACE -o VOLUME``: tetrahedralise a surface (mesh/tetrahedralize.py)."""
-    from tissuesim.mesh.meshers import MESHERS
+    """``tissuesim mesh SURFACE -o VOLUME``: tetrahedralise a surface
+    (mesh/from_surface/tetrahedralize.py)."""
+    from tissuesim.mesh.from_surface.meshers import MESHERS
 
     p = sub.add_parser(
         "mesh",
@@ -92,7 +94,7 @@ def mesh_command(args: argparse.Namespace) -> int:
     from tissuesim.errors import OutputError
     from tissuesim.io.atomic import atomic_output
     from tissuesim.mesh import write_mesh
-    from tissuesim.mesh.tetrahedralize import tetrahedralize
+    from tissuesim.mesh.from_surface.tetrahedralize import tetrahedralize
 
     out = Path(args.output)
     if out.is_dir() or not out.parent.is_dir():

@@ -159,7 +159,7 @@ class BodyCalls:
                     "rectangle element = 'hex20', 'hex27', 'quad8', 'quad9'), or order 1"
                 )
             if order == 2 and mesh.order == 1:
-                from tissuesim.mesh.elevate import elevate_mesh
+                from tissuesim.mesh.cells.elevate import elevate_mesh
 
                 mesh = elevate_mesh(mesh)
             elif order == 1 and mesh.order == 2:
@@ -315,10 +315,10 @@ class BodyCalls:
 
     def _cut_ahead(self) -> None:
         """Before a step: each blade in contact with the body it cuts cuts every cell it will
-        touch in the step, where the body is now (``mesh/cut_ahead.py``), so that it moves in
-        the cut's kerf; what that changed is reported after the step."""
+        touch in the step, where the body is now (``mesh/cutting/cut_ahead.py``), so that it moves
+        in the cut's kerf; what that changed is reported after the step."""
         from tissuesim.bodies.organ_cut import STEP_SAMPLES
-        from tissuesim.mesh.cut_ahead import MARGIN, cut_ahead
+        from tissuesim.mesh.cutting.cut_ahead import MARGIN, cut_ahead
 
         t0, t1 = self.time, self.time + self.time_step
         for blade in self.organ_cuts:

@@ -447,7 +447,7 @@ class SetupCalls:
         cut; the swept surface is written as the series ``name``. With ``body`` (a FEM body)
         it cuts that body: ``blade(t)`` returns its straight edge (2, 3) or a flat triangular
         blade's corners (3, 3), moving in its own plane or off it (then along the surface it
-        sweeps, ``mesh/swept_cut.py``); after each step the cells it has swept through
+        sweeps, ``mesh/cutting/swept_cut.py``); after each step the cells it has swept through
         completely are cut by the virtual node algorithm (``cut_body``), mass kept; its
         cutting force (``toughness``, J/m^2 of new surface) is reported as ``name``
         and the cut's area per step under ``extra["cuts"]``. Returns the cutting tool.
@@ -457,7 +457,7 @@ class SetupCalls:
         also when it is driven live (``drive_obstacle``); ``end`` may then be ``math.inf``.
         With contact on (``set_contact``) the instrument is in contact with the body it cuts
         as with every other (``contact``, default True): before each step the cells it will
-        touch in the step are cut (``mesh/cut_ahead.py``), so it moves in the cut's kerf and
+        touch in the step are cut (``mesh/cutting/cut_ahead.py``), so it moves in the cut's kerf and
         the cut's faces never pass through it; ``contact=False`` lets it pass through the body
         it cuts, which is then cut after each step. ``name``'s force is what the instrument
         feels: the cutting resistance plus the contact force of the bodies on it.
@@ -565,7 +565,7 @@ class SetupCalls:
 
 
 def _median_boundary_edge(mesh: Mesh) -> float:
-    from tissuesim.mesh.boundary import boundary_facets
+    from tissuesim.mesh.queries.boundary import boundary_facets
 
     P = mesh.points[boundary_facets(mesh.simplices)]
     return float(np.median(np.linalg.norm(P - np.roll(P, 1, axis=1), axis=2)))

@@ -11,7 +11,7 @@ import pytest
 
 import tissuesim as ts
 from tissuesim.cli import main
-from tissuesim.mesh import meshers
+from tissuesim.mesh.from_surface import meshers
 
 RADII = (0.05, 0.03, 0.02)
 
@@ -56,7 +56,7 @@ def test_mesh_errors_are_one_line_with_exit_code_2(tmp_path, stl, capsys):
 
 
 def test_mesh_keeps_the_old_file_when_meshing_fails(tmp_path, stl, capsys, monkeypatch):
-    from tissuesim.mesh import tetrahedralize as tet
+    from tissuesim.mesh.from_surface import tetrahedralize as tet
 
     out = tmp_path / "organ.vtu"
     out.write_text("previous mesh")

@@ -8,7 +8,7 @@ import pytest
 
 import tissuesim as ts
 from tissuesim.cli import main
-from tissuesim.mesh import tetrahedralize as tet
+from tissuesim.mesh.from_surface import tetrahedralize as tet
 
 
 @pytest.fixture

@@ -103,7 +103,7 @@ def test_closed_triangles_take_the_energy_other_surfaces_the_lag_and_bad_facets_
     with pytest.raises(InputError, match="hexahedron20 cells"):
         ts.Simulation(quadratic, ts.make_material("neo_hookean", youngs_modulus=1e4,
                       poisson_ratio=0.3)).add_follower_pressure([[0, 1, 2]], 1.0)  # fmt: skip
-    from tissuesim.mesh.virtual_nodes import PlanarCut
+    from tissuesim.mesh.cutting.virtual_nodes import PlanarCut
 
     plane = np.array([[0.5, -1, -1], [0.5, 2, -1], [0.5, 2, 2], [0.5, -1, 2]], dtype=float)
     with pytest.raises(InputError, match="follower pressure"):

@@ -335,7 +335,7 @@ def test_cutting_an_organ_under_the_tissue_keeps_each_attachment_on_its_side():
     from scipy.sparse import csr_matrix
     from scipy.sparse.csgraph import connected_components
 
-    from tissuesim.mesh.virtual_nodes import PlanarCut
+    from tissuesim.mesh.cutting.virtual_nodes import PlanarCut
 
     sim = two_boxes()
     sim.step()

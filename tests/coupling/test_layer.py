@@ -6,7 +6,7 @@ import pytest
 from tissuesim.coupling.layer import contact_facets, sample_between
 from tissuesim.frames.sampling import IntegrationPoints
 from tissuesim.mesh import box
-from tissuesim.mesh.locate import distance_to_boundary, inside_mesh
+from tissuesim.mesh.queries.locate import distance_to_boundary, inside_mesh
 
 GAP = 0.1
 LEFT = box((0.0, 0.0, 0.0), (1.0, 1.0, 1.0), (4, 4, 4))

@@ -13,7 +13,7 @@ import scipy.sparse as sp
 import tissuesim as ts
 from tissuesim.contact.blade_clearance import clearance
 from tissuesim.contact.cut_surface import BLADE_GAP, cut_surface
-from tissuesim.mesh.virtual_nodes import PlanarCut, virtual_node_cut
+from tissuesim.mesh.cutting.virtual_nodes import PlanarCut, virtual_node_cut
 
 DHAT = 0.01
 GAP = BLADE_GAP * DHAT

@@ -1,5 +1,5 @@
 """An instrument in contact with the body it cuts (``add_cut(obstacle, ...)`` with contact on):
-the cut is made ahead of the blade (``mesh/cut_ahead.py``), so the blade moves in the cut's
+the cut is made ahead of the blade (``mesh/cutting/cut_ahead.py``), so the blade moves in the cut's
 kerf: no step intersects, the cut leads the blade by little (a step's travel, at most a cell
 edge, and a cell), nothing presses on the blade while the body is at rest, and when a side
 leans on the blade the instrument carries it (its force and the support's balance the body's
@@ -14,9 +14,9 @@ import pytest
 
 import tissuesim as ts
 from tissuesim.frames.sampling import Surface
-from tissuesim.mesh.cut_ahead import touched_cells
-from tissuesim.mesh.planar_cut import PlanarCut
-from tissuesim.mesh.swept_cut import SweptCut
+from tissuesim.mesh.cutting.cut_ahead import touched_cells
+from tissuesim.mesh.cutting.planar_cut import PlanarCut
+from tissuesim.mesh.cutting.swept_cut import SweptCut
 
 pytest.importorskip("ipctk")
 
@@ -139,7 +139,7 @@ def test_touched_cells_are_those_the_blade_reaches_within_the_margin():
 
 def test_an_instrument_driven_off_its_plane_cuts_along_its_sweep_in_contact():
     """Driven live along x, then 2 mm off its plane (y) as it goes on: its cut becomes a swept
-    surface (mesh/cut_ahead.py's fans over the touched cells), no step intersects, the blade
+    surface (mesh/cutting/cut_ahead.py's fans over the touched cells), no step intersects, the blade
     stays in contact, the cut grows; its flat, moved sideways, pushes the tissue it faces, so
     the instrument feels a force against the sideways motion."""
     mesh = ts.box((0, 0, 0), (0.1, 0.04, 0.04), (10, 4, 4))
@@ -170,7 +170,7 @@ def test_the_lead_follows_the_blades_next_step_when_its_motion_is_known():
     """A prescribed blade leads by where it will be a step later: not at all when it stops,
     along its next move when it turns; a live one (``following`` None) by this step's travel,
     at most a cell's edge."""
-    from tissuesim.mesh.cut_ahead import lead
+    from tissuesim.mesh.cutting.cut_ahead import lead
 
     cube = ts.box((0, 0, 0), (1, 1, 1), (4, 4, 4))  # cell edges 0.25 (0.35 diagonals)
     x_cell = cube.points[cube.cells]

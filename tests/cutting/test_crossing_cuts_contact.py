@@ -13,7 +13,7 @@ from test_cut_contact import block_on_floor  # pytest puts this folder on the pa
 
 import tissuesim as ts
 from tissuesim.contact.cut_surface import GAP, cut_surface
-from tissuesim.mesh.virtual_nodes import PlanarCut, virtual_node_cut
+from tissuesim.mesh.cutting.virtual_nodes import PlanarCut, virtual_node_cut
 
 G = 9.81
 DHAT = 0.01

@@ -1,9 +1,9 @@
-"""Crumbs (mesh/crumbs.py): a piece a cut frees that is too small for the mesh to carry on its
-own (under 1 % of the cells it lies in) and too thin for a contact surface stays attached to
-the piece it was part of. Three cuts that nearly meet in a line leave a prism 0.5 mm across in
-the middle: with contact on it stays with a neighbour (6 pieces, not 7), nothing moves when it
-joins, no gram is lost, the contact surface is the one without it, and the steps after it
-converge as they do without such a piece; without contact it is a piece of its own."""
+"""Crumbs (mesh/cutting/crumbs.py): a piece a cut frees that is too small for the mesh to carry on
+its own (under 1 % of the cells it lies in) and too thin for a contact surface stays attached to the
+piece it was part of. Three cuts that nearly meet in a line leave a prism 0.5 mm across in the
+middle: with contact on it stays with a neighbour (6 pieces, not 7), nothing moves when it joins, no
+gram is lost, the contact surface is the one without it, and the steps after it converge as they do
+without such a piece; without contact it is a piece of its own."""
 
 from __future__ import annotations
 
@@ -18,8 +18,8 @@ from test_several_cuts_contact import closed_and_free
 import tissuesim.bodies.cut_state as cut_state
 from tissuesim.contact.sliver_points import bare_pieces
 from tissuesim.contact.surfaces import cut_faces
-from tissuesim.mesh.crumbs import CRUMB, attach_crumbs, joined, small_pieces
-from tissuesim.mesh.virtual_nodes import PlanarCut, virtual_node_cut
+from tissuesim.mesh.cutting.crumbs import CRUMB, attach_crumbs, joined, small_pieces
+from tissuesim.mesh.cutting.virtual_nodes import PlanarCut, virtual_node_cut
 
 #: the prism's axis (along z, through the beam of block_on_floor) and its inradius (m)
 CENTRE, INRADIUS = np.array([0.47, 0.1, 0.15]), 3e-4

@@ -1,7 +1,7 @@
-"""A blade that leaves its plane cuts along the surface it sweeps (mesh/swept_cut.py): an edge
-swept along a circular arc through a block cuts it along the cylinder, within 1 % of the
-local edge length, into two pieces, with its mass kept; an instrument driven out of its first
-plane goes on cutting along its new path."""
+"""A blade that leaves its plane cuts along the surface it sweeps (mesh/cutting/swept_cut.py): an
+edge swept along a circular arc through a block cuts it along the cylinder, within 1 % of the local
+edge length, into two pieces, with its mass kept; an instrument driven out of its first plane goes
+on cutting along its new path."""
 
 from __future__ import annotations
 

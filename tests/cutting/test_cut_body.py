@@ -8,7 +8,7 @@ import pytest
 
 import tissuesim as ts
 from tissuesim.errors import InputError
-from tissuesim.mesh.virtual_nodes import PlanarCut
+from tissuesim.mesh.cutting.virtual_nodes import PlanarCut
 
 G = 9.81
 

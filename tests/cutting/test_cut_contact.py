@@ -13,7 +13,7 @@ import pytest
 import tissuesim as ts
 from tissuesim.contact.cut_surface import GAP, SNAP_OUT, cut_surface
 from tissuesim.contact.obstacles import plane
-from tissuesim.mesh.virtual_nodes import PlanarCut, virtual_node_cut
+from tissuesim.mesh.cutting.virtual_nodes import PlanarCut, virtual_node_cut
 
 G = 9.81
 

@@ -12,7 +12,7 @@ import pytest
 import tissuesim as ts
 from tissuesim.contact.cut_surface import GAP, SNAP_OUT
 from tissuesim.contact.cut_surface_2d import cut_boundary
-from tissuesim.mesh.virtual_nodes import PlanarCut, virtual_node_cut
+from tissuesim.mesh.cutting.virtual_nodes import PlanarCut, virtual_node_cut
 
 G = 9.81
 

@@ -1,4 +1,4 @@
-"""A body cut by virtual nodes (mesh/virtual_nodes.py, Mesh.cell_fractions) as a FEM model:
+"""A body cut by virtual nodes (mesh/cutting/virtual_nodes.py, Mesh.cell_fractions) as a FEM model:
 mass kept, energy derivatives of the copies against finite differences, and a notched
 cantilever against meshes with the notch along their faces."""
 
@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 
 import tissuesim as ts
+from tissuesim.mesh.cutting.virtual_nodes import PlanarCut, virtual_node_cut
 from tissuesim.mesh.mesh import Mesh
-from tissuesim.mesh.virtual_nodes import PlanarCut, virtual_node_cut
 from tissuesim.model import Model
 
 

@@ -13,8 +13,8 @@ import tissuesim as ts
 from tissuesim.assembly.pattern import SparsityPattern
 from tissuesim.energies.mass import MassMatrix
 from tissuesim.kinematics.p1 import shape_gradients
-from tissuesim.mesh.boundary import boundary_facets, match_facets
-from tissuesim.mesh.virtual_nodes import PlanarCut
+from tissuesim.mesh.cutting.virtual_nodes import PlanarCut
+from tissuesim.mesh.queries.boundary import boundary_facets, match_facets
 
 NO_EXTRA = (np.zeros(0, np.int64), np.zeros(0, np.int64))  # forces the generic pattern
 

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 from test_liver_resection import run_coarse
 
-from tissuesim.mesh.virtual_nodes import node_pieces
+from tissuesim.mesh.cutting.virtual_nodes import node_pieces
 
 G = 9.81
 

@@ -1,5 +1,5 @@
-"""The closed-form split of simplices by a plane (mesh/plane_split.py) against convex hulls of
-the clipped simplex, an independent computation, and the polygon test against a point loop."""
+"""The closed-form split of simplices by a plane (mesh/cutting/plane_split.py) against convex hulls
+of the clipped simplex, an independent computation, and the polygon test against a point loop."""
 
 from __future__ import annotations
 
@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 from scipy.spatial import ConvexHull
 
-from tissuesim.mesh.plane_split import positive_fraction, sections_inside
+from tissuesim.mesh.cutting.plane_split import positive_fraction, sections_inside
 
 
 def hull_fraction(x: np.ndarray, d: np.ndarray) -> float:

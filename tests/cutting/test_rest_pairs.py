@@ -12,7 +12,7 @@ from test_crossing_cuts_contact import BOX, CASES, DHAT
 import tissuesim as ts
 from tissuesim.contact.cut_surface import cut_surface
 from tissuesim.contact.rest_proximity import rest_proximity_filter
-from tissuesim.mesh.virtual_nodes import virtual_node_cut
+from tissuesim.mesh.cutting.virtual_nodes import virtual_node_cut
 
 
 def test_a_body_cut_where_cuts_cross_feels_no_contact_force_at_rest():

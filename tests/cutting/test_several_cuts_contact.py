@@ -15,8 +15,8 @@ import tissuesim as ts
 import tissuesim.contact.cut_surface as cut_surface_module
 import tissuesim.contact.cut_surface_2d as cut_surface_2d_module
 from tissuesim.contact.cut_surface import GAP, SNAP_IN, SNAP_OUT, cut_surface, level_stack
-from tissuesim.mesh.plane_split import region_fractions
-from tissuesim.mesh.virtual_nodes import PlanarCut, virtual_node_cut
+from tissuesim.mesh.cutting.plane_split import region_fractions
+from tissuesim.mesh.cutting.virtual_nodes import PlanarCut, virtual_node_cut
 
 #: three oblique cuts meeting in a few cells where merging the surface's close points folded
 #: it through itself (a cluster's mean moved past its neighbours' triangles)

@@ -1,4 +1,4 @@
-"""The curved-cut geometry (mesh/swept_cut.py): closest points on triangles against an
+"""The curved-cut geometry (mesh/cutting/swept_cut.py): closest points on triangles against an
 independent computation, distances equal to the plane's on a planar sweep, and sections on
 and off what a blade swept."""
 
@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 
 from tissuesim.errors import InputError
-from tissuesim.mesh.planar_cut import PlanarCut
-from tissuesim.mesh.swept_cut import SweptCut, closest_points
+from tissuesim.mesh.cutting.planar_cut import PlanarCut
+from tissuesim.mesh.cutting.swept_cut import SweptCut, closest_points
 
 
 def _closest_by_parts(p, a, b, c):

@@ -1,4 +1,4 @@
-"""The virtual node algorithm's core (mesh/virtual_nodes.py): which cells a cut crosses, the
+"""The virtual node algorithm's core (mesh/cutting/virtual_nodes.py): which cells a cut crosses, the
 copies and their volume fractions, node duplication where the material separates."""
 
 from __future__ import annotations
@@ -9,7 +9,7 @@ import pytest
 import tissuesim as ts
 from tissuesim.errors import InputError
 from tissuesim.mesh.checks import signed_volumes
-from tissuesim.mesh.virtual_nodes import PlanarCut, cut_cells, virtual_node_cut
+from tissuesim.mesh.cutting.virtual_nodes import PlanarCut, cut_cells, virtual_node_cut
 
 
 def plane_x(x0: float, y=(-1.0, 2.0), z=(-1.0, 2.0)) -> PlanarCut:

@@ -15,7 +15,7 @@ LAWS = ("neo_hookean", "course_neo_hookean", "fixed_corotated", "linear", "stvk"
 
 def distorted(mesh, amount=0.15, seed=3):
     """The mesh with its interior nodes moved randomly (non-parallelogram cells)."""
-    from tissuesim.mesh.select import boundary_vertices
+    from tissuesim.mesh.queries.select import boundary_vertices
 
     p = mesh.points.copy()
     inner = np.setdiff1d(np.arange(mesh.n_points), boundary_vertices(mesh))
@@ -55,7 +55,7 @@ def test_q1_patch_test_constant_strain_is_exact(name):
         np.testing.assert_allclose(F, np.broadcast_to(A, F.shape), atol=1e-13)
         assert md.kinematics.weights.sum() == pytest.approx(1.0, rel=1e-12)
         g = md.evaluate(x, 1, False).gradient.reshape(-1, d)
-        from tissuesim.mesh.select import boundary_vertices
+        from tissuesim.mesh.queries.select import boundary_vertices
 
         inner = np.setdiff1d(np.arange(mesh.n_points), boundary_vertices(mesh))
         scale = np.abs(g).max()
@@ -142,7 +142,7 @@ def test_q1_mass_consistent_lumped_gravity_and_body_force(name):
 @pytest.mark.parametrize("name", ["quad_distorted", "hex", "hex_distorted"])
 def test_q1_traction_integrates_force_and_moment(name):
     from tissuesim.energies.loads import Traction
-    from tissuesim.mesh.select import facets_on_plane
+    from tissuesim.mesh.queries.select import facets_on_plane
 
     mesh = MESHES[name]()
     md = model(mesh)
@@ -160,7 +160,7 @@ def test_q1_traction_integrates_force_and_moment(name):
     moment = (f[:, 1] * mesh.points[:, 1]).sum()
     assert moment == pytest.approx(5.0 / 3.0, rel=1e-12)
     # outward normals of the selected faces
-    from tissuesim.mesh.tensor import split_faces
+    from tissuesim.mesh.cells.tensor import split_faces
 
     if d == 3:
         tri = split_faces(facets)
@@ -170,7 +170,7 @@ def test_q1_traction_integrates_force_and_moment(name):
 
 
 def test_q1_shape_functions_partition_of_unity_and_derivatives():
-    from tissuesim.mesh.tensor import SIGNS, gauss_rule, shape_functions
+    from tissuesim.mesh.cells.tensor import SIGNS, gauss_rule, shape_functions
 
     for d in (2, 3):
         rng = np.random.default_rng(d)

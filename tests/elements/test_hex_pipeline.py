@@ -10,9 +10,9 @@ import pytest
 import tissuesim as ts
 from tissuesim.errors import InputError, MeshError
 from tissuesim.mesh import describe_mesh, read_mesh, write_mesh
-from tissuesim.mesh.boundary import boundary_facets
+from tissuesim.mesh.cells.tensor import split_faces
 from tissuesim.mesh.checks import validate_mesh
-from tissuesim.mesh.tensor import split_faces
+from tissuesim.mesh.queries.boundary import boundary_facets
 
 
 def test_generators_sets_and_split_boundary():
@@ -161,7 +161,7 @@ def test_refused_with_reasons():
     with pytest.raises(InputError, match="order 2 of hexahedron"):
         sim.add_body("a", mesh, mat, order=2)
     sim.add_body("b", mesh, mat)
-    from tissuesim.mesh.virtual_nodes import PlanarCut
+    from tissuesim.mesh.cutting.virtual_nodes import PlanarCut
 
     square = [[0.5, -1, -1], [0.5, 2, -1], [0.5, 2, 2], [0.5, -1, 2]]
     cut = PlanarCut(np.array([0.5, 0, 0.0]), np.array([1.0, 0, 0]), np.array(square, float))

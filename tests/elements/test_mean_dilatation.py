@@ -7,7 +7,7 @@ from tissuesim import Simulation
 from tissuesim.errors import InputError
 from tissuesim.materials.registry import make_material
 from tissuesim.mesh import box, rectangle
-from tissuesim.mesh.select import boundary_vertices, facets_on_plane, vertices_on_plane
+from tissuesim.mesh.queries.select import boundary_vertices, facets_on_plane, vertices_on_plane
 from tissuesim.model import Model
 from tissuesim.solve.newton import NewtonOptions
 

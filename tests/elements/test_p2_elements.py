@@ -14,7 +14,7 @@ LAWS = ("neo_hookean", "course_neo_hookean", "fixed_corotated", "linear", "stvk"
 
 def curved(mesh, amount=0.05):
     """The mesh with its interior midside nodes moved off their edges (curved elements)."""
-    from tissuesim.mesh.select import boundary_vertices
+    from tissuesim.mesh.queries.select import boundary_vertices
 
     p = mesh.points.copy()
     d = mesh.dim
@@ -50,7 +50,7 @@ def test_p2_reproduces_quadratic_fields_exactly(name):
     x = X @ A.T + np.einsum("ijk,nj,nk->ni", Q, X, X)
     F = K.deformation_gradients(x.ravel())
     # exact gradient at the quadrature points: A + 2 Q X (Q symmetric in j, k)
-    from tissuesim.mesh.reference import quadrature, shape_functions
+    from tissuesim.mesh.cells.reference import quadrature, shape_functions
 
     xi, _ = quadrature(d, 2)
     N, _ = shape_functions(d, 2, xi)
@@ -143,7 +143,7 @@ def test_p2_mass_consistent_lumped_and_gravity(name):
 
 def test_p2_traction_integrates_force_and_moment():
     from tissuesim.energies.loads import Traction
-    from tissuesim.mesh.select import facets_on_plane
+    from tissuesim.mesh.queries.select import facets_on_plane
 
     for mesh in (rectangle(divisions=(3, 4), order=2), box(divisions=(2, 3, 2), order=2)):
         md = model(mesh)

@@ -10,9 +10,9 @@ import pytest
 from tissuesim.backend import numba_available
 from tissuesim.materials.registry import make_material
 from tissuesim.mesh import box, rectangle
-from tissuesim.mesh import tensor_quadratic as tq
+from tissuesim.mesh.cells import tensor_quadratic as tq
 from tissuesim.mesh.checks import validate_mesh
-from tissuesim.mesh.select import boundary_vertices
+from tissuesim.mesh.queries.select import boundary_vertices
 from tissuesim.model import Model
 
 KINDS = ("quad8", "quad9", "hexahedron20", "hexahedron27")
@@ -144,7 +144,7 @@ def test_mass_integrates_volume_and_quadratics_lumped_is_positive(kind):
 @pytest.mark.parametrize("kind", KINDS)
 def test_traction_integrates_force_and_moment(kind):
     from tissuesim.energies.loads import Traction
-    from tissuesim.mesh.select import facets_on_plane
+    from tissuesim.mesh.queries.select import facets_on_plane
 
     mesh = mesh_of(kind, distort=0.3)
     md = model(mesh)
@@ -164,7 +164,7 @@ def test_traction_integrates_force_and_moment(kind):
 @pytest.mark.parametrize("kind", KINDS)
 def test_split_fills_the_cells_and_shows_each_face_on_the_boundary(kind):
     from tissuesim.contact.pairs import contact_facets
-    from tissuesim.mesh.boundary import boundary_facets, facet_normals
+    from tissuesim.mesh.queries.boundary import boundary_facets, facet_normals
 
     mesh = mesh_of(kind, divisions=(2, 1, 2)[: 2 if kind.startswith("quad") else 3], distort=0.2)
     d = mesh.dim

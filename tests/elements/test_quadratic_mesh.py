@@ -6,8 +6,8 @@ import pytest
 
 from tissuesim.errors import MeshError
 from tissuesim.mesh import box, ellipsoid, read_mesh, rectangle, write_mesh
+from tissuesim.mesh.cells.elevate import elevate_mesh
 from tissuesim.mesh.checks import validate_mesh
-from tissuesim.mesh.elevate import elevate_mesh
 
 
 def test_generators_put_midside_nodes_in_the_side_sets():

@@ -5,7 +5,7 @@ from math import factorial
 import numpy as np
 import pytest
 
-from tissuesim.mesh.reference import facet_quadrature, quadrature, shape_functions
+from tissuesim.mesh.cells.reference import facet_quadrature, quadrature, shape_functions
 
 
 def exact_monomial(powers) -> float:
@@ -44,7 +44,7 @@ def test_facet_rule_is_one_dimension_lower():
 @pytest.mark.parametrize("order", [1, 2])
 def test_shape_functions_interpolate_and_sum_to_one(dim, order):
     # nodes: corners, then the midpoints of mesh/quadratic.EDGES
-    from tissuesim.mesh.quadratic import EDGES
+    from tissuesim.mesh.cells.quadratic import EDGES
 
     corners = np.concatenate([np.zeros((1, dim)), np.eye(dim)])
     nodes = corners if order == 1 else np.concatenate([corners, corners[EDGES[dim]].mean(axis=1)])

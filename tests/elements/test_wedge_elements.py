@@ -9,9 +9,10 @@ import tissuesim as ts
 from tissuesim.backend import numba_available
 from tissuesim.energies.loads import BodyForce, Gravity, Traction, traction_nodal_forces
 from tissuesim.materials.registry import make_material
-from tissuesim.mesh import describe_mesh, wedge
+from tissuesim.mesh import describe_mesh
+from tissuesim.mesh.cells import wedge
 from tissuesim.mesh.checks import validate_mesh
-from tissuesim.mesh.select import boundary_vertices
+from tissuesim.mesh.queries.select import boundary_vertices
 from tissuesim.model import Model
 
 LAWS = ("neo_hookean", "course_neo_hookean", "fixed_corotated", "linear", "stvk")

@@ -12,7 +12,7 @@ import pytest
 
 import tissuesim as ts
 from tissuesim.febio import FebError, febio_scene, load_febio, read_feb
-from tissuesim.mesh import wedge
+from tissuesim.mesh.cells import wedge
 from tissuesim.solve.newton import NewtonOptions
 
 E, NU, TRACTION, PRESSURE = 1e4, 0.3, (0.0, 0.0, -30.0), 20.0

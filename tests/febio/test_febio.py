@@ -312,7 +312,7 @@ def test_a_pressure_on_the_deformed_closed_surface_is_a_follower_pressure(tmp_pa
     surface: it runs as a follower pressure, so at the end the Cauchy stress is -p I (a dead
     pressure on the reference faces would leave -p J^(-1/3) I); the converted scene says
     [[pressure]]."""
-    from tissuesim.mesh.boundary import boundary_facets
+    from tissuesim.mesh.queries.boundary import boundary_facets
 
     text = (MODELS / "mooney_rivlin_pressure.feb").read_text()
     cells = np.array([[1, 2, 4, 8], [1, 4, 3, 8], [1, 3, 7, 8], [1, 7, 5, 8], [1, 5, 6, 8],

@@ -14,7 +14,7 @@ from scipy.optimize import brentq
 
 from tissuesim.febio import FebError, febio_scene, load_febio, read_feb
 from tissuesim.febio.mesh_sections import PERMUTATIONS
-from tissuesim.mesh.tensor_quadratic import NODES
+from tissuesim.mesh.cells.tensor_quadratic import NODES
 
 MODELS = Path(__file__).parent / "models"
 

@@ -1,5 +1,5 @@
-"""Issue 41: points embedded in a mesh by barycentric coordinates (mesh/embedding.py), the map
-that carries a fine visual surface with a coarse body. A barycentric map is exact for affine
+"""Issue 41: points embedded in a mesh by barycentric coordinates (mesh/queries/embedding.py), the
+map that carries a fine visual surface with a coarse body. A barycentric map is exact for affine
 motion, points outside the mesh included (their coordinates are extrapolated)."""
 
 from __future__ import annotations
@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 
 import tissuesim as ts
-from tissuesim.mesh.elevate import elevate_mesh
-from tissuesim.mesh.embedding import embed_points
+from tissuesim.mesh.cells.elevate import elevate_mesh
+from tissuesim.mesh.queries.embedding import embed_points
 
 A3 = np.array([[1.1, 0.2, -0.1], [0.05, 0.9, 0.1], [0.02, -0.03, 1.2]])
 B3 = np.array([0.01, 0.02, -0.03])

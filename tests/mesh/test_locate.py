@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 
 from tissuesim.mesh import box, ellipsoid, rectangle
-from tissuesim.mesh.boundary import boundary_facets
-from tissuesim.mesh.locate import (
+from tissuesim.mesh.queries.boundary import boundary_facets
+from tissuesim.mesh.queries.locate import (
     ClosestPoints,
     MeshLocator,
     closest_boundary_points,

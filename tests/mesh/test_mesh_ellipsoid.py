@@ -5,8 +5,8 @@ import pytest
 
 from tissuesim.errors import MeshError
 from tissuesim.mesh import box, ellipsoid, facet_normals, signed_volumes
-from tissuesim.mesh.boundary import boundary_facets, facet_table
-from tissuesim.mesh.generators import _cube_to_ball
+from tissuesim.mesh.generators.ellipsoids import _cube_to_ball
+from tissuesim.mesh.queries.boundary import boundary_facets, facet_table
 
 RADII = (1.0, 0.7, 0.5)
 CENTER = (0.3, -1.0, 2.0)

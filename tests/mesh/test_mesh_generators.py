@@ -5,7 +5,7 @@ import pytest
 
 from tissuesim.errors import MeshError
 from tissuesim.mesh import box, facet_normals, rectangle, signed_volumes
-from tissuesim.mesh.boundary import all_facets, facet_table
+from tissuesim.mesh.queries.boundary import all_facets, facet_table
 
 
 def assert_conforming(mesh, n_boundary):

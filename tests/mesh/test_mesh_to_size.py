@@ -15,10 +15,10 @@ import pytest
 import tissuesim as ts
 from tissuesim.cli import main
 from tissuesim.errors import InputError, MeshError, SceneError
-from tissuesim.mesh import meshers
-from tissuesim.mesh import tetrahedralize as tet
-from tissuesim.mesh.sizing import ELEMENT_TOLERANCE, MAX_PASSES, next_size, to_count
-from tissuesim.mesh.smoothing import normal_variation, smooth_surface
+from tissuesim.mesh.from_surface import meshers
+from tissuesim.mesh.from_surface import tetrahedralize as tet
+from tissuesim.mesh.from_surface.sizing import ELEMENT_TOLERANCE, MAX_PASSES, next_size, to_count
+from tissuesim.mesh.from_surface.smoothing import normal_variation, smooth_surface
 from tissuesim.scene.loader import load_scene
 
 ROOT = Path(__file__).resolve().parents[2]

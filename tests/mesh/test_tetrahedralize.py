@@ -9,9 +9,10 @@ import pytest
 
 import tissuesim as ts
 from tissuesim.errors import InputError, MeshError
-from tissuesim.mesh import meshers, signed_volumes, write_mesh
-from tissuesim.mesh import tetrahedralize as tet
-from tissuesim.mesh.tetrahedralize import dihedral_angles, mesh_surface, read_surface
+from tissuesim.mesh import signed_volumes, write_mesh
+from tissuesim.mesh.from_surface import meshers
+from tissuesim.mesh.from_surface import tetrahedralize as tet
+from tissuesim.mesh.from_surface.tetrahedralize import dihedral_angles, mesh_surface, read_surface
 
 RADII = (0.05, 0.03, 0.02)
 EXACT = 4 / 3 * np.pi * np.prod(RADII)

@@ -133,7 +133,7 @@ def test_wrong_shapes_raise(tmp_path):
 def test_3d_picture_of_a_smooth_body_without_feature_edges(tmp_path):
     """A generated ellipsoid has no sharp edges: the rest outline is empty, which matplotlib
     refused (the plain install's palpation example ended in an internal error)."""
-    from tissuesim.mesh.generators import ellipsoid
+    from tissuesim.mesh.generators.ellipsoids import ellipsoid
 
     mesh = ellipsoid((0.0, 0.0, 0.0), (0.06, 0.04, 0.03), 6)
     x = mesh.points * 1.01

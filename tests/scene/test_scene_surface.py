@@ -11,7 +11,8 @@ import pytest
 
 import tissuesim as ts
 from tissuesim.errors import SceneError
-from tissuesim.mesh import meshers, signed_volumes
+from tissuesim.mesh import signed_volumes
+from tissuesim.mesh.from_surface import meshers
 from tissuesim.scene.loader import load_scene
 
 RADII = (0.05, 0.03, 0.02)

@@ -1,4 +1,4 @@
-"""What a FEM body keeps of its cuts (virtual node algorithm, ``mesh/virtual_nodes.py``), so
+"""What a FEM body keeps of its cuts (virtual node algorithm, ``mesh/cutting/virtual_nodes.py``), so
 that it can be cut again, step after step, as a blade advances.
 
 Every cut is recomputed from the body's *original* mesh with all its cuts so far: the nodes of
@@ -17,12 +17,12 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from tissuesim.errors import InputError
-from tissuesim.mesh.boundary import facet_measures
-from tissuesim.mesh.interior_faces import interior_faces
-from tissuesim.mesh.plane_split import section_measures
+from tissuesim.mesh.cutting.plane_split import section_measures
+from tissuesim.mesh.cutting.swept_cut import SweptCut
+from tissuesim.mesh.cutting.virtual_nodes import PlanarCut, VirtualNodeMesh, virtual_node_cut
+from tissuesim.mesh.queries.boundary import facet_measures
+from tissuesim.mesh.queries.interior_faces import interior_faces
 from tissuesim.mesh.rows import rows_any
-from tissuesim.mesh.swept_cut import SweptCut
-from tissuesim.mesh.virtual_nodes import PlanarCut, VirtualNodeMesh, virtual_node_cut
 
 __all__ = [
     "CutState",
@@ -205,12 +205,12 @@ def recut(
 def attach_crumbs_in_contact(
     state: CutState, vn: VirtualNodeMesh, carry: np.ndarray, dhat: float, blade: bool
 ) -> tuple[VirtualNodeMesh, np.ndarray]:
-    """The cut ``vn`` (and ``carry``) with its crumbs attached (``mesh/crumbs.py``): small
+    """The cut ``vn`` (and ``carry``) with its crumbs attached (``mesh/cutting/crumbs.py``): small
     pieces that have no contact surface at the barrier's ``dhat`` (``blade``: the gap of a body
     an instrument in contact cuts). Kept as the state's current cut. Unchanged when there is
     none (a contact surface is built to tell only when a small piece exists, and only round
     the small pieces: ``bare_small_pieces``)."""
-    from tissuesim.mesh.crumbs import attach_crumbs, small_pieces
+    from tissuesim.mesh.cutting.crumbs import attach_crumbs, small_pieces
 
     small = small_pieces(vn, state.original.points)
     if not small.any():

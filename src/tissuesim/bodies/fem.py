@@ -267,13 +267,13 @@ class FemBody:
         width = self.mesh.facet_nodes  # d; 4 for the quad faces of hexahedra
         facets = ids.reshape(np.shape(facets)) if ids.size else ids.reshape(0, width)
         if self.mesh.cell_type == "wedge" and facets.ndim == 2 and facets.shape[1] == 3:
-            from tissuesim.mesh.wedge import as_facets
+            from tissuesim.mesh.cells.wedge import as_facets
 
             facets = as_facets(facets)  # a wedge's triangle faces, as its facet rows hold them
         if facets.ndim != 2 or facets.shape[1] != width:
             raise InputError(f"add_traction: facets must be (k, {width}) vertex indices")
         if self.mesh.order == 2 and facets.size:
-            from tissuesim.mesh.quadratic import quadratic_facets
+            from tissuesim.mesh.cells.quadratic import quadratic_facets
 
             missing = (quadratic_facets(self.mesh, facets) < 0).any(axis=1)
             if missing.any():
@@ -341,7 +341,7 @@ class FemBody:
         self.velocity = v.ravel().copy()
         self._changed("velocity")
 
-    # -- cutting (mesh/virtual_nodes.py) ---------------------------------------------------------
+    # -- cutting (mesh/cutting/virtual_nodes.py) ---------------------------------------------------
     def apply_cut(self, cut, carry: np.ndarray, state) -> None:
         """Take the mesh of a virtual-node cut (``VirtualNodeMesh`` of the original mesh of
         ``state``, a ``bodies.cut_state.CutState``): a new model on it (the copies' densities,

@@ -9,7 +9,7 @@ scalpel's flat blade, which cuts wherever it is as well as where it has been), m
 its positions so far in that plane (exact for a blade moving without turning; for one that
 turns in its plane, a little more than it swept). A blade that leaves its plane (it tilts,
 turns or follows a curved path) cuts along the surface it sweeps: the triangles between its
-positions sampled step by step (``mesh/swept_cut.py``), each cell along the swept surface's
+positions sampled step by step (``mesh/cutting/swept_cut.py``), each cell along the swept surface's
 plane where it passes. Its force per step is the cutting
 resistance: with ``toughness`` G (J/m^2, the energy to make a unit of new cut surface; 0 by
 default), the work G dA of the area cut in the step over the blade's travel ds, against its
@@ -23,7 +23,7 @@ moved by the obstacle's motion, prescribed or driven live between steps
 step (``record``); its plane is the one its first samples span, and its cut becomes a swept
 surface once it leaves it. With contact on, the instrument is in contact with the body it
 cuts too (``contact``, the default): before each step, every cell the blade will touch in the
-step is cut (``mesh/cut_ahead.py``), so the blade moves in the cut's kerf, both faces of the
+step is cut (``mesh/cutting/cut_ahead.py``), so the blade moves in the cut's kerf, both faces of the
 cut stay clear of it, and what presses on its faces is a contact force. The cut then leads
 the blade by at most a step's travel (capped at a cell's edge) and one cell (after each step,
 without contact, it trails by at most one cell).
@@ -39,8 +39,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from tissuesim.errors import InputError
-from tissuesim.mesh.swept_cut import SweptCut
-from tissuesim.mesh.virtual_nodes import PlanarCut
+from tissuesim.mesh.cutting.swept_cut import SweptCut
+from tissuesim.mesh.cutting.virtual_nodes import PlanarCut
 
 __all__ = ["OrganCut"]
 
@@ -68,7 +68,7 @@ class OrganCut:
     contact: bool = False
     point: np.ndarray | None = field(init=False, default=None)
     normal: np.ndarray | None = field(init=False, default=None)
-    #: the blade left its plane: the cut follows the surface it sweeps (mesh/swept_cut.py)
+    #: the blade left its plane: the cut follows the surface it sweeps (mesh/cutting/swept_cut.py)
     curved: bool = field(init=False, default=False)
     area: float = field(init=False, default=0.0)
     _samples: list = field(init=False, default_factory=list, repr=False)

@@ -15,7 +15,7 @@ The crack turns where the stress ahead of it turns: when the mean principal dire
 new elements it would take is more than TURN_DEGREES off its plane's normal, the crack goes on
 as a new planar piece from its front, through the front's nearest edge (so the pieces join
 along it), normal to that direction (turned about the edge), taking only elements ahead of
-the front. The pieces together are a swept surface (``mesh/swept_cut.py``), each element cut
+the front. The pieces together are a swept surface (``mesh/cutting/swept_cut.py``), each element cut
 along the piece nearest to it. The rule is deterministic (no random nucleation). Its size per
 step, and so the load at which a body tears, depends on the mesh as every local strength
 criterion on a stress field does: the guide reports it.
@@ -35,8 +35,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from tissuesim.errors import InputError
-from tissuesim.mesh.swept_cut import SweptCut
-from tissuesim.mesh.virtual_nodes import PlanarCut
+from tissuesim.mesh.cutting.swept_cut import SweptCut
+from tissuesim.mesh.cutting.virtual_nodes import PlanarCut
 
 __all__ = ["BodyTearing", "Crack", "FAR_CELLS", "TURN_DEGREES"]
 

@@ -1,10 +1,10 @@
 """A fine visual surface carried by a coarse FEM body (SOFA's barycentric mapping).
 
 Any triangle surface (a polyline in 2D) is embedded once, at rest, in the body's simplices by
-barycentric coordinates (``mesh/embedding.py``); it then moves with the body at the cost of one
-sparse product per frame, is written as its own series (``io/body_series.py VisualSeries``) and
-is drawn instead of the body's coarse surface in the 3D pictures (``render/scene.py``). It takes
-no part in the mechanics: it has no mass, no stiffness, no contact.
+barycentric coordinates (``mesh/queries/embedding.py``); it then moves with the body at the cost of
+one sparse product per frame, is written as its own series (``io/body_series.py VisualSeries``) and
+is drawn instead of the body's coarse surface in the 3D pictures (``render/scene.py``). It takes no
+part in the mechanics: it has no mass, no stiffness, no contact.
 
 Points outside the body's mesh (a fine surface sticks out of a coarse mesh by up to an element)
 are carried by the element of the closest boundary facet, with extrapolated coordinates; a point
@@ -24,8 +24,8 @@ from typing import Any
 import numpy as np
 
 from tissuesim.errors import InputError, MeshError
-from tissuesim.mesh.embedding import Embedding, embed_points
 from tissuesim.mesh.mesh import Mesh
+from tissuesim.mesh.queries.embedding import Embedding, embed_points
 from tissuesim.validate import short
 
 __all__ = ["VisualSurface", "make_visual_surface", "read_visual_cells"]

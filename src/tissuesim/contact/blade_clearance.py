@@ -1,7 +1,7 @@
 """A step's start clear of a blade's path: the kerf ahead of a blade in contact opened.
 
 A blade in contact with the body it cuts moves in the kerf cut ahead of it
-(``mesh/cut_ahead.py``), whose faces are cut ``BLADE_GAP`` dhat off the blade's plane. A
+(``mesh/cutting/cut_ahead.py``), whose faces are cut ``BLADE_GAP`` dhat off the blade's plane. A
 loaded body closes that kerf ahead of the blade's edge where no blade holds it open (a lobe
 hanging from the rest of the organ turns its cut face towards the plane, and the two faces may
 even cross it together). The step cannot then start with the blade at its target: the blade
@@ -82,7 +82,7 @@ def clearance(
 def _in_swept_area(vertices, blades, point, normal, margin) -> np.ndarray | None:
     """Which vertices project onto the blade's plane within ``margin`` of the convex polygon
     its edges or triangles over the step span (None: they span no area)."""
-    from tissuesim.mesh.planar_cut import PlanarCut
+    from tissuesim.mesh.cutting.planar_cut import PlanarCut
 
     area = PlanarCut.hull(
         np.concatenate([np.asarray(b, dtype=float) for b in blades]), point, normal

@@ -1,4 +1,4 @@
-"""The contact surface of a cut FEM body (virtual node cut, ``mesh/virtual_nodes.py``): its
+"""The contact surface of a cut FEM body (virtual node cut, ``mesh/cutting/virtual_nodes.py``): its
 boundary embedded in the element copies, every surface point a fixed weighting of mesh nodes.
 
 The two faces of a fresh cut coincide, and IPC's barrier is infinite at zero distance. So each
@@ -32,7 +32,7 @@ import scipy.sparse as sp
 from tissuesim.contact.edges import triangle_edges
 from tissuesim.contact.polygon_surface import polygon_surface
 from tissuesim.errors import InputError
-from tissuesim.mesh.polygon_clip import clip_polygons
+from tissuesim.mesh.cutting.polygon_clip import clip_polygons
 from tissuesim.mesh.rows import unique_rows
 
 __all__ = ["cut_surface", "level_stack"]

@@ -17,7 +17,7 @@ An edge whose both node levels are exactly gap bounds its copy's region only whe
 third node is at gap or above (else that region is the edge alone, and the copy leaves it out),
 and an edge two copies both give, in opposite directions, is inside the region (dropped).
 Segments run with the region on their left (outward normal (dy, -dx), the 2D convention of
-``mesh/boundary.py`` that the contact model passes to ipctk as (k, 2) edges).
+``mesh/queries/boundary.py`` that the contact model passes to ipctk as (k, 2) edges).
 """
 
 from __future__ import annotations

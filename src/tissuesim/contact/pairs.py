@@ -52,8 +52,8 @@ def contact_facets(name: str, mesh, surface) -> np.ndarray:
     (k, d) array of vertex indices; a hexahedral mesh's quad faces (k, 4) are split in two (a
     quadratic one's into the 6 or 8 triangles of its split, a quad8 / quad9 mesh's edges into
     2 segments), a wedge mesh's (k, 4) facets into triangles as its split has them (a triangle
-    (a, b, c, c) is one, ``mesh/wedge.py``)."""
-    from tissuesim.mesh.boundary import boundary_facets
+    (a, b, c, c) is one, ``mesh/cells/wedge.py``)."""
+    from tissuesim.mesh.queries.boundary import boundary_facets
 
     if surface is None:
         return boundary_facets(mesh.simplices)
@@ -85,18 +85,18 @@ def contact_facets(name: str, mesh, surface) -> np.ndarray:
         raise InputError(f"contact surface of {name!r} has no triangles")
     if not mesh.simplicial and mesh.order == 2 and tri.shape[1] == mesh.facet_nodes:
         # quadratic quadrilaterals / hexahedra: each facet as the simplices of the mesh's split
-        from tissuesim.mesh.tensor_quadratic import facet_simplices
+        from tissuesim.mesh.cells.tensor_quadratic import facet_simplices
 
         try:
             return facet_simplices(mesh, tri).astype(np.int64)
         except InputError as exc:
             raise InputError(f"contact surface of {name!r}: {exc}") from None
     if mesh.cell_type == "wedge" and tri.shape[1] == 4:  # quads and collapsed triangles
-        from tissuesim.mesh.wedge import facet_triangles
+        from tissuesim.mesh.cells.wedge import facet_triangles
 
         tri = facet_triangles(tri)
     if mesh.facet_nodes == 4 and tri.shape[1] == 4:  # quad faces of hexahedra: 2 triangles each
-        from tissuesim.mesh.tensor import split_faces
+        from tissuesim.mesh.cells.tensor import split_faces
 
         tri = split_faces(tri)
     if tri.shape[1] != mesh.dim:

@@ -39,7 +39,7 @@ def bare_pieces(mesh, W: sp.spmatrix, tri: np.ndarray) -> np.ndarray:
     """Which cells (m,) belong to a piece of the cut body with no contact surface: a
     connected component of its cells (sharing nodes) none of whose nodes a surface vertex is
     interpolated from."""
-    from tissuesim.mesh.virtual_nodes import node_pieces
+    from tissuesim.mesh.cutting.virtual_nodes import node_pieces
 
     nodes = sp.csr_matrix(W)[np.unique(tri)].indices  # the nodes a surface vertex uses
     used = np.zeros(mesh.n_points, dtype=bool)
@@ -58,8 +58,8 @@ def sliver_points(
     """(weights (p, n_points) of each contact point over the body's nodes, its area (p,)) for
     the pieces without a contact surface (``bare_pieces``), or None when every piece has one."""
     from tissuesim.contact.cut_surface import level_stack
-    from tissuesim.mesh.plane_split import region_vertices, section_measures
-    from tissuesim.mesh.virtual_nodes import node_pieces
+    from tissuesim.mesh.cutting.plane_split import region_vertices, section_measures
+    from tissuesim.mesh.cutting.virtual_nodes import node_pieces
 
     bare = np.flatnonzero(bare_pieces(mesh, W, tri))
     if bare.size == 0:

@@ -39,7 +39,7 @@ def thin_surfaces(
     surface's builder, ``surfaces.cut_faces``) at the first of SCALES times ``dhat`` that
     gives it one; pieces none does stay as they were (no surface)."""
     from tissuesim.contact.sliver_points import bare_pieces
-    from tissuesim.mesh.virtual_nodes import node_pieces
+    from tissuesim.mesh.cutting.virtual_nodes import node_pieces
 
     bare = bare_pieces(mesh, W, facets)
     if not bare.any():

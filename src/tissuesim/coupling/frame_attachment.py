@@ -61,7 +61,7 @@ def frame_attachment(
 ) -> FrameAttachment:
     from tissuesim.coupling.layer import contact_facets
     from tissuesim.coupling.tissue import _facet_samples
-    from tissuesim.mesh.locate import closest_boundary_points
+    from tissuesim.mesh.queries.locate import closest_boundary_points
 
     if mesh.dim != 3:
         raise InputError(f"attach: body {fem!r} is {mesh.dim}D; frame bodies attach to 3D bodies")

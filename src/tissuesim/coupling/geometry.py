@@ -12,7 +12,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from tissuesim.errors import InputError
-from tissuesim.mesh.locate import TriangleSoup
+from tissuesim.mesh.queries.locate import TriangleSoup
 
 __all__ = ["swept_blade_triangles", "point_triangle_distance", "segments_hit_triangles"]
 
@@ -64,9 +64,9 @@ def swept_blade_triangles(before: np.ndarray, after: np.ndarray) -> np.ndarray:
 def point_triangle_distance(points: np.ndarray, triangles: np.ndarray) -> np.ndarray:
     """Distance (q,) from each of ``points`` (q, 3) to the nearest of ``triangles`` (m, 3, 3).
 
-    Exact point-triangle distances (Voronoi regions, the kernel of ``tissuesim.mesh.locate``)
-    over candidate triangles from a KD-tree of centroids, chunked over point-triangle pairs;
-    degenerate triangles count as their edges.
+    Exact point-triangle distances (Voronoi regions, the kernel of
+    ``tissuesim.mesh.queries.locate``) over candidate triangles from a KD-tree of centroids, chunked
+    over point-triangle pairs; degenerate triangles count as their edges.
     """
     func = "point_triangle_distance"
     p = _array(func, "points", points, "(q, 3)", (3,))

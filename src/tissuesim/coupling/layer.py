@@ -25,9 +25,9 @@ from tissuesim.frames.sampling import (
     _positive,
     cell_points,
 )
-from tissuesim.mesh.boundary import boundary_facets, facet_normals
-from tissuesim.mesh.locate import MeshLocator
 from tissuesim.mesh.mesh import Mesh
+from tissuesim.mesh.queries.boundary import boundary_facets, facet_normals
+from tissuesim.mesh.queries.locate import MeshLocator
 from tissuesim.validate import short
 
 __all__ = ["sample_between", "contact_facets"]

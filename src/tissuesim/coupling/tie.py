@@ -76,8 +76,8 @@ def tie_bodies(
     ``distance`` m of b's boundary) to b, at points no farther apart than a's median boundary
     edge."""
     from tissuesim.coupling.tissue import _facet_samples
-    from tissuesim.mesh.boundary import boundary_facets
-    from tissuesim.mesh.locate import closest_boundary_points, distance_to_boundary
+    from tissuesim.mesh.queries.boundary import boundary_facets
+    from tissuesim.mesh.queries.locate import closest_boundary_points, distance_to_boundary
 
     for mesh, who in ((mesh_a, a), (mesh_b, b)):
         if mesh.dim != 3:

@@ -29,7 +29,7 @@ from tissuesim.frames.placement import farthest_point_frames
 from tissuesim.frames.sampling import IntegrationPoints
 from tissuesim.materials.base import Material
 from tissuesim.materials.measures import continuum_fields
-from tissuesim.mesh.boundary import facet_measures
+from tissuesim.mesh.queries.boundary import facet_measures
 from tissuesim.validate import short
 
 __all__ = ["TissueBody", "ATTACHMENT_FACTOR", "MIN_J_AFTER_CUT"]
@@ -106,7 +106,7 @@ class TissueBody:
         backend: str = "auto",
     ) -> None:
         from tissuesim.coupling.layer import contact_facets, sample_between
-        from tissuesim.mesh.locate import closest_boundary_points
+        from tissuesim.mesh.queries.locate import closest_boundary_points
 
         if not organs:
             raise InputError("add the organs before the tissue that connects them")

@@ -18,7 +18,7 @@ import numpy as np
 
 from tissuesim.energies.accumulator import Accumulator
 from tissuesim.errors import InputError
-from tissuesim.mesh.boundary import facet_measures
+from tissuesim.mesh.queries.boundary import facet_measures
 
 __all__ = [
     "ExternalForce",
@@ -63,7 +63,7 @@ def quadratic_traction_nodal_forces(
     """Nodal forces (n, d) of a traction on quadratic facets (k, 3 or 6), given at the facet's
     nodes (k, nf, d) and interpolated quadratically: f^a = int N^a N^b dA h^b, by a degree-5
     rule on the (possibly curved) facet, dA = |dX/dxi| (2D) or |dX/dxi_1 x dX/dxi_2| (3D)."""
-    from tissuesim.mesh.reference import facet_quadrature, shape_functions
+    from tissuesim.mesh.cells.reference import facet_quadrature, shape_functions
 
     n, d = points.shape
     xi, w = facet_quadrature(d, 5)
@@ -91,14 +91,14 @@ def quad_traction_nodal_forces(
     (k, 8) / (k, 9) (``tensor_quadratic.local_facets`` order) interpolate it with the quad8 /
     quad9 shape functions, by the same rule (N^a N^b of degree 4 per variable: still exact on
     a flat parallelogram)."""
-    from tissuesim.mesh.tensor import gauss_rule, shape_functions
+    from tissuesim.mesh.cells.tensor import gauss_rule, shape_functions
 
     n = points.shape[0]
     xi, w = gauss_rule(2, 3)
     if faces.shape[1] == 4:
         N, dN = shape_functions(2, xi)  # (q, 4), (q, 4, 2)
     else:
-        from tissuesim.mesh import tensor_quadratic as tq
+        from tissuesim.mesh.cells import tensor_quadratic as tq
 
         N, dN = tq.shape_functions(tq.CELL_TYPES[2, faces.shape[1]], xi)
     T = np.einsum("kai,qaj->kqij", points[faces], dN)  # (k, q, 3, 2) tangents
@@ -167,7 +167,7 @@ class Traction:
         mesh = model.mesh
         facets = self.facets
         if mesh.order == 2:
-            from tissuesim.mesh.quadratic import quadratic_facets
+            from tissuesim.mesh.cells.quadratic import quadratic_facets
 
             facets = quadratic_facets(mesh, facets)
         X = mesh.points[facets]  # (k, nf, d) [facet, node, coord]

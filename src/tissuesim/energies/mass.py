@@ -14,7 +14,7 @@ lumped mass is the row sums. The quadratic ones (quad8, quad9, hexahedron20, hex
 integrate with 4 per direction; a serendipity cell's row sums are negative at its corners
 (a hexahedron20's -V/8 each, its midside nodes V/6; a quad8's -A/12, A/3), so, as for P2,
 their lumped mass is HRZ's (the consistent diagonal scaled to the cell's mass: positive at
-every node). Linear wedges integrate with a rule exact for N^a N^b det J (``mesh/wedge.py``);
+every node). Linear wedges integrate with a rule exact for N^a N^b det J (``mesh/cells/wedge.py``);
 their shape functions are non-negative, so their row sums are positive and, as for Q1, the
 lumped mass is the row sums: they keep the element's mass and its first moments exactly
 (sum_a m_a X_a = int rho X, the mass centre) and are the consistent nodal loads of a uniform
@@ -153,7 +153,7 @@ def _element_rule(mesh) -> tuple[np.ndarray, np.ndarray]:
     and 4 along the axis (``wedge.mass_rule``)."""
     if mesh.cell_type == "wedge":
         from tissuesim.kinematics.wedge import wedge_shape_values
-        from tissuesim.mesh.wedge import mass_rule
+        from tissuesim.mesh.cells.wedge import mass_rule
 
         return wedge_shape_values(mesh.points, mesh.cells, mass_rule())
     if not mesh.simplicial and mesh.order == 2:

@@ -63,7 +63,7 @@ def follower_pressure(mesh, facets, pressure, name: str, body: str) -> FollowerP
     body of ``mesh`` (P1 tetrahedra: triangles (k, 3); Q1 hexahedra: quad faces (k, 4)), given
     in any vertex order; they are matched to the boundary and oriented outward. Closed
     triangles take the energy, every other surface is lagged."""
-    from tissuesim.mesh.boundary import boundary_facets, match_facets
+    from tissuesim.mesh.queries.boundary import boundary_facets, match_facets
     from tissuesim.validate import indices
 
     where = f"add_follower_pressure {name!r}"
@@ -81,7 +81,7 @@ def follower_pressure(mesh, facets, pressure, name: str, body: str) -> FollowerP
     if width == 3:
         boundary = boundary_facets(mesh.cells)
     else:
-        from tissuesim.mesh.tensor import boundary_faces
+        from tissuesim.mesh.cells.tensor import boundary_faces
 
         boundary = boundary_faces(mesh.cells, 3)
     row = match_facets(boundary, facets)

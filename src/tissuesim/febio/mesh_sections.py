@@ -26,12 +26,12 @@ ELEMENTS = {
 #: y = -1, x = +1, y = +1, x = -1, z = -1, z = +1, VTK x = -1, x = +1, y = -1, y = +1, ...
 #: penta6 is read as it is: FEPenta6::shape_fnc puts its nodes at (r, s, t) = (0, 0, -1),
 #: (1, 0, -1), (0, 1, -1), (0, 0, 1), (1, 0, 1), (0, 1, 1), Gmsh's and meshio's ``wedge`` order,
-#: which tissuesim uses (``mesh/wedge.py``; VTK's mirrors it, and meshio converts)
+#: which tissuesim uses (``mesh/cells/wedge.py``; VTK's mirrors it, and meshio converts)
 PERMUTATIONS = {"hex27": np.array([*range(20), 23, 21, 20, 22, 24, 25, 26])}
 #: FEBio surface facet types -> corners kept (tissuesim's facets are corner lists; FEBio lists
 #: a facet's corners first). A surface that mixes triangles and quadrilaterals (a penta6
 #: mesh's) keeps its triangles as (a, b, c, c), the rows of 4 a wedge mesh's facets are
-#: (``mesh/wedge.py``)
+#: (``mesh/cells/wedge.py``)
 FACETS = {"tri3": 3, "tri6": 3, "quad4": 4, "quad8": 4, "quad9": 4}
 
 
@@ -167,7 +167,7 @@ ORDERS = {
 def _check_order(model: FebModel, kind: str, cells: np.ndarray, elems: list[Node]) -> None:
     """Refuses the first element whose rest map has a Jacobian that is not positive at a Gauss
     point or node: its nodes are not in FEBio's order (or it is folded or inverted)."""
-    from tissuesim.mesh.tensor_checks import DEGENERATE, tensor_jacobians
+    from tissuesim.mesh.cells.tensor_checks import DEGENERATE, tensor_jacobians
 
     detJ = tensor_jacobians(model.nodes, cells)
     bad = (detJ <= DEGENERATE * np.abs(detJ).mean(axis=1, keepdims=True)).any(axis=1)
@@ -204,7 +204,7 @@ def _surface(model: FebModel, node: Node) -> None:
     if not facets:
         raise node.error("a surface needs at least one facet")
     if len({len(f) for f in facets}) > 1:  # a wedge mesh's triangles and quadrilaterals
-        from tissuesim.mesh.wedge import as_facets
+        from tissuesim.mesh.cells.wedge import as_facets
 
         facets = as_facets([np.pad(f, (0, 4 - len(f)), mode="edge") for f in facets])
     model.surfaces[name] = (np.array(facets, dtype=np.int64), node)

@@ -33,7 +33,7 @@ from tissuesim.frames.surfaces import (  # re-exported: samplers and surfaces ar
     winding_number,
 )
 from tissuesim.mesh.checks import signed_volumes
-from tissuesim.mesh.generators import _arguments
+from tissuesim.mesh.generators.common import _arguments
 from tissuesim.mesh.mesh import Mesh
 from tissuesim.validate import check_memory, positive_field
 

@@ -14,10 +14,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from tissuesim.errors import InputError, MeshError
-from tissuesim.mesh.boundary import boundary_facets
-from tissuesim.mesh.generators import _arguments
+from tissuesim.mesh.generators.common import _arguments
 from tissuesim.mesh.io import _load
 from tissuesim.mesh.mesh import Mesh
+from tissuesim.mesh.queries.boundary import boundary_facets
 from tissuesim.validate import regular_file, short
 
 __all__ = [

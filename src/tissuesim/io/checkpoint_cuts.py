@@ -37,7 +37,7 @@ _ROWS = ("copy", "cut", "side", "level")
 
 def _put_cut(arrays: dict, key: str, cut) -> str:
     """Keep a ``PlanarCut`` or ``SweptCut`` under ``key``; returns its kind."""
-    from tissuesim.mesh.swept_cut import SweptCut
+    from tissuesim.mesh.cutting.swept_cut import SweptCut
 
     if isinstance(cut, SweptCut):
         arrays[f"{key}.triangles"] = cut.triangles
@@ -48,8 +48,8 @@ def _put_cut(arrays: dict, key: str, cut) -> str:
 
 
 def _get_cut(arrays, key: str, kind: str):
-    from tissuesim.mesh.swept_cut import SweptCut
-    from tissuesim.mesh.virtual_nodes import PlanarCut
+    from tissuesim.mesh.cutting.swept_cut import SweptCut
+    from tissuesim.mesh.cutting.virtual_nodes import PlanarCut
 
     if kind == "swept":
         return SweptCut(np.array(arrays[f"{key}.triangles"]))
@@ -96,7 +96,7 @@ def _put_body(arrays: dict, key: str, b) -> dict:
 
 def _get_body(sim, name: str, meta: dict, arrays, key: str, path) -> None:
     from tissuesim.bodies.cut_state import CutState
-    from tissuesim.mesh.virtual_nodes import Constraints, VirtualNodeMesh
+    from tissuesim.mesh.cutting.virtual_nodes import Constraints, VirtualNodeMesh
 
     b = sim.bodies.get(name)
     if b is None or b.kind != "fem":

@@ -15,13 +15,13 @@ from dataclasses import dataclass
 import numpy as np
 
 from tissuesim.kinematics.nodal import NodalKinematics
-from tissuesim.mesh.mesh import Mesh
-from tissuesim.mesh.reference import (
+from tissuesim.mesh.cells.reference import (
     quadrature,
     rest_jacobians,
     shape_functions,
     stiffness_degree,
 )
+from tissuesim.mesh.mesh import Mesh
 
 __all__ = ["P2Kinematics", "shape_values"]
 

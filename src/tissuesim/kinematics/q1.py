@@ -1,7 +1,7 @@
 """Q1 kinematics: 4-node quadrilaterals and 8-node hexahedra, 2^d Gauss points per cell.
 
 At Gauss point xi_q of [-1, 1]^d the rest map X(xi) = sum_a X^a N_a(xi) has the Jacobian
-J_q = sum_a X^a (dN_a/dxi)^T (``mesh/tensor.py``); the shape gradients there are
+J_q = sum_a X^a (dN_a/dxi)^T (``mesh/cells/tensor.py``); the shape gradients there are
 dN_a/dX = J_q^{-T} dN_a/dxi and the weight w_q det J_q. F = sum_a x^a (dN_a/dX)^T is linear in
 the cell's DOFs with constant gradients at each point, so ``NodalKinematics`` computes F,
 forces and Hessians per point unchanged, and ``points_per_cell`` = 2^d groups a cell's points
@@ -15,8 +15,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from tissuesim.kinematics.nodal import NodalKinematics
+from tissuesim.mesh.cells.tensor import gauss_rule, rest_jacobians, shape_functions
 from tissuesim.mesh.mesh import Mesh
-from tissuesim.mesh.tensor import gauss_rule, rest_jacobians, shape_functions
 
 __all__ = ["Q1Kinematics", "q1_shape_values", "tensor_kinematics"]
 

@@ -2,7 +2,7 @@
 hexahedron27, 3^d Gauss points per cell (FEBio's and FElupe's rule for them).
 
 As for Q1 (``kinematics/q1.py``): at Gauss point xi_q the rest map's Jacobian is
-J_q = sum_a X^a (dN_a/dxi)^T with the cell's shape functions (``mesh/tensor_quadratic.py``),
+J_q = sum_a X^a (dN_a/dxi)^T with the cell's shape functions (``mesh/cells/tensor_quadratic.py``),
 dN_a/dX = J_q^{-T} dN_a/dxi and the weight w_q det J_q; F = sum_a x^a (dN_a/dX)^T is linear in
 the cell's DOFs, so ``NodalKinematics`` does the rest and ``points_per_cell`` = 3^d groups a
 cell's points for the Hessian's scatter.
@@ -16,9 +16,9 @@ import numpy as np
 
 from tissuesim.kinematics.nodal import NodalKinematics
 from tissuesim.kinematics.q1 import tensor_kinematics
-from tissuesim.mesh import tensor_quadratic as tq
+from tissuesim.mesh.cells import tensor_quadratic as tq
+from tissuesim.mesh.cells.tensor import gauss_rule, rest_jacobians
 from tissuesim.mesh.mesh import Mesh
-from tissuesim.mesh.tensor import gauss_rule, rest_jacobians
 
 __all__ = ["Q2Kinematics", "q2_shape_values"]
 

@@ -1,5 +1,5 @@
 """Linear wedge kinematics: 6-node prisms, 6 integration points per cell (FEBio's FEPenta6G6:
-the 3-point triangle rule times 2 Gauss points along the axis, ``mesh/wedge.py``).
+the 3-point triangle rule times 2 Gauss points along the axis, ``mesh/cells/wedge.py``).
 
 As for Q1 (``kinematics/q1.py``): at point xi_q the rest map's Jacobian is
 J_q = sum_a X^a (dN_a/dxi)^T, dN_a/dX = J_q^{-T} dN_a/dxi and the weight w_q det J_q;
@@ -16,9 +16,9 @@ import numpy as np
 
 from tissuesim.kinematics.nodal import NodalKinematics
 from tissuesim.kinematics.q1 import tensor_kinematics
-from tissuesim.mesh import wedge
+from tissuesim.mesh.cells import wedge
+from tissuesim.mesh.cells.tensor import rest_jacobians
 from tissuesim.mesh.mesh import Mesh
-from tissuesim.mesh.tensor import rest_jacobians
 
 __all__ = ["WedgeKinematics", "wedge_shape_values"]
 

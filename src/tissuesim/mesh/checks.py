@@ -8,8 +8,8 @@ from collections.abc import Mapping
 import numpy as np
 
 from tissuesim.errors import MeshError
-from tissuesim.mesh.boundary import boundary_from_table, facet_table, match_facets
 from tissuesim.mesh.mesh import Mesh
+from tissuesim.mesh.queries.boundary import boundary_from_table, facet_table, match_facets
 
 __all__ = ["validate_mesh", "signed_volumes", "edge_lengths"]
 
@@ -218,7 +218,7 @@ def validate_mesh(
         )
 
     if tensor:
-        from tissuesim.mesh.tensor_checks import check_tensor_cells, reorient_permutation
+        from tissuesim.mesh.cells.tensor_checks import check_tensor_cells, reorient_permutation
 
         flipped = check_tensor_cells(pts, c, source)
         reorder, how = reorient_permutation(d, c.shape[1]), "mirroring their vertex order"
@@ -302,17 +302,17 @@ def _finish_checks(
     pts, c, point_sets, facet_sets = _drop_unused(pts, c, point_sets, facet_sets, source)
     n = pts.shape[0]
     if quadratic:
-        from tissuesim.mesh.quadratic_checks import check_quadratic
+        from tissuesim.mesh.cells.quadratic_checks import check_quadratic
 
         check_quadratic(pts, c, source)
     wedges = (d, c.shape[1]) == (3, 6)
     if tensor:
-        from tissuesim.mesh.tensor import face_table, local_faces
+        from tissuesim.mesh.cells.tensor import face_table, local_faces
 
         table = face_table(c, d)
         nf, per_cell = (4 if d == 3 else 2), len(local_faces(d, c.shape[1]))
         if c.shape[1] != 2**d and not wedges:
-            from tissuesim.mesh.tensor_quadratic import check_shared_nodes
+            from tissuesim.mesh.cells.tensor_quadratic import check_shared_nodes
 
             check_shared_nodes(c, d, table, source)
     else:
@@ -341,7 +341,7 @@ def _finish_checks(
         if a.size == 0:
             a = a.reshape(0, nf)
         if wedges:  # triangles (k, 3) and collapsed quads as (a, b, c, c)
-            from tissuesim.mesh.wedge import as_facets
+            from tissuesim.mesh.cells.wedge import as_facets
 
             a = as_facets(a)
         if a.ndim != 2 or a.shape[1] != nf:

@@ -5,10 +5,11 @@ triangle6, e.g. Gmsh second order; meshio converts Gmsh's node order to VTK's, w
 uses), or hexahedra (3D, tagged quad faces become facet sets) and quadrilaterals (2D), Q1 or
 quadratic (meshio's hexahedron20 / hexahedron27 / quad8 / quad9, VTK's node order), or linear
 wedges (meshio's ``wedge``, Gmsh's prism order: meshio converts VTK's mirrored one; tagged
-triangles and quads both become facets, ``mesh/wedge.py``), and turns tags into named sets: meshio
-cell sets and gmsh physical groups ("gmsh:physical" with names from $PhysicalNames). Tagged facets
-(lines in 2D, triangles in 3D) become facet sets, tagged volume cells cell sets, tagged lower-
-dimensional cells (vertices, edges in 3D) point sets. Everything is then checked by validate_mesh.
+triangles and quads both become facets, ``mesh/cells/wedge.py``), and turns tags into named sets:
+meshio cell sets and gmsh physical groups ("gmsh:physical" with names from $PhysicalNames). Tagged
+facets (lines in 2D, triangles in 3D) become facet sets, tagged volume cells cell sets, tagged
+lower-dimensional cells (vertices, edges in 3D) point sets. Everything is then checked by
+validate_mesh.
 """
 
 from __future__ import annotations
@@ -22,10 +23,10 @@ from collections import defaultdict
 import numpy as np
 
 from tissuesim.errors import InputError, MeshError
-from tissuesim.mesh.boundary import all_facets, facet_measures, facet_table, match_facets
 from tissuesim.mesh.checks import edge_lengths, signed_volumes, validate_mesh
 from tissuesim.mesh.mesh import Mesh
-from tissuesim.mesh.select import _boundary
+from tissuesim.mesh.queries.boundary import all_facets, facet_measures, facet_table, match_facets
+from tissuesim.mesh.queries.select import _boundary
 from tissuesim.validate import short
 
 __all__ = ["read_mesh", "write_mesh", "describe_mesh"]
@@ -163,7 +164,7 @@ def _tagged_sets(m, d: int, vtype: str):
         elif b.type in facet_types:  # quadratic facets by their corners
             facets = np.asarray(b.data)[rows][:, :nf]
             if facets.shape[1] < nf:  # a wedge's triangle: (a, b, c, c)
-                from tissuesim.mesh.wedge import as_facets
+                from tissuesim.mesh.cells.wedge import as_facets
 
                 facets = as_facets(facets)
             facet_sets[name].append(facets)
@@ -186,7 +187,7 @@ def _tagged_sets(m, d: int, vtype: str):
 
 def read_mesh(path: str | os.PathLike[str], *, merge_coincident: bool = False) -> Mesh:
     """Read a tetrahedral (3D) or triangle (2D) mesh file, linear or quadratic (tetra10,
-    triangle6: their midside nodes are checked, ``mesh/quadratic_checks.py``); points in the
+    triangle6: their midside nodes are checked, ``mesh/cells/quadratic_checks.py``); points in the
     file's units.
 
     Any format meshio reads (.vtu, .msh gmsh 2.2/4.1, .mesh medit, .xdmf, ...). Raises MeshError
@@ -215,7 +216,7 @@ def read_mesh(path: str | os.PathLike[str], *, merge_coincident: bool = False) -
     facet_sets = {k: np.concatenate(v).astype(np.int64) for k, v in fsets.items()}
     if facet_sets:
         if vtype in _TENSOR_FACET:
-            from tissuesim.mesh.tensor import face_table
+            from tissuesim.mesh.cells.tensor import face_table
 
             facets, first, inverse, counts = face_table(cells, d)
         else:
@@ -270,7 +271,7 @@ def write_mesh(mesh: Mesh, path: str | os.PathLike[str], file_format: str | None
             tag += 1
             facets = np.asarray(facets)
             if wedges:  # the triangles (a, b, c, c) as triangles, the quads as quads
-                from tissuesim.mesh.wedge import is_triangle
+                from tissuesim.mesh.cells.wedge import is_triangle
 
                 tri = is_triangle(facets)
                 parts = [("triangle", facets[tri, :3]), ("quad", facets[~tri])]
@@ -330,7 +331,7 @@ def describe_mesh(mesh: Mesh) -> dict:
         quality = d * inradius / np.linalg.norm(centre, axis=1)
         measure = "radius ratio d * inradius / circumradius (1 = regular simplex)"
     else:
-        from tissuesim.mesh.tensor_checks import tensor_quality
+        from tissuesim.mesh.cells.tensor_checks import tensor_quality
 
         vol, edges, quality = tensor_quality(p, c)
         measure = "scaled Jacobian: min over nodes of det J / product of edge lengths (1 = box)"

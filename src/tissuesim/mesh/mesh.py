@@ -37,20 +37,21 @@ class Mesh:
         hexahedra).
     cells: (m, d + 1) int64 vertex indices, positively oriented (det of edge vectors > 0);
         quadratic meshes (order 2): (m, 6) triangles or (m, 10) tetrahedra, the corners first,
-        then the midside nodes (``mesh/quadratic.py``); Q1 quadrilaterals (m, 4) in 2D and
+        then the midside nodes (``mesh/cells/quadratic.py``); Q1 quadrilaterals (m, 4) in 2D and
         hexahedra (m, 8) in 3D in VTK's node order, with a positive rest Jacobian at every
-        Gauss point (``mesh/tensor.py``); quadratic quadrilaterals (m, 8) / (m, 9) and
-        hexahedra (m, 20) / (m, 27) in VTK's node order (``mesh/tensor_quadratic.py``);
-        linear wedges (m, 6) in meshio's / Gmsh's / FEBio's node order (``mesh/wedge.py``).
+        Gauss point (``mesh/cells/tensor.py``); quadratic quadrilaterals (m, 8) / (m, 9) and
+        hexahedra (m, 20) / (m, 27) in VTK's node order (``mesh/cells/tensor_quadratic.py``);
+        linear wedges (m, 6) in meshio's / Gmsh's / FEBio's node order (``mesh/cells/wedge.py``).
     point_sets: name -> (k,) vertex indices.
     facet_sets: name -> (k, d) boundary facets (edges in 2D, triangles in 3D) as corner indices;
         (k, 4) quad faces for hexahedra (``facet_nodes``), and for wedges their quads and
-        triangles, a triangle as (a, b, c, c) (``mesh/wedge.py``); quadratic cells' facets by
+        triangles, a triangle as (a, b, c, c) (``mesh/cells/wedge.py``); quadratic cells' facets by
         their corners, as for P2.
     cell_sets: name -> (k,) cell indices.
     source: where the mesh came from (a file path or a generator), used in error messages.
     cell_fractions: (m,) the part of each cell's volume that is material (a virtual-node cut's
-        copies, ``mesh/virtual_nodes.py``), weighting its energy, mass and body loads; None: 1.
+        copies, ``mesh/cutting/virtual_nodes.py``), weighting its energy, mass and body loads;
+        None: 1.
     cell_levels: (m, d + 1) with ``cell_fractions``: each copy's material level at its
         vertices (material where its linear interpolation is >= 0); whole cells next to the
         cut carry their distance to its plane on their side, the others +inf.
@@ -72,7 +73,8 @@ class Mesh:
     source: str = "<arrays>"
     surface_projection: Callable[[np.ndarray], np.ndarray] | None = None
     # the fraction of each cell's volume that holds material (m,): cells copied by a
-    # virtual-node cut (``mesh/virtual_nodes.py``) stand for their side only; None: all of it
+    # virtual-node cut (``mesh/cutting/virtual_nodes.py``) stand for their side only;
+    # None: all of it
     cell_fractions: np.ndarray | None = None
     # (m, d+1) with cell_fractions: each copy's material level at its vertices, its signed
     # distance to the cut's plane (where the body was when cut) times its side, so its material
@@ -155,20 +157,20 @@ class Mesh:
     @cached_property
     def _subdivision(self) -> tuple[np.ndarray, np.ndarray]:
         if self.cell_type == "wedge":
-            from tissuesim.mesh.wedge import subdivide as split_wedges
+            from tissuesim.mesh.cells.wedge import subdivide as split_wedges
 
             return split_wedges(self.points, self.cells)
         if not self.simplicial and self.order == 2:
-            from tissuesim.mesh.tensor_quadratic import subdivide as split_quadratic
+            from tissuesim.mesh.cells.tensor_quadratic import subdivide as split_quadratic
 
             return split_quadratic(self.points, self.cells)
         if not self.simplicial:
-            from tissuesim.mesh.tensor import subdivide as split
+            from tissuesim.mesh.cells.tensor import subdivide as split
 
             return split(self.points, self.cells)
         if self.order == 1:
             return self.cells, np.arange(self.n_cells)
-        from tissuesim.mesh.quadratic import subdivide
+        from tissuesim.mesh.cells.quadratic import subdivide
 
         return subdivide(self.points, self.cells)
 
@@ -176,9 +178,9 @@ class Mesh:
     def simplices(self) -> np.ndarray:
         """Linear simplices (k, d + 1) over all nodes: the cells themselves for order 1, the
         linear subdivision of each quadratic cell (4 triangles, 8 tetrahedra) for order 2, the
-        split of each Q1 cell (2 triangles, 6 tetrahedra; ``mesh/tensor.py``), quadratic
+        split of each Q1 cell (2 triangles, 6 tetrahedra; ``mesh/cells/tensor.py``), quadratic
         quadrilateral / hexahedron (6 or 8 triangles, 22 or 48 tetrahedra;
-        ``mesh/tensor_quadratic.py``) or wedge (3 tetrahedra; ``mesh/wedge.py``).
+        ``mesh/cells/tensor_quadratic.py``) or wedge (3 tetrahedra; ``mesh/cells/wedge.py``).
         Geometry (boundary, location, contact, pictures) works on these."""
         return self._subdivision[0]
 
@@ -204,6 +206,6 @@ class Mesh:
     @cached_property
     def midside(self):
         """Corner pairs (k, 2) -> their midside nodes (k,) (-1 where none); order 2 only."""
-        from tissuesim.mesh.quadratic import midside_lookup
+        from tissuesim.mesh.cells.quadratic import midside_lookup
 
         return midside_lookup(self.cells, self.dim)

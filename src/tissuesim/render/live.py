@@ -109,7 +109,7 @@ class LiveSession:
         return next(ob for ob in self.sim.obstacles if ob.name == self.name)
 
     def _add_actors(self) -> None:
-        from tissuesim.mesh.boundary import boundary_facets
+        from tissuesim.mesh.queries.boundary import boundary_facets
 
         pv = self.pv
         for name, body in self.sim.bodies.items():

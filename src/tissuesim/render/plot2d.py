@@ -212,7 +212,7 @@ def _clipped_weights(mesh: Mesh) -> np.ndarray:
     it (``Mesh.cell_more_levels``): the triangle clipped by each of its levels, shorter
     polygons padded with their last corner."""
     from tissuesim.contact.cut_surface import level_stack
-    from tissuesim.mesh.polygon_clip import clip_polygons
+    from tissuesim.mesh.cutting.polygon_clip import clip_polygons
 
     levels = level_stack(mesh)
     m, C, _ = levels.shape

@@ -229,7 +229,7 @@ def _drawn_surface(mesh, cache: dict):
 
             cache[key] = (mesh, cut_surface(mesh, 0.0))
         else:
-            from tissuesim.mesh.boundary import boundary_facets
+            from tissuesim.mesh.queries.boundary import boundary_facets
 
             cache[key] = (mesh, (None, boundary_facets(mesh.simplices)))
     return cache[key][1]

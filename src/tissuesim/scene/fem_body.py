@@ -229,7 +229,7 @@ SURFACE_OPTIONS = (
 def _surface_mesh(table: dict, base_dir: Path, where: str):
     """mesh = { surface = "organ.stl", size = 0.004 }: mesh_surface (relative to the scene);
     the other keys of SURFACE_OPTIONS go to it by name (it checks them, naming the key)."""
-    from tissuesim.mesh.tetrahedralize import mesh_surface
+    from tissuesim.mesh.from_surface.tetrahedralize import mesh_surface
 
     extra = set(table) - {"surface", *SURFACE_OPTIONS}
     if extra:
@@ -253,7 +253,7 @@ def _surface_mesh(table: dict, base_dir: Path, where: str):
 
 
 def _select(mesh, kind: str, selector, where: str, key: str | None = None) -> np.ndarray:
-    from tissuesim.mesh import select
+    from tissuesim.mesh.queries import select
 
     if not isinstance(selector, dict) or len(selector) != 1:
         raise SceneError(

@@ -57,7 +57,7 @@ def cook_displacement(
     import tissuesim as ts
     from tissuesim.mesh import rectangle
     from tissuesim.mesh.checks import validate_mesh
-    from tissuesim.mesh.select import facets_on_plane, vertices_on_plane
+    from tissuesim.mesh.queries.select import facets_on_plane, vertices_on_plane
     from tissuesim.solve.newton import NewtonOptions
 
     grid = rectangle(divisions=(n, n))

@@ -29,7 +29,7 @@ import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
 
 from tissuesim.mesh.checks import signed_volumes
-from tissuesim.mesh.virtual_nodes import VirtualNodeMesh
+from tissuesim.mesh.cutting.virtual_nodes import VirtualNodeMesh
 
 __all__ = ["CRUMB", "attach_crumbs", "joined", "small_pieces"]
 

@@ -1,10 +1,10 @@
-"""Which node slots of a virtual node cut stay one node (``mesh/virtual_nodes.py``): every
+"""Which node slots of a virtual node cut stay one node (``mesh/cutting/virtual_nodes.py``): every
 (copy, local node) is a slot, and the slots of two copies that share a face are joined when
 their material meets on that face (the face's part on both copies' sides has an area); a face
 the cut runs along joins nothing. The groups are the connected components of those joins.
 
 Slots of nodes away from every cut group as in the uncut mesh (its groups are kept with its
-interior face table, ``mesh/interior_faces.py``, across the cuts of a body); the others join
+interior face table, ``mesh/queries/interior_faces.py``, across the cuts of a body); the others join
 here: whole cells across a face at once, and faces next to a cut cell take
 their parts in closed form (``plane_split.positive_fraction``), all at once; only faces where
 two different cuts meet, or next to a cell several cuts cross, are clipped one by one (these
@@ -16,12 +16,12 @@ import numpy as np
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 
-from tissuesim.mesh.interior_faces import InteriorFaces, interior_faces
-from tissuesim.mesh.planar_cut import EMPTY, PLANE_TOLERANCE, PlanarCut
-from tissuesim.mesh.plane_split import positive_fraction
-from tissuesim.mesh.polygon_clip import clip_polygons, polygon_measures
+from tissuesim.mesh.cutting.planar_cut import EMPTY, PLANE_TOLERANCE, PlanarCut
+from tissuesim.mesh.cutting.plane_split import positive_fraction
+from tissuesim.mesh.cutting.polygon_clip import clip_polygons, polygon_measures
+from tissuesim.mesh.cutting.swept_cut import SweptCut
+from tissuesim.mesh.queries.interior_faces import InteriorFaces, interior_faces
 from tissuesim.mesh.rows import rows_all
-from tissuesim.mesh.swept_cut import SweptCut
 
 __all__ = ["node_groups"]
 

@@ -1,7 +1,7 @@
 """A cut along a curved surface: what a blade sweeps when it does not stay in one plane (it
 turns, tilts or follows a curved path), as the triangles between its sampled positions.
 
-The virtual node algorithm (``mesh/virtual_nodes.py``) needs, per cut, a signed distance at
+The virtual node algorithm (``mesh/cutting/virtual_nodes.py``) needs, per cut, a signed distance at
 the cells' vertices (linear in each cell, so each cell's cut is planar and its fractions are
 closed forms) and whether a crossed cell's section lies on what was swept. Here the distance
 of a point is its signed distance to the supporting plane of the swept triangle nearest to

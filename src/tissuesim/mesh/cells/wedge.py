@@ -45,8 +45,8 @@ from functools import cache
 
 import numpy as np
 
-from tissuesim.mesh.reference import quadrature
-from tissuesim.mesh.tensor import WEDGE_FACES, collapsed_triangles, positively_oriented
+from tissuesim.mesh.cells.reference import quadrature
+from tissuesim.mesh.cells.tensor import WEDGE_FACES, collapsed_triangles, positively_oriented
 
 __all__ = [
     "NODES",

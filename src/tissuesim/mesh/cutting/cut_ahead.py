@@ -19,8 +19,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from tissuesim.mesh.planar_cut import PLANE_TOLERANCE, PlanarCut
-from tissuesim.mesh.swept_cut import SweptCut
+from tissuesim.mesh.cutting.planar_cut import PLANE_TOLERANCE, PlanarCut
+from tissuesim.mesh.cutting.swept_cut import SweptCut
 
 __all__ = ["LEAD_CELLS", "MARGIN", "cut_ahead", "lead", "touched_cells"]
 

@@ -2,7 +2,7 @@
 
 Vertex selections return sorted unique (k,) int64 vertex ids; facet selections return (k, d) int64
 boundary facets oriented outward ((k, 4) quad faces for hexahedra; for wedges (k, 4) rows of
-quads and triangles, a triangle as (a, b, c, c), ``mesh/wedge.py``). An empty selection raises
+quads and triangles, a triangle as (a, b, c, c), ``mesh/cells/wedge.py``). An empty selection raises
 MeshError stating what was asked and the mesh's bounding box. Default tolerances are 1e-6 times
 the bounding-box diagonal.
 """
@@ -15,8 +15,8 @@ from collections.abc import Sequence
 import numpy as np
 
 from tissuesim.errors import MeshError
-from tissuesim.mesh.boundary import boundary_facets
 from tissuesim.mesh.mesh import Mesh
+from tissuesim.mesh.queries.boundary import boundary_facets
 
 __all__ = [
     "vertices_on_plane",
@@ -76,7 +76,7 @@ def _boundary(mesh: Mesh) -> np.ndarray:
         if mesh.simplicial:
             facets = boundary_facets(mesh.corners)
         else:  # edges of quadrilaterals, quad faces (k, 4) of hexahedra and wedges
-            from tissuesim.mesh.tensor import boundary_faces
+            from tissuesim.mesh.cells.tensor import boundary_faces
 
             facets = boundary_faces(mesh.cells, mesh.dim)
         facets.flags.writeable = False
@@ -94,7 +94,7 @@ def boundary_vertices(mesh: Mesh) -> np.ndarray:
     boundary facets for quadratic meshes)."""
     facets = _boundary(mesh)
     if mesh.order == 2:
-        from tissuesim.mesh.quadratic import quadratic_facets
+        from tissuesim.mesh.cells.quadratic import quadratic_facets
 
         facets = quadratic_facets(mesh, facets)
     return _nonempty(np.unique(facets), mesh, "boundary vertices")
@@ -133,7 +133,7 @@ def vertices_tagged(mesh: Mesh, tag: str) -> np.ndarray:
     elif tag in mesh.facet_sets:
         facets = np.asarray(mesh.facet_sets[tag], dtype=np.int64).reshape(-1, mesh.facet_nodes)
         if mesh.order == 2:
-            from tissuesim.mesh.quadratic import quadratic_facets
+            from tissuesim.mesh.cells.quadratic import quadratic_facets
 
             facets = quadratic_facets(mesh, facets)
         ids = np.unique(facets[facets >= 0])

@@ -1,7 +1,7 @@
 """The reference simplex: Lagrange shape functions of order 1 and 2, and quadrature rules.
 
 Reference coordinates xi in {xi_j >= 0, sum xi_j <= 1}; barycentric L_0 = 1 - sum xi, L_j = xi_j.
-Order 1: N_a = L_a. Order 2 (nodes in ``mesh/quadratic.py``'s order): corners
+Order 1: N_a = L_a. Order 2 (nodes in ``mesh/cells/quadratic.py``'s order): corners
 N_a = L_a (2 L_a - 1), midside node of edge (a, b): N = 4 L_a L_b.
 
 Quadrature (weights sum to the reference measure 1/2 or 1/6):
@@ -20,7 +20,7 @@ from functools import cache
 
 import numpy as np
 
-from tissuesim.mesh.quadratic import EDGES
+from tissuesim.mesh.cells.quadratic import EDGES
 
 __all__ = [
     "shape_functions",

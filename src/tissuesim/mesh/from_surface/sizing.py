@@ -31,8 +31,8 @@ from typing import Any
 import numpy as np
 
 from tissuesim.errors import InputError
-from tissuesim.mesh import smoothing as _smoothing
-from tissuesim.mesh.smoothing import DEFAULT_SMOOTHING_ITERATIONS
+from tissuesim.mesh.from_surface import smoothing as _smoothing
+from tissuesim.mesh.from_surface.smoothing import DEFAULT_SMOOTHING_ITERATIONS
 from tissuesim.validate import short
 
 __all__ = [

@@ -1,13 +1,13 @@
 """A linear mesh elevated to a quadratic (P2) one, checked like any other mesh: the node
-geometry is ``mesh/quadratic.py``'s, the checks ``mesh/checks.py``'s (kept apart so the node
+geometry is ``mesh/cells/quadratic.py``'s, the checks ``mesh/checks.py``'s (kept apart so the node
 geometry, which the checks use, imports neither)."""
 
 from __future__ import annotations
 
 import numpy as np
 
+from tissuesim.mesh.cells.quadratic import EDGES, elevate
 from tissuesim.mesh.checks import validate_mesh
-from tissuesim.mesh.quadratic import EDGES, elevate
 
 __all__ = ["elevate_mesh"]
 

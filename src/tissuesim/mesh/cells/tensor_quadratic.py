@@ -6,7 +6,7 @@ Node order is VTK's (VTK_QUADRATIC_QUAD 23, VTK_BIQUADRATIC_QUAD 28,
 VTK_QUADRATIC_HEXAHEDRON 25, VTK_TRIQUADRATIC_HEXAHEDRON 29; meshio's and FElupe's ``quad8``,
 ``quad9``, ``hexahedron20``, ``hexahedron27``), on the reference cell [-1, 1]^d:
 
-    corners as the Q1 cell's (``mesh/tensor.py``), then the midside nodes of the edges
+    corners as the Q1 cell's (``mesh/cells/tensor.py``), then the midside nodes of the edges
     quad:       (0,1) (1,2) (2,3) (3,0), then (quad9) the centre
     hexahedron: (0,1) (1,2) (2,3) (3,0)  (4,5) (5,6) (6,7) (7,4)  (0,4) (1,5) (2,6) (3,7),
                 then (hexahedron27) the face centres x = -1, x = +1, y = -1, y = +1, z = -1,
@@ -34,7 +34,7 @@ from functools import cache
 
 import numpy as np
 
-from tissuesim.mesh import tensor
+from tissuesim.mesh.cells import tensor
 
 __all__ = [
     "CELL_TYPES",
@@ -151,7 +151,7 @@ def local_facets(kind: str) -> np.ndarray:
 
 def _facet_lookup(cells: np.ndarray, d: int, facets: np.ndarray) -> np.ndarray:
     """(k,) index into cells.ravel-of-faces (cell * 2d + local face) of each corner facet."""
-    from tissuesim.mesh.boundary import match_facets
+    from tissuesim.mesh.queries.boundary import match_facets
 
     corner_faces = np.asarray(cells)[:, tensor.FACES[d]].reshape(-1, tensor.FACES[d].shape[1])
     return match_facets(corner_faces, np.asarray(facets, dtype=np.int64))
@@ -175,7 +175,7 @@ def full_facets(mesh, facets: np.ndarray) -> np.ndarray:
 def facet_templates(kind: str) -> np.ndarray:
     """(2d, t, d) the simplices (triangles / segments) each facet shows in ``subdivide``,
     outward, in local cell nodes; found by splitting the reference cell itself."""
-    from tissuesim.mesh.boundary import boundary_facets
+    from tissuesim.mesh.queries.boundary import boundary_facets
 
     X = NODES[kind]
     simplices, _ = subdivide(X, np.arange(len(X))[None])

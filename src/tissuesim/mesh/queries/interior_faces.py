@@ -1,6 +1,6 @@
 """The faces two cells of a simplex mesh share, with where each face's nodes sit in both cells:
-what the virtual node cut joins node slots across (``mesh/node_groups.py``) and what a body's
-cut state checks for faces a cut parted (``bodies/cut_state.py``). A body cut step after step
+what the virtual node cut joins node slots across (``mesh/cutting/node_groups.py``) and what a
+body's cut state checks for faces a cut parted (``bodies/cut_state.py``). A body cut step after step
 asks for its original mesh's faces every time, so the last few meshes' are kept."""
 
 from __future__ import annotations
@@ -11,7 +11,7 @@ import numpy as np
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 
-from tissuesim.mesh.boundary import all_facets, facet_table
+from tissuesim.mesh.queries.boundary import all_facets, facet_table
 
 __all__ = ["InteriorFaces", "interior_faces"]
 

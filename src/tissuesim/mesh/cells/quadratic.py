@@ -88,7 +88,7 @@ def elevate(
 
 
 def _boundary_edge_mask(cells: np.ndarray, edges: np.ndarray, d: int) -> np.ndarray:
-    from tissuesim.mesh.boundary import boundary_facets
+    from tissuesim.mesh.queries.boundary import boundary_facets
 
     facets = boundary_facets(cells)  # (k, d)
     if d == 2:
@@ -127,7 +127,7 @@ def quadratic_facets(mesh, facets: np.ndarray) -> np.ndarray:
     quadrilaterals / hexahedra their edges (k, 3) or quad faces (k, 8 / 9)
     (``tensor_quadratic.full_facets``)."""
     if not mesh.simplicial:
-        from tissuesim.mesh.tensor_quadratic import full_facets
+        from tissuesim.mesh.cells.tensor_quadratic import full_facets
 
         return full_facets(mesh, facets)
     d = mesh.dim

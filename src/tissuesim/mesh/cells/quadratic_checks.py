@@ -12,8 +12,8 @@ from __future__ import annotations
 import numpy as np
 
 from tissuesim.errors import MeshError
-from tissuesim.mesh.quadratic import EDGES
-from tissuesim.mesh.reference import (
+from tissuesim.mesh.cells.quadratic import EDGES
+from tissuesim.mesh.cells.reference import (
     quadrature,
     rest_jacobians,
     shape_functions,

@@ -1,5 +1,5 @@
 """A planar cut: a plane bounded by a convex polygon (the area a straight blade sweeps), the
-input of the virtual node algorithm (``mesh/virtual_nodes.py``)."""
+input of the virtual node algorithm (``mesh/cutting/virtual_nodes.py``)."""
 
 from __future__ import annotations
 
@@ -72,7 +72,7 @@ class PlanarCut:
         ring = centre + (ring - centre) * (1.0 + 1e-6) + 1e-9 * size * np.sign(ring - centre)
         return cls(point, normal, point + ring[:, :1] * u + ring[:, 1:] * w)
 
-    # -- what the virtual node algorithm asks of a cut (mesh/swept_cut.py answers it too) ---
+    # -- what the virtual node algorithm asks of a cut (mesh/cutting/swept_cut.py answers it too)
     def distances(self, x: np.ndarray) -> np.ndarray:
         """Signed distances (...) of points x (..., 3) to the plane."""
         return (np.asarray(x, dtype=float) - self.point) @ self.normal
@@ -80,7 +80,7 @@ class PlanarCut:
     def sections_inside(self, x: np.ndarray, d: np.ndarray) -> np.ndarray:
         """Whether each simplex's section of the plane (x (m, k, 3) its vertices, d (m, k)
         their distances) lies in the polygon (plane_split.sections_inside). Returns (m,)."""
-        from tissuesim.mesh.plane_split import sections_inside
+        from tissuesim.mesh.cutting.plane_split import sections_inside
 
         return sections_inside(x, d, self.polygon, self.normal)
 

@@ -39,11 +39,11 @@ from functools import cached_property
 import numpy as np
 
 from tissuesim.errors import InputError
-from tissuesim.mesh.node_groups import node_groups
-from tissuesim.mesh.planar_cut import EMPTY, PLANE_TOLERANCE, PlanarCut
-from tissuesim.mesh.plane_split import positive_fraction, region_fractions
+from tissuesim.mesh.cutting.node_groups import node_groups
+from tissuesim.mesh.cutting.planar_cut import EMPTY, PLANE_TOLERANCE, PlanarCut
+from tissuesim.mesh.cutting.plane_split import positive_fraction, region_fractions
+from tissuesim.mesh.cutting.swept_cut import SweptCut
 from tissuesim.mesh.rows import row_max, rows_all, rows_any
-from tissuesim.mesh.swept_cut import SweptCut
 
 __all__ = ["PlanarCut", "VirtualNodeMesh", "cut_cells", "virtual_node_cut"]
 
@@ -186,8 +186,8 @@ class VirtualNodeMesh:
         a copy's facet stands for its cell's, so only the copies of the set's facets are
         looked at (two facets with the same nodes have the same original one), and of those
         the ones no other copy shares bound the cut mesh."""
-        from tissuesim.mesh.boundary import all_facets, match_facets
-        from tissuesim.mesh.interior_faces import interior_faces
+        from tissuesim.mesh.queries.boundary import all_facets, match_facets
+        from tissuesim.mesh.queries.interior_faces import interior_faces
 
         faces = interior_faces(mesh.cells)
         k = self.cells.shape[1]

@@ -15,7 +15,7 @@ from __future__ import annotations
 import numpy as np
 
 from tissuesim.errors import MeshError
-from tissuesim.mesh.tensor import SIGNS, gauss_rule, rest_jacobians, shape_functions
+from tissuesim.mesh.cells.tensor import SIGNS, gauss_rule, rest_jacobians, shape_functions
 
 __all__ = [
     "tensor_jacobians",
@@ -38,10 +38,10 @@ def _basis(d: int, nv: int):
     if nv == 2**d:
         return (lambda xi: shape_functions(d, xi)), SIGNS[d], gauss_rule(d, 2)
     if (d, nv) == (3, 6):
-        from tissuesim.mesh import wedge
+        from tissuesim.mesh.cells import wedge
 
         return wedge.shape_functions, wedge.NODES, wedge.stiffness_rule()
-    from tissuesim.mesh import tensor_quadratic as tq
+    from tissuesim.mesh.cells import tensor_quadratic as tq
 
     kind = tq.CELL_TYPES[d, nv]
     rule = gauss_rule(d, tq.STIFFNESS_POINTS)
@@ -68,10 +68,10 @@ def reorient_permutation(d: int, nv: int) -> list[int]:
     if nv == 2**d:
         return REORIENT[d]
     if (d, nv) == (3, 6):
-        from tissuesim.mesh.wedge import REORIENT as WEDGE
+        from tissuesim.mesh.cells.wedge import REORIENT as WEDGE
 
         return WEDGE
-    from tissuesim.mesh import tensor_quadratic as tq
+    from tissuesim.mesh.cells import tensor_quadratic as tq
 
     return tq.reorient(tq.CELL_TYPES[d, nv])
 
@@ -115,7 +115,7 @@ def tensor_quality(points: np.ndarray, cells: np.ndarray):
     quality min over the nodes of det J / prod |dX/dxi_j| (1 for a rectangle / box and a
     right prism over a right isosceles triangle, 0 for a degenerate corner); the edges are
     corner to corner."""
-    from tissuesim.mesh.tensor import local_faces
+    from tissuesim.mesh.cells.tensor import local_faces
 
     d = points.shape[1]
     shape, nodes, (xi, w) = _basis(d, cells.shape[1])

@@ -20,7 +20,7 @@ generator); where a file's numbering differs, a flat tetrahedron over the face's
 added so that the split stays closed (its faces are both splits' triangles).
 
 The face tables (``all_faces``, ``face_table``, ``boundary_faces``) also serve linear wedges
-(``mesh/wedge.py``), whose facets are (k, 4) rows too (``WEDGE_FACES``).
+(``mesh/cells/wedge.py``), whose facets are (k, 4) rows too (``WEDGE_FACES``).
 """
 
 from __future__ import annotations
@@ -79,7 +79,7 @@ FACES = {
     ),
 }
 
-#: the facets of a linear wedge (``mesh/wedge.py``), outward as ``FACES``: the triangles with
+#: the facets of a linear wedge (``mesh/cells/wedge.py``), outward as ``FACES``: the triangles with
 #: their last corner repeated, so that a wedge mesh's facets are (k, 4) rows like a
 #: hexahedral one's and the face tables below serve both
 WEDGE_FACES = np.array(

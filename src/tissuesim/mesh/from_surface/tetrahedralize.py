@@ -1,13 +1,13 @@
 """A triangle surface (STL, OBJ, PLY, ... or arrays) -> a checked P1 tetrahedral ``Mesh``.
 
 ``mesh_surface`` reads the surface with meshio, welds it, runs an external mesher
-(``mesh/meshers.py``: pytetwild, a dependency, by default; tetgen or gmsh on request, the
-extras ``tissuesim[tetgen]`` / ``tissuesim[gmsh]``) and checks what comes back: no tetrahedra,
-tangled (mixed-orientation) or degenerate tetrahedra and a volume far from the surface's are
-errors or warnings, never a silent bad mesh. ``tetrahedralize`` returns the mesh with a quality
-report (tetrahedra, points, dihedral angles, radius ratio, volume against the surface's
-enclosed volume), which ``tissuesim mesh`` prints. The robustness of each mesher is measured in
-docs/meshing.md (``benchmarks/meshers.py``).
+(``mesh/from_surface/meshers.py``: pytetwild, a dependency, by default; tetgen or gmsh on request,
+the extras ``tissuesim[tetgen]`` / ``tissuesim[gmsh]``) and checks what comes back: no tetrahedra,
+tangled (mixed-orientation) or degenerate tetrahedra and a volume far from the surface's are errors
+or warnings, never a silent bad mesh. ``tetrahedralize`` returns the mesh with a quality report
+(tetrahedra, points, dihedral angles, radius ratio, volume against the surface's enclosed volume),
+which ``tissuesim mesh`` prints. The robustness of each mesher is measured in docs/meshing.md
+(``benchmarks/meshers.py``).
 """
 
 from __future__ import annotations
@@ -21,10 +21,10 @@ from typing import Any
 import numpy as np
 
 from tissuesim.errors import InputError, MeshError
+from tissuesim.mesh.from_surface.meshers import INSTALL_HINT, MESHERS, available_meshers, run_mesher
+from tissuesim.mesh.from_surface.sizing import MAX_TETRAHEDRA, meshing_options, to_count
+from tissuesim.mesh.from_surface.smoothing import DEFAULT_SMOOTHING_ITERATIONS, smooth_surface
 from tissuesim.mesh.mesh import Mesh
-from tissuesim.mesh.meshers import INSTALL_HINT, MESHERS, available_meshers, run_mesher
-from tissuesim.mesh.sizing import MAX_TETRAHEDRA, meshing_options, to_count
-from tissuesim.mesh.smoothing import DEFAULT_SMOOTHING_ITERATIONS, smooth_surface
 from tissuesim.validate import short
 
 __all__ = [
@@ -290,8 +290,8 @@ def _orient(v: np.ndarray, t: np.ndarray, name: str, source: str) -> np.ndarray:
 
 def _mesh_once(surf: Surface, name: str, h: float, options: dict[str, Any]) -> tuple[Mesh, float]:
     """One run of mesher ``name`` at size ``h``, checked: the mesh and the mesher's seconds."""
-    from tissuesim.mesh.boundary import boundary_facets
     from tissuesim.mesh.checks import validate_mesh
+    from tissuesim.mesh.queries.boundary import boundary_facets
 
     started = time.perf_counter()
     v, t = run_mesher(name, surf.points, surf.faces, h, surf.source, options)
@@ -353,7 +353,7 @@ def tetrahedralize(
     the bounding-box diagonal (fTetWild's -e), or envelope: its width in metres (default
     size / 20); coarsen: fTetWild's --coarsen. smoothing: "taubin" or "sinc" (VTK) smooths a
     staircase (a voxel segmentation) before meshing, keeping the enclosed volume, over
-    smoothing_iterations (20). See mesh/sizing.py and mesh/smoothing.py.
+    smoothing_iterations (20). See mesh/from_surface/sizing.py and mesh/from_surface/smoothing.py.
 
     The mesh has the point and facet set "surface" (its boundary). The report holds mesher,
     seconds, size, n_tets, n_points, min/max dihedral angle (degrees), radius ratio min/mean,

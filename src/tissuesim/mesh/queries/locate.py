@@ -21,8 +21,8 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from tissuesim.errors import InputError
-from tissuesim.mesh.boundary import _LOCAL_FACETS, boundary_from_table, facet_table
 from tissuesim.mesh.mesh import Mesh
+from tissuesim.mesh.queries.boundary import _LOCAL_FACETS, boundary_from_table, facet_table
 from tissuesim.validate import short
 
 __all__ = [

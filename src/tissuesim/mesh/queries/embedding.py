@@ -27,9 +27,9 @@ import scipy.sparse as sp
 from scipy.spatial import cKDTree
 
 from tissuesim.errors import InputError
-from tissuesim.mesh.boundary import facet_table
-from tissuesim.mesh.locate import _PAIRS_PER_CHUNK, TriangleSoup
 from tissuesim.mesh.mesh import Mesh
+from tissuesim.mesh.queries.boundary import facet_table
+from tissuesim.mesh.queries.locate import _PAIRS_PER_CHUNK, TriangleSoup
 
 __all__ = ["Embedding", "embed_points"]
 

@@ -2,8 +2,8 @@
 
 Each adapter takes a triangle surface (points (n, 3) float64, faces (k, 3) int64) and a target
 edge length ``size`` (in the units of the points) and returns the raw output of its mesher,
-(points (p, 3) float64, tetrahedra (m, 4) int64), unchecked: ``mesh/tetrahedralize.py`` checks
-it. The meshers are optional dependencies, imported only when called:
+(points (p, 3) float64, tetrahedra (m, 4) int64), unchecked: ``mesh/from_surface/tetrahedralize.py``
+checks it. The meshers are optional dependencies, imported only when called:
 
 - ``pytetwild`` (fTetWild, MPL-2.0): envelope-based, meshes non-manifold, self-touching and open
   surfaces (it fills by the generalised winding number); the default (docs/meshing.md).
