@@ -8,7 +8,7 @@ import pytest
 
 from tissuesim.backend import numba_available, resolve_backend
 from tissuesim.materials import MATERIALS
-from tissuesim.materials.neo_hookean import NeoHookean
+from tissuesim.materials.isotropic.neo_hookean import NeoHookean
 from tissuesim.mesh import box, rectangle
 from tissuesim.model import Model
 
@@ -32,7 +32,7 @@ def mesh(request):
 @pytest.mark.parametrize("name", FUSED_LAWS)
 @pytest.mark.parametrize("dim", [2, 3])
 def test_point_kernels_equal_numpy_laws(name, dim):
-    from tissuesim.materials.point_kernels import KERNELS
+    from tissuesim.materials.isotropic.point_kernels import KERNELS
 
     material = MATERIALS[name](youngs_modulus=800.0, poisson_ratio=0.35)
     rng = np.random.default_rng(dim)

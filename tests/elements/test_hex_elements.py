@@ -92,7 +92,7 @@ def test_q1_fused_numba_equals_numpy(name, law):
     rng = np.random.default_rng(2)
     x = mesh.points.ravel() + 0.02 * rng.standard_normal(mesh.points.size)
     a = model(mesh, law, "numpy").evaluate(x, 2, False)
-    from tissuesim.materials.point_kernels import LAW_IDS
+    from tissuesim.materials.isotropic.point_kernels import LAW_IDS
 
     fused = model(mesh, law, "numba")
     assert fused.elastic.fused == (law in LAW_IDS)

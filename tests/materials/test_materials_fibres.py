@@ -12,8 +12,8 @@ import pytest
 
 from tissuesim.errors import MaterialError
 from tissuesim.materials import make_material
-from tissuesim.materials.holzapfel_gasser_ogden import HGOUnconstrained, HolzapfelGasserOgden
-from tissuesim.materials.trans_iso_mooney_rivlin import TransIsoMooneyRivlin
+from tissuesim.materials.fibres.holzapfel_gasser_ogden import HGOUnconstrained, HolzapfelGasserOgden
+from tissuesim.materials.fibres.trans_iso_mooney_rivlin import TransIsoMooneyRivlin
 from tissuesim.mesh import box
 from tissuesim.model import Model
 

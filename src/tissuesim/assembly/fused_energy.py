@@ -14,7 +14,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit, types
 
-from tissuesim.materials.energy_point import SIGNATURE
+from tissuesim.materials.energy_law.energy_point import SIGNATURE
 
 __all__ = ["assemble_energy"]
 

@@ -26,7 +26,7 @@ import numpy as np
 from numba import njit
 
 from tissuesim.errors import InputError
-from tissuesim.materials.point_kernels import evaluate_point
+from tissuesim.materials.isotropic.point_kernels import evaluate_point
 
 __all__ = ["assemble_p1", "element_jacobians"]
 

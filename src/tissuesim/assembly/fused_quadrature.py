@@ -14,7 +14,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from tissuesim.materials.point_kernels import evaluate_point
+from tissuesim.materials.isotropic.point_kernels import evaluate_point
 
 __all__ = ["assemble_points"]
 

@@ -19,8 +19,8 @@ import numpy as np
 from tissuesim.energies.accumulator import Accumulator
 from tissuesim.errors import InvertedElementError
 from tissuesim.kinematics.nodal import NodalKinematics, local_hessians
-from tissuesim.materials._common import det
 from tissuesim.materials.base import Material
+from tissuesim.materials.isotropic._common import det
 from tissuesim.materials.psd import project_tangent_psd
 
 __all__ = ["ElasticEnergy", "scatter_point_hessians"]
@@ -37,7 +37,7 @@ class ElasticEnergy:
 
     def __post_init__(self) -> None:
         if self.backend == "numba":
-            from tissuesim.materials.point_kernels import LAW_IDS
+            from tissuesim.materials.isotropic.point_kernels import LAW_IDS
 
             law = LAW_IDS.get(getattr(self.material, "name", ""), -1)
             registered = _registered_class(self.material)
@@ -166,7 +166,7 @@ def scatter_point_hessians(K: NodalKinematics, A: np.ndarray, acc: Accumulator, 
 
 def _generated_kernel_law(material: Material) -> bool:
     """A law from its energy (``EnergyLaw``, not a subclass that overrides evaluate)."""
-    from tissuesim.materials.energy import EnergyLaw
+    from tissuesim.materials.energy_law.energy import EnergyLaw
 
     return isinstance(material, EnergyLaw) and type(material).evaluate is EnergyLaw.evaluate
 

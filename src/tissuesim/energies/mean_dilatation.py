@@ -35,8 +35,8 @@ from tissuesim.energies.accumulator import Accumulator
 from tissuesim.energies.elastic import scatter_point_hessians
 from tissuesim.errors import InvertedElementError
 from tissuesim.kinematics.nodal import NodalKinematics
-from tissuesim.materials._common import bcast, det, outer
 from tissuesim.materials.base import Material
+from tissuesim.materials.isotropic._common import bcast, det, outer
 from tissuesim.materials.psd import project_tangent_psd
 from tissuesim.materials.volumetric import VolumetricPart, volumetric_part
 

@@ -1,18 +1,25 @@
 """Hyperelastic material laws: psi(F), P(F) and dP/dF, batched over integration points (and a
-law from its energy, ``EnergyLaw``, whose P and dP/dF SymPy derives)."""
+law from its energy, ``EnergyLaw``, whose P and dP/dF SymPy derives).
 
-from tissuesim.materials.arruda_boyce import ArrudaBoyce, CoupledArrudaBoyce
+The interface is in ``base.py``, law names in ``registry.py``; the laws by family in
+``isotropic/`` (the (E, nu) laws, what every law shares, their Numba kernels), ``soft_tissue/``
+(FEBio's laws), ``fibres/`` (fibre-reinforced laws) and ``energy_law/`` (a law from its energy);
+visco-elasticity on any law in ``viscoelastic.py``, fitting to test curves in ``fitting.py``, the
+output's strain and stress measures in ``measures.py``, the laws' volumetric parts for mean
+dilatation in ``volumetric.py`` and the PSD projection in ``psd.py``.
+"""
+
 from tissuesim.materials.base import Material, MaterialResponse
-from tissuesim.materials.corotated import FixedCorotated
-from tissuesim.materials.course_neo_hookean import CourseNeoHookean
-from tissuesim.materials.energy import EnergyLaw, from_energy
+from tissuesim.materials.energy_law.energy import EnergyLaw, from_energy
+from tissuesim.materials.fibres.holzapfel_gasser_ogden import HGOUnconstrained, HolzapfelGasserOgden
+from tissuesim.materials.fibres.trans_iso_mooney_rivlin import TransIsoMooneyRivlin
 from tissuesim.materials.fitting import FitResult, fit_material, nominal_stress
-from tissuesim.materials.holzapfel_gasser_ogden import HGOUnconstrained, HolzapfelGasserOgden
-from tissuesim.materials.lame import lame_parameters
-from tissuesim.materials.linear import LinearElastic
-from tissuesim.materials.mooney_rivlin import CoupledMooneyRivlin, MooneyRivlin
-from tissuesim.materials.neo_hookean import NeoHookean
-from tissuesim.materials.ogden import Ogden, OgdenUnconstrained
+from tissuesim.materials.isotropic.corotated import FixedCorotated
+from tissuesim.materials.isotropic.course_neo_hookean import CourseNeoHookean
+from tissuesim.materials.isotropic.lame import lame_parameters
+from tissuesim.materials.isotropic.linear import LinearElastic
+from tissuesim.materials.isotropic.neo_hookean import NeoHookean
+from tissuesim.materials.isotropic.stvk import StVenantKirchhoff
 from tissuesim.materials.psd import project_psd, project_tangent_psd
 from tissuesim.materials.registry import (
     ALIASES,
@@ -21,11 +28,12 @@ from tissuesim.materials.registry import (
     SOFT_TISSUE_LAWS,
     make_material,
 )
-from tissuesim.materials.stvk import StVenantKirchhoff
-from tissuesim.materials.trans_iso_mooney_rivlin import TransIsoMooneyRivlin
-from tissuesim.materials.veronda_westmann import CoupledVerondaWestmann, VerondaWestmann
+from tissuesim.materials.soft_tissue.arruda_boyce import ArrudaBoyce, CoupledArrudaBoyce
+from tissuesim.materials.soft_tissue.mooney_rivlin import CoupledMooneyRivlin, MooneyRivlin
+from tissuesim.materials.soft_tissue.ogden import Ogden, OgdenUnconstrained
+from tissuesim.materials.soft_tissue.veronda_westmann import CoupledVerondaWestmann, VerondaWestmann
+from tissuesim.materials.soft_tissue.yeoh import CoupledYeoh, Yeoh
 from tissuesim.materials.viscoelastic import UncoupledViscoelastic, Viscoelastic
-from tissuesim.materials.yeoh import CoupledYeoh, Yeoh
 
 __all__ = [
     "Material",

@@ -17,21 +17,21 @@ import difflib
 import inspect
 
 from tissuesim.errors import MaterialError
-from tissuesim.materials.arruda_boyce import ArrudaBoyce, CoupledArrudaBoyce
 from tissuesim.materials.base import Material
-from tissuesim.materials.corotated import FixedCorotated
-from tissuesim.materials.course_neo_hookean import CourseNeoHookean
-from tissuesim.materials.energy import EnergyLaw
-from tissuesim.materials.holzapfel_gasser_ogden import HGOUnconstrained, HolzapfelGasserOgden
-from tissuesim.materials.linear import LinearElastic
-from tissuesim.materials.mooney_rivlin import CoupledMooneyRivlin, MooneyRivlin
-from tissuesim.materials.neo_hookean import NeoHookean
-from tissuesim.materials.ogden import Ogden, OgdenUnconstrained
-from tissuesim.materials.stvk import StVenantKirchhoff
-from tissuesim.materials.trans_iso_mooney_rivlin import TransIsoMooneyRivlin
-from tissuesim.materials.veronda_westmann import CoupledVerondaWestmann, VerondaWestmann
+from tissuesim.materials.energy_law.energy import EnergyLaw
+from tissuesim.materials.fibres.holzapfel_gasser_ogden import HGOUnconstrained, HolzapfelGasserOgden
+from tissuesim.materials.fibres.trans_iso_mooney_rivlin import TransIsoMooneyRivlin
+from tissuesim.materials.isotropic.corotated import FixedCorotated
+from tissuesim.materials.isotropic.course_neo_hookean import CourseNeoHookean
+from tissuesim.materials.isotropic.linear import LinearElastic
+from tissuesim.materials.isotropic.neo_hookean import NeoHookean
+from tissuesim.materials.isotropic.stvk import StVenantKirchhoff
+from tissuesim.materials.soft_tissue.arruda_boyce import ArrudaBoyce, CoupledArrudaBoyce
+from tissuesim.materials.soft_tissue.mooney_rivlin import CoupledMooneyRivlin, MooneyRivlin
+from tissuesim.materials.soft_tissue.ogden import Ogden, OgdenUnconstrained
+from tissuesim.materials.soft_tissue.veronda_westmann import CoupledVerondaWestmann, VerondaWestmann
+from tissuesim.materials.soft_tissue.yeoh import CoupledYeoh, Yeoh
 from tissuesim.materials.viscoelastic import VISCOELASTIC_LAWS
-from tissuesim.materials.yeoh import CoupledYeoh, Yeoh
 from tissuesim.validate import short
 
 __all__ = ["MATERIALS", "ALIASES", "SOFT_TISSUE_LAWS", "FIBRE_LAWS", "make_material"]

@@ -44,9 +44,20 @@ import math
 import numpy as np
 
 from tissuesim.errors import MaterialError
-from tissuesim.materials._common import bcast, check_input, cofactor, det, det_hessian, outer
-from tissuesim.materials._hyperelastic import bulk_energy, inverted_error, parameter_list
 from tissuesim.materials.base import Material, MaterialResponse
+from tissuesim.materials.isotropic._common import (
+    bcast,
+    check_input,
+    cofactor,
+    det,
+    det_hessian,
+    outer,
+)
+from tissuesim.materials.soft_tissue._hyperelastic import (
+    bulk_energy,
+    inverted_error,
+    parameter_list,
+)
 from tissuesim.validate import short
 
 __all__ = ["Viscoelastic", "UncoupledViscoelastic", "VISCOELASTIC_LAWS"]
@@ -291,7 +302,7 @@ class UncoupledViscoelastic(Viscoelastic):
     uncoupled = True
 
     def _check_base(self, elastic: Material) -> None:
-        from tissuesim.materials.ogden import Ogden
+        from tissuesim.materials.soft_tissue.ogden import Ogden
 
         if not (isinstance(elastic, Ogden) or getattr(elastic, "uncoupled", False) is True):
             raise MaterialError(

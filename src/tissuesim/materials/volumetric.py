@@ -28,9 +28,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from tissuesim.errors import InputError
-from tissuesim.materials._common import IDENTITY, cofactor, det, det_hessian
-from tissuesim.materials._hyperelastic import HyperelasticMaterial, bulk_energy
 from tissuesim.materials.base import Material
+from tissuesim.materials.isotropic._common import IDENTITY, cofactor, det, det_hessian
+from tissuesim.materials.soft_tissue._hyperelastic import HyperelasticMaterial, bulk_energy
 
 __all__ = ["VolumetricPart", "volumetric_part", "VOLUMETRIC_LAWS"]
 

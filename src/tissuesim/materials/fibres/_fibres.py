@@ -27,9 +27,16 @@ from __future__ import annotations
 import numpy as np
 
 from tissuesim.errors import MaterialError
-from tissuesim.materials._common import IDENTITY, bcast, check_input, cofactor, det, det_hessian
-from tissuesim.materials._hyperelastic import HyperelasticMaterial, inverted_error
 from tissuesim.materials.base import MaterialResponse
+from tissuesim.materials.isotropic._common import (
+    IDENTITY,
+    bcast,
+    check_input,
+    cofactor,
+    det,
+    det_hessian,
+)
+from tissuesim.materials.soft_tissue._hyperelastic import HyperelasticMaterial, inverted_error
 from tissuesim.validate import short
 
 __all__ = ["FibreLaw", "unit_vectors", "local_axes", "planar_keys"]

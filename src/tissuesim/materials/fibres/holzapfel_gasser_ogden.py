@@ -27,8 +27,8 @@ from __future__ import annotations
 import numpy as np
 
 from tissuesim.errors import MaterialError
-from tissuesim.materials._fibres import FibreLaw, local_axes, planar_keys
-from tissuesim.materials._hyperelastic import (
+from tissuesim.materials.fibres._fibres import FibreLaw, local_axes, planar_keys
+from tissuesim.materials.soft_tissue._hyperelastic import (
     BULK_KINDS,
     PRESSURE_MODELS,
     bulk_energy,

@@ -11,7 +11,7 @@ import numpy as np
 
 from tissuesim.errors import MaterialError
 from tissuesim.materials.base import Material
-from tissuesim.materials.lame import lame_parameters
+from tissuesim.materials.isotropic.lame import lame_parameters
 from tissuesim.validate import short
 
 _EPS2 = np.array([[0.0, 1.0], [-1.0, 0.0]])

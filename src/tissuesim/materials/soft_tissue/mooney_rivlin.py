@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from tissuesim.materials._hyperelastic import Derivatives, InvariantLaw, parameter
+from tissuesim.materials.soft_tissue._hyperelastic import Derivatives, InvariantLaw, parameter
 
 __all__ = ["MooneyRivlin", "CoupledMooneyRivlin"]
 

@@ -29,22 +29,22 @@ from __future__ import annotations
 import numpy as np
 
 from tissuesim.errors import MaterialError
-from tissuesim.materials._common import (
+from tissuesim.materials.base import MaterialResponse
+from tissuesim.materials.isotropic._common import (
     bcast,
     check_input,
     cofactor,
     det,
     det_hessian,
 )
-from tissuesim.materials._hyperelastic import (
+from tissuesim.materials.soft_tissue._hyperelastic import (
     HyperelasticMaterial,
     bulk_energy,
     inverted_error,
     parameter,
     parameter_list,
 )
-from tissuesim.materials._hyperelastic import pressure_model as _pressure_model
-from tissuesim.materials.base import MaterialResponse
+from tissuesim.materials.soft_tissue._hyperelastic import pressure_model as _pressure_model
 
 __all__ = ["Ogden", "OgdenUnconstrained", "power_divided_difference"]
 

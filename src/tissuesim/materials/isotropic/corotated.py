@@ -15,7 +15,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from tissuesim.materials._common import (
+from tissuesim.materials.base import MaterialResponse
+from tissuesim.materials.isotropic._common import (
     IDENTITY,
     IsotropicMaterial,
     bcast,
@@ -25,7 +26,6 @@ from tissuesim.materials._common import (
     det_hessian,
     outer,
 )
-from tissuesim.materials.base import MaterialResponse
 
 __all__ = ["FixedCorotated"]
 

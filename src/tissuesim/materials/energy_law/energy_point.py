@@ -19,7 +19,7 @@ from __future__ import annotations
 
 from numba import njit, types
 
-from tissuesim.materials.point_kernels import _add_det_hessian, _cofactor, _det
+from tissuesim.materials.isotropic.point_kernels import _add_det_hessian, _cofactor, _det
 
 __all__ = ["SIGNATURE", "invariants_point", "invariant_tensors_point"]
 

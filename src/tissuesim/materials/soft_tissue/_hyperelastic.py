@@ -38,7 +38,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from tissuesim.errors import InputError, InvertedElementError, MaterialError
-from tissuesim.materials._common import (
+from tissuesim.materials.base import Material, MaterialResponse
+from tissuesim.materials.isotropic._common import (
     IDENTITY,
     bcast,
     check_input,
@@ -46,7 +47,6 @@ from tissuesim.materials._common import (
     det,
     det_hessian,
 )
-from tissuesim.materials.base import Material, MaterialResponse
 from tissuesim.validate import real, short
 
 __all__ = [

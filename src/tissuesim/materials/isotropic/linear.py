@@ -10,8 +10,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from tissuesim.materials._common import IsotropicMaterial, bcast, check_input
 from tissuesim.materials.base import MaterialResponse
+from tissuesim.materials.isotropic._common import IsotropicMaterial, bcast, check_input
 
 __all__ = ["LinearElastic"]
 

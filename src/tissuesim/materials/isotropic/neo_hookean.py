@@ -14,7 +14,8 @@ from __future__ import annotations
 import numpy as np
 
 from tissuesim.errors import InvertedElementError
-from tissuesim.materials._common import (
+from tissuesim.materials.base import MaterialResponse
+from tissuesim.materials.isotropic._common import (
     IDENTITY,
     IsotropicMaterial,
     bcast,
@@ -23,7 +24,6 @@ from tissuesim.materials._common import (
     det,
     outer,
 )
-from tissuesim.materials.base import MaterialResponse
 
 __all__ = ["NeoHookean"]
 

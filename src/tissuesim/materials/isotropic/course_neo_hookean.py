@@ -16,7 +16,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from tissuesim.materials._common import (
+from tissuesim.materials.base import MaterialResponse
+from tissuesim.materials.isotropic._common import (
     IDENTITY,
     IsotropicMaterial,
     bcast,
@@ -26,7 +27,6 @@ from tissuesim.materials._common import (
     det_hessian,
     outer,
 )
-from tissuesim.materials.base import MaterialResponse
 
 __all__ = ["CourseNeoHookean"]
 

@@ -28,10 +28,8 @@ from collections.abc import Callable
 import numpy as np
 
 from tissuesim.errors import InvertedElementError, MaterialError
-from tissuesim.materials._common import check_input, cofactor, det
-from tissuesim.materials._hyperelastic import invariant_tensors, parameter
 from tissuesim.materials.base import Material, MaterialResponse
-from tissuesim.materials.energy_expr import (
+from tissuesim.materials.energy_law.energy_expr import (
     CONSTANTS,
     FUNCTIONS,
     MATRICES,
@@ -42,6 +40,8 @@ from tissuesim.materials.energy_expr import (
     derive,
     parse_energy,
 )
+from tissuesim.materials.isotropic._common import check_input, cofactor, det
+from tissuesim.materials.soft_tissue._hyperelastic import invariant_tensors, parameter
 from tissuesim.validate import short
 
 __all__ = ["EnergyLaw", "from_energy"]
@@ -139,7 +139,7 @@ class EnergyLaw(Material):
         """The Numba point kernel of dimension ``dim`` (``energy_kernel.py``), or None when it
         cannot be made; for the fused assembly (``energies/elastic.py``)."""
         if dim not in self._kernels:
-            from tissuesim.materials.energy_kernel import make_kernel
+            from tissuesim.materials.energy_law.energy_kernel import make_kernel
 
             self._kernels[dim] = make_kernel(self._derived(dim).derivation, self.psi_text)
         return self._kernels[dim]

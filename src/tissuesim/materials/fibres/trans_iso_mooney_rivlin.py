@@ -25,14 +25,14 @@ import numpy as np
 from scipy.special import expi
 
 from tissuesim.errors import MaterialError
-from tissuesim.materials._fibres import FibreLaw, planar_keys, unit_vectors
-from tissuesim.materials._hyperelastic import (
+from tissuesim.materials.fibres._fibres import FibreLaw, planar_keys, unit_vectors
+from tissuesim.materials.soft_tissue._hyperelastic import (
     BULK_KINDS,
     PRESSURE_MODELS,
     bulk_energy,
     parameter,
 )
-from tissuesim.materials._hyperelastic import pressure_model as _pressure_model
+from tissuesim.materials.soft_tissue._hyperelastic import pressure_model as _pressure_model
 
 __all__ = ["TransIsoMooneyRivlin"]
 
