@@ -4,6 +4,11 @@ kept) against one assembly (energy, gradient and Hessian) plus one back-solve of
 matrix, measured in the same run; and the interactive mode's free motion (one gradient and one
 back-solve on the kept factor, ``time/contact_step.py lagged_free_motion``).
 
+The step's composition: evaluations per step by order (0 energy, 1 with the gradient, 2 with
+the Hessian: Newton's matrices, the start's candidates, the line search, the record's energies),
+back-solves and factorisations per step (the solver's counts), each timed alone on the same
+matrix, and their sum against the step (the rest: Python, the state's update, reporting).
+
     python3 benchmarks/free_step.py                   # 1e4 tetrahedra, 20 steps
     python3 benchmarks/free_step.py --divisions 8 17
 """
@@ -35,11 +40,22 @@ def measure(divisions: int, steps: int) -> dict:
     s = sim.system
     solver = sim._linear_solver()
     walls, assemble, solve, lagged, iterations = [], [], [], [], []
+    orders, linear = {0: 0, 1: 0, 2: 0}, {"back_solves": 0, "factorizations": 0}
+    evaluate = s.evaluate
+
+    def counted(x, order, *args, **kwargs):
+        orders[order] += 1
+        return evaluate(x, order, *args, **kwargs)
+
     for _ in range(steps):
+        s.evaluate = counted
         start = time.perf_counter()
         record = sim.step()
         walls.append(time.perf_counter() - start)
+        s.evaluate = evaluate
         iterations.append(record.newton_iterations)
+        for key in linear:
+            linear[key] += record.extra["linear"][key]
         energies = s.last_step_energies
         x = sim.state.x
         start = time.perf_counter()
@@ -52,6 +68,29 @@ def measure(divisions: int, steps: int) -> dict:
         start = time.perf_counter()
         lagged_free_motion(s, sim.state, sim.time_step, solver, True, energies, sim.time)
         lagged.append(time.perf_counter() - start)
+    x, energies = sim.state.x, s.last_step_energies
+    cost = {}
+    for order in (0, 1):
+        times = []
+        for _ in range(steps):
+            start = time.perf_counter()
+            s.evaluate(x, order, False, energies)
+            times.append(time.perf_counter() - start)
+        cost[order] = statistics.median(times)
+    cost[2] = statistics.median(assemble)
+    factor = []
+    matrix = solver.factored_matrix
+    for _ in range(3):
+        start = time.perf_counter()
+        solver.direct.factorize(matrix)
+        factor.append(time.perf_counter() - start)
+    per_step = {f"evaluations_{k}": v / steps for k, v in orders.items()}
+    per_step.update({k: v / steps for k, v in linear.items()})
+    modelled = (
+        sum(cost[k] * per_step[f"evaluations_{k}"] for k in (0, 1, 2))
+        + statistics.median(solve) * per_step["back_solves"]
+        + statistics.median(factor) * per_step["factorizations"]
+    )
     step, one = statistics.median(walls), statistics.median(assemble) + statistics.median(solve)
     return {
         "tetrahedra": int(sim.bodies["organ"].mesh.n_cells),
@@ -61,6 +100,11 @@ def measure(divisions: int, steps: int) -> dict:
         "back_solve_ms": 1e3 * statistics.median(solve),
         "ratio": step / one,
         "lagged_free_motion_ms": 1e3 * statistics.median(lagged),
+        **per_step,
+        "energy_ms": 1e3 * cost[0],
+        "gradient_ms": 1e3 * cost[1],
+        "factorization_ms": 1e3 * statistics.median(factor),
+        "modelled_ms": 1e3 * modelled,
     }
 
 
@@ -74,12 +118,30 @@ def main() -> None:
         "| step / (assembly + back-solve) | lagged free motion ms |",
         "| --- | --- | --- | --- | --- | --- | --- |",
     ]
+    rows = []
     for divisions in args.divisions:
         r = measure(divisions, args.steps)
+        rows.append(r)
         lines.append(
             f"| {r['tetrahedra']:,} | {r['step_ms']:.1f} | {r['iterations']:.2f} | "
             f"{r['assembly_ms']:.2f} | {r['back_solve_ms']:.2f} | {r['ratio']:.1f} | "
             f"{r['lagged_free_motion_ms']:.1f} |"
+        )
+    lines += [
+        "",
+        "The step's composition (per step: evaluations by order, back-solves, factorisations; "
+        "each kind timed alone on the last step's matrix; their sum against the step):",
+        "",
+        "| tetrahedra | energy (order 0) | gradient (1) | Hessian (2) | back-solves | "
+        "factorisations | energy ms | gradient ms | factorisation ms | sum ms | step ms |",
+        "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |",
+    ]
+    for r in rows:
+        lines.append(
+            f"| {r['tetrahedra']:,} | {r['evaluations_0']:.2f} | {r['evaluations_1']:.2f} | "
+            f"{r['evaluations_2']:.2f} | {r['back_solves']:.2f} | {r['factorizations']:.2f} | "
+            f"{r['energy_ms']:.2f} | {r['gradient_ms']:.2f} | {r['factorization_ms']:.1f} | "
+            f"{r['modelled_ms']:.1f} | {r['step_ms']:.1f} |"
         )
     text = (
         "# The contact-free step (benchmarks/free_step.py)\n\n"
