@@ -1,7 +1,7 @@
 """Where contact's collision sets and CCD sweeps take their candidate pairs from.
 
-A step's candidate set (``contact/candidates.py``) is built with the surface primitives' boxes
-inflated by dhat / 2 + a margin and reused by every evaluation (and CCD sweep) whose vertices
+A step's candidate set (``contact/barrier/candidates.py``) is built with the surface primitives'
+boxes inflated by dhat / 2 + a margin and reused by every evaluation (and CCD sweep) whose vertices
 stay within the margin; a vertex that leaves it rebuilds the set. A larger margin means fewer
 rebuilds but more pairs, and every collision-set build and narrow phase pays for each pair.
 A CCD sweep can instead take the pairs of ipctk's broad phase over its own boxes.
@@ -40,8 +40,8 @@ from pathlib import Path
 
 import numpy as np
 
-from tissuesim.contact import ccd_queries
-from tissuesim.contact.candidates import StepCandidates
+from tissuesim.contact.barrier import ccd_queries
+from tissuesim.contact.barrier.candidates import StepCandidates
 from tissuesim.mesh.cutting.virtual_nodes import PlanarCut
 from tissuesim.scene.loader import build_scene
 

@@ -23,7 +23,7 @@ import ipctk
 import numpy as np
 
 import tissuesim as ts
-from tissuesim.contact.cut_surface import cut_surface
+from tissuesim.contact.cut.surface import cut_surface
 from tissuesim.errors import InputError
 from tissuesim.mesh.cutting.virtual_nodes import PlanarCut, virtual_node_cut
 

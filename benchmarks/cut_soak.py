@@ -9,8 +9,8 @@ case:
 - ``through``: one to three oblique planes through about one point near its middle (2-8
   pieces falling onto each other and the table);
 - ``thin``: two nearly parallel planes 0.1-3 dhat apart (a slab thinner than the cut faces'
-  gap: ``contact/thin_pieces.py``, or a crumb: ``mesh/cutting/crumbs.py``), in 4 of 10 cases a third
-  across them.
+  gap: ``contact/cut/thin_pieces.py``, or a crumb: ``mesh/cutting/crumbs.py``), in 4 of 10 cases a
+  third across them.
 
 Per case: the pieces, whether it failed (an error, or a step's exact intersection test), the
 iterations of the first step after the cut and the largest of the later ones, any warning.

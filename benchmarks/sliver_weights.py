@@ -15,7 +15,7 @@ import time
 import ipctk
 import numpy as np
 
-from tissuesim.contact.sliver_points import weigh_points
+from tissuesim.contact.cut.sliver_points import weigh_points
 
 
 def grids(n: int = 40) -> tuple[np.ndarray, np.ndarray]:

@@ -220,8 +220,10 @@ def attempt(fn, *args, notes=None, label="", **kwargs):
 
 
 def fmt_table(rows, cols, key, level="N"):
-    out = ["| " + " | ".join(c for c, _ in cols) + " | change vs previous |",
-           "|" + "---|" * (len(cols) + 1)]
+    out = [
+        "| " + " | ".join(c for c, _ in cols) + " | change vs previous |",
+        "|" + "---|" * (len(cols) + 1),
+    ]
     prev = None
     for r in rows:
         v = r[key]
@@ -270,8 +272,18 @@ def cook_mesh(N, element, g=2.0):
     return m, region
 
 
-def run_cook(N, mu, lam, traction, energy="tissuesim", element="quad9", formulation="mixed",
-             g=2.0, steps=4, solver=None):
+def run_cook(
+    N,
+    mu,
+    lam,
+    traction,
+    energy="tissuesim",
+    element="quad9",
+    formulation="mixed",
+    g=2.0,
+    steps=4,
+    solver=None,
+):
     f = _felupe()
     t0 = time.perf_counter()
     mesh, region = cook_mesh(N, element, g)
@@ -298,8 +310,12 @@ def run_cook(N, mu, lam, traction, energy="tissuesim", element="quad9", formulat
         iters += res.iterations
     u = field[0].values[tip[0]]
     return {
-        "N": N, "cells": mesh.ncells, "dofs": int(np.sum(field.fieldsizes)),
-        "ux": float(u[0]), "uy": float(u[1]), "iters": iters,
+        "N": N,
+        "cells": mesh.ncells,
+        "dofs": int(np.sum(field.fieldsizes)),
+        "ux": float(u[0]),
+        "uy": float(u[1]),
+        "iters": iters,
         "time": time.perf_counter() - t0,
     }
 
@@ -323,8 +339,10 @@ def run_cook_slab(N, mu, lam, traction, energy="dealii", g=2.0, steps=4, solver=
     end = np.flatnonzero(np.isclose(m.points[:, 0], 48.0))
     ys = np.unique(np.round(m.points[end, 1], 10))
     zs = np.unique(np.round(m.points[end, 2], 10))
-    w = (simpson_weights(ys)[np.searchsorted(ys, np.round(m.points[end, 1], 10))]
-         * simpson_weights(zs)[np.searchsorted(zs, np.round(m.points[end, 2], 10))])
+    w = (
+        simpson_weights(ys)[np.searchsorted(ys, np.round(m.points[end, 1], 10))]
+        * simpson_weights(zs)[np.searchsorted(zs, np.round(m.points[end, 2], 10))]
+    )
     assert abs(w.sum() - 16.0) < 1e-9
     values = np.zeros((len(end), 3))
     values[:, 1] = traction * w
@@ -334,8 +352,13 @@ def run_cook_slab(N, mu, lam, traction, energy="dealii", g=2.0, steps=4, solver=
         field = newton([solid, load], field, dof0, dof1, solver=solver).x
     tip = np.isclose(m.points[:, 0], 48.0) & np.isclose(m.points[:, 1], 60.0)
     tip &= np.isclose(m.points[:, 2], 0.5)  # mid-thickness node
-    return {"N": N, "cells": m.ncells, "dofs": int(np.sum(field.fieldsizes)),
-            "uy": float(field[0].values[tip][0, 1]), "time": time.perf_counter() - t0}
+    return {
+        "N": N,
+        "cells": m.ncells,
+        "dofs": int(np.sum(field.fieldsizes)),
+        "uy": float(field[0].values[tip][0, 1]),
+        "time": time.perf_counter() - t0,
+    }
 
 
 COOK_MU = 80.194
@@ -359,20 +382,50 @@ def task_cook(args, out):
             lv = args.levels
         rows, notes = [], []
         for N in lv:
-            r = attempt(run_cook, N, COOK_MU, lam, COOK_T, "tissuesim", element, form,
-                        args.grading, steps=args.steps, solver=solver, notes=notes,
-                        label=f"N={N}")
+            r = attempt(
+                run_cook,
+                N,
+                COOK_MU,
+                lam,
+                COOK_T,
+                "tissuesim",
+                element,
+                form,
+                args.grading,
+                steps=args.steps,
+                solver=solver,
+                notes=notes,
+                label=f"N={N}",
+            )
             if r is None:
                 continue
             rows.append(r)
-            print(f"cook nu={nu} {element} {form} N={N}: uy={r['uy']:.6f} "
-                  f"dofs={r['dofs']} {r['time']:.1f}s", file=sys.stderr, flush=True)
+            print(
+                f"cook nu={nu} {element} {form} N={N}: uy={r['uy']:.6f} "
+                f"dofs={r['dofs']} {r['time']:.1f}s",
+                file=sys.stderr,
+                flush=True,
+            )
         out.append(f"\n### Cook, tissuesim neo_hookean, nu = {nu}, {element}, {form}\n")
-        out.append(f"mu = {COOK_MU} MPa, lam = {lam:.6g} MPa, t_y = {COOK_T} MPa (total 100 N "
-                   f"per mm thickness), grading g = {args.grading}, {args.steps} load steps\n")
-        out.append(fmt_table(rows, [("N", "{}"), ("cells", "{}"), ("dofs", "{}"),
-                                    ("uy", "{:.6f}"), ("ux", "{:.6f}"), ("iters", "{}"),
-                                    ("time", "{:.1f}")], "uy"))
+        out.append(
+            f"mu = {COOK_MU} MPa, lam = {lam:.6g} MPa, t_y = {COOK_T} MPa (total 100 N "
+            f"per mm thickness), grading g = {args.grading}, {args.steps} load steps\n"
+        )
+        out.append(
+            fmt_table(
+                rows,
+                [
+                    ("N", "{}"),
+                    ("cells", "{}"),
+                    ("dofs", "{}"),
+                    ("uy", "{:.6f}"),
+                    ("ux", "{:.6f}"),
+                    ("iters", "{}"),
+                    ("time", "{:.1f}"),
+                ],
+                "uy",
+            )
+        )
         out.extend_notes(notes)
 
 
@@ -381,55 +434,124 @@ def task_cook_published(args, out):
     levels = args.levels or [8, 16, 32, 64]
     cases = [
         # label, mu, lam, traction, energy
-        ("deal.II gallery params, deal.II energy", 0.4225, lame(0.4225, 0.3), 1.0 / 16.0,
-         "dealii"),
-        ("deal.II gallery params, tissuesim energy", 0.4225, lame(0.4225, 0.3), 1.0 / 16.0,
-         "tissuesim"),
-        ("OGS params (E=240.565, nu=0.499), OGS energy", 240.565 / 2.998,
-         lame(240.565 / 2.998, 0.499), COOK_T, "ogs"),
-        ("OGS params (E=240.565, nu=0.499), tissuesim energy", 240.565 / 2.998,
-         lame(240.565 / 2.998, 0.499), COOK_T, "tissuesim"),
-        ("default params nu=0.4999, step-44/deal.II energy", COOK_MU, lame(COOK_MU, 0.4999),
-         COOK_T, "dealii"),
-        ("default params nu=0.49, step-44/deal.II energy", COOK_MU, lame(COOK_MU, 0.49),
-         COOK_T, "dealii"),
-        ("default params nu=0.3, step-44/deal.II energy", COOK_MU, lame(COOK_MU, 0.3),
-         COOK_T, "dealii"),
+        ("deal.II gallery params, deal.II energy", 0.4225, lame(0.4225, 0.3), 1.0 / 16.0, "dealii"),
+        (
+            "deal.II gallery params, tissuesim energy",
+            0.4225,
+            lame(0.4225, 0.3),
+            1.0 / 16.0,
+            "tissuesim",
+        ),
+        (
+            "OGS params (E=240.565, nu=0.499), OGS energy",
+            240.565 / 2.998,
+            lame(240.565 / 2.998, 0.499),
+            COOK_T,
+            "ogs",
+        ),
+        (
+            "OGS params (E=240.565, nu=0.499), tissuesim energy",
+            240.565 / 2.998,
+            lame(240.565 / 2.998, 0.499),
+            COOK_T,
+            "tissuesim",
+        ),
+        (
+            "default params nu=0.4999, step-44/deal.II energy",
+            COOK_MU,
+            lame(COOK_MU, 0.4999),
+            COOK_T,
+            "dealii",
+        ),
+        (
+            "default params nu=0.49, step-44/deal.II energy",
+            COOK_MU,
+            lame(COOK_MU, 0.49),
+            COOK_T,
+            "dealii",
+        ),
+        (
+            "default params nu=0.3, step-44/deal.II energy",
+            COOK_MU,
+            lame(COOK_MU, 0.3),
+            COOK_T,
+            "dealii",
+        ),
     ]
     for label, mu, lam, t, energy in cases:
         rows, notes = [], []
         for N in levels:
-            r = attempt(run_cook, N, mu, lam, t, energy, "quad9", "mixed", args.grading,
-                        steps=args.steps, solver=solver, notes=notes, label=f"N={N}")
+            r = attempt(
+                run_cook,
+                N,
+                mu,
+                lam,
+                t,
+                energy,
+                "quad9",
+                "mixed",
+                args.grading,
+                steps=args.steps,
+                solver=solver,
+                notes=notes,
+                label=f"N={N}",
+            )
             if r is None:
                 continue
             rows.append(r)
-            print(f"cook-published {label} N={N}: uy={r['uy']:.6f} {r['time']:.1f}s",
-                  file=sys.stderr, flush=True)
+            print(
+                f"cook-published {label} N={N}: uy={r['uy']:.6f} {r['time']:.1f}s",
+                file=sys.stderr,
+                flush=True,
+            )
         out.append(f"\n### Cook, {label}\n")
-        out.append(f"mu = {mu:.6g} MPa, lam = {lam:.6g} MPa, t_y = {t:.6g} MPa, energy "
-                   f"`{energy}`, quad9 mixed, grading g = {args.grading}\n")
-        out.append(fmt_table(rows, [("N", "{}"), ("dofs", "{}"), ("uy", "{:.6f}"),
-                                    ("time", "{:.1f}")], "uy"))
+        out.append(
+            f"mu = {mu:.6g} MPa, lam = {lam:.6g} MPa, t_y = {t:.6g} MPa, energy "
+            f"`{energy}`, quad9 mixed, grading g = {args.grading}\n"
+        )
+        out.append(
+            fmt_table(
+                rows, [("N", "{}"), ("dofs", "{}"), ("uy", "{:.6f}"), ("time", "{:.1f}")], "uy"
+            )
+        )
         out.extend_notes(notes)
     for energy in ["dealii", "tissuesim"]:
         rows, notes = [], []
-        for N in (args.levels or [8, 16, 32]):
-            r = attempt(run_cook_slab, N, 0.4225, lame(0.4225, 0.3), 1.0 / 16.0, energy,
-                        args.grading, steps=args.steps, solver=solver, notes=notes,
-                        label=f"N={N}")
+        for N in args.levels or [8, 16, 32]:
+            r = attempt(
+                run_cook_slab,
+                N,
+                0.4225,
+                lame(0.4225, 0.3),
+                1.0 / 16.0,
+                energy,
+                args.grading,
+                steps=args.steps,
+                solver=solver,
+                notes=notes,
+                label=f"N={N}",
+            )
             if r is None:
                 continue
             rows.append(r)
-            print(f"cook-published slab {energy} N={N}: uy={r['uy']:.6f} {r['time']:.1f}s",
-                  file=sys.stderr, flush=True)
-        out.append(f"\n### Cook, deal.II gallery params, 3D slab 1 mm thick, z free, energy "
-                   f"`{energy}`\n")
-        out.append("mu = 0.4225 MPa, nu = 0.3, total force 1 N (t_y = 1/16 MPa), one Hex27 "
-                   f"through the thickness, mixed, grading g = {args.grading}, u_y at "
-                   "(48, 60, 0.5)\n")
-        out.append(fmt_table(rows, [("N", "{}"), ("dofs", "{}"), ("uy", "{:.6f}"),
-                                    ("time", "{:.1f}")], "uy"))
+            print(
+                f"cook-published slab {energy} N={N}: uy={r['uy']:.6f} {r['time']:.1f}s",
+                file=sys.stderr,
+                flush=True,
+            )
+        out.append(
+            f"\n### Cook, deal.II gallery params, 3D slab 1 mm thick, z free, energy `{energy}`\n"
+        )
+        out.append(
+            "mu = 0.4225 MPa, nu = 0.3, total force 1 N (t_y = 1/16 MPa), one Hex27 "
+            f"through the thickness, mixed, grading g = {args.grading}, u_y at "
+            "(48, 60, 0.5)\n"
+        )
+        out.append(
+            fmt_table(
+                rows, [("N", "{}"), ("dofs", "{}"), ("uy", "{:.6f}"), ("time", "{:.1f}")], "uy"
+            )
+        )
         out.extend_notes(notes)
 
 
@@ -466,8 +588,17 @@ def block_mesh(n, element, model, g):
     return m, region
 
 
-def run_block(n, nu, element="hex27", model="eighth", g=1.0, steps=5, mu=1000.0,
-              formulation="mixed", solver=None):
+def run_block(
+    n,
+    nu,
+    element="hex27",
+    model="eighth",
+    g=1.0,
+    steps=5,
+    mu=1000.0,
+    formulation="mixed",
+    solver=None,
+):
     f = _felupe()
     t0 = time.perf_counter()
     lam = lame(mu, nu)
@@ -506,8 +637,13 @@ def run_block(n, nu, element="hex27", model="eighth", g=1.0, steps=5, mu=1000.0,
     Fz = 4.0 * float(np.sum(fz[top]))  # 4 x quarter of the top face
     Jmin = float(np.min(np.linalg.det(field[0].extract().transpose(2, 3, 0, 1))))
     return {
-        "n": n, "cells": mesh.ncells, "dofs": int(np.sum(field.fieldsizes)), "Fz": Fz,
-        "Jmin": Jmin, "iters": iters, "time": time.perf_counter() - t0,
+        "n": n,
+        "cells": mesh.ncells,
+        "dofs": int(np.sum(field.fieldsizes)),
+        "Fz": Fz,
+        "Jmin": Jmin,
+        "iters": iters,
+        "time": time.perf_counter() - t0,
     }
 
 
@@ -518,20 +654,48 @@ def task_block(args, out):
             levels = args.levels or [2, 4, 8, 12 if element == "tet10" else 16]
             rows, notes = [], []
             for n in levels:
-                r = attempt(run_block, n, nu, element, args.block_model, args.block_grading,
-                            formulation=(args.formulation or ["mixed"])[0], solver=solver,
-                            notes=notes, label=f"n={n}")
+                r = attempt(
+                    run_block,
+                    n,
+                    nu,
+                    element,
+                    args.block_model,
+                    args.block_grading,
+                    formulation=(args.formulation or ["mixed"])[0],
+                    solver=solver,
+                    notes=notes,
+                    label=f"n={n}",
+                )
                 if r is None:
                     continue
                 rows.append(r)
-                print(f"block nu={nu} {element} n={n}: Fz={r['Fz']:.6f} dofs={r['dofs']} "
-                      f"{r['time']:.1f}s", file=sys.stderr, flush=True)
-            out.append(f"\n### Block, nu = {nu}, {element}, {args.block_model} model, "
-                       f"grading g = {args.block_grading}\n")
+                print(
+                    f"block nu={nu} {element} n={n}: Fz={r['Fz']:.6f} dofs={r['dofs']} "
+                    f"{r['time']:.1f}s",
+                    file=sys.stderr,
+                    flush=True,
+                )
+            out.append(
+                f"\n### Block, nu = {nu}, {element}, {args.block_model} model, "
+                f"grading g = {args.block_grading}\n"
+            )
             out.append(f"mu = 1000 Pa, lam = {lame(1000.0, nu):.6g} Pa, top moved -0.2 m\n")
-            out.append(fmt_table(rows, [("n", "{}"), ("cells", "{}"), ("dofs", "{}"),
-                                        ("Fz", "{:.6f}"), ("Jmin", "{:.4f}"),
-                                        ("iters", "{}"), ("time", "{:.1f}")], "Fz", "n"))
+            out.append(
+                fmt_table(
+                    rows,
+                    [
+                        ("n", "{}"),
+                        ("cells", "{}"),
+                        ("dofs", "{}"),
+                        ("Fz", "{:.6f}"),
+                        ("Jmin", "{:.4f}"),
+                        ("iters", "{}"),
+                        ("time", "{:.1f}"),
+                    ],
+                    "Fz",
+                    "n",
+                )
+            )
             out.extend_notes(notes)
 
 
@@ -546,8 +710,12 @@ def beam_theory(E=1e5, nu=0.0, L=2.0, b=0.4, h=0.4, P=1.0):
     G = E / (2.0 * (1.0 + nu))
     kappa = 10.0 * (1.0 + nu) / (12.0 + 11.0 * nu)  # Cowper, rectangle
     eb = P * L**3 / (3.0 * E * I)
-    return {"euler_bernoulli": eb, "timoshenko": eb + P * L / (kappa * G * A),
-            "timoshenko_5/6": eb + P * L / (5.0 / 6.0 * G * A), "kappa": kappa}
+    return {
+        "euler_bernoulli": eb,
+        "timoshenko": eb + P * L / (kappa * G * A),
+        "timoshenko_5/6": eb + P * L / (5.0 / 6.0 * G * A),
+        "kappa": kappa,
+    }
 
 
 def run_cantilever(n, nu, E=1e5, g=1.0, solver=None):
@@ -557,8 +725,11 @@ def run_cantilever(n, nu, E=1e5, g=1.0, solver=None):
     t0 = time.perf_counter()
     m = f.Cube(a=(0.0, 0.0, 0.0), b=(1.0, 1.0, 1.0), n=(5 * n + 1, n + 1, n + 1))
     p = m.points
-    m = f.Mesh(np.column_stack([2.0 * p[:, 0] ** g, 0.4 * grade(p[:, 1], g),
-                                0.4 * grade(p[:, 2], g)]), m.cells, m.cell_type)
+    m = f.Mesh(
+        np.column_stack([2.0 * p[:, 0] ** g, 0.4 * grade(p[:, 1], g), 0.4 * grade(p[:, 2], g)]),
+        m.cells,
+        m.cell_type,
+    )
     m = m.add_midpoints_edges().add_midpoints_faces().add_midpoints_volumes()
     region = f.RegionTriQuadraticHexahedron(m)
     field = f.FieldContainer([f.Field(region, dim=3)])
@@ -580,9 +751,13 @@ def run_cantilever(n, nu, E=1e5, g=1.0, solver=None):
     uz = res.x[0].values[end, 2]
     centre = np.isclose(m.points[end, 1], 0.2) & np.isclose(m.points[end, 2], 0.2)
     return {
-        "n": n, "cells": m.ncells, "dofs": int(np.sum(res.x.fieldsizes)),
-        "mean_uz": float(np.sum(w * uz) / area), "centre_uz": float(uz[centre][0]),
-        "iters": res.iterations, "time": time.perf_counter() - t0,
+        "n": n,
+        "cells": m.ncells,
+        "dofs": int(np.sum(res.x.fieldsizes)),
+        "mean_uz": float(np.sum(w * uz) / area),
+        "centre_uz": float(uz[centre][0]),
+        "iters": res.iterations,
+        "time": time.perf_counter() - t0,
     }
 
 
@@ -594,17 +769,30 @@ def task_cantilever(args, out):
         for n in levels:
             r = run_cantilever(n, nu, g=args.cant_grading, solver=solver)
             rows.append(r)
-            print(f"cantilever nu={nu} n={n}: mean={r['mean_uz']:.8e} centre="
-                  f"{r['centre_uz']:.8e} {r['time']:.1f}s", file=sys.stderr, flush=True)
+            print(
+                f"cantilever nu={nu} n={n}: mean={r['mean_uz']:.8e} centre="
+                f"{r['centre_uz']:.8e} {r['time']:.1f}s",
+                file=sys.stderr,
+                flush=True,
+            )
         bt = beam_theory(nu=nu)
-        out.append(f"\n### Cantilever, nu = {nu}, Hex27 (E = 1e5 Pa), grading g = "
-                   f"{args.cant_grading}\n")
-        out.append("Beam theory (deflection magnitude, downwards): Euler-Bernoulli "
-                   f"{bt['euler_bernoulli']:.6e} m; Timoshenko (Cowper kappa = "
-                   f"{bt['kappa']:.4f}) {bt['timoshenko']:.6e} m; Timoshenko (kappa = 5/6) "
-                   f"{bt['timoshenko_5/6']:.6e} m\n")
-        cols = [("n", "{}"), ("cells", "{}"), ("dofs", "{}"), ("mean_uz", "{:.8e}"),
-                ("centre_uz", "{:.8e}"), ("time", "{:.1f}")]
+        out.append(
+            f"\n### Cantilever, nu = {nu}, Hex27 (E = 1e5 Pa), grading g = {args.cant_grading}\n"
+        )
+        out.append(
+            "Beam theory (deflection magnitude, downwards): Euler-Bernoulli "
+            f"{bt['euler_bernoulli']:.6e} m; Timoshenko (Cowper kappa = "
+            f"{bt['kappa']:.4f}) {bt['timoshenko']:.6e} m; Timoshenko (kappa = 5/6) "
+            f"{bt['timoshenko_5/6']:.6e} m\n"
+        )
+        cols = [
+            ("n", "{}"),
+            ("cells", "{}"),
+            ("dofs", "{}"),
+            ("mean_uz", "{:.8e}"),
+            ("centre_uz", "{:.8e}"),
+            ("time", "{:.1f}"),
+        ]
         out.append(fmt_table(rows, cols, "mean_uz", "n"))
         out.append("")
         out.append(fmt_table(rows, cols, "centre_uz", "n"))
@@ -627,42 +815,74 @@ class _Out(list):
 
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--task", default="all",
-                    choices=["cook", "cook-published", "block", "cantilever", "all"])
-    ap.add_argument("--levels", type=int, nargs="+", default=None,
-                    help="refinement levels (see the module docstring)")
+    ap.add_argument(
+        "--task", default="all", choices=["cook", "cook-published", "block", "cantilever", "all"]
+    )
+    ap.add_argument(
+        "--levels",
+        type=int,
+        nargs="+",
+        default=None,
+        help="refinement levels (see the module docstring)",
+    )
     ap.add_argument("--nu", type=float, nargs="+", default=None)
-    ap.add_argument("--element", nargs="+", default=None,
-                    choices=["quad9", "tri6", "hex27", "tet10"])
+    ap.add_argument(
+        "--element", nargs="+", default=None, choices=["quad9", "tri6", "hex27", "tet10"]
+    )
     ap.add_argument("--formulation", nargs="+", default=None, choices=["mixed", "disp"])
-    ap.add_argument("--grading", type=float, default=2.0,
-                    help="Cook: two-sided power grading exponent of the mesh (1 = uniform)")
-    ap.add_argument("--steps", type=int, default=4,
-                    help="Cook: number of equal load steps")
+    ap.add_argument(
+        "--grading",
+        type=float,
+        default=2.0,
+        help="Cook: two-sided power grading exponent of the mesh (1 = uniform)",
+    )
+    ap.add_argument("--steps", type=int, default=4, help="Cook: number of equal load steps")
     ap.add_argument("--block-model", default="eighth", choices=["eighth", "quarter"])
-    ap.add_argument("--block-grading", type=float, default=1.0,
-                    help="block: power grading towards the bonded edges (1 = uniform)")
-    ap.add_argument("--cant-grading", type=float, default=1.0,
-                    help="cantilever: power grading towards the clamped edges (1 = uniform)")
+    ap.add_argument(
+        "--block-grading",
+        type=float,
+        default=1.0,
+        help="block: power grading towards the bonded edges (1 = uniform)",
+    )
+    ap.add_argument(
+        "--cant-grading",
+        type=float,
+        default=1.0,
+        help="cantilever: power grading towards the clamped edges (1 = uniform)",
+    )
     ap.add_argument("--quick", action="store_true", help="coarse levels only (smoke test)")
     args = ap.parse_args(argv)
     if args.quick and args.levels is None:
-        args.levels = {"cook": [4, 8, 16], "cook-published": [4, 8, 16], "block": [1, 2, 4],
-                       "cantilever": [1, 2, 4]}.get(args.task, [2, 4, 8])
+        args.levels = {
+            "cook": [4, 8, 16],
+            "cook-published": [4, 8, 16],
+            "block": [1, 2, 4],
+            "cantilever": [1, 2, 4],
+        }.get(args.task, [2, 4, 8])
     warnings.simplefilter("ignore", DeprecationWarning)
     f = _felupe()
     _, solver_name = _solver()
     out = _Out()
-    out.append(f"FElupe {f.__version__}, numpy {np.__version__}, linear solver {solver_name}, "
-           f"check |psi_felupe - 3mu/2 - psi_tissuesim| = {check_energy():.2e}")
-    tasks = {"cook": task_cook, "cook-published": task_cook_published, "block": task_block,
-             "cantilever": task_cantilever}
+    out.append(
+        f"FElupe {f.__version__}, numpy {np.__version__}, linear solver {solver_name}, "
+        f"check |psi_felupe - 3mu/2 - psi_tissuesim| = {check_energy():.2e}"
+    )
+    tasks = {
+        "cook": task_cook,
+        "cook-published": task_cook_published,
+        "block": task_block,
+        "cantilever": task_cantilever,
+    }
     chosen = list(tasks) if args.task == "all" else [args.task]
     if args.task == "all" and args.quick:
         for name in chosen:
             sub = argparse.Namespace(**vars(args))
-            sub.levels = {"cook": [4, 8, 16], "cook-published": [4, 8, 16],
-                          "block": [1, 2, 4], "cantilever": [1, 2, 4]}[name]
+            sub.levels = {
+                "cook": [4, 8, 16],
+                "cook-published": [4, 8, 16],
+                "block": [1, 2, 4],
+                "cantilever": [1, 2, 4],
+            }[name]
             tasks[name](sub, out)
     else:
         for name in chosen:

@@ -38,7 +38,7 @@ import numpy as np
 
 from tissuesim import validate
 from tissuesim.bodies.fem import FemBody
-from tissuesim.contact.indentation import IndentationTracker
+from tissuesim.contact.readout.indentation import IndentationTracker
 from tissuesim.energies.mass import MassKind
 from tissuesim.errors import InputError
 from tissuesim.materials.base import Material
@@ -254,8 +254,8 @@ class Simulation(BodyCalls, SetupCalls, StepChecks, BodyResults, Stepping):
     def _contact_model(self):
         """The contact model over every FEM body's surface and every frame body's embedded
         surface (a frame body without one, and the tissue, take no part)."""
+        from tissuesim.contact.geometry.surfaces import fem_surface, frame_surface
         from tissuesim.contact.model import ContactModel
-        from tissuesim.contact.surfaces import fem_surface, frame_surface
         from tissuesim.io.third_party_logs import quiet_ipctk
 
         quiet_ipctk()  # before contact's first ipctk call: its warnings stay off stderr

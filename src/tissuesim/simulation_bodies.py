@@ -245,7 +245,7 @@ class BodyCalls:
         crossed it), another name is another cut. Returns what changed: {"cells_cut" (new),
         "new_nodes", "pieces", "area_m2" (the rest area of this cut so far), "origin": (n,)
         the node each node continues}. With contact on, the cut body's contact surface is its
-        cut boundary (``contact/cut_surface.py``, in 2D ``contact/cut_surface_2d.py``: each
+        cut boundary (``contact/cut/surface.py``, in 2D ``contact/cut/surface_2d.py``: each
         side's cut face a little inside it, so the two never pass through each other). A
         tissue's attachment points on the body follow the copy on their side of the cut. A
         cell several cuts cross is split into the parts between them."""
@@ -305,7 +305,7 @@ class BodyCalls:
 
     def _blade_in(self, body: str) -> bool:
         """Whether an instrument in contact cuts FEM body ``body`` (its cut faces then sit
-        further in: ``contact/cut_surface.py`` BLADE_GAP)."""
+        further in: ``contact/cut/surface.py`` BLADE_GAP)."""
         return any(c.body == body and self._cuts_ahead(c) for c in self.organ_cuts)
 
     def _cuts_ahead(self, blade) -> bool:
@@ -352,10 +352,10 @@ class BodyCalls:
 
     def _clear_blade_paths(self, c: np.ndarray) -> np.ndarray | None:
         """The configuration ``c`` with the kerf ahead of each blade in contact opened where
-        the body closed it on the blade's path in this step (``contact/blade_clearance.py``), or
+        the body closed it on the blade's path in this step (``contact/cut/blade_clearance.py``), or
         None when no blade's path needs it: a step's start when ``c`` is not one."""
-        from tissuesim.contact.blade_clearance import clearance
-        from tissuesim.contact.cut_surface import BLADE_GAP
+        from tissuesim.contact.cut.blade_clearance import clearance
+        from tissuesim.contact.cut.surface import BLADE_GAP
 
         s, contact = self.system, self.system.contact
         out = None

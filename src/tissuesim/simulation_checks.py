@@ -10,7 +10,7 @@ from typing import Any
 
 import numpy as np
 
-from tissuesim.contact.indentation import is_probe
+from tissuesim.contact.readout.indentation import is_probe
 from tissuesim.errors import InputError
 
 __all__ = ["StepChecks", "STABILITY_MARGIN"]

@@ -266,10 +266,10 @@ class BodyResults:
 
     def instrument_linearization(self, name: str):
         """Obstacle ``name``'s force at the last step's end and its stiffness for a small
-        further translation (``contact/haptics.py`` InstrumentLinearization: ``force`` N,
+        further translation (``contact/readout/haptics.py`` InstrumentLinearization: ``force`` N,
         ``stiffness`` N/m, ``force_at(d)``), from the last step's matrix through the kept
         factorisation: a haptic loop renders ``-force_at(d)`` at 1 kHz between steps."""
-        from tissuesim.contact.haptics import linearize_instrument
+        from tissuesim.contact.readout.haptics import linearize_instrument
         from tissuesim.errors import InputError
 
         s = self.system

@@ -43,7 +43,7 @@ class SetupCalls:
         (``contact/model.py``): ``dhat`` the activation distance (m; default 1e-3 of the
         scene's size), ``stiffness`` the barrier's kappa (Pa, fixed; default None or
         "adaptive": IPC's adaptive kappa from the largest Young's modulus E, within
-        [E, 100 E], contact/stiffness.py);
+        [E, 100 E], contact/barrier/stiffness.py);
         ``friction`` the Coulomb coefficient mu (IPC's smoothed friction, static
         below the sliding speed ``eps_v`` m/s, lagged over ``friction_iterations`` Newton
         solves per step). ``surfaces`` maps a body name to its contact surface, a facet set

@@ -66,7 +66,7 @@ class System:
     ties: Sequence = ()  # coupling/tie.py: FEM bodies glued where they touch
     contact: object = None  # contact/model.py ContactModel, or None
     # the last implicit step's body energies (inertia about its prediction, loads): its Phi,
-    # for the instrument linearisation (contact/haptics.py)
+    # for the instrument linearisation (contact/readout/haptics.py)
     last_step_energies: list | None = None
 
     def __post_init__(self) -> None:
@@ -270,8 +270,8 @@ class System:
     ) -> Accumulator:
         """Phi at c: every body's energies (``energies[j]``: the extra energies of body j in
         its configuration space) plus the coupling, over the tangent DOFs; ``contact`` False
-        leaves the contact energy out (contact/kinematic.py adds its own). ``project``: False
-        (exact Hessians), True (every part projected to PSD) or "contact" (only the contact
+        leaves the contact energy out (contact/barrier/kinematic.py adds its own). ``project``:
+        False (exact Hessians), True (every part projected to PSD) or "contact" (only the contact
         energy's, per collision as IPC does)."""
         energies = energies if energies is not None else [() for _ in self.bodies]
         contact_project = bool(project)

@@ -1,5 +1,5 @@
-"""IPC's adaptive barrier stiffness (contact/stiffness.py): kappa balances the other energies'
-gradient when contact appears, within [E, 100 E], and doubles while the gap keeps closing
+"""IPC's adaptive barrier stiffness (contact/barrier/stiffness.py): kappa balances the other
+energies' gradient when contact appears, within [E, 100 E], and doubles while the gap keeps closing
 below round-off scale; a block on a floor with it rests carrying its weight."""
 
 from __future__ import annotations
@@ -11,8 +11,8 @@ import tissuesim as ts
 
 ipctk = pytest.importorskip("ipctk")
 
+from tissuesim.contact.barrier.stiffness import EPSILON, AdaptiveStiffness  # noqa: E402
 from tissuesim.contact.obstacles import plane  # noqa: E402
-from tissuesim.contact.stiffness import EPSILON, AdaptiveStiffness  # noqa: E402
 
 
 def test_the_initial_stiffness_balances_the_gradients_within_its_bounds():

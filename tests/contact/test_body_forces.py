@@ -1,5 +1,5 @@
-"""Body-to-body contact forces (contact/body_forces.py): what each body receives from each other
-body, as a force sensor between them reads it: equal and opposite, carrying a resting block's
+"""Body-to-body contact forces (contact/readout/body_forces.py): what each body receives from each
+other body, as a force sensor between them reads it: equal and opposite, carrying a resting block's
 weight, split into the barrier's and the friction's parts on an incline where it sticks."""
 
 from __future__ import annotations

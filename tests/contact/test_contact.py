@@ -186,7 +186,7 @@ def test_a_graded_box_is_finer_where_asked_and_stays_positive():
 
 def test_newton_moves_an_obstacle_that_outruns_the_barrier_gap_without_halving():
     """The probe moves 10 x dhat per step into the block: the start of every step is
-    unreachable with the probe at its target, so Newton moves it (contact/kinematic.py)."""
+    unreachable with the probe at its target, so Newton moves it (contact/barrier/kinematic.py)."""
     mesh = ts.box((0, 0, 0), (1, 1, 0.5), (4, 4, 2))
     sim = ts.Simulation(mesh, MATERIAL, integrator="quasistatic", time_step=0.1)
     sim.fix("body", ts.select.vertices_on_plane(mesh, axis=2, value=0.0))
@@ -208,9 +208,9 @@ def test_newton_moves_an_obstacle_that_outruns_the_barrier_gap_without_halving()
 
 
 def test_the_augmented_energy_with_obstacle_unknowns_matches_finite_differences():
-    """contact/kinematic.py: bodies' energy + barrier over bodies and obstacle vertices +
+    """contact/barrier/kinematic.py: bodies' energy + barrier over bodies and obstacle vertices +
     the augmented Lagrangian pull of the obstacles to their targets."""
-    from tissuesim.contact.kinematic import _Augmented
+    from tissuesim.contact.barrier.kinematic import _Augmented
 
     mesh = ts.box((0, 0, 0), (1, 1, 0.5), (3, 3, 2))
     sim = ts.Simulation(mesh, MATERIAL, integrator="quasistatic", time_step=0.1)

@@ -1,5 +1,5 @@
-"""Contact of frame bodies (contact/surfaces.py): the embedded surface's barrier energy through
-rigid and affine frame DOFs against finite differences (gradient, and the Hessian with the
+"""Contact of frame bodies (contact/geometry/surfaces.py): the embedded surface's barrier energy
+through rigid and affine frame DOFs against finite differences (gradient, and the Hessian with the
 rotation chart's curvature, by second differences of the energy along the retraction), and
 frame bodies that fall onto a floor and onto a FEM block without ever intersecting."""
 

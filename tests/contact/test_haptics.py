@@ -1,4 +1,4 @@
-"""The instrument's linearised force (contact/haptics.py): the derivative of the step's
+"""The instrument's linearised force (contact/readout/haptics.py): the derivative of the step's
 solution force with respect to the instrument's translation, against central differences of
 re-solved steps, and the errors of asking for it where it does not exist."""
 

@@ -1,6 +1,6 @@
-"""A sphere probe's indentation depth (contact/indentation.py): 0 until it touches the bodies as
-they are (sagged, moved), then its travel since the touch, past its radius too; reset when it
-lets go; none for capsules and planes."""
+"""A sphere probe's indentation depth (contact/readout/indentation.py): 0 until it touches the
+bodies as they are (sagged, moved), then its travel since the touch, past its radius too; reset
+when it lets go; none for capsules and planes."""
 
 from __future__ import annotations
 
@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 
 import tissuesim as ts
-from tissuesim.contact.indentation import IndentationTracker
 from tissuesim.contact.obstacles import Obstacle, capsule, plane, sphere
+from tissuesim.contact.readout.indentation import IndentationTracker
 
 R = 0.005
 

@@ -173,9 +173,9 @@ def test_the_step_candidate_set_gives_the_barrier_of_a_fresh_build():
 
 def test_a_sweep_from_its_own_broad_phase_finds_the_step_of_the_step_set(monkeypatch):
     """CCD sweeps take their pairs from the step's candidate set or, where that set is dense,
-    from a broad phase over the sweep's own boxes (contact/ccd_queries.py): both give the same
-    collision-free fraction, for moves that hit the probe and moves that do not."""
-    from tissuesim.contact import ccd_queries
+    from a broad phase over the sweep's own boxes (contact/barrier/ccd_queries.py): both give the
+    same collision-free fraction, for moves that hit the probe and moves that do not."""
+    from tissuesim.contact.barrier import ccd_queries
 
     sim = pressed_block()
     _press(sim, [4e-4])

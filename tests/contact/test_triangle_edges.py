@@ -1,5 +1,5 @@
-"""contact/edges.py: a surface's edges for ipctk, the empty surface included (ipctk.edges took
-seconds on an empty int32 array, up to 37 s in a cut-and-fall run, and raised bad_alloc on an
+"""contact/geometry/edges.py: a surface's edges for ipctk, the empty surface included (ipctk.edges
+took seconds on an empty int32 array, up to 37 s in a cut-and-fall run, and raised bad_alloc on an
 empty int64 one)."""
 
 from __future__ import annotations
@@ -7,7 +7,7 @@ from __future__ import annotations
 import ipctk
 import numpy as np
 
-from tissuesim.contact.edges import triangle_edges
+from tissuesim.contact.geometry.edges import triangle_edges
 
 
 def test_an_empty_surface_has_no_edges():

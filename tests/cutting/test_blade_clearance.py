@@ -1,4 +1,4 @@
-"""A step's start with the kerf ahead of a blade in contact opened (contact/blade_clearance.py):
+"""A step's start with the kerf ahead of a blade in contact opened (contact/cut/blade_clearance.py):
 the surface vertices in the blade's path are moved to their side of its plane, at least the gap
 from it; nothing far from the path moves; a kerf already open needs nothing. And on the liver
 resected by an instrument, the steps start with the blade at its target instead of pulling it
@@ -11,8 +11,8 @@ import pytest
 import scipy.sparse as sp
 
 import tissuesim as ts
-from tissuesim.contact.blade_clearance import clearance
-from tissuesim.contact.cut_surface import BLADE_GAP, cut_surface
+from tissuesim.contact.cut.blade_clearance import clearance
+from tissuesim.contact.cut.surface import BLADE_GAP, cut_surface
 from tissuesim.mesh.cutting.virtual_nodes import PlanarCut, virtual_node_cut
 
 DHAT = 0.01
@@ -121,7 +121,7 @@ def test_a_vertex_on_a_node_both_sides_share_is_moved_by_its_other_nodes():
     """Where a cut's copies stay joined (at its front) a node belongs to copies on both sides:
     it stays where it is and the vertex's nodes on one side move further for it, when they
     carry at least MIN_SIDED of its weight; a vertex held mostly by the shared node is left."""
-    from tissuesim.contact.blade_clearance import MIN_SIDED
+    from tissuesim.contact.cut.blade_clearance import MIN_SIDED
 
     # a + copy (nodes 0, 1, 2 on the + side, node 3 virtual) and a - copy sharing node 3
     x = np.array([[1.0, 0, 0], [1.0, 1, 0], [1.0, 0, 1], [-1.0, 0, 0],

@@ -195,8 +195,8 @@ def test_a_blade_crossing_an_earlier_cut_moves_in_its_kerf_with_the_kerf_gap(x0,
     (x0 = 0.04: it parted nodes and copied no cell) or through cells: no step intersects.
     Where cells both cross, the contact surface is built with the kerf's gap (BLADE_GAP)
     every time, not the plain cut faces' gap."""
-    import tissuesim.contact.cut_surface as cut_surface_module
-    from tissuesim.contact.cut_surface import BLADE_GAP
+    import tissuesim.contact.cut.surface as cut_surface_module
+    from tissuesim.contact.cut.surface import BLADE_GAP
 
     built = cut_surface_module.cut_surface
     gaps = []

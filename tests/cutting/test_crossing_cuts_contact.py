@@ -1,4 +1,4 @@
-"""Contact of a body two cuts cross in the same cells (contact/cut_surface.py with several
+"""Contact of a body two cuts cross in the same cells (contact/cut/surface.py with several
 levels per copy): the surface is closed, oriented and free of intersection where the cuts
 cross and where one ends at the other, its enclosed volume is the body's less both slabs
 (their overlap counted once), and pieces cut apart by two cuts fall onto a floor and onto
@@ -12,7 +12,7 @@ import pytest
 from test_cut_contact import block_on_floor  # pytest puts this folder on the path
 
 import tissuesim as ts
-from tissuesim.contact.cut_surface import GAP, cut_surface
+from tissuesim.contact.cut.surface import GAP, cut_surface
 from tissuesim.mesh.cutting.virtual_nodes import PlanarCut, virtual_node_cut
 
 G = 9.81
@@ -131,7 +131,7 @@ def test_the_enclosed_volume_is_the_body_less_both_slabs(name, areas, overlap, m
     slabs share (2 gap x 2 gap x the crossing's length), counted twice; no node of this block
     is within the snapping band and short edges are left unmerged, so the level sets are
     exact."""
-    import tissuesim.contact.cut_surface as module
+    import tissuesim.contact.cut.surface as module
 
     monkeypatch.setattr(module, "MERGE", 0.0)
     cm, W, tri, V = surface(name)
@@ -224,7 +224,7 @@ ALONG_FACES = {
 def test_a_cut_along_faces_crossed_by_another_leaves_a_closed_surface(name, monkeypatch):
     """Closed, oriented, free of intersection, nothing within 0.3 dhat at rest, and the
     enclosed volume the block's less both slabs plus their shared prism (exact: no merging)."""
-    import tissuesim.contact.cut_surface as module
+    import tissuesim.contact.cut.surface as module
 
     monkeypatch.setattr(module, "MERGE", 0.0)
     cm = virtual_node_cut(BOX.points, BOX.cells, ALONG_FACES[name]).to_mesh(BOX)

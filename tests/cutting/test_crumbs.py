@@ -16,8 +16,8 @@ from test_cut_contact import block_on_floor
 from test_several_cuts_contact import closed_and_free
 
 import tissuesim.bodies.cut_state as cut_state
-from tissuesim.contact.sliver_points import bare_pieces
-from tissuesim.contact.surfaces import cut_faces
+from tissuesim.contact.cut.sliver_points import bare_pieces
+from tissuesim.contact.geometry.surfaces import cut_faces
 from tissuesim.mesh.cutting.crumbs import CRUMB, attach_crumbs, joined, small_pieces
 from tissuesim.mesh.cutting.virtual_nodes import PlanarCut, virtual_node_cut
 

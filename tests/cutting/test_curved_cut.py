@@ -75,7 +75,7 @@ def test_a_curved_cut_in_contact_stays_closed_and_free_of_intersection(monkeypat
     ipctk = pytest.importorskip("ipctk")
     before = ipctk.get_num_threads()
     monkeypatch.setenv("TISSUESIM_CONTACT_THREADS", "1")
-    from tissuesim.contact.cut_surface import cut_surface
+    from tissuesim.contact.cut.surface import cut_surface
 
     sim = _block(divisions=10)
     sim.add_gravity((0.0, 0.0, -9.81))

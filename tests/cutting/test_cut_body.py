@@ -127,7 +127,7 @@ def test_a_second_cut_across_cells_cut_before_splits_them_further():
 def test_crossing_cuts_in_2d_with_contact_on_part_the_strip_in_four():
     """A 2D strip held at x = 0 cut across (x = 0.47) and along (y = 0.23) with contact on:
     four pieces, the mass kept, and the steps after the cuts keep every cut edge apart from
-    every other (2D contact where cuts meet: contact/cut_boundary_several.py)."""
+    every other (2D contact where cuts meet: contact/cut/boundary_several.py)."""
     mesh = ts.rectangle((0.0, 0.0), (1.0, 0.4), (10, 4))
     material = ts.make_material("neo_hookean", youngs_modulus=1e6, poisson_ratio=0.3)
     sim = ts.Simulation(mesh, material, density=1000.0, integrator="backward_euler",

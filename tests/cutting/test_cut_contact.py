@@ -1,4 +1,4 @@
-"""A cut body in contact (contact/cut_surface.py): its contact surface is closed, oriented and
+"""A cut body in contact (contact/cut/surface.py): its contact surface is closed, oriented and
 free of intersection, the two sides of a cut start apart and never pass through each other, and
 a piece cut off falls onto a floor and rests there with its weight on it."""
 
@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 import tissuesim as ts
-from tissuesim.contact.cut_surface import GAP, SNAP_OUT, cut_surface
+from tissuesim.contact.cut.surface import GAP, SNAP_OUT, cut_surface
 from tissuesim.contact.obstacles import plane
 from tissuesim.mesh.cutting.virtual_nodes import PlanarCut, virtual_node_cut
 
@@ -84,7 +84,7 @@ def test_the_enclosed_volume_is_the_body_less_the_slab_at_the_cut(name, slab, mo
     """Divergence theorem over the closed surface: the block, less 2 gap times the cut's area
     (no node of this block is within the snapping band, and short edges are left unmerged, so
     the level set is exact)."""
-    import tissuesim.contact.cut_surface as module
+    import tissuesim.contact.cut.surface as module
 
     monkeypatch.setattr(module, "MERGE", 0.0)
     cm, W, tri, V, cut, dhat = surface(name)
@@ -195,7 +195,7 @@ def test_contact_energy_of_a_cut_body_matches_finite_differences():
 
 def test_a_sliver_thinner_than_the_gap_is_reported_as_in_contact_by_points():
     """A cut 0.1 mm from the end of a bar with dhat = 10 mm leaves a sliver whose contact
-    region is empty even at dhat / 16 (contact/thin_pieces.py): the rebuild warns that it has
+    region is empty even at dhat / 16 (contact/cut/thin_pieces.py): the rebuild warns that it has
     no contact surface and is in contact by points (tests/cutting/test_sliver_contact.py); a
     cut 5 mm from the end leaves one that gets a surface of its own (empty at the gap, 1
     dhat), and one 30 mm from the end a plain one."""

@@ -1,4 +1,4 @@
-"""A cut 2D body in contact (contact/cut_surface_2d.py): its boundary polylines are closed,
+"""A cut 2D body in contact (contact/cut/surface_2d.py): its boundary polylines are closed,
 oriented and free of intersection, enclose the body less the strip at the cut, the two sides of
 a cut start apart and push back when pressed together, and a piece cut off falls onto a floor
 and rests there with its weight on it."""
@@ -10,8 +10,8 @@ import numpy as np
 import pytest
 
 import tissuesim as ts
-from tissuesim.contact.cut_surface import GAP, SNAP_OUT
-from tissuesim.contact.cut_surface_2d import cut_boundary
+from tissuesim.contact.cut.surface import GAP, SNAP_OUT
+from tissuesim.contact.cut.surface_2d import cut_boundary
 from tissuesim.mesh.cutting.virtual_nodes import PlanarCut, virtual_node_cut
 
 G = 9.81
@@ -88,7 +88,7 @@ def test_the_enclosed_area_is_the_body_less_the_strip_at_the_cut(name, strip, mo
     """The strip less 2 gap times the cut's length (no node of these cuts is within the
     snapping band, and short segments are left unmerged, so the level set is exact); the notch
     is cut through the cells it crosses completely, y 0.2..0.4."""
-    import tissuesim.contact.cut_surface_2d as module
+    import tissuesim.contact.cut.surface_2d as module
 
     monkeypatch.setattr(module, "MERGE", 0.0)
     W, edges, V, cut, dhat = boundary(name)

@@ -36,12 +36,12 @@ def test_a_third_blade_through_the_wedge_cuts_without_fighting_its_own_surface()
     """A third blade along y = 10 mm, down with the other two, crosses both: elements all
     three cut. Before the pieces part (steps 19-24, the blades deep in the organ) no step takes
     more than 25 Newton iterations (17-39 while the cut surface's own pairs within dhat at rest
-    were pushed apart by the barrier: contact/rest_proximity.py), nothing intersects, and no
+    were pushed apart by the barrier: contact/cut/rest_proximity.py), nothing intersects, and no
     gram is lost."""
     import tomllib
 
     from tissuesim.cli import example_path
-    from tissuesim.contact.cut_surface import level_stack
+    from tissuesim.contact.cut.surface import level_stack
     from tissuesim.scene.loader import build_scene
 
     path = example_path("liver_wedge_resection")

@@ -1,4 +1,4 @@
-"""The cut body's contact surface from its clipped face polygons (contact/polygon_surface.py):
+"""The cut body's contact surface from its clipped face polygons (contact/cut/polygon_surface.py):
 points closer than the merge distance are made one before the polygons are triangulated, so a
 sliver polygon along a mesh edge never leaves a folded triangle; points inserted along a side
 (no T-junction) get a centroid fan; a ring merged across a pinch splits into loops."""
@@ -8,7 +8,7 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
-from tissuesim.contact.polygon_surface import _face_junctions, _loops, polygon_surface
+from tissuesim.contact.cut.polygon_surface import _face_junctions, _loops, polygon_surface
 
 A, B, C, D, E = range(5)
 REST = np.array([[0, 0, 0], [0, 10, 0], [-10, 0, 0], [-2.5, -1, 0], [3, 2, 0]], dtype=float)

@@ -1,5 +1,5 @@
 """Surface pairs of one piece of a cut body that lie within dhat of each other at rest (where
-cuts meet) do not collide (contact/rest_proximity.py): a body cut where cuts cross feels no
+cuts meet) do not collide (contact/cut/rest_proximity.py): a body cut where cuts cross feels no
 contact force at rest, while pairs of different pieces, and bodies that are not cut, keep
 theirs."""
 
@@ -10,8 +10,8 @@ import numpy as np
 from test_crossing_cuts_contact import BOX, CASES, DHAT
 
 import tissuesim as ts
-from tissuesim.contact.cut_surface import cut_surface
-from tissuesim.contact.rest_proximity import rest_proximity_filter
+from tissuesim.contact.cut.rest_proximity import rest_proximity_filter
+from tissuesim.contact.cut.surface import cut_surface
 from tissuesim.mesh.cutting.virtual_nodes import virtual_node_cut
 
 

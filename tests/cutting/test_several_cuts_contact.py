@@ -1,4 +1,4 @@
-"""Contact of a body where three or more cuts cross the same cells (contact/cut_surface.py with
+"""Contact of a body where three or more cuts cross the same cells (contact/cut/surface.py with
 any number of levels per copy): the surface is closed, oriented and free of intersection, its
 enclosed volume is that of the contact region (counted independently, part by part), and the
 pieces of three cuts fall onto a floor and onto each other and rest there."""
@@ -12,9 +12,9 @@ from test_crossing_cuts_contact import BOX, DHAT, outer_pieces_fall_and_rest, pl
 from test_cut_contact import across, block_on_floor
 
 import tissuesim as ts
-import tissuesim.contact.cut_surface as cut_surface_module
-import tissuesim.contact.cut_surface_2d as cut_surface_2d_module
-from tissuesim.contact.cut_surface import GAP, SNAP_IN, SNAP_OUT, cut_surface, level_stack
+import tissuesim.contact.cut.surface as cut_surface_module
+import tissuesim.contact.cut.surface_2d as cut_surface_2d_module
+from tissuesim.contact.cut.surface import GAP, SNAP_IN, SNAP_OUT, cut_surface, level_stack
 from tissuesim.mesh.cutting.plane_split import region_fractions
 from tissuesim.mesh.cutting.virtual_nodes import PlanarCut, virtual_node_cut
 

@@ -1,6 +1,6 @@
 """A piece of a cut body too thin for a contact surface, even one built at the thin pieces'
-smallest scale (``contact/thin_pieces.py``), is in contact by points
-(``contact/sliver_points.py``): it falls onto the floor and rests there with its weight on it
+smallest scale (``contact/cut/thin_pieces.py``), is in contact by points
+(``contact/cut/sliver_points.py``): it falls onto the floor and rests there with its weight on it
 instead of passing through; its points start outside every barrier; their barrier's
 derivatives match finite differences; the points cover a 2D sliver too. The slivers here would
 get a surface of their own (``tests/cutting/test_thin_pieces.py``): every test takes that away
@@ -15,7 +15,7 @@ import pytest
 from test_cut_contact import G, across, block_on_floor
 
 import tissuesim as ts
-from tissuesim.contact.sliver_points import LIFT, MERGE
+from tissuesim.contact.cut.sliver_points import LIFT, MERGE
 
 DHAT = 1e-3  # block_on_floor's
 
@@ -23,7 +23,7 @@ DHAT = 1e-3  # block_on_floor's
 @pytest.fixture(autouse=True)
 def points_only(monkeypatch):
     """No thin piece gets a surface of its own: contact points are all it has."""
-    import tissuesim.contact.thin_pieces as thin_pieces
+    import tissuesim.contact.cut.thin_pieces as thin_pieces
 
     monkeypatch.setattr(thin_pieces, "SCALES", ())
 
@@ -169,7 +169,7 @@ def test_a_point_weighs_as_a_surface_vertex_of_its_area():
     point of area A weigh as a surface vertex of area A, so the barrier's value scales by A."""
     import ipctk
 
-    from tissuesim.contact.sliver_points import weigh_points
+    from tissuesim.contact.cut.sliver_points import weigh_points
 
     V = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0.2, 0.2, 0.004], [0.6, 0.1, 0.02],
                   [0.9, 0.1, 0.02], [0.6, 0.4, 0.02]], dtype=float)  # fmt: skip

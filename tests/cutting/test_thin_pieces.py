@@ -1,5 +1,5 @@
 """A piece of a cut body thinner than its cut faces' gap (dhat) gets a contact surface of its
-own, built as for a barrier a quarter (then a sixteenth) as large (contact/thin_pieces.py):
+own, built as for a barrier a quarter (then a sixteenth) as large (contact/cut/thin_pieces.py):
 the surface is closed and free of intersection, lies in the piece, starts outside every
 barrier, and the piece falls onto the floor and rests there with its weight without any
 surface passing through another (the exact test sees it); in 2D too."""
@@ -14,9 +14,9 @@ from test_cut_contact import G, across, block_on_floor
 from test_several_cuts_contact import closed_and_free
 from test_sliver_contact import slice_with_friction, sliver_on_floor, strip_over_floor_2d
 
-from tissuesim.contact.sliver_points import bare_pieces
-from tissuesim.contact.surfaces import cut_faces
-from tissuesim.contact.thin_pieces import SCALES, thin_surfaces
+from tissuesim.contact.cut.sliver_points import bare_pieces
+from tissuesim.contact.cut.thin_pieces import SCALES, thin_surfaces
+from tissuesim.contact.geometry.surfaces import cut_faces
 
 DHAT = 1e-3  # block_on_floor's
 

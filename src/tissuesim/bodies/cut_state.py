@@ -234,9 +234,9 @@ def bare_small_pieces(
     belong to copies of other pieces, whose nodes a small piece does not use. The whole
     surface, built on every later cut event that frees the same crumb again, cost 0.04 s at
     1e4 tetrahedra."""
-    from tissuesim.contact.sliver_points import bare_pieces
-    from tissuesim.contact.surfaces import cut_faces
-    from tissuesim.contact.thin_pieces import cells_of
+    from tissuesim.contact.cut.sliver_points import bare_pieces
+    from tissuesim.contact.cut.thin_pieces import cells_of
+    from tissuesim.contact.geometry.surfaces import cut_faces
 
     cells = state.original.cells
     touched = np.zeros(state.original.n_points, dtype=bool)

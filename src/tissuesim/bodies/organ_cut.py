@@ -78,7 +78,7 @@ class OrganCut:
     #: out of contact with its body for this step (a new cut face crossed it at the start)
     suspended: bool = field(init=False, default=False, repr=False)
     #: a blade in contact: its edges or triangles over the step about to be taken (the cut
-    #: ahead's samples), whose path the step's start keeps clear (contact/blade_clearance.py)
+    #: ahead's samples), whose path the step's start keeps clear (contact/cut/blade_clearance.py)
     path: list | None = field(init=False, default=None, repr=False)
 
     def __post_init__(self) -> None:

@@ -1,7 +1,7 @@
 """Barrier contact (IPC, Li et al. 2020) between the surfaces of the bodies (each with itself,
 too) and the kinematic obstacles, through the IPC Toolkit (``ipctk``).
 
-The collision mesh stacks every body's contact surface (contact/surfaces.py: a FEM body's
+The collision mesh stacks every body's contact surface (contact/geometry/surfaces.py: a FEM body's
 boundary vertices are rows of the system configuration; a frame body's embedded surface moves
 with its frames, mapped to frame DOFs with the chain rule) and the obstacles' vertices
 (positions given by their motion at the step's time, no unknowns). Energies are evaluated over
@@ -29,13 +29,14 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.sparse as sp
 
-from tissuesim.contact.candidates import StepCandidates
-from tissuesim.contact.ccd_queries import CollisionQueries
-from tissuesim.contact.edges import triangle_edges
-from tissuesim.contact.friction_lag import FrictionLag
-from tissuesim.contact.sliver_points import weigh_points
-from tissuesim.contact.stiffness import AdaptiveStiffness
-from tissuesim.contact.surfaces import CutFemSurface, FemSurface
+from tissuesim.contact.barrier.candidates import StepCandidates
+from tissuesim.contact.barrier.ccd_queries import CollisionQueries
+from tissuesim.contact.barrier.forces import ContactForces
+from tissuesim.contact.barrier.friction_lag import FrictionLag
+from tissuesim.contact.barrier.stiffness import AdaptiveStiffness
+from tissuesim.contact.cut.sliver_points import weigh_points
+from tissuesim.contact.geometry.edges import triangle_edges
+from tissuesim.contact.geometry.surfaces import CutFemSurface, FemSurface
 from tissuesim.errors import InputError
 
 __all__ = ["ContactModel", "ContactSettings", "ContactStats"]
@@ -45,7 +46,8 @@ __all__ = ["ContactModel", "ContactSettings", "ContactStats"]
 class ContactSettings:
     """dhat: activation distance (m; None: 1e-3 of the scene's bounding-box diagonal).
     stiffness: kappa (Pa, fixed) or None / "adaptive": IPC's adaptive kappa, starting at the
-    largest Young's modulus E of the bodies in contact, within [E, 100 E] (contact/stiffness.py)."""
+    largest Young's modulus E of the bodies in contact, within [E, 100 E]
+    (contact/barrier/stiffness.py)."""
 
     dhat: float | None = None
     stiffness: float | str | None = None
@@ -55,7 +57,8 @@ class ContactSettings:
     # body name -> its contact surface: a facet set name or (k, 3) vertex indices (default:
     # the whole boundary)
     surfaces: dict = field(default_factory=dict)
-    pairs: tuple = ()  # contact/pairs.py ContactPair: a pair switched off or with its own mu
+    # contact/pairs.py ContactPair: a pair switched off or with its own mu
+    pairs: tuple = ()
     # how a step treats contact (time/contact_step.py): "auto" (the barrier, interactive under
     # a budget), "accurate" (the barrier's Newton from the predicted contacts), "interactive"
     # (the certified prediction is the step), "barrier" (the barrier's Newton alone)
@@ -80,10 +83,10 @@ class ContactStats:
 
 
 @dataclass(eq=False)
-class ContactModel(FrictionLag, CollisionQueries):
+class ContactModel(FrictionLag, CollisionQueries, ContactForces):
     """See the module docstring. ``surfaces``: every body's contact surface
-    (``contact/surfaces.py``: FEM boundaries, frame bodies' embedded surfaces); ``obstacles``:
-    the Obstacle list; ``n_dofs``: the system's tangent DOFs."""
+    (``contact/geometry/surfaces.py``: FEM boundaries, frame bodies' embedded surfaces);
+    ``obstacles``: the Obstacle list; ``n_dofs``: the system's tangent DOFs."""
 
     surfaces: list
     obstacles: list
@@ -91,7 +94,7 @@ class ContactModel(FrictionLag, CollisionQueries):
     n_dofs: int
     time: float = 0.0
     stats: ContactStats = field(default_factory=ContactStats)
-    # contact/kinematic.py's augmented pattern, elimination and linear solver
+    # contact/barrier/kinematic.py's augmented pattern, elimination and linear solver
     augmented_cache: dict = field(default_factory=dict)
 
     def __post_init__(self) -> None:
@@ -168,7 +171,7 @@ class ContactModel(FrictionLag, CollisionQueries):
         self.dhat = self.settings.dhat if self.settings.dhat is not None else 1e-3 * diag
         self._leave_out_rest_pairs(ipctk)
         default = max(_youngs(s.material) for s in self.surfaces)
-        self.adaptive = None  # contact/stiffness.py, unless a fixed stiffness is given
+        self.adaptive = None  # contact/barrier/stiffness.py, unless a fixed stiffness is given
         if self.settings.stiffness in (None, "adaptive"):
             self.adaptive = AdaptiveStiffness(default, diag)
         fixed = isinstance(self.settings.stiffness, float)
@@ -194,7 +197,7 @@ class ContactModel(FrictionLag, CollisionQueries):
             self.adaptive = old.adaptive
         self.set_stiffness(old.kappa)
 
-    # -- the barrier's stiffness (fixed, or IPC's adaptive one: contact/stiffness.py) -------------
+    # -- the barrier's stiffness (fixed, or IPC's adaptive one: contact/barrier/stiffness.py) --
     def set_stiffness(self, kappa: float) -> None:
         self.kappa = float(kappa)
         self.barrier = self._ipctk.BarrierPotential(self.dhat, self.kappa, True)
@@ -340,9 +343,9 @@ class ContactModel(FrictionLag, CollisionQueries):
     def begin_step(self) -> None:
         """A new step: the candidate set is built at the first evaluation with bounds inflated
         by a margin of dhat and reused by every evaluation (and CCD sweep, while it is not
-        dense: ``contact/ccd_queries.py``) whose vertices stay within the margin of where it
-        was built; a vertex that leaves it rebuilds the set (contact/candidates.py). A margin
-        of the step's expected motion (up to a quarter of an edge, the earlier default) saved
+        dense: ``contact/barrier/ccd_queries.py``) whose vertices stay within the margin of where it
+        was built; a vertex that leaves it rebuilds the set (contact/barrier/candidates.py). A
+        margin of the step's expected motion (up to a quarter of an edge, the earlier default) saved
         rebuilds but every evaluation paid for its extra pairs: dhat was within 10 % of it
         (run-to-run spread) on every scene of ``benchmarks/contact_candidates.py``, and needs
         no motion estimate."""
@@ -352,8 +355,8 @@ class ContactModel(FrictionLag, CollisionQueries):
 
     def _leave_out_rest_pairs(self, ipctk) -> None:
         """Cut bodies' surface pairs of one piece that touch at rest do not collide
-        (``contact/rest_proximity.py``)."""
-        from tissuesim.contact.rest_proximity import rest_proximity_filter
+        (``contact/cut/rest_proximity.py``)."""
+        from tissuesim.contact.cut.rest_proximity import rest_proximity_filter
 
         near = np.zeros(len(self.rest), dtype=bool)
         for surface in self.surfaces:
@@ -438,78 +441,6 @@ class ContactModel(FrictionLag, CollisionQueries):
         if f_hess is not None:
             H_V = f_hess if H_V is None else H_V + f_hess
         return value, g_V, H_V
-
-    def proximity(self, c: np.ndarray) -> tuple[float, int]:
-        """(the smallest distance (m) between surface elements within dhat, inf if none; the
-        number of collision pairs within dhat), from one collision build."""
-        V = self.vertices(c)
-        col = self._collisions(V)
-        if len(col) == 0:
-            return float("inf"), 0
-        return float(np.sqrt(col.compute_minimum_distance(self.mesh, V))), len(col)
-
-    def min_distance(self, c: np.ndarray) -> float:
-        return self.proximity(c)[0]
-
-    def body_forces(self, c: np.ndarray) -> dict[str, np.ndarray]:
-        """Per enabled pair of bodies, the contact force each receives from the other
-        (``contact/body_forces.py``)."""
-        from tissuesim.contact.body_forces import body_contact_forces
-
-        state = self._friction or self._reported_friction
-        lag = None
-        if self.has_friction and state is not None and len(state[0]):
-            lag = (self._friction_lag_at, state[1], state[2])
-        return body_contact_forces(self, self.vertices(c), lag)
-
-    def obstacle_forces(self, c: np.ndarray) -> dict[str, np.ndarray]:
-        """Force (N, 3-vector) each obstacle exerts on the bodies, as ``name``, and with
-        friction its parts ``name.normal`` (the barrier's gradient with respect to the
-        obstacle's vertices, summed: the bodies' side is its negative) and ``name.friction``
-        (the last step's lagged friction potential's, likewise)."""
-        predicted = self._predicted_forces(c)
-        if predicted is not None:
-            return predicted
-        V = self.vertices(c)
-        col = self._collisions(V)
-        normal = (
-            self.barrier.gradient(col, self.mesh, V).reshape(-1, self.dim)
-            if len(col)
-            else np.zeros_like(V)
-        )
-        friction = None
-        state = self._friction or self._reported_friction
-        if self.has_friction and state is not None and len(state[0]):
-            tangential, V_start, potential = state
-            U = np.asfortranarray(V - V_start)
-            friction = potential.gradient(tangential, self.mesh, U).reshape(-1, self.dim)
-        out = {}
-        for ob in self.obstacles:
-            rows = self.slices[ob.name][0]
-            n = normal[rows].sum(axis=0)
-            f = np.zeros(self.dim) if friction is None else friction[rows].sum(axis=0)
-            out[ob.name] = n + f
-            if self.has_friction:
-                out[f"{ob.name}.normal"] = n
-                out[f"{ob.name}.friction"] = f
-        return out
-
-    def _predicted_forces(self, c: np.ndarray) -> dict[str, np.ndarray] | None:
-        """An interactive step's obstacle forces, its multipliers (``time/contact_step.py``),
-        when c is the state it accepted; else None."""
-        if self.predicted_forces is None:
-            return None
-        x, prediction = self.predicted_forces
-        if x.shape != c.shape or not np.array_equal(x, c):
-            return None
-        out = {}
-        for name, force in prediction.forces.items():
-            out[name] = force
-            if self.has_friction:
-                normal = prediction.normal_forces[name]
-                out[f"{name}.normal"] = normal
-                out[f"{name}.friction"] = force - normal
-        return out
 
 
 def _youngs(material) -> float:

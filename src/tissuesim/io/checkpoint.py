@@ -279,8 +279,8 @@ def restore(sim, meta: dict, arrays, history: list, path: Path) -> None:
     """Put a captured state into ``sim`` (set up the same way, not stepped yet)."""
     import warnings
 
+    from tissuesim.contact.barrier.stiffness import AdaptiveStiffness
     from tissuesim.contact.obstacles import DrivenMotion
-    from tissuesim.contact.stiffness import AdaptiveStiffness
     from tissuesim.time.state import State
 
     sim.history[:] = history

@@ -80,7 +80,7 @@ class Mesh:
     # distance to the cut's plane (where the body was when cut) times its side, so its material
     # is where the level's linear interpolation is >= 0; whole cells next to the cut carry
     # their distance on their side, others +inf rows. The cut faces' contact surfaces are level
-    # sets of it (contact/cut_surface.py)
+    # sets of it (contact/cut/surface.py)
     cell_levels: np.ndarray | None = None
     # (cell of each row (r,), levels (r, d+1)) with cell_levels: the further levels of cells
     # several cuts bound (copies of cells several cuts cross; whole cells next to several

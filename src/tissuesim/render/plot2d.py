@@ -211,7 +211,7 @@ def _clipped_weights(mesh: Mesh) -> np.ndarray:
     """(m, K, 3) vertex weights of each triangle's material part where several levels bound
     it (``Mesh.cell_more_levels``): the triangle clipped by each of its levels, shorter
     polygons padded with their last corner."""
-    from tissuesim.contact.cut_surface import level_stack
+    from tissuesim.contact.cut.surface import level_stack
     from tissuesim.mesh.cutting.polygon_clip import clip_polygons
 
     levels = level_stack(mesh)

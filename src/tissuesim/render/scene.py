@@ -225,7 +225,7 @@ def _drawn_surface(mesh, cache: dict):
     key = id(mesh)
     if key not in cache:
         if mesh.cell_levels is not None and mesh.dim == 3:
-            from tissuesim.contact.cut_surface import cut_surface
+            from tissuesim.contact.cut.surface import cut_surface
 
             cache[key] = (mesh, cut_surface(mesh, 0.0))
         else:

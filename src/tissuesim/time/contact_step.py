@@ -359,7 +359,7 @@ def certify(contact, x0: np.ndarray, x: np.ndarray, y0, y1) -> str:
         return contact.max_step(a, b, ya, yb) >= 1.0 or contact.start_free(a, b, ya, yb)
 
     # one broad phase for the straight move's CCD, the sides test and the calibration's
-    # collisions at x (``contact/candidates.py``)
+    # collisions at x (``contact/barrier/candidates.py``)
     V0, V1 = contact.vertices(x0, obstacle=y0), contact.vertices(x, obstacle=y1)
     if contact.candidates.margin is not None:
         contact.candidates.hold_sweep(V0, V1)

@@ -230,7 +230,7 @@ def _reachable_starts(system, state, candidates, t1, y0, y1) -> list[np.ndarray]
 
 def _cleared_starts(system, contact, x0, candidates, y0, y1, t1) -> list[np.ndarray]:
     """Starts with the kerf ahead of a blade in contact opened (``contact.clear_path``,
-    contact/blade_clearance.py) where the plain ones would put the blade through the faces the
+    contact/cut/blade_clearance.py) where the plain ones would put the blade through the faces the
     loaded body closed on its path. A start counts when the bodies get there from x0 with the
     obstacles where they are, and the obstacles then get to their targets, both free of
     intersection (exact CCD): the same proof as one straight move, taken in two legs."""
@@ -342,11 +342,11 @@ def _step_with_moving_obstacles(
     friction_from=None,
     friction_h=None,
 ) -> StepOutcome:
-    """Implicit step in which Newton moves the obstacles too (contact/kinematic.py): the start
-    must only be reachable with the obstacles where they are. Under a budget that runs out the
+    """Implicit step in which Newton moves the obstacles too (contact/barrier/kinematic.py): the
+    start must only be reachable with the obstacles where they are. Under a budget that runs out the
     obstacles stay where Newton got them (short of their targets, like a haptic proxy).
     ``t1``, ``friction_from``, ``friction_h``: as ``implicit_step``'s t_end and friction."""
-    from tissuesim.contact.kinematic import solve_with_moving_obstacles
+    from tissuesim.contact.barrier.kinematic import solve_with_moving_obstacles
 
     contact = system.contact
     t1 = state.time + h if t1 is None else t1

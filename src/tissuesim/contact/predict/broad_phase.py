@@ -14,7 +14,7 @@ enables two obstacles), so it finds the same pairs (``tests/contact/``
 the grasp's 12.0 and 6.9.
 
 Without numba (``tissuesim[fast]``), or with a vertex filter beyond the pair table (a cut
-body's pairs that touch at rest, ``contact/rest_proximity.py``), the caller uses ipctk's.
+body's pairs that touch at rest, ``contact/cut/rest_proximity.py``), the caller uses ipctk's.
 """
 
 from __future__ import annotations

@@ -4,7 +4,7 @@ Where three cuts meet near one line the virtual node algorithm can free a piece 
 millimetres made of element parts of fractions 1e-4 (2.3 mm^3 in the liver's lobe, 3e-4 of
 the cells it lies in). Its nodes are mostly virtual and held by that much mass and stiffness.
 With contact on it is also thinner than the cut faces' kerf (2 dhat): it had no contact
-surface of its own, only points (``contact/sliver_points.py``). Squeezed between the pieces
+surface of its own, only points (``contact/cut/sliver_points.py``). Squeezed between the pieces
 round it, a Newton iteration moved it 0.2 m against their millimetres; CCD then cut each
 iteration's step, of the whole system, to a thousandth, and the step failed after six
 halvings.
@@ -14,10 +14,10 @@ cells where both have a part, the crumb's copy takes the other's nodes wherever 
 continue the same node of the mesh before the cut; nothing moves when they join. The crumb's
 copies and their fractions stay, so no mass or volume is lost, and the cuts keep their place.
 Its parts add no contact faces (it had none) and take none away: a copy whose region at the
-kerf's gap is empty covers nothing as a partner (``contact/cut_surface.py``). What changes is
+kerf's gap is empty covers nothing as a partner (``contact/cut/surface.py``). What changes is
 that the crumb no longer moves on its own. A thin slice that is not small (a grazing cut along
 the organ's side) is not a crumb: it comes off, with a surface of its own
-(``contact/thin_pieces.py``).
+(``contact/cut/thin_pieces.py``).
 """
 
 from __future__ import annotations

@@ -11,7 +11,7 @@ comes within ``margin`` of what the blade will have swept by the step's end, car
 its motion by one more step's travel (at most a cell's edge: tissue moves while the step is
 solved, and what meets the edge must have been cut, not pushed), or that holds a point of the
 blade, is cut along that surface. The cut then leads the blade by at most that lead and one
-cell, and its faces, each ``dhat`` inside its side (``contact/cut_surface.py``), leave the blade
+cell, and its faces, each ``dhat`` inside its side (``contact/cut/surface.py``), leave the blade
 a kerf to move in.
 """
 

@@ -1,6 +1,6 @@
 """Convex polygons clipped by linear functions, batched (Sutherland-Hodgman, one corner slot at
 a time over all polygons), their corners as weights over the nodes they live on: the cut
-body's contact surface (``contact/cut_surface.py``) and the face parts where cuts meet
+body's contact surface (``contact/cut/surface.py``) and the face parts where cuts meet
 (``mesh/cutting/node_groups.py``) clip this way."""
 
 from __future__ import annotations

@@ -271,7 +271,7 @@ def _levels(x_cell, cells, cuts, d_all, taken, copy_cut, parent, side, origin) -
     to its (first) cut's plane times its side; a whole cell on one side of a cut that shares a
     node with a cell it cuts, or a node it parts on its plane (a cut along faces), its distance
     on that side (the cut faces' contact surfaces shave such cells where they come close to the
-    plane: contact/cut_surface.py); +inf else. d_all (cuts, m, d+1): the cells' vertex
+    plane: contact/cut/surface.py); +inf else. d_all (cuts, m, d+1): the cells' vertex
     distances; ``taken`` (m, cuts) which cuts cut each cell. Returns the levels and, for whole
     cells next to several cuts and for copies with a node a cut along faces parts, the further
     ones as rows (``VirtualNodeMesh.shave``)."""

@@ -57,7 +57,7 @@ def sliver_points(
 ) -> tuple[sp.csr_matrix, np.ndarray] | None:
     """(weights (p, n_points) of each contact point over the body's nodes, its area (p,)) for
     the pieces without a contact surface (``bare_pieces``), or None when every piece has one."""
-    from tissuesim.contact.cut_surface import level_stack
+    from tissuesim.contact.cut.surface import level_stack
     from tissuesim.mesh.cutting.plane_split import region_vertices, section_measures
     from tissuesim.mesh.cutting.virtual_nodes import node_pieces
 

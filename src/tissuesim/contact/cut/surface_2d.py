@@ -1,5 +1,5 @@
 """The contact boundary of a cut 2D body (P1 triangles): the 2D counterpart of
-``contact/cut_surface.py``, with the same rules (read its docstring): each side's cut edge follows
+``contact/cut/surface.py``, with the same rules (read its docstring): each side's cut edge follows
 the level set ``level = gap`` (gap = GAP dhat) of its copy's material level
 (``Mesh.cell_levels``), node levels within SNAP_IN dhat above or SNAP_OUT dhat below it are put
 on it, and points closer than MERGE dhat at rest are one point. So the two sides of a fresh cut
@@ -25,8 +25,8 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
-from tissuesim.contact.cut_boundary_several import _OPPOSITE, _TRI_EDGES, assemble, several_boundary
-from tissuesim.contact.cut_surface import (
+from tissuesim.contact.cut.boundary_several import _OPPOSITE, _TRI_EDGES, assemble, several_boundary
+from tissuesim.contact.cut.surface import (
     _MERGE,
     _ZERO,
     GAP,

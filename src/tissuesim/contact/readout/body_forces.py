@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from tissuesim.contact.sliver_points import weigh_points
+from tissuesim.contact.cut.sliver_points import weigh_points
 
 __all__ = ["body_contact_forces"]
 

@@ -16,8 +16,8 @@ __all__ = ["CollisionQueries"]
 #: tight-inclusion CCD for one yes-or-no query per step: its tolerance, and the iterations after
 #: which it gives up (and says "not free"; unbounded it took 16-80 s between parallel faces)
 TIGHT_TOLERANCE, TIGHT_ITERATIONS = 1e-6, 100_000
-#: a sweep takes its pairs from the step's candidate set (``contact/candidates.py``) while that
-#: holds at most this many per surface vertex, else from ipctk's broad phase over the sweep's
+#: a sweep takes its pairs from the step's candidate set (``contact/barrier/candidates.py``) while
+#: that holds at most this many per surface vertex, else from ipctk's broad phase over the sweep's
 #: own boxes: the narrow phase pays for every pair, and the step's set holds every pair within
 #: dhat of the step's path. Between a cut's two fresh faces (2 dhat apart over a whole section)
 #: it held 11 per vertex (900 after a long sweep) and CCD took 5x longer from it; a probe on

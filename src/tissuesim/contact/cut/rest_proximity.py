@@ -1,7 +1,7 @@
 """Pairs of a cut body's contact surface that touch already at rest, left out of contact.
 
 Where cuts meet, the contact surface of one piece folds round the line between its cut faces
-(``contact/cut_surface.py``), and primitives on either side of that crease that share no
+(``contact/cut/surface.py``), and primitives on either side of that crease that share no
 vertex lie within dhat of each other at rest (34 of 40 random crossings had a pair within
 0.3 dhat, ``benchmarks/crossing_surfaces.py``). IPC's barrier then pushes them apart from the
 first step: a spurious force inside the piece, large at a small distance, which moved a cut
@@ -19,7 +19,7 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
 
-from tissuesim.contact.edges import triangle_edges
+from tissuesim.contact.geometry.edges import triangle_edges
 
 __all__ = ["REST_GAP", "rest_proximity_filter"]
 

@@ -29,8 +29,8 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
-from tissuesim.contact.edges import triangle_edges
-from tissuesim.contact.polygon_surface import polygon_surface
+from tissuesim.contact.cut.polygon_surface import polygon_surface
+from tissuesim.contact.geometry.edges import triangle_edges
 from tissuesim.errors import InputError
 from tissuesim.mesh.cutting.polygon_clip import clip_polygons
 from tissuesim.mesh.rows import unique_rows
@@ -66,7 +66,7 @@ def cut_surface(mesh, dhat: float, gap: float = GAP) -> tuple[sp.csr_matrix, np.
     ``dhat`` (m): the cut faces ``gap`` dhat inside each side (default GAP); node levels
     within SNAP_IN dhat above or SNAP_OUT dhat below that are taken as on it, so the level set
     passes through those nodes instead of making tiny triangles next to them; points closer than
-    MERGE dhat (at rest) made one (``contact/polygon_surface.py``). IPC's barrier acts between
+    MERGE dhat (at rest) made one (``contact/cut/polygon_surface.py``). IPC's barrier acts between
     a surface's own primitives closer than dhat, so the surface must have no feature that
     small. Where cuts meet in a cell (any number of them), a surface that merging folded
     through itself at rest is built again merging less (MERGE / 2, / 4, then not at all)."""

@@ -1,5 +1,5 @@
 """Clipped face polygons -> one watertight triangle surface (the cut body's contact surface,
-``contact/cut_surface.py``): every surface point a fixed weighting of mesh nodes.
+``contact/cut/surface.py``): every surface point a fixed weighting of mesh nodes.
 
 1. Corners are points on mesh edges (or nodes): corners on one edge with the same weight are
    one point.

@@ -67,10 +67,10 @@ class FemSurface:
 
 @dataclass(frozen=True, eq=False)
 class CutFemSurface:
-    """A cut FEM body's contact surface (``contact/cut_surface.py``): points embedded in its
+    """A cut FEM body's contact surface (``contact/cut/surface.py``): points embedded in its
     element copies, V = W X with ``embedding`` W (k, n_points) over the body's node positions
     X, ``rest`` (k, d), ``triangles`` (m, d: triangles in 3D, edges in 2D,
-    ``contact/cut_surface_2d.py``), the body's ``config`` and ``tangent`` slices."""
+    ``contact/cut/surface_2d.py``), the body's ``config`` and ``tangent`` slices."""
 
     name: str
     material: object
@@ -80,7 +80,7 @@ class CutFemSurface:
     config: slice
     tangent: slice
     #: per point: NaN for the surface's, the area of a contact point of a piece too thin for
-    #: a surface (``contact/sliver_points.py``: points without faces, after the surface's)
+    #: a surface (``contact/cut/sliver_points.py``: points without faces, after the surface's)
     point_areas: np.ndarray | None = None
     #: per point: whether it is embedded in a cell a cut bounds (where the cut faces are)
     near_cut: np.ndarray | None = None
@@ -161,8 +161,8 @@ def cut_faces(mesh, dhat: float, blade: bool = False) -> tuple[sp.csr_matrix, np
     """A cut mesh's contact surface (weights over its nodes, facets): ``cut_surface`` in 3D,
     with the gap of a body an instrument in contact cuts (``blade``) or the plain one;
     ``cut_boundary`` in 2D. The rebuild and ``cut_body``'s check before a cut both build it."""
-    from tissuesim.contact.cut_surface import BLADE_GAP, GAP, cut_surface
-    from tissuesim.contact.cut_surface_2d import cut_boundary
+    from tissuesim.contact.cut.surface import BLADE_GAP, GAP, cut_surface
+    from tissuesim.contact.cut.surface_2d import cut_boundary
 
     if mesh.dim == 2:
         return cut_boundary(mesh, dhat)
@@ -181,13 +181,13 @@ def fem_surface(
     """Body ``name``'s contact surface: its boundary (triangles in 3D, edges in 2D), or a
     facet set / facets (``choice``); a cut body's is embedded in its element copies, its cut
     faces a little inside each side for a barrier of activation distance ``dhat`` (m;
-    ``contact/cut_surface.py``; ``blade``: an instrument in contact cuts it, and its cut faces
+    ``contact/cut/surface.py``; ``blade``: an instrument in contact cuts it, and its cut faces
     sit further in, clear of the blade's barrier)."""
     from tissuesim.contact.pairs import contact_facets
 
     if model.mesh.cell_levels is not None:
-        from tissuesim.contact.sliver_points import bare_pieces, sliver_points
-        from tissuesim.contact.thin_pieces import thin_surfaces
+        from tissuesim.contact.cut.sliver_points import bare_pieces, sliver_points
+        from tissuesim.contact.cut.thin_pieces import thin_surfaces
 
         if choice is not None:
             raise InputError(
@@ -205,7 +205,7 @@ def fem_surface(
             areas = np.concatenate([np.full(W.shape[0], np.nan), points[1]])
             W = sp.vstack([W, points[0]], format="csr")
         n = model.mesh.n_points * model.mesh.dim
-        from tissuesim.contact.cut_surface import level_stack
+        from tissuesim.contact.cut.surface import level_stack
 
         bounded = np.isfinite(level_stack(model.mesh)).all(axis=2).any(axis=1)
         copied = np.zeros(model.mesh.n_points)  # nodes of cells a cut bounds
@@ -272,11 +272,11 @@ def frame_surface(name: str, model, embedding, triangles, config: slice, tangent
 
 def _warn_bare_pieces(name: str, points: int) -> None:
     """Warn that a piece of a cut body is too thin for a contact surface, even one built at
-    the thin pieces' smallest scale (``contact/thin_pieces.py``), and is in contact by
-    ``points`` points instead (``contact/sliver_points.py``)."""
+    the thin pieces' smallest scale (``contact/cut/thin_pieces.py``), and is in contact by
+    ``points`` points instead (``contact/cut/sliver_points.py``)."""
     import warnings
 
-    from tissuesim.contact.thin_pieces import SCALES
+    from tissuesim.contact.cut.thin_pieces import SCALES
 
     smallest = f"dhat / {round(1 / min(SCALES))}" if SCALES else "dhat"
     warnings.warn(

@@ -9,8 +9,8 @@ meets faces, edges and points of everything (no thin edge passes between contact
 the exact intersection test sees it. Its faces stay dhat (1 + scale) from the other side's at
 rest, outside their barrier. Its own faces, closer than dhat to each other, lie on either side
 of its material and are left out of contact as every pair of one piece that touches at rest
-near a cut (``contact/rest_proximity.py``). A piece thinner than the smallest scale allows
-keeps contact points (``contact/sliver_points.py``).
+near a cut (``contact/cut/rest_proximity.py``). A piece thinner than the smallest scale allows
+keeps contact points (``contact/cut/sliver_points.py``).
 """
 
 from __future__ import annotations
@@ -38,7 +38,7 @@ def thin_surfaces(
     had none (``sliver_points.bare_pieces``), built by ``build(mesh, dhat)`` (the cut
     surface's builder, ``surfaces.cut_faces``) at the first of SCALES times ``dhat`` that
     gives it one; pieces none does stay as they were (no surface)."""
-    from tissuesim.contact.sliver_points import bare_pieces
+    from tissuesim.contact.cut.sliver_points import bare_pieces
     from tissuesim.mesh.cutting.virtual_nodes import node_pieces
 
     bare = bare_pieces(mesh, W, facets)

@@ -1,4 +1,4 @@
-"""The contact boundary of a cut 2D body where cuts meet (``contact/cut_surface_2d.py`` for the
+"""The contact boundary of a cut 2D body where cuts meet (``contact/cut/surface_2d.py`` for the
 rules): a copy of a triangle several cuts cross is bounded by all its levels, so its region is
 cell ∩ {level_i >= gap for every i}. Per copy edge the exposed part is that region on the edge
 less what its partners (the copies holding the same two nodes) cover; a partner two cuts bound
@@ -15,8 +15,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from tissuesim.contact.cut_surface import _MERGE, _ZERO
-from tissuesim.contact.polygon_surface import merge_weighted_points
+from tissuesim.contact.cut.polygon_surface import merge_weighted_points
+from tissuesim.contact.cut.surface import _MERGE, _ZERO
 
 __all__ = ["assemble", "several_boundary"]
 

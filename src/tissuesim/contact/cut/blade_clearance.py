@@ -6,8 +6,8 @@ loaded body closes that kerf ahead of the blade's edge where no blade holds it o
 hanging from the rest of the organ turns its cut face towards the plane, and the two faces may
 even cross it together). The step cannot then start with the blade at its target: the blade
 would have to pass through the faces. Without another start the step falls back to pulling the
-blade in by a penalty inside Newton (``contact/kinematic.py``), which took 20-30 iterations a
-step on the liver.
+blade in by a penalty inside Newton (``contact/barrier/kinematic.py``), which took 20-30 iterations
+a step on the liver.
 
 The start found here opens the kerf as the blade's wedge will: every surface vertex of the cut
 body inside the area the blade sweeps in the step (its projection on the blade's plane within
