@@ -1,6 +1,6 @@
 """How close ``Simulation.critical_time_step()`` (the CFL estimate h_min / c) is to the true
 explicit stability limit 2 / omega_max, omega_max^2 the largest eigenvalue of M_lumped^-1 K at
-rest (Lanczos, scipy's eigsh). The refusal threshold ``STABILITY_MARGIN`` in simulation.py
+rest (Lanczos, scipy's eigsh). The refusal threshold ``STABILITY_MARGIN`` in simulation/checks.py
 (time steps above 1.5 x the estimate are refused before the first step) rests on this table:
 no mesh here has its true limit above 1.5 x its estimate. Not a timing: no repeats needed.
 
@@ -16,7 +16,7 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 import tissuesim as ts
-from tissuesim.simulation import STABILITY_MARGIN
+from tissuesim.simulation.checks import STABILITY_MARGIN
 
 
 def true_limit(sim: ts.Simulation) -> float:

@@ -1,239 +1,170 @@
-"""Adding, naming, finding and removing the bodies of a ``Simulation`` (a mixin, like
-``simulation_setup.SetupCalls``): FEM meshes, meshless frame bodies, the connective tissue.
-Body names are file stems of the output, so they are checked against each other's series."""
+"""Cuts and tearing in a ``Simulation`` (a mixin): blades through the connective tissue or a
+FEM body (``add_cut``), tearing (``set_tearing``), a FEM body cut now by the virtual node
+algorithm (``cut_body``), and what a step does with them: the cut made ahead of a blade in
+contact before the step, the kerf ahead of it opened, the cuts and cracks made after it."""
 
 from __future__ import annotations
 
-import functools
-import re
+from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
 import numpy as np
 
-from tissuesim import validate
-from tissuesim.bodies.fem import FemBody
-from tissuesim.energies.mass import MassKind
 from tissuesim.errors import InputError
-from tissuesim.materials.base import Material
-from tissuesim.mesh.mesh import Mesh
-from tissuesim.time.state import State
+from tissuesim.validate import short
 
 if TYPE_CHECKING:
     from tissuesim.coupling.tissue import TissueBody
 
-__all__ = ["BodyCalls", "RESERVED_NAMES"]
-
-_NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9_.-]*")
-#: a body's size (m, its largest extent) outside these is most likely in other units than
-#: metres (a surface in millimetres read as metres is 1000x too large): warned, once
-BODY_SIZE_RANGE = (1e-3, 5.0)
-#: series the output writes besides the bodies'; no body may take these names
-RESERVED_NAMES = ("cut", "summary", "forces", "manifest")
+__all__ = ["CutCalls"]
 
 
-class BodyCalls:
+class CutCalls:
     """Mixed into ``Simulation``."""
 
-    _units_warned = False  # the units warning is given once per simulation
+    # -- blades and tearing -------------------------------------------------------------------
+    def _tissue(self, what: str) -> TissueBody:
+        if self.tissue is None:
+            raise InputError(f"{what} acts on the tissue: call add_tissue first")
+        return self.tissue
 
-    def _check_units(self, name: str, points: np.ndarray) -> None:
-        """Warn (once) of a body larger than a few metres or smaller than a millimetre: with
-        SI moduli and gravity such a run goes on silently, off by factors of 1e3 and more."""
-        import warnings
-
-        if self._units_warned or not len(points):
-            return
-        size = float(np.max(np.ptp(np.asarray(points, dtype=float), axis=0)))
-        low, high = BODY_SIZE_RANGE
-        if low <= size <= high or not np.isfinite(size):
-            return
-        self._units_warned = True
-        hint = (
-            "a mesh in millimetres read as metres is 1000x too large: scale its points by 1e-3"
-            if size > high
-            else "a mesh in metres is meant here: scale its points if they are in other units"
-        )
-        side = f"larger than {high:g} m" if size > high else f"smaller than {low * 1e3:g} mm"
-        warnings.warn(
-            f"body {name!r} is {size:.3g} m across ({side}); tissuesim works in SI units (m, "
-            f"Pa, kg/m^3, N): {hint} (this is said once)",
-            UserWarning,
-            stacklevel=3,
-        )
-
-    def _new_name(self, name: str, what: str, kind: str = "fem") -> str:
-        """A body name that is valid as a file stem and clashes with no other body's output
-        series (``<name>``, ``<name>_frames``, ``<name>_surface``, ``<name>_points``)."""
-        from tissuesim.io.body_series import series_names
-
-        if not isinstance(name, str) or not _NAME.fullmatch(name):
-            raise InputError(
-                f"{what} name {validate.short(name)} must be letters, digits, '_', '-' or '.', "
-                "starting with a letter or digit (it names output files)"
-            )
-        taken = name in self.bodies or name in {o.name for o in self.obstacles}
-        if taken or name in RESERVED_NAMES or (name == "tissue" != what):
-            raise InputError(f"{what} name {name!r} is taken; choose another")
-        mine = set(series_names(name, kind))
-        if mine & set(self.visual_surfaces):
-            raise InputError(f"{what} name {name!r} is a visual surface's series; choose another")
-        for other in self.bodies.values():
-            clash = mine & set(series_names(other.name, other.kind))
-            if clash:
-                raise InputError(
-                    f"{what} name {name!r} would write the series {sorted(clash)[0]!r} that "
-                    f"body {other.name!r} writes; choose another name"
-                )
-        if self._system is not None and self.history:
-            raise RuntimeError(f"add {what}s before the first step")
-        return name
-
-    def _claim_force_name(self, name: str | None, default: str = "") -> str:
-        """``name`` if it is new (else an error); None: ``default``, numbered if taken."""
-        if name is None:
-            name, k = default, 1
-            while name in self._force_names:
-                name, k = f"{default}_{k}", k + 1
-        elif name in self._force_names:
-            raise InputError(
-                f"a support, grasper or spring set named {name!r} exists; give another name"
-            )
-        self._force_names.add(name)
-        return name
-
-    def _changed(self, body: str = "", what: str = "structure") -> None:
-        """A body's set-up changed: ``structure`` rebuilds the system before the next step;
-        ``prescribed`` / ``velocity`` also update the body's part of the state."""
-        known = self._system is not None and body in self._system.names
-        if self._state is not None and known and what in ("prescribed", "velocity"):
-            j = self._system.index(body)
-            b = self.bodies[body]
-            x, v = self._state.x.copy(), self._state.v.copy()
-            sc, st = self._system.config_slices[j], self._system.tangent_slices[j]
-            if what == "prescribed":
-                x[sc] = b.model.apply_prescribed(x[sc], self.time)
-            else:
-                v[st] = b.velocity
-            self._state = State(self.time, x, v)
-        if what != "velocity":  # a new velocity changes the state, not the system
-            self._system_dirty = True
-
-    def add_body(
+    def add_cut(
         self,
-        name: str,
-        mesh: Mesh,
-        material: Material,
+        blade,
+        start: float,
+        end: float,
         *,
-        density: float | np.ndarray = 1000.0,
-        mass: MassKind = "consistent",
-        order: int | None = None,
-        formulation: str = "displacement",
-    ) -> FemBody:
-        """A FEM body: a triangle or tetrahedral mesh (``mesh.box``, ``mesh.ellipsoid``,
-        ``read_mesh``) of one material; density kg/m^3 (scalar or one per element).
+        body: str | None = None,
+        kerf=None,
+        name: str = "cut",
+        toughness: float = 0.0,
+        edge: Sequence[int] | None = None,
+        contact: bool | None = None,
+    ):
+        """A blade sweeping from ``start`` to ``end`` (s). Without ``body`` it dissects the
+        connective tissue (``add_tissue`` first): ``blade(t)`` returns a polyline (k, 3) of
+        k >= 2 points (m); the tissue points within ``kerf`` (m; default half the tissue's
+        sample spacing) of the swept surface are removed and frames stop acting across the
+        cut; the swept surface is written as the series ``name``. With ``body`` (a FEM body)
+        it cuts that body: ``blade(t)`` returns its straight edge (2, 3) or a flat triangular
+        blade's corners (3, 3), moving in its own plane or off it (then along the surface it
+        sweeps, ``mesh/cutting/swept_cut.py``); after each step the cells it has swept through
+        completely are cut by the virtual node algorithm (``cut_body``), mass kept; its
+        cutting force (``toughness``, J/m^2 of new surface) is reported as ``name``
+        and the cut's area per step under ``extra["cuts"]``. Returns the cutting tool.
 
-        order: None (the mesh's), 1, or 2 (a linear mesh gets a node at every edge's midpoint;
-        vertex indices are kept, point sets gain the midside nodes between their vertices).
-        formulation: "displacement", or "mean_dilatation" for nearly incompressible laws
-        (nu >= 0.45): the lambda term on element (P2) or vertex-patch (P1) volume averages,
-        free of volumetric locking (``energies/mean_dilatation.py``)."""
-        name = self._new_name(name, "body")
-        if self.tissue is not None:
-            raise InputError("add the organs before the tissue that connects them")
-        if not isinstance(mesh, Mesh):
-            raise InputError(f"add_body: mesh must be a tissuesim Mesh, not {validate.short(mesh)}")
-        if not isinstance(material, Material):
-            raise InputError(
-                f"add_body: material must be a tissuesim material (make_material), not "
-                f"{validate.short(material)}"
+        ``blade`` may instead name an obstacle (an instrument): its surface's vertices
+        ``edge`` (2 or 3 indices; default its only triangle) are the blade, moved with it,
+        also when it is driven live (``drive_obstacle``); ``end`` may then be ``math.inf``.
+        With contact on (``set_contact``) the instrument is in contact with the body it cuts
+        as with every other (``contact``, default True): before each step the cells it will
+        touch in the step are cut (``mesh/cutting/cut_ahead.py``), so it moves in the cut's kerf and
+        the cut's faces never pass through it; ``contact=False`` lets it pass through the body
+        it cuts, which is then cut after each step. ``name``'s force is what the instrument
+        feels: the cutting resistance plus the contact force of the bodies on it.
+
+        ``sim.add_cut(lambda t: np.array([[t - 1, -0.2, 0.15], [t - 1, 1.2, 0.15]]),
+        start=1.0, end=2.0)`` sweeps a straight blade along x."""
+        if body is not None:
+            from tissuesim.bodies.organ_cut import OrganCut
+
+            b = self.body(body, ("fem",))
+            self._no_cut_with_visual(b.name, f"add_cut {name!r}")
+            if kerf is not None:
+                raise InputError(
+                    f"add_cut: kerf is for cuts of the connective tissue; a cut of body "
+                    f"{b.name!r} follows the blade's plane and removes nothing: leave kerf out"
+                )
+            if any(c.name == name for c in self.organ_cuts) or name in self.bodies:
+                raise InputError(f"add_cut: the name {name!r} is taken; give the cut its own")
+            obstacle = None
+            if isinstance(blade, str):
+                obstacle, blade = blade, self._obstacle_blade(blade, edge, name)
+            elif edge is not None:
+                raise InputError("add_cut: edge picks an obstacle's vertices; blade is no obstacle")
+            if contact is None:
+                contact = obstacle is not None
+            elif not isinstance(contact, bool):
+                raise InputError(f"add_cut: contact must be true or false, not {contact!r}")
+            tool = OrganCut(
+                blade, float(start), float(end), b.name, name, float(toughness), obstacle, contact
             )
-        validate.choice(mass, "mass", ("consistent", "lumped"))
-        validate.choice(formulation, "formulation", ("displacement", "mean_dilatation"))
-        if order is not None:
-            if isinstance(order, bool) or order not in (1, 2):
-                raise InputError(f"order must be 1 or 2, not {validate.short(order)}")
-            if order == 2 and not mesh.simplicial and mesh.order == 1:
+            self.organ_cuts.append(tool)
+            if obstacle is not None:
+                self._changed()  # the blade leaves the body it cuts out of its contact
+            return tool
+        if isinstance(blade, str) or edge is not None:
+            raise InputError("add_cut: an obstacle as the blade cuts a FEM body: give body = '...'")
+        return self._tissue("add_cut").add_cut(blade, start, end, kerf=kerf, name=name)
+
+    def _obstacle_blade(self, obstacle: str, edge, cut: str):
+        """blade(t): the vertices ``edge`` of obstacle ``obstacle`` where it is at t (looked
+        up at each call: driving replaces the obstacle's motion)."""
+        names = [ob.name for ob in self.obstacles]
+        if obstacle not in names:
+            known = ", ".join(names) or "none"
+            raise InputError(f"add_cut {cut!r}: no obstacle {obstacle!r} (obstacles: {known})")
+        surface = self.obstacles[names.index(obstacle)].surface
+        if edge is None:
+            if len(surface.triangles) != 1:
                 raise InputError(
-                    f"add_body {name!r}: order 2 of {mesh.cell_type} cells is not available; "
-                    "give a tetrahedral / triangle mesh for order 2, a quadratic one (box / "
-                    "rectangle element = 'hex20', 'hex27', 'quad8', 'quad9'), or order 1"
+                    f"add_cut {cut!r}: obstacle {obstacle!r} has {len(surface.triangles)} "
+                    "triangles: give edge = (i, j) or (i, j, k), the vertices of its blade"
                 )
-            if order == 2 and mesh.order == 1:
-                from tissuesim.mesh.cells.elevate import elevate_mesh
+            edge = surface.triangles[0]
+        from tissuesim.validate import indices
 
-                mesh = elevate_mesh(mesh)
-            elif order == 1 and mesh.order == 2:
+        ids = indices(edge, f"add_cut {cut!r}: edge", len(surface.points))
+        if ids.size not in (2, 3) or len(set(ids.tolist())) != ids.size:
+            raise InputError(
+                f"add_cut {cut!r}: edge must be 2 or 3 distinct vertices of obstacle "
+                f"{obstacle!r} (an edge or a triangle), not {short(edge)}"
+            )
+
+        def blade(t: float) -> np.ndarray:
+            ob = next(o for o in self.obstacles if o.name == obstacle)
+            return ob.positions(t)[ids]
+
+        return blade
+
+    def set_tearing(
+        self,
+        threshold: float | None = None,
+        *,
+        body: str | None = None,
+        stress: float | None = None,
+        stretch: float | None = None,
+    ) -> None:
+        """Let tissue tear. Without ``body``: the connective tissue (``add_tissue`` first);
+        after each step, tissue points whose largest principal Green strain exceeds
+        ``threshold`` (dimensionless, e.g. 0.5) are removed. With ``body`` (a FEM body): it
+        tears where its largest principal Cauchy stress exceeds ``stress`` (Pa, its strength)
+        or its largest principal stretch exceeds ``stretch``: a crack normal to that stress
+        grows through the elements over the threshold, cut like a blade's cut
+        (``bodies/organ_tear.py``); once its cracks stop, a new one may start far from them.
+        Reported as the cuts ``body.tear`` (``body.tear2``, ... for later cracks) in
+        ``extra["cuts"]``."""
+        if body is None:
+            if threshold is None or stress is not None or stretch is not None:
                 raise InputError(
-                    f"add_body {name!r}: order 1 was asked for but {mesh.source} has quadratic "
-                    "elements; give a linear mesh or order = 2"
+                    "set_tearing: the connective tissue tears at a strain threshold "
+                    "(set_tearing(0.5)); stress= and stretch= are for a body (body='...')"
                 )
-        if self.explicit:
-            mass = "lumped"  # the explicit update inverts the mass: it must be diagonal
-        body = FemBody(
-            name,
-            mesh,
-            material,
-            density=density,
-            mass=mass,
-            formulation=formulation,
-            backend=self.backend,
-            claim_name=self._claim_force_name,
-            changed=functools.partial(self._changed, name),
-        )
-        for g in self.gravity:
-            body.add_gravity(g)
-        self.bodies[name] = body
-        self._check_units(name, mesh.points)
-        self._changed()
-        return body
+            self._tissue("set_tearing").set_tearing(threshold)
+            return
+        from tissuesim.bodies.organ_tear import BodyTearing
 
-    def add_frame_body(self, name: str, frames: np.ndarray, samples, material: Material, **kw):
-        """A meshless body: frame origins (n, 3) (``grid_frames``, ``farthest_point_frames``),
-        integration points with volumes (``sample_box``, ``sample_surface``, ...), any
-        material; keywords of ``bodies.frames.FrameBody`` (density, frame_type "rigid" or
-        "affine", shape "wendland" or "shepard", radius, radius_factor, min_frames,
-        rotations, mass "full" or "lumped")."""
-        from tissuesim.bodies.frames import FrameBody
+        b = self.body(body, ("fem",))
+        self._no_cut_with_visual(b.name, "set_tearing")
+        if threshold is not None:
+            raise InputError(
+                f"set_tearing: body {b.name!r} tears at a stress (stress=, Pa) or a stretch "
+                "(stretch=), not at a strain threshold"
+            )
+        self.organ_tears = [t for t in self.organ_tears if t.body != b.name]
+        self.organ_tears.append(BodyTearing(b.name, stress, stretch))
 
-        name = self._new_name(name, "body", "frames")
-        body = FrameBody(
-            name,
-            frames,
-            samples,
-            material,
-            backend=self.backend,
-            claim_name=self._claim_force_name,
-            changed=functools.partial(self._changed, name),
-            time=lambda: self.time,
-            **kw,
-        )
-        for g in self.gravity:
-            body.add_gravity(g)
-        self.bodies[name] = body
-        self._changed()
-        return body
-
-    def add_tissue(self, material: Material, *, name: str = "tissue", **kw) -> TissueBody:
-        """The connective tissue between the FEM bodies (``coupling/tissue.py``): integration
-        points ``samples=``, or sampled between the organs (``thickness``, ``spacing``,
-        ``region``); ``frames`` a count or (n, 3) origins; ``frame_type`` "affine" (default)
-        or "rigid"; attached to every organ it touches (``attach_distance``,
-        ``attachment_stiffness`` N/m per m^2)."""
-        from tissuesim.coupling.tissue import TissueBody
-
-        if self.tissue is not None:
-            raise InputError("the scene has a tissue already; one tissue body per scene")
-        name = self._new_name(name, "tissue", "tissue")
-        organs = [(n, b.mesh) for n, b in self.bodies.items() if b.kind == "fem"]
-        if any(m.dim != 3 for _, m in organs):
-            raise InputError("the tissue joins 3D organs; a 2D body cannot take part")
-        tissue = TissueBody(name, organs, material, backend=self.backend, **kw)
-        for g in self.gravity:
-            tissue.add_gravity(g)
-        self.bodies[name] = self.tissue = tissue
-        self._changed()
-        return tissue
-
+    # -- cutting a FEM body, and what a step does with cuts -----------------------------------
     def cut_body(self, cut, *, body: str | None = None, name: str = "cut") -> dict:
         """Cut a FEM body now along ``cut`` (a ``mesh.virtual_nodes.PlanarCut`` in world
         coordinates: the blade cuts the body where it is) by the virtual node algorithm: the
@@ -484,37 +415,3 @@ class BodyCalls:
         vn = None if b.cut_state is None else b.cut_state.vn
         mass = float(b.model.mass.lumped.sum()) / b.mesh.dim
         return {"pieces": 1 if vn is None else vn.n_pieces, "mass_kg": mass}
-
-    def remove_body(self, name: str) -> None:
-        """Take a body (and, for the tissue, its attachments and cuts) out, before the first
-        step (e.g. to measure a scene without its tissue)."""
-        if self.history:
-            raise RuntimeError("remove_body must come before the first step")
-        body = self.body(name)
-        del self.bodies[name]
-        self.visual_surfaces = {k: v for k, v in self.visual_surfaces.items() if v.body != name}
-        if body is self.tissue:
-            self.tissue = None
-        self._state = None
-        self._system = None
-        self._changed()
-
-    def body(self, name: str | None = None, kinds: tuple[str, ...] = ()):
-        """The body called ``name``; None: the only body (of ``kinds``, if given)."""
-        if name is not None:
-            if name not in self.bodies:
-                raise InputError(
-                    f"unknown body {validate.short(name)}; bodies: {list(self.bodies)}"
-                )
-            b = self.bodies[name]
-            if kinds and b.kind not in kinds:
-                raise InputError(f"body {name!r} is a {b.kind} body; this needs {kinds}")
-            return b
-        candidates = [b for b in self.bodies.values() if not kinds or b.kind in kinds]
-        if len(candidates) != 1:
-            what = f"{'/'.join(kinds)} " if kinds else ""
-            raise InputError(
-                f"the simulation has {len(candidates)} {what}bodies "
-                f"({[b.name for b in candidates]}); name one with body="
-            )
-        return candidates[0]

@@ -1,7 +1,7 @@
-"""How a Simulation steps (a mixin of ``simulation.Simulation``): the step function of its
-integrator (explicit, Backward Euler, Newmark, quasistatic, pseudo-time), the phases of a run
-(``time/phases.py``), the end time of the next step, and adaptive steps (FEBio's rule,
-``time/adaptive.py``: one controller per phase, or one for a run without phases)."""
+"""How a Simulation steps (a mixin of ``Simulation``, ``simulation/simulation.py``): the step
+function of its integrator (explicit, Backward Euler, Newmark, quasistatic, pseudo-time), the
+phases of a run (``time/phases.py``), the end time of the next step, and adaptive steps (FEBio's
+rule, ``time/adaptive.py``: one controller per phase, or one for a run without phases)."""
 
 from __future__ import annotations
 

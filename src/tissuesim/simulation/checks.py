@@ -1,7 +1,6 @@
-"""What a ``Simulation`` checks before stepping and reports after a step (a mixin, like
-``simulation_setup.SetupCalls``): a quasistatic solve must be held, explicit steps must be
-below the stability limit; the step's contact figures, the explicit steps' reactions and the
-tissue's topology events."""
+"""What a ``Simulation`` checks before stepping and reports after a step (a mixin): a
+quasistatic solve must be held, explicit steps must be below the stability limit; the step's
+contact figures, the explicit steps' reactions and the tissue's topology events."""
 
 from __future__ import annotations
 
@@ -112,7 +111,7 @@ class StepChecks:
         the barrier acts between most of a body's surface at rest and the steps barely move."""
         if self.contact.dhat is None:
             return  # the default, 1e-3 of the scene's size
-        from tissuesim.simulation_setup import _median_boundary_edge
+        from tissuesim.simulation.interactions import _median_boundary_edge
 
         dhat = float(contact.dhat)
         for body in self._active():

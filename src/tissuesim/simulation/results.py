@@ -175,7 +175,7 @@ class BodyResults:
         """A visual surface's series name: a file stem no body, obstacle, internal series or
         other visual surface writes."""
         from tissuesim.io.body_series import series_names
-        from tissuesim.simulation_bodies import _NAME, RESERVED_NAMES
+        from tissuesim.simulation.bodies import _NAME, RESERVED_NAMES
 
         if not isinstance(name, str) or not _NAME.fullmatch(name):
             raise InputError(

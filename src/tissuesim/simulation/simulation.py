@@ -44,11 +44,13 @@ from tissuesim.errors import InputError
 from tissuesim.materials.base import Material
 from tissuesim.mesh.mesh import Mesh
 from tissuesim.records import StepRecord
-from tissuesim.simulation_bodies import RESERVED_NAMES, BodyCalls
-from tissuesim.simulation_checks import StepChecks
-from tissuesim.simulation_results import BodyResults
-from tissuesim.simulation_setup import SetupCalls
-from tissuesim.simulation_stepping import Stepping
+from tissuesim.simulation.bodies import BodyCalls
+from tissuesim.simulation.checks import StepChecks
+from tissuesim.simulation.cuts import CutCalls
+from tissuesim.simulation.interactions import InteractionCalls
+from tissuesim.simulation.loads import LoadCalls
+from tissuesim.simulation.results import BodyResults
+from tissuesim.simulation.stepping import Stepping
 from tissuesim.solve.linear import make_linear_solver
 from tissuesim.solve.newton import NewtonOptions
 from tissuesim.time.adaptive import AdaptiveStepping
@@ -63,7 +65,7 @@ if TYPE_CHECKING:  # frames and the system pull in scipy.spatial: imported when 
     from tissuesim.coupling.tissue import TissueBody
     from tissuesim.system import System
 
-__all__ = ["Simulation", "StepRecord", "INTEGRATORS", "RESERVED_NAMES", "check_time_resolution"]
+__all__ = ["Simulation", "INTEGRATORS"]
 
 Integrator = Literal["backward_euler", "quasistatic", "explicit", "symplectic_euler", "newmark"]
 #: "symplectic_euler" is the FEM name of the explicit scheme; both step every body explicitly
@@ -71,7 +73,9 @@ INTEGRATORS = ("backward_euler", "quasistatic", "explicit", "symplectic_euler", 
 EXPLICIT = ("explicit", "symplectic_euler")
 
 
-class Simulation(BodyCalls, SetupCalls, StepChecks, BodyResults, Stepping):
+class Simulation(
+    BodyCalls, LoadCalls, InteractionCalls, CutCalls, StepChecks, BodyResults, Stepping
+):
     """Bodies, their interactions and a time integrator; see the module docstring.
 
     mesh, material (optional): the short form, one FEM body named ``name`` with ``density``
@@ -250,72 +254,6 @@ class Simulation(BodyCalls, SetupCalls, StepChecks, BodyResults, Stepping):
         self._state = State(t, np.concatenate(x), np.concatenate(v), acceleration)
         if old is None or old.pattern is not self._system.pattern:
             self._solver = None  # the pattern changed: a new symbolic analysis
-
-    def _contact_model(self):
-        """The contact model over every FEM body's surface and every frame body's embedded
-        surface (a frame body without one, and the tissue, take no part)."""
-        from tissuesim.contact.geometry.surfaces import fem_surface, frame_surface
-        from tissuesim.contact.model import ContactModel
-        from tissuesim.io.third_party_logs import quiet_ipctk
-
-        quiet_ipctk()  # before contact's first ipctk call: its warnings stay off stderr
-        s, settings = self._system, self.contact
-        surfaces = []
-        dhat = self._contact_dhat()
-        for j, name in enumerate(s.names):
-            body, choice = self.bodies[name], settings.surfaces.get(name)
-            config, tangent = s.config_slices[j], s.tangent_slices[j]
-            if body.kind == "fem":
-                blade = self._blade_in(name)
-                surfaces.append(
-                    fem_surface(name, s.bodies[j], config.start, tangent.start, choice, dhat, blade)
-                )
-            elif body.kind == "frames" and body.surface is not None:
-                embedding = body.embedded["surface"]
-                surfaces.append(
-                    frame_surface(
-                        name,
-                        s.bodies[j],
-                        embedding,
-                        body.surface.triangles,
-                        config,
-                        tangent,
-                        choice,
-                    )
-                )
-            elif choice is not None:
-                raise InputError(
-                    f"contact surfaces: body {name!r} has no contact surface (a frame body "
-                    "needs an embedded surface, embed_surface; the tissue takes no part)"
-                )
-        named = {sf.name for sf in surfaces}
-        unknown = set(settings.surfaces) - set(s.names)
-        if unknown:
-            raise InputError(
-                f"contact surfaces: no body {sorted(unknown)[0]!r} (bodies in contact: "
-                f"{', '.join(sorted(named))})"
-            )
-        if not surfaces:
-            raise InputError(
-                "contact acts on FEM bodies and frame bodies with an embedded surface; this "
-                "simulation has none"
-            )
-        model = ContactModel(surfaces, list(self.obstacles), _with_blades(self), s.n_dofs)
-        if any(self._cuts_ahead(c) for c in self.organ_cuts):
-            model.clear_path = self._clear_blade_paths
-        return model
-
-    def _contact_dhat(self) -> float:
-        """The barrier's dhat (m) as the contact model will take it: the scene's, else 1e-3 of
-        the diagonal of the bodies' and obstacles' bounding box."""
-        if self.contact.dhat is not None:
-            return float(self.contact.dhat)
-        pts = [b.mesh.points for b in self._active() if b.kind == "fem" and b.mesh.dim == 3]
-        pts += [ob.rest for ob in self.obstacles]
-        if not pts:
-            return 0.0
-        P = np.vstack(pts)
-        return 1e-3 * float(np.linalg.norm(np.ptp(P, axis=0)))
 
     @staticmethod
     def _initial_config(b) -> np.ndarray:
@@ -532,22 +470,3 @@ class Simulation(BodyCalls, SetupCalls, StepChecks, BodyResults, Stepping):
             "contact": None if s.contact is None else s.contact.describe(),
             "visual_surfaces": {n: v.describe() for n, v in self.visual_surfaces.items()},
         }
-
-
-def _with_blades(sim) -> object:
-    """The contact settings with each obstacle that cuts a body without contact out of contact
-    with that body (it passes through what it cuts), unless the scene pairs them itself."""
-    from dataclasses import replace
-
-    from tissuesim.contact.pairs import ContactPair
-
-    settings = sim.contact
-    listed = {frozenset((p.a, p.b)) for p in settings.pairs}
-    blades = [
-        ContactPair(c.body, c.obstacle, enabled=False)
-        for c in sim.organ_cuts
-        if c.obstacle is not None
-        and (not c.contact or c.suspended)
-        and frozenset((c.body, c.obstacle)) not in listed
-    ]
-    return replace(settings, pairs=tuple(settings.pairs) + tuple(blades)) if blades else settings
