@@ -198,12 +198,25 @@ class TissueSeries(BodySeries):
         self._velocity = np.zeros_like(s.points)
 
     def open(self, directory: Path, keep: dict | None = None) -> None:
-        n = self.body.samples.n
+        n, name = self.body.samples.n, f"{self.body.name}_points"
+        kept = _kept(keep, name)
         self.writers = [
-            VTUSeriesWriter(
-                directory, None, f"{self.body.name}_points", cells=_vertices(n), n_points=n
-            )
+            VTUSeriesWriter(directory, None, name, cells=_vertices(n), n_points=n, keep=kept)
         ]
+        if kept:  # a resumed run: cut-away points keep the values of the last frame written
+            self._continue(directory / kept[-1][1])
+
+    def _continue(self, path: Path) -> None:
+        import meshio
+
+        data = meshio.read(path).point_data
+        n = self.body.samples.n
+        self._last_u[:] = data["displacement"]
+        self._strain[:] = data["max_principal_strain"]
+        for k in self._last:
+            self._last[k][:] = data[k]
+        for k in self._last_tensors:
+            self._last_tensors[k][:] = np.reshape(data[k], (n, 3, 3))
 
     def write(self, sim, t: float) -> dict[str, Any]:
         b = self.body

@@ -28,8 +28,8 @@ with itself, and with frames up to those it lists (later frames are dropped on r
 Format: ``FORMAT`` 2 since checkpoints keep cuts; format 1 (before) is read where nothing cuts
 or tears (it was never written where something did), any other is refused in one line.
 
-Not supported: a tissue (its frames rebuilt after cuts and tearing, its attachments to the
-organs); ``refuse_unsupported`` says so in one line.
+The connective tissue (issue 41): its dissection and its attachments' cells
+(``io/checkpoint_tissue.py``), its frame model made again from them on load.
 """
 
 from __future__ import annotations
@@ -50,6 +50,7 @@ from tissuesim.io.checkpoint_fingerprint import FIX as _FIX
 from tissuesim.io.checkpoint_fingerprint import check_fingerprint as _check_fingerprint
 from tissuesim.io.checkpoint_fingerprint import fingerprint, scene_hash
 from tissuesim.io.checkpoint_predictor import capture_predictor, restore_predictor
+from tissuesim.io.checkpoint_tissue import capture_tissue, restore_tissue
 from tissuesim.io.interrupts import deferred_interrupts
 
 __all__ = [
@@ -57,9 +58,7 @@ __all__ = [
     "HISTORY",
     "FORMAT",
     "fingerprint",
-    "refuse_unsupported",
     "scene_hash",
-    "unsupported",
     "save_simulation",
     "load_simulation",
     "RunCheckpoint",
@@ -72,25 +71,6 @@ FORMAT = 2
 #: the layouts this version reads (``restore_cuts`` refuses a format 1 checkpoint for a run
 #: that cuts or tears in one line)
 READS = (1, 2)
-
-
-def unsupported(sim) -> str | None:
-    """What of ``sim`` a checkpoint cannot carry, or None: a tissue (its frames rebuilt after
-    its tearing and cuts, its attachments to the organs). Cut and torn FEM bodies it carries
-    (``io/checkpoint_cuts.py``)."""
-    if sim.tissue is not None:
-        return "a tissue (its tearing and cuts change the model's topology"
-    return None
-
-
-def refuse_unsupported(sim) -> None:
-    """InputError for a simulation whose state a checkpoint cannot carry (``unsupported``)."""
-    what = unsupported(sim)
-    if what is not None:
-        raise InputError(
-            f"resume and Simulation.save/load do not support {what}, which a checkpoint does "
-            "not carry); rerun the scene from the start"
-        )
 
 
 # -- history: one JSON line per StepRecord ----------------------------------------------------
@@ -231,7 +211,6 @@ def capture(sim) -> tuple[dict, dict[str, np.ndarray]]:
     """(meta, arrays): everything of ``sim`` that changes from step to step, history aside."""
     from tissuesim.contact.obstacles import DrivenMotion
 
-    refuse_unsupported(sim)
     s, state = sim.system, sim.state
     arrays: dict[str, np.ndarray] = {"x": state.x, "v": state.v, "time": np.float64(state.time)}
     if state.a is not None:  # Newmark's accelerations
@@ -270,6 +249,7 @@ def capture(sim) -> tuple[dict, dict[str, np.ndarray]]:
                 arrays[f"driven.{ob.name}.{which}.target"] = motion.target
     meta["driven"] = driven
     meta["cuts"] = capture_cuts(sim, arrays)  # cut and torn bodies, blades, cracks
+    meta["tissue"] = capture_tissue(sim, arrays)  # its dissection, attachments' cells
     c = getattr(sim, "_controller", None)  # adaptive steps: the next step's length, ...
     meta["stepper"] = None if c is None else {"start": c.start, "end": c.end, **c.state()}
     return meta, arrays
@@ -290,6 +270,7 @@ def restore(sim, meta: dict, arrays, history: list, path: Path) -> None:
             if body.kind == "fem":
                 body.release_graspers(start + 1e-9 * sim.time_step)
     restore_cuts(sim, meta.get("cuts"), arrays, path, _FIX)  # before the system is built
+    restore_tissue(sim, meta.get("tissue"), arrays, path, _FIX)  # on the cut organs
     s = sim.system
     x, v = np.array(arrays["x"]), np.array(arrays["v"])
     if x.shape != sim.state.x.shape or v.shape != sim.state.v.shape:
@@ -404,7 +385,6 @@ def save_simulation(sim, path: str | os.PathLike[str]) -> Path:
 def load_simulation(sim, path: str | os.PathLike[str]) -> None:
     """``Simulation.load``: restore a ``save``-d state into ``sim``, set up the same way."""
     path = Path(path)
-    refuse_unsupported(sim)
     if sim.history:
         raise InputError(
             "Simulation.load needs a simulation that has not stepped yet: set it up again the "
@@ -432,7 +412,6 @@ class RunCheckpoint:
     def read(self, sim) -> tuple[dict, dict, list]:
         """(meta, arrays, history) of the directory's checkpoint; an InputError if there is
         none, it is damaged, or it was written for another set-up than ``sim``'s. Reads only."""
-        refuse_unsupported(sim)
         meta, arrays = _read_npz(self.path)
         self._fingerprint = fingerprint(sim, self.scene)
         _check_fingerprint(meta["fingerprint"], self._fingerprint, self.path)
@@ -466,8 +445,6 @@ class RunCheckpoint:
         """Append the new history lines (fsynced), then replace checkpoint.npz atomically."""
         from tissuesim._version import __version__
 
-        if unsupported(sim) is not None:
-            return  # not resumable (refuse_unsupported): no checkpoint
         if self._fingerprint is None:
             self._fingerprint = fingerprint(sim, self.scene)
         mode = "a" if self._logged else "w"  # the first write starts the file afresh

@@ -89,7 +89,9 @@ def fingerprint(sim, scene: str | None = None) -> dict[str, str]:
         "bodies": ", ".join(sim.bodies),
     }
     for name, b in sim.bodies.items():
-        material = repr(b.model.material) if b.model is not None else ""
+        # a tissue's model is remade as it is cut (None once all of it is gone): its own law
+        model = b.material if b.kind == "tissue" else getattr(b.model, "material", None)
+        material = repr(model) if model is not None else ""
         if b.kind == "fem":
             what, data = _fem(b)
         elif b.kind == "frames":
@@ -104,6 +106,9 @@ def fingerprint(sim, scene: str | None = None) -> dict[str, str]:
         parts[f"obstacle {ob.name!r}"] = f"surface {_digest(ob.rest, ob.triangles)}"
     if sim.organ_cuts or sim.organ_tears:  # absent otherwise: as checkpoints of format 1
         parts["cutting"] = _cutting(sim)
+    if sim.tissue is not None:  # its cuts and tearing (absent otherwise, as before)
+        t = sim.tissue.describe()
+        parts["tissue"] = json.dumps({k: t[k] for k in ("cuts", "tear_threshold", "frames")})
     if scene:
         parts["scene file (all but [run])"] = scene
     return parts

@@ -31,7 +31,7 @@ import numpy as np
 from tissuesim.errors import InputError, TissueSimError
 from tissuesim.io.atomic import remove_leftovers, write_json_atomic
 from tissuesim.io.body_series import VisualSeries, series_for
-from tissuesim.io.checkpoint import CHECKPOINT, HISTORY, RunCheckpoint, restore, unsupported
+from tissuesim.io.checkpoint import CHECKPOINT, HISTORY, RunCheckpoint, restore
 from tissuesim.io.interrupts import deferred_interrupts, interrupts_as_keyboard_interrupt
 from tissuesim.io.lock import run_lock
 from tissuesim.io.manifest import MANIFEST, Manifest, prepare_directory
@@ -182,7 +182,12 @@ class RunOutput:
         tissue = self.sim.tissue
         if tissue is not None and tissue.cuts:
             self.cut_series = VTUSeriesWriter(
-                self.directory, None, "cut", cells=("triangle", np.zeros((1, 3), int)), n_points=3
+                self.directory,
+                None,
+                "cut",
+                cells=("triangle", np.zeros((1, 3), int)),
+                n_points=3,
+                keep=None if keep is None else keep.get("cut"),
             )
         else:
             remove_series(self.directory, "cut")
@@ -235,7 +240,7 @@ class RunOutput:
 
     def _write_checkpoint(self, steps: int) -> None:
         """After a frame: the checkpoint of the state it shows (io/checkpoint.py)."""
-        if self.checkpoint is None or unsupported(self.sim) is not None:
+        if self.checkpoint is None:
             return
         self.manifest.add(file=CHECKPOINT)  # listed before it exists: the next run removes it
         self.manifest.add(file=HISTORY)
