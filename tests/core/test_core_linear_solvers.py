@@ -327,3 +327,31 @@ def test_a_stale_factor_is_replaced_once_its_extra_iterations_cost_a_fresh_one()
     again, repeated = run(4)  # counts, not timings: the same schedule, the same bits
     assert again == ruled
     assert all(np.array_equal(x, y) for x, y in zip(solutions, repeated, strict=True))
+
+
+def test_a_factor_refreshed_in_a_background_thread_is_swapped_in_when_ready():
+    """``background=True``: once the kept factor costs extra CG iterations, a fresh one is
+    made in a thread while the solves go on with the old one (each to the tolerance), and it
+    is swapped in at the next matrix after it is ready; the factor it replaces is kept as the
+    spare for the next one."""
+    from tissuesim.solve import reuse
+
+    n = 60
+    K = _spd_matrix(n, 9)
+    drift = sp.diags(np.random.default_rng(10).uniform(0.5, 1.5, n) * n * 0.1)
+    b = np.ones(n)
+    solver = reuse.ReusedFactorSolver(SuperLUSolver(), max_cg=50, background=True)
+    versions = []
+    for k in range(12):
+        A = (K + 0.15 * k * drift).tocsr()
+        solver.factorize(A)
+        x = solver.solve(b)
+        assert np.linalg.norm(A @ x - b) <= 1.01e-6 * np.linalg.norm(b)
+        job = solver._background[2]
+        if job is not None:
+            job.result()  # ready before the next matrix: swapped in there
+        versions.append(solver.version)
+    assert versions[-1] > 2  # fresh factors came from the thread
+    assert solver.stats.factorizations == versions[-1]
+    kept, spare = solver.direct, solver._background[1]
+    assert spare is not None and spare is not kept

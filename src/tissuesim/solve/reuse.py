@@ -36,6 +36,15 @@ most twice the best schedule's cost). Counts, not timings, so runs stay bit-repr
 sagging organ's free steps at 1e4 tetrahedra used one factor for 30 steps at 5.7 back-solves
 a solve (8 was the old limit); with the rule they take 2.6 (``benchmarks/free_step.py``).
 
+With ``background=True`` (Courtecuisse et al.'s asynchronous preconditioner) a fresh factor
+is made in a thread (PARDISO and CHOLMOD release the GIL) once the kept one has cost
+BACKGROUND_AFTER extra back-solves, and swapped in at the first matrix after it is ready;
+solves go on with the old one meanwhile. Runs are then not bit-reproducible (the swap depends
+on timing), and it did not pay here: on the palpation organ at rest (1e4 tetrahedra, two
+cores, ``benchmarks/free_step.py --background``) a factor one step old still costs CG 2-3
+back-solves a solve at rtol 1e-6, so the steps took as many back-solves as with the
+synchronous rule (2.95-3.25 against 2.65 a step) and no less time. Off by default.
+
 Counts per step (``take_stats``): factorisations, back-solves, CG iterations.
 """
 
@@ -68,6 +77,9 @@ MAX_KEPT_COLUMNS = 1000
 #: factorised: a factorisation costs 22-38 back-solves at 2e3-2e4 DOFs in 3D (PARDISO, one
 #: thread, measured here), 20 keeps the rule on the side of fresh factors
 REFACTOR_AFTER = 20
+#: with the factor made in a background thread: a new one is started once the kept factor has
+#: cost this many back-solves beyond one per solve
+BACKGROUND_AFTER = 2
 #: a kept column solved again costs about this share of a back-solve (one multi-column call:
 #: 0.47 ms a column at 6,591 DOFs against 0.9-1.8 ms for one back-solve, PARDISO, measured)
 COLUMN_COST = 0.3
@@ -90,8 +102,12 @@ class ReusedFactorSolver(LinearSolver):
         max_cg: int = 8,
         rtol: float = 1e-6,
         woodbury: bool | None = None,
+        background: bool = False,
     ) -> None:
         self.direct = direct
+        # a fresh factor made in a thread while solves go on with the kept one
+        # (``_background``): None, or [executor, spare solver, pending job or None]
+        self._background: list | None = [None, None, None] if background else None
         # the update apart by Woodbury (default: with the Cholesky solvers, PARDISO and
         # CHOLMOD; SuperLU's LU factors the elasticity of a body only contact holds, nearly
         # singular, without a word, and four contact tests then lost their descent directions)
@@ -132,6 +148,11 @@ class ReusedFactorSolver(LinearSolver):
         self._update = update if update is not None and update.nnz else None
         self._fresh = False
         self._woodbury = None
+        if self._background is not None and self._factored:
+            self._take_background()
+            if self.excess >= BACKGROUND_AFTER:
+                self._start_background()
+            return
         if self._factored and self.excess >= self.refresh_cost():
             self._factored = False  # the stale factor has cost a fresh one: refactorise
 
@@ -140,10 +161,61 @@ class ReusedFactorSolver(LinearSolver):
         held = len(self.columns.slot) + sum(self.held_columns.values())
         return self.refactor_after + COLUMN_COST * held
 
+    # -- the factor made in a background thread (Courtecuisse et al.'s asynchronous
+    # preconditioner): PARDISO and CHOLMOD release the GIL while they factorise
+    def _base(self, hold: bool):
+        """(the matrix to factor, whether it holds the update) for the current A."""
+        if self.woodbury and self._update is not None and not hold:
+            if self._woodbury_dofs() is not None:
+                return (self._A - self._update).tocsr(), False
+        return self._A, True
+
+    def _start_background(self) -> None:
+        executor, spare, job = self._background
+        if job is not None:
+            return
+        if executor is None:
+            from concurrent.futures import ThreadPoolExecutor
+
+            executor = ThreadPoolExecutor(1, thread_name_prefix="tissuesim-factor")
+            spare = self.direct.__class__()
+            self._background[:2] = executor, spare
+        base, holds = self._base(False)
+        holds = holds and self._update is not None
+
+        def factor():
+            spare.factorize(base)
+            return base, holds
+
+        self._background[2] = executor.submit(factor)
+
+    def _take_background(self) -> None:
+        """Swap in the background factor if it is ready (a failed one is dropped)."""
+        executor, spare, job = self._background
+        if job is None or not job.done():
+            return
+        self._background[2] = None
+        try:
+            base, holds = job.result()
+        except Exception:  # noqa: BLE001 (indefinite: the next synchronous factor says so)
+            return
+        self.direct, self._background[1] = spare, self.direct
+        self.factored_matrix = base
+        self.factor_holds_update = holds
+        self.columns.clear()
+        self._woodbury = None
+        self.stats.factorizations += 1
+        self.excess = 0
+        self.version += 1
+        self._fresh = base is self._A
+
     def refactorize(self, hold: bool = False) -> None:
         """Factorise the current matrix now, without its update where Woodbury can apply it
         (``hold``: with it; raises NotPositiveDefiniteError)."""
         self._factored = False
+        if self._background is not None and self._background[2] is not None:
+            self._background[2].exception()  # wait: its factor is older than this one
+            self._background[2] = None
         base, holds = self._A, True
         if (
             self.woodbury
