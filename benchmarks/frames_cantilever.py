@@ -253,7 +253,7 @@ def fem_modal(nd: int) -> dict:
 
 def fem_free_vibration(nd: int, periods: float, f_guess: float) -> dict:
     """Symplectic Euler (lumped mass) from the static deflection under SMALL_LOAD."""
-    from tissuesim.time.stability import critical_time_step
+    from tissuesim.time.integrators.stability import critical_time_step
     from tissuesim.time.state import State
     from tissuesim.time.steps import explicit_step
 

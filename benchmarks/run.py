@@ -254,7 +254,7 @@ def worker_explicit(dim: int, n: int, steps: int) -> dict:
     import numpy as np
 
     import tissuesim as ts
-    from tissuesim.time.stability import critical_time_step
+    from tissuesim.time.integrators.stability import critical_time_step
 
     mesh, model, u, _, _ = _problem(dim, n)
     material = ts.NeoHookean(youngs_modulus=E, poisson_ratio=NU)

@@ -211,13 +211,13 @@ class Model:
     def new_accumulator(self, order: int, project: bool = False) -> Accumulator:
         return Accumulator(self.pattern, order, project)
 
-    #: Rayleigh damping (alpha 1/s, beta s) or None (``time/history.py``)
+    #: Rayleigh damping (alpha 1/s, beta s) or None (``time/attempts/history.py``)
     damping: tuple[float, float] | None = None
     _step_damping = None  # the damping energy of the step in progress
 
     def begin_step(self, x: np.ndarray, h: float) -> None:
         """A step of ``h`` s from positions x starts: the material's history is frozen for it
-        and the Rayleigh damping about x is set up (``time/history.py``)."""
+        and the Rayleigh damping about x is set up (``time/attempts/history.py``)."""
         if hasattr(self.material, "begin_step"):
             self.material.begin_step(h)
         if self.damping is not None:

@@ -1,7 +1,7 @@
-"""Quasistatics of a body that only contact holds (time/pseudo_time.py): an organ resting on a
-table, then pressed by a probe. Each step comes to rest in pseudo-time, and the result is a
-static equilibrium: the table carries the weight, table and probe together carry it once the
-probe presses, no state intersects, and the bodies are at rest (zero velocity)."""
+"""Quasistatics of a body that only contact holds (time/integrators/pseudo_time.py): an organ
+resting on a table, then pressed by a probe. Each step comes to rest in pseudo-time, and the
+result is a static equilibrium: the table carries the weight, table and probe together carry it
+once the probe presses, no state intersects, and the bodies are at rest (zero velocity)."""
 
 from __future__ import annotations
 

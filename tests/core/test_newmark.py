@@ -1,6 +1,6 @@
-"""Newmark's method (time/newmark.py): exact for a constant acceleration from FEBio's initial
-acceleration, energy-conserving where Backward Euler damps, quadratic Newton, its state
-carried through checkpoints and phases, and one-line refusals."""
+"""Newmark's method (time/integrators/newmark.py): exact for a constant acceleration from
+FEBio's initial acceleration, energy-conserving where Backward Euler damps, quadratic Newton,
+its state carried through checkpoints and phases, and one-line refusals."""
 
 from __future__ import annotations
 

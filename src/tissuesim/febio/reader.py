@@ -184,7 +184,7 @@ def _newmark(model: FebModel) -> tuple[float, float] | None:
             f"alpha = {alpha:g}: tissuesim runs Newmark's method with alpha = 1"
         )
     from tissuesim.errors import InputError
-    from tissuesim.time.newmark import check_newmark
+    from tissuesim.time.integrators.newmark import check_newmark
 
     try:
         return check_newmark((beta, gamma))

@@ -292,7 +292,7 @@ def _check_simulation(table: dict, where: str) -> None:
     of ``validate.py``, as in the API."""
     from tissuesim import validate
     from tissuesim.backend import resolve_backend
-    from tissuesim.time.retry import validate_stepping
+    from tissuesim.time.attempts.retry import validate_stepping
 
     with _context(where):
         validate.choice(table.get("integrator", "backward_euler"), "integrator", FRAME_INTEGRATORS)

@@ -24,7 +24,7 @@ class StepChecks:
     def _check_supported(self) -> bool:
         """A quasistatic solve that nothing holds has no solution (SciPy would return finite
         garbage): refuse it, unless contact can hold the bodies; returns whether the step must
-        then come to rest in pseudo-time (``time/pseudo_time.py``)."""
+        then come to rest in pseudo-time (``time/integrators/pseudo_time.py``)."""
         held_by_contact = self._held_by_contact()
         if held_by_contact and not self.system.contact.has_friction:
             raise InputError(
@@ -36,7 +36,7 @@ class StepChecks:
         return held_by_contact
 
     def _held_by_contact(self) -> bool:
-        from tissuesim.time.quasistatic import check_supported
+        from tissuesim.time.integrators.quasistatic import check_supported
 
         s = self.system
         if len(s.bodies) == 1 and self._active()[0].kind == "fem":

@@ -361,7 +361,7 @@ class BodyResults:
         the lumped masses; the sum of two PSD stiffnesses has at most the sum of their
         largest eigenvalues). The frame side of an attachment is not counted."""
         from tissuesim.frames.stability import frame_critical_time_step
-        from tissuesim.time.stability import critical_time_step
+        from tissuesim.time.integrators.stability import critical_time_step
 
         s, out = self.system, np.inf
         for j, name in enumerate(s.names):

@@ -54,10 +54,10 @@ from tissuesim.simulation.stepping import Stepping
 from tissuesim.solve.linear import make_linear_solver
 from tissuesim.solve.newton import NewtonOptions
 from tissuesim.time.adaptive import AdaptiveStepping
+from tissuesim.time.attempts.retry import validate_stepping
 from tissuesim.time.grid import check_time_resolution
-from tissuesim.time.newmark import check_newmark
+from tissuesim.time.integrators.newmark import check_newmark
 from tissuesim.time.phases import Phase, Schedule
-from tissuesim.time.retry import validate_stepping
 from tissuesim.time.state import State
 
 if TYPE_CHECKING:  # frames and the system pull in scipy.spatial: imported when first used

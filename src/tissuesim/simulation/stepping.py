@@ -18,8 +18,8 @@ from tissuesim.time.adaptive import (
     advance_adaptive,
     check_adaptive,
 )
+from tissuesim.time.attempts.retry import QUASISTATIC_ADVICE, advance
 from tissuesim.time.phases import Phase, Schedule
-from tissuesim.time.retry import QUASISTATIC_ADVICE, advance
 
 __all__ = ["Stepping"]
 
@@ -46,7 +46,7 @@ class Stepping:
             return step_fn, None
         solver = self._linear_solver()
         if self.integrator == "newmark":
-            from tissuesim.time.newmark import newmark_step
+            from tissuesim.time.integrators.newmark import newmark_step
 
             self._check_newmark_bodies()
             beta, gamma = self.newmark
@@ -66,7 +66,7 @@ class Stepping:
             budget=budget,
         )
         if by_contact:  # quasistatics of bodies only contact holds: rest in pseudo-time
-            from tissuesim.time.pseudo_time import pseudo_time_step
+            from tissuesim.time.integrators.pseudo_time import pseudo_time_step
 
             step_fn = functools.partial(
                 pseudo_time_step, energies=self.step_energies, budget=budget
@@ -91,7 +91,7 @@ class Stepping:
         if state.a is None and not self.history and state.time == self.start_time:
             from dataclasses import replace
 
-            from tissuesim.time.newmark import initial_acceleration
+            from tissuesim.time.integrators.newmark import initial_acceleration
 
             a0 = initial_acceleration(s, s.bodies, state.time)
             self._state = replace(state, a=a0 if np.any(a0) else None)

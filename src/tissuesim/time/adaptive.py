@@ -29,7 +29,7 @@ import numpy as np
 
 from tissuesim import validate
 from tissuesim.errors import ConvergenceError, InputError
-from tissuesim.time.history import begin_attempt, end_attempt
+from tissuesim.time.attempts.history import begin_attempt, end_attempt
 from tissuesim.time.state import State, StepOutcome
 
 __all__ = ["AdaptiveStepping", "TimeStepController", "check_adaptive", "advance_adaptive"]

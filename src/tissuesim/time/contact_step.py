@@ -29,7 +29,7 @@ import numpy as np
 
 from tissuesim.energies.loads import ExternalForce
 from tissuesim.solve.newton import minimize
-from tissuesim.time.implicit import choose_start
+from tissuesim.time.attempts.start import choose_start
 from tissuesim.time.state import State, StepOutcome
 
 __all__ = ["resolve_mode", "free_motion", "interactive_step", "accurate_start"]

@@ -69,7 +69,7 @@ class Schedule:
 
     def __init__(self, phases: Sequence[Phase | dict], start: float, explicit: bool) -> None:
         from tissuesim.time.adaptive import check_adaptive
-        from tissuesim.time.retry import validate_stepping
+        from tissuesim.time.attempts.retry import validate_stepping
 
         if explicit:
             raise InputError(

@@ -28,6 +28,7 @@ import scipy.sparse.linalg as spla
 from tissuesim.errors import InstabilityError
 from tissuesim.solve.newton import minimize
 from tissuesim.system import is_frame_body
+from tissuesim.time.attempts.start import choose_start
 from tissuesim.time.contact_step import (
     accurate_start,
     barrier_pull,
@@ -35,7 +36,6 @@ from tissuesim.time.contact_step import (
     interactive_step,
     resolve_mode,
 )
-from tissuesim.time.implicit import choose_start
 from tissuesim.time.state import State, StepOutcome
 
 __all__ = ["implicit_step", "explicit_step", "EnergyBuilder"]
@@ -61,10 +61,10 @@ def implicit_step(
     """One implicit step; ``budget`` ({"deadline": perf_counter value, "iterations": n}) ends
     Newton early for interactive loops: the state reached is accepted and flagged.
 
-    For pseudo-time steps (``time/pseudo_time.py``): ``t_end`` the time of the loads, the
-    prescribed values and the obstacles (default state.time + h, while h sets the inertia);
-    ``friction_from`` the contact vertices friction's slip is measured from (default the
-    state's) and ``friction_h`` the step its smoothing velocity scales with (default h)."""
+    For pseudo-time steps (``time/integrators/pseudo_time.py``): ``t_end`` the time of the
+    loads, the prescribed values and the obstacles (default state.time + h, while h sets the
+    inertia); ``friction_from`` the contact vertices friction's slip is measured from (default
+    the state's) and ``friction_h`` the step its smoothing velocity scales with (default h)."""
     t1 = state.time + h if t_end is None else t_end
     c_pred = system.retract(state.x, h * state.v) if dynamic else None
     body_energies = energies(t1, c_pred, h)

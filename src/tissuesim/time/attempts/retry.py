@@ -2,8 +2,8 @@
 
 A failed step of length h is retried as two steps of h/2, recursively, down to
 h / 2**max_halvings; if that still fails, ConvergenceError says when, why, and what to try.
-Around every attempt ``time/history.py`` freezes the bodies' internal variables and, once the
-attempt converged, updates them.
+Around every attempt ``time/attempts/history.py`` freezes the bodies' internal variables and,
+once the attempt converged, updates them.
 """
 
 from __future__ import annotations
@@ -11,7 +11,7 @@ from __future__ import annotations
 from dataclasses import replace
 
 from tissuesim.errors import ConvergenceError, InputError
-from tissuesim.time.history import begin_attempt, end_attempt
+from tissuesim.time.attempts.history import begin_attempt, end_attempt
 from tissuesim.time.state import State, StepOutcome
 
 __all__ = ["advance", "validate_stepping"]

@@ -2,7 +2,7 @@
 viscoelastic material's history (``materials/viscoelastic.py``) and Rayleigh damping
 (``energies/damping.py``).
 
-``time/retry.py`` calls ``begin_attempt`` before every attempt (halved ones too) and
+``time/attempts/retry.py`` calls ``begin_attempt`` before every attempt (halved ones too) and
 ``end_attempt`` after it: the history is frozen for the attempt from the last accepted state,
 and updated once, only when the attempt converged; a rejected attempt leaves it as it was.
 """
