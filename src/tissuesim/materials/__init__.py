@@ -3,14 +3,17 @@ law from its energy, ``EnergyLaw``, whose P and dP/dF SymPy derives).
 
 The interface is in ``base.py``, law names in ``registry.py``; the laws by family in
 ``isotropic/`` (the (E, nu) laws, what every law shares, their Numba kernels), ``soft_tissue/``
-(FEBio's laws), ``fibres/`` (fibre-reinforced laws) and ``energy_law/`` (a law from its energy);
-visco-elasticity on any law in ``viscoelastic.py``, fitting to test curves in ``fitting.py``, the
+(FEBio's laws), ``fibres/`` (fibre-reinforced laws and FEBio's fibre laws) and ``energy_law/``
+(a law from its energy); visco-elasticity on any law in ``viscoelastic.py``, FEBio's solid
+mixtures (sums of laws) in ``mixture.py``, fitting to test curves in ``fitting.py``, the
 output's strain and stress measures in ``measures.py``, the laws' volumetric parts for mean
 dilatation in ``volumetric.py`` and the PSD projection in ``psd.py``.
 """
 
 from tissuesim.materials.base import Material, MaterialResponse
 from tissuesim.materials.energy_law.energy import EnergyLaw, from_energy
+from tissuesim.materials.fibres.fibre_exp_pow import FiberExpPow, FiberExpPowUncoupled
+from tissuesim.materials.fibres.fibre_pow_linear import FiberPowLinear, FiberPowLinearUncoupled
 from tissuesim.materials.fibres.holzapfel_gasser_ogden import HGOUnconstrained, HolzapfelGasserOgden
 from tissuesim.materials.fibres.trans_iso_mooney_rivlin import TransIsoMooneyRivlin
 from tissuesim.materials.fitting import FitResult, fit_material, nominal_stress
@@ -20,6 +23,7 @@ from tissuesim.materials.isotropic.lame import lame_parameters
 from tissuesim.materials.isotropic.linear import LinearElastic
 from tissuesim.materials.isotropic.neo_hookean import NeoHookean
 from tissuesim.materials.isotropic.stvk import StVenantKirchhoff
+from tissuesim.materials.mixture import SolidMixture, UncoupledSolidMixture
 from tissuesim.materials.psd import project_psd, project_tangent_psd
 from tissuesim.materials.registry import (
     ALIASES,
@@ -56,6 +60,12 @@ __all__ = [
     "HolzapfelGasserOgden",
     "HGOUnconstrained",
     "TransIsoMooneyRivlin",
+    "FiberExpPow",
+    "FiberExpPowUncoupled",
+    "FiberPowLinear",
+    "FiberPowLinearUncoupled",
+    "SolidMixture",
+    "UncoupledSolidMixture",
     "Viscoelastic",
     "UncoupledViscoelastic",
     "EnergyLaw",

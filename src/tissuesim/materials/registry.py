@@ -8,7 +8,9 @@ tissuesim's coupled forms where FEBio has none. ``<law>_uncoupled`` and ``<law>_
 accepted as aliases (``ALIASES``). ``viscoelastic`` and ``uncoupled_viscoelastic`` wrap another
 law given as ``elastic`` (a material or a table with its ``model``), ``VISCOELASTIC_LAWS``.
 ``energy`` is a law from its strain-energy density ``psi`` (``EnergyLaw``), its other keys the
-parameters psi names.
+parameters psi names. ``solid_mixture`` and ``uncoupled_solid_mixture`` sum the laws given as
+``components`` (``MIXTURES``); FEBio's fibre laws ``fiber_exp_pow``, ``fiber_pow_linear`` (and
+their ``_uncoupled`` forms) are meant as their components.
 """
 
 from __future__ import annotations
@@ -19,6 +21,8 @@ import inspect
 from tissuesim.errors import MaterialError
 from tissuesim.materials.base import Material
 from tissuesim.materials.energy_law.energy import EnergyLaw
+from tissuesim.materials.fibres.fibre_exp_pow import FiberExpPow, FiberExpPowUncoupled
+from tissuesim.materials.fibres.fibre_pow_linear import FiberPowLinear, FiberPowLinearUncoupled
 from tissuesim.materials.fibres.holzapfel_gasser_ogden import HGOUnconstrained, HolzapfelGasserOgden
 from tissuesim.materials.fibres.trans_iso_mooney_rivlin import TransIsoMooneyRivlin
 from tissuesim.materials.isotropic.corotated import FixedCorotated
@@ -26,6 +30,7 @@ from tissuesim.materials.isotropic.course_neo_hookean import CourseNeoHookean
 from tissuesim.materials.isotropic.linear import LinearElastic
 from tissuesim.materials.isotropic.neo_hookean import NeoHookean
 from tissuesim.materials.isotropic.stvk import StVenantKirchhoff
+from tissuesim.materials.mixture import MIXTURES
 from tissuesim.materials.soft_tissue.arruda_boyce import ArrudaBoyce, CoupledArrudaBoyce
 from tissuesim.materials.soft_tissue.mooney_rivlin import CoupledMooneyRivlin, MooneyRivlin
 from tissuesim.materials.soft_tissue.ogden import Ogden, OgdenUnconstrained
@@ -34,7 +39,15 @@ from tissuesim.materials.soft_tissue.yeoh import CoupledYeoh, Yeoh
 from tissuesim.materials.viscoelastic import VISCOELASTIC_LAWS
 from tissuesim.validate import short
 
-__all__ = ["MATERIALS", "ALIASES", "SOFT_TISSUE_LAWS", "FIBRE_LAWS", "make_material"]
+__all__ = [
+    "MATERIALS",
+    "ALIASES",
+    "SOFT_TISSUE_LAWS",
+    "FIBRE_LAWS",
+    "MIXTURES",
+    "make_material",
+    "law_class",
+]
 
 #: the laws with their own parameters (FEBio's names), not (E, nu) or (mu, lambda)
 SOFT_TISSUE_LAWS: tuple[type[Material], ...] = (
@@ -55,6 +68,10 @@ FIBRE_LAWS: tuple[type[Material], ...] = (
     HolzapfelGasserOgden,
     HGOUnconstrained,
     TransIsoMooneyRivlin,
+    FiberExpPow,
+    FiberExpPowUncoupled,
+    FiberPowLinear,
+    FiberPowLinearUncoupled,
 )
 
 MATERIALS: dict[str, type[Material]] = {
@@ -78,7 +95,23 @@ ALIASES: dict[str, str] = {
     "arruda_boyce_coupled": "coupled_arruda_boyce",
     "ogden_uncoupled": "ogden",
     "ogden_coupled": "ogden_unconstrained",
+    "fibre_exp_pow": "fiber_exp_pow",
+    "fibre_exp_pow_uncoupled": "fiber_exp_pow_uncoupled",
+    "fibre_pow_linear": "fiber_pow_linear",
+    "fibre_pow_linear_uncoupled": "fiber_pow_linear_uncoupled",
 }
+
+
+def _key(model: object) -> str:
+    key = str(model).strip().lower().replace("-", "_").replace(" ", "_")
+    return ALIASES.get(key, key)
+
+
+def law_class(model: object) -> type[Material] | None:
+    """The class ``make_material(model, ...)`` builds, or None (a wrapper, an energy law or an
+    unknown name)."""
+    key = _key(model)
+    return MATERIALS.get(key) or MIXTURES.get(key)
 
 
 def _suggest(word: str, choices: list[str]) -> str:
@@ -108,6 +141,33 @@ def _viscoelastic(key: str, params: dict) -> Material:
     return VISCOELASTIC_LAWS[key](elastic, **rest)
 
 
+def _mixture(key: str, params: dict) -> Material:
+    """A solid mixture: ``components`` materials or tables with their model; a component law of
+    an uncoupled mixture that needs k and has none gets the mixture's (FEBio ignores it)."""
+    components = params.get("components")
+    if isinstance(components, (list, tuple)):
+        k = params.get("k") if key == "uncoupled_solid_mixture" else None
+        built = []
+        for i, value in enumerate(components):
+            if not isinstance(value, dict):
+                built.append(value)  # a material; anything else the mixture refuses
+                continue
+            table = dict(value)
+            if "model" not in table:
+                raise MaterialError(f"{key}: components[{i}] needs its model (e.g. 'neo_hookean')")
+            model = table.pop("model")
+            cls = law_class(model)
+            if k is not None and cls is not None and "k" not in table:
+                if "k" in inspect.signature(cls.__init__).parameters:
+                    table["k"] = k
+            try:
+                built.append(make_material(model, **table))
+            except MaterialError as exc:
+                raise MaterialError(f"{key}: components[{i}]: {exc}") from None
+        params = {**params, "components": built}
+    return MIXTURES[key](**params)
+
+
 def make_material(model: str, **params: object) -> Material:
     """Build the law registered as ``model`` with keyword parameters (e.g. E and nu, or a
     soft-tissue law's own: ``make_material("ogden", c=[1e3], m=[8.0], k=1e5)``; a law from its
@@ -115,8 +175,9 @@ def make_material(model: str, **params: object) -> Material:
 
     FEBio's law names work as written there (``"Mooney-Rivlin"``, ``"Ogden unconstrained"``):
     case, spaces and dashes do not matter."""
-    key = str(model).strip().lower().replace("-", "_").replace(" ", "_")
-    key = ALIASES.get(key, key)
+    key = _key(model)
+    if key in MIXTURES:
+        return _mixture(key, params)
     if key in VISCOELASTIC_LAWS:
         return _viscoelastic(key, params)
     if key == EnergyLaw.name:
@@ -127,7 +188,7 @@ def make_material(model: str, **params: object) -> Material:
             )
         return EnergyLaw(params.pop("psi"), **params)
     if key not in MATERIALS:
-        names = [*MATERIALS, *VISCOELASTIC_LAWS, EnergyLaw.name]
+        names = [*MATERIALS, *VISCOELASTIC_LAWS, *MIXTURES, EnergyLaw.name]
         raise MaterialError(f"unknown material model {short(model)}; {_suggest(key, names)}")
     cls = MATERIALS[key]
     sig = inspect.signature(cls.__init__).parameters

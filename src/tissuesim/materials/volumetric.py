@@ -15,6 +15,10 @@ theta is the law's measure of volume change and U its lambda term, the part that
     ogden_unconstrained  theta = J             U = cp/2 (theta - 1)^2
     holzapfel_gasser_ogden, hgo_unconstrained, trans_iso_mooney_rivlin: their bulk term with k
                          (HGO: FEBio's default k/4 (theta^2 - 1 - 2 ln theta))
+    fiber_exp_pow, fiber_pow_linear (and their _uncoupled forms): none (U = 0, a fibre has no
+                         bulk term)
+    solid_mixture        the sum of its components' U, which must share theta and U's kind
+    uncoupled_solid_mixture  theta = J, its own bulk term with k (pressure_model as above)
 
 psi_rest keeps every mu term (for the uncoupled soft-tissue laws: the deviatoric energy), so its
 bulk stiffness is of order mu and does not lock. Shapes:
@@ -51,6 +55,12 @@ VOLUMETRIC_LAWS = {
     "holzapfel_gasser_ogden": ("J", "goh"),
     "hgo_unconstrained": ("J", "goh"),
     "trans_iso_mooney_rivlin": ("J", "log"),
+    **{
+        name: ("J", "log")
+        for law in ("fiber_exp_pow", "fiber_pow_linear")
+        for name in (law, f"{law}_uncoupled")
+    },
+    "uncoupled_solid_mixture": ("J", "log"),
 }
 
 
@@ -99,7 +109,19 @@ class VolumetricPart:
 
 
 def volumetric_part(material: Material, what: str = "formulation") -> VolumetricPart:
+    """The law's theta and U (``VOLUMETRIC_LAWS``); a solid mixture's is its components' sum."""
     name = getattr(material, "name", "")
+    if name == "solid_mixture":
+        parts = [volumetric_part(p, what) for p in material.components]
+        parts = [p for p in parts if p.lam != 0.0] or parts[:1]
+        kinds = {(p.theta_kind, p.u_kind) for p in parts}
+        if len(kinds) > 1:
+            raise InputError(
+                f"{what} 'mean_dilatation': the solid mixture's components have different "
+                f"volumetric terms ({', '.join(sorted(f'{t} {u}' for t, u in kinds))}); use "
+                "formulation = 'displacement'"
+            )
+        return VolumetricPart(*kinds.pop(), float(sum(p.lam for p in parts)))
     if name not in VOLUMETRIC_LAWS:
         raise InputError(
             f"{what} 'mean_dilatation' needs a law with a known volumetric part "

@@ -1,0 +1,273 @@
+"""FEBio's fibre laws (fiber-exp-pow, fiber-pow-linear, coupled and uncoupled) and solid
+mixtures: finite differences of stress against energy and of the tangent against stress in 2D
+and 3D, the fibre slack in compression, a mixture as the sum of its parts, closed forms of a
+stretch along the fibre derived by hand, per-element fibres through a mixture, the registry's
+tables and the parameter errors."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from tissuesim.errors import MaterialError
+from tissuesim.materials import (
+    FiberExpPow,
+    FiberExpPowUncoupled,
+    FiberPowLinear,
+    FiberPowLinearUncoupled,
+    MooneyRivlin,
+    NeoHookean,
+    SolidMixture,
+    UncoupledSolidMixture,
+    Viscoelastic,
+    make_material,
+)
+from tissuesim.materials.volumetric import volumetric_part
+from tissuesim.mesh import box
+from tissuesim.model import Model
+
+NH = dict(youngs_modulus=1000.0, poisson_ratio=0.3)
+EXP = dict(ksi=50.0, alpha=2.0, beta=2.5)
+LIN = dict(E=400.0, lam0=1.08, beta=3.0)
+FIBRE = [1.0, 0.4, 0.2]
+
+LAWS = {
+    "fiber_exp_pow": lambda: FiberExpPow(**EXP, lam0=1.02, fiber=FIBRE),
+    "fiber_exp_pow_alpha0_beta2": lambda: FiberExpPow(ksi=50.0, alpha=0.0, beta=2.0, fiber=FIBRE),
+    "fiber_exp_pow_uncoupled": lambda: FiberExpPowUncoupled(**EXP, fiber=FIBRE),
+    "fiber_pow_linear": lambda: FiberPowLinear(**LIN, fiber=FIBRE),
+    "fiber_pow_linear_uncoupled": lambda: FiberPowLinearUncoupled(**LIN, fiber=FIBRE),
+    "solid_mixture": lambda: SolidMixture(
+        [NeoHookean(**NH), FiberExpPow(**EXP, fiber=FIBRE), FiberPowLinear(**LIN, fiber=[0, 1, 0])]
+    ),
+    "uncoupled_solid_mixture": lambda: UncoupledSolidMixture(
+        [
+            MooneyRivlin(c1=100.0, c2=20.0, k=1.0),
+            FiberExpPowUncoupled(**EXP, fiber=FIBRE),
+            FiberPowLinearUncoupled(**LIN, fiber=[0, 1, 1]),
+        ],
+        k=5000.0,
+        pressure_model="NIKE3D",
+    ),
+}
+
+
+def _random_F(rng, q, d, spread, jmin=0.4):
+    F = np.eye(d) + spread * rng.standard_normal((4 * q, d, d))
+    return F[np.linalg.det(F) > jmin][:q]
+
+
+def _central_diff(fun, F, h):
+    q, d = F.shape[:2]
+    basis = np.eye(d * d).reshape(d * d, d, d) * h
+    Fp = (F[:, None] + basis[None]).reshape(-1, d, d)
+    Fm = (F[:, None] - basis[None]).reshape(-1, d, d)
+    diff = (fun(Fp) - fun(Fm)) / (2 * h)
+    diff = diff.reshape((q, d, d) + diff.shape[1:])
+    return np.moveaxis(diff, (1, 2), (-2, -1))
+
+
+def _rel(a, b):
+    return np.max(np.abs(a - b)) / np.max(np.abs(b))
+
+
+@pytest.mark.parametrize("name", sorted(LAWS))
+@pytest.mark.parametrize("d", [2, 3])
+def test_stress_and_tangent_match_finite_differences(name, d):
+    law = LAWS[name]()
+    F = _random_F(np.random.default_rng(d + 7), 12, d, 0.2)
+    res = law.evaluate(F)
+    assert _rel(res.stress, _central_diff(law.energy_density, F, 1e-6)) < 1e-6
+    assert _rel(res.tangent, _central_diff(law.stress, F, 1e-6)) < 1e-6
+    At = np.transpose(res.tangent, (0, 3, 4, 1, 2))
+    np.testing.assert_allclose(res.tangent, At, atol=1e-12 * np.abs(At).max())
+
+
+@pytest.mark.parametrize("name", sorted(LAWS))
+def test_rest_state_is_stress_free(name):
+    res = LAWS[name]().evaluate(np.eye(3)[None])
+    assert res.energy[0] == pytest.approx(0.0, abs=1e-12)
+    np.testing.assert_allclose(res.stress[0], 0.0, atol=1e-10)
+
+
+@pytest.mark.parametrize("name", [n for n in LAWS if n.startswith("fiber")])
+def test_a_fibre_bears_nothing_in_compression(name):
+    """Shortened along the fibre (and stretched across it): no energy, stress or tangent;
+    the uncoupled laws measure the isochoric stretch, so the block keeps J = 1 there."""
+    law = LAWS[name]()
+    a = law.fiber
+    lam = np.array([0.8, 0.95, 0.999])
+    Q = np.linalg.qr(np.column_stack([a, [0, 1, 0], [0, 0, 1]]))[0]
+    Q *= np.sign(Q[:, 0] @ a)
+    F = np.array([Q @ np.diag([s, s**-0.5, s**-0.5]) @ Q.T for s in lam])
+    res = law.evaluate(F)
+    assert np.all(res.energy == 0.0)
+    assert np.all(res.stress == 0.0) and np.all(res.tangent == 0.0)
+    stretched = law.evaluate(np.array([Q @ np.diag([1.1, 1.1**-0.5, 1.1**-0.5]) @ Q.T]))
+    assert stretched.energy[0] > 0.0 and np.abs(stretched.stress).max() > 0.0
+
+
+def test_a_mixture_is_the_sum_of_its_parts():
+    parts = [NeoHookean(**NH), FiberExpPow(**EXP, fiber=FIBRE), FiberPowLinear(**LIN)]
+    mix = SolidMixture(parts)
+    F = _random_F(np.random.default_rng(1), 10, 3, 0.2)
+    res, each = mix.evaluate(F), [p.evaluate(F) for p in parts]
+    for key in ("energy", "stress", "tangent"):
+        total = sum(getattr(r, key) for r in each)
+        np.testing.assert_allclose(getattr(res, key), total, rtol=1e-13, atol=1e-10)
+    assert mix.mu == parts[0].mu and mix.lam == parts[0].lam
+
+
+def test_an_uncoupled_mixture_sums_deviatoric_parts_and_its_own_bulk_term():
+    """The components' k is ignored (FEBio's rule): the mixture's k gives U(J), so Mooney-Rivlin
+    with that k plus the fibre is the same law."""
+    fibre = FiberExpPowUncoupled(**EXP, fiber=FIBRE)
+    mix = UncoupledSolidMixture([MooneyRivlin(c1=100.0, k=7.0), fibre], k=3000.0)
+    ref = [MooneyRivlin(c1=100.0, k=3000.0), fibre]
+    F = _random_F(np.random.default_rng(2), 10, 3, 0.2)
+    res = mix.evaluate(F)
+    for key in ("energy", "stress", "tangent"):
+        total = sum(getattr(r.evaluate(F), key) for r in ref)
+        np.testing.assert_allclose(getattr(res, key), total, rtol=1e-12, atol=1e-9)
+    assert mix.mu == 200.0 and mix.lam == pytest.approx(3000.0 - 400.0 / 3.0)
+    assert volumetric_part(mix) == volumetric_part(ref[0])
+
+
+def test_uniaxial_stretch_along_the_fibre_by_hand():
+    """F = diag(l, t, t), fibre e1: P11 = neo-Hookean's + 2 l W'(I4), I4 = l^2, with
+    W' = ksi x^(beta-1) exp(alpha x^beta), x = l^2 - lam0^2 (fiber-exp-pow); the other
+    components are the neo-Hookean's alone."""
+    mu, lam = NeoHookean(**NH).mu, NeoHookean(**NH).lam
+    ksi, alpha, beta, lam0 = 50.0, 2.0, 2.5, 1.03
+    mix = SolidMixture([NeoHookean(**NH), FiberExpPow(ksi=ksi, alpha=alpha, beta=beta, lam0=lam0)])
+    for l, t in [(1.2, 0.93), (1.1, 1.0), (1.02, 0.98)]:
+        P = mix.stress(np.diag([l, t, t])[None])[0]
+        J = l * t * t
+        x = max(l**2 - lam0**2, 0.0)
+        fibre = 2.0 * l * ksi * x ** (beta - 1) * np.exp(alpha * x**beta)
+        assert P[0, 0] == pytest.approx(mu * (l - 1 / l) + lam * np.log(J) / l + fibre, rel=1e-12)
+        assert P[1, 1] == pytest.approx(mu * (t - 1 / t) + lam * np.log(J) / t, rel=1e-12)
+        np.testing.assert_allclose(P[[0, 0, 1], [1, 2, 2]], 0.0, atol=1e-12)
+
+
+def test_fiber_pow_linear_toe_and_linear_range_by_hand():
+    """The fibre's nominal stress 2 l W'(l^2): 2 ksi l (l^2 - 1)^(beta - 1) in the toe and
+    2 b l - E past lam0 (linear), with FEBio's ksi and b; continuous at lam0."""
+    E, lam0, beta = LIN["E"], LIN["lam0"], LIN["beta"]
+    law = FiberPowLinear(**LIN)
+    I0 = lam0**2
+    ksi = E / (4 * (beta - 1)) * I0**-1.5 * (I0 - 1) ** (2 - beta)
+    b = ksi * (I0 - 1) ** (beta - 1) + E / (2 * lam0)
+    for l in (1.01, 1.05, lam0 - 1e-9, lam0 + 1e-9, 1.2, 1.5):
+        P = law.stress(np.diag([l, 1.0, 1.0])[None])[0, 0, 0]
+        hand = 2 * ksi * l * (l**2 - 1) ** (beta - 1) if l < lam0 else 2 * b * l - E
+        assert P == pytest.approx(hand, rel=1e-9)
+    # the uncoupled law at J = 1 is the coupled one's I4b = I4 plus the deviatoric projection
+    unc = FiberPowLinearUncoupled(**LIN)
+    l = 1.2
+    F = np.diag([l, l**-0.5, l**-0.5])[None]
+    Wp = b - E / (2 * l)
+    P = unc.stress(F)[0]
+    assert P[0, 0] == pytest.approx(4.0 / 3.0 * Wp * l, rel=1e-12)
+    assert P[1, 1] == pytest.approx(-2.0 / 3.0 * Wp * l**2.5, rel=1e-12)
+
+
+def test_fiber_exp_pow_uncoupled_at_constant_volume_by_hand():
+    """J = 1, F = diag(l, l^-1/2, l^-1/2): P = W' (2 F a (x) a - 2/3 I4 F^-T), so
+    P11 = 4/3 l W' and P22 = -2/3 l^(5/2) W' with W' at x = l^2 - 1."""
+    ksi, alpha, beta = EXP["ksi"], EXP["alpha"], EXP["beta"]
+    law = FiberExpPowUncoupled(**EXP)
+    for l in (1.05, 1.2):
+        x = l**2 - 1
+        Wp = ksi * x ** (beta - 1) * np.exp(alpha * x**beta)
+        P = law.stress(np.diag([l, l**-0.5, l**-0.5])[None])[0]
+        assert P[0, 0] == pytest.approx(4 / 3 * l * Wp, rel=1e-12)
+        assert P[2, 2] == pytest.approx(-2 / 3 * l**2.5 * Wp, rel=1e-12)
+
+
+def test_per_element_fibres_through_a_mixture_are_bound_and_assembled():
+    mesh = box(divisions=(2, 1, 1))
+    m = mesh.n_cells
+    rng = np.random.default_rng(0)
+    fibres = rng.standard_normal((m, 3))
+    mix = SolidMixture([NeoHookean(**NH), FiberExpPow(**EXP, fiber=fibres)])
+    bound = mix.bind(2 * m, 3)
+    assert bound.components[1].fibres.shape == (2 * m, 1, 3)
+    assert mix.components[1].fibres.shape == (m, 1, 3)
+    assert SolidMixture([NeoHookean(**NH)]).bind(10, 3).components[0] is not None
+    model = Model(mesh, mix, np.ones(m), backend="numpy")
+    x = mesh.points.ravel() * np.repeat([1.15, 0.95, 0.95], mesh.n_points) + 0.02 * (
+        rng.standard_normal(mesh.points.size)
+    )
+    F = model.kinematics.deformation_gradients(x)
+    laws = [SolidMixture([NeoHookean(**NH), FiberExpPow(**EXP, fiber=f)]) for f in fibres]
+    per_element = np.array([law.energy_density(F[e : e + 1])[0] for e, law in enumerate(laws)])
+    acc = model.evaluate(x, 1, False)
+    assert acc.value == pytest.approx(per_element @ model.kinematics.weights, rel=1e-12)
+
+
+def test_registry_tables_and_names():
+    mix = make_material(
+        "solid mixture",
+        components=[
+            {"model": "neo-Hookean", **NH},
+            {"model": "fiber-exp-pow", **EXP, "fiber": [0, 1, 0]},
+            FiberPowLinear(**LIN),
+        ],
+    )
+    assert isinstance(mix, SolidMixture) and isinstance(mix.components[1], FiberExpPow)
+    unc = make_material(
+        "uncoupled_solid_mixture",
+        k=1e4,
+        components=[
+            {"model": "Mooney-Rivlin", "c1": 100.0},
+            {"model": "fibre_exp_pow_uncoupled", **EXP},
+        ],
+    )
+    assert unc.components[0].k == 0.0 and unc.k == 1e4
+    assert "FiberExpPowUncoupled" in repr(unc) and "k=10000.0" in repr(unc)
+    assert volumetric_part(mix).lam == pytest.approx(NeoHookean(**NH).lam)
+
+
+@pytest.mark.parametrize(
+    "model, params, message",
+    [
+        ("solid_mixture", {}, "needs components"),
+        ("solid_mixture", {"components": []}, "at least one component"),
+        ("solid_mixture", {"components": [{"c1": 1.0}]}, r"components\[0\] needs its model"),
+        ("solid_mixture", {"components": [{"model": "fiber_exp_pow", **EXP}]}, "must be > 0"),
+        ("solid_mixture", {"components": [{"model": "neo_hookean", **NH}], "k": 1.0}, "unknown"),
+        (
+            "solid_mixture",
+            {"components": [SolidMixture([NeoHookean(**NH)])]},
+            "is a mixture",
+        ),
+        (
+            "solid_mixture",
+            {"components": [Viscoelastic(NeoHookean(**NH), g=[0.5], tau=[1.0])]},
+            "visco-elastic",
+        ),
+        (
+            "uncoupled_solid_mixture",
+            {"k": 1e3, "components": [{"model": "neo_hookean", **NH}]},
+            "not an uncoupled law",
+        ),
+        ("uncoupled_solid_mixture", {"components": [{"model": "yeoh", "c1": 1.0}]}, "needs k"),
+        ("fiber_exp_pow", {**EXP, "mu": 1.0}, "mu .* not supported"),
+        ("fiber_exp_pow", {**EXP, "beta": 1.5}, "beta must be >= 2"),
+        ("fiber_exp_pow", {**EXP, "lam0": 0.9}, "lam0 must be >= 1"),
+        ("fiber_exp_pow", {"alpha": 1.0}, "needs ksi"),
+        ("fiber_exp_pow", {**EXP, "fiber": [0, 0, 0]}, "non-zero"),
+        ("fiber_pow_linear", {**LIN, "lam0": 1.0}, "lam0 .* must be > 1"),
+        ("fiber_pow_linear", {**LIN, "tension_only": 0}, "tension_only"),
+        ("fiber_pow_linear", {"lam0": 1.1}, "needs E"),
+        (
+            "solid_mixture",
+            {"components": [{"model": "neo_hookean", **NH}, {"model": "fiber_pow_linear"}]},
+            r"components\[1\]: fiber_pow_linear needs E",
+        ),
+    ],
+)
+def test_parameter_errors(model, params, message):
+    with pytest.raises(MaterialError, match=message):
+        make_material(model, **params)
