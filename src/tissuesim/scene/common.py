@@ -1,7 +1,8 @@
 """What every scene reader shares (``loader.py`` for one body, ``fem_body.py``, ``frames.py``,
-``coupled.py``, ``contact.py``): the Scene it returns, the error helpers that name the file and
-the table (unknown keys with a suggestion, library errors re-raised as SceneErrors), the
-[simulation], [newton], [run] and [material] tables, expressions of time and conditions."""
+``coupled.py``, ``cuts.py``, ``contact.py``): the Scene it returns, the error helpers that name
+the file and the table (unknown keys with a suggestion, library errors re-raised as
+SceneErrors), the [simulation], [newton], [run] and [material] tables, numbers, body names,
+expressions of time and conditions."""
 
 from __future__ import annotations
 
@@ -242,6 +243,23 @@ def condition(text, where: str):
 
 def _is_number(value) -> bool:
     return isinstance(value, numbers.Real) and not isinstance(value, bool)
+
+
+def _body_name(sim, value, where: str) -> str:
+    """``value`` as the name of one of the scene's bodies (``where``'s body key)."""
+    if not isinstance(value, str) or value not in sim.bodies:
+        raise SceneError(
+            f"{where} body: {short(value)} is not a body of this scene; bodies: "
+            f"{', '.join(sim.bodies)}"
+        )
+    return value
+
+
+def _number(value, where: str, want: str, positive: bool = True) -> float:
+    """A finite number, > 0 unless ``positive`` is False (``want`` says what, for the error)."""
+    if not (_is_number(value) and np.isfinite(value) and (value > 0 or not positive)):
+        raise SceneError(f"{where}: must be {want}, not {short(value)}")
+    return float(value)
 
 
 def _required(table: dict, key: str, where: str):
