@@ -1,7 +1,8 @@
 """FEBio's ``<Material>`` section: the elastic laws with FEBio's parameters, the fibre laws
-with their ``<mat_axis>`` and ``<fiber>``, and the ``viscoelastic`` / ``uncoupled
-viscoelastic`` wrappers around an ``<elastic>`` law; and the per-element directions of
-``<MeshData>`` (``ElementData`` of type ``mat_axis`` or ``fiber``).
+with their ``<mat_axis>`` and ``<fiber>``, the ``solid mixture`` / ``uncoupled solid mixture``
+of ``<solid>`` components (each a law of its own, with its own directions), and the
+``viscoelastic`` / ``uncoupled viscoelastic`` wrappers around an ``<elastic>`` law; and the
+per-element directions of ``<MeshData>`` (``ElementData`` of type ``mat_axis`` or ``fiber``).
 
 Directions follow FEBio: a law's local axes Q = [e1 e2 e3] come from ``mat_axis``
 (``vector``: e1 = a/|a|, e3 = a x d/|a x d|, e2 = e3 x e1; ``local``: a and d from element
@@ -9,7 +10,10 @@ nodes n1 -> n2 and n1 -> n3, default 1, 2, 4; none: the global axes). Holzapfel-
 puts its fibres in the plane of e1 and e2; trans iso Mooney-Rivlin's ``fiber`` (default
 1,0,0) is given in the local axes, so its global direction is Q fiber. Element data replace
 the material's axes (``mat_axis``) or its fibre (``fiber``, a global direction) on the
-elements they list."""
+elements they list. A mixture's component takes its axes as FEBio does, Q = Q_mixture Q_own
+(``GetLocalCS``), and FEBio's fibre laws (``fiber-exp-pow``, ``fiber-pow-linear``) their
+``fiber`` in those axes (``type="vector"`` or ``"angles"``: theta, phi in degrees,
+(cos theta sin phi, sin theta sin phi, cos phi)); they are read as mixture components only."""
 
 from __future__ import annotations
 
@@ -20,7 +24,14 @@ import numpy as np
 from tissuesim.febio.model import FebModel, _floats, _int_attr, _ints, _once, _unsupported
 from tissuesim.febio.xml import Node
 
-__all__ = ["MATERIAL_TYPES", "UNCOUPLED", "FIBRE_TYPES", "Orientation", "read_materials"]
+__all__ = [
+    "MATERIAL_TYPES",
+    "UNCOUPLED",
+    "FIBRE_TYPES",
+    "MIXTURES",
+    "Orientation",
+    "read_materials",
+]
 
 #: FEBio material types tissuesim runs -> (model, FEBio parameter -> tissuesim keyword; None:
 #: the law takes FEBio's parameter names as they are)
@@ -41,19 +52,31 @@ MATERIAL_TYPES = {
             "Holzapfel-Gasser-Ogden",
             "HGO unconstrained",
             "trans iso Mooney-Rivlin",
+            "fiber-exp-pow",
+            "fiber-exp-pow-uncoupled",
+            "fiber-pow-linear",
+            "fiber-pow-linear-uncoupled",
         )
     },
 }
+#: FEBio's fibre laws, read as components of a solid mixture only (they have no matrix)
+FIBRES_ONLY = {
+    "fiber-exp-pow", "fiber-exp-pow-uncoupled", "fiber-pow-linear", "fiber-pow-linear-uncoupled",
+}  # fmt: skip
+#: FEBio's solid mixtures -> tissuesim's model
+MIXTURES = {"solid mixture": "solid_mixture", "uncoupled solid mixture": "uncoupled_solid_mixture"}
 #: the fibre laws: FEBio type -> what their directions are ("axes": e1, e2; "fiber": Q fiber)
 FIBRE_TYPES = {
     "Holzapfel-Gasser-Ogden": "axes",
     "HGO unconstrained": "axes",
     "trans iso Mooney-Rivlin": "fiber",
+    **{name: "fiber" for name in FIBRES_ONLY},
 }
 #: the uncoupled laws, which FEBio runs with its three-field (mean dilatation) hex8 / tet10
 UNCOUPLED = {
     "Mooney-Rivlin", "Ogden", "Yeoh", "Veronda-Westmann", "Arruda-Boyce",
     "Holzapfel-Gasser-Ogden", "trans iso Mooney-Rivlin", "uncoupled viscoelastic",
+    "uncoupled solid mixture", "fiber-exp-pow-uncoupled", "fiber-pow-linear-uncoupled",
 }  # fmt: skip
 VISCOELASTIC = {"viscoelastic": "viscoelastic", "uncoupled viscoelastic": "uncoupled_viscoelastic"}
 
@@ -69,6 +92,15 @@ class Orientation:
     fiber: np.ndarray | None = None
 
 
+@dataclass
+class MixtureOrientation:
+    """A solid mixture's ``mat_axis`` (as ``Orientation.axis``) and, per component, its
+    Orientation (None: a law without directions)."""
+
+    axis: tuple | None
+    parts: list
+
+
 def read_materials(model: FebModel, node: Node) -> None:
     """<Material>: each <material> checked by building the tissuesim law once."""
     for mat in node.children:
@@ -81,18 +113,31 @@ def read_materials(model: FebModel, node: Node) -> None:
             model.materials.setdefault(f"#{mat.attrib['id']}", spec)
 
 
-def _law(model: FebModel, mat: Node, top: bool) -> tuple:
-    """(model name, parameters, density, FEBio type, Orientation or None)."""
+def _law(model: FebModel, mat: Node, top: bool, component: bool = False) -> tuple:
+    """(model name, parameters, density, FEBio type, Orientation or None); ``component``: a
+    solid mixture's ``<solid>`` (not built alone: an uncoupled mixture's component has no k)."""
     from tissuesim.errors import TissueSimError
     from tissuesim.materials import make_material
 
     kind = mat.attrib.get("type", "")
     if kind in VISCOELASTIC and top:
         return _viscoelastic(model, mat, kind)
-    if kind not in MATERIAL_TYPES:
-        known = list(MATERIAL_TYPES) + (list(VISCOELASTIC) if top else [])
+    if kind in MIXTURES:
+        if component:
+            raise mat.error(f"{kind!r}: a mixture is not a component of a mixture (nor in FEBio)")
+        return _mixture(model, mat, kind)
+    if kind not in MATERIAL_TYPES or (kind in FIBRES_ONLY and not component):
+        known = [k for k in MATERIAL_TYPES if component or k not in FIBRES_ONLY]
+        known += list(VISCOELASTIC) if top else []
+        known += list(MIXTURES) if not component else []
+        where = " in a solid mixture" if component else ""
+        alone = (
+            " alone (it has no matrix): put it in a solid mixture" if kind in FIBRES_ONLY else ""
+        )
+        if alone:
+            raise mat.error(f"material type {kind!r} is read as a mixture's <solid> only{alone}")
         raise mat.error(
-            f"material type {kind!r} is not supported by tissuesim; it runs "
+            f"material type {kind!r} is not supported by tissuesim{where}; it runs "
             f"{', '.join(repr(k) for k in known)}"
         )
     model_name, rename = MATERIAL_TYPES[kind]
@@ -116,11 +161,60 @@ def _law(model: FebModel, mat: Node, top: bool) -> tuple:
         if key is None:
             raise p.error(f"parameter {p.tag!r} of {kind!r}: it takes {sorted(rename)}")
         params[key] = float(_floats(p, 1)[0])
+    if not component:
+        try:
+            make_material(model_name, **params)
+        except TissueSimError as exc:
+            raise mat.error(f"material {kind!r}: {exc}") from None
+    return (model_name, params, density, kind, orientation)
+
+
+def _mixture(model: FebModel, mat: Node, kind: str) -> tuple:
+    """FEBio's (uncoupled) solid mixture: its ``<solid>`` components, each read as a law of its
+    own, an optional ``<mat_axis>`` that turns every component's axes, the uncoupled mixture's
+    ``<k>`` and ``<pressure_model>``, and its ``<density>`` (the components' are not used)."""
+    from tissuesim.errors import TissueSimError
+    from tissuesim.materials import make_material
+
+    params: dict = {}
+    density, axis, components, parts = 1.0, Orientation("axes"), [], []
+    seen: dict[str, Node] = {}
+    for p in mat.children:
+        if p.tag == "solid":
+            name, comp, _, _, orientation = _law(model, p, top=False, component=True)
+            components.append({"model": name, **comp})
+            parts.append(orientation)
+            continue
+        if p.tag in seen:
+            raise p.error(f"<{p.tag}> is given twice in <{mat.tag}> (first at line "
+                          f"{seen[p.tag].line}): keep one")  # fmt: skip
+        seen[p.tag] = p
+        if p.tag == "mat_axis":
+            _direction(axis, p, kind)
+            continue
+        if p.children or "lc" in p.attrib or p.attrib.get("type") not in (None, "const"):
+            raise _unsupported(p, "a material parameter that is a field, a curve or a table")
+        if p.tag == "density":
+            density = _density(p)
+        elif p.tag == "pressure_model" and kind == "uncoupled solid mixture":
+            params[p.tag] = int(p.text) if p.text.isdigit() else p.text
+        elif p.tag == "k" and kind == "uncoupled solid mixture":
+            params["k"] = float(_floats(p, 1)[0])
+        else:
+            takes = "<solid>, <mat_axis>, <density>"
+            takes += ", <k>, <pressure_model>" if kind == "uncoupled solid mixture" else ""
+            raise p.error(f"parameter {p.tag!r} of {kind!r}: it takes {takes}")
+    if not components:
+        raise mat.error(f"a {kind!r} needs at least one <solid>")
+    params["components"] = components
     try:
-        make_material(model_name, **params)
+        make_material(MIXTURES[kind], **params)
     except TissueSimError as exc:
         raise mat.error(f"material {kind!r}: {exc}") from None
-    return (model_name, params, density, kind, orientation)
+    orientation = None
+    if axis.axis is not None or any(o is not None for o in parts):
+        orientation = MixtureOrientation(axis.axis, parts)
+    return (MIXTURES[kind], params, density, kind, orientation)
 
 
 def _density(p: Node) -> float:
@@ -158,10 +252,20 @@ def _direction(orientation: Orientation, p: Node, kind: str) -> None:
         return
     if orientation.kind != "fiber":
         raise p.error(f"{kind!r} takes its fibres from <mat_axis> (e1, e2 and gamma), not <fiber>")
+    if how == "angles":  # FEBio's FESphericalAnglesVectorGenerator, degrees
+        parts = _once(p)
+        if not set(parts) <= {"theta", "phi"}:
+            extra = next(c for c in p.children if c.tag not in ("theta", "phi"))
+            raise _unsupported(extra, 'a fiber type="angles" takes <theta> and <phi>')
+        theta = np.radians(float(_floats(parts["theta"], 1)[0])) if "theta" in parts else 0.0
+        phi = np.radians(float(_floats(parts["phi"], 1)[0])) if "phi" in parts else np.pi / 2
+        s, c = np.sin(phi), np.cos(phi)
+        orientation.fiber = np.array([np.cos(theta) * s, np.sin(theta) * s, c])
+        return
     if how != "vector":
         raise p.error(
-            f'fiber type {how!r} is not supported by tissuesim; it reads type="vector" (and '
-            'per-element <ElementData type="fiber">)'
+            f'fiber type {how!r} is not supported by tissuesim; it reads type="vector" and '
+            '"angles" (and per-element <ElementData type="fiber">)'
         )
     vector = p.find("vector")
     extra = [c for c in p.children if c.tag != "vector"]
@@ -284,7 +388,8 @@ def body_directions(
     model: FebModel, spec: tuple, parts: list[str], points: np.ndarray, cells: np.ndarray
 ) -> dict:
     """The direction keys of a body's fibre law (``mat_axis_a``/``mat_axis_d`` or ``fiber``):
-    one vector when they are the same in every element, else one per cell (lists)."""
+    one vector when they are the same in every element, else one per cell (lists). A solid
+    mixture's are ``{"components": [keys of each component]}`` (``with_directions``)."""
     orientation = spec[4]
     if orientation is None:
         if any(model.element_data.get(k) for k in ("mat_axis", "fiber")):
@@ -294,28 +399,29 @@ def body_directions(
                         raise e.error(f"{kind} data on elements whose law ({spec[3]!r}) has no "
                                       "fibres")  # fmt: skip
         return {}
+    if isinstance(orientation, MixtureOrientation):
+        for kind, store in model.element_data.items():
+            for (part, _), (_, e) in store.items():
+                if part in parts:
+                    raise _unsupported(
+                        e,
+                        f"{kind} element data on a {spec[3]!r} (its components "
+                        "take their directions from their own mat_axis and fiber)",
+                    )
+        outer = _axes(orientation.axis, points, cells)
+        return {
+            "components": [
+                {} if o is None else _keys(o, outer @ _axes(o.axis, points, cells), None)
+                for o in orientation.parts
+            ]
+        }
     m = len(cells)
-    axis = orientation.axis
-    if axis is None:
-        Q = np.broadcast_to(np.eye(3), (m, 3, 3)).copy()
-    elif axis[0] == "vector":
-        Q = np.broadcast_to(axes_from(axis[1], axis[2]), (m, 3, 3)).copy()
-    else:
-        i, j, k = axis[1]
-        if max(axis[1]) >= cells.shape[1]:
-            raise axis[2].error(f"mat_axis local nodes {[n + 1 for n in axis[1]]}: the "
-                                f"elements have {cells.shape[1]} nodes")  # fmt: skip
-        x = points[cells]
-        a, d = x[:, j] - x[:, i], x[:, k] - x[:, i]
-        if np.any(np.linalg.norm(np.cross(a, d), axis=1) == 0.0):
-            raise axis[2].error("mat_axis local: three nodes of an element are collinear")
-        Q = axes_from(a, d)
+    Q = _axes(orientation.axis, points, cells)
     offsets, start = {}, 0
     for p in parts:
         offsets[p] = start
         start += len(model.parts[p][1])
-    fiber = np.tile(orientation.fiber if orientation.fiber is not None else [1.0, 0, 0], (m, 1))
-    given = np.zeros(m, dtype=bool)
+    given = np.full((m, 3), np.nan)
     for (part, row), ((a, d), _) in model.element_data.get("mat_axis", {}).items():
         if part in offsets:
             Q[offsets[part] + row] = axes_from(a, d)
@@ -323,16 +429,58 @@ def body_directions(
         if part in offsets:
             if orientation.kind != "fiber":
                 raise e.error(f"{spec[3]!r} takes its fibres from mat_axis, not fiber data")
-            fiber[offsets[part] + row] = f
-            given[offsets[part] + row] = True
+            given[offsets[part] + row] = f
+    return _keys(orientation, Q, given)
+
+
+def _axes(axis: tuple | None, points: np.ndarray, cells: np.ndarray) -> np.ndarray:
+    """(m, 3, 3) local axes per cell of an Orientation's ``axis``."""
+    m = len(cells)
+    if axis is None:
+        return np.broadcast_to(np.eye(3), (m, 3, 3)).copy()
+    if axis[0] == "vector":
+        return np.broadcast_to(axes_from(axis[1], axis[2]), (m, 3, 3)).copy()
+    i, j, k = axis[1]
+    if max(axis[1]) >= cells.shape[1]:
+        raise axis[2].error(f"mat_axis local nodes {[n + 1 for n in axis[1]]}: the "
+                            f"elements have {cells.shape[1]} nodes")  # fmt: skip
+    x = points[cells]
+    a, d = x[:, j] - x[:, i], x[:, k] - x[:, i]
+    if np.any(np.linalg.norm(np.cross(a, d), axis=1) == 0.0):
+        raise axis[2].error("mat_axis local: three nodes of an element are collinear")
+    return axes_from(a, d)
+
+
+def _keys(orientation: Orientation, Q: np.ndarray, given: np.ndarray | None) -> dict:
+    """The law's direction keys from its axes Q (m, 3, 3): e1, e2 of Q, or Q fiber; ``given``
+    (m, 3): global fibres from element data (NaN rows: none)."""
+    m = len(Q)
     if orientation.kind == "axes":
         keys = {"mat_axis_a": Q[:, :, 0], "mat_axis_d": Q[:, :, 1]}
     else:
+        fiber = np.tile(orientation.fiber if orientation.fiber is not None else [1.0, 0, 0], (m, 1))
         local = np.einsum("mij,mj->mi", Q, fiber / np.linalg.norm(fiber, axis=1, keepdims=True))
-        keys = {"fiber": np.where(given[:, None], fiber, local)}
+        if given is not None:
+            local = np.where(np.isnan(given[:, :1]), local, given)
+        keys = {"fiber": local}
     out = {}
     for key, rows in keys.items():
         rows = np.round(rows, 15) + 0.0
         same = np.allclose(rows, rows[0], rtol=0.0, atol=1e-14)
         out[key] = rows[0].tolist() if same else rows.tolist()
     return out
+
+
+def with_directions(params: dict, directions: dict) -> dict:
+    """A law's parameters with its ``body_directions``: into its ``elastic`` law (a
+    viscoelastic wrapper) or its ``components`` (a solid mixture), else its own."""
+    params = dict(params)
+    if "elastic" in params:
+        params["elastic"] = with_directions(params["elastic"], directions)
+    elif "components" in directions:
+        params["components"] = [
+            {**c, **d} for c, d in zip(params["components"], directions["components"], strict=True)
+        ]
+    else:
+        params.update(directions)
+    return params

@@ -11,7 +11,7 @@ from pathlib import Path
 import numpy as np
 
 from tissuesim.febio.curves import curve_expression
-from tissuesim.febio.materials import body_directions
+from tissuesim.febio.materials import body_directions, with_directions
 from tissuesim.febio.model import FebModel, Load
 from tissuesim.febio.reader import UNCOUPLED, read_feb
 from tissuesim.febio.time_stepper import adaptive_table, run_steps
@@ -170,11 +170,7 @@ def febio_scene(model: FebModel, stem: str) -> tuple[dict, dict]:
                 'type="elastic-solid" (FEBio then runs that too)'
             )
         directions = body_directions(model, spec, body["parts"], model.nodes, body["cells"])
-        params = dict(params)
-        if "elastic" in params:
-            params["elastic"] = {**params["elastic"], **directions}
-        else:
-            params.update(directions)
+        params = with_directions(params, directions)
         tables.update(
             mesh={"file": file},
             material={"model": model_name, **params},

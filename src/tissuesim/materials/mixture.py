@@ -9,9 +9,8 @@ so its stress and tangent are the sums of theirs:
 Components are any elastic laws (materials; ``make_material`` also takes tables
 ``{ model = ..., ... }``, ``registry.py``): a matrix (``neo_hookean``, ``mooney_rivlin``, ...)
 and fibres (``fiber_exp_pow``, ``fiber_pow_linear``, ``holzapfel_gasser_ogden``, ...), each with
-its own
-directions. As in FEBio, a mixture is not a component of a mixture, and the uncoupled mixture
-takes uncoupled components whose bulk terms are left out: its own ``k`` (Pa) and
+its own directions. As in FEBio, a mixture is not a component of a mixture, and the uncoupled
+mixture takes uncoupled components whose bulk terms are left out: its own ``k`` (Pa) and
 ``pressure_model`` (as every uncoupled law's, ``_hyperelastic.bulk_energy``) give U(J), and a
 component's ``k`` is ignored (FEBio warns and sets it to 0), so it need not be given.
 Visco-elastic components are refused (their history is the body's, not a component's).

@@ -23,10 +23,15 @@ def resolve_directions(table: dict, mesh, where: str) -> dict:
     """``table`` (a material table, its model popped or not) with every direction key given as
     a cell data name or as expressions replaced by an (m, d) array, one row per cell of
     ``mesh`` (None: a body without a FEM mesh, which refuses both forms); the ``elastic``
-    table of a viscoelastic law too."""
+    table of a viscoelastic law and the ``components`` tables of a solid mixture too."""
     out = dict(table)
     if isinstance(out.get("elastic"), dict):
         out["elastic"] = resolve_directions(out["elastic"], mesh, f"{where} elastic")
+    if isinstance(out.get("components"), list):
+        out["components"] = [
+            resolve_directions(c, mesh, f"{where} components[{i}]") if isinstance(c, dict) else c
+            for i, c in enumerate(out["components"])
+        ]
     for key in DIRECTION_KEYS:
         value = out.get(key)
         if isinstance(value, dict):
