@@ -55,7 +55,7 @@ def timed(f) -> float:
 def main() -> None:
     import tissuesim as ts
     from tissuesim.bodies.visual_surface import make_visual_surface
-    from tissuesim.io.vtu_series import VTUSeriesWriter
+    from tissuesim.io.series.vtu import VTUSeriesWriter
     from tissuesim.mesh.queries.embedding import embed_points
 
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])

@@ -68,7 +68,7 @@ def _run(
 ) -> int:
     import time
 
-    from tissuesim.io.checkpoint import completed_steps
+    from tissuesim.io.checkpoints.checkpoint import completed_steps
     from tissuesim.scene.loader import load_scene
 
     started = time.perf_counter()
@@ -144,7 +144,7 @@ def _scene_hash(path: Path) -> str:
         import hashlib
 
         return hashlib.sha256(path.read_bytes()).hexdigest()[:16]
-    from tissuesim.io.checkpoint import scene_hash
+    from tissuesim.io.checkpoints.checkpoint import scene_hash
 
     return scene_hash(path)
 

@@ -1,4 +1,4 @@
-"""A run with connective tissue saved and loaded (io/checkpoint_tissue.py) goes on exactly
+"""A run with connective tissue saved and loaded (io/checkpoints/tissue.py) goes on exactly
 (np.array_equal) as the run that never stopped: while a blade cuts through the tissue, while it
 tears, and after the organ under it was cut (its attachments moved to the copies on their
 side). Before, checkpoints refused a tissue."""

@@ -1,4 +1,4 @@
-"""Cut and torn bodies resume like every other run (issue 41, ``io/checkpoint_cuts.py``): a
+"""Cut and torn bodies resume like every other run (issue 41, ``io/checkpoints/cuts.py``): a
 checkpoint taken while a blade cuts or a body tears holds the cut topology, the blades' and
 cracks' progress, and the run resumed from it equals the run that never stopped bit for bit
 (positions, velocities, forces, residuals, cut reports, output files), with a cut before the

@@ -138,7 +138,7 @@ def test_gmsh_second_order_node_order_is_converted(tmp_path):
 
 
 def test_vtu_output_writes_quadratic_cells(tmp_path):
-    from tissuesim.io.vtu_series import VTUSeriesWriter
+    from tissuesim.io.series.vtu import VTUSeriesWriter
 
     m = box(divisions=(1, 1, 1), order=2)
     w = VTUSeriesWriter(tmp_path, m, "body")

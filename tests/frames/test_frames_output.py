@@ -13,7 +13,7 @@ from PIL import Image
 import tissuesim.render.points3d as points3d
 from tissuesim.frames.placement import grid_frames
 from tissuesim.frames.sampling import box_surface, sample_box
-from tissuesim.io.vtu_series import VTUSeriesWriter
+from tissuesim.io.series.vtu import VTUSeriesWriter
 from tissuesim.materials import make_material
 from tissuesim.simulation import Simulation
 

@@ -287,7 +287,7 @@ def test_a_ctrl_c_while_a_checkpoint_is_written_waits_until_it_is_whole(tmp_path
     interrupt is raised."""
     import os
 
-    from tissuesim.io import checkpoint
+    from tissuesim.io.checkpoints import checkpoint
 
     real = np.savez
 

@@ -1,6 +1,6 @@
-"""Resuming a run (io/checkpoint.py): a run stopped (killed, or finished and continued with more
-steps) and resumed gives exactly (np.array_equal) the positions, velocities, forces and output
-files of a run that never stopped, with the direct solvers' kept factor restored from its
+"""Resuming a run (io/checkpoints/checkpoint.py): a run stopped (killed, or finished and continued
+with more steps) and resumed gives exactly (np.array_equal) the positions, velocities, forces and
+output files of a run that never stopped, with the direct solvers' kept factor restored from its
 matrix; scene mismatches and damaged checkpoints are one error line each.
 
 Contact runs are compared with ipctk on one thread: its parallel sums differ in the last bits
@@ -98,7 +98,7 @@ def test_save_load_continues_bit_identical_2d(tmp_path, linear_solver):
 
 def test_a_fresh_factor_would_not_be_bit_identical(tmp_path, monkeypatch):
     """The kept factor matters: restored from a fresh factorisation, the iterates differ."""
-    import tissuesim.io.checkpoint as checkpoint
+    import tissuesim.io.checkpoints.checkpoint as checkpoint
 
     whole = _sim(SCENE_2D, "splu")
     whole.run(10, None, progress=False)

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 import tissuesim as ts
-from tissuesim.io.body_series import FemSeries
+from tissuesim.io.series.bodies import FemSeries
 from tissuesim.render.overlays import cut_outline
 
 

@@ -7,7 +7,7 @@ import re
 
 import pytest
 
-from tissuesim.io.body_series import series_names
+from tissuesim.io.series.bodies import series_names
 from tissuesim.scene.examples import example_path, list_examples
 from tissuesim.scene.loader import load_scene
 

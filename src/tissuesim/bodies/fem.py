@@ -393,7 +393,7 @@ class FemBody:
         self._set_conditions()
 
     def restore_cut(self, state, held: dict[str, np.ndarray], velocity: np.ndarray) -> None:
-        """Take a checkpoint's cut (``io/checkpoint_cuts.py``): ``state`` (a ``CutState``
+        """Take a checkpoint's cut (``io/checkpoints/cuts.py``): ``state`` (a ``CutState``
         with its current cut) as this body's, the model made on its cut mesh afresh (the pattern
         a cut renews equals it entry for entry), every support and grasper on the vertices it
         held (``held``, by name), and ``velocity``."""

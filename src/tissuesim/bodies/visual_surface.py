@@ -2,9 +2,9 @@
 
 Any triangle surface (a polyline in 2D) is embedded once, at rest, in the body's simplices by
 barycentric coordinates (``mesh/queries/embedding.py``); it then moves with the body at the cost of
-one sparse product per frame, is written as its own series (``io/body_series.py VisualSeries``) and
-is drawn instead of the body's coarse surface in the 3D pictures (``render/scene.py``). It takes no
-part in the mechanics: it has no mass, no stiffness, no contact.
+one sparse product per frame, is written as its own series (``io/series/bodies.py VisualSeries``)
+and is drawn instead of the body's coarse surface in the 3D pictures (``render/scene.py``). It takes
+no part in the mechanics: it has no mass, no stiffness, no contact.
 
 Points outside the body's mesh (a fine surface sticks out of a coarse mesh by up to an element)
 are carried by the element of the closest boundary facet, with extrapolated coordinates; a point

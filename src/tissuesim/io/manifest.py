@@ -19,14 +19,14 @@ from pathlib import Path
 
 from tissuesim.errors import OutputError
 from tissuesim.io.atomic import remove_leftovers, write_json_atomic
-from tissuesim.io.vtu_series import remove_series
+from tissuesim.io.series.vtu import remove_series
 
 __all__ = ["prepare_directory", "Manifest", "OUTPUT_FILES", "MANIFEST"]
 
 MANIFEST = "manifest.json"
 #: plain files a run may write besides its series
 OUTPUT_FILES = ("summary.json", MANIFEST, "forces.csv", "forces.png", "final.png", "run.gif")
-OUTPUT_FILES += ("checkpoint.npz", "checkpoint_history.jsonl")  # io/checkpoint.py
+OUTPUT_FILES += ("checkpoint.npz", "checkpoint_history.jsonl")  # io/checkpoints/checkpoint.py
 _PLAIN = re.compile(r"[A-Za-z0-9][A-Za-z0-9_.-]*")
 
 

@@ -1,5 +1,5 @@
 """Running a Simulation with output, the same for every scene: per body a VTU series + PVD on rest
-positions (``io/body_series.py``), per visual surface one, the cut surface, summary.json,
+positions (``io/series/bodies.py``), per visual surface one, the cut surface, summary.json,
 forces.csv and forces.png, a progress bar and the pictures (``render/scene.py``).
 
 The directory is checked before anything is written (``io/manifest.py``). summary.json is
@@ -13,8 +13,9 @@ manifest.json) is removed when the new run starts, so nothing stale sits beside 
 Interrupts (one Ctrl-C or several, SIGTERM) end the run with status "interrupted" and skip the
 pictures; while the final summary is written further interrupts wait.
 
-After every frame the checkpoint (``io/checkpoint.py``) is written; ``resume`` continues the run
-in the directory from it: its series, summary.json and forces.csv go on with the whole history.
+After every frame the checkpoint (``io/checkpoints/checkpoint.py``) is written; ``resume``
+continues the run in the directory from it: its series, summary.json and forces.csv go on with the
+whole history.
 """
 
 from __future__ import annotations
@@ -30,11 +31,11 @@ import numpy as np
 
 from tissuesim.errors import InputError, TissueSimError
 from tissuesim.io.atomic import remove_leftovers, write_json_atomic
-from tissuesim.io.body_series import VisualSeries, series_for
-from tissuesim.io.checkpoint import CHECKPOINT, HISTORY, RunCheckpoint, restore
+from tissuesim.io.checkpoints.checkpoint import CHECKPOINT, HISTORY, RunCheckpoint, restore
 from tissuesim.io.interrupts import deferred_interrupts, interrupts_as_keyboard_interrupt
 from tissuesim.io.lock import run_lock
 from tissuesim.io.manifest import MANIFEST, Manifest, prepare_directory
+from tissuesim.io.series.bodies import VisualSeries, series_for
 
 __all__ = ["RunOutput", "OBSTACLES"]
 
@@ -78,7 +79,7 @@ class RunOutput:
         self.frames: list[tuple[Any, ...]] = []  # what the pictures draw, one per written frame
         self.cut_series = None
         self.obstacle_series: list = []  # (Obstacle, VTUSeriesWriter), opened with the series
-        self.visual_series: list = []  # io/body_series.py VisualSeries, one per visual surface
+        self.visual_series: list = []  # io/series/bodies.py VisualSeries, one per visual surface
         self.status = "running"
         self.error = None
         self.pictures = "not rendered" if render else "not asked for (render = false)"
@@ -164,7 +165,7 @@ class RunOutput:
 
     # -- series -------------------------------------------------------------------------------
     def _open_series(self) -> None:
-        from tissuesim.io.vtu_series import VTUSeriesWriter, remove_series
+        from tissuesim.io.series.vtu import VTUSeriesWriter, remove_series
 
         keep = self._kept_series
         for s in self.series + self.visual_series:
@@ -239,7 +240,7 @@ class RunOutput:
                 self.manifest.add(series=w.name)
 
     def _write_checkpoint(self, steps: int) -> None:
-        """After a frame: the checkpoint of the state it shows (io/checkpoint.py)."""
+        """After a frame: the checkpoint of the state it shows (io/checkpoints/checkpoint.py)."""
         if self.checkpoint is None:
             return
         self.manifest.add(file=CHECKPOINT)  # listed before it exists: the next run removes it

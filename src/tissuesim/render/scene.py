@@ -21,7 +21,7 @@ or in 3D as many as the simulation's own wall time pays for at ``SECONDS_PER_3D_
 ``MAX_GIF_FRAMES_3D``), evenly subsampled, so drawing costs about what the simulation cost
 (measured in docs/performance.md; PyVista's fixed cost, about 2 s, remains).
 
-A frame (what ``io/body_series.py`` returns per written step) is
+A frame (what ``io/series/bodies.py`` returns per written step) is
 (time, {body name: data}, cut triangles (m, 3, 3), title suffix).
 """
 

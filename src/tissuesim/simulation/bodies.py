@@ -64,7 +64,7 @@ class BodyCalls:
     def _new_name(self, name: str, what: str, kind: str = "fem") -> str:
         """A body name that is valid as a file stem and clashes with no other body's output
         series (``<name>``, ``<name>_frames``, ``<name>_surface``, ``<name>_points``)."""
-        from tissuesim.io.body_series import series_names
+        from tissuesim.io.series.bodies import series_names
 
         if not isinstance(name, str) or not _NAME.fullmatch(name):
             raise InputError(

@@ -174,7 +174,7 @@ class BodyResults:
     def _visual_name(self, name: Any) -> None:
         """A visual surface's series name: a file stem no body, obstacle, internal series or
         other visual surface writes."""
-        from tissuesim.io.body_series import series_names
+        from tissuesim.io.series.bodies import series_names
         from tissuesim.simulation.bodies import _NAME, RESERVED_NAMES
 
         if not isinstance(name, str) or not _NAME.fullmatch(name):

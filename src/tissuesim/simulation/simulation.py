@@ -434,15 +434,15 @@ class Simulation(
 
     def save(self, path: str | Path) -> Path:
         """Write the state, history and linear solver's state to ``path`` (.npz, atomically;
-        ``io/checkpoint.py``); ``load`` continues from it bit-identically."""
-        from tissuesim.io.checkpoint import save_simulation
+        ``io/checkpoints/checkpoint.py``); ``load`` continues from it bit-identically."""
+        from tissuesim.io.checkpoints.checkpoint import save_simulation
 
         return save_simulation(self, path)
 
     def load(self, path: str | Path) -> Simulation:
         """Restore a ``save``-d state into this simulation, set up as the saved one was and not
         stepped yet (InputError naming what differs otherwise); returns the simulation."""
-        from tissuesim.io.checkpoint import load_simulation
+        from tissuesim.io.checkpoints.checkpoint import load_simulation
 
         load_simulation(self, path)
         return self

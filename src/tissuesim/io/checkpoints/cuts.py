@@ -1,5 +1,5 @@
-"""What a checkpoint (``io/checkpoint.py``) keeps of cut and torn FEM bodies, so that a run
-that cuts or tears resumes bit-identically (issue 41).
+"""What a checkpoint (``io/checkpoints/checkpoint.py``) keeps of cut and torn FEM bodies, so that a
+run that cuts or tears resumes bit-identically (issue 41).
 
 Kept, per cut body (arrays ``cut.<body>.*``): its current cut mesh (``VirtualNodeMesh``: the
 points, cells, volume fractions, parents, sides, cuts and origins, each copy's levels and the
@@ -14,7 +14,7 @@ body (``tear.<body>.<k>.*``): each crack's current plane and polygon, its earlie
 the front it turned at.
 
 Not kept: the original mesh, the cells' densities and rest geometry, which the set-up gives
-(the fingerprint checks the original mesh, ``io/checkpoint_fingerprint.py``); the model, its
+(the fingerprint checks the original mesh, ``io/checkpoints/fingerprint.py``); the model, its
 pattern, the contact surface and the crumbs' attachment are made again from the cut mesh (the
 same arrays in, the same bits out: a pattern renewed after a cut equals the one built afresh
 entry for entry). The linear solver's state, the contact state and the step history are the

@@ -1,4 +1,4 @@
-"""What a checkpoint (``io/checkpoint.py``) keeps of the connective tissue
+"""What a checkpoint (``io/checkpoints/checkpoint.py``) keeps of the connective tissue
 (``coupling/tissue.py``), so that a run whose tissue is cut, torn or attached to a cut organ
 resumes bit-identically (issue 41).
 
@@ -11,7 +11,7 @@ coordinates (the pictures show them).
 
 Not kept: the samples, frames, their radii, the material and the cuts' and tearing's set-up,
 which the set-up gives; the frame model is made again from the dissection (the same arrays in,
-the same model out), after the cut organs are restored (``io/checkpoint_cuts.py``), and the
+the same model out), after the cut organs are restored (``io/checkpoints/cuts.py``), and the
 system with it.
 """
 

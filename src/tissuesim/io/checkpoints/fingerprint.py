@@ -1,11 +1,11 @@
-"""The fingerprint of a simulation's set-up that a checkpoint (``io/checkpoint.py``) must match:
-readable parts, one per setting group, body, obstacle and the scene file's hash, compared
-part by part so that a mismatch names what differs.
+"""The fingerprint of a simulation's set-up that a checkpoint (``io/checkpoints/checkpoint.py``)
+must match: readable parts, one per setting group, body, obstacle and the scene file's hash,
+compared part by part so that a mismatch names what differs.
 
 A cut or torn body is fingerprinted by the mesh it was set up with (its cut state's original
 mesh and densities), not by its cut mesh: a checkpoint written after a cut is loaded into a
 simulation set up anew, not cut yet, and its cuts are restored from the checkpoint
-(``io/checkpoint_cuts.py``). Blades and tearing are part of the set-up too.
+(``io/checkpoints/cuts.py``). Blades and tearing are part of the set-up too.
 """
 
 from __future__ import annotations

@@ -12,10 +12,10 @@ again from the same matrix with the same ordering (a fresh factor takes other it
 set-up (meshes, materials, supports, motions) is not kept: it is code and data the user
 already has. A checkpoint is loaded into a simulation set up the same way, checked by a
 ``fingerprint`` (integrator, Newton options, each body's mesh / material / density, contact and
-obstacles; the command line adds the scene file's hash; ``io/checkpoint_fingerprint.py``).
+obstacles; the command line adds the scene file's hash; ``io/checkpoints/fingerprint.py``).
 
 Cut and torn bodies (issue 41): their current cut mesh and cuts, the vertices their supports
-and graspers hold, the blades' progress and the cracks (``io/checkpoint_cuts.py``); on load
+and graspers hold, the blades' progress and the cracks (``io/checkpoints/cuts.py``); on load
 each cut body's model, the system, the contact surfaces and the linear solver are made again
 on the cut mesh, so a run killed mid-cut resumes bit-identically too.
 
@@ -29,7 +29,7 @@ Format: ``FORMAT`` 2 since checkpoints keep cuts; format 1 (before) is read wher
 or tears (it was never written where something did), any other is refused in one line.
 
 The connective tissue (issue 41): its dissection and its attachments' cells
-(``io/checkpoint_tissue.py``), its frame model made again from them on load.
+(``io/checkpoints/tissue.py``), its frame model made again from them on load.
 """
 
 from __future__ import annotations
@@ -45,12 +45,12 @@ import scipy.sparse as sp
 
 from tissuesim.errors import InputError
 from tissuesim.io.atomic import atomic_output, write_text_atomic
-from tissuesim.io.checkpoint_cuts import capture_cuts, restore_cuts
-from tissuesim.io.checkpoint_fingerprint import FIX as _FIX
-from tissuesim.io.checkpoint_fingerprint import check_fingerprint as _check_fingerprint
-from tissuesim.io.checkpoint_fingerprint import fingerprint, scene_hash
-from tissuesim.io.checkpoint_predictor import capture_predictor, restore_predictor
-from tissuesim.io.checkpoint_tissue import capture_tissue, restore_tissue
+from tissuesim.io.checkpoints.cuts import capture_cuts, restore_cuts
+from tissuesim.io.checkpoints.fingerprint import FIX as _FIX
+from tissuesim.io.checkpoints.fingerprint import check_fingerprint as _check_fingerprint
+from tissuesim.io.checkpoints.fingerprint import fingerprint, scene_hash
+from tissuesim.io.checkpoints.predictor import capture_predictor, restore_predictor
+from tissuesim.io.checkpoints.tissue import capture_tissue, restore_tissue
 from tissuesim.io.interrupts import deferred_interrupts
 
 __all__ = [

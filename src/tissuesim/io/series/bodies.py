@@ -25,7 +25,7 @@ from typing import Any
 
 import numpy as np
 
-from tissuesim.io.vtu_series import VTUSeriesWriter, remove_series
+from tissuesim.io.series.vtu import VTUSeriesWriter, remove_series
 from tissuesim.materials.measures import FIELD_NAMES
 
 __all__ = ["series_for", "BodySeries", "VisualSeries", "series_names"]
