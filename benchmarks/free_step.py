@@ -156,7 +156,9 @@ def main() -> None:
         )
     text = (
         "# The contact-free step (benchmarks/free_step.py)\n\n"
-        f"`python3 benchmarks/free_step.py {' '.join(sys.argv[1:])}`, one thread, medians of "
+        f"`python3 benchmarks/free_step.py {' '.join(sys.argv[1:])}`, one thread"
+        + (" (and one that factorises)" if args.background else "")
+        + ", medians of "
         f"{args.steps} steps.\n\n" + "\n".join(lines) + "\n"
     )
     name = "free_step_background.md" if args.background else "free_step.md"

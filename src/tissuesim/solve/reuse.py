@@ -40,10 +40,11 @@ With ``background=True`` (Courtecuisse et al.'s asynchronous preconditioner) a f
 is made in a thread (PARDISO and CHOLMOD release the GIL) once the kept one has cost
 BACKGROUND_AFTER extra back-solves, and swapped in at the first matrix after it is ready;
 solves go on with the old one meanwhile. Runs are then not bit-reproducible (the swap depends
-on timing), and it did not pay here: on the palpation organ at rest (1e4 tetrahedra, two
-cores, ``benchmarks/free_step.py --background``) a factor one step old still costs CG 2-3
-back-solves a solve at rtol 1e-6, so the steps took as many back-solves as with the
-synchronous rule (2.95-3.25 against 2.65 a step) and no less time. Off by default.
+on timing), and it did not pay here: a factor one step old still costs CG 2-3 back-solves a
+solve at rtol 1e-6, so the steps save little (the palpation organ sagging, 1e4 tetrahedra, two
+cores, ``benchmarks/free_step.py --divisions 12 --background``: 24.3 ms a step against 24.7,
+4.85 back-solves against 5.15, 0.50 factorisations in the thread against 0.15, measured while
+another process used part of the second core). Off by default.
 
 Counts per step (``take_stats``): factorisations, back-solves, CG iterations.
 """
