@@ -90,7 +90,7 @@ REFUSALS = {
                '<solid type="solid mixture">', "a mixture is not a component of a mixture"),
     "alone": ('type="solid mixture">', 'type="fiber-exp-pow">', "material", MATERIAL,
               "read as a mixture's <solid> only"),
-    "mu": ("<mu>0</mu>", "<mu>2</mu>", "material", MATERIAL, "mu (FEBio's fibre shear term)"),
+    "mu": ("<mu>0</mu>", "<mu>-2</mu>", "material", MATERIAL, "mu (the fibre's shear modulus)"),
     "uncoupled": ('type="solid mixture">', 'type="uncoupled solid mixture"><k>1e5</k>', "material",
                   MATERIAL, "not an uncoupled law"),
     "param": ("<density>1000</density>", "<density>1000</density><c1>1</c1>", "c1", "<c1>",

@@ -35,6 +35,8 @@ LAWS = {
     "fiber_exp_pow": lambda: FiberExpPow(**EXP, lam0=1.02, fiber=FIBRE),
     "fiber_exp_pow_alpha0_beta2": lambda: FiberExpPow(ksi=50.0, alpha=0.0, beta=2.0, fiber=FIBRE),
     "fiber_exp_pow_uncoupled": lambda: FiberExpPowUncoupled(**EXP, fiber=FIBRE),
+    "fiber_exp_pow_shear": lambda: FiberExpPow(**EXP, mu=30.0, lam0=1.02, fiber=FIBRE),
+    "fiber_exp_pow_uncoupled_shear": lambda: FiberExpPowUncoupled(**EXP, mu=30.0, fiber=FIBRE),
     "fiber_pow_linear": lambda: FiberPowLinear(**LIN, fiber=FIBRE),
     "fiber_pow_linear_uncoupled": lambda: FiberPowLinearUncoupled(**LIN, fiber=FIBRE),
     "solid_mixture": lambda: SolidMixture(
@@ -185,6 +187,36 @@ def test_fiber_exp_pow_uncoupled_at_constant_volume_by_hand():
         assert P[2, 2] == pytest.approx(-2 / 3 * l**2.5 * Wp, rel=1e-12)
 
 
+@pytest.mark.parametrize("uncoupled", [False, True])
+def test_fiber_exp_pow_cauchy_stress_is_febios(uncoupled):
+    """FEBio's FiberStress: sigma = 2 Wl / J N + mu / J sym(N (B - I)), N = (F a) (x) (F a),
+    Wl = ksi x^(beta-1) exp(alpha x^beta); the uncoupled law's is the deviatoric part of the
+    same on F~ = J^(-1/3) F (FEBio's DevFiberStress). Where the fibre is taut."""
+    ksi, alpha, beta, mu = 50.0, 2.0, 2.5, 30.0
+    a = np.array(FIBRE) / np.linalg.norm(FIBRE)
+    cls = FiberExpPowUncoupled if uncoupled else FiberExpPow
+    law = cls(ksi=ksi, alpha=alpha, beta=beta, mu=mu, fiber=FIBRE)
+    F = _random_F(np.random.default_rng(5), 40, 3, 0.2)
+    P = law.stress(F)
+    checked = 0
+    for Fq, Pq in zip(F, P, strict=True):
+        J = np.linalg.det(Fq)
+        Fm = Fq * J ** (-1 / 3) if uncoupled else Fq
+        n = Fm @ a
+        x = n @ n - 1.0
+        if x <= 0:
+            assert np.all(Pq == 0.0)
+            continue
+        N = np.outer(n, n)
+        NB = N @ (Fm @ Fm.T - np.eye(3))
+        s = 2 * ksi * x ** (beta - 1) * np.exp(alpha * x**beta) / J * N + mu / J * (NB + NB.T) / 2
+        if uncoupled:
+            s = s - np.trace(s) / 3 * np.eye(3)
+        np.testing.assert_allclose(Pq @ Fq.T / J, s, atol=1e-10 * np.abs(s).max())
+        checked += 1
+    assert checked > 10
+
+
 def test_per_element_fibres_through_a_mixture_are_bound_and_assembled():
     mesh = box(divisions=(2, 1, 1))
     m = mesh.n_cells
@@ -253,7 +285,7 @@ def test_registry_tables_and_names():
             "not an uncoupled law",
         ),
         ("uncoupled_solid_mixture", {"components": [{"model": "yeoh", "c1": 1.0}]}, "needs k"),
-        ("fiber_exp_pow", {**EXP, "mu": 1.0}, "mu .* not supported"),
+        ("fiber_exp_pow", {**EXP, "mu": -1.0}, r"mu \(the fibre's shear modulus\) must be >= 0"),
         ("fiber_exp_pow", {**EXP, "beta": 1.5}, "beta must be >= 2"),
         ("fiber_exp_pow", {**EXP, "lam0": 0.9}, "lam0 must be >= 1"),
         ("fiber_exp_pow", {"alpha": 1.0}, "needs ksi"),

@@ -12,9 +12,20 @@ for x > 0 only: the fibre bears no compression (W = 0 for I4 <= lam0^2). Then
     d2W/dI4^2 = ksi x^(beta - 2) ((alpha x^beta + 1) beta - 1) exp(alpha x^beta)
 
 (FEBio's Wl and Wll; its Cauchy stress 2 Wl / J (F a) (x) (F a) is this law's P pushed
-forward). Parameters as FEBio's: ``ksi`` (Pa) >= 0, ``alpha`` >= 0, ``beta`` >= 2, ``lam0``
->= 1 (the coupled law's slack stretch; the uncoupled law has none). FEBio's optional fibre
-shear term ``mu`` (mu/4 (I5 - 2 I4 + 1)) is not implemented: ``mu`` other than 0 is refused.
+forward). FEBio's fibre shear term, ``mu`` (Pa) >= 0, adds where the fibre is taut
+
+    mu / 4 (I5 - 2 I4 + 1),   I5 = a . C^2 a   (uncoupled: I5b = J^(-4/3) I5 and I4b)
+
+(its Cauchy stress mu / J sym(N (B - I)), N = (F a) (x) (F a), FEBio's; it is >= 0 and jumps
+where the fibre goes slack in shear, as FEBio's does). Its derivatives, with G5 = dI5/dF =
+2 (F C a (x) a + F a (x) C a) and
+
+    d2I5/dF_ij dF_kl = 2 [delta_ik S_lj + (Fa)_i (Fa)_k delta_jl + (Fa)_i F_kj a_l
+                          + F_il (Fa)_k a_j + B_ik a_j a_l],   S = a (x) C a + C a (x) a,
+
+and for the uncoupled law the chain rule through J^(-4/3) and J^(-2/3) (``_scaled``). Parameters
+as FEBio's: ``ksi`` (Pa) >= 0, ``alpha`` >= 0, ``beta`` >= 2, ``mu`` >= 0, ``lam0`` >= 1 (the
+coupled law's slack stretch; the uncoupled law has none).
 """
 
 from __future__ import annotations
@@ -22,7 +33,9 @@ from __future__ import annotations
 import numpy as np
 
 from tissuesim.errors import MaterialError
+from tissuesim.materials.base import MaterialResponse
 from tissuesim.materials.fibres._single_fibre import SingleFibre, exponent
+from tissuesim.materials.isotropic._common import bcast, cofactor, det, det_hessian, outer
 from tissuesim.materials.soft_tissue._hyperelastic import parameter
 
 __all__ = ["FiberExpPow", "FiberExpPowUncoupled"]
@@ -59,14 +72,15 @@ class FiberExpPow(SingleFibre):
         self.lam0 = 1.0 if self.uncoupled else parameter(law, "lam0", lam0, unit="")
         if self.lam0 < 1.0:
             raise MaterialError(f"{law}: lam0 must be >= 1, got {self.lam0!r}")
-        if parameter(law, "mu", mu) != 0.0:
-            raise MaterialError(
-                f"{law}: mu (FEBio's fibre shear term) is not supported by tissuesim; give 0"
-            )
+        self.fibre_mu = parameter(law, "mu", mu)
+        if self.fibre_mu < 0.0:
+            raise MaterialError(f"{law}: mu (the fibre's shear modulus) must be >= 0")
         self._set_fibre(fiber)
 
     def parameters(self) -> dict[str, object]:
         out: dict[str, object] = dict(ksi=self.ksi, alpha=self.alpha, beta=self.beta)
+        if self.fibre_mu:
+            out["mu"] = self.fibre_mu
         if not self.uncoupled:
             out["lam0"] = self.lam0
         return {**out, **self._fibre_parameter()}
@@ -86,6 +100,86 @@ class FiberExpPow(SingleFibre):
             ddf = ksi * x ** (beta - 2.0) * ((alpha * xb + 1.0) * beta - 1.0) * ex
         zero = np.zeros_like(x)
         return np.where(on, f, zero), np.where(on, df, zero), np.where(on, ddf, zero)
+
+    def _taut(self, I4: np.ndarray) -> np.ndarray:
+        x = I4 - self.lam0**2
+        return x >= 0.0 if self.uncoupled else x >= _EPS
+
+    def evaluate(self, F: np.ndarray, order: int = 2) -> MaterialResponse:
+        res = super().evaluate(F, order)
+        if self.fibre_mu == 0.0:
+            return res
+        F = np.asarray(F, dtype=float)
+        q, d = F.shape[0], F.shape[-1]
+        a = np.broadcast_to(self.fibres[:, 0, :], (q, 3))
+        ain, a3sq = a[:, :d], (a[:, 2] ** 2 if d == 2 else np.zeros(q))
+        cof = cofactor(F)
+        J = det(F, cof)
+        ok = J > 0.0
+        Js = np.where(ok, J, 1.0)
+        C = np.swapaxes(F, 1, 2) @ F
+        Fa = np.einsum("qij,qj->qi", F, ain)
+        Ca = np.einsum("qij,qj->qi", C, ain)
+        FCa = np.einsum("qij,qj->qi", F, Ca)
+        I4 = np.einsum("qi,qi->q", Fa, Fa) + a3sq
+        I5 = np.einsum("qi,qi->q", Ca, Ca) + a3sq
+        e4, e5 = (2.0 / 3.0, 4.0 / 3.0) if self.uncoupled else (0.0, 0.0)
+        taut = self._taut(I4 * Js**-e4) & ok
+        c = np.where(taut, self.fibre_mu / 4.0, 0.0)
+        G4 = 2.0 * Fa[:, :, None] * ain[:, None, :]
+        G5 = 2.0 * (FCa[:, :, None] * ain[:, None, :] + Fa[:, :, None] * Ca[:, None, :])
+        terms = [(c, e5, I5, G5), (-2.0 * c, e4, I4, G4)]
+        psi = sum(k * Js**-e * inv for k, e, inv, _ in terms) + c
+        psi = res.energy + np.where(ok, psi, 0.0)
+        if order == 0:
+            return MaterialResponse(psi)
+        P = res.stress + sum(
+            _scaled(k, e, inv, G, None, Js, cof, F, 1)[0] for k, e, inv, G in terms
+        )
+        if order == 1:
+            return MaterialResponse(psi, P)
+        eye = np.eye(d)
+        B = F @ np.swapaxes(F, 1, 2)
+        S = ain[:, :, None] * Ca[:, None, :] + Ca[:, :, None] * ain[:, None, :]
+        H5 = 2.0 * (
+            eye[None, :, None, :, None] * S[:, None, :, None, :]
+            + Fa[:, :, None, None, None] * Fa[:, None, None, :, None] * eye[None, None, :, None, :]
+            + Fa[:, :, None, None, None]
+            * np.swapaxes(F, 1, 2)[:, None, :, :, None]
+            * ain[:, None, None, None, :]
+            + F[:, :, None, None, :] * Fa[:, None, None, :, None] * ain[:, None, :, None, None]
+            + B[:, :, None, :, None] * ain[:, None, :, None, None] * ain[:, None, None, None, :]
+        )
+        H4 = (
+            2.0
+            * eye[None, :, None, :, None]
+            * (ain[:, :, None] * ain[:, None, :])[:, None, :, None, :]
+        )
+        A = res.tangent
+        for (k, e, inv, G), H in zip(terms, (H5, H4), strict=True):
+            A = A + _scaled(k, e, inv, G, H, Js, cof, F, 2)[1]
+        return MaterialResponse(psi, P, A)
+
+
+def _scaled(
+    k: np.ndarray,
+    e: float,
+    inv: np.ndarray,
+    G: np.ndarray,
+    H: np.ndarray | None,
+    J: np.ndarray,
+    cof: np.ndarray,
+    F: np.ndarray,
+    order: int,
+) -> tuple:
+    """P and (order 2) dP/dF of k J^(-e) I for an invariant I with gradient G, Hessian H."""
+    g, dg, ddg = J**-e, -e * J ** (-e - 1.0), e * (e + 1.0) * J ** (-e - 2.0)
+    P = bcast(k * g, 3) * G + bcast(k * dg * inv, 3) * cof
+    if order == 1:
+        return P, None
+    A = bcast(k * g, 5) * H + bcast(k * dg, 5) * (outer(G, cof) + outer(cof, G))
+    A += bcast(k * ddg * inv, 5) * outer(cof, cof) + bcast(k * dg * inv, 5) * det_hessian(F)
+    return P, A
 
 
 class FiberExpPowUncoupled(FiberExpPow):
