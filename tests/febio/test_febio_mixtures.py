@@ -49,17 +49,21 @@ def test_mixture_of_neo_hookean_and_fibres_pulled_along_the_fibre_by_hand():
 
 
 def test_uncoupled_mixture_pull_is_the_laws_stress():
-    """Mooney-Rivlin + fiber-exp-pow-uncoupled with the mixture's k (hex8: FEBio's three-field
-    element, tissuesim's mean dilatation): a homogeneous state whose lateral stresses are zero
-    and whose pull is P_xx of the law, itself checked against finite differences elsewhere."""
+    """Mooney-Rivlin + fiber-exp-pow-uncoupled + uncoupled fiber-exp-linear, both along x,
+    with the mixture's k (the components' k = 0 and pressure_model ignored, as in
+    FEBio; hex8: FEBio's three-field element, tissuesim's mean dilatation): a homogeneous state
+    whose lateral stresses are zero and whose pull is P_xx of the law, itself checked
+    against finite differences elsewhere."""
     law = make_material(
         "uncoupled_solid_mixture",
         k=1e5,
         components=[
             {"model": "Mooney-Rivlin", "c1": 1000.0, "c2": 200.0},
             {"model": "fiber-exp-pow-uncoupled", "ksi": 5000.0, "alpha": 2.0, "beta": 2.0},
+            {"model": "uncoupled fiber-exp-linear", "c3": 100.0, "c4": 10.0, "c5": 2e4,
+             "lam_max": 1.1},
         ],
-    )
+    )  # fmt: skip
     data, _ = febio_scene(read_feb(MODELS / "uncoupled_mixture_uniaxial.feb"), "x")
     assert data["simulation"]["formulation"] == "mean_dilatation"
     stretch, force = _stretched("uncoupled_mixture_uniaxial")

@@ -11,6 +11,8 @@ import pytest
 
 from tissuesim.errors import MaterialError
 from tissuesim.materials import (
+    FiberExpLinear,
+    FiberExpLinearUncoupled,
     FiberExpPow,
     FiberExpPowUncoupled,
     FiberPowLinear,
@@ -29,6 +31,7 @@ from tissuesim.model import Model
 NH = dict(youngs_modulus=1000.0, poisson_ratio=0.3)
 EXP = dict(ksi=50.0, alpha=2.0, beta=2.5)
 LIN = dict(E=400.0, lam0=1.08, beta=3.0)
+EXPLIN = dict(c3=20.0, c4=8.0, c5=600.0, lam_max=1.06)
 FIBRE = [1.0, 0.4, 0.2]
 
 LAWS = {
@@ -39,6 +42,8 @@ LAWS = {
     "fiber_exp_pow_uncoupled_shear": lambda: FiberExpPowUncoupled(**EXP, mu=30.0, fiber=FIBRE),
     "fiber_pow_linear": lambda: FiberPowLinear(**LIN, fiber=FIBRE),
     "fiber_pow_linear_uncoupled": lambda: FiberPowLinearUncoupled(**LIN, fiber=FIBRE),
+    "fiber_exp_linear": lambda: FiberExpLinear(**EXPLIN, fiber=FIBRE),
+    "fiber_exp_linear_uncoupled": lambda: FiberExpLinearUncoupled(**EXPLIN, fiber=FIBRE),
     "solid_mixture": lambda: SolidMixture(
         [NeoHookean(**NH), FiberExpPow(**EXP, fiber=FIBRE), FiberPowLinear(**LIN, fiber=[0, 1, 0])]
     ),
@@ -174,6 +179,30 @@ def test_fiber_pow_linear_toe_and_linear_range_by_hand():
     assert P[1, 1] == pytest.approx(-2.0 / 3.0 * Wp * l**2.5, rel=1e-12)
 
 
+def test_fiber_exp_linear_by_hand():
+    """FEBio's l dW/dl = c3 (exp(c4 (l - 1)) - 1) up to lam_max, c5 l + c6 past it, so the
+    nominal stress along the fibre, 2 l dW/dI4 = (l dW/dl) / l; with c3 = 0 FEBio's
+    c3 = c5 / c4 exp(-c4 (lam_max - 1)) (a continuous slope). Energy: the integral of it."""
+    from scipy.integrate import quad
+
+    c3, c4, c5, lm = EXPLIN["c3"], EXPLIN["c4"], EXPLIN["c5"], EXPLIN["lam_max"]
+    c6 = c3 * (np.exp(c4 * (lm - 1)) - 1) - c5 * lm
+    law = FiberExpLinear(**EXPLIN)
+    for l in (1.02, 1.05, 1.1, 1.3):
+        s = c3 * (np.exp(c4 * (l - 1)) - 1) if l < lm else c5 * l + c6
+        F = np.diag([l, 1.0, 1.0])[None]
+        assert law.stress(F)[0, 0, 0] == pytest.approx(s / l, rel=1e-12)
+        energy = quad(lambda t: (c3 * np.expm1(c4 * (t - 1)) if t < lm else c5 * t + c6) / t,
+                      1.0, l, points=[lm] if l > lm else None)[0]  # fmt: skip
+        assert law.energy_density(F)[0] == pytest.approx(energy, rel=1e-9)
+    slope = FiberExpLinear(c4=c4, c5=c5, lam_max=lm)
+    h = 1e-6
+    l = lm + h * np.array([-2.0, -1.0, 1.0, 2.0])
+    s = slope.stress(np.stack([np.diag([x, 1.0, 1.0]) for x in l]))[:, 0, 0] * l  # l dW/dl
+    below, above = (s[1] - s[0]) / h, (s[3] - s[2]) / h
+    assert below == pytest.approx(c5, rel=1e-4) and above == pytest.approx(c5, rel=1e-9)
+
+
 def test_fiber_exp_pow_uncoupled_at_constant_volume_by_hand():
     """J = 1, F = diag(l, l^-1/2, l^-1/2): P = W' (2 F a (x) a - 2/3 I4 F^-T), so
     P11 = 4/3 l W' and P22 = -2/3 l^(5/2) W' with W' at x = l^2 - 1."""
@@ -293,6 +322,8 @@ def test_registry_tables_and_names():
         ("fiber_pow_linear", {**LIN, "lam0": 1.0}, "lam0 .* must be > 1"),
         ("fiber_pow_linear", {**LIN, "tension_only": 0}, "tension_only"),
         ("fiber_pow_linear", {"lam0": 1.1}, "needs E"),
+        ("fiber_exp_linear", {**EXPLIN, "c4": 0.0}, "c4 must be > 0"),
+        ("fiber_exp_linear", {**EXPLIN, "lam_max": 0.9}, "lam_max >= 1"),
         (
             "solid_mixture",
             {"components": [{"model": "neo_hookean", **NH}, {"model": "fiber_pow_linear"}]},

@@ -11,9 +11,10 @@ puts its fibres in the plane of e1 and e2; trans iso Mooney-Rivlin's ``fiber`` (
 1,0,0) is given in the local axes, so its global direction is Q fiber. Element data replace
 the material's axes (``mat_axis``) or its fibre (``fiber``, a global direction) on the
 elements they list. A mixture's component takes its axes as FEBio does, Q = Q_mixture Q_own
-(``GetLocalCS``), and FEBio's fibre laws (``fiber-exp-pow``, ``fiber-pow-linear``) their
-``fiber`` in those axes (``type="vector"`` or ``"angles"``: theta, phi in degrees,
-(cos theta sin phi, sin theta sin phi, cos phi)); they are read as mixture components only."""
+(``GetLocalCS``), and FEBio's fibre laws (``fiber-exp-pow``, ``fiber-pow-linear``,
+``fiber-exp-linear``) their ``fiber`` in those axes (``type="vector"`` or ``"angles"``: theta,
+phi in degrees, (cos theta sin phi, sin theta sin phi, cos phi)); they are read as mixture
+components only."""
 
 from __future__ import annotations
 
@@ -58,10 +59,15 @@ MATERIAL_TYPES = {
             "fiber-pow-linear-uncoupled",
         )
     },
+    **{
+        name: (name, {"c3": "c3", "c4": "c4", "c5": "c5", "lambda": "lam_max"})
+        for name in ("fiber-exp-linear", "uncoupled fiber-exp-linear")
+    },
 }
 #: FEBio's fibre laws, read as components of a solid mixture only (they have no matrix)
 FIBRES_ONLY = {
     "fiber-exp-pow", "fiber-exp-pow-uncoupled", "fiber-pow-linear", "fiber-pow-linear-uncoupled",
+    "fiber-exp-linear", "uncoupled fiber-exp-linear",
 }  # fmt: skip
 #: FEBio's solid mixtures -> tissuesim's model
 MIXTURES = {"solid mixture": "solid_mixture", "uncoupled solid mixture": "uncoupled_solid_mixture"}
@@ -77,6 +83,7 @@ UNCOUPLED = {
     "Mooney-Rivlin", "Ogden", "Yeoh", "Veronda-Westmann", "Arruda-Boyce",
     "Holzapfel-Gasser-Ogden", "trans iso Mooney-Rivlin", "uncoupled viscoelastic",
     "uncoupled solid mixture", "fiber-exp-pow-uncoupled", "fiber-pow-linear-uncoupled",
+    "uncoupled fiber-exp-linear",
 }  # fmt: skip
 VISCOELASTIC = {"viscoelastic": "viscoelastic", "uncoupled viscoelastic": "uncoupled_viscoelastic"}
 
@@ -113,9 +120,13 @@ def read_materials(model: FebModel, node: Node) -> None:
             model.materials.setdefault(f"#{mat.attrib['id']}", spec)
 
 
-def _law(model: FebModel, mat: Node, top: bool, component: bool = False) -> tuple:
+def _law(
+    model: FebModel, mat: Node, top: bool, component: bool = False, bulk: bool = True
+) -> tuple:
     """(model name, parameters, density, FEBio type, Orientation or None); ``component``: a
-    solid mixture's ``<solid>`` (not built alone: an uncoupled mixture's component has no k)."""
+    solid mixture's ``<solid>`` (not built alone: an uncoupled mixture's component has no k);
+    ``bulk`` False: its ``<k>`` and ``<pressure_model>`` left out (an uncoupled mixture's
+    component, whose bulk term FEBio ignores)."""
     from tissuesim.errors import TissueSimError
     from tissuesim.materials import make_material
 
@@ -154,6 +165,8 @@ def _law(model: FebModel, mat: Node, top: bool, component: bool = False) -> tupl
         if p.tag == "density":
             density = _density(p)
             continue
+        if p.tag in ("k", "pressure_model") and not bulk:
+            continue
         if p.tag == "pressure_model":
             params[p.tag] = int(p.text) if p.text.isdigit() else p.text
             continue
@@ -181,7 +194,8 @@ def _mixture(model: FebModel, mat: Node, kind: str) -> tuple:
     seen: dict[str, Node] = {}
     for p in mat.children:
         if p.tag == "solid":
-            name, comp, _, _, orientation = _law(model, p, top=False, component=True)
+            bulk = kind != "uncoupled solid mixture"
+            name, comp, _, _, orientation = _law(model, p, top=False, component=True, bulk=bulk)
             components.append({"model": name, **comp})
             parts.append(orientation)
             continue

@@ -12,6 +12,7 @@ dilatation in ``volumetric.py`` and the PSD projection in ``psd.py``.
 
 from tissuesim.materials.base import Material, MaterialResponse
 from tissuesim.materials.energy_law.energy import EnergyLaw, from_energy
+from tissuesim.materials.fibres.fibre_exp_linear import FiberExpLinear, FiberExpLinearUncoupled
 from tissuesim.materials.fibres.fibre_exp_pow import FiberExpPow, FiberExpPowUncoupled
 from tissuesim.materials.fibres.fibre_pow_linear import FiberPowLinear, FiberPowLinearUncoupled
 from tissuesim.materials.fibres.holzapfel_gasser_ogden import HGOUnconstrained, HolzapfelGasserOgden
@@ -64,6 +65,8 @@ __all__ = [
     "FiberExpPowUncoupled",
     "FiberPowLinear",
     "FiberPowLinearUncoupled",
+    "FiberExpLinear",
+    "FiberExpLinearUncoupled",
     "SolidMixture",
     "UncoupledSolidMixture",
     "Viscoelastic",

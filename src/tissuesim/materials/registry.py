@@ -9,8 +9,8 @@ accepted as aliases (``ALIASES``). ``viscoelastic`` and ``uncoupled_viscoelastic
 law given as ``elastic`` (a material or a table with its ``model``), ``VISCOELASTIC_LAWS``.
 ``energy`` is a law from its strain-energy density ``psi`` (``EnergyLaw``), its other keys the
 parameters psi names. ``solid_mixture`` and ``uncoupled_solid_mixture`` sum the laws given as
-``components`` (``MIXTURES``); FEBio's fibre laws ``fiber_exp_pow``, ``fiber_pow_linear`` (and
-their ``_uncoupled`` forms) are meant as their components.
+``components`` (``MIXTURES``); FEBio's fibre laws ``fiber_exp_pow``, ``fiber_pow_linear``,
+``fiber_exp_linear`` (and their ``_uncoupled`` forms) are meant as their components.
 """
 
 from __future__ import annotations
@@ -21,6 +21,7 @@ import inspect
 from tissuesim.errors import MaterialError
 from tissuesim.materials.base import Material
 from tissuesim.materials.energy_law.energy import EnergyLaw
+from tissuesim.materials.fibres.fibre_exp_linear import FiberExpLinear, FiberExpLinearUncoupled
 from tissuesim.materials.fibres.fibre_exp_pow import FiberExpPow, FiberExpPowUncoupled
 from tissuesim.materials.fibres.fibre_pow_linear import FiberPowLinear, FiberPowLinearUncoupled
 from tissuesim.materials.fibres.holzapfel_gasser_ogden import HGOUnconstrained, HolzapfelGasserOgden
@@ -72,6 +73,8 @@ FIBRE_LAWS: tuple[type[Material], ...] = (
     FiberExpPowUncoupled,
     FiberPowLinear,
     FiberPowLinearUncoupled,
+    FiberExpLinear,
+    FiberExpLinearUncoupled,
 )
 
 MATERIALS: dict[str, type[Material]] = {
@@ -99,6 +102,9 @@ ALIASES: dict[str, str] = {
     "fibre_exp_pow_uncoupled": "fiber_exp_pow_uncoupled",
     "fibre_pow_linear": "fiber_pow_linear",
     "fibre_pow_linear_uncoupled": "fiber_pow_linear_uncoupled",
+    "fibre_exp_linear": "fiber_exp_linear",
+    "fibre_exp_linear_uncoupled": "fiber_exp_linear_uncoupled",
+    "uncoupled_fiber_exp_linear": "fiber_exp_linear_uncoupled",
 }
 
 
@@ -143,7 +149,7 @@ def _viscoelastic(key: str, params: dict) -> Material:
 
 def _mixture(key: str, params: dict) -> Material:
     """A solid mixture: ``components`` materials or tables with their model; a component law of
-    an uncoupled mixture that needs k and has none gets the mixture's (FEBio ignores it)."""
+    an uncoupled mixture that takes k gets the mixture's (FEBio ignores the component's)."""
     components = params.get("components")
     if isinstance(components, (list, tuple)):
         k = params.get("k") if key == "uncoupled_solid_mixture" else None
@@ -157,7 +163,7 @@ def _mixture(key: str, params: dict) -> Material:
                 raise MaterialError(f"{key}: components[{i}] needs its model (e.g. 'neo_hookean')")
             model = table.pop("model")
             cls = law_class(model)
-            if k is not None and cls is not None and "k" not in table:
+            if k is not None and cls is not None:
                 if "k" in inspect.signature(cls.__init__).parameters:
                     table["k"] = k
             try:

@@ -15,8 +15,8 @@ theta is the law's measure of volume change and U its lambda term, the part that
     ogden_unconstrained  theta = J             U = cp/2 (theta - 1)^2
     holzapfel_gasser_ogden, hgo_unconstrained, trans_iso_mooney_rivlin: their bulk term with k
                          (HGO: FEBio's default k/4 (theta^2 - 1 - 2 ln theta))
-    fiber_exp_pow, fiber_pow_linear (and their _uncoupled forms): none (U = 0, a fibre has no
-                         bulk term)
+    fiber_exp_pow, fiber_pow_linear, fiber_exp_linear (and their _uncoupled forms): none
+                         (U = 0, a fibre has no bulk term)
     solid_mixture        the sum of its components' U, which must share theta and U's kind
     uncoupled_solid_mixture  theta = J, its own bulk term with k (pressure_model as above)
 
@@ -57,7 +57,7 @@ VOLUMETRIC_LAWS = {
     "trans_iso_mooney_rivlin": ("J", "log"),
     **{
         name: ("J", "log")
-        for law in ("fiber_exp_pow", "fiber_pow_linear")
+        for law in ("fiber_exp_pow", "fiber_pow_linear", "fiber_exp_linear")
         for name in (law, f"{law}_uncoupled")
     },
     "uncoupled_solid_mixture": ("J", "log"),

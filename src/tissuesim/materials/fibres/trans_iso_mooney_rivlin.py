@@ -2,7 +2,8 @@
 
     W = c1 (I1b - 3) + c2 (I2b - 3) + Wf(lb) + U(J),   lb = sqrt(I4b), I4b = J^(-2/3) a . C a
 
-The fibre (FEBio's ``FEFiberExpLinearUC``) bears tension only; its lb dWf/dlb is
+The fibre (FEBio's ``FEFiberExpLinearUC``, ``fibre_exp_linear.py``) bears tension only; its
+lb dWf/dlb is
 
     0                                 lb < 1
     c3 (exp(c4 (lb - 1)) - 1)         1 <= lb < lam_max
@@ -22,10 +23,9 @@ J <= 0: energy +inf, stress and tangent raise InvertedElementError.
 from __future__ import annotations
 
 import numpy as np
-from scipy.special import expi
 
-from tissuesim.errors import MaterialError
 from tissuesim.materials.fibres._fibres import FibreLaw, planar_keys, unit_vectors
+from tissuesim.materials.fibres.fibre_exp_linear import ExpLinearFibre
 from tissuesim.materials.soft_tissue._hyperelastic import (
     BULK_KINDS,
     PRESSURE_MODELS,
@@ -62,23 +62,14 @@ class TransIsoMooneyRivlin(FibreLaw):
     ) -> None:
         law = self.name
         self.c1, self.c2 = parameter(law, "c1", c1), parameter(law, "c2", c2)
-        self.c3, self.c4 = parameter(law, "c3", c3), parameter(law, "c4", c4, unit="")
-        self.c5 = parameter(law, "c5", c5)
-        self.lam_max = parameter(law, "lam_max", lam_max, unit="")
-        if min(self.c3, self.c4, self.c5) < 0.0 or self.lam_max < 1.0:
-            raise MaterialError(f"{law}: c3, c4, c5 must be >= 0 and lam_max >= 1")
-        if self.c4 == 0.0 and (self.c3 > 0.0 or self.c5 > 0.0):
-            raise MaterialError(f"{law}: c4 must be > 0 for a fibre with c3 or c5 > 0")
+        self._fibre = ExpLinearFibre(law, c3, c4, c5, lam_max)
+        self.c3, self.c4, self.c5 = self._fibre.c3, self._fibre.c4, self._fibre.c5
+        self.lam_max = self._fibre.lam_max
         self.k = parameter(law, "k", k, positive=True, meaning="bulk modulus")
         self.fiber = unit_vectors(law, "fiber", fiber)
         self.planar = planar_keys(fiber=fiber)
         self.fibres = self.fiber.reshape(-1, 1, 3)
         self.bulk_kind = _pressure_model(law, pressure_model)
-        self._c3 = self.c3
-        if self.c3 == 0.0 and self.c5 > 0.0:
-            self._c3 = self.c5 / self.c4 * np.exp(-self.c4 * (self.lam_max - 1.0))
-        self._c6 = self._c3 * np.expm1(self.c4 * (self.lam_max - 1.0)) - self.c5 * self.lam_max
-        self._wmax = self._fibre_energy_below(np.array([self.lam_max]))[0]
         self.mu = 2.0 * (self.c1 + self.c2)
         self.lam = self.k - 2.0 * self.mu / 3.0
         self._check_moduli()
@@ -92,33 +83,12 @@ class TransIsoMooneyRivlin(FibreLaw):
     def bulk(self, J: np.ndarray, lnJ: np.ndarray) -> tuple:
         return bulk_energy(self.bulk_kind, self.k, J, lnJ)
 
-    def _fibre_energy_below(self, lb: np.ndarray) -> np.ndarray:
-        """Wf for 1 <= lb <= lam_max."""
-        c3, c4 = self._c3, self.c4
-        if c3 == 0.0:
-            return np.zeros_like(lb)
-        return c3 * np.exp(-c4) * (expi(c4 * lb) - expi(c4)) - c3 * np.log(lb)
-
     def w(self, inv: np.ndarray, order: int) -> tuple:
         I1, I2, I4 = inv[:, 0], inv[:, 1], inv[:, 2]
-        lb = np.sqrt(I4)
-        on, past = lb >= 1.0, lb >= self.lam_max
-        lbo = np.where(on, lb, 1.0)
-        c3, c4, c5, c6, lm = self._c3, self.c4, self.c5, self._c6, self.lam_max
-        below = np.minimum(lbo, lm)
-        Wf = np.where(
-            past,
-            c5 * (lbo - lm) + c6 * np.log(lbo / lm) + self._wmax,
-            self._fibre_energy_below(below),
-        )
-        Wf = np.where(on, Wf, 0.0)
-        ex = np.exp(c4 * (below - 1.0))
-        s = np.where(past, c5 * lbo + c6, c3 * (ex - 1.0))  # lb dWf/dlb
-        ds = np.where(past, c5, c3 * c4 * ex)  # its derivative in lb
-        s, ds = np.where(on, s, 0.0), np.where(on, ds, 0.0)
+        Wf, dWf, ddWf = self._fibre(I4, order)
         w = self.c1 * (I1 - 3.0) + self.c2 * (I2 - 3.0) + Wf
-        g = np.stack([np.full_like(I1, self.c1), np.full_like(I1, self.c2), s / (2.0 * I4)], 1)
+        g = np.stack([np.full_like(I1, self.c1), np.full_like(I1, self.c2), dWf], 1)
         h = np.zeros((inv.shape[0], 3, 3))
         if order >= 2:
-            h[:, 2, 2] = (lbo * ds - 2.0 * s) / (4.0 * I4**2)
+            h[:, 2, 2] = ddWf
         return w, g, h
