@@ -334,3 +334,43 @@ def test_registry_tables_and_names():
 def test_parameter_errors(model, params, message):
     with pytest.raises(MaterialError, match=message):
         make_material(model, **params)
+
+
+@pytest.mark.parametrize("name", ["solid_mixture", "uncoupled_solid_mixture"])
+def test_mean_dilatation_of_a_mixture_under_homogeneous_stretch(name):
+    """The mixture's volumetric part (the components' summed, or the uncoupled mixture's own
+    bulk term) averaged over patches: a homogeneous stretch has the same energy and gradient
+    as in the displacement form."""
+    mesh = box(divisions=(2, 2, 1))
+    x = (mesh.points * [1.12, 0.96, 0.97]).ravel()
+    law = LAWS[name]()
+    out = [
+        Model(mesh, law, np.ones(mesh.n_cells), backend="numpy", formulation=f).evaluate(
+            x, 1, False
+        )
+        for f in ("displacement", "mean_dilatation")
+    ]
+    assert out[1].value == pytest.approx(out[0].value, rel=1e-12)
+    np.testing.assert_allclose(
+        out[1].gradient, out[0].gradient, atol=1e-9 * abs(out[0].gradient).max()
+    )
+
+
+def test_an_uncoupled_mixture_in_uncoupled_viscoelastic():
+    """FEBio's uncoupled viscoelastic wraps an uncoupled mixture: its bulk term stays elastic."""
+    law = make_material(
+        "uncoupled_viscoelastic",
+        elastic={
+            "model": "uncoupled_solid_mixture",
+            "k": 1e4,
+            "components": [
+                {"model": "mooney_rivlin", "c1": 100.0},
+                {"model": "fiber_exp_pow_uncoupled", **EXP},
+            ],
+        },
+        g=[0.5],
+        tau=[1.0],
+    )
+    bound = law.bind(4, 3)
+    res = bound.evaluate(np.eye(3)[None].repeat(4, axis=0))
+    np.testing.assert_allclose(res.stress, 0.0, atol=1e-10)
