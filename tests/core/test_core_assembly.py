@@ -28,6 +28,14 @@ SOFT_TISSUE_PARAMETERS = {
     "holzapfel_gasser_ogden": dict(c=150.0, k1=200.0, k2=2.0, kappa=0.1, gamma=30.0, k=3000.0),
     "hgo_unconstrained": dict(c=150.0, k1=200.0, k2=2.0, kappa=0.1, gamma=30.0, k=3000.0),
     "trans_iso_mooney_rivlin": dict(c1=150.0, c3=10.0, c4=5.0, c5=300.0, lam_max=1.1, k=3e3),
+    # FEBio's fibre laws alone (a mixture's components): beta = 3 keeps the Hessian continuous
+    # where the fibre goes slack
+    "fiber_exp_pow": dict(ksi=500.0, alpha=2.0, beta=3.0, mu=50.0),
+    "fiber_exp_pow_uncoupled": dict(ksi=500.0, alpha=2.0, beta=3.0, mu=50.0),
+    "fiber_pow_linear": dict(E=1000.0, lam0=1.1, beta=3.0),
+    "fiber_pow_linear_uncoupled": dict(E=1000.0, lam0=1.1, beta=3.0),
+    "fiber_exp_linear": dict(c3=10.0, c4=5.0, c5=300.0, lam_max=1.1),
+    "fiber_exp_linear_uncoupled": dict(c3=10.0, c4=5.0, c5=300.0, lam_max=1.1),
 }
 
 

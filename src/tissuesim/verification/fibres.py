@@ -27,6 +27,14 @@ With W(I1, I2, I4_f) and a fibre a_f (unit, reference), P = 2 W1 F + 2 W2 (I1 F 
 * trans-iso Mooney-Rivlin: W1 = c1, W2 = c2, W4 = s(lb) / (2 lb^2), lb = sqrt(I4), with lb dWf/dlb
   = s(lb) = 0 (lb < 1), c3 (exp(c4 (lb - 1)) - 1) (1 <= lb < lam_max), c5 lb + c6 past lam_max,
   c6 = c3 (exp(c4 (lam_max - 1)) - 1) - c5 lam_max.
+* FEBio's fibre laws alone (a solid mixture's components; J = 1, so the uncoupled forms' I4b is
+  I4), W1 = W2 = 0 and, for a taut fibre (0 when slack):
+  fiber-exp-pow, W = ksi / (alpha beta) (exp(alpha x^beta) - 1), x = I4 - lam0^2 (uncoupled:
+  I4 - 1): W4 = ksi x^(beta - 1) exp(alpha x^beta) (its shear term mu is 0 here);
+  fiber-pow-linear, I0 = lam0^2, ksi = E / (4 (beta - 1)) I0^-3/2 (I0 - 1)^(2 - beta):
+  W4 = ksi (I4 - 1)^(beta - 1) for 1 <= I4 < I0, else b - E / (2 sqrt(I4)) with
+  b = ksi (I0 - 1)^(beta - 1) + E / (2 lam0);
+  fiber-exp-linear: trans-iso Mooney-Rivlin's fibre, W4 = s(lb) / (2 lb^2).
 """
 
 from __future__ import annotations
@@ -64,6 +72,42 @@ def _timr(fibres, i1, i4s):
     lb = math.sqrt(i4s[0])
     s = 0.0 if lb < 1.0 else c3 * (math.exp(c4 * (lb - 1.0)) - 1.0) if lb < lm else c5 * lb + c6
     return _TIMR["c1"], _TIMR["c2"], [s / (2.0 * lb * lb)]
+
+
+_EXP_POW = {"ksi": 500.0, "alpha": 2.0, "beta": 2.5}
+_POW_LINEAR = {"E": 1000.0, "lam0": 1.2, "beta": 3.0}
+_EXP_LINEAR = {k: _TIMR[k] for k in ("c3", "c4", "c5", "lam_max")}
+
+
+def _exp_pow(lam0: float):
+    """(W1, W2, [W4]) of fiber-exp-pow with x = I4 - lam0^2 (closed form above)."""
+
+    def derivatives(fibres, i1, i4s):
+        ksi, alpha, beta = _EXP_POW["ksi"], _EXP_POW["alpha"], _EXP_POW["beta"]
+        x = i4s[0] - lam0 * lam0
+        w4 = ksi * x ** (beta - 1.0) * math.exp(alpha * x**beta) if x > 0.0 else 0.0
+        return 0.0, 0.0, [w4]
+
+    return derivatives
+
+
+def _pow_linear(fibres, i1, i4s):
+    """(W1, W2, [W4]) of fiber-pow-linear (closed form above)."""
+    E, lam0, beta = _POW_LINEAR["E"], _POW_LINEAR["lam0"], _POW_LINEAR["beta"]
+    i0, i4 = lam0 * lam0, i4s[0]
+    ksi = E / (4.0 * (beta - 1.0)) * i0**-1.5 * (i0 - 1.0) ** (2.0 - beta)
+    if i4 < 1.0:
+        return 0.0, 0.0, [0.0]
+    if i4 < i0:
+        return 0.0, 0.0, [ksi * (i4 - 1.0) ** (beta - 1.0)]
+    b = ksi * (i0 - 1.0) ** (beta - 1.0) + E / (2.0 * lam0)
+    return 0.0, 0.0, [b - E / (2.0 * math.sqrt(i4))]
+
+
+def _exp_linear(fibres, i1, i4s):
+    """(W1, W2, [W4]) of fiber-exp-linear: trans-iso Mooney-Rivlin's fibre alone."""
+    _, _, w4 = _timr(fibres, i1, i4s)
+    return 0.0, 0.0, w4
 
 
 def _families(gamma: float, across: bool) -> list[tuple[float, float, float]]:
@@ -140,6 +184,25 @@ def _cases() -> list[tuple[str, str, str, dict, object, list]]:
         ("trans_iso_mooney_rivlin", f"shear, fibre (1, 1, 0) (g = {G}, exponential part)",
          "shear", {**timr, "fiber": (1.0, 1.0, 0.0)}, _timr, [(_SQ, _SQ, 0.0)]),
     ]  # fmt: skip
+    single = (
+        ("fiber_exp_pow", {**_EXP_POW, "lam0": 1.05}, _exp_pow(1.05)),
+        ("fiber_exp_pow_uncoupled", _EXP_POW, _exp_pow(1.0)),
+        ("fiber_pow_linear", _POW_LINEAR, _pow_linear),
+        ("fiber_pow_linear_uncoupled", _POW_LINEAR, _pow_linear),
+        ("fiber_exp_linear", _EXP_LINEAR, _exp_linear),
+        ("fiber_exp_linear_uncoupled", _EXP_LINEAR, _exp_linear),
+    )
+    for name, params, derivatives in single:
+        out += [
+            (name, f"uniaxial along the fibre (l = {L})", "uniaxial",
+             {**params, "fiber": (1.0, 0.0, 0.0)}, derivatives, [(1.0, 0.0, 0.0)]),
+            (name, f"uniaxial across, fibre slack (l = {L})", "uniaxial",
+             {**params, "fiber": (0.0, 1.0, 0.0)}, derivatives, [(0.0, 1.0, 0.0)]),
+            (name, f"equibiaxial, fibre (1, 0, 1) (l = {L})", "equibiaxial",
+             {**params, "fiber": (1.0, 0.0, 1.0)}, derivatives, [(_SQ, 0.0, _SQ)]),
+            (name, f"shear, fibre (1, 1, 0) (g = {G})", "shear",
+             {**params, "fiber": (1.0, 1.0, 0.0)}, derivatives, [(_SQ, _SQ, 0.0)]),
+        ]  # fmt: skip
     return out
 
 
