@@ -61,6 +61,8 @@ class FebModel:
     #: "mat_axis" / "fiber" -> {(part, row): (value, XML element)} from <MeshData>
     element_data: dict = field(default_factory=dict)
     notes: list = field(default_factory=list)  # "file:line <tag>: what is not used"
+    #: "file:line <tag>: what the converter changed" (contact surfaces set apart)
+    changes: list = field(default_factory=list)
     steps: int = 1
     #: a DYNAMIC analysis' Newmark (beta, gamma); the <solver> values read and their elements
     newmark: tuple[float, float] | None = None

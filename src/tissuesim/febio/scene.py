@@ -6,10 +6,12 @@ the same objects (``run`` converts into a temporary directory and loads that sce
 from __future__ import annotations
 
 import os
+import warnings
 from pathlib import Path
 
 import numpy as np
 
+from tissuesim.febio.contact_start import separate_touching
 from tissuesim.febio.curves import curve_expression
 from tissuesim.febio.materials import body_directions, with_directions
 from tissuesim.febio.model import FebModel, Load
@@ -94,10 +96,12 @@ def _material_of(model: FebModel, part: str) -> str:
 
 def febio_scene(model: FebModel, stem: str) -> tuple[dict, dict]:
     """(the scene's tables, {mesh file name: Mesh}) for a FEBio model; mesh files are named
-    after ``stem`` (one per body)."""
+    after ``stem`` (one per body). A contact pair that starts touching is set apart first
+    (``contact_start.py``: ``model.nodes`` moved, a line in ``model.changes``)."""
     from tissuesim.mesh.checks import validate_mesh
 
     bodies = _bodies(model)
+    dhat = separate_touching(model, bodies)  # contact that starts touching: moved apart
     tables_per_body, meshes, gravity = [], {}, np.zeros(3)
     for body in bodies:
         name = body["parts"][0] if len(bodies) > 1 else "body"
@@ -206,6 +210,7 @@ def febio_scene(model: FebModel, stem: str) -> tuple[dict, dict]:
                 force = [_times(density_load, model, i) for i in range(3)]
                 tables.setdefault("body_force", []).append({"force_density": force})
         tables_per_body.append((name, tables))
+    _unique_support_names(tables_per_body)
     sim = {
         "integrator": INTEGRATORS[model.analysis],
         "time_step": model.step_size,
@@ -249,6 +254,8 @@ def febio_scene(model: FebModel, stem: str) -> tuple[dict, dict]:
     if gravity.any():
         data["gravity"] = {"acceleration": (gravity * len(bodies)).tolist()}
     data.update(_contact(model, [n for n, _ in tables_per_body], bodies, meshes))
+    if dhat is not None:
+        data["contact"] = {"dhat": dhat, **data["contact"]}
     data["run"] = {
         "steps": sum(
             run_steps(p["time_steps"], p["step_size"], table)
@@ -256,6 +263,24 @@ def febio_scene(model: FebModel, stem: str) -> tuple[dict, dict]:
         )
     }
     return data, meshes
+
+
+def _unique_support_names(tables_per_body: list[tuple[str, dict]]) -> None:
+    """A support's name once in the scene (the loader refuses a name given twice): FEBio lets
+    two <bc> share a name, and a <bc> on nodes of two bodies is written once per body. The
+    first keeps its name, a later one gets its body's name (then a number) as a suffix."""
+    used: set[str] = set()
+    for body, tables in tables_per_body:
+        for entry in tables.get("dirichlet", []):
+            name = entry.get("name")
+            if name is None:
+                continue
+            unique, k = name, 1
+            while unique in used:
+                unique = f"{name}.{body}" if k == 1 else f"{name}.{body}.{k}"
+                k += 1
+            entry["name"] = unique
+            used.add(unique)
 
 
 def _node_set_name(model: FebModel, name: str) -> str:
@@ -402,6 +427,7 @@ def convert_febio(
         raise OutputError(f"{existing[0]}: exists; give --force to overwrite it")
     header = [f"converted by tissuesim from the FEBio model {Path(path).name}"]
     header += [f"not used: {n}" for n in model.notes]
+    header += [f"changed: {n}" for n in model.changes]
     text = dumps(data, header)
     try:
         with atomic_outputs(targets) as tmps:
@@ -413,4 +439,6 @@ def convert_febio(
             f"{scene}: cannot write the scene and its mesh ({exc.strerror or exc}); nothing "
             "was written"
         ) from None
+    for line in model.changes:  # one warning line each (run prints them too: load_febio)
+        warnings.warn(f"changed: {line}", UserWarning, stacklevel=2)
     return targets
