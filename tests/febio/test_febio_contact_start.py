@@ -16,6 +16,7 @@ import pytest
 from scipy.optimize import brentq
 
 from tissuesim.cli import main
+from tissuesim.febio import convert_febio
 from tissuesim.febio.contact_start import DHAT
 from tissuesim.materials import NeoHookean
 from tissuesim.mesh import read_mesh
@@ -134,3 +135,21 @@ def test_support_names_are_unique_in_the_converted_scene(names, tmp_path):
     sim.step()
     sim.step()
     assert sim.history[-1].converged
+
+
+def test_the_secondary_surface_moves_into_its_own_body(tmp_path):
+    """With the pair's roles swapped, 'upper''s bottom face is the one moved: up, into
+    'upper'; 'lower' stays as written."""
+    text = MODEL.read_text()
+    old = "<primary>upper_bottom</primary>\n      <secondary>lower_top</secondary>"
+    assert old in text
+    feb = tmp_path / "swapped.feb"
+    feb.write_text(text.replace(old, old.replace("upper_bottom", "@").replace("lower_top",
+                   "upper_bottom").replace("@", "lower_top")))  # fmt: skip
+    with pytest.warns(UserWarning, match="the secondary 'upper_bottom' \\(9 nodes\\) is moved"):
+        convert_febio(feb, tmp_path / "scene.toml")
+    lower = read_mesh(tmp_path / "scene.lower.msh").points
+    upper = read_mesh(tmp_path / "scene.upper.msh").points
+    assert set(np.round(lower[:, 2], 12)) == {0.0, 0.5}
+    bottom = np.isclose(upper[:, 2], 0.5 + DHAT_HERE, rtol=0, atol=1e-15)
+    assert bottom.sum() == 9 and set(np.round(upper[~bottom, 2], 12)) == {1.0}
