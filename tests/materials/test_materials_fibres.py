@@ -9,6 +9,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from stress_differences import central_difference, random_deformations, relative_difference
 
 from tissuesim.errors import MaterialError
 from tissuesim.materials import make_material
@@ -29,33 +30,14 @@ LAWS = {
 }
 
 
-def _random_F(rng, q, d, spread, jmin=0.4):
-    F = np.eye(d) + spread * rng.standard_normal((4 * q, d, d))
-    return F[np.linalg.det(F) > jmin][:q]
-
-
-def _central_diff(fun, F, h):
-    q, d = F.shape[:2]
-    basis = np.eye(d * d).reshape(d * d, d, d) * h
-    Fp = (F[:, None] + basis[None]).reshape(-1, d, d)
-    Fm = (F[:, None] - basis[None]).reshape(-1, d, d)
-    diff = (fun(Fp) - fun(Fm)) / (2 * h)
-    diff = diff.reshape((q, d, d) + diff.shape[1:])
-    return np.moveaxis(diff, (1, 2), (-2, -1))
-
-
-def _rel(a, b):
-    return np.max(np.abs(a - b)) / np.max(np.abs(b))
-
-
 @pytest.mark.parametrize("name", sorted(LAWS))
 @pytest.mark.parametrize("d", [2, 3])
 def test_stress_and_tangent_match_finite_differences(name, d):
     law = LAWS[name]()
-    F = _random_F(np.random.default_rng(d), 8, d, 0.25)
+    F = random_deformations(np.random.default_rng(d), 8, d, 0.25)
     res = law.evaluate(F)
-    assert _rel(res.stress, _central_diff(law.energy_density, F, 1e-6)) < 1e-7
-    assert _rel(res.tangent, _central_diff(law.stress, F, 1e-6)) < 1e-7
+    assert relative_difference(res.stress, central_difference(law.energy_density, F, 1e-6)) < 1e-7
+    assert relative_difference(res.tangent, central_difference(law.stress, F, 1e-6)) < 1e-7
     At = np.transpose(res.tangent, (0, 3, 4, 1, 2))
     np.testing.assert_allclose(res.tangent, At, atol=1e-12 * np.abs(At).max())
 
@@ -66,7 +48,7 @@ def test_rest_state_objectivity_and_anisotropy(name):
     res = law.evaluate(np.eye(3)[None])
     assert abs(res.energy[0]) < 1e-12 * law.mu and np.abs(res.stress).max() < 1e-12 * law.mu
     rng = np.random.default_rng(4)
-    F = _random_F(rng, 6, 3, 0.3)
+    F = random_deformations(rng, 6, 3, 0.3)
     Q, _ = np.linalg.qr(rng.standard_normal((6, 3, 3)))
     Q[np.linalg.det(Q) < 0, :, 0] *= -1
     psi = law.energy_density(F)
@@ -77,7 +59,7 @@ def test_rest_state_objectivity_and_anisotropy(name):
 
 
 def test_without_fibres_they_are_mooney_rivlin():
-    F = _random_F(np.random.default_rng(9), 6, 3, 0.3)
+    F = random_deformations(np.random.default_rng(9), 6, 3, 0.3)
     hgo = HolzapfelGasserOgden(c=100.0, k1=0.0, k2=2.0, k=5000.0)
     mr = make_material("mooney_rivlin", c1=50.0, k=5000.0, pressure_model="Abaqus (GOH)")
     np.testing.assert_allclose(hgo.stress_derivative(F), mr.stress_derivative(F), rtol=1e-11)
@@ -229,7 +211,7 @@ def test_mean_dilatation_with_fibres_matches_finite_differences(name):
 def test_the_volumetric_part_is_the_k_term(name):
     from tissuesim.materials.volumetric import volumetric_part
 
-    F = _random_F(np.random.default_rng(6), 8, 3, 0.3)
+    F = random_deformations(np.random.default_rng(6), 8, 3, 0.3)
     a, b = LAWS[name](), LAWS[name]()
     b.k = 2 * a.k  # the same law with another bulk modulus
     theta = volumetric_part(a).theta(F, 0)[0]

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from stress_differences import central_difference, random_deformations, relative_difference
 
 from tissuesim.errors import MaterialError
 from tissuesim.materials import (
@@ -59,33 +60,14 @@ LAWS = {
 }
 
 
-def _random_F(rng, q, d, spread, jmin=0.4):
-    F = np.eye(d) + spread * rng.standard_normal((4 * q, d, d))
-    return F[np.linalg.det(F) > jmin][:q]
-
-
-def _central_diff(fun, F, h):
-    q, d = F.shape[:2]
-    basis = np.eye(d * d).reshape(d * d, d, d) * h
-    Fp = (F[:, None] + basis[None]).reshape(-1, d, d)
-    Fm = (F[:, None] - basis[None]).reshape(-1, d, d)
-    diff = (fun(Fp) - fun(Fm)) / (2 * h)
-    diff = diff.reshape((q, d, d) + diff.shape[1:])
-    return np.moveaxis(diff, (1, 2), (-2, -1))
-
-
-def _rel(a, b):
-    return np.max(np.abs(a - b)) / np.max(np.abs(b))
-
-
 @pytest.mark.parametrize("name", sorted(LAWS))
 @pytest.mark.parametrize("d", [2, 3])
 def test_stress_and_tangent_match_finite_differences(name, d):
     law = LAWS[name]()
-    F = _random_F(np.random.default_rng(d + 7), 12, d, 0.2)
+    F = random_deformations(np.random.default_rng(d + 7), 12, d, 0.2)
     res = law.evaluate(F)
-    assert _rel(res.stress, _central_diff(law.energy_density, F, 1e-6)) < 1e-6
-    assert _rel(res.tangent, _central_diff(law.stress, F, 1e-6)) < 1e-6
+    assert relative_difference(res.stress, central_difference(law.energy_density, F, 1e-6)) < 1e-6
+    assert relative_difference(res.tangent, central_difference(law.stress, F, 1e-6)) < 1e-6
     At = np.transpose(res.tangent, (0, 3, 4, 1, 2))
     np.testing.assert_allclose(res.tangent, At, atol=1e-12 * np.abs(At).max())
 
@@ -117,7 +99,7 @@ def test_a_fibre_bears_nothing_in_compression(name):
 def test_a_mixture_is_the_sum_of_its_parts():
     parts = [NeoHookean(**NH), FiberExpPow(**EXP, fiber=FIBRE), FiberPowLinear(**LIN)]
     mix = SolidMixture(parts)
-    F = _random_F(np.random.default_rng(1), 10, 3, 0.2)
+    F = random_deformations(np.random.default_rng(1), 10, 3, 0.2)
     res, each = mix.evaluate(F), [p.evaluate(F) for p in parts]
     for key in ("energy", "stress", "tangent"):
         total = sum(getattr(r, key) for r in each)
@@ -131,7 +113,7 @@ def test_an_uncoupled_mixture_sums_deviatoric_parts_and_its_own_bulk_term():
     fibre = FiberExpPowUncoupled(**EXP, fiber=FIBRE)
     mix = UncoupledSolidMixture([MooneyRivlin(c1=100.0, k=7.0), fibre], k=3000.0)
     ref = [MooneyRivlin(c1=100.0, k=3000.0), fibre]
-    F = _random_F(np.random.default_rng(2), 10, 3, 0.2)
+    F = random_deformations(np.random.default_rng(2), 10, 3, 0.2)
     res = mix.evaluate(F)
     for key in ("energy", "stress", "tangent"):
         total = sum(getattr(r.evaluate(F), key) for r in ref)
@@ -225,7 +207,7 @@ def test_fiber_exp_pow_cauchy_stress_is_febios(uncoupled):
     a = np.array(FIBRE) / np.linalg.norm(FIBRE)
     cls = FiberExpPowUncoupled if uncoupled else FiberExpPow
     law = cls(ksi=ksi, alpha=alpha, beta=beta, mu=mu, fiber=FIBRE)
-    F = _random_F(np.random.default_rng(5), 40, 3, 0.2)
+    F = random_deformations(np.random.default_rng(5), 40, 3, 0.2)
     P = law.stress(F)
     checked = 0
     for Fq, Pq in zip(F, P, strict=True):

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from stress_differences import central_difference, random_deformations, relative_difference
 
 from tissuesim.errors import InvertedElementError
 from tissuesim.materials import SOFT_TISSUE_LAWS, make_material, project_tangent_psd
@@ -59,36 +60,20 @@ def law(request):
     return make_material(request.param, **CASES[request.param][0])
 
 
-def _random_F(rng, q, d, spread, jmin):
-    F = np.eye(d) + spread * rng.standard_normal((4 * q, d, d))
-    return F[np.linalg.det(F) > jmin][:q]
-
-
-def _central_diff(fun, F, h):
-    """d fun / dF by central differences in one batched call; derivative indices last."""
-    q, d = F.shape[:2]
-    basis = np.eye(d * d).reshape(d * d, d, d) * h
-    Fp = (F[:, None] + basis[None]).reshape(-1, d, d)
-    Fm = (F[:, None] - basis[None]).reshape(-1, d, d)
-    diff = (fun(Fp) - fun(Fm)) / (2 * h)
-    diff = diff.reshape((q, d, d) + diff.shape[1:])
-    return np.moveaxis(diff, (1, 2), (-2, -1))
-
-
-def _rel(a, b):
-    return np.max(np.abs(a - b)) / np.max(np.abs(b))
-
-
 @pytest.mark.parametrize("d", DIMS)
 def test_stress_and_tangent_match_finite_differences(law, d):
     rng = np.random.default_rng(100 + d)
     for spread, jmin in ((0.1, 0.5), (0.35, 0.3)):
-        F = _random_F(rng, 6, d, spread, jmin)
+        F = random_deformations(rng, 6, d, spread, jmin)
         res = law.evaluate(F, 2)
         assert res.energy.shape == (6,) and res.stress.shape == F.shape
         assert res.tangent.shape == (6, d, d, d, d)
-        assert _rel(res.stress, _central_diff(law.energy_density, F, 1e-6)) < 1e-7, law.name
-        assert _rel(res.tangent, _central_diff(law.stress, F, 1e-6)) < 1e-7, law.name
+        assert (
+            relative_difference(res.stress, central_difference(law.energy_density, F, 1e-6)) < 1e-7
+        ), law.name
+        assert relative_difference(res.tangent, central_difference(law.stress, F, 1e-6)) < 1e-7, (
+            law.name
+        )
         At = np.transpose(res.tangent, (0, 3, 4, 1, 2))
         np.testing.assert_allclose(res.tangent, At, atol=1e-12 * np.abs(At).max())
         low = law.evaluate(F, 0)
@@ -99,9 +84,9 @@ def test_stress_and_tangent_match_finite_differences(law, d):
 
 def test_finite_differences_catch_a_wrong_tangent(law):
     """The check above can fail: a tangent off by a small term is caught."""
-    F = _random_F(np.random.default_rng(5), 4, 3, 0.3, 0.3)
+    F = random_deformations(np.random.default_rng(5), 4, 3, 0.3, 0.3)
     A = law.stress_derivative(F) * (1 + 1e-5)
-    assert _rel(A, _central_diff(law.stress, F, 1e-6)) > 1e-6
+    assert relative_difference(A, central_difference(law.stress, F, 1e-6)) > 1e-6
 
 
 @pytest.mark.parametrize("d", DIMS)
@@ -128,7 +113,7 @@ def test_rest_state_is_energy_and_stress_free_with_the_hand_moduli(law, d):
 @pytest.mark.parametrize("d", DIMS)
 def test_objectivity(law, d):
     rng = np.random.default_rng(20 + d)
-    F = _random_F(rng, 8, d, 0.35, 0.3)
+    F = random_deformations(rng, 8, d, 0.35, 0.3)
     Q, _ = np.linalg.qr(rng.standard_normal((8, d, d)))
     Q[np.linalg.det(Q) < 0, :, 0] *= -1.0
     psi, P = law.energy_density(F), law.stress(F)
@@ -139,7 +124,7 @@ def test_objectivity(law, d):
 
 
 def test_plane_strain_is_3d_with_unit_out_of_plane_stretch(law):
-    F2 = _random_F(np.random.default_rng(3), 5, 2, 0.3, 0.3)
+    F2 = random_deformations(np.random.default_rng(3), 5, 2, 0.3, 0.3)
     F3 = np.zeros((5, 3, 3))
     F3[:, :2, :2], F3[:, 2, 2] = F2, 1.0
     r2, r3 = law.evaluate(F2), law.evaluate(F3)
@@ -197,10 +182,10 @@ def test_ogden_at_equal_and_nearly_equal_stretches(name, d):
         # the rotated tangent is the rotation of the tangent: no dependence on the eigenvectors
         rot = np.einsum("ia,jb,kc,ld,abcd->ijkl", R, R, R, R, res.tangent[0])
         np.testing.assert_allclose(res.tangent[1], rot, atol=1e-10 * law.lam, err_msg=label)
-        A_fd = _central_diff(law.stress, F, 1e-6)
-        assert _rel(res.tangent, A_fd) < 1e-7, label
+        A_fd = central_difference(law.stress, F, 1e-6)
+        assert relative_difference(res.tangent, A_fd) < 1e-7, label
     # continuity: nearly equal stretches give the tangent of equal ones
     A_eq = law.stress_derivative(np.diag([l, l, 0.9][:d])[None])
     for delta in (1e-13, 1e-10, 1e-7):
         A = law.stress_derivative(np.diag([l, l * (1 + delta), 0.9][:d])[None])
-        assert _rel(A, A_eq) < 10 * delta + 1e-13, delta
+        assert relative_difference(A, A_eq) < 10 * delta + 1e-13, delta
