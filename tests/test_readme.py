@@ -301,7 +301,23 @@ TESTED_PYTHON_BLOCKS = {
     "sim.add_visual_surface(": "test_visual_surface_python_example_runs",
     "import sympy as sp\nimport tissuesim as ts": "test_energy_law_python_example_runs",
     "ts.SolidMixture([": "test_mixture_python_example_runs",
+    'sim.add_logfile("node_data"': "test_logfile_python_example_runs",
 }
+
+
+def test_logfile_python_example_runs(tmp_path):
+    """The output page's log tables: the pulled face's ux ends at 0.2 m and its reactions sum
+    to the pull's force in forces.csv."""
+    code = block("python", 'sim.add_logfile("node_data"')
+    result = subprocess.run(
+        [sys.executable, "-c", code], cwd=tmp_path, capture_output=True, text=True, timeout=300
+    )
+    assert result.returncode == 0, result.stderr
+    ux, rx = (float(v) for v in result.stdout.split())
+    assert ux == pytest.approx(0.2)
+    forces = np.genfromtxt(tmp_path / "out/logfile/forces.csv", delimiter=",", names=True)
+    assert rx == pytest.approx(forces["pull_x_N"][-1], rel=1e-12)
+    assert (tmp_path / "out/logfile/element_data_2.csv").is_file()
 
 
 def test_mixture_python_example_runs(tmp_path):

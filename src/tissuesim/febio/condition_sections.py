@@ -289,7 +289,12 @@ def _globals(model: FebModel, section: Node) -> None:
 
 def _output(model: FebModel, section: Node) -> None:
     for c in section.children:
-        if c.tag not in ("plotfile", "logfile"):
+        if c.tag == "logfile":
+            from tissuesim.febio.logfiles import read_logfile
+
+            read_logfile(model, c)
+            continue
+        if c.tag != "plotfile":
             raise _unsupported(c, "this Output element is not supported by tissuesim")
         model.note(c, "FEBio's own output file is not written: tissuesim writes its VTU series "
                    "(displacement, J, stress, strain), forces.csv and summary.json")  # fmt: skip

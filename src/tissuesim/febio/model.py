@@ -61,6 +61,9 @@ class FebModel:
     #: "mat_axis" / "fiber" -> {(part, row): (value, XML element)} from <MeshData>
     element_data: dict = field(default_factory=dict)
     notes: list = field(default_factory=list)  # "file:line <tag>: what is not used"
+    #: <logfile> requests (febio/logfiles.py): kind, data, node rows or (part, row) cells
+    #: (None: all), file, node
+    logfiles: list = field(default_factory=list)
     #: "file:line <tag>: what the converter changed" (contact surfaces set apart)
     changes: list = field(default_factory=list)
     steps: int = 1

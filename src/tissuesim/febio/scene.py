@@ -256,6 +256,9 @@ def febio_scene(model: FebModel, stem: str) -> tuple[dict, dict]:
     data.update(_contact(model, [n for n, _ in tables_per_body], bodies, meshes))
     if dhat is not None:
         data["contact"] = {"dhat": dhat, **data["contact"]}
+    logfiles = _logfiles(model, bodies, [n for n, _ in tables_per_body])
+    if logfiles:
+        data["logfiles"] = logfiles
     data["run"] = {
         "steps": sum(
             run_steps(p["time_steps"], p["step_size"], table)
@@ -263,6 +266,46 @@ def febio_scene(model: FebModel, stem: str) -> tuple[dict, dict]:
         )
     }
     return data, meshes
+
+
+def _logfiles(model: FebModel, bodies: list[dict], names: list[str]) -> list[dict]:
+    """The <logfile> requests as [[logfiles]] tables: per body the rows of its mesh and their
+    FEBio ids; a request over several bodies is one table per body (``<file stem>_<body>``).
+    A request without a file is written as ``<kind>_<n>.csv`` (n: its place among them)."""
+    row_ids = np.empty(len(model.nodes), dtype=np.int64)
+    row_ids[list(model._node_index.values())] = list(model._node_index)
+    tables = []
+    for n, request in enumerate(model.logfiles, start=1):
+        kind, items = request["kind"], request["items"]
+        per_body = []
+        for name, body in zip(names, bodies, strict=True):
+            if kind == "node_data":
+                used = np.unique(body["cells"])
+                local = np.full(len(model.nodes), -1)
+                local[used] = np.arange(len(used))
+                rows = used if items is None else items[local[items] >= 0]
+                if len(rows):
+                    per_body.append((name, "nodes", local[rows], row_ids[rows]))
+                continue
+            members = [(p, r) for p in body["parts"] for r in range(len(model.parts[p][1]))]
+            members = members if items is None else [m for m in items if m[0] in body["parts"]]
+            if members:
+                cells = _cell_rows(body, members, model)
+                ids = np.array([model.parts[p][2][r] for p, r in members], dtype=np.int64)
+                per_body.append((name, "elements", cells, ids))
+        file = request["file"] or f"{kind}_{n}.csv"
+        stem, dot, suffix = file.rpartition(".")
+        for name, key, rows, ids in per_body:
+            if len(per_body) > 1:
+                file = f"{stem}_{name}.{suffix}" if dot else f"{suffix}_{name}"
+            table = {"kind": kind, "data": list(request["data"])}
+            if len(bodies) > 1:
+                table["body"] = name
+            whole = items is None and np.array_equal(rows, np.arange(len(rows)))
+            if not (whole and np.array_equal(ids, rows + 1)):  # else: all rows, ids = rows + 1
+                table.update({key: rows.tolist(), "ids": ids.tolist()})
+            tables.append({**table, "file": file})
+    return tables
 
 
 def _unique_support_names(tables_per_body: list[tuple[str, dict]]) -> None:

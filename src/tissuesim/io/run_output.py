@@ -1,6 +1,7 @@
 """Running a Simulation with output, the same for every scene: per body a VTU series + PVD on rest
 positions (``io/series/bodies.py``), per visual surface one, the cut surface, summary.json,
-forces.csv and forces.png, a progress bar and the pictures (``render/scene.py``).
+forces.csv and forces.png, FEBio's log tables (``io/logfiles.py``), a progress bar and the
+pictures (``render/scene.py``).
 
 The directory is checked before anything is written (``io/manifest.py``). summary.json is
 written the moment the run starts (before the model is assembled), rewritten atomically after a
@@ -80,6 +81,7 @@ class RunOutput:
         self.cut_series = None
         self.obstacle_series: list = []  # (Obstacle, VTUSeriesWriter), opened with the series
         self.visual_series: list = []  # io/series/bodies.py VisualSeries, one per visual surface
+        self.logs: list = []  # io/logfiles.py LogTable, one per Simulation.add_logfile request
         self.status = "running"
         self.error = None
         self.pictures = "not rendered" if render else "not asked for (render = false)"
@@ -180,6 +182,7 @@ class RunOutput:
                 keep=None if keep is None else keep.get(ob.name),
             )
             self.obstacle_series.append((ob, writer))
+        self._open_logs()
         tissue = self.sim.tissue
         if tissue is not None and tissue.cuts:
             self.cut_series = VTUSeriesWriter(
@@ -196,9 +199,26 @@ class RunOutput:
             for stale in ("final.png", "run.gif", "forces.png", "forces.csv"):
                 (self.directory / stale).unlink(missing_ok=True)  # from a run without a manifest
 
+    def _open_logs(self) -> None:
+        """The log tables (``io/logfiles.py``): new ones, or a resumed run's cut back to the
+        lines its checkpoint counts."""
+        from tissuesim.io.logfiles import LogTable
+
+        counts = None
+        if self.resume:
+            counts = self.checkpoint.meta.get("run", {}).get("logfiles", {})
+        self.logs = []
+        for request in self.sim.logfiles:
+            table = LogTable(request)
+            table.open(self.directory, None if counts is None else counts.get(request.file))
+            self.manifest.add(file=request.file)
+            self.logs.append(table)
+
     def _write_frame(self) -> None:
         sim = self.sim
         t = sim.time
+        for log in self.logs:  # before the checkpoint that counts their lines
+            log.write(sim, t)
         data = {}
         for s in self.series:
             if s.body.model is not None or s.body.kind == "tissue":
@@ -247,6 +267,8 @@ class RunOutput:
         self.manifest.add(file=HISTORY)
         series = {w.name: [[t, p.name] for t, p in w.frames] for w in self._writers() if w.frames}
         run = {"first_step": self._first_step, "steps": steps, "every": self.every}
+        if self.logs:
+            run["logfiles"] = {log.request.file: log.lines for log in self.logs}
         self.checkpoint.write(self.sim, series, run)
 
     def window(self) -> list:

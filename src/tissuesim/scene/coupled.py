@@ -73,6 +73,7 @@ from tissuesim.scene.common import condition as _condition
 from tissuesim.scene.contact import CONTACT_KEYS, OBSTACLE_KEYS
 from tissuesim.scene.cuts import CUT_KEYS, TEARING_KEYS, add_cut_tables, add_tearing_table
 from tissuesim.scene.fem_body import _mesh, _select
+from tissuesim.scene.logfiles import LOGFILE_KEYS, add_logfiles
 from tissuesim.scene.visual import VISUAL_KEYS, add_visual_surfaces
 from tissuesim.validate import short
 
@@ -113,8 +114,12 @@ COUPLED_SCENE_KEYS: dict[str, Any] = {
     "contact": set(CONTACT_KEYS),
     "obstacles": set(OBSTACLE_KEYS),
     "visual_surfaces": set(VISUAL_KEYS),
+    "logfiles": set(LOGFILE_KEYS),
 }
-ARRAYS = ("organs", "bodies", "graspers", "attachments", "cuts", "obstacles", "visual_surfaces")
+ARRAYS = (
+    "organs", "bodies", "graspers", "attachments", "cuts", "obstacles", "visual_surfaces",
+    "logfiles",
+)  # fmt: skip
 MESH_GENERATORS = {
     "ellipsoid": ("center", "radii", "divisions"),
     "box": ("lower", "upper", "divisions", "element"),
@@ -198,6 +203,7 @@ def build_bodies_scene(data: dict, base_dir: Path, source: str, name: str) -> Sc
         _tissue(sim, tissue, f"{source} [tissue]")
     add_cut_tables(sim, data, source, bool(tissue))
     add_visual_surfaces(sim, data, base_dir, source)
+    add_logfiles(sim, data, source)
     add_tearing_table(sim, data, source, bool(tissue))
     return Scene(sim, name, source, _run_table(data, source))
 

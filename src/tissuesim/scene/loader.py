@@ -14,6 +14,7 @@ Every key is the name of an argument of the Python API (see docs/reference/scene
     [initial]       Simulation.set_velocity(velocity)
     [[graspers]]    Simulation.grasp(vertices, displacement, stiffness, name, release)
     [[visual_surfaces]] Simulation.add_visual_surface(file, body, name, max_outside)
+    [[logfiles]]    Simulation.add_logfile(kind, data, body, items, ids, file)
     [run]           Simulation.run(steps, every, render)
 
 Vertex and facet sets are selector tables, e.g. ``{ on_plane = { axis = 0, value = -1.0 } }``,
@@ -60,6 +61,7 @@ from tissuesim.scene.fem_body import (
     MESH_KEYS,
     add_fem_body,
 )
+from tissuesim.scene.logfiles import LOGFILE_KEYS, add_logfiles
 from tissuesim.scene.visual import VISUAL_KEYS, add_visual_surfaces
 
 __all__ = ["Scene", "load_scene", "build_scene", "SCENE_KEYS"]
@@ -76,6 +78,7 @@ SCENE_KEYS = {
     "obstacles": set(OBSTACLE_KEYS),
     "graspers": set(GRASPER_KEYS),
     "visual_surfaces": set(VISUAL_KEYS),
+    "logfiles": set(LOGFILE_KEYS),
 }
 # Tables of frame scenes ([frames], tissuesim.scene.frames) that mean nothing for a [mesh] body.
 FRAME_ONLY_KEYS = ("region", "fixed_frames", "prescribed_frames", "springs", "point_forces")
@@ -216,4 +219,5 @@ def _build(data: dict, base_dir: Path, source: str, name: str) -> Scene:
 
     add_contact_tables(sim, data, base_dir, source)
     add_visual_surfaces(sim, data, base_dir, source, "body")
+    add_logfiles(sim, data, source, "body")
     return Scene(sim, name, source, _run_table(data, source))

@@ -134,6 +134,32 @@ class BodyResults:
         "surface"); their current positions: ``embedded_positions(name)``."""
         return self.body(None, ("frames",)).embedded
 
+    # -- log tables (io/logfiles.py) ------------------------------------------------------------
+    def add_logfile(
+        self,
+        kind: str,
+        data: list[str],
+        *,
+        body: str | None = None,
+        items: Any = None,
+        ids: Any = None,
+        file: str | None = None,
+    ):
+        """Ask a run with output for a CSV table, FEBio's ``<logfile>`` request: ``kind``
+        "node_data" (vertices) or "element_data" (cells) of FEM body ``body``, the variables
+        ``data`` by FEBio's names (``ux``, ``Rx``, ``sx``, ``E1``, ``J``, ...: ``io/logfiles.py``),
+        for the mesh rows ``items`` (None: all), labelled ``ids`` in the table (default: the
+        rows + 1), written as ``file`` in the output directory (default ``<kind>_<n>.csv``)
+        at every frame the run writes. Returns the checked request."""
+        from tissuesim.io.logfiles import make_request
+
+        b = self.body(body, ("fem",))
+        n = b.mesh.n_points if kind == "node_data" else b.mesh.n_cells
+        taken = {r.file for r in self.logfiles}
+        request = make_request(kind, data, b.name, n, items, ids, file, taken)
+        self.logfiles.append(request)
+        return request
+
     # -- visual surfaces (bodies/visual_surface.py) -------------------------------------------
     def add_visual_surface(
         self,

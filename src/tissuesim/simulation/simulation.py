@@ -138,6 +138,7 @@ class Simulation(
         self.organ_cuts: list = []  # blades cutting FEM bodies (bodies/organ_cut.py)
         self.organ_tears: list = []  # FEM bodies that tear (bodies/organ_tear.py)
         self.visual_surfaces: dict = {}  # name -> bodies/visual_surface.py VisualSurface
+        self.logfiles: list = []  # io/logfiles.py LogRequest: FEBio's log tables
         self.schedule: Schedule | None = None  # time/phases.py: a run in phases
         self.adaptive: AdaptiveStepping | None = None  # time/adaptive.py: FEBio's steps
         self._controller = None  # the adaptive steps' TimeStepController now

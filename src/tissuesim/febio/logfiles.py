@@ -1,0 +1,109 @@
+"""FEBio's ``<Output><logfile>`` requests: node_data and element_data become tables a run
+writes (``io/logfiles.py``; ``convert`` writes them as ``[[logfiles]]``), with the variables
+tissuesim has; FEBio's other variables are named in one note per request, and
+rigid_body_data / rigid_connector_data are refused (tissuesim runs no rigid bodies)."""
+
+from __future__ import annotations
+
+from pathlib import PurePosixPath, PureWindowsPath
+
+import numpy as np
+
+from tissuesim.febio.model import FebModel, _ints, _unsupported
+from tissuesim.febio.xml import Node
+from tissuesim.io.logfiles import KINDS
+
+__all__ = ["read_logfile", "TABLE_LAYOUT"]
+
+#: attributes that shape FEBio's text file; tissuesim writes CSV (a note when given)
+TABLE_LAYOUT = ("delim", "format", "comments")
+#: the attribute naming a set (FEBio 2.5 and later; before, "set" and "elset")
+SET_ATTRIBUTES = {"node_data": ("node_set", "set"), "element_data": ("elem_set", "elset")}
+
+
+def read_logfile(model: FebModel, node: Node) -> None:
+    """<logfile>: each node_data / element_data request kept in ``model.logfiles``."""
+    if node.attrib.get("file") is not None:
+        model.note(node, f"FEBio's log file {node.attrib['file']!r} is not written: tissuesim "
+                   "writes summary.json, and each data request as a CSV table")  # fmt: skip
+    for c in node.children:
+        if c.tag in ("rigid_body_data", "rigid_connector_data"):
+            raise c.error(
+                f"{c.tag}: the model has no rigid bodies in tissuesim (it does not run FEBio's "
+                "rigid bodies yet), so there is no rigid body to log"
+            )
+        if c.tag not in KINDS:
+            raise _unsupported(c, "this logfile request is not supported by tissuesim")
+        _request(model, c)
+
+
+def _request(model: FebModel, node: Node) -> None:
+    kind = node.tag
+    text = node.attrib.get("data")
+    if not text or not text.strip():
+        raise node.error(f'<{kind}> needs data="..." (variables separated by ";")')
+    names = [n.strip() for n in text.split(";") if n.strip()]
+    known = [n for n in names if n in KINDS[kind]]
+    unknown = [n for n in names if n not in KINDS[kind]]
+    if unknown:
+        kept = f"the table has {', '.join(known)}" if known else "the request is dropped"
+        model.note(node, f"{kind} variables {', '.join(unknown)} not written ({kept}): "
+                   f"tissuesim writes {', '.join(KINDS[kind])}")  # fmt: skip
+    layout = [a for a in TABLE_LAYOUT if node.attrib.get(a) is not None]
+    if node.attrib.get("delim") in (",", None) and layout == ["delim"]:
+        layout = []
+    if layout:
+        model.note(node, f"FEBio's table layout ({', '.join(layout)}) not used: tissuesim "
+                   "writes comma-separated tables")  # fmt: skip
+    items = _items(model, node, kind)
+    file = node.attrib.get("file")
+    if file is not None:
+        file = PureWindowsPath(PurePosixPath(file).name).name  # FEBio's path: the model's
+    if known:
+        model.logfiles.append(
+            {"kind": kind, "data": known, "items": items, "file": file, "node": node}
+        )
+
+
+def _items(model: FebModel, node: Node, kind: str):
+    """The request's nodes (rows of model.nodes) or elements ((part, row) pairs), in the
+    order given; None for all."""
+    for attribute in SET_ATTRIBUTES[kind]:
+        name = node.attrib.get(attribute)
+        if name is None:
+            continue
+        if kind == "node_data":
+            if name not in model.node_sets:
+                raise node.error(f'{attribute}="{name}": no NodeSet of that name')
+            return np.asarray(model.node_sets[name], dtype=np.int64)
+        if name not in model.element_sets:
+            raise node.error(f'{attribute}="{name}": no ElementSet of that name')
+        return list(model.element_sets[name][0])
+    if not node.text.strip():
+        return None
+    ids = _id_ranges(node)
+    if kind == "node_data":
+        missing = [i for i in ids if i not in model._node_index]
+        if missing:
+            raise node.error(f"node id {missing[0]} is not defined in <Nodes>")
+        return np.array([model._node_index[i] for i in ids], dtype=np.int64)
+    missing = [i for i in ids if i not in model._element_index]
+    if missing:
+        raise node.error(f"element id {missing[0]} is not defined in <Elements>")
+    return [model._element_index[i] for i in ids]
+
+
+def _id_ranges(node: Node) -> list[int]:
+    """FEBio's item list: ids and ranges ``a:b`` or ``a:b:step``, separated by commas."""
+    ids: list[int] = []
+    for part in node.text.split(","):
+        part = part.strip()
+        if ":" not in part:
+            ids += _ints(node, part)
+            continue
+        bounds = _ints(node, part.replace(":", ","))
+        if len(bounds) not in (2, 3) or (len(bounds) == 3 and bounds[2] < 1):
+            raise node.error(f"expected a range a:b or a:b:step, got {part!r}")
+        step = bounds[2] if len(bounds) == 3 else 1
+        ids += list(range(bounds[0], bounds[1] + 1, step))
+    return ids
