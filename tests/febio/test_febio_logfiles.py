@@ -203,3 +203,36 @@ def test_the_python_api_checks_its_request():
         sim.add_logfile("rigid_body_data", ["x"])
     with pytest.raises(InputError, match="2 ids for 1 items"):
         sim.add_logfile("node_data", ["ux"], items=[0], ids=[1, 2])
+
+
+def test_a_request_over_several_bodies_is_one_table_per_body(tmp_path):
+    """contact_stack: three blocks, three bodies; one request over nodes of two of them and one
+    over every element become a table per body, each with its FEBio ids, and the run writes
+    them."""
+    text = (MODELS / "contact_stack.feb").read_text()
+    logfile = (
+        "  <Output>\n    <logfile>\n"
+        '      <node_data data="uz" file="z.csv">1,13,14</node_data>\n'
+        '      <element_data data="J"/>\n'
+        "    </logfile>\n  </Output>\n</febio_spec>"
+    )
+    feb = tmp_path / "stack.feb"
+    feb.write_text(text.replace("</febio_spec>", logfile))
+    scene = tmp_path / "scene.toml"
+    convert_febio(feb, scene)
+    import tomllib
+
+    tables = tomllib.loads(scene.read_text())["logfiles"]
+    nodes = {t["body"]: (t["ids"], t["file"]) for t in tables if t["kind"] == "node_data"}
+    assert nodes == {"lower": ([1], "z_lower.csv"), "upper": ([13, 14], "z_upper.csv")}
+    elements = {t["body"]: (t.get("ids"), t["file"]) for t in tables if t["kind"] == "element_data"}
+    assert elements == {
+        "lower": (None, "element_data_2_lower.csv"),  # every row, ids = rows + 1: left out
+        "upper": ([2], "element_data_2_upper.csv"),
+        "puck": ([3], "element_data_2_puck.csv"),
+    }
+    out = tmp_path / "out"
+    assert main(["run", str(scene), "--out", str(out), "--no-render", "--quiet"]) == 0
+    upper = Table(out / "z_upper.csv")
+    assert upper.columns == ["time", "node", "uz"] and len(upper.values) == 2 * 3  # 3 frames
+    assert Table(out / "element_data_2_puck.csv")["element"].tolist() == [3.0] * 3

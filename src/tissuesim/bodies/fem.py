@@ -456,6 +456,12 @@ class FemBody:
         """Per element: J, green_strain, cauchy_stress, von_mises, energy_density
         (``materials/measures.py``); for P2 the volume averages over each element's points."""
         K = self.model.kinematics
+        return {k: K.cell_average(v) for k, v in self.quadrature_fields(x).items()}
+
+    def quadrature_fields(self, x: np.ndarray) -> dict[str, np.ndarray]:
+        """``cell_fields`` at each integration point (``kinematics.points_per_cell``
+        consecutive points per element), before their average."""
+        K = self.model.kinematics
         fields = continuum_fields(self.model.material, K.deformation_gradients(x))
         if self.model.formulation == "mean_dilatation":  # the patch pressure, not the point's
             from tissuesim.materials.measures import von_mises
@@ -465,7 +471,7 @@ class FemBody:
             ] + self.model.elastic.cauchy_correction(x)
             fields["von_mises"] = von_mises(fields["cauchy_stress"])
             fields["energy_density"] = self.model.elastic.point_energy_density(x)
-        return {k: K.cell_average(v) for k, v in fields.items()}
+        return fields
 
     def min_J(self, x: np.ndarray) -> float:
         return float(self.model.elastic.jacobians(x).min())

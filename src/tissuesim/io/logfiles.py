@@ -11,8 +11,10 @@ frames, the first at the start time included). FEBio's names:
   prescribed motion holds, 0 elsewhere);
 - element_data: ``sx, sy, sz, sxy, syz, sxz`` (Cauchy stress), ``s1, s2, s3`` (its principal
   values, s1 >= s2 >= s3), ``Ex, Ey, Ez, Exy, Eyz, Exz`` (Green-Lagrange strain), ``E1, E2,
-  E3`` (its principal values), ``J`` (volume ratio); each the element's average over its
-  integration points (principal values of the averaged tensor), as the VTU series has them.
+  E3`` (its principal values), ``J`` (volume ratio); each the mean over the element's
+  integration points, as FEBio's log takes it (principal values per point, then their mean;
+  the VTU series' cell data weights the points by their volume: the same on an undistorted
+  element).
 
 The table is appended frame by frame, each frame's rows in one write, flushed and fsynced;
 the checkpoint counts its lines, so a resumed run first cuts it back to the frames the
@@ -181,28 +183,36 @@ def reactions(sim: Any, body: str) -> np.ndarray:
 
 
 def element_values(sim: Any, request: LogRequest) -> dict[str, np.ndarray]:
-    """The element_data variables of ``request`` now, one value per item."""
+    """The element_data variables of ``request`` now, one value per item: each the mean over
+    the element's integration points, as FEBio's log takes it (principal values per point,
+    then their mean)."""
     b, c, _ = sim.body_state(request.body)
-    fields = b.cell_fields(c)
-    stress = _padded(np.asarray(fields["cauchy_stress"]))
-    strain = _padded(np.asarray(fields["green_strain"]))
-    if request.items is not None:
-        stress, strain = stress[request.items], strain[request.items]
+    K = b.model.kinematics
+    fields = b.quadrature_fields(c)
+    n = K.points_per_cell
+    tensors = {
+        "s": _padded(np.asarray(fields["cauchy_stress"])),
+        "E": _padded(np.asarray(fields["green_strain"])),
+    }
+
+    def mean(values: np.ndarray) -> np.ndarray:
+        values = K.per_cell_sum(values) / n
+        return values if request.items is None else values[request.items]
+
     out: dict[str, np.ndarray] = {}
     principal: dict[str, np.ndarray] = {}
     for name in request.data:
         if name == "J":
-            J = np.asarray(fields["J"], dtype=float)
-            out[name] = J if request.items is None else J[request.items]
+            out[name] = mean(np.asarray(fields["J"], dtype=float))
             continue
-        T = stress if name[0] == "s" else strain
+        T = tensors[name[0]]
         if name[1:] in _PAIRS:
             i, k = _PAIRS[name[1:]]
-            out[name] = T[:, i, k]
-        else:
-            if name[0] not in principal:
-                principal[name[0]] = _principal(T)
-            out[name] = principal[name[0]][:, int(name[1]) - 1]
+            out[name] = mean(T[:, i, k])
+            continue
+        if name[0] not in principal:
+            principal[name[0]] = _principal(T)
+        out[name] = mean(principal[name[0]][:, int(name[1]) - 1])
     return out
 
 
