@@ -236,3 +236,16 @@ def test_a_request_over_several_bodies_is_one_table_per_body(tmp_path):
     upper = Table(out / "z_upper.csv")
     assert upper.columns == ["time", "node", "uz"] and len(upper.values) == 2 * 3  # 3 frames
     assert Table(out / "element_data_2_puck.csv")["element"].tolist() == [3.0] * 3
+
+
+def test_a_body_that_tears_is_not_logged(tmp_path):
+    import tissuesim as ts
+
+    sim = ts.Simulation(
+        ts.box((0, 0, 0), (1, 1, 1), (1, 1, 1)),
+        ts.make_material("neo_hookean", youngs_modulus=1e4, poisson_ratio=0.3),
+    )
+    sim.add_logfile("node_data", ["ux"])
+    sim.set_tearing(body="body", stretch=2.0)
+    with pytest.raises(InputError, match="which is cut"):
+        sim.run(1, tmp_path / "out", progress=False, render=False)

@@ -216,6 +216,21 @@ def element_values(sim: Any, request: LogRequest) -> dict[str, np.ndarray]:
     return out
 
 
+def check_uncut(sim: Any, request: LogRequest) -> None:
+    """A logged body is never cut nor torn (its vertices and elements would be others than
+    the rows asked for): InputError in one line when the run starts."""
+    body = request.body
+    cutters = [c.name for c in sim.organ_cuts if c.body == body]
+    cutters += [f"{body}.tear" for t in sim.organ_tears if t.body == body]
+    if sim.bodies[body].cut_state is not None:
+        cutters.append("cut_body")
+    if cutters:
+        raise InputError(
+            f"the log table {request.file!r} is of body {body!r}, which is cut ({cutters[0]}): "
+            "a cut changes its nodes and elements; log another body, or leave the cut out"
+        )
+
+
 class LogTable:
     """The CSV file of one request in a run's directory: ``open`` (afresh, or cut back to
     ``keep`` lines when a run resumes), then ``write(sim, t)`` once per frame."""

@@ -202,13 +202,14 @@ class RunOutput:
     def _open_logs(self) -> None:
         """The log tables (``io/logfiles.py``): new ones, or a resumed run's cut back to the
         lines its checkpoint counts."""
-        from tissuesim.io.logfiles import LogTable
+        from tissuesim.io.logfiles import LogTable, check_uncut
 
         counts = None
         if self.resume:
             counts = self.checkpoint.meta.get("run", {}).get("logfiles", {})
         self.logs = []
         for request in self.sim.logfiles:
+            check_uncut(self.sim, request)
             table = LogTable(request)
             table.open(self.directory, None if counts is None else counts.get(request.file))
             self.manifest.add(file=request.file)
