@@ -143,9 +143,9 @@ def test_several_bodies_python_example_runs(tmp_path):
 
 
 def test_the_scene_key_table_names_every_table_the_loaders_accept():
-    from tissuesim.scene.coupled import COUPLED_SCENE_KEYS
-    from tissuesim.scene.frames import FRAME_SCENE_KEYS
     from tissuesim.scene.loader import SCENE_KEYS
+    from tissuesim.scene.tables.coupled import COUPLED_SCENE_KEYS
+    from tissuesim.scene.tables.frames import FRAME_SCENE_KEYS
 
     page = DOCS / "reference" / "scene-keys.md"
     section = page.read_text().split("Every key of every scene:", 1)[1].split("\n## ")[0]

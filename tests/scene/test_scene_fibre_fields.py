@@ -1,5 +1,5 @@
 """Fibre directions per element from a mesh file's cell data or from expressions of x, y, z
-(scene/fibre_fields.py), and their one-line errors."""
+(scene/tables/fibre_fields.py), and their one-line errors."""
 
 from __future__ import annotations
 

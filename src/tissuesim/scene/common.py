@@ -156,9 +156,9 @@ def _material(data: dict, source: str, where: str | None = None, mesh=None):
     """[material]: make_material(model, **parameters); shared by mesh and frame scenes, and by
     the inline ``material = {...}`` tables of coupled scenes (``where`` names those). A FEM
     body passes its ``mesh``, on which fibre directions given as cell data or expressions are
-    evaluated (``scene/fibre_fields.py``)."""
+    evaluated (``scene/tables/fibre_fields.py``)."""
     from tissuesim.materials import make_material
-    from tissuesim.scene.fibre_fields import resolve_directions
+    from tissuesim.scene.tables.fibre_fields import resolve_directions
 
     where = where or f"{source} [material]"
     material_table = dict(_table(data, "material", source))

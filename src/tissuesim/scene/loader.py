@@ -23,12 +23,12 @@ x, y, z, t (``tissuesim.scene.expressions``). Unknown keys are errors that sugge
 valid key; every error names the file and the table.
 
 A scene with a ``[frames]`` table is a meshless frame-based body instead: its
-tables are read by ``tissuesim.scene.frames``, which shares [material], [simulation], [newton],
-[gravity] and [run] with this module.
+tables are read by ``tissuesim.scene.tables.frames``, which shares [material], [simulation],
+[newton], [gravity] and [run] with this module.
 
 A scene with ``[[bodies]]`` (or ``[[organs]]``) tables has many bodies (organs joined
 by connective tissue, with [tissue], [[cuts]] and [tearing]): its tables are read
-by ``tissuesim.scene.coupled``, which shares [simulation], [newton], [gravity], [run], the
+by ``tissuesim.scene.tables.coupled``, which shares [simulation], [newton], [gravity], [run], the
 material tables and the vertex selectors with this module. ``[[organs]]`` decides even when
 other tables are present (a [mesh] or [frames] table beside it is then an error).
 """
@@ -52,17 +52,17 @@ from tissuesim.scene.common import (  # re-exported: the readers' shared names
     _unknown,
     wrong_form,
 )
-from tissuesim.scene.contact import CONTACT_KEYS, OBSTACLE_KEYS
-from tissuesim.scene.coupled import GRASPER_KEYS
-from tissuesim.scene.fem_body import (
+from tissuesim.scene.tables.contact import CONTACT_KEYS, OBSTACLE_KEYS
+from tissuesim.scene.tables.coupled import GRASPER_KEYS
+from tissuesim.scene.tables.fem_body import (
     FEM_BODY_KEYS,
     FEM_BODY_OPTIONS,
     FEM_TABLE_KEYS,
     MESH_KEYS,
     add_fem_body,
 )
-from tissuesim.scene.logfiles import LOGFILE_KEYS, add_logfiles
-from tissuesim.scene.visual import VISUAL_KEYS, add_visual_surfaces
+from tissuesim.scene.tables.logfiles import LOGFILE_KEYS, add_logfiles
+from tissuesim.scene.tables.visual import VISUAL_KEYS, add_visual_surfaces
 
 __all__ = ["Scene", "load_scene", "build_scene", "SCENE_KEYS"]
 
@@ -80,9 +80,9 @@ SCENE_KEYS = {
     "visual_surfaces": set(VISUAL_KEYS),
     "logfiles": set(LOGFILE_KEYS),
 }
-# Tables of frame scenes ([frames], tissuesim.scene.frames) that mean nothing for a [mesh] body.
+# Tables of frame scenes ([frames], scene/tables/frames.py) that mean nothing for a [mesh] body.
 FRAME_ONLY_KEYS = ("region", "fixed_frames", "prescribed_frames", "springs", "point_forces")
-# Tables of coupled scenes ([[organs]], tissuesim.scene.coupled) that mean nothing for one body.
+# Tables of coupled scenes ([[organs]], scene/tables/coupled.py) that mean nothing for one body.
 # [[graspers]] is not one of them: a grasper is the most basic interaction, on any FEM body.
 COUPLED_ONLY_KEYS = ("tissue", "cuts", "tearing")
 
@@ -156,11 +156,11 @@ def _build(data: dict, base_dir: Path, source: str, name: str) -> Scene:
     from tissuesim.simulation import Simulation
 
     if "organs" in data or "bodies" in data:
-        from tissuesim.scene.coupled import build_bodies_scene
+        from tissuesim.scene.tables.coupled import build_bodies_scene
 
         return build_bodies_scene(data, base_dir, source, name)
     if "frames" in data:
-        from tissuesim.scene.frames import build_frame_scene
+        from tissuesim.scene.tables.frames import build_frame_scene
 
         return build_frame_scene(data, base_dir, source, name)
     frame_only = [key for key in data if key in FRAME_ONLY_KEYS]
@@ -209,13 +209,13 @@ def _build(data: dict, base_dir: Path, source: str, name: str) -> Scene:
         _unknown(gravity, SCENE_KEYS["gravity"], f"{source} [gravity]")
         with _context(f"{source} [gravity]"):
             sim.add_gravity(gravity["acceleration"])
-    from tissuesim.scene.coupled import _grasper
+    from tissuesim.scene.tables.coupled import _grasper
 
     for i, item in enumerate(_table(data, "graspers", source, array=True), start=1):
         if "body" not in item and "organ" not in item:  # the scene's one body, "body"
             item = {**item, "body": "body"}
         _grasper(sim, item, f"{source} [[graspers]] #{i}")
-    from tissuesim.scene.contact import add_contact_tables
+    from tissuesim.scene.tables.contact import add_contact_tables
 
     add_contact_tables(sim, data, base_dir, source)
     add_visual_surfaces(sim, data, base_dir, source, "body")

@@ -54,9 +54,9 @@ from tissuesim.scene.common import (
     _unknown,
     _vector3,
 )
-from tissuesim.scene.contact import CONTACT_KEYS, OBSTACLE_KEYS
 from tissuesim.scene.expressions import compile_vector
-from tissuesim.scene.frame_regions import (
+from tissuesim.scene.tables.contact import CONTACT_KEYS, OBSTACLE_KEYS
+from tissuesim.scene.tables.frame_regions import (
     REGION_KEYS,
     _frame_positions,
     _points,
@@ -147,7 +147,7 @@ def build_frame_scene(data: dict, base_dir: Path, source: str, name: str) -> Sce
         _unknown(gravity, FRAME_SCENE_KEYS["gravity"], where)
         with _context(where):
             sim.add_gravity(_vector3(gravity["acceleration"], f"{where} acceleration"))
-    from tissuesim.scene.contact import add_contact_tables
+    from tissuesim.scene.tables.contact import add_contact_tables
 
     add_contact_tables(sim, data, base_dir, source)
     return Scene(sim, name, source, _run_table(data, source))

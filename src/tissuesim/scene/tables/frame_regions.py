@@ -1,7 +1,7 @@
 """The tables of a frame body that say where it is: its [region] (a box, an ellipsoid, a
 closed surface or a tetrahedral mesh, filled with integration points), where its frames go
 ([frames] grid / count / positions), and the selectors that pick frames and display-surface
-points for supports, springs and point forces (``scene/frames.py`` reads the rest)."""
+points for supports, springs and point forces (``scene/tables/frames.py`` reads the rest)."""
 
 from __future__ import annotations
 

@@ -26,11 +26,12 @@ argument of the Python API of ``tissuesim.coupling.simulation.CoupledSimulation`
     [[cuts]]       add_cut(blade, start, end, kerf, name): blade is a polyline of >= 2 points
                    [["x(t)", "y(t)", "z(t)"], ...], each coordinate a number or an expression
                    of t; with body = "organ" the blade (an edge of 2 points or a triangle) cuts
-                   that organ, with its toughness (J/m^2, optional); read in ``scene/cuts.py``
+                   that organ, with its toughness (J/m^2, optional); read in
+                   ``scene/tables/cuts.py``
     [tearing]      set_tearing(threshold): the tissue; with body = "organ" and stress (Pa) or
-                   stretch, that organ tears (``scene/cuts.py``)
+                   stretch, that organ tears (``scene/tables/cuts.py``)
     [[visual_surfaces]] add_visual_surface(file, body, name, max_outside): a fine surface
-                   carried by a FEM body for the output (``scene/visual.py``)
+                   carried by a FEM body for the output (``scene/tables/visual.py``)
     [run]          run(steps, every, render), as for every scene
 
 Vertex selectors (fix, graspers' vertices) pick vertices of one organ's rest mesh: the
@@ -70,11 +71,11 @@ from tissuesim.scene.common import (
     of_time,
 )
 from tissuesim.scene.common import condition as _condition
-from tissuesim.scene.contact import CONTACT_KEYS, OBSTACLE_KEYS
-from tissuesim.scene.cuts import CUT_KEYS, TEARING_KEYS, add_cut_tables, add_tearing_table
-from tissuesim.scene.fem_body import _mesh, _select
-from tissuesim.scene.logfiles import LOGFILE_KEYS, add_logfiles
-from tissuesim.scene.visual import VISUAL_KEYS, add_visual_surfaces
+from tissuesim.scene.tables.contact import CONTACT_KEYS, OBSTACLE_KEYS
+from tissuesim.scene.tables.cuts import CUT_KEYS, TEARING_KEYS, add_cut_tables, add_tearing_table
+from tissuesim.scene.tables.fem_body import _mesh, _select
+from tissuesim.scene.tables.logfiles import LOGFILE_KEYS, add_logfiles
+from tissuesim.scene.tables.visual import VISUAL_KEYS, add_visual_surfaces
 from tissuesim.validate import short
 
 __all__ = ["build_bodies_scene", "COUPLED_SCENE_KEYS"]
@@ -195,7 +196,7 @@ def build_bodies_scene(data: dict, base_dir: Path, source: str, name: str) -> Sc
         _grasper(sim, item, f"{source} graspers[{i}]")
     for i, item in enumerate(_table(data, "attachments", source, array=True), start=1):
         _attachment(sim, item, f"{source} attachments[{i}]")
-    from tissuesim.scene.contact import add_contact_tables
+    from tissuesim.scene.tables.contact import add_contact_tables
 
     add_contact_tables(sim, data, base_dir, source)
     tissue = _table(data, "tissue", source)
@@ -274,8 +275,8 @@ def _body(sim, item: dict, base_dir: Path, source: str, i: int) -> None:
     frames = {...} and region = {...}); its conditions are arrays of tables inside it
     ([[bodies.dirichlet]], [[bodies.fixed_frames]], ...)."""
     from tissuesim.scene.common import body_label
-    from tissuesim.scene.fem_body import FEM_BODY_KEYS, add_fem_body
-    from tissuesim.scene.frames import FRAME_BODY_KEYS, add_frame_body_tables
+    from tissuesim.scene.tables.fem_body import FEM_BODY_KEYS, add_fem_body
+    from tissuesim.scene.tables.frames import FRAME_BODY_KEYS, add_frame_body_tables
 
     label = body_label(source, "bodies", i)
     where = label()
