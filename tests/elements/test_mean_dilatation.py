@@ -201,3 +201,31 @@ def test_output_stress_uses_the_patch_pressure(name):
     assert volumes @ fields["energy_density"] == pytest.approx(energy, rel=1e-10)
     # a non-uniform one: the pressure differs from the locking point-wise one
     assert not np.allclose(fields["cauchy_stress"], plain.cell_fields(x)["cauchy_stress"])
+
+
+def test_an_uncoupled_viscoelastic_law_on_the_mean_dilatation_form_matches_differences():
+    """An uncoupled viscoelastic law (FEBio's three-field hex8 with it): the bulk term is the
+    elastic law's on the patch's mean dilatation, the Prony series acts on the deviatoric part
+    at the points; with a history built over a first step, the energy's gradient and Hessian
+    within a step match finite differences."""
+    mesh = box(divisions=(2, 1, 1), element="hex")
+    elastic = {"model": "mooney_rivlin", "c1": 200.0, "c2": 50.0, "k": 5e3}
+    law = make_material("uncoupled_viscoelastic", elastic=elastic, g=[0.5], tau=[0.2])
+    md = Model(mesh, law, np.ones(mesh.n_cells), backend="numpy", formulation="mean_dilatation")
+    rng = np.random.default_rng(5)
+    x1 = (mesh.points * [1.15, 0.95, 0.97]).ravel() + 0.01 * rng.standard_normal(mesh.points.size)
+    md.material.begin_step(0.1)  # the model's bound copy of the law holds the history
+    md.end_step(x1)  # a first step's history
+    md.material.begin_step(0.1)
+    x = x1 + 0.02 * rng.standard_normal(x1.size)
+    acc = md.evaluate(x, 2, False)
+    H = md.pattern.matrix(acc.hessian)
+    dx = rng.standard_normal(x.size)
+    eps = 1e-6
+    plus, minus = md.evaluate(x + eps * dx, 1, False), md.evaluate(x - eps * dx, 1, False)
+    assert (plus.value - minus.value) / (2 * eps) == pytest.approx(acc.gradient @ dx, rel=1e-6)
+    fd_H = (plus.gradient - minus.gradient) / (2 * eps)
+    np.testing.assert_allclose(fd_H, H @ dx, rtol=0, atol=1e-6 * np.abs(H @ dx).max())
+    coupled = make_material("viscoelastic", elastic=elastic, g=[0.5], tau=[0.2])
+    with pytest.raises(InputError, match="volumetric part"):
+        Model(mesh, coupled, np.ones(mesh.n_cells), backend="numpy", formulation="mean_dilatation")

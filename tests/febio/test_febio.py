@@ -348,3 +348,31 @@ def test_a_pressure_on_the_deformed_closed_surface_is_a_follower_pressure(tmp_pa
     assert np.allclose(cauchy, -500.0 * np.eye(3), atol=1e-5 * 500)
     written = convert_febio(feb, tmp_path / "closed.toml")
     assert "[[pressure]]" in written[0].read_text()
+
+
+def test_an_uncoupled_viscoelastic_law_on_hex8_runs_febios_three_field_element(tmp_path):
+    """FEBio runs an `uncoupled viscoelastic` law on hex8 with its three-field element (the
+    usual ligament and tendon model); tissuesim runs it on the mean-dilatation form (the Prony
+    series on the deviatoric part, the bulk term on the element's mean dilatation). Under the
+    cube's homogeneous stretch and relaxation the mean dilatation is the point's, so the pull
+    equals the displacement form's (the SolidDomain given as elastic-solid) step by step."""
+    text = (MODELS / "viscoelastic_relaxation.feb").read_text()
+    old_elastic = '<elastic type="neo-Hookean">\n        <E>1000</E>\n        <v>0</v>'
+    assert old_elastic in text and 'type="viscoelastic"' in text
+    text = text.replace('type="viscoelastic"', 'type="uncoupled viscoelastic"').replace(
+        old_elastic,
+        '<elastic type="Mooney-Rivlin">\n        <c1>200</c1>\n        <c2>50</c2>\n'
+        "        <k>5000</k>",
+    )
+    pulls = {}
+    for domain in ('mat="tissue"/>', 'mat="tissue" type="elastic-solid"/>'):
+        feb = tmp_path / "uncoupled.feb"
+        feb.write_text(text.replace('mat="tissue"/>', domain))
+        scene = load_febio(feb)
+        (body,) = scene.simulation.bodies.values()
+        records = [scene.simulation.step() for _ in range(5)]
+        pulls[body.model.formulation] = [r.extra["forces"]["pull"][0] for r in records]
+    assert set(pulls) == {"mean_dilatation", "displacement"}
+    md, disp = np.array(pulls["mean_dilatation"]), np.array(pulls["displacement"])
+    assert md[0] > 0 and md[-1] < 0.9 * md[0]  # pulled, then relaxing
+    np.testing.assert_allclose(md, disp, rtol=1e-9)

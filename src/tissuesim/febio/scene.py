@@ -167,11 +167,11 @@ def febio_scene(model: FebModel, stem: str) -> tuple[dict, dict]:
         elif formulation == "mean_dilatation" and body["cell_type"] == "tetra":
             raise body["node"].error("three-field-solid on tet4: tissuesim's P1 mean dilatation "
                                      "is a vertex patch, not FEBio's element")  # fmt: skip
-        if model_name.endswith("viscoelastic") and formulation == "mean_dilatation":
+        if model_name == "viscoelastic" and formulation == "mean_dilatation":
             raise model.domains[body["parts"][0]][2].error(
-                f"{kind!r} on {body['cell_type']} runs FEBio's three-field element; tissuesim's "
-                "viscoelastic laws run the displacement form: give the SolidDomain "
-                'type="elastic-solid" (FEBio then runs that too)'
+                f"{kind!r} on {body['cell_type']} with the three-field element: tissuesim's "
+                "coupled viscoelastic law relaxes the volumetric stress too and runs the "
+                'displacement form only: give the SolidDomain type="elastic-solid"'
             )
         directions = body_directions(model, spec, body["parts"], model.nodes, body["cells"])
         params = with_directions(params, directions)

@@ -109,8 +109,13 @@ class VolumetricPart:
 
 
 def volumetric_part(material: Material, what: str = "formulation") -> VolumetricPart:
-    """The law's theta and U (``VOLUMETRIC_LAWS``); a solid mixture's is its components' sum."""
+    """The law's theta and U (``VOLUMETRIC_LAWS``); a solid mixture's is its components' sum,
+    an uncoupled viscoelastic law's its elastic law's."""
     name = getattr(material, "name", "")
+    if name == "uncoupled_viscoelastic":
+        # the Prony series relaxes the deviatoric part only; the bulk term U(J) stays the
+        # elastic law's (``UncoupledViscoelastic._bulk``): FEBio's three-field hex8 with it
+        return volumetric_part(material.elastic, what)
     if name == "solid_mixture":
         parts = [volumetric_part(p, what) for p in material.components]
         parts = [p for p in parts if p.lam != 0.0] or parts[:1]
