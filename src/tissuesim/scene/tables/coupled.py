@@ -1,14 +1,14 @@
-"""Coupled scenes: ``[[organs]]`` tables make a scene a CoupledSimulation (organs joined by
+"""Coupled scenes: ``[[organs]]`` tables make a scene of several bodies (organs joined by
 connective tissue, graspers, supports, cuts and tearing).
 
 ``tissuesim.scene.loader`` sends every scene with an ``[[organs]]`` table here. Every key is an
-argument of the Python API of ``tissuesim.coupling.simulation.CoupledSimulation``:
+argument of the Python API of ``tissuesim.simulation.Simulation``:
 
-    [simulation]   CoupledSimulation(integrator, time_step, max_step_halvings, start_time,
+    [simulation]   Simulation(integrator, time_step, max_step_halvings, start_time,
                    backend); integrator "backward_euler" (default) or "quasistatic"
-    [gravity]      CoupledSimulation(gravity=acceleration)
+    [gravity]      Simulation(gravity=acceleration)
     [newton]       NewtonOptions(...), as for [mesh] scenes
-    [[organs]]     add_organ(name, mesh, material, density, mass), and fix(name, vertices):
+    [[organs]]     add_body(name, mesh, material, density, mass), and fix(name, vertices):
                    mesh = { generator = "ellipsoid", center, radii, divisions }
                         | { generator = "box", lower, upper, divisions }
                         | { file = "organ.vtu" }  (read_mesh, relative to the scene file)
