@@ -30,19 +30,13 @@ import numpy as np
 from tissuesim.errors import MaterialError
 from tissuesim.materials.base import Material, MaterialResponse
 from tissuesim.materials.isotropic._common import (
-    bcast,
     check_input,
-    cofactor,
-    det,
-    det_hessian,
-    outer,
 )
 from tissuesim.materials.soft_tissue._hyperelastic import (
     BULK_KINDS,
     PRESSURE_MODELS,
     HyperelasticMaterial,
-    bulk_energy,
-    inverted_error,
+    bulk_response,
     parameter,
     pressure_model,
 )
@@ -182,21 +176,7 @@ class UncoupledSolidMixture(SolidMixture, HyperelasticMaterial):
         return tail
 
     def _bulk(self, F: np.ndarray, order: int) -> MaterialResponse:
-        cof = cofactor(F)
-        J = det(F, cof)
-        ok = J > 0.0
-        if order > 0 and not ok.all():
-            raise inverted_error(self.name, J, ok)
-        Js = np.where(ok, J, 1.0)
-        U, dU, ddU = bulk_energy(self.bulk_kind, self.k, Js, np.log(Js))
-        U = np.where(ok, U, math.inf)
-        if order == 0:
-            return MaterialResponse(U)
-        P = bcast(dU, 3) * cof
-        if order == 1:
-            return MaterialResponse(U, P)
-        A = bcast(ddU, 5) * outer(cof, cof) + bcast(dU, 5) * det_hessian(F)
-        return MaterialResponse(U, P, A)
+        return bulk_response(self.name, self.bulk_kind, self.k, F, order)
 
 
 def _pressure(law: str, value: object) -> str:

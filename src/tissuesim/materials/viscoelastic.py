@@ -46,16 +46,10 @@ import numpy as np
 from tissuesim.errors import MaterialError
 from tissuesim.materials.base import Material, MaterialResponse
 from tissuesim.materials.isotropic._common import (
-    bcast,
     check_input,
-    cofactor,
-    det,
-    det_hessian,
-    outer,
 )
 from tissuesim.materials.soft_tissue._hyperelastic import (
-    bulk_energy,
-    inverted_error,
+    bulk_response,
     parameter_list,
 )
 from tissuesim.validate import short
@@ -313,21 +307,7 @@ class UncoupledViscoelastic(Viscoelastic):
 
     def _bulk(self, F: np.ndarray, order: int) -> MaterialResponse:
         base = self.elastic
-        cof = cofactor(F)
-        J = det(F, cof)
-        ok = J > 0.0
-        if order > 0 and not ok.all():
-            raise inverted_error(base.name, J, ok)
-        Js = np.where(ok, J, 1.0)
-        U, dU, ddU = bulk_energy(base.bulk_kind, float(base.k), Js, np.log(Js))
-        U = np.where(ok, U, math.inf)
-        if order == 0:
-            return MaterialResponse(U)
-        P = bcast(dU, 3) * cof
-        if order == 1:
-            return MaterialResponse(U, P)
-        A = bcast(ddU, 5) * outer(cof, cof) + bcast(dU, 5) * det_hessian(F)
-        return MaterialResponse(U, P, A)
+        return bulk_response(base.name, base.bulk_kind, float(base.k), F, order)
 
     def _relaxing(self, F: np.ndarray, order: int) -> MaterialResponse:
         full, bulk = self.elastic.evaluate(F, order), self._bulk(F, order)

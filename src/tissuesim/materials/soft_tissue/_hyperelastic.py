@@ -46,6 +46,7 @@ from tissuesim.materials.isotropic._common import (
     cofactor,
     det,
     det_hessian,
+    outer,
 )
 from tissuesim.validate import real, short
 
@@ -112,6 +113,27 @@ def bulk_energy(kind: str, k: float, J: np.ndarray, lnJ: np.ndarray) -> tuple:
     if kind == "goh":
         return 0.25 * k * (J**2 - 1.0 - 2.0 * lnJ), 0.5 * k * (J - 1.0 / J), 0.5 * k * (1.0 + J**-2)
     return 0.5 * k * (J - 1.0) ** 2, k * (J - 1.0), np.full_like(J, k)
+
+
+def bulk_response(name: str, kind: str, k: float, F: np.ndarray, order: int) -> MaterialResponse:
+    """The bulk term U(J) of ``kind`` alone at F (q, 3, 3): its energy (inf where J <= 0),
+    first Piola stress U' cof F and tangent U'' cof (x) cof + U' dcof/dF up to ``order``
+    (an uncoupled law's volumetric part: the mixtures' and the viscoelastic wrappers')."""
+    cof = cofactor(F)
+    J = det(F, cof)
+    ok = J > 0.0
+    if order > 0 and not ok.all():
+        raise inverted_error(name, J, ok)
+    Js = np.where(ok, J, 1.0)
+    U, dU, ddU = bulk_energy(kind, k, Js, np.log(Js))
+    U = np.where(ok, U, math.inf)
+    if order == 0:
+        return MaterialResponse(U)
+    P = bcast(dU, 3) * cof
+    if order == 1:
+        return MaterialResponse(U, P)
+    A = bcast(ddU, 5) * outer(cof, cof) + bcast(dU, 5) * det_hessian(F)
+    return MaterialResponse(U, P, A)
 
 
 def parameter_list(law: str, key: str, value: object, *, unit: str = "Pa") -> list[float]:
