@@ -131,6 +131,10 @@ def _law(
     from tissuesim.materials import make_material
 
     kind = mat.attrib.get("type", "")
+    if kind == "rigid body" and top:
+        from tissuesim.febio.rigid import rigid_material
+
+        return rigid_material(model, mat)
     if kind in VISCOELASTIC and top:
         return _viscoelastic(model, mat, kind)
     if kind in MIXTURES:
