@@ -1,0 +1,61 @@
+"""FEBio's material types that tissuesim runs: the type -> (tissuesim law, parameter names)
+table, the fibre laws and what their directions are, the mixtures, the viscoelastic wrappers and
+the uncoupled laws (which FEBio runs with its three-field element). ``materials.py`` reads the
+``<material>`` elements with these tables."""
+
+from __future__ import annotations
+
+__all__ = ["MATERIAL_TYPES", "FIBRES_ONLY", "MIXTURES", "FIBRE_TYPES", "UNCOUPLED", "VISCOELASTIC"]
+
+#: FEBio material types tissuesim runs -> (model, FEBio parameter -> tissuesim keyword; None:
+#: the law takes FEBio's parameter names as they are)
+MATERIAL_TYPES = {
+    "neo-Hookean": ("neo_hookean", {"E": "youngs_modulus", "v": "poisson_ratio"}),
+    "isotropic elastic": ("stvk", {"E": "youngs_modulus", "v": "poisson_ratio"}),
+    **{
+        name: (name, None)
+        for name in (
+            "Mooney-Rivlin",
+            "coupled Mooney-Rivlin",
+            "Ogden",
+            "Ogden unconstrained",
+            "Yeoh",
+            "Veronda-Westmann",
+            "coupled Veronda-Westmann",
+            "Arruda-Boyce",
+            "Holzapfel-Gasser-Ogden",
+            "HGO unconstrained",
+            "trans iso Mooney-Rivlin",
+            "fiber-exp-pow",
+            "fiber-exp-pow-uncoupled",
+            "fiber-pow-linear",
+            "fiber-pow-linear-uncoupled",
+        )
+    },
+    **{
+        name: (name, {"c3": "c3", "c4": "c4", "c5": "c5", "lambda": "lam_max"})
+        for name in ("fiber-exp-linear", "uncoupled fiber-exp-linear")
+    },
+}
+#: FEBio's fibre laws, read as components of a solid mixture only (they have no matrix)
+FIBRES_ONLY = {
+    "fiber-exp-pow", "fiber-exp-pow-uncoupled", "fiber-pow-linear", "fiber-pow-linear-uncoupled",
+    "fiber-exp-linear", "uncoupled fiber-exp-linear",
+}  # fmt: skip
+#: FEBio's solid mixtures -> tissuesim's model
+MIXTURES = {"solid mixture": "solid_mixture", "uncoupled solid mixture": "uncoupled_solid_mixture"}
+#: the fibre laws: FEBio type -> what their directions are ("axes": e1, e2; "fiber": Q fiber)
+FIBRE_TYPES = {
+    "Holzapfel-Gasser-Ogden": "axes",
+    "HGO unconstrained": "axes",
+    "trans iso Mooney-Rivlin": "fiber",
+    **{name: "fiber" for name in FIBRES_ONLY},
+}
+#: the uncoupled laws, which FEBio runs with its three-field (mean dilatation) hex8 / tet10
+UNCOUPLED = {
+    "Mooney-Rivlin", "Ogden", "Yeoh", "Veronda-Westmann", "Arruda-Boyce",
+    "Holzapfel-Gasser-Ogden", "trans iso Mooney-Rivlin", "uncoupled viscoelastic",
+    "uncoupled solid mixture", "fiber-exp-pow-uncoupled", "fiber-pow-linear-uncoupled",
+    "uncoupled fiber-exp-linear",
+}  # fmt: skip
+VISCOELASTIC = {"viscoelastic": "viscoelastic", "uncoupled viscoelastic": "uncoupled_viscoelastic"}
