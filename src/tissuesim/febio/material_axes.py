@@ -32,6 +32,10 @@ class Orientation:
     kind: str
     axis: tuple | None = None
     fiber: np.ndarray | None = None
+    #: ``<fiber type="local">``: (i, j, node) 0-based element nodes, the fibre n_i -> n_j
+    fiber_nodes: tuple | None = None
+    #: ``<fiber type="user">``: the node; every element takes its fibre from element data
+    user: Node | None = None
 
 
 @dataclass
@@ -80,10 +84,24 @@ def _direction(orientation: Orientation, p: Node, kind: str) -> None:
         s, c = np.sin(phi), np.cos(phi)
         orientation.fiber = np.array([np.cos(theta) * s, np.sin(theta) * s, c])
         return
+    if how == "local":  # FEBio's FELocalVectorGenerator: element nodes n1 -> n2, default 1, 2
+        source = p.find("local") or p
+        nodes = _ints(source) if source.text else [0, 0]
+        if len(nodes) != 2 or min(nodes) < 0:
+            raise p.error('a fiber type="local" lists two element nodes, e.g. <local>1,2</local>')
+        if nodes == [0, 0]:
+            nodes = [1, 2]
+        if min(nodes) == 0 or nodes[0] == nodes[1]:
+            raise p.error(f"fiber local nodes {nodes}: two different element nodes from 1")
+        orientation.fiber_nodes = (nodes[0] - 1, nodes[1] - 1, p)
+        return
+    if how == "user":  # FEBio's FEUserVectorGenerator: the fibres are element data
+        orientation.user = p
+        return
     if how != "vector":
         raise p.error(
-            f'fiber type {how!r} is not supported by tissuesim; it reads type="vector" and '
-            '"angles" (and per-element <ElementData type="fiber">)'
+            f'fiber type {how!r} is not supported by tissuesim; it reads type="vector", '
+            '"angles", "local" and "user" (per-element <ElementData type="fiber">)'
         )
     vector = p.find("vector")
     extra = [c for c in p.children if c.tag != "vector"]
@@ -175,7 +193,9 @@ def body_directions(
         outer = _axes(orientation.axis, points, cells)
         return {
             "components": [
-                {} if o is None else _keys(o, outer @ _axes(o.axis, points, cells), None)
+                {}
+                if o is None
+                else _keys(o, outer @ _axes(o.axis, points, cells), None, points, cells)
                 for o in orientation.parts
             ]
         }
@@ -194,7 +214,7 @@ def body_directions(
             if orientation.kind != "fiber":
                 raise e.error(f"{spec[3]!r} takes its fibres from mat_axis, not fiber data")
             given[offsets[part] + row] = f
-    return _keys(orientation, Q, given)
+    return _keys(orientation, Q, given, points, cells)
 
 
 def _axes(axis: tuple | None, points: np.ndarray, cells: np.ndarray) -> np.ndarray:
@@ -215,14 +235,34 @@ def _axes(axis: tuple | None, points: np.ndarray, cells: np.ndarray) -> np.ndarr
     return axes_from(a, d)
 
 
-def _keys(orientation: Orientation, Q: np.ndarray, given: np.ndarray | None) -> dict:
+def _keys(
+    orientation: Orientation,
+    Q: np.ndarray,
+    given: np.ndarray | None,
+    points: np.ndarray,
+    cells: np.ndarray,
+) -> dict:
     """The law's direction keys from its axes Q (m, 3, 3): e1, e2 of Q, or Q fiber; ``given``
-    (m, 3): global fibres from element data (NaN rows: none)."""
+    (m, 3): global fibres from element data (NaN rows: none). A ``local`` fibre is its element's
+    nodes n_i -> n_j (rest positions); a ``user`` one must be given on every element."""
     m = len(Q)
     if orientation.kind == "axes":
         keys = {"mat_axis_a": Q[:, :, 0], "mat_axis_d": Q[:, :, 1]}
     else:
+        if orientation.user is not None and (given is None or np.isnan(given).any()):
+            raise orientation.user.error(
+                'fiber type="user": every element of the material needs its fibre in '
+                '<MeshData> <ElementData type="fiber">'
+            )
         fiber = np.tile(orientation.fiber if orientation.fiber is not None else [1.0, 0, 0], (m, 1))
+        if orientation.fiber_nodes is not None:
+            i, j, node = orientation.fiber_nodes
+            if max(i, j) >= cells.shape[1]:
+                raise node.error(f"fiber local nodes {[i + 1, j + 1]}: the elements have "
+                                 f"{cells.shape[1]} nodes")  # fmt: skip
+            fiber = points[cells[:, j]] - points[cells[:, i]]
+            if np.any(np.linalg.norm(fiber, axis=1) == 0.0):
+                raise node.error("fiber local: two nodes of an element coincide")
         local = np.einsum("mij,mj->mi", Q, fiber / np.linalg.norm(fiber, axis=1, keepdims=True))
         if given is not None:
             local = np.where(np.isnan(given[:, :1]), local, given)

@@ -26,6 +26,7 @@ MATERIAL_TYPES = {
             "Holzapfel-Gasser-Ogden",
             "HGO unconstrained",
             "trans iso Mooney-Rivlin",
+            "trans iso Veronda-Westmann",
             "fiber-exp-pow",
             "fiber-exp-pow-uncoupled",
             "fiber-pow-linear",
@@ -49,12 +50,14 @@ FIBRE_TYPES = {
     "Holzapfel-Gasser-Ogden": "axes",
     "HGO unconstrained": "axes",
     "trans iso Mooney-Rivlin": "fiber",
+    "trans iso Veronda-Westmann": "fiber",
     **{name: "fiber" for name in FIBRES_ONLY},
 }
 #: the uncoupled laws, which FEBio runs with its three-field (mean dilatation) hex8 / tet10
 UNCOUPLED = {
     "Mooney-Rivlin", "Ogden", "Yeoh", "Veronda-Westmann", "Arruda-Boyce",
-    "Holzapfel-Gasser-Ogden", "trans iso Mooney-Rivlin", "uncoupled viscoelastic",
+    "Holzapfel-Gasser-Ogden", "trans iso Mooney-Rivlin", "trans iso Veronda-Westmann",
+    "uncoupled viscoelastic",
     "uncoupled solid mixture", "fiber-exp-pow-uncoupled", "fiber-pow-linear-uncoupled",
     "uncoupled fiber-exp-linear",
 }  # fmt: skip

@@ -17,6 +17,7 @@ from tissuesim.materials.fibres.fibre_exp_pow import FiberExpPow, FiberExpPowUnc
 from tissuesim.materials.fibres.fibre_pow_linear import FiberPowLinear, FiberPowLinearUncoupled
 from tissuesim.materials.fibres.holzapfel_gasser_ogden import HGOUnconstrained, HolzapfelGasserOgden
 from tissuesim.materials.fibres.trans_iso_mooney_rivlin import TransIsoMooneyRivlin
+from tissuesim.materials.fibres.trans_iso_veronda_westmann import TransIsoVerondaWestmann
 from tissuesim.materials.fitting import FitResult, fit_material, nominal_stress
 from tissuesim.materials.isotropic.corotated import FixedCorotated
 from tissuesim.materials.isotropic.course_neo_hookean import CourseNeoHookean
@@ -61,6 +62,7 @@ __all__ = [
     "HolzapfelGasserOgden",
     "HGOUnconstrained",
     "TransIsoMooneyRivlin",
+    "TransIsoVerondaWestmann",
     "FiberExpPow",
     "FiberExpPowUncoupled",
     "FiberPowLinear",

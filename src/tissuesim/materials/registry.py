@@ -26,6 +26,7 @@ from tissuesim.materials.fibres.fibre_exp_pow import FiberExpPow, FiberExpPowUnc
 from tissuesim.materials.fibres.fibre_pow_linear import FiberPowLinear, FiberPowLinearUncoupled
 from tissuesim.materials.fibres.holzapfel_gasser_ogden import HGOUnconstrained, HolzapfelGasserOgden
 from tissuesim.materials.fibres.trans_iso_mooney_rivlin import TransIsoMooneyRivlin
+from tissuesim.materials.fibres.trans_iso_veronda_westmann import TransIsoVerondaWestmann
 from tissuesim.materials.isotropic.corotated import FixedCorotated
 from tissuesim.materials.isotropic.course_neo_hookean import CourseNeoHookean
 from tissuesim.materials.isotropic.linear import LinearElastic
@@ -69,6 +70,7 @@ FIBRE_LAWS: tuple[type[Material], ...] = (
     HolzapfelGasserOgden,
     HGOUnconstrained,
     TransIsoMooneyRivlin,
+    TransIsoVerondaWestmann,
     FiberExpPow,
     FiberExpPowUncoupled,
     FiberPowLinear,

@@ -27,6 +27,8 @@ With W(I1, I2, I4_f) and a fibre a_f (unit, reference), P = 2 W1 F + 2 W2 (I1 F 
 * trans-iso Mooney-Rivlin: W1 = c1, W2 = c2, W4 = s(lb) / (2 lb^2), lb = sqrt(I4), with lb dWf/dlb
   = s(lb) = 0 (lb < 1), c3 (exp(c4 (lb - 1)) - 1) (1 <= lb < lam_max), c5 lb + c6 past lam_max,
   c6 = c3 (exp(c4 (lam_max - 1)) - 1) - c5 lam_max.
+* trans-iso Veronda-Westmann: W1 = c1 c2 exp(c2 (I1 - 3)), W2 = -c1 c2 / 2, W4 the fibre of
+  trans-iso Mooney-Rivlin.
 * FEBio's fibre laws alone (a solid mixture's components; J = 1, so the uncoupled forms' I4b is
   I4), W1 = W2 = 0 and, for a taut fibre (0 when slack):
   fiber-exp-pow, W = ksi / (alpha beta) (exp(alpha x^beta) - 1), x = I4 - lam0^2 (uncoupled:
@@ -72,6 +74,15 @@ def _timr(fibres, i1, i4s):
     lb = math.sqrt(i4s[0])
     s = 0.0 if lb < 1.0 else c3 * (math.exp(c4 * (lb - 1.0)) - 1.0) if lb < lm else c5 * lb + c6
     return _TIMR["c1"], _TIMR["c2"], [s / (2.0 * lb * lb)]
+
+
+_TIVW = {"c1": 150.0, "c2": 1.5, **{k: _TIMR[k] for k in ("c3", "c4", "c5", "lam_max")}}
+
+
+def _tivw(fibres, i1, i4s):
+    """(W1, W2, [W4]) of trans-iso Veronda-Westmann (closed form above)."""
+    c1, c2 = _TIVW["c1"], _TIVW["c2"]
+    return c1 * c2 * math.exp(c2 * (i1 - 3.0)), -0.5 * c1 * c2, _timr(fibres, i1, i4s)[2]
 
 
 _EXP_POW = {"ksi": 500.0, "alpha": 2.0, "beta": 2.5}
@@ -183,6 +194,17 @@ def _cases() -> list[tuple[str, str, str, dict, object, list]]:
          {**timr, "fiber": (1.0, 0.0, 1.0)}, _timr, [(_SQ, 0.0, _SQ)]),
         ("trans_iso_mooney_rivlin", f"shear, fibre (1, 1, 0) (g = {G}, exponential part)",
          "shear", {**timr, "fiber": (1.0, 1.0, 0.0)}, _timr, [(_SQ, _SQ, 0.0)]),
+    ]  # fmt: skip
+    tivw = {**_TIVW, "k": 3000.0}
+    out += [
+        ("trans_iso_veronda_westmann", f"uniaxial along the fibre (l = {L}, linear part)",
+         "uniaxial", {**tivw, "fiber": (1.0, 0.0, 0.0)}, _tivw, [(1.0, 0.0, 0.0)]),
+        ("trans_iso_veronda_westmann", f"uniaxial across, fibre compressed (l = {L})",
+         "uniaxial", {**tivw, "fiber": (0.0, 1.0, 0.0)}, _tivw, [(0.0, 1.0, 0.0)]),
+        ("trans_iso_veronda_westmann", f"equibiaxial, fibre (1, 0, 1) (l = {L})", "equibiaxial",
+         {**tivw, "fiber": (1.0, 0.0, 1.0)}, _tivw, [(_SQ, 0.0, _SQ)]),
+        ("trans_iso_veronda_westmann", f"shear, fibre (1, 1, 0) (g = {G}, exponential part)",
+         "shear", {**tivw, "fiber": (1.0, 1.0, 0.0)}, _tivw, [(_SQ, _SQ, 0.0)]),
     ]  # fmt: skip
     single = (
         ("fiber_exp_pow", {**_EXP_POW, "lam0": 1.05}, _exp_pow(1.05)),

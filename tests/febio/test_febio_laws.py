@@ -1,0 +1,96 @@
+"""FEBio's material laws added for its verification suite (issue 42), each through a small
+model of tests/febio/models read by ``load_febio``: the homogeneous state against the law, and
+the fibre directions FEBio's ``<fiber type="local">`` and ``type="user"`` give."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from tissuesim.febio import FebError, febio_scene, load_febio, read_feb
+
+MODELS = Path(__file__).parent / "models"
+
+
+def _run(scene, steps: int) -> np.ndarray:
+    sim = scene.simulation
+    for _ in range(steps):
+        sim.step()
+    return sim.body_positions("body")
+
+
+def _stretches(scene, x: np.ndarray) -> np.ndarray:
+    X = scene.simulation.body("body").mesh.points
+    return np.array([np.polyfit(X[:, i], x[:, i], 1)[0] for i in range(3)])
+
+
+def test_trans_iso_veronda_westmann_uniaxial_is_the_laws_homogeneous_state():
+    """The cube pulled 1.15 along its fibre (type="local", nodes 1 -> 2: x) stretches
+    homogeneously, contracts equally across it (transversely isotropic), and its pull is the
+    law's P_xx with the lateral stresses zero; the fibre more than doubles it here."""
+    from tissuesim.materials import TransIsoVerondaWestmann
+
+    scene = load_febio(MODELS / "tivw_uniaxial.feb")
+    x = _run(scene, 3)
+    stretch = _stretches(scene, x)
+    params = dict(c1=2000.0, c2=1.5, c3=500.0, c4=20.0, c5=60000.0, lam_max=1.1, k=1e6)
+    P = TransIsoVerondaWestmann(**params).evaluate(np.diag(stretch)[None], 1).stress[0]
+    force = abs(scene.simulation.step().extra["forces"]["pull"][0])  # held: the same state
+    assert stretch[0] == pytest.approx(1.15)
+    assert stretch[1] == pytest.approx(stretch[2], rel=1e-9) and stretch[1] < 0.95
+    assert np.allclose([P[1, 1], P[2, 2]], 0.0, atol=1e-6 * P[0, 0])
+    assert force == pytest.approx(P[0, 0], rel=1e-6)
+    matrix = TransIsoVerondaWestmann(**{**params, "c3": 0.0, "c5": 0.0})
+    assert P[0, 0] > 2.0 * matrix.evaluate(np.diag(stretch)[None], 1).stress[0, 0, 0]
+
+
+def _with(tmp_path: Path, name: str, old: str, new: str) -> Path:
+    text = (MODELS / f"{name}.feb").read_text()
+    assert old in text
+    path = tmp_path / f"{name}.feb"
+    path.write_text(text.replace(old, new))
+    return path
+
+
+@pytest.mark.parametrize(
+    "nodes, expected", [("1,2", [1, 0, 0]), ("1,4", [0, 1, 0]), ("2,7", [0, 1, 1]), ("", [1, 0, 0])]
+)
+def test_fiber_type_local_is_the_element_edge(tmp_path, nodes, expected):
+    """FEBio's FELocalVectorGenerator: the unit vector from element node n1 to n2 at rest
+    (default 1, 2)."""
+    path = _with(tmp_path, "tivw_uniaxial", "<local>1,2</local>", f"<local>{nodes}</local>")
+    data, _ = febio_scene(read_feb(path), "x")
+    np.testing.assert_allclose(
+        data["material"]["fiber"], np.array(expected) / np.linalg.norm(expected)
+    )
+
+
+def test_fiber_type_user_takes_the_element_data_and_needs_it_everywhere(tmp_path):
+    user = '<fiber type="user"/>'
+    old = '<fiber type="local">\n        <local>1,2</local>\n      </fiber>'
+    path = _with(tmp_path, "tivw_uniaxial", old, user)
+    with pytest.raises(
+        FebError, match=r'fiber type="user": every element .* <ElementData type="fiber">'
+    ):
+        febio_scene(read_feb(path), "x")
+    data = (
+        '<MeshData>\n    <ElementData type="fiber" elem_set="cube">\n'
+        '      <e lid="1">0,0,2</e>\n    </ElementData>\n  </MeshData>\n  <Boundary>'
+    )
+    path.write_text(path.read_text().replace("<Boundary>", data, 1))
+    scene_data, _ = febio_scene(read_feb(path), "x")
+    fiber = np.array(scene_data["material"]["fiber"])
+    np.testing.assert_allclose(fiber / np.linalg.norm(fiber), [0.0, 0.0, 1.0])
+
+
+@pytest.mark.parametrize(
+    "local, message",
+    [("1,1", "two different element nodes"), ("1,9", "the elements have 8 nodes"),
+     ("1,2,3", "two element nodes")],
+)  # fmt: skip
+def test_fiber_type_local_refusals(tmp_path, local, message):
+    path = _with(tmp_path, "tivw_uniaxial", "<local>1,2</local>", f"<local>{local}</local>")
+    with pytest.raises(FebError, match=message):
+        febio_scene(read_feb(path), "x")
