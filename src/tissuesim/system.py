@@ -65,6 +65,12 @@ class System:
     attachments: Sequence[Attachment] = ()
     ties: Sequence = ()  # coupling/tie.py: FEM bodies glued where they touch
     contact: object = None  # contact/model.py ContactModel, or None
+    #: rigid bodies (rigid/body.py RigidModel), their blocks after the bodies' in c and q, and
+    #: the FEM vertices that follow them: (body index, vertex indices, rigid index) each
+    rigid: Sequence = ()
+    rigid_members: Sequence = ()
+    #: the time of the rigid bodies' loads (the step's end time: Simulation.step_energies)
+    load_time: float = 0.0
     # the last implicit step's body energies (inertia about its prediction, loads): its Phi,
     # for the instrument linearisation (contact/readout/haptics.py)
     last_step_energies: list | None = None
@@ -95,9 +101,16 @@ class System:
             self.config_slices.append(slice(c0, c0 + b.n_config))
             self.tangent_slices.append(slice(t0, t0 + b.n_dofs))
             c0, t0 = c0 + b.n_config, t0 + b.n_dofs
+        self.rigid = list(self.rigid)
+        self.rigid_config_slices, self.rigid_tangent_slices = [], []
+        for r in self.rigid:
+            self.rigid_config_slices.append(slice(c0, c0 + r.n_config))
+            self.rigid_tangent_slices.append(slice(t0, t0 + r.n_dofs))
+            c0, t0 = c0 + r.n_config, t0 + r.n_dofs
         self.n_config, self.n_dofs = c0, t0
         self.ties = list(self.ties)
-        self.single = len(self.bodies) == 1 and not self.attachments
+        self.single = len(self.bodies) == 1 and not self.attachments and not self.rigid
+        self.links = self._rigid_links()
         self._tie_matrices = [self._tie_matrix(t) for t in self.ties]
         self._build_pattern()
         self.organ_hessians = [
@@ -135,6 +148,10 @@ class System:
         for H in tie_hessians:
             rows.append(H.row.astype(np.int64))
             cols.append(H.col.astype(np.int64))
+        if self.links is not None:
+            r, c = self.links.pattern_entries(np.concatenate(rows), np.concatenate(cols))
+            rows.append(r.astype(np.int64))
+            cols.append(c.astype(np.int64))
         self.pattern = SparsityPattern.from_entries(
             self.n_dofs, np.concatenate(rows), np.concatenate(cols)
         )
@@ -157,6 +174,33 @@ class System:
             )
             for (r, c, frames, coeff) in pairs
         ]
+
+    def _rigid_links(self):
+        """The linked vertices of every rigid block (rigid/links.py), or None."""
+        from tissuesim.rigid.links import RigidLinks
+
+        if not self.rigid:
+            return None
+        dofs, rigid, offsets = [], [], []
+        for j, vertices, k in self.rigid_members:
+            body = self.bodies[j]
+            if is_frame_body(body) or body.mesh.dim != 3:
+                raise InputError("a rigid body links vertices of 3D FEM bodies only")
+            v = np.asarray(vertices, dtype=np.int64)
+            start = self.tangent_slices[j].start
+            dofs.append(start + 3 * v[:, None] + np.arange(3))
+            rigid.append(np.full(len(v), k))
+            offsets.append(body.mesh.points[v] - self.rigid[k].center)
+        if not dofs:
+            return None
+        dofs = np.concatenate(dofs)
+        if len(np.unique(dofs[:, 0])) < len(dofs):
+            raise InputError("a vertex is linked to two rigid bodies (or twice to one)")
+        k_dofs = np.array([np.arange(s.start, s.stop) for s in self.rigid_tangent_slices])
+        k_conf = np.array([np.arange(s.start, s.stop) for s in self.rigid_config_slices])
+        return RigidLinks(
+            dofs, np.concatenate(rigid), np.concatenate(offsets), k_dofs, k_conf, self.n_dofs
+        )
 
     def _tie_matrix(self, tie):
         """G over the configuration (for G c) and over the tangent DOFs (gradient, Hessian)."""
@@ -200,6 +244,12 @@ class System:
             b.prescribed_dofs + s.start
             for b, s in zip(self.bodies, self.tangent_slices, strict=True)
         ]
+        dofs += [
+            r.prescribed_dofs + s.start
+            for r, s in zip(self.rigid, self.rigid_tangent_slices, strict=True)
+        ]
+        if self.links is not None:
+            dofs.append(self.links.dofs.ravel())
         self.prescribed_dofs = np.concatenate(dofs).astype(np.int64)
         if self.single:
             self.elimination = self.bodies[0].elimination
@@ -218,7 +268,17 @@ class System:
         out = np.empty(self.n_config)
         for b, sc, st in zip(self.bodies, self.config_slices, self.tangent_slices, strict=True):
             out[sc] = b.retract(c[sc], dq[st])
-        return out
+        return self._place_rigid(c, dq, out)
+
+    def _place_rigid(self, c: np.ndarray, dq: np.ndarray, out: np.ndarray) -> np.ndarray:
+        """The rigid blocks retracted too, and their linked vertices placed on them."""
+        if not self.rigid:
+            return out
+        for r, sc, st in zip(
+            self.rigid, self.rigid_config_slices, self.rigid_tangent_slices, strict=True
+        ):
+            out[sc] = r.retract(c[sc], dq[st])
+        return self.links.place(out) if self.links is not None else out
 
     def difference(self, c1: np.ndarray, c0: np.ndarray) -> np.ndarray:
         """The tangent step from c0 to c1 (velocities times h)."""
@@ -227,16 +287,24 @@ class System:
         out = np.empty(self.n_dofs)
         for b, sc, st in zip(self.bodies, self.config_slices, self.tangent_slices, strict=True):
             out[st] = b.difference(c1[sc], c0[sc])
+        for r, sc, st in zip(
+            self.rigid, self.rigid_config_slices, self.rigid_tangent_slices, strict=True
+        ):
+            out[st] = r.difference(c1[sc], c0[sc])
         return out
 
     def apply_prescribed(self, c: np.ndarray, t: float) -> np.ndarray:
         out = c.copy()
         for b, sc in zip(self.bodies, self.config_slices, strict=True):
             out[sc] = b.apply_prescribed(c[sc], t)
-        return out
+        for r, sc in zip(self.rigid, self.rigid_config_slices, strict=True):
+            out[sc] = r.apply_prescribed(c[sc], t)
+        return self.links.place(out) if self.links is not None else out
 
     def rest_config(self) -> np.ndarray:
-        return np.concatenate([b.rest_config() for b in self.bodies])
+        return np.concatenate(
+            [b.rest_config() for b in self.bodies] + [r.rest_config() for r in self.rigid]
+        )
 
     def kinetic_energy(self, c: np.ndarray, v: np.ndarray) -> float:
         return float(
@@ -305,7 +373,39 @@ class System:
             for i, cross in enumerate(self.cross):
                 j = self._tissue_of[i]
                 self._add_cross(cross, self.bodies[j], c[self.config_slices[j]], acc.hessian)
-        return self._add_contact(acc, c, contact_project) if contact else acc
+        if contact:
+            self._add_contact(acc, c, contact_project)
+        return self._reduce_rigid(acc, c)
+
+    def _reduce_rigid(self, acc: Accumulator, c: np.ndarray) -> Accumulator:
+        """The rigid bodies' loads, and what acts on their linked vertices mapped onto their
+        six DOFs (rigid/links.py)."""
+        if not self.rigid:
+            return acc
+        for r, sc, st in zip(
+            self.rigid, self.rigid_config_slices, self.rigid_tangent_slices, strict=True
+        ):
+            value, g = r.load_energy(c[sc], self.load_time, acc.order)
+            acc.add_value(f"{r.name}.load", value)
+            if acc.order >= 1:
+                acc.gradient[st] += g
+        links = self.links
+        if links is None or acc.order < 1:
+            return acc
+        p = links.arms(c)
+        if acc.order >= 2:
+            pat = self.pattern
+            H = sp.csr_matrix((acc.hessian, pat.indices, pat.indptr), shape=(pat.n, pat.n))
+            extra = links.reduced_hessian(H, acc.gradient, p)
+            if not hasattr(self, "_keys"):
+                self._keys = pat.keys()
+            np.add.at(acc.hessian, pat.positions(extra.row, extra.col, keys=self._keys), extra.data)
+            if acc.extra_hessian is not None:
+                E = sp.csr_matrix(acc.extra_hessian)
+                zero = np.zeros(pat.n)  # the curvature is in the main Hessian already
+                acc.extra_hessian = (E + links.reduced_hessian(E, zero, p)).tocsr()
+        links.reduce_gradient(acc.gradient, p)
+        return acc
 
     def _add_contact(self, acc: Accumulator, c: np.ndarray, project: bool) -> Accumulator:
         """The barrier contact energy (contact/model.py) on top of everything else."""

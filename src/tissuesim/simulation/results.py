@@ -270,6 +270,8 @@ class BodyResults:
         for j, name in enumerate(s.names):
             gj = None if g is None or g.size != s.n_dofs else g[s.tangent_slices[j]]
             out.update(self.bodies[name].forces(s.body_config(self._state.x, j), gj, self.time))
+        if s.rigid:
+            out.update(self._rigid_forces(g))
         for t, r in zip(s.ties, s.tie_residuals(self._state.x), strict=True):
             out[t.name] = (-(t.stiffness[:, None] * r).sum(axis=0)).tolist()
         for name, sign, i in self._named_attachments:

@@ -50,6 +50,7 @@ from tissuesim.simulation.cuts import CutCalls
 from tissuesim.simulation.interactions import InteractionCalls
 from tissuesim.simulation.loads import LoadCalls
 from tissuesim.simulation.results import BodyResults
+from tissuesim.simulation.rigid import RigidCalls
 from tissuesim.simulation.stepping import Stepping
 from tissuesim.solve.linear import make_linear_solver
 from tissuesim.solve.newton import NewtonOptions
@@ -74,7 +75,14 @@ EXPLICIT = ("explicit", "symplectic_euler")
 
 
 class Simulation(
-    BodyCalls, LoadCalls, InteractionCalls, CutCalls, StepChecks, BodyResults, Stepping
+    BodyCalls,
+    LoadCalls,
+    InteractionCalls,
+    CutCalls,
+    RigidCalls,
+    StepChecks,
+    BodyResults,
+    Stepping,
 ):
     """Bodies, their interactions and a time integrator; see the module docstring.
 
@@ -120,6 +128,7 @@ class Simulation(
         self.backend = validate.choice(backend, "backend", ("auto", "numba", "numpy"))
         self.bodies: dict[str, FemBody | FrameBody | TissueBody] = {}
         self.tissue: TissueBody | None = None
+        self.rigid_bodies: dict = {}  # name -> simulation/rigid.py RigidBodySpec
         self.history: list[StepRecord] = []
         self.gravity: list[np.ndarray] = []  # on every body, those added later too
         self._force_names: set[str] = set()
@@ -229,7 +238,18 @@ class Simulation(
                 self._named_attachments.append((spec.name, sign, len(attachments)))
                 attachments.append(spec.build(names.index(spec.fem), j, bodies[j].model))
         ties = [t for t in self.ties if t.a in names and t.b in names]
-        self._system = System([b.model for b in bodies], names, attachments, ties)
+        rigid, members = self._rigid_models(names)
+        self._system = System(
+            [b.model for b in bodies], names, attachments, ties, rigid=rigid, rigid_members=members
+        )
+        for r, sc, st in zip(
+            old.rigid if old is not None else (),
+            old.rigid_config_slices if old is not None else (),
+            old.rigid_tangent_slices if old is not None else (),
+            strict=True,
+        ):
+            if state is not None:
+                parts[f"rigid:{r.name}"] = (state.x[sc], state.v[st], None)
         if self.contact is not None:
             self._system.contact = self._contact_model()
             if old is not None and old.contact is not None:
@@ -250,6 +270,11 @@ class Simulation(
             v.append(v0)
             a.append(np.zeros_like(v0) if a0 is None else a0)
             carry_a = carry_a or a0 is not None
+        for r in rigid:  # the rigid blocks after the bodies (system.py)
+            c0, v0, _ = parts.get(f"rigid:{r.name}") or (r.rest_config(), np.zeros(6), None)
+            x.append(c0)
+            v.append(v0)
+            a.append(np.zeros(6))
         t = self.start_time if state is None else state.time
         acceleration = np.concatenate(a) if carry_a else None  # Newmark's, across rebuilds
         self._state = State(t, np.concatenate(x), np.concatenate(v), acceleration)
@@ -320,6 +345,7 @@ class Simulation(
         """Every body's extra energies of a step at time t (inertia about c_pred when given,
         loads, springs): what ``time/steps.py`` adds to the elastic energies."""
         s = self.system
+        s.load_time = t  # the rigid bodies' loads (system.py)
         return [
             self.bodies[name].step_energies(
                 t, None if c_pred is None else c_pred[s.config_slices[j]], h

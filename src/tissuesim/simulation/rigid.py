@@ -1,0 +1,176 @@
+"""Rigid bodies of a Simulation (a mixin): ``add_rigid_body`` makes FEM bodies, or vertex sets
+of them, move as one rigid body with six DOFs of its own in the same Newton solve (fixed,
+prescribed or free; a dead force and moment), reported in ``forces()`` as its name (the force
+the supports of its held DOFs apply, N) and ``<name>.moment`` (N m, about its centre)."""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from tissuesim import validate
+from tissuesim.bodies.fem import vertex_indices
+from tissuesim.errors import InputError
+from tissuesim.rigid.body import DOF_NAMES, RigidModel
+
+__all__ = ["RigidCalls", "RigidBodySpec"]
+
+
+@dataclass(eq=False)
+class RigidBodySpec:
+    """What ``add_rigid_body`` was given: the linked (body, vertices) pairs, the centre (None:
+    computed), held DOFs (index -> value function or None) and the loads."""
+
+    name: str
+    members: list[tuple[str, np.ndarray]]
+    center: np.ndarray | None
+    held: dict[int, Callable[[float], float] | None] = field(default_factory=dict)
+    force: Callable[[float], np.ndarray] | None = None
+    moment: Callable[[float], np.ndarray] | None = None
+
+
+def _dof_index(name: object, what: str) -> int:
+    if name not in DOF_NAMES:
+        raise InputError(
+            f"add_rigid_body: {what} names a DOF {validate.short(name)}; the DOFs are "
+            f"{', '.join(DOF_NAMES)}"
+        )
+    return DOF_NAMES.index(name)
+
+
+def _time_function(value, what: str) -> Callable[[float], float]:
+    if callable(value):
+        return value
+    v = validate.real(value, what)
+    return lambda t: v
+
+
+def _vector_function(value, what: str) -> Callable[[float], np.ndarray] | None:
+    if value is None:
+        return None
+    if callable(value):
+        return lambda t: np.asarray(value(t), dtype=float).reshape(3)
+    items = None
+    if isinstance(value, np.ndarray | Sequence) and not isinstance(value, str):
+        items = list(np.asarray(value, dtype=object).ravel())
+    if items is None or len(items) != 3:
+        raise InputError(f"add_rigid_body: {what} must be 3 numbers or functions of t")
+    parts = [_time_function(v, what) for v in items]
+    return lambda t: np.array([p(t) for p in parts])
+
+
+class RigidCalls:
+    """Mixed into ``Simulation``."""
+
+    rigid_bodies: dict
+
+    def add_rigid_body(
+        self,
+        name: str,
+        bodies: Sequence[str] = (),
+        *,
+        vertices: Mapping[str, object] | None = None,
+        center: Sequence[float] | None = None,
+        fixed: Sequence[str] = (),
+        prescribed: Mapping[str, float | Callable[[float], float]] | None = None,
+        force: Sequence | Callable | None = None,
+        moment: Sequence | Callable | None = None,
+    ) -> str:
+        """A rigid body named ``name``: the FEM ``bodies`` named move rigidly as a whole (an
+        instrument, a bone, a platen: their mass is its mass, their surface its contact
+        surface) and the ``vertices`` of other bodies ({body: vertices or a point set name})
+        move with it (glued to it). Its DOFs ("x", "y", "z": the centre's translation; "rx",
+        "ry", "rz": rotation about the global axes through the centre) are free unless
+        ``fixed`` or ``prescribed`` ({dof: value (m or rad) or a function of t}); ``force``
+        (N) and ``moment`` (N m, about the centre) act on it (3 numbers or functions of t, or
+        one function of t giving 3). ``center`` (m): default the centre of mass of the
+        ``bodies``, else the mean of the linked vertices."""
+        if not isinstance(name, str) or not name.strip():
+            raise InputError(f"add_rigid_body: name must be a text, not {validate.short(name)}")
+        if name in self.rigid_bodies or name in self.bodies:
+            raise InputError(f"add_rigid_body: a body named {name!r} exists; give another name")
+        members: list[tuple[str, np.ndarray]] = []
+        for b in bodies:
+            body = self.body(b, ("fem",))
+            if body.dim != 3:
+                raise InputError(f"add_rigid_body: body {b!r} is 2D; rigid bodies are 3D")
+            members.append((body.name, np.arange(body.mesh.n_points)))
+        for b, which in (vertices or {}).items():
+            body = self.body(b, ("fem",))
+            if body.dim != 3:
+                raise InputError(f"add_rigid_body: body {b!r} is 2D; rigid bodies are 3D")
+            members.append((body.name, vertex_indices(which, body.mesh.n_points, "add_rigid_body")))
+        if not members:
+            raise InputError(
+                f"add_rigid_body {name!r}: give the bodies it is made of, or vertices that "
+                "move with it"
+            )
+        held: dict[int, Callable[[float], float] | None] = {}
+        for dof in fixed:
+            held[_dof_index(dof, "fixed")] = None
+        for dof, value in (prescribed or {}).items():
+            k = _dof_index(dof, "prescribed")
+            if k in held:
+                raise InputError(f"add_rigid_body: DOF {dof!r} is both fixed and prescribed")
+            held[k] = _time_function(value, f"prescribed {dof}")
+        c = None if center is None else validate.vector(center, "center", 3, unit="m")
+        spec = RigidBodySpec(
+            name,
+            members,
+            c,
+            held,
+            _vector_function(force, "force"),
+            _vector_function(moment, "moment"),
+        )
+        for body, v in members:  # held in their bodies; the system places them
+            self.bodies[body].fix(v, name=f"{name}.{body}")
+        self.rigid_bodies[name] = spec
+        self._system_dirty = True
+        return name
+
+    def _rigid_models(self, names: list[str]) -> tuple[list, list]:
+        """(RigidModel per rigid body, (body index, vertices, rigid index) per member) for a
+        system of the FEM bodies ``names``."""
+        models, members = [], []
+        for k, spec in enumerate(self.rigid_bodies.values()):
+            mine = [(names.index(b), v) for b, v in spec.members if b in names]
+            center = spec.center
+            if center is None:
+                center = self._rigid_center(spec)
+            models.append(RigidModel(spec.name, center, spec.held, spec.force, spec.moment))
+            members += [(j, v, k) for j, v in mine]
+        return models, members
+
+    def _rigid_center(self, spec: RigidBodySpec) -> np.ndarray:
+        """The centre of mass of the bodies made rigid as a whole (their lumped vertex masses),
+        else the mean of the linked vertices."""
+        whole = [b for b, v in spec.members if len(v) == self.bodies[b].mesh.n_points]
+        if whole:
+            # the consistent mass' row sums: each vertex's share, exact mass and first moment
+            w = np.concatenate([self.bodies[b].model.mass.row_sums[::3] for b in whole])
+            points = [self.bodies[b].mesh.points for b in whole]
+            return (np.concatenate(points) * w[:, None]).sum(axis=0) / w.sum()
+        return np.concatenate([self.bodies[b].mesh.points[v] for b, v in spec.members]).mean(axis=0)
+
+    def rigid_state(self, name: str) -> tuple[np.ndarray, np.ndarray]:
+        """(centre position (3,) m, rotation matrix (3, 3)) of rigid body ``name`` now."""
+        if name not in self.rigid_bodies:
+            raise InputError(
+                f"no rigid body named {name!r}; rigid bodies: {sorted(self.rigid_bodies)}"
+            )
+        s = self.system
+        k = [r.name for r in s.rigid].index(name)
+        z = self._state.x[s.rigid_config_slices[k]]
+        return z[:3].copy(), z[3:12].reshape(3, 3).copy()
+
+    def _rigid_forces(self, gradient: np.ndarray | None) -> dict[str, list[float]]:
+        """Each rigid body's force (N) and moment (N m, about its centre) from its held DOFs'
+        supports: the last solve's gradient at its six DOFs (zero on the free ones)."""
+        s, out = self.system, {}
+        for r, st in zip(s.rigid, s.rigid_tangent_slices, strict=True):
+            g = np.zeros(6) if gradient is None or gradient.size != s.n_dofs else gradient[st]
+            out[r.name] = g[:3].tolist()
+            out[f"{r.name}.moment"] = g[3:].tolist()
+        return out
