@@ -94,3 +94,30 @@ def test_fiber_type_local_refusals(tmp_path, local, message):
     path = _with(tmp_path, "tivw_uniaxial", "<local>1,2</local>", f"<local>{local}</local>")
     with pytest.raises(FebError, match=message):
         febio_scene(read_feb(path), "x")
+
+
+ORTHO = dict(E1=1000.0, E2=2000.0, E3=3000.0, G12=600.0, G23=400.0, G31=500.0)
+ORTHO.update(v12=0.3, v23=0.2, v31=0.25, mat_axis_a=[0, 1, 0], mat_axis_d=[-1, 0, 0])
+
+
+@pytest.mark.parametrize(
+    "name, law, extra",
+    [("orthotropic_uniaxial", "orthotropic_elastic", {}),
+     ("fung_orthotropic_uniaxial", "fung_orthotropic", {"c": 1500.0, "k": 20000.0}),
+     ("fung_ortho_compressible_uniaxial", "fung_ortho_compressible", {"c": 1500.0, "k": 20000.0})],
+)  # fmt: skip
+def test_orthotropic_uniaxial_is_the_laws_homogeneous_state(name, law, extra):
+    """The cube pulled 1.15 along x = -a_2 (mat_axis a = y, d = -x) stretches homogeneously,
+    contracts differently along y (a_1, E1 = 1000) and z (a_3, E3 = 3000), and its pull is
+    the law's P_xx with the lateral stresses zero."""
+    from tissuesim.materials import make_material
+
+    scene = load_febio(MODELS / f"{name}.feb")
+    x = _run(scene, 3)
+    stretch = _stretches(scene, x)
+    P = make_material(law, **ORTHO, **extra).evaluate(np.diag(stretch)[None], 1).stress[0]
+    force = abs(scene.simulation.step().extra["forces"]["pull"][0])
+    assert stretch[0] == pytest.approx(1.15)
+    assert abs(stretch[1] - stretch[2]) > 1e-3
+    assert np.allclose([P[1, 1], P[2, 2]], 0.0, atol=1e-6 * P[0, 0])
+    assert force == pytest.approx(P[0, 0], rel=1e-6)

@@ -27,6 +27,9 @@ MATERIAL_TYPES = {
             "HGO unconstrained",
             "trans iso Mooney-Rivlin",
             "trans iso Veronda-Westmann",
+            "orthotropic elastic",
+            "Fung orthotropic",
+            "Fung-ortho-compressible",
             "fiber-exp-pow",
             "fiber-exp-pow-uncoupled",
             "fiber-pow-linear",
@@ -51,13 +54,17 @@ FIBRE_TYPES = {
     "HGO unconstrained": "axes",
     "trans iso Mooney-Rivlin": "fiber",
     "trans iso Veronda-Westmann": "fiber",
+    **{
+        name: "axes"
+        for name in ("orthotropic elastic", "Fung orthotropic", "Fung-ortho-compressible")
+    },
     **{name: "fiber" for name in FIBRES_ONLY},
 }
 #: the uncoupled laws, which FEBio runs with its three-field (mean dilatation) hex8 / tet10
 UNCOUPLED = {
     "Mooney-Rivlin", "Ogden", "Yeoh", "Veronda-Westmann", "Arruda-Boyce",
     "Holzapfel-Gasser-Ogden", "trans iso Mooney-Rivlin", "trans iso Veronda-Westmann",
-    "uncoupled viscoelastic",
+    "Fung orthotropic", "uncoupled viscoelastic",
     "uncoupled solid mixture", "fiber-exp-pow-uncoupled", "fiber-pow-linear-uncoupled",
     "uncoupled fiber-exp-linear",
 }  # fmt: skip

@@ -26,6 +26,11 @@ from tissuesim.materials.isotropic.linear import LinearElastic
 from tissuesim.materials.isotropic.neo_hookean import NeoHookean
 from tissuesim.materials.isotropic.stvk import StVenantKirchhoff
 from tissuesim.materials.mixture import SolidMixture, UncoupledSolidMixture
+from tissuesim.materials.orthotropic import (
+    FungOrthotropic,
+    FungOrthotropicCompressible,
+    OrthotropicElastic,
+)
 from tissuesim.materials.psd import project_psd, project_tangent_psd
 from tissuesim.materials.registry import (
     ALIASES,
@@ -63,6 +68,9 @@ __all__ = [
     "HGOUnconstrained",
     "TransIsoMooneyRivlin",
     "TransIsoVerondaWestmann",
+    "OrthotropicElastic",
+    "FungOrthotropic",
+    "FungOrthotropicCompressible",
     "FiberExpPow",
     "FiberExpPowUncoupled",
     "FiberPowLinear",

@@ -33,6 +33,11 @@ from tissuesim.materials.isotropic.linear import LinearElastic
 from tissuesim.materials.isotropic.neo_hookean import NeoHookean
 from tissuesim.materials.isotropic.stvk import StVenantKirchhoff
 from tissuesim.materials.mixture import MIXTURES
+from tissuesim.materials.orthotropic import (
+    FungOrthotropic,
+    FungOrthotropicCompressible,
+    OrthotropicElastic,
+)
 from tissuesim.materials.soft_tissue.arruda_boyce import ArrudaBoyce, CoupledArrudaBoyce
 from tissuesim.materials.soft_tissue.mooney_rivlin import CoupledMooneyRivlin, MooneyRivlin
 from tissuesim.materials.soft_tissue.ogden import Ogden, OgdenUnconstrained
@@ -71,6 +76,9 @@ FIBRE_LAWS: tuple[type[Material], ...] = (
     HGOUnconstrained,
     TransIsoMooneyRivlin,
     TransIsoVerondaWestmann,
+    OrthotropicElastic,
+    FungOrthotropic,
+    FungOrthotropicCompressible,
     FiberExpPow,
     FiberExpPowUncoupled,
     FiberPowLinear,

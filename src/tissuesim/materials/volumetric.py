@@ -14,7 +14,7 @@ theta is the law's measure of volume change and U its lambda term, the part that
                          theta), "Abaqus": k/2 (theta - 1)^2)
     ogden_unconstrained  theta = J             U = cp/2 (theta - 1)^2
     holzapfel_gasser_ogden, hgo_unconstrained, trans_iso_mooney_rivlin,
-    trans_iso_veronda_westmann: their bulk term with k
+    trans_iso_veronda_westmann, fung_orthotropic, fung_ortho_compressible: their bulk term with k
                          (HGO: FEBio's default k/4 (theta^2 - 1 - 2 ln theta))
     fiber_exp_pow, fiber_pow_linear, fiber_exp_linear (and their _uncoupled forms): none
                          (U = 0, a fibre has no bulk term)
@@ -57,6 +57,8 @@ VOLUMETRIC_LAWS = {
     "hgo_unconstrained": ("J", "goh"),
     "trans_iso_mooney_rivlin": ("J", "log"),
     "trans_iso_veronda_westmann": ("J", "log"),
+    "fung_orthotropic": ("J", "log"),
+    "fung_ortho_compressible": ("J", "log"),
     **{
         name: ("J", "log")
         for law in ("fiber_exp_pow", "fiber_pow_linear", "fiber_exp_linear")

@@ -1,4 +1,5 @@
-"""Homogeneous stress of the fibre-reinforced laws against closed forms derived by hand from
+"""Homogeneous stress of the fibre-reinforced laws (and, from ``orthotropic.py``, the
+orthotropic ones) against closed forms derived by hand from
 FEBio's energies (not from the code): uniaxial stretch along and across the fibres (across: the
 fibres shorten and carry nothing), equibiaxial stretch and simple shear.
 
@@ -228,16 +229,32 @@ def _cases() -> list[tuple[str, str, str, dict, object, list]]:
     return out
 
 
-#: (law, quantity, deformation, parameters, derivatives W1, W2, W4_f, fibres by hand)
-CASES = _cases()
+def _orthotropic_cases() -> list:
+    from tissuesim.verification.orthotropic import CASES as ORTHOTROPIC
+
+    return list(ORTHOTROPIC)
+
+
+#: (law, quantity, deformation, parameters, derivatives W1, W2, W4_f, fibres by hand); the
+#: orthotropic laws' (``orthotropic.py``) with their closed form and no fibres
+CASES = _cases() + _orthotropic_cases()
 
 
 def checks(cases: list | None = None) -> list[Check]:
     """One check per case of ``cases`` (default ``CASES``): the law built by name, its stress
-    combination against the closed form (relative 1e-8)."""
+    combination against the closed form (relative 1e-8); a case without fibres (the
+    orthotropic laws, ``orthotropic.py``) carries its closed form as a function, and its
+    small-strain cases ("hooke") compare to 1e-5."""
+    from tissuesim.verification import orthotropic
+
     out = []
     for name, what, kind, params, derivatives, fibres in cases or CASES:
         law = make_material(name, **params)
+        if fibres is None:
+            small = kind.startswith("hooke")
+            result = orthotropic.hooke(law, kind) if small else combination(law, kind)
+            out.append(Check(name, what, float(derivatives()), result, 1e-5 if small else TOL))
+            continue
         ref = _closed(derivatives, fibres, kind)
         out.append(Check(name, what, float(ref), combination(law, kind), TOL))
     return out
