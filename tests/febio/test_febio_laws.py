@@ -121,3 +121,25 @@ def test_orthotropic_uniaxial_is_the_laws_homogeneous_state(name, law, extra):
     assert abs(stretch[1] - stretch[2]) > 1e-3
     assert np.allclose([P[1, 1], P[2, 2]], 0.0, atol=1e-6 * P[0, 0])
     assert force == pytest.approx(P[0, 0], rel=1e-6)
+
+
+@pytest.mark.parametrize(
+    "name, law, params",
+    [("holmes_mow_uniaxial", "holmes_mow", {"E": 1000.0, "v": 0.3, "beta": 0.5}),
+     ("uncoupled_holmes_mow_uniaxial", "uncoupled_holmes_mow",
+      {"mu": 300.0, "beta": 2.0, "k": 5000.0})],
+)  # fmt: skip
+def test_holmes_mow_uniaxial_is_the_laws_homogeneous_state(name, law, params):
+    """The cube pulled 1.15 along x stretches homogeneously, contracts equally along y and z
+    (isotropic), and its pull is the law's P_xx with the lateral stresses zero."""
+    from tissuesim.materials import make_material
+
+    scene = load_febio(MODELS / f"{name}.feb")
+    x = _run(scene, 3)
+    stretch = _stretches(scene, x)
+    P = make_material(law, **params).evaluate(np.diag(stretch)[None], 1).stress[0]
+    force = abs(scene.simulation.step().extra["forces"]["pull"][0])
+    assert stretch[0] == pytest.approx(1.15)
+    assert stretch[1] == pytest.approx(stretch[2], rel=1e-9) and stretch[1] < 0.99
+    assert np.allclose([P[1, 1], P[2, 2]], 0.0, atol=1e-6 * P[0, 0])
+    assert force == pytest.approx(P[0, 0], rel=1e-6)

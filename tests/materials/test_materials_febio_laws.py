@@ -28,8 +28,12 @@ LAWS = {
              False),
     "fung_compressible": ("fung_ortho_compressible", {**ORTHO, **AXES, "c": 800.0, "k": 9000.0},
                           "Fung-ortho-compressible", False),
+    "holmes_mow": ("holmes_mow", {"E": 1000.0, "v": 0.3, "beta": 0.5}, "Holmes-Mow", True),
+    "holmes_mow_v0": ("holmes_mow", {"E": 1000.0, "v": 0.0, "beta": 2.0}, "Holmes-Mow", True),
+    "uncoupled_holmes_mow": ("uncoupled_holmes_mow", {"mu": 300.0, "beta": 2.0, "k": 3000.0},
+                             "uncoupled Holmes-Mow", True),
 }  # fmt: skip
-UNCOUPLED = ("tivw", "tivw_goh", "fung")
+UNCOUPLED = ("tivw", "tivw_goh", "fung", "uncoupled_holmes_mow")
 
 
 def _law(key: str):
@@ -186,3 +190,41 @@ def test_the_guides_orthotropic_scene_runs():
         sim.step()
         tip = np.isclose(sim.mesh.points[:, 0], 1.0)
         assert sim.displacement[tip, 2].mean() < 0
+
+
+@pytest.mark.parametrize("v", [0.0, 0.3, 0.45])
+def test_holmes_mow_at_small_strain_is_hookes_law(v):
+    """The tangent at rest is lam I (x) I + 2 mu sym, mu = E / (2 (1 + v)), lam = E v /
+    ((1 + v)(1 - 2 v)); the uncoupled law's shear modulus is its mu."""
+    E = 1000.0
+    mu, lam = E / (2 * (1 + v)), E * v / ((1 + v) * (1 - 2 * v))
+    A = make_material("holmes_mow", E=E, v=v, beta=0.7).stress_derivative(np.eye(3)[None])[0]
+    I = np.eye(3)
+    hooke = lam * np.einsum("ij,kl->ijkl", I, I) + mu * (
+        np.einsum("ik,jl->ijkl", I, I) + np.einsum("il,jk->ijkl", I, I)
+    )
+    np.testing.assert_allclose(A, hooke, atol=1e-9 * E)
+    uc = make_material("uncoupled_holmes_mow", mu=300.0, beta=2.0, k=3000.0)
+    assert (uc.mu, uc.lam) == (300.0, 3000.0 - 200.0)
+    F = np.eye(3)[None].copy()
+    F[0, 0, 1] = 1e-6
+    assert uc.stress(F)[0, 0, 1] == pytest.approx(300.0e-6, rel=1e-6)
+
+
+def test_holmes_mow_volumetric_part_is_none():
+    """The coupled law's J terms sit inside its exponential: mean dilatation keeps it whole."""
+    part = volumetric_part(make_material("holmes_mow", E=1000.0, v=0.3, beta=0.5))
+    assert (part.theta_kind, part.lam) == ("J", 0.0)
+
+
+@pytest.mark.parametrize(
+    "model, params, message",
+    [("holmes_mow", {"E": 1.0, "v": 0.5, "beta": 1.0}, r"v must be in \(-1, 0.5\)"),
+     ("holmes_mow", {"E": 1.0, "v": 0.2, "beta": 0.0}, "beta must be > 0"),
+     ("holmes_mow", {"v": 0.2, "beta": 1.0}, "needs E"),
+     ("uncoupled_holmes_mow", {"mu": 1.0, "beta": 1.0}, "needs k"),
+     ("uncoupled_holmes_mow", {"mu": -1.0, "beta": 1.0, "k": 1.0}, "mu must be > 0")],
+)  # fmt: skip
+def test_holmes_mow_refusals(model, params, message):
+    with pytest.raises(MaterialError, match=message):
+        make_material(model, **params)

@@ -189,3 +189,11 @@ def test_ogden_at_equal_and_nearly_equal_stretches(name, d):
     for delta in (1e-13, 1e-10, 1e-7):
         A = law.stress_derivative(np.diag([l, l * (1 + delta), 0.9][:d])[None])
         assert relative_difference(A, A_eq) < 10 * delta + 1e-13, delta
+
+
+# FEBio's Holmes-Mow laws (issue 42): finite differences, small strain and the rest in
+# test_materials_febio_laws.py; listed here for test_every_soft_tissue_law_is_tested
+CASES.update(
+    holmes_mow=(dict(E=1000.0, v=0.3, beta=0.5), 1000.0 / 2.6, 300.0 / (1.3 * 0.4)),
+    uncoupled_holmes_mow=(dict(mu=300.0, beta=2.0, k=3000.0), 300.0, 3000.0 - 200.0),
+)

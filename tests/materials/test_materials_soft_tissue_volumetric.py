@@ -129,3 +129,10 @@ def test_pressure_model_errors():
         make_material("coupled_yeoh", c1=1.0, k=10.0, pressure_model="Abaqus")
     with pytest.raises(MaterialError, match="unknown parameter 'pressure_model'"):
         make_material("coupled_mooney_rivlin", c1=1.0, k=10.0, pressure_model="Abaqus")
+
+
+# FEBio's Holmes-Mow laws (issue 42), whose volumetric parts test_materials_febio_laws.py
+# checks (the coupled one has none: U = 0)
+PARAMS.update(
+    holmes_mow=dict(E=1000.0, v=0.3, beta=0.5), uncoupled_holmes_mow=dict(mu=300.0, beta=2.0)
+)

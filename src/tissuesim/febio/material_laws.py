@@ -30,6 +30,8 @@ MATERIAL_TYPES = {
             "orthotropic elastic",
             "Fung orthotropic",
             "Fung-ortho-compressible",
+            "Holmes-Mow",
+            "uncoupled Holmes-Mow",
             "fiber-exp-pow",
             "fiber-exp-pow-uncoupled",
             "fiber-pow-linear",
@@ -64,7 +66,7 @@ FIBRE_TYPES = {
 UNCOUPLED = {
     "Mooney-Rivlin", "Ogden", "Yeoh", "Veronda-Westmann", "Arruda-Boyce",
     "Holzapfel-Gasser-Ogden", "trans iso Mooney-Rivlin", "trans iso Veronda-Westmann",
-    "Fung orthotropic", "uncoupled viscoelastic",
+    "Fung orthotropic", "uncoupled Holmes-Mow", "uncoupled viscoelastic",
     "uncoupled solid mixture", "fiber-exp-pow-uncoupled", "fiber-pow-linear-uncoupled",
     "uncoupled fiber-exp-linear",
 }  # fmt: skip

@@ -40,6 +40,7 @@ from tissuesim.materials.registry import (
     make_material,
 )
 from tissuesim.materials.soft_tissue.arruda_boyce import ArrudaBoyce, CoupledArrudaBoyce
+from tissuesim.materials.soft_tissue.holmes_mow import HolmesMow, UncoupledHolmesMow
 from tissuesim.materials.soft_tissue.mooney_rivlin import CoupledMooneyRivlin, MooneyRivlin
 from tissuesim.materials.soft_tissue.ogden import Ogden, OgdenUnconstrained
 from tissuesim.materials.soft_tissue.veronda_westmann import CoupledVerondaWestmann, VerondaWestmann
@@ -68,6 +69,8 @@ __all__ = [
     "HGOUnconstrained",
     "TransIsoMooneyRivlin",
     "TransIsoVerondaWestmann",
+    "HolmesMow",
+    "UncoupledHolmesMow",
     "OrthotropicElastic",
     "FungOrthotropic",
     "FungOrthotropicCompressible",

@@ -39,6 +39,7 @@ from tissuesim.materials.orthotropic import (
     OrthotropicElastic,
 )
 from tissuesim.materials.soft_tissue.arruda_boyce import ArrudaBoyce, CoupledArrudaBoyce
+from tissuesim.materials.soft_tissue.holmes_mow import HolmesMow, UncoupledHolmesMow
 from tissuesim.materials.soft_tissue.mooney_rivlin import CoupledMooneyRivlin, MooneyRivlin
 from tissuesim.materials.soft_tissue.ogden import Ogden, OgdenUnconstrained
 from tissuesim.materials.soft_tissue.veronda_westmann import CoupledVerondaWestmann, VerondaWestmann
@@ -68,6 +69,8 @@ SOFT_TISSUE_LAWS: tuple[type[Material], ...] = (
     CoupledVerondaWestmann,
     ArrudaBoyce,
     CoupledArrudaBoyce,
+    HolmesMow,
+    UncoupledHolmesMow,
 )
 
 #: the fibre-reinforced laws (directions per body, element or point): FEBio's names too

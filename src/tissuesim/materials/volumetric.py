@@ -16,6 +16,8 @@ theta is the law's measure of volume change and U its lambda term, the part that
     holzapfel_gasser_ogden, hgo_unconstrained, trans_iso_mooney_rivlin,
     trans_iso_veronda_westmann, fung_orthotropic, fung_ortho_compressible: their bulk term with k
                          (HGO: FEBio's default k/4 (theta^2 - 1 - 2 ln theta))
+    uncoupled_holmes_mow  theta = J             U = its bulk term with k
+    holmes_mow           none (U = 0: its J terms are inside its exponential, psi_rest the law)
     fiber_exp_pow, fiber_pow_linear, fiber_exp_linear (and their _uncoupled forms): none
                          (U = 0, a fibre has no bulk term)
     solid_mixture        the sum of its components' U, which must share theta and U's kind
@@ -59,6 +61,8 @@ VOLUMETRIC_LAWS = {
     "trans_iso_veronda_westmann": ("J", "log"),
     "fung_orthotropic": ("J", "log"),
     "fung_ortho_compressible": ("J", "log"),
+    "uncoupled_holmes_mow": ("J", "log"),
+    "holmes_mow": ("J", "log"),
     **{
         name: ("J", "log")
         for law in ("fiber_exp_pow", "fiber_pow_linear", "fiber_exp_linear")

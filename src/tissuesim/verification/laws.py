@@ -14,7 +14,9 @@ pressure (cof F = F^-T) that the combinations remove, leaving
     shear 2 g (W1 + W2) (I1 = I2 = 3 + g^2, (I1 F - F C)_12 = g).
 W1, W2 of each law: neo-Hookean forms mu / 2, 0; St Venant-Kirchhoff (lam/8 (I1 - 3)^2 +
 mu/4 (I1^2 - 2 I2 - 2 I1 + 3)) lam (I1 - 3)/4 + mu (I1 - 1)/2, -mu/2; Mooney-Rivlin c1, c2;
-Yeoh sum i c_i (I1 - 3)^(i-1); Veronda-Westmann c1 c2 exp(c2 (I1 - 3)), -c1 c2 / 2;
+Yeoh sum i c_i (I1 - 3)^(i-1); Holmes-Mow (at J = 1) exp(Q) (2 mu - lam)/4, exp(Q) lam/4 with
+Q = beta/Ha ((2 mu - lam)(I1 - 3) + lam (I2 - 3)), Ha = lam + 2 mu, and uncoupled mu/2
+exp(beta (I1 - 3)), 0; Veronda-Westmann c1 c2 exp(c2 (I1 - 3)), -c1 c2 / 2;
 Arruda-Boyce (mu sum_i C_i (I1^i - 3^i) / N^(i-1), FEBio's C = 1/2, 1/10, 11/350, 19/1750,
 519/134750) mu sum_i i C_i I1^(i-1) / N^(i-1). Ogden (principal stretches): uniaxial
 sum c/m (l^(m-1) - l^(-m/2-1)), equibiaxial sum c/m (l^(m-1) - l^(-2m-1)), shear sum c/m (L^m -
@@ -89,6 +91,19 @@ def _vw(c1, c2):
     return lambda I1, I2: (c1 * c2 * np.exp(c2 * (I1 - 3)), -c1 * c2 / 2)
 
 
+def _hm(E, v, beta):
+    # Ha/(4 beta) exp(Q), Q = beta/Ha ((2 mu - lam)(I1 - 3) + lam (I2 - 3)) at J = 1:
+    # W1 = Ha/(4 beta) exp(Q) beta (2 mu - lam)/Ha = exp(Q) (2 mu - lam)/4, W2 = exp(Q) lam/4
+    mu, lam = E / (2 * (1 + v)), E * v / ((1 + v) * (1 - 2 * v))
+    ha = lam + 2 * mu
+
+    def w(I1, I2):
+        eQ = np.exp(beta / ha * ((2 * mu - lam) * (I1 - 3) + lam * (I2 - 3)))
+        return eQ * (2 * mu - lam) / 4, eQ * lam / 4
+
+    return w
+
+
 _NEO = {"shear_modulus": MU, "lame_lambda": LAM}
 _MR = {"c1": 150.0, "c2": 40.0, "k": 3000.0}
 _YEOH = {"c1": 150.0, "c2": 30.0, "c3": 5.0, "k": 3000.0}
@@ -113,6 +128,11 @@ LAWS = {
     "coupled_veronda_westmann": (_VW, lambda: _invariant(_vw(200.0, 1.5))),
     "arruda_boyce": (_ABP, lambda: _invariant(_ab(300.0, 4.0))),
     "coupled_arruda_boyce": (_ABP, lambda: _invariant(_ab(300.0, 4.0))),
+    "holmes_mow": ({"E": 1000.0, "v": 0.3, "beta": 0.5}, lambda: _invariant(_hm(1000.0, 0.3, 0.5))),
+    "uncoupled_holmes_mow": (
+        {"mu": 300.0, "beta": 2.0, "k": 3000.0},
+        lambda: _invariant(lambda I1, I2: (150.0 * np.exp(2.0 * (I1 - 3)), 0.0)),
+    ),
     "ogden": ({**_OGDEN, "k": 3000.0}, _ogden),
     "ogden_unconstrained": ({**_OGDEN, "cp": 3000.0}, _ogden),
 }
