@@ -143,3 +143,20 @@ def test_holmes_mow_uniaxial_is_the_laws_homogeneous_state(name, law, params):
     assert stretch[1] == pytest.approx(stretch[2], rel=1e-9) and stretch[1] < 0.99
     assert np.allclose([P[1, 1], P[2, 2]], 0.0, atol=1e-6 * P[0, 0])
     assert force == pytest.approx(P[0, 0], rel=1e-6)
+
+
+def test_coupled_trans_iso_mooney_rivlin_uniaxial_is_the_laws_homogeneous_state():
+    """The cube pulled 1.15 along its fibre (x): homogeneous, equal lateral contraction, the
+    pull the law's P_xx with the lateral stresses zero."""
+    from tissuesim.materials import CoupledTransIsoMooneyRivlin
+
+    scene = load_febio(MODELS / "coupled_trans_iso_uniaxial.feb")
+    x = _run(scene, 3)
+    stretch = _stretches(scene, x)
+    params = dict(c1=1000.0, c2=200.0, c3=500.0, c4=20.0, c5=60000.0, lam_max=1.1, k=20000.0)
+    P = CoupledTransIsoMooneyRivlin(**params).evaluate(np.diag(stretch)[None], 1).stress[0]
+    force = abs(scene.simulation.step().extra["forces"]["pull"][0])
+    assert stretch[0] == pytest.approx(1.15)
+    assert stretch[1] == pytest.approx(stretch[2], rel=1e-9) and stretch[1] < 0.99
+    assert np.allclose([P[1, 1], P[2, 2]], 0.0, atol=1e-6 * P[0, 0])
+    assert force == pytest.approx(P[0, 0], rel=1e-6)

@@ -15,6 +15,7 @@ from tissuesim.materials.volumetric import volumetric_part
 ORTHO = dict(E1=1000.0, E2=2000.0, E3=3000.0, G12=600.0, G23=400.0, G31=500.0)
 ORTHO.update(v12=0.3, v23=0.2, v31=0.25)
 AXES = dict(mat_axis_a=[1.0, 0.3, 0.2], mat_axis_d=[0.0, 1.0, 0.4])
+TIMR = dict(c1=100.0, c2=20.0, c3=10.0, c4=5.0, c5=400.0, lam_max=1.1, k=5000.0)
 TIVW = dict(c1=200.0, c2=1.5, c3=10.0, c4=5.0, c5=400.0, lam_max=1.1, k=5000.0)
 #: name -> (registry name, parameters, FEBio type, isotropic)
 LAWS = {
@@ -23,6 +24,8 @@ LAWS = {
     "tivw_goh": ("trans_iso_veronda_westmann",
                  {**TIVW, "fiber": [0.2, 1, 0.5], "pressure_model": "Abaqus (GOH)"},
                  "trans iso Veronda-Westmann", False),
+    "ctimr": ("coupled_trans_iso_mooney_rivlin",
+              {**TIMR, "fiber": [1, 1, 0]}, "coupled trans-iso Mooney-Rivlin", False),
     "ortho": ("orthotropic_elastic", {**ORTHO, **AXES}, "orthotropic elastic", False),
     "fung": ("fung_orthotropic", {**ORTHO, **AXES, "c": 800.0, "k": 9000.0}, "Fung orthotropic",
              False),
@@ -228,3 +231,25 @@ def test_holmes_mow_volumetric_part_is_none():
 def test_holmes_mow_refusals(model, params, message):
     with pytest.raises(MaterialError, match=message):
         make_material(model, **params)
+
+
+def test_coupled_trans_iso_mooney_rivlin_is_coupled_mooney_rivlin_and_febios_fibre():
+    """Without fibre it is coupled Mooney-Rivlin; with c3 = 0 its fibre stays slack up to
+    lam_max and then pulls with l dWf/dl = c5 (l - lam_max) (FEBio's coupled law keeps c3 = 0,
+    where the uncoupled one takes the continuous-slope c3)."""
+    F = random_deformations(np.random.default_rng(9), 6, 3, 0.3)
+    ti = make_material("coupled_trans_iso_mooney_rivlin", c1=100.0, c2=20.0, k=5000.0)
+    mr = make_material("coupled_mooney_rivlin", c1=100.0, c2=20.0, k=5000.0)
+    np.testing.assert_allclose(ti.stress_derivative(F), mr.stress_derivative(F), rtol=1e-11)
+    linear = dict(c1=100.0, c2=20.0, c5=400.0, c4=5.0, lam_max=1.1, k=5000.0)
+    law = make_material("coupled_trans_iso_mooney_rivlin", **linear)
+    for l, pull in ((1.05, 0.0), (1.2, 400.0 * (1.2 - 1.1))):
+        t = l**-0.5
+        Fl = np.diag([l, t, t])[None]
+        P, Pm = law.stress(Fl)[0], mr.stress(Fl)[0]
+        # the fibre's P_11 - P_22 t / l: 2 W4 l = l dWf/dl / l
+        assert (P[0, 0] - P[1, 1] * t / l) - (Pm[0, 0] - Pm[1, 1] * t / l) == pytest.approx(
+            pull / l, abs=1e-9
+        )
+    uncoupled = make_material("trans_iso_mooney_rivlin", **linear)
+    assert uncoupled.c3 == 0.0 and uncoupled._fibre._c3 > 0.0  # its continuous slope

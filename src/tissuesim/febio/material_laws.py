@@ -27,6 +27,7 @@ MATERIAL_TYPES = {
             "HGO unconstrained",
             "trans iso Mooney-Rivlin",
             "trans iso Veronda-Westmann",
+            "coupled trans-iso Mooney-Rivlin",
             "orthotropic elastic",
             "Fung orthotropic",
             "Fung-ortho-compressible",
@@ -56,6 +57,7 @@ FIBRE_TYPES = {
     "HGO unconstrained": "axes",
     "trans iso Mooney-Rivlin": "fiber",
     "trans iso Veronda-Westmann": "fiber",
+    "coupled trans-iso Mooney-Rivlin": "fiber",
     **{
         name: "axes"
         for name in ("orthotropic elastic", "Fung orthotropic", "Fung-ortho-compressible")

@@ -16,7 +16,10 @@ from tissuesim.materials.fibres.fibre_exp_linear import FiberExpLinear, FiberExp
 from tissuesim.materials.fibres.fibre_exp_pow import FiberExpPow, FiberExpPowUncoupled
 from tissuesim.materials.fibres.fibre_pow_linear import FiberPowLinear, FiberPowLinearUncoupled
 from tissuesim.materials.fibres.holzapfel_gasser_ogden import HGOUnconstrained, HolzapfelGasserOgden
-from tissuesim.materials.fibres.trans_iso_mooney_rivlin import TransIsoMooneyRivlin
+from tissuesim.materials.fibres.trans_iso_mooney_rivlin import (
+    CoupledTransIsoMooneyRivlin,
+    TransIsoMooneyRivlin,
+)
 from tissuesim.materials.fibres.trans_iso_veronda_westmann import TransIsoVerondaWestmann
 from tissuesim.materials.fitting import FitResult, fit_material, nominal_stress
 from tissuesim.materials.isotropic.corotated import FixedCorotated
@@ -69,6 +72,7 @@ __all__ = [
     "HGOUnconstrained",
     "TransIsoMooneyRivlin",
     "TransIsoVerondaWestmann",
+    "CoupledTransIsoMooneyRivlin",
     "HolmesMow",
     "UncoupledHolmesMow",
     "OrthotropicElastic",

@@ -25,7 +25,10 @@ from tissuesim.materials.fibres.fibre_exp_linear import FiberExpLinear, FiberExp
 from tissuesim.materials.fibres.fibre_exp_pow import FiberExpPow, FiberExpPowUncoupled
 from tissuesim.materials.fibres.fibre_pow_linear import FiberPowLinear, FiberPowLinearUncoupled
 from tissuesim.materials.fibres.holzapfel_gasser_ogden import HGOUnconstrained, HolzapfelGasserOgden
-from tissuesim.materials.fibres.trans_iso_mooney_rivlin import TransIsoMooneyRivlin
+from tissuesim.materials.fibres.trans_iso_mooney_rivlin import (
+    CoupledTransIsoMooneyRivlin,
+    TransIsoMooneyRivlin,
+)
 from tissuesim.materials.fibres.trans_iso_veronda_westmann import TransIsoVerondaWestmann
 from tissuesim.materials.isotropic.corotated import FixedCorotated
 from tissuesim.materials.isotropic.course_neo_hookean import CourseNeoHookean
@@ -79,6 +82,7 @@ FIBRE_LAWS: tuple[type[Material], ...] = (
     HGOUnconstrained,
     TransIsoMooneyRivlin,
     TransIsoVerondaWestmann,
+    CoupledTransIsoMooneyRivlin,
     OrthotropicElastic,
     FungOrthotropic,
     FungOrthotropicCompressible,

@@ -28,6 +28,7 @@ With W(I1, I2, I4_f) and a fibre a_f (unit, reference), P = 2 W1 F + 2 W2 (I1 F 
 * trans-iso Mooney-Rivlin: W1 = c1, W2 = c2, W4 = s(lb) / (2 lb^2), lb = sqrt(I4), with lb dWf/dlb
   = s(lb) = 0 (lb < 1), c3 (exp(c4 (lb - 1)) - 1) (1 <= lb < lam_max), c5 lb + c6 past lam_max,
   c6 = c3 (exp(c4 (lam_max - 1)) - 1) - c5 lam_max.
+* coupled trans-iso Mooney-Rivlin: the same W1, W2, W4 on I1, I2, I4 (J = 1 here).
 * trans-iso Veronda-Westmann: W1 = c1 c2 exp(c2 (I1 - 3)), W2 = -c1 c2 / 2, W4 the fibre of
   trans-iso Mooney-Rivlin.
 * FEBio's fibre laws alone (a solid mixture's components; J = 1, so the uncoupled forms' I4b is
@@ -195,6 +196,13 @@ def _cases() -> list[tuple[str, str, str, dict, object, list]]:
          {**timr, "fiber": (1.0, 0.0, 1.0)}, _timr, [(_SQ, 0.0, _SQ)]),
         ("trans_iso_mooney_rivlin", f"shear, fibre (1, 1, 0) (g = {G}, exponential part)",
          "shear", {**timr, "fiber": (1.0, 1.0, 0.0)}, _timr, [(_SQ, _SQ, 0.0)]),
+    ]  # fmt: skip
+    ctimr = {**timr, "fiber": (1.0, 1.0, 0.0)}
+    out += [
+        ("coupled_trans_iso_mooney_rivlin", f"uniaxial along the fibre (l = {L}, linear part)",
+         "uniaxial", {**ctimr, "fiber": (1.0, 0.0, 0.0)}, _timr, [(1.0, 0.0, 0.0)]),
+        ("coupled_trans_iso_mooney_rivlin", f"shear, fibre (1, 1, 0) (g = {G}, exponential part)",
+         "shear", ctimr, _timr, [(_SQ, _SQ, 0.0)]),
     ]  # fmt: skip
     tivw = {**_TIVW, "k": 3000.0}
     out += [

@@ -29,7 +29,17 @@ __all__ = ["ExpLinearFibre", "FiberExpLinear", "FiberExpLinearUncoupled"]
 class ExpLinearFibre:
     """The exponential-linear fibre's W(I4) and its derivatives (checked parameters)."""
 
-    def __init__(self, law: str, c3: object, c4: object, c5: object, lam_max: object) -> None:
+    def __init__(
+        self,
+        law: str,
+        c3: object,
+        c4: object,
+        c5: object,
+        lam_max: object,
+        continuous_slope: bool = True,
+    ) -> None:
+        """``continuous_slope`` False: c3 = 0 stays 0 (FEBio's coupled trans-iso Mooney-Rivlin,
+        whose fibre is then slack up to lam_max and linear past it)."""
         self.c3, self.c4 = parameter(law, "c3", c3), parameter(law, "c4", c4, unit="")
         self.c5 = parameter(law, "c5", c5)
         self.lam_max = parameter(law, "lam_max", lam_max, unit="")
@@ -38,7 +48,7 @@ class ExpLinearFibre:
         if self.c4 == 0.0 and (self.c3 > 0.0 or self.c5 > 0.0):
             raise MaterialError(f"{law}: c4 must be > 0 for a fibre with c3 or c5 > 0")
         self._c3 = self.c3
-        if self.c3 == 0.0 and self.c5 > 0.0:
+        if self.c3 == 0.0 and self.c5 > 0.0 and continuous_slope:
             self._c3 = self.c5 / self.c4 * np.exp(-self.c4 * (self.lam_max - 1.0))
         self._c6 = self._c3 * np.expm1(self.c4 * (self.lam_max - 1.0)) - self.c5 * self.lam_max
         self._wmax = self._energy_below(np.array([self.lam_max]))[0]

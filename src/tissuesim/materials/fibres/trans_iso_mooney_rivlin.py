@@ -18,12 +18,21 @@ s = lb dWf/dlb. U(J) = k/2 (ln J)^2 (FEBio's ``pressure_model`` picks another).
 ``fiber``: the reference fibre direction, one vector or one per element ((m, 3), expanded by
 ``bind``). ``.mu`` = 2 (c1 + c2), ``.lam`` = k - 2 mu / 3 are the matrix's small-strain moduli.
 J <= 0: energy +inf, stress and tangent raise InvertedElementError.
+
+``coupled_trans_iso_mooney_rivlin`` is FEBio's ``coupled trans-iso Mooney-Rivlin``
+(``FECoupledTransIsoMooneyRivlin``): the same on I1, I2 and the fibre stretch l = sqrt(I4),
+
+    W = c1 (I1 - 3) + c2 (I2 - 3) - 2 (c1 + 2 c2) ln J + Wf(l) + k/2 (ln J)^2
+
+with the same fibre except that c3 = 0 stays 0 (FEBio's coupled law: slack up to lam_max, then
+l dWf/dl = c5 (l - lam_max)). ``.mu`` = 2 (c1 + c2), ``.lam`` = k + 4 c2.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
+from tissuesim.errors import MaterialError
 from tissuesim.materials.fibres._fibres import FibreLaw, planar_keys, unit_vectors
 from tissuesim.materials.fibres.fibre_exp_linear import ExpLinearFibre
 from tissuesim.materials.soft_tissue._hyperelastic import (
@@ -34,7 +43,7 @@ from tissuesim.materials.soft_tissue._hyperelastic import (
 )
 from tissuesim.materials.soft_tissue._hyperelastic import pressure_model as _pressure_model
 
-__all__ = ["TransIsoMooneyRivlin"]
+__all__ = ["TransIsoMooneyRivlin", "CoupledTransIsoMooneyRivlin"]
 
 
 class TransIsoMooneyRivlin(FibreLaw):
@@ -92,3 +101,41 @@ class TransIsoMooneyRivlin(FibreLaw):
         if order >= 2:
             h[:, 2, 2] = ddWf
         return w, g, h
+
+
+class CoupledTransIsoMooneyRivlin(TransIsoMooneyRivlin):
+    """FEBio's coupled trans-iso Mooney-Rivlin: c1 (I1 - 3) + c2 (I2 - 3) - 2 (c1 + 2 c2) ln J
+    + an exponential-linear fibre on l = sqrt(I4) + k/2 (ln J)^2; c1 > 0, c2, c3, c5, k in Pa."""
+
+    name = "coupled_trans_iso_mooney_rivlin"
+    febio_name = "coupled trans-iso Mooney-Rivlin"
+    uncoupled = False
+
+    def __init__(
+        self,
+        *,
+        c1: float | None = None,
+        c2: float = 0.0,
+        c3: float = 0.0,
+        c4: float = 0.0,
+        c5: float = 0.0,
+        lam_max: float = 1.0,
+        k: float | None = None,
+        fiber: object = (1.0, 0.0, 0.0),
+    ) -> None:
+        super().__init__(c1=c1, c2=c2, c3=c3, c4=c4, c5=c5, lam_max=lam_max, k=k, fiber=fiber)
+        if not self.c1 > 0.0:
+            raise MaterialError(f"{self.name}: c1 must be > 0 Pa, got {self.c1!r}")
+        self._fibre = ExpLinearFibre(self.name, c3, c4, c5, lam_max, continuous_slope=False)
+        self.lam = self.k + 4.0 * self.c2
+        self._check_moduli()
+
+    def parameters(self) -> dict[str, object]:
+        out = super().parameters()
+        del out["pressure_model"]
+        return out
+
+    def bulk(self, J: np.ndarray, lnJ: np.ndarray) -> tuple:
+        a = 2.0 * (self.c1 + 2.0 * self.c2)
+        U = -a * lnJ + 0.5 * self.k * lnJ**2
+        return U, (self.k * lnJ - a) / J, (self.k * (1.0 - lnJ) + a) / J**2
