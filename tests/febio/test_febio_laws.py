@@ -160,3 +160,27 @@ def test_coupled_trans_iso_mooney_rivlin_uniaxial_is_the_laws_homogeneous_state(
     assert stretch[1] == pytest.approx(stretch[2], rel=1e-9) and stretch[1] < 0.99
     assert np.allclose([P[1, 1], P[2, 2]], 0.0, atol=1e-6 * P[0, 0])
     assert force == pytest.approx(P[0, 0], rel=1e-6)
+
+
+def test_tc_nonlinear_orthotropic_uniaxial_is_the_laws_homogeneous_state(tmp_path):
+    """mat_axis a = y, d = -x: the pull along x stretches family a_2 (beta 3, ksi 3000); the
+    cube deforms homogeneously, y and z contract differently (a_1 and a_3 slack but the state
+    is not transversely isotropic: the pull's family differs), and the pull is P_xx. beta and
+    ksi are read as three values, or one for all three axes."""
+    from tissuesim.materials import TCNonlinearOrthotropic
+
+    scene = load_febio(MODELS / "tc_nonlinear_orthotropic_uniaxial.feb")
+    x = _run(scene, 3)
+    stretch = _stretches(scene, x)
+    params = dict(c1=1000.0, c2=200.0, beta=[2.5, 3, 4], ksi=[8000, 3000, 5000], k=50000.0)
+    law = TCNonlinearOrthotropic(**params, mat_axis_a=[0, 1, 0], mat_axis_d=[-1, 0, 0])
+    P = law.evaluate(np.diag(stretch)[None], 1).stress[0]
+    force = abs(scene.simulation.step().extra["forces"]["pull"][0])
+    assert stretch[0] == pytest.approx(1.15)
+    assert np.allclose([P[1, 1], P[2, 2]], 0.0, atol=1e-6 * P[0, 0])
+    assert force == pytest.approx(P[0, 0], rel=1e-6)
+    path = _with(
+        tmp_path, "tc_nonlinear_orthotropic_uniaxial", "<beta>2.5,3,4</beta>", "<beta>3</beta>"
+    )
+    data, _ = febio_scene(read_feb(path), "x")
+    assert data["material"]["beta"] == [3.0] and data["material"]["ksi"] == [8000, 3000, 5000]

@@ -26,6 +26,9 @@ LAWS = {
                  "trans iso Veronda-Westmann", False),
     "ctimr": ("coupled_trans_iso_mooney_rivlin",
               {**TIMR, "fiber": [1, 1, 0]}, "coupled trans-iso Mooney-Rivlin", False),
+    "tc": ("tc_nonlinear_orthotropic",
+           {"c1": 100.0, "c2": 20.0, "beta": [2.5, 3.0, 4.0], "ksi": [800.0, 300.0, 500.0],
+            "k": 5000.0, **AXES}, "TC nonlinear orthotropic", False),
     "ortho": ("orthotropic_elastic", {**ORTHO, **AXES}, "orthotropic elastic", False),
     "fung": ("fung_orthotropic", {**ORTHO, **AXES, "c": 800.0, "k": 9000.0}, "Fung orthotropic",
              False),
@@ -36,7 +39,7 @@ LAWS = {
     "uncoupled_holmes_mow": ("uncoupled_holmes_mow", {"mu": 300.0, "beta": 2.0, "k": 3000.0},
                              "uncoupled Holmes-Mow", True),
 }  # fmt: skip
-UNCOUPLED = ("tivw", "tivw_goh", "fung", "uncoupled_holmes_mow")
+UNCOUPLED = ("tivw", "tivw_goh", "fung", "uncoupled_holmes_mow", "tc")
 
 
 def _law(key: str):
@@ -253,3 +256,33 @@ def test_coupled_trans_iso_mooney_rivlin_is_coupled_mooney_rivlin_and_febios_fib
         )
     uncoupled = make_material("trans_iso_mooney_rivlin", **linear)
     assert uncoupled.c3 == 0.0 and uncoupled._fibre._c3 > 0.0  # its continuous slope
+
+
+def test_tc_nonlinear_orthotropic_fibres_bear_tension_only():
+    """Compressed along every axis (a pure isochoric squeeze is impossible, so: each axis in
+    turn stretched while the others shorten) only the stretched family adds to the matrix,
+    and with ksi = 0 the law is Mooney-Rivlin; one beta for all axes is three equal ones."""
+    mr = make_material("mooney_rivlin", c1=100.0, c2=20.0, k=5000.0)
+    one = dict(c1=100.0, c2=20.0, k=5000.0, beta=3.0)
+    zero = make_material("tc_nonlinear_orthotropic", **one, ksi=0.0)
+    F = random_deformations(np.random.default_rng(2), 5, 3, 0.3)
+    np.testing.assert_allclose(zero.stress_derivative(F), mr.stress_derivative(F), rtol=1e-11)
+    law = make_material("tc_nonlinear_orthotropic", **one, ksi=[500.0, 0.0, 0.0])
+    same = make_material("tc_nonlinear_orthotropic", **{**one, "beta": [3.0] * 3}, ksi=[500, 0, 0])
+    np.testing.assert_allclose(law.stress(F), same.stress(F), rtol=1e-14)
+    squeezed = np.diag([0.9, 1.0 / 0.9**0.5, 1.0 / 0.9**0.5])[None]  # a_1 shorter: slack
+    np.testing.assert_allclose(law.stress(squeezed), mr.stress(squeezed), rtol=1e-12)
+    pulled = np.diag([1.2, 1.2**-0.5, 1.2**-0.5])[None]
+    extra = law.energy_density(pulled) - mr.energy_density(pulled)
+    np.testing.assert_allclose(extra, 500.0 * 0.2**3, rtol=1e-12)
+
+
+@pytest.mark.parametrize(
+    "change, message",
+    [({"beta": 1.5}, "beta must be >= 2"), ({"ksi": [1.0, 2.0]}, "ksi takes 1 or 3 values"),
+     ({"ksi": None}, "needs ksi")],
+)  # fmt: skip
+def test_tc_nonlinear_orthotropic_refusals(change, message):
+    params = dict(c1=1.0, k=10.0, beta=3.0, ksi=1.0)
+    with pytest.raises(MaterialError, match=message):
+        make_material("tc_nonlinear_orthotropic", **{**params, **change})

@@ -5,7 +5,15 @@ the uncoupled laws (which FEBio runs with its three-field element). ``materials.
 
 from __future__ import annotations
 
-__all__ = ["MATERIAL_TYPES", "FIBRES_ONLY", "MIXTURES", "FIBRE_TYPES", "UNCOUPLED", "VISCOELASTIC"]
+__all__ = [
+    "VECTOR_PARAMETERS",
+    "MATERIAL_TYPES",
+    "FIBRES_ONLY",
+    "MIXTURES",
+    "FIBRE_TYPES",
+    "UNCOUPLED",
+    "VISCOELASTIC",
+]
 
 #: FEBio material types tissuesim runs -> (model, FEBio parameter -> tissuesim keyword; None:
 #: the law takes FEBio's parameter names as they are)
@@ -32,6 +40,7 @@ MATERIAL_TYPES = {
             "Fung orthotropic",
             "Fung-ortho-compressible",
             "Holmes-Mow",
+            "TC nonlinear orthotropic",
             "uncoupled Holmes-Mow",
             "fiber-exp-pow",
             "fiber-exp-pow-uncoupled",
@@ -60,7 +69,12 @@ FIBRE_TYPES = {
     "coupled trans-iso Mooney-Rivlin": "fiber",
     **{
         name: "axes"
-        for name in ("orthotropic elastic", "Fung orthotropic", "Fung-ortho-compressible")
+        for name in (
+            "orthotropic elastic",
+            "Fung orthotropic",
+            "Fung-ortho-compressible",
+            "TC nonlinear orthotropic",
+        )
     },
     **{name: "fiber" for name in FIBRES_ONLY},
 }
@@ -68,8 +82,11 @@ FIBRE_TYPES = {
 UNCOUPLED = {
     "Mooney-Rivlin", "Ogden", "Yeoh", "Veronda-Westmann", "Arruda-Boyce",
     "Holzapfel-Gasser-Ogden", "trans iso Mooney-Rivlin", "trans iso Veronda-Westmann",
-    "Fung orthotropic", "uncoupled Holmes-Mow", "uncoupled viscoelastic",
+    "Fung orthotropic", "uncoupled Holmes-Mow", "TC nonlinear orthotropic",
+    "uncoupled viscoelastic",
     "uncoupled solid mixture", "fiber-exp-pow-uncoupled", "fiber-pow-linear-uncoupled",
     "uncoupled fiber-exp-linear",
 }  # fmt: skip
 VISCOELASTIC = {"viscoelastic": "viscoelastic", "uncoupled viscoelastic": "uncoupled_viscoelastic"}
+#: parameters given as a list (one value per axis), by FEBio type
+VECTOR_PARAMETERS = {"TC nonlinear orthotropic": ("beta", "ksi")}

@@ -33,6 +33,7 @@ from tissuesim.febio.material_laws import (
     MATERIAL_TYPES,
     MIXTURES,
     UNCOUPLED,
+    VECTOR_PARAMETERS,
     VISCOELASTIC,
 )
 from tissuesim.febio.model import FebModel, _floats, _once, _unsupported
@@ -122,6 +123,9 @@ def _law(
         key = p.tag if rename is None else rename.get(p.tag)
         if key is None:
             raise p.error(f"parameter {p.tag!r} of {kind!r}: it takes {sorted(rename)}")
+        if p.tag in VECTOR_PARAMETERS.get(kind, ()):
+            params[key] = _floats(p).tolist()
+            continue
         params[key] = float(_floats(p, 1)[0])
     if not component:
         try:

@@ -25,6 +25,7 @@ from tissuesim.materials.fibres.fibre_exp_linear import FiberExpLinear, FiberExp
 from tissuesim.materials.fibres.fibre_exp_pow import FiberExpPow, FiberExpPowUncoupled
 from tissuesim.materials.fibres.fibre_pow_linear import FiberPowLinear, FiberPowLinearUncoupled
 from tissuesim.materials.fibres.holzapfel_gasser_ogden import HGOUnconstrained, HolzapfelGasserOgden
+from tissuesim.materials.fibres.tc_nonlinear_orthotropic import TCNonlinearOrthotropic
 from tissuesim.materials.fibres.trans_iso_mooney_rivlin import (
     CoupledTransIsoMooneyRivlin,
     TransIsoMooneyRivlin,
@@ -83,6 +84,7 @@ FIBRE_LAWS: tuple[type[Material], ...] = (
     TransIsoMooneyRivlin,
     TransIsoVerondaWestmann,
     CoupledTransIsoMooneyRivlin,
+    TCNonlinearOrthotropic,
     OrthotropicElastic,
     FungOrthotropic,
     FungOrthotropicCompressible,

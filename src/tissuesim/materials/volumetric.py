@@ -14,7 +14,8 @@ theta is the law's measure of volume change and U its lambda term, the part that
                          theta), "Abaqus": k/2 (theta - 1)^2)
     ogden_unconstrained  theta = J             U = cp/2 (theta - 1)^2
     holzapfel_gasser_ogden, hgo_unconstrained, trans_iso_mooney_rivlin,
-    trans_iso_veronda_westmann, fung_orthotropic, fung_ortho_compressible: their bulk term with k
+    trans_iso_veronda_westmann, fung_orthotropic, fung_ortho_compressible,
+    tc_nonlinear_orthotropic: their bulk term with k
                          (HGO: FEBio's default k/4 (theta^2 - 1 - 2 ln theta))
     uncoupled_holmes_mow  theta = J             U = its bulk term with k
     holmes_mow           none (U = 0: its J terms are inside its exponential, psi_rest the law)
@@ -62,6 +63,7 @@ VOLUMETRIC_LAWS = {
     "fung_orthotropic": ("J", "log"),
     "fung_ortho_compressible": ("J", "log"),
     "uncoupled_holmes_mow": ("J", "log"),
+    "tc_nonlinear_orthotropic": ("J", "log"),
     "holmes_mow": ("J", "log"),
     **{
         name: ("J", "log")

@@ -29,6 +29,8 @@ With W(I1, I2, I4_f) and a fibre a_f (unit, reference), P = 2 W1 F + 2 W2 (I1 F 
   = s(lb) = 0 (lb < 1), c3 (exp(c4 (lb - 1)) - 1) (1 <= lb < lam_max), c5 lb + c6 past lam_max,
   c6 = c3 (exp(c4 (lam_max - 1)) - 1) - c5 lam_max.
 * coupled trans-iso Mooney-Rivlin: the same W1, W2, W4 on I1, I2, I4 (J = 1 here).
+* TC nonlinear orthotropic: W1 = c1, W2 = c2 and a family along each axis with
+  W4_a = beta_a ksi_a (l_a - 1)^(beta_a - 1) / (2 l_a), l_a = sqrt(I4_a) > 1 (else 0).
 * trans-iso Veronda-Westmann: W1 = c1 c2 exp(c2 (I1 - 3)), W2 = -c1 c2 / 2, W4 the fibre of
   trans-iso Mooney-Rivlin.
 * FEBio's fibre laws alone (a solid mixture's components; J = 1, so the uncoupled forms' I4b is
@@ -85,6 +87,18 @@ def _tivw(fibres, i1, i4s):
     """(W1, W2, [W4]) of trans-iso Veronda-Westmann (closed form above)."""
     c1, c2 = _TIVW["c1"], _TIVW["c2"]
     return c1 * c2 * math.exp(c2 * (i1 - 3.0)), -0.5 * c1 * c2, _timr(fibres, i1, i4s)[2]
+
+
+_TC = {"c1": 150.0, "c2": 40.0, "beta": [2.5, 3.0, 4.0], "ksi": [800.0, 300.0, 500.0]}
+
+
+def _tc(fibres, i1, i4s):
+    """(W1, W2, [W4_a]) of TC nonlinear orthotropic, families along the global axes."""
+    w4 = []
+    for i4, b, ksi in zip(i4s, _TC["beta"], _TC["ksi"], strict=True):
+        lam = math.sqrt(i4)
+        w4.append(b * ksi * (lam - 1.0) ** (b - 1.0) / (2.0 * lam) if lam > 1.0 else 0.0)
+    return _TC["c1"], _TC["c2"], w4
 
 
 _EXP_POW = {"ksi": 500.0, "alpha": 2.0, "beta": 2.5}
@@ -203,6 +217,14 @@ def _cases() -> list[tuple[str, str, str, dict, object, list]]:
          "uniaxial", {**ctimr, "fiber": (1.0, 0.0, 0.0)}, _timr, [(1.0, 0.0, 0.0)]),
         ("coupled_trans_iso_mooney_rivlin", f"shear, fibre (1, 1, 0) (g = {G}, exponential part)",
          "shear", ctimr, _timr, [(_SQ, _SQ, 0.0)]),
+    ]  # fmt: skip
+    tc, axes = {**_TC, "k": 3000.0}, [(1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0)]
+    out += [
+        ("tc_nonlinear_orthotropic", f"uniaxial along a_1, a_2 and a_3 compressed (l = {L})",
+         "uniaxial", tc, _tc, axes),
+        ("tc_nonlinear_orthotropic", f"equibiaxial, a_3 compressed (l = {L})", "equibiaxial",
+         tc, _tc, axes),
+        ("tc_nonlinear_orthotropic", f"shear, a_2 stretched (g = {G})", "shear", tc, _tc, axes),
     ]  # fmt: skip
     tivw = {**_TIVW, "k": 3000.0}
     out += [
