@@ -184,3 +184,72 @@ def test_tc_nonlinear_orthotropic_uniaxial_is_the_laws_homogeneous_state(tmp_pat
     )
     data, _ = febio_scene(read_feb(path), "x")
     assert data["material"]["beta"] == [3.0] and data["material"]["ksi"] == [8000, 3000, 5000]
+
+
+def test_hyperelastic_w_is_the_energy_law_and_runs_as_neo_hookean(tmp_path):
+    """FEBio's hyperelastic with W the neo-Hookean energy: the energy law with the assigned
+    parameters, whose run is the neo-Hookean model's to round-off."""
+    scene = load_febio(MODELS / "hyperelastic_uniaxial.feb")
+    data, _ = febio_scene(read_feb(MODELS / "hyperelastic_uniaxial.feb"), "x")
+    material = data["material"]
+    assert (material["model"], material["mu"], material["lam"]) == ("energy", 1000.0, 4000.0)
+    assert material["psi"] == "mu*((I1 - 3)/2 - ln(J)) + lam*ln(J)*ln(J)/2"
+    x = _run(scene, 3)
+    E, nu = 1000.0 * (3 * 4000.0 + 2 * 1000.0) / (4000.0 + 1000.0), 4000.0 / (2 * 5000.0)
+    text = (MODELS / "hyperelastic_uniaxial.feb").read_text()
+    old = text[text.index('<material id="1"') : text.index("</material>")]
+    new = '<material id="1" name="tissue" type="neo-Hookean"><density>1000</density>'
+    new += f"<E>{E!r}</E><v>{nu!r}</v>"
+    path = tmp_path / "neo.feb"
+    path.write_text(text.replace(old, new))
+    np.testing.assert_allclose(x, _run(load_febio(path), 3), atol=1e-9)
+
+
+@pytest.mark.parametrize(
+    "w, extra, expected",
+    [("c1 = 1; c2 = 0.1; c1*(I1 - 3) + c2*(I2 - 3)", "<k>100</k>",
+      "c1*(I1b - 3) + c2*(I2b - 3) + k/2*ln(J)**2"),
+     ("c1 = 2; c1*(I1 - 3)", "<k>100</k><pressure_model>Abaqus</pressure_model>",
+      "c1*(I1b - 3) + k/2*(J - 1)**2"),
+     ("e = 2; e*(exp(I1 - 3) - 1) + 1e-3*log(I2/3)", "<k>5</k>",
+      "p_e*(exp(I1b - 3) - 1) + 1e-3*0.4342944819032518*ln(I2b/3) + k/2*ln(J)**2")],
+)  # fmt: skip
+def test_uncoupled_hyperelastic_w_in_the_deviatoric_invariants(tmp_path, w, extra, expected):
+    """I1, I2 become I1b, I2b, FEBio's bulk term of k and pressure_model is added, FEBio's log
+    is decimal, a parameter named like a tissuesim name is renamed; with W Mooney-Rivlin's it
+    is the uncoupled Mooney-Rivlin law."""
+    from tissuesim.materials import make_material
+
+    text = (MODELS / "hyperelastic_uniaxial.feb").read_text()
+    old = text[text.index('<material id="1"') : text.index("</material>")]
+    new = f'<material id="1" name="tissue" type="uncoupled hyperelastic"><W>{w}</W>{extra}'
+    path = tmp_path / "uc.feb"
+    path.write_text(text.replace(old, new))
+    model = read_feb(path)
+    assert any("three-field element" in n for n in model.notes)
+    data, _ = febio_scene(model, "x")
+    params = dict(data["material"])
+    assert params.pop("model") == "energy" and params.pop("psi") == expected
+    if "c2" in params:
+        law = make_material("energy", psi=expected, **params)
+        mr = make_material("mooney_rivlin", c1=1.0, c2=0.1, k=100.0)
+        F = np.array([[[1.2, 0.1, 0.0], [0.05, 0.9, 0.1], [0.0, -0.1, 1.05]]])
+        np.testing.assert_allclose(law.stress_derivative(F), mr.stress_derivative(F), rtol=1e-10)
+
+
+@pytest.mark.parametrize(
+    "kind, w, message",
+    [("hyperelastic", "mu = 1; mu*(I1 - 3)/2 - mu*ln(J) + X", "the position X"),
+     ("hyperelastic", "mu = 1; nu*(I1 - 3)", "unknown name 'nu'"),
+     ("hyperelastic", "mu = one; mu*(I1 - 3)", "a parameter is a number"),
+     ("hyperelastic", "mu = 1; mu*(I1 - 3)", "not stress-free at rest"),
+     ("uncoupled hyperelastic", "mu = 1; mu*(I1 - 3) + J", "unknown name J"),
+     ("uncoupled hyperelastic", "mu = 1; mu*(I1 - 3)", "needs its bulk modulus <k>")],
+)  # fmt: skip
+def test_hyperelastic_refusals(tmp_path, kind, w, message):
+    text = (MODELS / "hyperelastic_uniaxial.feb").read_text()
+    old = text[text.index('<material id="1"') : text.index("</material>")]
+    path = tmp_path / "bad.feb"
+    path.write_text(text.replace(old, f'<material id="1" name="t" type="{kind}"><W>{w}</W>'))
+    with pytest.raises(FebError, match=message):
+        read_feb(path)

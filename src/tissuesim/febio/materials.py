@@ -27,6 +27,7 @@ from tissuesim.febio.material_axes import (
     read_mesh_data,
     with_directions,
 )
+from tissuesim.febio.material_expressions import GENERIC, generic_hyperelastic
 from tissuesim.febio.material_laws import (
     FIBRE_TYPES,
     FIBRES_ONLY,
@@ -87,8 +88,18 @@ def _law(
         if component:
             raise mat.error(f"{kind!r}: a mixture is not a component of a mixture (nor in FEBio)")
         return _mixture(model, mat, kind)
+    if kind in GENERIC:
+        params, density = generic_hyperelastic(model, mat, kind)
+        if not (density > 0.0):
+            raise mat.error(f"density {density:g}: a density must be > 0 (kg/m^3 in SI units)")
+        if not component:
+            try:
+                make_material("energy", **params)
+            except TissueSimError as exc:
+                raise mat.error(f"material {kind!r}: {exc}") from None
+        return ("energy", params, density, kind, None)
     if kind not in MATERIAL_TYPES or (kind in FIBRES_ONLY and not component):
-        known = [k for k in MATERIAL_TYPES if component or k not in FIBRES_ONLY]
+        known = [k for k in MATERIAL_TYPES if component or k not in FIBRES_ONLY] + list(GENERIC)
         known += list(VISCOELASTIC) if top else []
         known += list(MIXTURES) if not component else []
         where = " in a solid mixture" if component else ""
