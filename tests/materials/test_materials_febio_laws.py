@@ -38,6 +38,11 @@ LAWS = {
     "holmes_mow_v0": ("holmes_mow", {"E": 1000.0, "v": 0.0, "beta": 2.0}, "Holmes-Mow", True),
     "uncoupled_holmes_mow": ("uncoupled_holmes_mow", {"mu": 300.0, "beta": 2.0, "k": 3000.0},
                              "uncoupled Holmes-Mow", True),
+    "abu": ("arruda_boyce_unconstrained", {"ksi": 300.0, "N": 4.0, "kappa": 3000.0},
+            "Arruda-Boyce unconstrained", True),
+    "abu_short": ("arruda_boyce_unconstrained",
+                  {"ksi": 300.0, "N": 2.0, "n_term": 3, "kappa": 300.0},
+                  "Arruda-Boyce unconstrained", True),
 }  # fmt: skip
 UNCOUPLED = ("tivw", "tivw_goh", "fung", "uncoupled_holmes_mow", "tc")
 
@@ -286,3 +291,41 @@ def test_tc_nonlinear_orthotropic_refusals(change, message):
     params = dict(c1=1.0, k=10.0, beta=3.0, ksi=1.0)
     with pytest.raises(MaterialError, match=message):
         make_material("tc_nonlinear_orthotropic", **{**params, **change})
+
+
+def test_arruda_boyce_unconstrained_series_is_the_inverse_langevin_function():
+    """The coefficients are the inverse Langevin function's series (reverted here from
+    L(x) = coth x - 1/x = x/3 - x^3/45 + 2 x^5/945 - x^7/4725 + ... by Newton's iteration on
+    the truncated series), and at rest the law is Hooke's with mu = W10, lam = 2 kappa + 4 w11."""
+    from tissuesim.materials.soft_tissue.arruda_boyce_unconstrained import INVERSE_LANGEVIN
+
+    y = np.linspace(0.05, 0.5, 10)
+    inverse = np.polynomial.polynomial.polyval(
+        y, np.ravel(np.c_[0 * INVERSE_LANGEVIN, INVERSE_LANGEVIN])
+    )
+    langevin = 1 / np.tanh(inverse) - 1 / inverse
+    np.testing.assert_allclose(langevin, y, rtol=1e-13)
+    np.testing.assert_allclose(
+        INVERSE_LANGEVIN[:5], [3, 9 / 5, 297 / 175, 1539 / 875, 126117 / 67375]
+    )
+    law = make_material("arruda_boyce_unconstrained", ksi=300.0, N=4.0, kappa=3000.0)
+    A = law.stress_derivative(np.eye(3)[None])[0]
+    I = np.eye(3)
+    hooke = law.lam * np.einsum("ij,kl->ijkl", I, I) + law.mu * (
+        np.einsum("ik,jl->ijkl", I, I) + np.einsum("il,jk->ijkl", I, I)
+    )
+    np.testing.assert_allclose(A, hooke, atol=1e-9 * law.lam)
+    assert law.lam > 2 * 3000.0 and law.mu > 300.0
+
+
+@pytest.mark.parametrize(
+    "change, message",
+    [({"n_term": 2}, "n_term must be a whole number in 3..30"),
+     ({"n_term": 3.5}, "n_term must be a whole number"), ({"kappa": 0.0}, "kappa must be > 0"),
+     ({"N": None}, "needs N")],
+)  # fmt: skip
+def test_arruda_boyce_unconstrained_refusals(change, message):
+    with pytest.raises(MaterialError, match=message):
+        make_material(
+            "arruda_boyce_unconstrained", **{"ksi": 1.0, "N": 4.0, "kappa": 1.0, **change}
+        )

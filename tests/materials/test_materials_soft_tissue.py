@@ -197,3 +197,6 @@ CASES.update(
     holmes_mow=(dict(E=1000.0, v=0.3, beta=0.5), 1000.0 / 2.6, 300.0 / (1.3 * 0.4)),
     uncoupled_holmes_mow=(dict(mu=300.0, beta=2.0, k=3000.0), 300.0, 3000.0 - 200.0),
 )
+
+# FEBio's Arruda-Boyce unconstrained (issue 42): tested in test_materials_febio_laws.py
+CASES["arruda_boyce_unconstrained"] = (dict(ksi=300.0, N=4.0, kappa=3000.0), None, None)

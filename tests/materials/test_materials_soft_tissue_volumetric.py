@@ -136,3 +136,6 @@ def test_pressure_model_errors():
 PARAMS.update(
     holmes_mow=dict(E=1000.0, v=0.3, beta=0.5), uncoupled_holmes_mow=dict(mu=300.0, beta=2.0)
 )
+
+# FEBio's Arruda-Boyce unconstrained (issue 42): its bulk term kappa/2 (J^2 - 1 - 2 ln J)
+PARAMS["arruda_boyce_unconstrained"] = dict(ksi=300.0, N=4.0)

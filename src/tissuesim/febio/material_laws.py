@@ -41,6 +41,7 @@ MATERIAL_TYPES = {
             "Fung-ortho-compressible",
             "Holmes-Mow",
             "TC nonlinear orthotropic",
+            "Arruda-Boyce unconstrained",
             "uncoupled Holmes-Mow",
             "fiber-exp-pow",
             "fiber-exp-pow-uncoupled",

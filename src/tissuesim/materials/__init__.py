@@ -44,6 +44,7 @@ from tissuesim.materials.registry import (
     make_material,
 )
 from tissuesim.materials.soft_tissue.arruda_boyce import ArrudaBoyce, CoupledArrudaBoyce
+from tissuesim.materials.soft_tissue.arruda_boyce_unconstrained import ArrudaBoyceUnconstrained
 from tissuesim.materials.soft_tissue.holmes_mow import HolmesMow, UncoupledHolmesMow
 from tissuesim.materials.soft_tissue.mooney_rivlin import CoupledMooneyRivlin, MooneyRivlin
 from tissuesim.materials.soft_tissue.ogden import Ogden, OgdenUnconstrained
@@ -77,6 +78,7 @@ __all__ = [
     "TCNonlinearOrthotropic",
     "HolmesMow",
     "UncoupledHolmesMow",
+    "ArrudaBoyceUnconstrained",
     "OrthotropicElastic",
     "FungOrthotropic",
     "FungOrthotropicCompressible",

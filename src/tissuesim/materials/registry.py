@@ -43,6 +43,7 @@ from tissuesim.materials.orthotropic import (
     OrthotropicElastic,
 )
 from tissuesim.materials.soft_tissue.arruda_boyce import ArrudaBoyce, CoupledArrudaBoyce
+from tissuesim.materials.soft_tissue.arruda_boyce_unconstrained import ArrudaBoyceUnconstrained
 from tissuesim.materials.soft_tissue.holmes_mow import HolmesMow, UncoupledHolmesMow
 from tissuesim.materials.soft_tissue.mooney_rivlin import CoupledMooneyRivlin, MooneyRivlin
 from tissuesim.materials.soft_tissue.ogden import Ogden, OgdenUnconstrained
@@ -75,6 +76,7 @@ SOFT_TISSUE_LAWS: tuple[type[Material], ...] = (
     CoupledArrudaBoyce,
     HolmesMow,
     UncoupledHolmesMow,
+    ArrudaBoyceUnconstrained,
 )
 
 #: the fibre-reinforced laws (directions per body, element or point): FEBio's names too

@@ -16,7 +16,9 @@ W1, W2 of each law: neo-Hookean forms mu / 2, 0; St Venant-Kirchhoff (lam/8 (I1 
 mu/4 (I1^2 - 2 I2 - 2 I1 + 3)) lam (I1 - 3)/4 + mu (I1 - 1)/2, -mu/2; Mooney-Rivlin c1, c2;
 Yeoh sum i c_i (I1 - 3)^(i-1); Holmes-Mow (at J = 1) exp(Q) (2 mu - lam)/4, exp(Q) lam/4 with
 Q = beta/Ha ((2 mu - lam)(I1 - 3) + lam (I2 - 3)), Ha = lam + 2 mu, and uncoupled mu/2
-exp(beta (I1 - 3)), 0; Veronda-Westmann c1 c2 exp(c2 (I1 - 3)), -c1 c2 / 2;
+exp(beta (I1 - 3)), 0; Arruda-Boyce unconstrained ksi N beta / (2 sqrt(3 N I1)), 0 with beta
+the inverse Langevin function of sqrt(I1 / (3 N)) (solved, not the law's series);
+Veronda-Westmann c1 c2 exp(c2 (I1 - 3)), -c1 c2 / 2;
 Arruda-Boyce (mu sum_i C_i (I1^i - 3^i) / N^(i-1), FEBio's C = 1/2, 1/10, 11/350, 19/1750,
 519/134750) mu sum_i i C_i I1^(i-1) / N^(i-1). Ogden (principal stretches): uniaxial
 sum c/m (l^(m-1) - l^(-m/2-1)), equibiaxial sum c/m (l^(m-1) - l^(-2m-1)), shear sum c/m (L^m -
@@ -104,6 +106,20 @@ def _hm(E, v, beta):
     return w
 
 
+def _abu(ksi, N):
+    # FEBio's Arruda-Boyce unconstrained: W1 = ksi N beta / (2 sqrt(3 N I1)), beta the inverse
+    # Langevin function of the chain stretch sqrt(I1 / (3 N)) (coth(beta) - 1/beta = stretch,
+    # solved here; the law sums its series)
+    from scipy.optimize import brentq
+
+    def w(I1, I2):
+        a = np.sqrt(I1 / (3 * N))
+        beta = brentq(lambda b: 1 / np.tanh(b) - 1 / b - a, 1e-9, 1e3, xtol=1e-15, rtol=1e-15)
+        return ksi * N * beta / (2 * np.sqrt(3 * N * I1)), 0.0
+
+    return w
+
+
 _NEO = {"shear_modulus": MU, "lame_lambda": LAM}
 _MR = {"c1": 150.0, "c2": 40.0, "k": 3000.0}
 _YEOH = {"c1": 150.0, "c2": 30.0, "c3": 5.0, "k": 3000.0}
@@ -132,6 +148,10 @@ LAWS = {
     "uncoupled_holmes_mow": (
         {"mu": 300.0, "beta": 2.0, "k": 3000.0},
         lambda: _invariant(lambda I1, I2: (150.0 * np.exp(2.0 * (I1 - 3)), 0.0)),
+    ),
+    "arruda_boyce_unconstrained": (
+        {"ksi": 300.0, "N": 4.0, "kappa": 3000.0},
+        lambda: _invariant(_abu(300.0, 4.0)),
     ),
     "ogden": ({**_OGDEN, "k": 3000.0}, _ogden),
     "ogden_unconstrained": ({**_OGDEN, "cp": 3000.0}, _ogden),
