@@ -129,7 +129,8 @@ def test_orthotropic_uniaxial_is_the_laws_homogeneous_state(name, law, extra):
      ("uncoupled_holmes_mow_uniaxial", "uncoupled_holmes_mow",
       {"mu": 300.0, "beta": 2.0, "k": 5000.0}),
      ("arruda_boyce_unconstrained_uniaxial", "arruda_boyce_unconstrained",
-      {"ksi": 1000.0, "N": 4.0, "n_term": 30, "kappa": 5000.0})],
+      {"ksi": 1000.0, "N": 4.0, "n_term": 30, "kappa": 5000.0}),
+     ("isotropic_hencky_uniaxial", "isotropic_hencky", {"E": 1000.0, "v": 0.3})],
 )  # fmt: skip
 def test_isotropic_uniaxial_is_the_laws_homogeneous_state(name, law, params):
     """The cube pulled 1.15 along x stretches homogeneously, contracts equally along y and z

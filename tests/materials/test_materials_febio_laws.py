@@ -43,6 +43,7 @@ LAWS = {
     "abu_short": ("arruda_boyce_unconstrained",
                   {"ksi": 300.0, "N": 2.0, "n_term": 3, "kappa": 300.0},
                   "Arruda-Boyce unconstrained", True),
+    "hencky": ("isotropic_hencky", {"E": 1000.0, "v": 0.3}, "isotropic Hencky", True),
 }  # fmt: skip
 UNCOUPLED = ("tivw", "tivw_goh", "fung", "uncoupled_holmes_mow", "tc")
 
@@ -329,3 +330,20 @@ def test_arruda_boyce_unconstrained_refusals(change, message):
         make_material(
             "arruda_boyce_unconstrained", **{"ksi": 1.0, "N": 4.0, "kappa": 1.0, **change}
         )
+
+
+def test_isotropic_hencky_is_hookes_law_on_the_logarithmic_strain():
+    """Kirchhoff stress 2 mu ln V + lam ln J I (FEBio's), at a random F and at equal stretches
+    (the divided differences' limit), and the tangent equal to finite differences there."""
+    law = make_material("isotropic_hencky", E=1000.0, v=0.3)
+    mu, lam = 1000.0 / 2.6, 300.0 / (1.3 * 0.4)
+    F = random_deformations(np.random.default_rng(11), 5, 3, 0.3)
+    for G in (F, np.diag([1.2, 1.2, 0.9])[None], np.eye(3)[None] * 1.1):
+        b = G @ np.swapaxes(G, 1, 2)
+        w, v = np.linalg.eigh(b)
+        h = np.einsum("qia,qa,qja->qij", v, 0.5 * np.log(w), v)
+        J = np.linalg.det(G)
+        tau = 2 * mu * h + (lam * np.log(J))[:, None, None] * np.eye(3)
+        np.testing.assert_allclose(law.stress(G) @ np.swapaxes(G, 1, 2), tau, atol=1e-9 * mu)
+        A = law.stress_derivative(G)
+        assert relative_difference(A, central_difference(law.stress, G, 1e-6)) < 1e-7

@@ -200,3 +200,6 @@ CASES.update(
 
 # FEBio's Arruda-Boyce unconstrained (issue 42): tested in test_materials_febio_laws.py
 CASES["arruda_boyce_unconstrained"] = (dict(ksi=300.0, N=4.0, kappa=3000.0), None, None)
+
+# FEBio's isotropic Hencky (issue 42): tested in test_materials_febio_laws.py
+CASES["isotropic_hencky"] = (dict(E=1000.0, v=0.3), 1000.0 / 2.6, 300.0 / (1.3 * 0.4))

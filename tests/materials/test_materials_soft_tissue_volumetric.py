@@ -139,3 +139,6 @@ PARAMS.update(
 
 # FEBio's Arruda-Boyce unconstrained (issue 42): its bulk term kappa/2 (J^2 - 1 - 2 ln J)
 PARAMS["arruda_boyce_unconstrained"] = dict(ksi=300.0, N=4.0)
+
+# FEBio's isotropic Hencky (issue 42): its bulk term lam/2 (ln J)^2
+PARAMS["isotropic_hencky"] = dict(E=1000.0, v=0.3)

@@ -42,6 +42,7 @@ MATERIAL_TYPES = {
             "Holmes-Mow",
             "TC nonlinear orthotropic",
             "Arruda-Boyce unconstrained",
+            "isotropic Hencky",
             "uncoupled Holmes-Mow",
             "fiber-exp-pow",
             "fiber-exp-pow-uncoupled",

@@ -45,6 +45,7 @@ from tissuesim.materials.registry import (
 )
 from tissuesim.materials.soft_tissue.arruda_boyce import ArrudaBoyce, CoupledArrudaBoyce
 from tissuesim.materials.soft_tissue.arruda_boyce_unconstrained import ArrudaBoyceUnconstrained
+from tissuesim.materials.soft_tissue.hencky import IsotropicHencky
 from tissuesim.materials.soft_tissue.holmes_mow import HolmesMow, UncoupledHolmesMow
 from tissuesim.materials.soft_tissue.mooney_rivlin import CoupledMooneyRivlin, MooneyRivlin
 from tissuesim.materials.soft_tissue.ogden import Ogden, OgdenUnconstrained
@@ -79,6 +80,7 @@ __all__ = [
     "HolmesMow",
     "UncoupledHolmesMow",
     "ArrudaBoyceUnconstrained",
+    "IsotropicHencky",
     "OrthotropicElastic",
     "FungOrthotropic",
     "FungOrthotropicCompressible",

@@ -44,6 +44,7 @@ from tissuesim.materials.orthotropic import (
 )
 from tissuesim.materials.soft_tissue.arruda_boyce import ArrudaBoyce, CoupledArrudaBoyce
 from tissuesim.materials.soft_tissue.arruda_boyce_unconstrained import ArrudaBoyceUnconstrained
+from tissuesim.materials.soft_tissue.hencky import IsotropicHencky
 from tissuesim.materials.soft_tissue.holmes_mow import HolmesMow, UncoupledHolmesMow
 from tissuesim.materials.soft_tissue.mooney_rivlin import CoupledMooneyRivlin, MooneyRivlin
 from tissuesim.materials.soft_tissue.ogden import Ogden, OgdenUnconstrained
@@ -77,6 +78,7 @@ SOFT_TISSUE_LAWS: tuple[type[Material], ...] = (
     HolmesMow,
     UncoupledHolmesMow,
     ArrudaBoyceUnconstrained,
+    IsotropicHencky,
 )
 
 #: the fibre-reinforced laws (directions per body, element or point): FEBio's names too

@@ -19,6 +19,7 @@ theta is the law's measure of volume change and U its lambda term, the part that
                          (HGO: FEBio's default k/4 (theta^2 - 1 - 2 ln theta))
     uncoupled_holmes_mow  theta = J             U = its bulk term with k
     arruda_boyce_unconstrained  theta = J  U = kappa/2 (J^2 - 1 - 2 ln J) (k = 2 kappa, "goh")
+    isotropic_hencky     theta = J             U = lam/2 (ln theta)^2
     holmes_mow           none (U = 0: its J terms are inside its exponential, psi_rest the law)
     fiber_exp_pow, fiber_pow_linear, fiber_exp_linear (and their _uncoupled forms): none
                          (U = 0, a fibre has no bulk term)
@@ -67,6 +68,7 @@ VOLUMETRIC_LAWS = {
     "tc_nonlinear_orthotropic": ("J", "log"),
     "holmes_mow": ("J", "log"),
     "arruda_boyce_unconstrained": ("J", "goh"),
+    "isotropic_hencky": ("J", "log"),
     **{
         name: ("J", "log")
         for law in ("fiber_exp_pow", "fiber_pow_linear", "fiber_exp_linear")

@@ -68,6 +68,20 @@ def _ogden():
     )
 
 
+def _hencky(mu):
+    # Kirchhoff stress 2 mu ln(lambda_a) + lam ln J: at J = 1 the lam term is a pressure the
+    # combinations drop; P_aa = tau_a / lambda_a; shear by the principal stretches of
+    # F = I + g e1 (x) e2: Ls = g/2 + sqrt(1 + g^2/4) and 1/Ls, at angle theta from x with
+    # tan(2 theta) = 2/g; P12 = sum_a tau_a (R_a . e1)(N_a . e2) / ..., written as
+    # 2 mu ln(Ls) (Ls + 1/Ls)^-1 * 2 (from sigma_12 = 2 mu ln(Ls) sin(2 phi), sin(2 phi) =
+    # 2 / (Ls + 1/Ls), and P = sigma at J = 1 for the 12 component of a shear)
+    t, b = L**-0.5, L**-2
+    uni = 2 * mu * np.log(L) / L - 2 * mu * np.log(t) / t * t / L
+    bi = 2 * mu * np.log(L) / L - 2 * mu * np.log(b) / b * b / L
+    Ls = G / 2 + np.sqrt(1 + G**2 / 4)
+    return uni, bi, 2 * mu * np.log(Ls) * 2 / (Ls + 1 / Ls)
+
+
 def _linear():
     t = L**-0.5
     tr = (L - 1) + 2 * (t - 1)
@@ -153,6 +167,7 @@ LAWS = {
         {"ksi": 300.0, "N": 4.0, "kappa": 3000.0},
         lambda: _invariant(_abu(300.0, 4.0)),
     ),
+    "isotropic_hencky": ({"E": 1000.0, "v": 0.3}, lambda: _hencky(1000.0 / 2.6)),
     "ogden": ({**_OGDEN, "k": 3000.0}, _ogden),
     "ogden_unconstrained": ({**_OGDEN, "cp": 3000.0}, _ogden),
 }
