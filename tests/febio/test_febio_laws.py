@@ -72,7 +72,7 @@ def test_fiber_type_user_takes_the_element_data_and_needs_it_everywhere(tmp_path
     old = '<fiber type="local">\n        <local>1,2</local>\n      </fiber>'
     path = _with(tmp_path, "tivw_uniaxial", old, user)
     with pytest.raises(
-        FebError, match=r'fiber type="user": every element .* <ElementData type="fiber">'
+        FebError, match=r"fiber type 'user': every element .* <ElementData type=\"fiber\">"
     ):
         febio_scene(read_feb(path), "x")
     data = (

@@ -251,8 +251,8 @@ def _keys(
     else:
         if orientation.user is not None and (given is None or np.isnan(given).any()):
             raise orientation.user.error(
-                'fiber type="user": every element of the material needs its fibre in '
-                '<MeshData> <ElementData type="fiber">'
+                "fiber type 'user': every element of the material needs its fibre in "
+                '<MeshData> <ElementData type="fiber"> (a solid mixture\'s component takes none)'
             )
         fiber = np.tile(orientation.fiber if orientation.fiber is not None else [1.0, 0, 0], (m, 1))
         if orientation.fiber_nodes is not None:
