@@ -15,6 +15,48 @@ from tissuesim.model import Model
 
 #: the soft-tissue laws take their own (FEBio) parameters; the others (E, nu)
 SOFT_TISSUE_PARAMETERS = {
+    "trans_iso_veronda_westmann": dict(
+        c1=200.0, c2=1.5, c3=10.0, c4=5.0, c5=300.0, lam_max=1.1, k=3e3
+    ),
+    "coupled_trans_iso_mooney_rivlin": dict(
+        c1=150.0, c3=10.0, c4=5.0, c5=300.0, lam_max=1.1, k=3e3
+    ),
+    "tc_nonlinear_orthotropic": dict(
+        c1=150.0, beta=[3.0, 3.0, 4.0], ksi=[300.0, 200.0, 100.0], k=3e3
+    ),
+    "orthotropic_elastic": dict(
+        E1=1000.0, E2=2000.0, E3=3000.0, G12=600.0, G23=400.0, G31=500.0, v12=0.3, v23=0.2, v31=0.25
+    ),
+    "fung_orthotropic": dict(
+        E1=1000.0,
+        E2=2000.0,
+        E3=3000.0,
+        G12=600.0,
+        G23=400.0,
+        G31=500.0,
+        v12=0.3,
+        v23=0.2,
+        v31=0.25,
+        c=1500.0,
+        k=3e3,
+    ),
+    "fung_ortho_compressible": dict(
+        E1=1000.0,
+        E2=2000.0,
+        E3=3000.0,
+        G12=600.0,
+        G23=400.0,
+        G31=500.0,
+        v12=0.3,
+        v23=0.2,
+        v31=0.25,
+        c=1500.0,
+        k=3e3,
+    ),
+    "holmes_mow": dict(E=1000.0, v=0.3, beta=0.5),
+    "uncoupled_holmes_mow": dict(mu=300.0, beta=2.0, k=3e3),
+    "arruda_boyce_unconstrained": dict(ksi=300.0, N=4.0, kappa=1500.0),
+    "isotropic_hencky": dict(E=1000.0, v=0.3),
     "mooney_rivlin": dict(c1=150.0, c2=40.0, k=3000.0),
     "coupled_mooney_rivlin": dict(c1=150.0, c2=40.0, k=3000.0),
     "ogden": dict(c=[300.0, -40.0], m=[4.0, -2.0], k=3000.0),
