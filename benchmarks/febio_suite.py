@@ -10,7 +10,8 @@ its steps against FEBio's recorded time steps, and tissuesim's solution norm aga
 component of every node of a deformable part that no zero or prescribed displacement active
 in the last step holds (a node held in one body is held; the nodes of a ``rigid body`` part
 are FEBio's rigid nodes, not equations, and are left out; FEBio's vector also holds the free
-DOFs of its rigid bodies, which this norm does not). Each model runs in its own process
+DOFs of its rigid bodies, the centre's displacement and the rotation vector, and so does this
+norm). Each model runs in its own process
 (this script with ``--one``) under a wall-time limit, so a hang or a crash is recorded as one
 and the others go on: status ``refused``, ``ran``, ``failed`` (``RunError``: Newton did not
 converge), ``crashed`` (any other exception, with its type, message and where it was raised,
@@ -254,10 +255,18 @@ def solution_norm(model: Any, sim: Any, np: Any) -> dict[str, Any]:
         if window is not None and not window[0] < sim.time <= window[1]:
             continue  # a condition of an earlier step: its DOFs are free in the last one
         free[np.ix_(model.node_sets[nodes], range(3) if comps is None else comps)] = False
-    note = ""
-    if rigid_materials:  # FEBio's vector also holds each rigid body's free DOFs
-        note = f"rigid bodies ({len(rigid_materials)}): their own DOFs not in the norm"
-    return {"norm": float(np.linalg.norm(u[free])), "dofs": int(free.sum()), "note": note}
+    # FEBio's vector also holds each rigid body's free DOFs: the centre's displacement and
+    # the rotation vector (FERigidSolver UpdateIncrements, the exponential map)
+    from tissuesim.frames.rotations import log_map
+
+    own = []
+    state, system = sim.state, sim.system
+    for r, sc in zip(system.rigid, system.rigid_config_slices, strict=True):
+        z = state.x[sc]
+        values = np.concatenate([z[:3] - r.center, log_map(z[3:12].reshape(3, 3))[0]])
+        own += [values[k] for k in range(6) if k not in r.held]
+    values = np.concatenate([u[free], np.asarray(own, dtype=float)])
+    return {"norm": float(np.linalg.norm(values)), "dofs": int(values.size), "note": ""}
 
 
 # -- the parent: every model, a process each --------------------------------------------------

@@ -104,10 +104,19 @@ def _boundary(model: FebModel, section: Node) -> None:
                 )
             load = _load(model, value, 1)
             model.dirichlet.append((nodes, [AXES[p["dof"].text]], load, name, model.window))
+        elif kind == "rigid":  # the node set moves with a rigid body
+            from tissuesim.febio.rigid import read_rigid_nodes
+
+            if model.window is not None:
+                raise bc.error(
+                    "a rigid interface inside a <step>: tissuesim links nodes to a rigid body "
+                    "for the whole run (give it in the model's <Boundary>)"
+                )
+            read_rigid_nodes(model, bc, _node_set(model, bc))
         else:
             raise bc.error(
                 f"boundary condition type {kind!r} is not supported by tissuesim; it runs "
-                "'zero displacement' (or 'fix') and 'prescribed displacement'"
+                "'zero displacement' (or 'fix'), 'prescribed displacement' and 'rigid'"
             )
 
 

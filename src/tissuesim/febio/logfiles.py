@@ -13,7 +13,7 @@ from tissuesim.febio.model import FebModel, _ints, _unsupported
 from tissuesim.febio.xml import Node
 from tissuesim.io.logfiles import KINDS
 
-__all__ = ["read_logfile", "TABLE_LAYOUT"]
+__all__ = ["read_logfile", "TABLE_LAYOUT", "logfile_tables", "cell_rows"]
 
 #: attributes that shape FEBio's text file; tissuesim writes CSV (a note when given)
 TABLE_LAYOUT = ("delim", "format", "comments")
@@ -107,3 +107,52 @@ def _id_ranges(node: Node) -> list[int]:
         step = bounds[2] if len(bounds) == 3 else 1
         ids += list(range(bounds[0], bounds[1] + 1, step))
     return ids
+
+
+def logfile_tables(model: FebModel, bodies: list[dict], names: list[str]) -> list[dict]:
+    """The <logfile> requests as [[logfiles]] tables: per body the rows of its mesh and their
+    FEBio ids; a request over several bodies is one table per body (``<file stem>_<body>``).
+    A request without a file is written as ``<kind>_<n>.csv`` (n: its place among them)."""
+    row_ids = np.empty(len(model.nodes), dtype=np.int64)
+    row_ids[list(model._node_index.values())] = list(model._node_index)
+    tables = []
+    for n, request in enumerate(model.logfiles, start=1):
+        kind, items = request["kind"], request["items"]
+        per_body = []
+        for name, body in zip(names, bodies, strict=True):
+            if kind == "node_data":
+                used = np.unique(body["cells"])
+                local = np.full(len(model.nodes), -1)
+                local[used] = np.arange(len(used))
+                rows = used if items is None else items[local[items] >= 0]
+                if len(rows):
+                    per_body.append((name, "nodes", local[rows], row_ids[rows]))
+                continue
+            members = [(p, r) for p in body["parts"] for r in range(len(model.parts[p][1]))]
+            members = members if items is None else [m for m in items if m[0] in body["parts"]]
+            if members:
+                cells = cell_rows(body, members, model)
+                ids = np.array([model.parts[p][2][r] for p, r in members], dtype=np.int64)
+                per_body.append((name, "elements", cells, ids))
+        file = request["file"] or f"{kind}_{n}.csv"
+        stem, dot, suffix = file.rpartition(".")
+        for name, key, rows, ids in per_body:
+            if len(per_body) > 1:
+                file = f"{stem}_{name}.{suffix}" if dot else f"{suffix}_{name}"
+            table = {"kind": kind, "data": list(request["data"])}
+            if names != ["body"]:
+                table["body"] = name
+            whole = items is None and np.array_equal(rows, np.arange(len(rows)))
+            if not (whole and np.array_equal(ids, rows + 1)):  # else: all rows, ids = rows + 1
+                table.update({key: rows.tolist(), "ids": ids.tolist()})
+            tables.append({**table, "file": file})
+    return tables
+
+
+def cell_rows(body: dict, members: list, model: FebModel) -> np.ndarray:
+    """The rows in a body's cells of (part, row) members (its parts' cells in turn)."""
+    offsets, start = {}, 0
+    for p in body["parts"]:
+        offsets[p] = start
+        start += len(model.parts[p][1])
+    return np.array([offsets[p] + r for p, r in members if p in offsets], dtype=np.int64)

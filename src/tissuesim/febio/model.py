@@ -64,6 +64,10 @@ class FebModel:
     #: <logfile> requests (febio/logfiles.py): kind, data, node rows or (part, row) cells
     #: (None: all), file, node
     logfiles: list = field(default_factory=list)
+    #: rigid body material name -> {"held": {dof: Load or None}, "force" / "moment": [(axis,
+    #: Load)]} (febio/rigid.py); node sets that move with a rigid body: (set, body, element)
+    rigid: dict = field(default_factory=dict)
+    rigid_nodes: list = field(default_factory=list)
     #: "file:line <tag>: what the converter changed" (contact surfaces set apart)
     changes: list = field(default_factory=list)
     steps: int = 1

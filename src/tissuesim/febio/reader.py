@@ -12,6 +12,7 @@ import os
 
 from tissuesim.febio.materials import MATERIAL_TYPES, UNCOUPLED, read_materials, read_mesh_data
 from tissuesim.febio.model import FebModel, Node, _floats, _ints, _once, _unsupported
+from tissuesim.febio.rigid import read_rigid
 from tissuesim.febio.time_stepper import read_plot_level, read_time_stepper
 from tissuesim.febio.xml import parse_feb
 
@@ -239,6 +240,7 @@ from tissuesim.febio.mesh_sections import SECTIONS as _MESH_SECTIONS  # noqa: E4
 STEP_SECTIONS = {
     "Control": _control,
     **{k: v for k, v in _CONDITION_SECTIONS.items() if k in ("Boundary", "Loads", "Contact")},
+    "Rigid": read_rigid,
 }
 SECTIONS = {
     "Module": _module,
@@ -246,6 +248,7 @@ SECTIONS = {
     "Control": _control,
     "Material": read_materials,
     "MeshData": read_mesh_data,
+    "Rigid": read_rigid,
     **_MESH_SECTIONS,
     **_CONDITION_SECTIONS,
 }

@@ -13,9 +13,16 @@ import numpy as np
 
 from tissuesim.febio.contact_start import separate_touching
 from tissuesim.febio.curves import curve_expression
+from tissuesim.febio.logfiles import cell_rows, logfile_tables
 from tissuesim.febio.materials import body_directions, with_directions
 from tissuesim.febio.model import FebModel, Load
 from tissuesim.febio.reader import UNCOUPLED, read_feb
+from tissuesim.febio.rigid_scene import (
+    RIGID_SET,
+    interface_sets,
+    rigid_bodies,
+    rigid_material_of,
+)
 from tissuesim.febio.time_stepper import adaptive_table, run_steps
 from tissuesim.febio.toml import dumps
 
@@ -42,8 +49,11 @@ def _times(load: Load, model: FebModel, k: int = 0, windowed: bool = True) -> st
 
 
 def _bodies(model: FebModel) -> list[dict]:
-    """Parts joined by shared nodes make one body (one material, one cell type)."""
-    names = list(model.parts)
+    """Parts joined by shared nodes make one body (one material, one cell type); the parts of
+    a rigid body material make one body of their own (``rigid`` its material), whatever nodes
+    they share (febio/rigid_scene.py)."""
+    rigid = {p: rigid_material_of(model, p) for p in model.parts}
+    names = [p for p in model.parts if rigid[p] is None]
     owner = np.full(len(model.nodes), -1)
     parent = list(range(len(names)))
 
@@ -61,6 +71,8 @@ def _bodies(model: FebModel) -> list[dict]:
     for i, name in enumerate(names):
         groups.setdefault(root(i), []).append(name)
     bodies = []
+    for material in dict.fromkeys(m for m in rigid.values() if m is not None):
+        groups[-1 - len(groups)] = [p for p, m in rigid.items() if m == material]
     for parts in groups.values():
         first = model.parts[parts[0]][3]
         materials = {_material_of(model, p) for p in parts}
@@ -84,6 +96,7 @@ def _bodies(model: FebModel) -> list[dict]:
                 "cells": cells,
                 "formulation": formulations.pop(),
                 "node": first,
+                "rigid": rigid[parts[0]],
             }
         )
     return bodies
@@ -103,12 +116,16 @@ def febio_scene(model: FebModel, stem: str) -> tuple[dict, dict]:
     bodies = _bodies(model)
     dhat = separate_touching(model, bodies)  # contact that starts touching: moved apart
     tables_per_body, meshes, gravity = [], {}, np.zeros(3)
+    several = len(bodies) > 1 or bool(model.rigid_nodes)
     for body in bodies:
-        name = body["parts"][0] if len(bodies) > 1 else "body"
+        name = body["parts"][0] if several else "body"
         used = np.unique(body["cells"])
         local = np.full(len(model.nodes), -1)
         local[used] = np.arange(len(used))
         point_sets, facet_sets, cell_sets = {}, {}, {}
+        body["interfaces"] = interface_sets(model, body, used)
+        for rigid_name, nodes in body["interfaces"].items():
+            point_sets[RIGID_SET.format(rigid_name)] = local[nodes]
         for set_name, ids in model.node_sets.items():
             mine = local[ids[local[ids] >= 0]]
             if len(mine) and not set_name.startswith("@surface:"):
@@ -118,7 +135,7 @@ def febio_scene(model: FebModel, stem: str) -> tuple[dict, dict]:
             if inside.any():
                 facet_sets[set_name] = local[facets[inside]]
         for set_name, (members, _) in model.element_sets.items():
-            rows = _cell_rows(body, members, model)
+            rows = cell_rows(body, members, model)
             if len(rows):
                 cell_sets[set_name] = rows
         tables: dict = {}
@@ -155,10 +172,15 @@ def febio_scene(model: FebModel, stem: str) -> tuple[dict, dict]:
             facet_sets=facet_sets,
             cell_sets=cell_sets,
         )
-        file = f"{stem}.msh" if len(bodies) == 1 else f"{stem}.{name}.msh"
+        file = f"{stem}.msh" if not several else f"{stem}.{name}.msh"
         meshes[file] = mesh
         spec = model.materials[body["material"]]
         model_name, params, density, kind, _ = spec
+        if body["rigid"] is not None:  # any law: a rigid motion strains nothing
+            model_name = "neo_hookean"
+            E, v = params.get("E", 1.0), params.get("v", 0.3)
+            params = {"youngs_modulus": E if E > 0 else 1.0,
+                      "poisson_ratio": v if -1.0 < v < 0.5 else 0.3}  # fmt: skip
         formulation = body["formulation"]
         if formulation is None:
             linear = ("hexahedron", "tetra10", "wedge")  # FEBio's three-field default
@@ -242,7 +264,7 @@ def febio_scene(model: FebModel, stem: str) -> tuple[dict, dict]:
             if table is not None:  # FEBio's time stepper over the step's time
                 phase["adaptive"] = table
     data: dict = {}
-    if len(bodies) == 1:
+    if not several:
         ((_, tables),) = tables_per_body
         for key in ("density", "formulation"):
             sim[key] = tables.pop(key)
@@ -253,10 +275,14 @@ def febio_scene(model: FebModel, stem: str) -> tuple[dict, dict]:
         data["bodies"] = [{"name": name, **tables} for name, tables in tables_per_body]
     if gravity.any():
         data["gravity"] = {"acceleration": (gravity * len(bodies)).tolist()}
+    rigid = rigid_bodies(model, bodies, [n for n, _ in tables_per_body],
+                         lambda load, m: _times(load, m, windowed=False))  # fmt: skip
+    if rigid:
+        data["rigid_bodies"] = rigid
     data.update(_contact(model, [n for n, _ in tables_per_body], bodies, meshes))
     if dhat is not None:
         data["contact"] = {"dhat": dhat, **data["contact"]}
-    logfiles = _logfiles(model, bodies, [n for n, _ in tables_per_body])
+    logfiles = logfile_tables(model, bodies, [n for n, _ in tables_per_body])
     if logfiles:
         data["logfiles"] = logfiles
     data["run"] = {
@@ -266,46 +292,6 @@ def febio_scene(model: FebModel, stem: str) -> tuple[dict, dict]:
         )
     }
     return data, meshes
-
-
-def _logfiles(model: FebModel, bodies: list[dict], names: list[str]) -> list[dict]:
-    """The <logfile> requests as [[logfiles]] tables: per body the rows of its mesh and their
-    FEBio ids; a request over several bodies is one table per body (``<file stem>_<body>``).
-    A request without a file is written as ``<kind>_<n>.csv`` (n: its place among them)."""
-    row_ids = np.empty(len(model.nodes), dtype=np.int64)
-    row_ids[list(model._node_index.values())] = list(model._node_index)
-    tables = []
-    for n, request in enumerate(model.logfiles, start=1):
-        kind, items = request["kind"], request["items"]
-        per_body = []
-        for name, body in zip(names, bodies, strict=True):
-            if kind == "node_data":
-                used = np.unique(body["cells"])
-                local = np.full(len(model.nodes), -1)
-                local[used] = np.arange(len(used))
-                rows = used if items is None else items[local[items] >= 0]
-                if len(rows):
-                    per_body.append((name, "nodes", local[rows], row_ids[rows]))
-                continue
-            members = [(p, r) for p in body["parts"] for r in range(len(model.parts[p][1]))]
-            members = members if items is None else [m for m in items if m[0] in body["parts"]]
-            if members:
-                cells = _cell_rows(body, members, model)
-                ids = np.array([model.parts[p][2][r] for p, r in members], dtype=np.int64)
-                per_body.append((name, "elements", cells, ids))
-        file = request["file"] or f"{kind}_{n}.csv"
-        stem, dot, suffix = file.rpartition(".")
-        for name, key, rows, ids in per_body:
-            if len(per_body) > 1:
-                file = f"{stem}_{name}.{suffix}" if dot else f"{suffix}_{name}"
-            table = {"kind": kind, "data": list(request["data"])}
-            if len(bodies) > 1:
-                table["body"] = name
-            whole = items is None and np.array_equal(rows, np.arange(len(rows)))
-            if not (whole and np.array_equal(ids, rows + 1)):  # else: all rows, ids = rows + 1
-                table.update({key: rows.tolist(), "ids": ids.tolist()})
-            tables.append({**table, "file": file})
-    return tables
 
 
 def _unique_support_names(tables_per_body: list[tuple[str, dict]]) -> None:
@@ -336,14 +322,6 @@ def _local_set(model: FebModel, name: str) -> str:
     if name.startswith("@surface:"):
         return name.removeprefix("@surface:")
     return _node_set_name(model, name)
-
-
-def _cell_rows(body: dict, members: list, model: FebModel) -> np.ndarray:
-    offsets, start = {}, 0
-    for p in body["parts"]:
-        offsets[p] = start
-        start += len(model.parts[p][1])
-    return np.array([offsets[p] + r for p, r in members if p in offsets], dtype=np.int64)
 
 
 def _by_normal(points: np.ndarray, facets: np.ndarray, model: FebModel, surface: str):

@@ -31,6 +31,11 @@ class Stepping:
         """(step_fn(system, state, h, solver, options), linear solver) for the integrator."""
         from tissuesim.time.steps import explicit_step, implicit_step
 
+        if self.rigid_bodies and (self.explicit or self.integrator == "newmark"):
+            raise InputError(
+                f"rigid bodies run with the quasistatic and backward_euler integrators, not "
+                f"{self.integrator!r} (its steps have no rigid body DOFs yet)"
+            )
         if self.explicit:
 
             def step_fn(system, state, h, solver, options):

@@ -30,6 +30,9 @@ argument of the Python API of ``tissuesim.simulation.Simulation``:
                    ``scene/tables/cuts.py``
     [tearing]      set_tearing(threshold): the tissue; with body = "organ" and stress (Pa) or
                    stretch, that organ tears (``scene/tables/cuts.py``)
+    [[rigid_bodies]] add_rigid_body(name, bodies, vertices, center, fixed, prescribed, force,
+                   moment): bodies moving rigidly, and vertices of others glued to them
+                   (``scene/tables/rigid.py``)
     [[visual_surfaces]] add_visual_surface(file, body, name, max_outside): a fine surface
                    carried by a FEM body for the output (``scene/tables/visual.py``)
     [run]          run(steps, every, render), as for every scene
@@ -75,6 +78,7 @@ from tissuesim.scene.tables.contact import CONTACT_KEYS, OBSTACLE_KEYS
 from tissuesim.scene.tables.cuts import CUT_KEYS, TEARING_KEYS, add_cut_tables, add_tearing_table
 from tissuesim.scene.tables.fem_body import _mesh, _select
 from tissuesim.scene.tables.logfiles import LOGFILE_KEYS, add_logfiles
+from tissuesim.scene.tables.rigid import RIGID_KEYS, add_rigid_bodies
 from tissuesim.scene.tables.visual import VISUAL_KEYS, add_visual_surfaces
 from tissuesim.validate import short
 
@@ -116,10 +120,11 @@ COUPLED_SCENE_KEYS: dict[str, Any] = {
     "obstacles": set(OBSTACLE_KEYS),
     "visual_surfaces": set(VISUAL_KEYS),
     "logfiles": set(LOGFILE_KEYS),
+    "rigid_bodies": set(RIGID_KEYS),
 }
 ARRAYS = (
     "organs", "bodies", "graspers", "attachments", "cuts", "obstacles", "visual_surfaces",
-    "logfiles",
+    "logfiles", "rigid_bodies",
 )  # fmt: skip
 MESH_GENERATORS = {
     "ellipsoid": ("center", "radii", "divisions"),
@@ -198,6 +203,7 @@ def build_bodies_scene(data: dict, base_dir: Path, source: str, name: str) -> Sc
         _attachment(sim, item, f"{source} attachments[{i}]")
     from tissuesim.scene.tables.contact import add_contact_tables
 
+    add_rigid_bodies(sim, data, source)
     add_contact_tables(sim, data, base_dir, source)
     tissue = _table(data, "tissue", source)
     if tissue:

@@ -1,0 +1,93 @@
+"""FEBio's rigid bodies in the converted scene: each ``rigid body`` material's parts become one
+FEM body moving rigidly as a whole (its mass the rigid body's, its faces contact surfaces), and
+the nodes of deformable bodies shared with it or named by a ``<bc type="rigid">`` a point set
+glued to it; one ``[[rigid_bodies]]`` table per rigid body with its held DOFs and loads."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from tissuesim.febio.model import FebModel, Load
+
+__all__ = ["rigid_material_of", "rigid_bodies", "interface_sets", "RIGID_SET"]
+
+#: the point set of a deformable body's nodes glued to rigid body <name>
+RIGID_SET = "{}.rigid_interface"
+
+DOF_NAMES = ("x", "y", "z", "rx", "ry", "rz")
+
+
+def rigid_material_of(model: FebModel, part: str) -> str | None:
+    """The rigid body material's name of a part, or None for a deformable part."""
+    mat = model.domains[part][0]
+    key = mat if mat in model.materials else f"#{mat}"
+    spec = model.materials.get(key)
+    if spec is None or spec[3] != "rigid body":
+        return None
+    return next(k for k, v in model.materials.items() if v is spec and not k.startswith("#"))
+
+
+def interface_sets(model: FebModel, body: dict, used: np.ndarray) -> dict[str, np.ndarray]:
+    """{rigid body: the model's node rows of this deformable body glued to it}: nodes it shares
+    with the rigid body's elements, and its nodes in the rigid body's <bc type="rigid"> sets."""
+    if body.get("rigid") is not None:
+        return {}
+    out: dict[str, set] = {}
+    mine = set(used.tolist())
+    for part, (_, cells, _, _) in model.parts.items():
+        name = rigid_material_of(model, part)
+        if name is not None:
+            out.setdefault(name, set()).update(mine & set(np.unique(cells).tolist()))
+    for nodes, name, _ in model.rigid_nodes:
+        out.setdefault(name, set()).update(mine & set(model.node_sets[nodes].tolist()))
+    return {k: np.array(sorted(v), dtype=np.int64) for k, v in out.items() if v}
+
+
+def rigid_bodies(model: FebModel, bodies: list[dict], names: list[str], times) -> list[dict]:
+    """The [[rigid_bodies]] tables: per rigid body material, the FEM body of its elements, the
+    glued point sets of the deformable bodies, its centre (when the model gives it), its held
+    DOFs (fixed, prescribed as expressions of t: ``times(Load, model)``) and its loads."""
+    tables = []
+    materials = [m for m, spec in model.materials.items()
+                 if spec[3] == "rigid body" and not m.startswith("#")]  # fmt: skip
+    for material in materials:
+        entry: dict = {"name": material}
+        own = [n for n, b in zip(names, bodies, strict=True) if b.get("rigid") == material]
+        glued = [
+            {"body": n, "vertices": {"tagged": RIGID_SET.format(material)}}
+            for n, b in zip(names, bodies, strict=True)
+            if material in b.get("interfaces", {})
+        ]
+        if not own and not glued:
+            model.notes.append(f"rigid body {material!r}: no elements and no nodes, not used")
+            continue
+        if own:
+            entry["bodies"] = own
+        if glued:
+            entry["vertices"] = glued
+        params = model.materials[material][1]
+        if "center" in params:
+            entry["center"] = list(params["center"])
+        conditions = model.rigid.get(material, {"held": {}, "force": [], "moment": []})
+        fixed = [DOF_NAMES[k] for k, load in sorted(conditions["held"].items()) if load is None]
+        if fixed:
+            entry["fixed"] = fixed
+        prescribed = {
+            DOF_NAMES[k]: times(load, model)
+            for k, load in sorted(conditions["held"].items())
+            if load is not None
+        }
+        if prescribed:
+            entry["prescribed"] = prescribed
+        for key in ("force", "moment"):
+            if conditions[key]:
+                items = ["0.0"] * 3
+                for axis, load in conditions[key]:
+                    items[axis] = times(Load(load.value, load.curve, load.window), model)
+                entry[key] = items
+        tables.append(entry)
+    names_used = set(names)
+    for t in tables:  # a rigid body is named after its material, apart from the FEM bodies
+        if t["name"] in names_used:
+            t["name"] = f"{t['name']}.rigid"
+    return tables

@@ -1,0 +1,156 @@
+"""FEBio's rigid bodies (febio/rigid.py, febio/rigid_scene.py): a model of our own, a hex8
+block under a rigid platen sharing its top nodes, pressed, then free under a force, then a
+platen of its own glued by <bc type="rigid">; each against the same block with its top nodes
+prescribed, and the converted scene against the model."""
+
+from __future__ import annotations
+
+import warnings
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from tissuesim.errors import TissueSimError
+from tissuesim.febio import convert_febio, load_febio, read_feb
+from tissuesim.scene.loader import load_scene
+
+MODELS = Path(__file__).parent / "models"
+PLATEN = (MODELS / "rigid_platen.feb").read_text()
+TOP = list(range(10, 19))  # FEBio ids of the block's top nodes
+
+
+def _run(text: str, tmp_path: Path, name: str = "m.feb"):
+    path = tmp_path / name
+    path.write_text(text)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        scene = load_febio(path)
+    sim = scene.simulation
+    for _ in range(scene.run["steps"]):
+        sim.step()
+    return sim, read_feb(path)
+
+
+def _prescribed(dz: float) -> str:
+    """The same block, no platen: its top nodes moved dz down and held in x and y."""
+    text = PLATEN
+    start, end = text.index('    <Elements type="hex8" name="plate">'), text.index("  </Mesh>")
+    plate = text[start:end]
+    text = text.replace(plate, plate[plate.index("    <NodeSet") :])
+    text = text.replace('    <SolidDomain name="plate" mat="platen"/>\n', "")
+    start, end = text.index("  <Rigid>"), text.index("  <LoadData>")
+    text = text[:start] + text[end:]
+    return text.replace(
+        "  </Boundary>",
+        '    <bc name="top" node_set="top" type="zero displacement">\n'
+        "      <x_dof>1</x_dof>\n      <y_dof>1</y_dof>\n      <z_dof>0</z_dof>\n    </bc>\n"
+        '    <bc name="press" node_set="top" type="prescribed displacement">\n'
+        f'      <dof>z</dof>\n      <value lc="1">{float(dz)!r}</value>\n'
+        "      <relative>0</relative>\n    </bc>\n  </Boundary>",
+    )
+
+
+def _block(sim, model) -> np.ndarray:
+    """The block's node positions by FEBio node row (its body is named after its part)."""
+    return sim.body_positions("block")
+
+
+def test_a_pressed_platen_is_the_same_motion_prescribed_on_the_nodes(tmp_path):
+    sim, model = _run(PLATEN, tmp_path)
+    ref, _ = _run(_prescribed(-0.05), tmp_path, "ref.feb")
+    assert np.abs(sim.body_positions("block") - ref.body_positions("body")).max() < 1e-12
+    f, g = sim.forces(), ref.forces()
+    assert f["platen"] == pytest.approx(g["press"], rel=1e-10, abs=1e-8)
+    assert f["platen"][2] < -100.0  # what holds the platen pushes it down into the block
+    assert np.allclose(f["platen.moment"], 0.0, atol=1e-8)  # symmetric
+    centre, R = sim.rigid_state("platen")
+    assert centre == pytest.approx([0.5, 0.5, 0.55 - 0.05])  # its centre of mass, moved
+    assert R == pytest.approx(np.eye(3))
+    plate = sim.body_positions("plate") - model.nodes[np.unique(model.parts["plate"][1])]
+    assert plate == pytest.approx(np.tile([0.0, 0.0, -0.05], (len(plate), 1)))
+
+
+def test_a_free_platen_under_a_force_sinks_as_far_as_that_force_presses(tmp_path):
+    """z free under rigid_force -F: the base holds F, and prescribing the depth it reached
+    takes the same force."""
+    force = 800.0
+    text = PLATEN.replace(
+        '    <rigid_bc name="press" type="rigid_displacement">\n      <rb>platen</rb>\n'
+        '      <dof>z</dof>\n      <value lc="1">-0.05</value>\n      <relative>0</relative>\n'
+        "    </rigid_bc>\n",
+        '    <rigid_load name="push" type="rigid_force">\n      <rb>platen</rb>\n'
+        f'      <dof>Rz</dof>\n      <value lc="1">{-force}</value>\n'
+        "      <load_type>LOAD</load_type>\n      <relative>0</relative>\n    </rigid_load>\n",
+    )
+    assert "rigid_force" in text
+    sim, _ = _run(text, tmp_path)
+    f = sim.forces()
+    assert f["base"][2] == pytest.approx(force, rel=1e-8)
+    assert f["platen"][2] == pytest.approx(0.0, abs=1e-6)  # a free DOF carries nothing
+    centre, _ = sim.rigid_state("platen")
+    depth = centre[2] - 0.55
+    ref, _ = _run(_prescribed(depth), tmp_path, "ref.feb")
+    assert ref.forces()["press"][2] == pytest.approx(-force, rel=1e-6)
+
+
+def test_a_platen_glued_by_a_rigid_bc_is_the_shared_nodes_platen(tmp_path):
+    """The platen on nodes of its own (a copy of the top face) and the block's top node set
+    glued to it by <bc type="rigid">: the same block as the one sharing its nodes."""
+    text = PLATEN
+    copies = "".join(
+        f'      <node id="{100 + k}">{x:g},{y:g},0.5</node>\n'
+        for k, (y, x) in enumerate((y, x) for y in (0, 0.5, 1) for x in (0, 0.5, 1))
+    )
+    text = text.replace("    </Nodes>", copies + "    </Nodes>")
+    plate = text[text.index('<Elements type="hex8" name="plate">') :]
+    plate = plate[: plate.index("</Elements>")]
+    new = plate
+    for k, node in enumerate(TOP):
+        new = new.replace(f">{node},", f">{100 + k},").replace(f",{node},", f",{100 + k},")
+    text = text.replace(plate, new)
+    text = text.replace(
+        "  </Boundary>",
+        '    <bc name="glue" node_set="top" type="rigid">\n      <rb>platen</rb>\n    </bc>\n'
+        "  </Boundary>",
+    )
+    sim, _ = _run(text, tmp_path)
+    shared, _ = _run(PLATEN, tmp_path, "shared.feb")
+    assert np.abs(sim.body_positions("block") - shared.body_positions("block")).max() < 1e-12
+    assert sim.forces()["platen"] == pytest.approx(shared.forces()["platen"], rel=1e-10)
+
+
+def test_the_converted_scene_runs_the_same(tmp_path):
+    sim, _ = _run(PLATEN, tmp_path)
+    scene_path = tmp_path / "platen.toml"
+    convert_febio(MODELS / "rigid_platen.feb", scene_path)
+    assert "[[rigid_bodies]]" in scene_path.read_text()
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        scene = load_scene(scene_path)
+    other = scene.simulation
+    for _ in range(scene.run["steps"]):
+        other.step()
+    assert np.array_equal(other.body_positions("block"), sim.body_positions("block"))
+
+
+@pytest.mark.parametrize(
+    "old, new, message",
+    [
+        ('<rigid_bc name="press" type="rigid_displacement">',
+         '<rigid_bc name="press" type="rigid_euler_angles">', "rigid_euler_angles"),
+        ("<rb>platen</rb>\n      <dof>z</dof>", "<rb>tissue</rb>\n      <dof>z</dof>",
+         "not a 'rigid body' material"),
+        ("  </Rigid>", '    <rigid_connector type="rigid spring"/>\n  </Rigid>',
+         "rigid connector 'rigid spring'"),
+        ("<value lc=\"1\">-0.05</value>\n      <relative>0</relative>",
+         "<value lc=\"1\">-0.05</value>\n      <relative>1</relative>", "relative = 1"),
+    ],
+)  # fmt: skip
+def test_refusals_name_the_element_and_line(old, new, message, tmp_path):
+    assert old in PLATEN
+    path = tmp_path / "bad.feb"
+    path.write_text(PLATEN.replace(old, new, 1))
+    with pytest.raises(TissueSimError, match=message) as info:
+        read_feb(path)
+    assert "bad.feb:" in str(info.value) and "\n" not in str(info.value)
