@@ -1,7 +1,8 @@
 """FEBio's ``<Output><logfile>`` requests: node_data and element_data become tables a run
 writes (``io/logfiles.py``; ``convert`` writes them as ``[[logfiles]]``), with the variables
 tissuesim has; FEBio's other variables are named in one note per request, and
-rigid_body_data / rigid_connector_data are refused (tissuesim runs no rigid bodies)."""
+rigid_body_data / rigid_connector_data are refused (a rigid body's force and moment are in
+forces.csv)."""
 
 from __future__ import annotations
 
@@ -29,8 +30,8 @@ def read_logfile(model: FebModel, node: Node) -> None:
     for c in node.children:
         if c.tag in ("rigid_body_data", "rigid_connector_data"):
             raise c.error(
-                f"{c.tag}: the model has no rigid bodies in tissuesim (it does not run FEBio's "
-                "rigid bodies yet), so there is no rigid body to log"
+                f"{c.tag}: tissuesim does not write FEBio's rigid body tables yet; a rigid "
+                "body's force and moment are in forces.csv (remove the request to run)"
             )
         if c.tag not in KINDS:
             raise _unsupported(c, "this logfile request is not supported by tissuesim")

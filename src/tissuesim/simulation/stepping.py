@@ -31,10 +31,10 @@ class Stepping:
         """(step_fn(system, state, h, solver, options), linear solver) for the integrator."""
         from tissuesim.time.steps import explicit_step, implicit_step
 
-        if self.rigid_bodies and (self.explicit or self.integrator == "newmark"):
+        if self.rigid_bodies and self.explicit:
             raise InputError(
-                f"rigid bodies run with the quasistatic and backward_euler integrators, not "
-                f"{self.integrator!r} (its steps have no rigid body DOFs yet)"
+                f"rigid bodies run with the quasistatic, backward_euler and newmark integrators, "
+                f"not {self.integrator!r} (its steps have no rigid body DOFs yet)"
             )
         if self.explicit:
 

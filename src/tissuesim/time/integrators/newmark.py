@@ -54,6 +54,8 @@ def check_newmark(parameters) -> tuple[float, float]:
 def initial_acceleration(system, models, t: float) -> np.ndarray:
     """a_0 = M^-1 f(t) on each FEM body's free DOFs (zero on its prescribed ones), f its
     external loads (gravity, body forces, tractions, nodal forces) at time t."""
+    if getattr(system, "links", None) is not None:
+        return _initial_acceleration_with_rigid(system, models, t)
     a = np.zeros(system.n_dofs)
     for j, model in enumerate(models):
         f = model.external_force(t)
@@ -66,6 +68,39 @@ def initial_acceleration(system, models, t: float) -> np.ndarray:
         block[free] = spla.spsolve(M, f[free])
         a[system.config_slices[j]] = block
     return a
+
+
+def _initial_acceleration_with_rigid(system, models, t: float) -> np.ndarray:
+    """a_0 = M^-1 f over the reduced DOFs of a system with rigid bodies (their glued vertices
+    follow them: x = P q, M_q = P^T M P, f_q = P^T f plus their own loads); the glued
+    vertices' a_0 is then T a_0 of their rigid body."""
+    import scipy.sparse as sp
+
+    n = system.n_dofs
+    blocks, f = [], np.zeros(n)
+    for j, model in enumerate(models):
+        st = system.tangent_slices[j]
+        blocks.append((st.start, model.mass.matrix().tocoo()))
+        f[st] = model.external_force(t)
+    rows = np.concatenate([b.row + o for o, b in blocks])
+    cols = np.concatenate([b.col + o for o, b in blocks])
+    M = sp.csr_matrix((np.concatenate([b.data for _, b in blocks]), (rows, cols)), shape=(n, n))
+    for r, st in zip(system.rigid, system.rigid_tangent_slices, strict=True):
+        force, moment = r.loads(t)
+        f[st] += np.concatenate([force, moment])
+    links = system.links
+    T = links.tangent_map(links.arms(system.rest_config()))
+    keep = np.ones(n)
+    keep[links.dofs.ravel()] = 0.0
+    P = (sp.diags(keep) + T).tocsr()
+    free = np.ones(n, dtype=bool)
+    free[system.prescribed_dofs] = False
+    Mq = (P.T @ M @ P).tocsr()[free][:, free].tocsc()
+    fq = (P.T @ f)[free]
+    q = np.zeros(n)
+    if np.any(fq):
+        q[free] = spla.spsolve(Mq, fq)
+    return P @ q
 
 
 def newmark_step(
@@ -83,11 +118,14 @@ def newmark_step(
     """One Newmark step of h s: Backward Euler's minimisation with the inertia of
     sqrt(beta) h about x_pred, then Newmark's acceleration and velocity updates."""
     a_n = np.zeros(system.n_dofs) if state.a is None else state.a
-    x_pred = state.x + h * state.v + h * h * (0.5 - beta) * a_n
+    # over the tangent DOFs (a rigid body's rotation on the left, rigid/body.py); for FEM
+    # bodies the retraction is x + dx and the difference x1 - x0
+    step = h * state.v + h * h * (0.5 - beta) * a_n
+    x_pred = system.retract(state.x, step)
     h_inertia = math.sqrt(beta) * h
     # the velocity that carries x_n to x_pred in h_inertia: Backward Euler's prediction is then
     # Newmark's, and contact sweeps the predicted motion
-    carried = State(state.time, state.x, (x_pred - state.x) / h_inertia)
+    carried = State(state.time, state.x, system.difference(x_pred, state.x) / h_inertia)
     outcome = implicit_step(
         system,
         carried,
@@ -102,7 +140,7 @@ def newmark_step(
     if not outcome.converged:
         return outcome
     x1 = outcome.state.x
-    a1 = (x1 - x_pred) / (beta * h * h)
+    a1 = system.difference(x1, x_pred) / (beta * h * h)
     v1 = state.v + h * ((1.0 - gamma) * a_n + gamma * a1)
     outcome.state = State(state.time + h, x1, v1, a1)
     return outcome
