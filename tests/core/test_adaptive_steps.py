@@ -83,6 +83,20 @@ def test_few_iterations_shrink_the_step_and_dtforce_takes_dtmax():
     assert (c.t_end, c.must_point) == (1.0, True)
 
 
+def test_a_must_point_curve_of_zero_sets_no_bound():
+    """FEBio's <dtmax lc="1">0</dtmax> with a STEP curve starting at 0 (co11, mi09): where the
+    curve is 0 (at t = 0) there is no dtmax: the first step keeps its dt0; from then on the
+    STEP curve's next value, 0.1, bounds it (FEBio's PointCurve: the next point's value)."""
+    free = AdaptiveStepping(dtmax_curve=((0.0, 0.0), (1.0, 0.1), (4.0, 0.1)),
+                            dtmax_interpolation="step", dtmin=0.01)  # fmt: skip
+    c = TimeStepController(free, 0.5, 0.0, 4.0)
+    assert (c.t_end, c.must_point) == (0.5, False)  # the first step unbounded: dt0 = 0.5
+    c.accepted(c.t_end, 3)
+    assert c.t_end == pytest.approx(0.6)  # 0.5 + (0.1 - 0.5) 0.2 = 0.42, at most dtmax 0.1
+    with pytest.raises(Exception, match="dtmax must be >= 0"):
+        TimeStepController(AdaptiveStepping(dtmax_curve=((0.0, -1.0), (1.0, 0.1))), 0.1, 0, 1)
+
+
 def _block(**kw):
     mesh = ts.box((0, 0, 0), (1, 0.2, 0.2), (4, 1, 1))
     sim = ts.Simulation(mesh, ts.NeoHookean(youngs_modulus=1e4, poisson_ratio=0.3),

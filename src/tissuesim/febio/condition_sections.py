@@ -28,6 +28,7 @@ CONTACT_TUNING = {
     "laugon", "tolerance", "gaptol", "penalty", "auto_penalty", "update_penalty", "two_pass",
     "knmult", "search_tol", "symmetric_stiffness", "search_radius", "seg_up", "minaug",
     "maxaug", "node_reloc", "smooth_aug", "flip_primary", "flip_secondary", "ktmult",
+    "fric_penalty",
 }  # fmt: skip
 #: load curve interpolations tissuesim writes as expressions of t
 INTERPOLATIONS = ("LINEAR", "STEP", "SMOOTH", "SMOOTH STEP")
@@ -104,6 +105,10 @@ def _boundary(model: FebModel, section: Node) -> None:
                 )
             load = _load(model, value, 1)
             model.dirichlet.append((nodes, [AXES[p["dof"].text]], load, name, model.window))
+        elif kind in ("zero shell displacement", "prescribed shell displacement"):
+            from tissuesim.febio.shells import read_shell_bc  # the shells' back faces
+
+            read_shell_bc(model, bc, _node_set(model, bc))
         elif kind == "rigid":  # the node set moves with a rigid body
             from tissuesim.febio.rigid import read_rigid_nodes
 

@@ -96,7 +96,8 @@ def run_steps(time_steps: int, step_size: float, table: dict | None) -> int:
         return time_steps
     duration = time_steps * step_size
     curve = table.get("dtmax_curve")
-    dtmax = min(v for _, v in curve) if curve else table["dtmax"]
+    positive = [v for _, v in curve if v > 0] if curve else [table["dtmax"]]
+    dtmax = min(positive) if positive else duration / max(time_steps, 1)  # 0: no bound
     must = len(curve) if curve else 0
     cap = 10 * max(time_steps, math.ceil(duration / dtmax)) + must
     if table["dtmin"] > 0:

@@ -3,7 +3,7 @@
 After a converged step in which Newton took n iterations, the next step is
 
     s = sqrt(opt_iter / n)
-    s >= 1: dt <- dt + (dtmax - dt) min(0.2, s - 1)          (at most dtmax)
+    s >= 1: dt <- dt + (dtmax - dt) min(0.2, s - 1)          (at most dtmax; dtmax 0: none)
     s <  1: dt <- dt - (dt - dtmin) (1 - s)                   (at least dtmin)
 
 where dt is the previous step as the rule set it (not as a must point shortened it) and dtmax
@@ -114,8 +114,8 @@ def check_adaptive(value: AdaptiveStepping | Mapping | None, what: str = "adapti
             raise InputError(f"{what} dtmax_curve must be two or more points [t, dtmax]")
         if not np.all(np.isfinite(curve)) or np.any(np.diff(curve[:, 0]) <= 0):
             raise InputError(f"{what} dtmax_curve: times must be finite and increasing")
-        if np.any(curve[:, 1] <= 0):
-            raise InputError(f"{what} dtmax_curve: dtmax must be > 0 at every point")
+        if np.any(curve[:, 1] < 0):
+            raise InputError(f"{what} dtmax_curve: dtmax must be >= 0 at every point (0: none)")
         curve = tuple((float(a), float(b)) for a, b in curve)
         dtmax = None if v.dtmax is None else float(v.dtmax)
     else:
@@ -186,12 +186,15 @@ class TimeStepController:
             dtn = dtmax
         elif iterations > 0:  # opt_iter = 0: dtmin (FEBio's rule as it stands)
             scale = math.sqrt(c.opt_iter / iterations)
+            # a dtmax of 0 (a must-point curve's value) sets no bound, as in FEBio
             if scale >= 1.0:
-                dtn = min(dtn + (dtmax - dtn) * min(0.2, scale - 1.0), 5.0 * self.dtp, dtmax)
+                dtn = min(dtn + (dtmax - dtn) * min(0.2, scale - 1.0), 5.0 * self.dtp)
             else:
-                dtn = min(max(dtn - (dtn - c.dtmin) * (1.0 - scale), c.dtmin), dtmax)
+                dtn = max(dtn - (dtn - c.dtmin) * (1.0 - scale), c.dtmin)
+            dtn = min(dtn, dtmax) if dtmax > 0 else dtn
         else:
-            dtn = min(max(dtn, c.dtmin), dtmax)
+            dtn = max(dtn, c.dtmin)
+            dtn = min(dtn, dtmax) if dtmax > 0 else dtn
         self.dtp = dtn  # the rule's own value, before the must points shorten it
         eps = self._eps(t)
         self.must_point = False
