@@ -13,6 +13,7 @@ __all__ = [
     "FIBRE_TYPES",
     "UNCOUPLED",
     "VISCOELASTIC",
+    "DAMAGE",
 ]
 
 #: FEBio material types tissuesim runs -> (model, FEBio parameter -> tissuesim keyword; None:
@@ -90,5 +91,10 @@ UNCOUPLED = {
     "uncoupled fiber-exp-linear",
 }  # fmt: skip
 VISCOELASTIC = {"viscoelastic": "viscoelastic", "uncoupled viscoelastic": "uncoupled_viscoelastic"}
+#: FEBio's damage wrappers (alone or a solid mixture's component) -> tissuesim's model
+DAMAGE = {
+    "elastic damage": "elastic_damage",
+    "uncoupled elastic damage": "uncoupled_elastic_damage",
+}
 #: parameters given as a list (one value per axis), by FEBio type
 VECTOR_PARAMETERS = {"TC nonlinear orthotropic": ("beta", "ksi")}

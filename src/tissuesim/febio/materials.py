@@ -29,6 +29,7 @@ from tissuesim.febio.material_axes import (
 )
 from tissuesim.febio.material_expressions import GENERIC, generic_hyperelastic
 from tissuesim.febio.material_laws import (
+    DAMAGE,
     FIBRE_TYPES,
     FIBRES_ONLY,
     MATERIAL_TYPES,
@@ -84,6 +85,8 @@ def _law(
         return rigid_material(model, mat)
     if kind in VISCOELASTIC and top:
         return _viscoelastic(model, mat, kind)
+    if kind in DAMAGE:
+        return _damage(model, mat, kind, component, bulk)
     if kind in MIXTURES:
         if component:
             raise mat.error(f"{kind!r}: a mixture is not a component of a mixture (nor in FEBio)")
@@ -101,6 +104,7 @@ def _law(
     if kind not in MATERIAL_TYPES or (kind in FIBRES_ONLY and not component):
         known = [k for k in MATERIAL_TYPES if component or k not in FIBRES_ONLY] + list(GENERIC)
         known += list(VISCOELASTIC) if top else []
+        known += list(DAMAGE)
         known += list(MIXTURES) if not component else []
         where = " in a solid mixture" if component else ""
         alone = (
@@ -255,3 +259,54 @@ def _viscoelastic(model: FebModel, mat: Node, kind: str) -> tuple:
     except TissueSimError as exc:
         raise mat.error(f"material {kind!r}: {exc}") from None
     return (VISCOELASTIC[kind], params, density, kind, orientation)
+
+
+def _damage(model: FebModel, mat: Node, kind: str, component: bool, bulk: bool) -> tuple:
+    """FEBio's (uncoupled) elastic damage: an <elastic> law, a <damage> CDF ("CDF log-normal",
+    ...) and a <criterion> ("DC von Mises stress", ...), each with its parameters; read alone
+    or as a solid mixture's <solid> (then its elastic law is read as a component too)."""
+    from tissuesim.errors import TissueSimError
+    from tissuesim.materials import make_material
+
+    density, elastic, parts, own = 1.0, None, {}, {}
+    _once(mat)
+    for p in mat.children:
+        if p.tag == "elastic":
+            if elastic is not None:
+                raise p.error("a second <elastic>")
+            uc = kind == "uncoupled elastic damage"  # the law's deviatoric part: its k unused
+            read = _law(model, p, top=False, component=component or uc, bulk=bulk and not uc)
+            elastic = (read, p)
+        elif p.tag in ("damage", "criterion"):
+            if p.tag in parts:
+                raise p.error(f"a second <{p.tag}>")
+            table: dict = {"model": p.attrib.get("type", "")}
+            _once(p)
+            for q in p.children:
+                if q.children or "lc" in q.attrib or q.attrib.get("type") not in (None, "const"):
+                    raise _unsupported(q, "a damage parameter that is a field, curve or table")
+                table[q.tag] = float(_floats(q, 1)[0])
+            parts[p.tag] = table
+        elif p.tag == "density":
+            density = _density(p)
+        elif p.tag in ("k", "pressure_model") and kind == "uncoupled elastic damage":
+            if bulk:  # its own bulk term (a mixture's component: the mixture's)
+                text = p.text.strip()
+                value = float(_floats(p, 1)[0]) if p.tag == "k" else text
+                own[p.tag] = int(text) if text.isdigit() else value
+        else:
+            uc = ", <k>, <pressure_model>" if kind == "uncoupled elastic damage" else ""
+            raise p.error(f"parameter {p.tag!r} of {kind!r}: it takes <elastic>, <damage>, "
+                          f"<criterion>, <density>{uc}")  # fmt: skip
+    for need in ("elastic", "damage", "criterion"):
+        if need == "elastic" and elastic is None or need != "elastic" and need not in parts:
+            raise mat.error(f"a {kind!r} material needs a <{need}>")
+    (base, base_params, base_density, _, orientation), _ = elastic
+    params = {"elastic": {"model": base, **base_params}, **parts, "density": base_density, **own}
+    if "density" not in {c.tag for c in mat.children}:
+        density = base_density
+    try:
+        make_material(DAMAGE[kind], **params)
+    except TissueSimError as exc:
+        raise mat.error(f"material {kind!r}: {exc}") from None
+    return (DAMAGE[kind], params, density, kind, orientation)

@@ -36,6 +36,7 @@ from tissuesim.materials.orthotropic import (
     OrthotropicElastic,
 )
 from tissuesim.materials.psd import project_psd, project_tangent_psd
+from tissuesim.materials.reactive.damage import ElasticDamage, UncoupledElasticDamage
 from tissuesim.materials.registry import (
     ALIASES,
     FIBRE_LAWS,
@@ -94,6 +95,8 @@ __all__ = [
     "UncoupledSolidMixture",
     "Viscoelastic",
     "UncoupledViscoelastic",
+    "ElasticDamage",
+    "UncoupledElasticDamage",
     "EnergyLaw",
     "from_energy",
     "lame_parameters",

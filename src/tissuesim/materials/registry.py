@@ -7,6 +7,8 @@ uncoupled laws; ``coupled_mooney_rivlin``, ``coupled_veronda_westmann`` and
 tissuesim's coupled forms where FEBio has none. ``<law>_uncoupled`` and ``<law>_coupled`` are
 accepted as aliases (``ALIASES``). ``viscoelastic`` and ``uncoupled_viscoelastic`` wrap another
 law given as ``elastic`` (a material or a table with its ``model``), ``VISCOELASTIC_LAWS``.
+``elastic_damage`` and ``uncoupled_elastic_damage`` scale another law (``elastic``) by 1 - D
+(``DAMAGE_LAWS``; a mixture with such a component steps its history, ``HISTORY_MIXTURES``).
 ``energy`` is a law from its strain-energy density ``psi`` (``EnergyLaw``), its other keys the
 parameters psi names. ``solid_mixture`` and ``uncoupled_solid_mixture`` sum the laws given as
 ``components`` (``MIXTURES``); FEBio's fibre laws ``fiber_exp_pow``, ``fiber_pow_linear``,
@@ -42,6 +44,8 @@ from tissuesim.materials.orthotropic import (
     FungOrthotropicCompressible,
     OrthotropicElastic,
 )
+from tissuesim.materials.reactive.damage import DAMAGE_LAWS
+from tissuesim.materials.reactive.history_mixture import HISTORY_MIXTURES
 from tissuesim.materials.soft_tissue.arruda_boyce import ArrudaBoyce, CoupledArrudaBoyce
 from tissuesim.materials.soft_tissue.arruda_boyce_unconstrained import ArrudaBoyceUnconstrained
 from tissuesim.materials.soft_tissue.hencky import IsotropicHencky
@@ -170,6 +174,41 @@ def _viscoelastic(key: str, params: dict) -> Material:
     return VISCOELASTIC_LAWS[key](elastic, **rest)
 
 
+def _elastic_table(key: str, elastic: object, extra: dict) -> object:
+    """A wrapper's ``elastic``: a material, or a table with its model (plus ``extra``: the
+    directions a FEBio mixture gives its component, meant for the wrapped law)."""
+    if not isinstance(elastic, dict):
+        if extra:
+            name = next(iter(extra))
+            raise MaterialError(f"unknown parameter {short(name)} for material {key!r}")
+        return elastic
+    table = {**elastic, **extra}
+    if "model" not in table:
+        raise MaterialError(f"{key}: elastic needs its model (e.g. 'neo_hookean')")
+    try:
+        return make_material(table.pop("model"), **table)
+    except MaterialError as exc:
+        raise MaterialError(f"{key}: elastic: {exc}") from None
+
+
+def _damage(key: str, params: dict) -> Material:
+    """A damage wrapper: ``elastic`` (a material or a table), ``damage`` (the CDF table),
+    ``criterion``, ``density`` (uncoupled: ``k``, ``pressure_model``); other keys (a mixture
+    component's directions) go to elastic."""
+    own = ("elastic", "damage", "criterion", "density")
+    if DAMAGE_LAWS[key].uncoupled:
+        own += ("k", "pressure_model")
+    extra = {k: v for k, v in params.items() if k not in own}
+    elastic = params.get("elastic")
+    if DAMAGE_LAWS[key].uncoupled and isinstance(elastic, dict) and "k" not in elastic:
+        cls = law_class(elastic.get("model"))  # its deviatoric part is used: any k will do
+        if cls is not None and "k" in inspect.signature(cls.__init__).parameters:
+            elastic = {**elastic, "k": 1.0}
+    elastic = _elastic_table(key, elastic, extra)
+    rest = {k: v for k, v in params.items() if k in own and k != "elastic"}
+    return DAMAGE_LAWS[key](elastic, **rest)
+
+
 def _mixture(key: str, params: dict) -> Material:
     """A solid mixture: ``components`` materials or tables with their model; a component law of
     an uncoupled mixture that takes k gets the mixture's (FEBio ignores the component's)."""
@@ -194,6 +233,8 @@ def _mixture(key: str, params: dict) -> Material:
             except MaterialError as exc:
                 raise MaterialError(f"{key}: components[{i}]: {exc}") from None
         params = {**params, "components": built}
+        if any(hasattr(c, "accept_step") for c in built):  # a damage component's history
+            return HISTORY_MIXTURES[key](**params)
     return MIXTURES[key](**params)
 
 
@@ -209,6 +250,8 @@ def make_material(model: str, **params: object) -> Material:
         return _mixture(key, params)
     if key in VISCOELASTIC_LAWS:
         return _viscoelastic(key, params)
+    if key in DAMAGE_LAWS:
+        return _damage(key, params)
     if key == EnergyLaw.name:
         if "psi" not in params:
             raise MaterialError(
@@ -217,7 +260,7 @@ def make_material(model: str, **params: object) -> Material:
             )
         return EnergyLaw(params.pop("psi"), **params)
     if key not in MATERIALS:
-        names = [*MATERIALS, *VISCOELASTIC_LAWS, *MIXTURES, EnergyLaw.name]
+        names = [*MATERIALS, *VISCOELASTIC_LAWS, *DAMAGE_LAWS, *MIXTURES, EnergyLaw.name]
         raise MaterialError(f"unknown material model {short(model)}; {_suggest(key, names)}")
     cls = MATERIALS[key]
     sig = inspect.signature(cls.__init__).parameters

@@ -1,0 +1,3 @@
+"""FEBio's history-dependent laws: elastic damage (``damage.py``, its CDFs and criteria in
+``damage_functions.py``), solid mixtures whose components keep a history
+(``history_mixture.py``)."""
