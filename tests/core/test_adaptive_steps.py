@@ -94,7 +94,7 @@ def test_a_must_point_curve_of_zero_sets_no_bound():
     c.accepted(c.t_end, 3)
     assert c.t_end == pytest.approx(0.6)  # 0.5 + (0.1 - 0.5) 0.2 = 0.42, at most dtmax 0.1
     with pytest.raises(Exception, match="dtmax must be >= 0"):
-        TimeStepController(AdaptiveStepping(dtmax_curve=((0.0, -1.0), (1.0, 0.1))), 0.1, 0, 1)
+        check_adaptive({"dtmax_curve": [[0.0, -1.0], [1.0, 0.1]]})
 
 
 def _block(**kw):
