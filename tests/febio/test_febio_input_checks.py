@@ -215,3 +215,18 @@ def test_reading_leaves_the_garbage_collector_as_it_was(tmp_path):
         assert not gc.isenabled()  # left off when it was off
     finally:
         gc.enable()
+
+
+def test_a_solver_tuning_given_twice_is_a_note_an_integrator_parameter_is_refused(tmp_path):
+    """FEBio keeps the last of a <solver> setting given twice (bt02, dy16, dy17 give lstol
+    twice): a tuning setting is one note; Newmark's beta twice is ambiguous and refused."""
+    text = (MODELS / "uniaxial_neo_hookean.feb").read_text()
+    path = tmp_path / "twice.feb"
+    path.write_text(text.replace('<solver type="solid">', '<solver type="solid">\n'
+                                 "      <lstol>0</lstol>\n      <lstol>0.9</lstol>"))  # fmt: skip
+    model = read_feb(path)
+    assert sum("lstol" in n for n in model.notes) == 1
+    path.write_text(text.replace('<solver type="solid">', '<solver type="solid">\n'
+                                 "      <beta>0.25</beta>\n      <beta>0.3</beta>"))  # fmt: skip
+    with pytest.raises(FebError, match="<beta> is given twice in <solver>"):
+        read_feb(path)

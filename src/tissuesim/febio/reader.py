@@ -152,13 +152,19 @@ def _solver(model: FebModel, node: Node) -> None:
         raise node.error(f"solver type {kind!r}: tissuesim runs FEBio's 'solid' solver")
     values = dict(INTEGRATOR_PARAMETERS)
     tuning = []
-    _once(node)
+    seen: dict = {}
+    for c in node.children:  # FEBio keeps the last of a tuning setting given twice
+        if c.tag in INTEGRATOR_PARAMETERS and c.tag in seen:
+            raise c.error(
+                f"<{c.tag}> is given twice in <solver> (first at line {seen[c.tag].line}): keep one"
+            )
+        seen[c.tag] = c
     for c in node.children:
         if c.tag in INTEGRATOR_PARAMETERS:
             values[c.tag] = float(_floats(c, 1)[0])
             if c.tag in ("rhoi", "alpha"):
                 model.integrator_nodes[c.tag] = c
-        else:
+        elif c.tag not in tuning:
             tuning.append(c.tag)
     rhoi, alpha = values["rhoi"], values["alpha"]
     if rhoi == -1.0:
