@@ -117,7 +117,9 @@ def _boundary(model: FebModel, section: Node) -> None:
                     "a rigid interface inside a <step>: tissuesim links nodes to a rigid body "
                     "for the whole run (give it in the model's <Boundary>)"
                 )
-            read_rigid_nodes(model, bc, _node_set(model, bc))
+            from tissuesim.febio.shells import clamped_set  # shells: their back nodes too
+
+            read_rigid_nodes(model, bc, clamped_set(model, bc, _node_set(model, bc)))
         else:
             raise bc.error(
                 f"boundary condition type {kind!r} is not supported by tissuesim; it runs "
@@ -131,9 +133,12 @@ def _loads(model: FebModel, section: Node) -> None:
         if load.tag == "nodal_load" and kind == "nodal_force":
             nodes = _node_set(model, load)
             p = _children(load, {"value", "relative", "shell_bottom"})
-            for flag in ("relative", "shell_bottom"):
-                if flag in p and _flag(p[flag]):
-                    raise _unsupported(p[flag], f"{flag} = 1")
+            if "relative" in p and _flag(p["relative"]):
+                raise _unsupported(p["relative"], "relative = 1")
+            if "shell_bottom" in p and _flag(p["shell_bottom"]):  # on the shells' back faces
+                from tissuesim.febio.shells import back_set
+
+                nodes = back_set(model, p["shell_bottom"], nodes)
             if "value" not in p:
                 raise load.error("needs a <value> (the force vector)")
             model.nodal.append((nodes, _load(model, p["value"], 3)))

@@ -1,11 +1,20 @@
 """FEBio's ``<Mesh>`` (Nodes, Elements, NodeSet, Surface, ElementSet, SurfacePair) and
-``<MeshDomains>`` (SolidDomain) sections, in FEBio 3.0's and 4.0's spellings."""
+``<MeshDomains>`` (SolidDomain, ShellDomain) sections, in FEBio 3.0's and 4.0's spellings;
+shells (quad4, tri3) become solid parts in ``shells.py``."""
 
 from __future__ import annotations
 
 import numpy as np
 
 from tissuesim.febio.model import FebModel, _floats, _int_attr, _ints, _unsupported
+from tissuesim.febio.shells import (
+    QUADRATIC_SHELLS,
+    SHELL_ELEMENTS,
+    add_shell_part,
+    read_mesh_data,
+    read_shell_domain,
+    shells_of,
+)
 from tissuesim.febio.xml import Node
 
 __all__ = ["SECTIONS", "ELEMENTS", "PERMUTATIONS", "FACETS"]
@@ -96,13 +105,14 @@ def _coordinates(nodes: list[Node]) -> np.ndarray:
 
 def _elements(model: FebModel, node: Node) -> None:
     kind = node.attrib.get("type", "")
-    if kind not in ELEMENTS:
+    if kind not in ELEMENTS and kind not in SHELL_ELEMENTS:
         raise node.error(
             f"element type {kind!r} is not supported by tissuesim; it runs "
-            f"{', '.join(ELEMENTS)} (penta15, pyramids, tet5, tet15, tet20, shells and beams "
-            "are not)"
+            f"{', '.join(ELEMENTS)} and the shells {', '.join(SHELL_ELEMENTS)} (penta15, "
+            f"pyramids, tet5, tet15, tet20, the quadratic shells {', '.join(QUADRATIC_SHELLS)} "
+            "and beams are not)"
         )
-    nv, cell_type = ELEMENTS[kind]
+    nv, cell_type = ELEMENTS[kind] if kind in ELEMENTS else SHELL_ELEMENTS[kind]
     name = node.attrib.get("name") or f"Part{len(model.parts) + 1}"
     if name in model.parts:
         raise node.error(f"a second <Elements> part named {name!r}")
@@ -122,6 +132,8 @@ def _elements(model: FebModel, node: Node) -> None:
         cells = cells[:, PERMUTATIONS[kind]]
     if kind in ORDERS:
         _check_order(model, kind, cells, elems)
+    if kind in SHELL_ELEMENTS:  # a hexahedron / wedge part: the shell's back face added
+        cells = add_shell_part(model, name, kind, cells)
     model.parts[name] = (cell_type, cells, np.array(ids), node)
     if "mat" in node.attrib:  # FEBio 2.5 style: the material on the part
         model.domains[name] = (node.attrib["mat"], None, node)
@@ -250,11 +262,16 @@ DOMAIN_TYPES = {"elastic-solid": "displacement", "three-field-solid": "mean_dila
 
 def _mesh_domains(model: FebModel, section: Node) -> None:
     for node in section.children:
+        if node.tag == "ShellDomain":
+            read_shell_domain(model, node)
+            continue
         if node.tag != "SolidDomain":
-            raise _unsupported(node, "tissuesim runs solid domains only")
+            raise _unsupported(node, "tissuesim runs solid and shell domains only")
         name, mat = node.attrib.get("name"), node.attrib.get("mat")
         if name not in model.parts:
             raise node.error(f"no <Elements> part named {name!r}")
+        if name in shells_of(model).faces:
+            raise node.error(f"part {name!r} is made of shells: give it a <ShellDomain>")
         if mat not in model.materials:
             raise node.error(f"no <material> named {mat!r}")
         kind = node.attrib.get("type")
@@ -267,4 +284,6 @@ def _mesh_domains(model: FebModel, section: Node) -> None:
         model.domains[name] = (mat, DOMAIN_TYPES.get(kind), node)
 
 
-SECTIONS = {"Mesh": _mesh, "MeshDomains": _mesh_domains}
+#: "MeshData" here replaces reader.py's entry (``reader.SECTIONS`` spreads these after it):
+#: shell thickness data, the rest passed on to ``material_axes.read_mesh_data``
+SECTIONS = {"Mesh": _mesh, "MeshDomains": _mesh_domains, "MeshData": read_mesh_data}

@@ -1,0 +1,250 @@
+"""FEBio's shells (``quad4``, ``tri3`` in a ``<ShellDomain>``) as the solids they are.
+
+FEBio 3/4's shell (``FESSIShellDomain``, ``FEElasticShellDomain``: "elastic-shell") gives each
+node its displacement u and a second one, w (the DOFs ``sx, sy, sz``), the displacement of
+the shell's back face: the point at (r, s, eta) is sum_i M_i(r, s) [(1 + eta)/2 (X_i + u_i) +
+(1 - eta)/2 (X_i - D_i + w_i)], D_i the node's director (``FEModel::InitShells``: the mean of
+the unit corner normals of the shells around it times their thickness there). Its F is that
+map's, its integration 2 x 2 (quad4) or 3 (tri3, (1/6, 1/6), (2/3, 1/6), (1/6, 2/3)) points in
+the plane times 2 Gauss points through the thickness, with the solid laws. That is exactly a
+hexahedron (a wedge) whose top face is the shell's nodes and whose bottom face is the nodes
+moved by -D, with tissuesim's hex8 (wedge) quadrature: so each shell part becomes a
+``hexahedron`` (``wedge``) part here, one new node per shell node (its back face, appended to
+``model.nodes``), and w is that node's displacement (FEBio's solution vector, and its
+``solution_norm``, holds w). ``zero shell displacement`` / ``prescribed shell displacement``
+hold the back nodes. The mesh is ``tissuesim.mesh.generators.shells``' (``solid_shell``).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from tissuesim.febio.model import FebModel, Load, _flag, _floats, _int_attr, _once, _unsupported
+from tissuesim.febio.xml import Node
+from tissuesim.mesh.generators.shells import shell_directors
+
+__all__ = [
+    "SHELL_ELEMENTS",
+    "add_shell_part",
+    "read_shell_domain",
+    "read_mesh_data",
+    "read_shell_bc",
+    "back_set",
+    "clamped_set",
+]
+
+#: FEBio shell element -> (nodes, the solid it is here)
+SHELL_ELEMENTS = {"quad4": (4, "hexahedron"), "tri3": (3, "wedge")}
+#: FEBio's quadratic shells: a 16 (12) node solid tissuesim has no element for
+QUADRATIC_SHELLS = ("quad8", "quad9", "tri6", "tri7")
+#: ShellDomain type -> formulation (None: FEBio's default for the law: three-field for an
+#: uncoupled law on quad4, as tissuesim's hexahedra; tri3 gets "displacement" below)
+SHELL_DOMAINS = {"elastic-shell": "displacement", "three-field-shell": "mean_dilatation"}
+SHELL_BCS = ("zero shell displacement", "prescribed shell displacement")
+AXES = {"sx": 0, "sy": 1, "sz": 2}
+
+
+@dataclass
+class Shells:
+    """The model's shell parts: faces (node rows), FEBio element type, thickness per corner,
+    and the back node of every shell node."""
+
+    faces: dict = field(default_factory=dict)  # part -> (k, nv) front node rows
+    kinds: dict = field(default_factory=dict)  # part -> "quad4" / "tri3"
+    thickness: dict = field(default_factory=dict)  # part -> (k, nv)
+    back: dict = field(default_factory=dict)  # front node row -> back node row
+
+
+def shells_of(model: FebModel) -> Shells:
+    """The model's Shells (created on first use)."""
+    if not hasattr(model, "_shells"):
+        model._shells = Shells()  # type: ignore[attr-defined]
+    return model._shells  # type: ignore[attr-defined]
+
+
+def add_shell_part(model: FebModel, name: str, kind: str, faces: np.ndarray) -> np.ndarray:
+    """The solid cells of a shell part: new back nodes (at the front nodes until the thickness
+    is read) appended to ``model.nodes``; (k, 2 nv) cells, back face first."""
+    shells = shells_of(model)
+    new = [int(i) for i in dict.fromkeys(faces.ravel().tolist()) if int(i) not in shells.back]
+    first = len(model.nodes)
+    for k, i in enumerate(new):
+        shells.back[i] = first + k
+    model.nodes = np.vstack([model.nodes, model.nodes[new]])
+    back = np.vectorize(shells.back.__getitem__, otypes=[np.int64])(faces)
+    shells.faces[name] = faces
+    shells.kinds[name] = kind
+    shells.thickness[name] = np.zeros(faces.shape)
+    return np.concatenate([back, faces], axis=1)
+
+
+def _place(model: FebModel) -> None:
+    """Back nodes at X - D (FEBio's directors, over every shell part)."""
+    shells = shells_of(model)
+    if not shells.faces:
+        return
+    front = np.array(list(shells.back), dtype=np.int64)
+    faces = np.concatenate(list(shells.faces.values()))
+    thickness = np.concatenate(list(shells.thickness.values()))
+    directors = shell_directors(model.nodes, faces, thickness, normalize=False)
+    model.nodes[[shells.back[i] for i in front.tolist()]] = model.nodes[front] - directors[front]
+
+
+def read_shell_domain(model: FebModel, node: Node) -> None:
+    """<ShellDomain name mat [type]> with <shell_thickness> (and <shell_normal_nodal>1)."""
+    name, mat = node.attrib.get("name"), node.attrib.get("mat")
+    shells = shells_of(model)
+    if name not in model.parts:
+        raise node.error(f"no <Elements> part named {name!r}")
+    if name not in shells.faces:
+        raise node.error(f"part {name!r} is not made of shell elements (quad4, tri3)")
+    if mat not in model.materials:
+        raise node.error(f"no <material> named {mat!r}")
+    kind = node.attrib.get("type")
+    if kind is not None and kind not in SHELL_DOMAINS:
+        raise node.error(
+            f"shell domain type {kind!r} is not supported by tissuesim; it runs "
+            f"{', '.join(SHELL_DOMAINS)} (the EAS, ANS and old shells are not)"
+        )
+    extra = sorted(set(node.attrib) - {"name", "mat", "type"})
+    if extra:
+        raise node.error(f"{extra[0]}: shell domain options are not supported by tissuesim")
+    p = _once(node)
+    for tag, child in p.items():
+        if tag == "shell_normal_nodal":
+            if not _flag(child):
+                raise _unsupported(child, "shell_normal_nodal = 0 (element normals)")
+        elif tag != "shell_thickness":
+            raise _unsupported(child, "this ShellDomain parameter is not supported by tissuesim")
+    if "shell_thickness" in p:
+        h = _floats(p["shell_thickness"], 1)[0]
+        if h < 0.0:
+            raise p["shell_thickness"].error("a shell thickness must not be negative")
+        if h > 0.0:  # FEBio's AssignDefaultShellThickness: 0 leaves it to <MeshData>
+            shells.thickness[name][:] = h
+            _place(model)
+    formulation = SHELL_DOMAINS.get(kind) if kind else None
+    if formulation is None and shells.kinds[name] == "tri3":
+        formulation = "displacement"  # FEBio: no three-field tri3 shell by default
+    others = [p for p in model.parts if p not in shells.faces]
+    shared = [p for p in others if np.intersect1d(model.parts[p][1], shells.faces[name]).size]
+    if shared:
+        raise node.error(
+            f"shell part {name!r} shares nodes with the solid part {shared[0]!r}: shells "
+            "attached to solids (FEBio's shell-solid interface) are not supported by tissuesim"
+        )
+    model.domains[name] = (mat, formulation, node)
+
+
+def read_shell_thickness(model: FebModel, data: Node) -> None:
+    """<ElementData type="shell thickness" elem_set=...>: <e lid=...> one thickness per node
+    of the element (or one for all)."""
+    from tissuesim.febio.material_axes import _element_set
+
+    shells = shells_of(model)
+    members = _element_set(model, data)
+    for e in data.children:
+        if e.tag not in ("e", "elem") or "lid" not in e.attrib:
+            raise _unsupported(e, "expected <e lid=...>")
+        lid = _int_attr(e, "lid", "an element's local id")
+        if not 1 <= lid <= len(members):
+            raise e.error(f"lid {lid} is outside the element set (1..{len(members)})")
+        part, row = members[lid - 1]
+        if part not in shells.faces:
+            raise e.error(f"a shell thickness on part {part!r}, which has no shell elements")
+        nv = shells.faces[part].shape[1]
+        values = _floats(e)
+        if values.size not in (1, nv) or (values <= 0.0).any():
+            raise e.error(f"a shell thickness is 1 or {nv} positive numbers")
+        shells.thickness[part][row] = values
+    _place(model)
+
+
+def read_mesh_data(model: FebModel, section: Node) -> None:
+    """<MeshData>: shell thickness data here, the rest by ``material_axes.read_mesh_data``."""
+    from tissuesim.febio.material_axes import read_mesh_data as read_axes
+
+    rest = []
+    for data in section.children:
+        if data.tag == "ElementData" and data.attrib.get("type") == "shell thickness":
+            read_shell_thickness(model, data)
+        else:
+            rest.append(data)
+    if rest:
+        read_axes(model, Node(section.tag, section.attrib, section.line, section.source,
+                              section.text, rest))  # fmt: skip
+
+
+def check_thickness(model: FebModel) -> None:
+    """Refuse a shell part left without a thickness (FEBio: "Zero shell thickness")."""
+    shells = shells_of(model)
+    for name, h in shells.thickness.items():
+        if (h <= 0.0).any():
+            node = model.domains.get(name, (None, None, model.parts[name][3]))[2]
+            raise node.error(
+                f"shell part {name!r} has no thickness: give <shell_thickness> in its "
+                '<ShellDomain> or <ElementData type="shell thickness">'
+            )
+
+
+def back_set(model: FebModel, node: Node, nodes: str) -> str:
+    """The node set of the back nodes of a set of shell nodes (``<nodes>.back``), for a
+    condition on the shells' back faces (``node`` the element that asks, for a refusal)."""
+    shells = shells_of(model)
+    rows = model.node_sets[nodes]
+    missing = [int(i) for i in rows if int(i) not in shells.back]
+    if missing:
+        raise node.error(f"node set {nodes!r} holds nodes of no shell (row {missing[0]})")
+    name = f"{nodes}.back"
+    model.node_sets[name] = np.array([shells.back[int(i)] for i in rows], dtype=np.int64)
+    return name
+
+
+def clamped_set(model: FebModel, bc: Node, nodes: str) -> str:
+    """A rigid interface (<bc type="rigid">) holds the back nodes of its shell nodes too, as
+    FEBio's ``clamp_shells`` (1 by default for its shells) does: the set ``<nodes>.clamped``
+    (``nodes`` itself when it holds no shell node or clamp_shells is 0)."""
+    shells = shells_of(model)
+    clamp = bc.find("clamp_shells")
+    if clamp is not None and not _flag(clamp):
+        return nodes
+    rows = model.node_sets[nodes]
+    backs = [shells.back[int(i)] for i in rows if int(i) in shells.back]
+    if not backs:
+        return nodes
+    name = f"{nodes}.clamped"
+    model.node_sets[name] = np.concatenate([rows, np.array(backs, dtype=np.int64)])
+    return name
+
+
+def read_shell_bc(model: FebModel, bc: Node, nodes: str) -> None:
+    """A <bc> on the shells' back faces: ``zero shell displacement`` (sx_dof, sy_dof, sz_dof)
+    or ``prescribed shell displacement`` (dof sx / sy / sz, value, relative = 0)."""
+    check_thickness(model)
+    back = back_set(model, bc, nodes)
+    kind, name = bc.attrib.get("type"), bc.attrib.get("name")
+    p = _once(bc)
+    if kind == "zero shell displacement":
+        allowed = {"sx_dof", "sy_dof", "sz_dof"}
+        for c in p.values():
+            if c.tag not in allowed:
+                raise _unsupported(c, f"this parameter of <{bc.tag}> is not supported")
+        comps = [AXES[t[:2]] for t in ("sx_dof", "sy_dof", "sz_dof") if t in p and _flag(p[t])]
+        if not comps:
+            raise bc.error("fixes no degree of freedom")
+        model.dirichlet.append(
+            (back, None if comps == [0, 1, 2] else comps, None, name, model.window)
+        )
+        return
+    for c in p.values():
+        if c.tag not in ("dof", "value", "relative"):
+            raise _unsupported(c, f"this parameter of <{bc.tag}> is not supported")
+    if "dof" not in p or p["dof"].text not in AXES or "value" not in p:
+        raise bc.error("needs <dof> sx, sy or sz and a <value>")
+    if "relative" in p and _flag(p["relative"]) and model.window and model.window[0] > 0.0:
+        raise p["relative"].error("relative = 1 in a step after the first")
+    curve = _int_attr(p["value"], "lc", "a load curve id")
+    load = Load(_floats(p["value"], 1), curve, model.window)
+    model.dirichlet.append((back, [AXES[p["dof"].text]], load, name, model.window))
