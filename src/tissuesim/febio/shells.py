@@ -68,7 +68,7 @@ def add_shell_part(model: FebModel, name: str, kind: str, faces: np.ndarray) -> 
     """The solid cells of a shell part: new back nodes (at the front nodes until the thickness
     is read) appended to ``model.nodes``; (k, 2 nv) cells, back face first."""
     shells = shells_of(model)
-    new = [int(i) for i in dict.fromkeys(faces.ravel().tolist()) if int(i) not in shells.back]
+    new = [int(i) for i in np.unique(faces) if int(i) not in shells.back]  # in node order
     first = len(model.nodes)
     for k, i in enumerate(new):
         shells.back[i] = first + k

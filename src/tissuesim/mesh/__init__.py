@@ -16,6 +16,7 @@ from tissuesim.mesh.from_surface.tetrahedralize import mesh_surface
 from tissuesim.mesh.generators.boxes import box
 from tissuesim.mesh.generators.ellipsoids import ellipsoid
 from tissuesim.mesh.generators.rectangles import rectangle
+from tissuesim.mesh.generators.shells import solid_shell
 from tissuesim.mesh.io import describe_mesh, read_mesh, write_mesh
 from tissuesim.mesh.mesh import Mesh
 from tissuesim.mesh.queries import select
@@ -28,6 +29,7 @@ __all__ = [
     "rectangle",
     "box",
     "ellipsoid",
+    "solid_shell",
     "boundary_facets",
     "facet_measures",
     "facet_normals",

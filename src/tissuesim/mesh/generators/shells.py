@@ -20,7 +20,7 @@ from tissuesim.errors import MeshError
 from tissuesim.mesh.checks import validate_mesh
 from tissuesim.mesh.mesh import Mesh
 
-__all__ = ["solid_shell", "shell_directors", "shell_cells"]
+__all__ = ["solid_shell", "shell_directors", "shell_cells", "read_shell_surface"]
 
 #: where the given surface lies in the shell: its top face (the side its faces' normals point
 #: to, FEBio's shell nodes), its middle surface or its bottom face
@@ -96,7 +96,7 @@ def solid_shell(
     faces: Sequence[Sequence[int]] | np.ndarray,
     thickness: float,
     layers: int = 1,
-    reference: str = "top",
+    reference: str = "middle",
     normalize: bool = True,
 ) -> Mesh:
     """A solid-shell mesh of a surface: hexahedra on quadrilaterals, wedges on triangles.
@@ -104,11 +104,13 @@ def solid_shell(
     points: (n, 3) surface vertices; faces: (k, 4) quadrilaterals or (k, 3) triangles,
     counter-clockwise seen from the top (their normals point to the top face); thickness: the
     shell's thickness (> 0); layers: cells through the thickness; reference: where the surface
-    lies, "top" (FEBio's shell nodes: the shell extends opposite the normals), "middle" or
-    "bottom"; normalize: directors of the full thickness (False: FEBio's mean of unit normals
-    times the thickness, shorter on a curved surface).
+    lies, "middle" (the default: the surface is the wall's mid-surface), "top" (FEBio's shell
+    nodes: the shell extends opposite the normals) or "bottom"; normalize: directors of the
+    full thickness (False: FEBio's mean of unit normals times the thickness, shorter on a
+    curved surface).
 
-    Vertex i of the surface is vertex i of the mesh's top face (rows 0..n-1), the levels
+    Vertex i of the surface is vertex i of the mesh's top face (rows 0..n-1; at the surface
+    itself with reference "top"), the levels
     below follow in order (every vertex must belong to a face). Point sets and facet sets:
     "top" and "bottom" (and cell sets "layer0", ... with several layers); each cell's top
     face is the surface's face (cells layer by layer from the top, ``k`` per layer).
@@ -150,3 +152,26 @@ def solid_shell(
         if layers > 1
         else None,
     )
+
+
+def read_shell_surface(path: str) -> tuple[np.ndarray, np.ndarray]:
+    """(points, faces) of a surface file for ``solid_shell``: its triangles (welded, as
+    ``mesh_surface`` reads them: STL stores each triangle's corners apart) or, where it has
+    no triangles, its quadrilaterals (OBJ, PLY, VTK, Gmsh); one of the two, open or closed."""
+    import meshio
+
+    from tissuesim.mesh.from_surface.tetrahedralize import read_surface
+
+    try:
+        data = meshio.read(path)
+    except Exception as exc:  # noqa: BLE001 - meshio raises many kinds; one line names the file
+        raise MeshError(f"{path}: cannot read the surface ({exc})") from None
+    kinds = {b.type for b in data.cells if len(b.data)}
+    if "triangle" in kinds and "quad" in kinds:
+        raise MeshError(f"{path}: a shell surface of triangles or of quadrilaterals, not both")
+    if "quad" in kinds:
+        quads = np.concatenate([b.data for b in data.cells if b.type == "quad"])
+        used, faces = np.unique(quads, return_inverse=True)
+        return np.asarray(data.points, dtype=np.float64)[used], faces.reshape(-1, 4)
+    surface = read_surface(path)
+    return surface.points, surface.faces

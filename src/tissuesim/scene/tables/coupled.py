@@ -129,6 +129,7 @@ ARRAYS = (
 MESH_GENERATORS = {
     "ellipsoid": ("center", "radii", "divisions"),
     "box": ("lower", "upper", "divisions", "element"),
+    "shell": ("points", "faces", "thickness", "layers", "reference"),
 }
 MESH_EXAMPLE = (
     'mesh = { generator = "ellipsoid", center = [0, 0, 0], radii = [0.06, 0.04, 0.02], '

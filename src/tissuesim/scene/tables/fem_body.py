@@ -58,6 +58,12 @@ MESH_KEYS = {
     "element": "box: tet (default), hex, hex20, hex27 or wedge; rectangle: triangle (default), "
     "quad, quad8 or quad9",
     "merge_coincident": "file: merge vertices that coincide (an unwelded seam) instead of refusing",
+    "thickness": "shell: a solid shell of this thickness on the surface (with surface = ... or "
+    "generator = 'shell')",
+    "layers": "shell: cells through the thickness (default 1)",
+    "reference": "shell: where the surface lies in the shell: middle (default), top or bottom",
+    "points": "generator = 'shell': the surface's (n, 3) vertices",
+    "faces": "generator = 'shell': its (k, 4) quadrilaterals or (k, 3) triangles",
 }
 
 #: the FEM body options a [simulation] table (short form) or a [[bodies]] table may set
@@ -160,7 +166,10 @@ MESH_GENERATORS = {
     "rectangle": ("lower", "upper", "divisions", "pattern", "element"),
     "box": ("lower", "upper", "divisions", "grading", "pattern", "element"),
     "ellipsoid": ("center", "radii", "divisions"),
+    "shell": ("points", "faces", "thickness", "layers", "reference"),
 }
+#: the keys of a solid shell of a surface file (mesh = { surface = "wall.stl", thickness = ... })
+SHELL_OPTIONS = ("thickness", "layers", "reference")
 
 
 def _mesh(table: dict, base_dir: Path, where: str):
@@ -170,6 +179,8 @@ def _mesh(table: dict, base_dir: Path, where: str):
     if not isinstance(table, dict):
         raise SceneError(f"{where}: must be a table, e.g. mesh = {{ generator = 'box', ... }}")
     _unknown(table, MESH_KEYS, where)
+    if "thickness" in table or table.get("generator") == "shell":
+        return _shell_mesh(table, base_dir, where)
     if "surface" in table:
         return _surface_mesh(table, base_dir, where)
     surface_only = sorted(set(table) & set(SURFACE_OPTIONS))
@@ -211,6 +222,48 @@ def _mesh(table: dict, base_dir: Path, where: str):
             )
     generators = {"rectangle": rectangle, "box": box, "ellipsoid": ellipsoid}
     return generators[generator](**kwargs)
+
+
+def _shell_mesh(table: dict, base_dir: Path, where: str):
+    """A solid shell (``solid_shell``): mesh = { surface = "wall.stl", thickness = 0.002 } or
+    { generator = "shell", points = [...], faces = [...], thickness = 0.002 }, with layers and
+    reference (default "middle": the surface is the wall's mid-surface)."""
+    from tissuesim.mesh.generators.shells import read_shell_surface, solid_shell
+
+    source = "surface" if "surface" in table else "generator"
+    keys = {"surface"} if source == "surface" else {"generator", "points", "faces"}
+    extra = sorted(set(table) - keys - set(SHELL_OPTIONS))
+    if extra or "thickness" not in table:
+        what = f"cannot be combined with {extra}" if extra else "needs a thickness"
+        raise SceneError(
+            f"{where}: a shell {what}; it takes surface = 'wall.stl' (or generator = 'shell', "
+            f"points, faces) and {', '.join(SHELL_OPTIONS)}"
+        )
+    options = {k: table[k] for k in SHELL_OPTIONS if k in table}
+    options.setdefault("reference", "middle")
+    if isinstance(options.get("thickness"), bool) or not isinstance(
+        options["thickness"], int | float
+    ):
+        raise SceneError(f"{where}: thickness must be a length in metres (a number > 0)")
+    with _context(where):
+        if source == "surface":
+            path = table["surface"]
+            if not isinstance(path, str):
+                raise SceneError(f"{where}: surface must be a path (a string), not {short(path)}")
+            full = Path(path) if Path(path).is_absolute() else base_dir / path
+            points, faces = read_shell_surface(str(full))
+        else:
+            if "points" not in table or "faces" not in table:
+                raise SceneError(f"{where}: generator = 'shell' needs points and faces")
+            try:
+                points = np.asarray(table["points"], dtype=np.float64)
+                faces = np.asarray(table["faces"], dtype=np.int64)
+            except (TypeError, ValueError):
+                raise SceneError(
+                    f"{where}: points must be [x, y, z] lists and faces lists of 3 or 4 "
+                    "vertex indices (0-based)"
+                ) from None
+        return solid_shell(points, faces, **options)
 
 
 #: the keys of mesh = { surface = ... } besides the path: tetrahedralize's keyword arguments

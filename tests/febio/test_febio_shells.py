@@ -1,0 +1,171 @@
+"""FEBio's shells (quad4, tri3) read as the solids they are (febio/shells.py): a cantilever
+plate of quad4 shells against the beam's closed form, the same plate built with
+``solid_shell`` in the API, a tri3 strip in tension against the exact uniaxial stretch, the
+back face's geometry (thickness, directors) and the one-line refusals."""
+
+import warnings
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import tissuesim as ts
+from tissuesim.errors import InputError
+from tissuesim.febio import load_febio, read_feb
+
+MODELS = Path(__file__).parent / "models"
+CANTILEVER = MODELS / "shell_cantilever_quad4.feb"
+TENSION = MODELS / "shell_tension_tri3.feb"
+L, W, H, E = 1.0, 0.2, 0.1, 1000.0  # the models' plate and law (neo-Hookean, v = 0)
+
+
+def run(path: Path, text: str | None = None, tmp_path: Path | None = None):
+    """(model, final positions of its nodes, the scene) of a model, or of ``text`` written
+    next to it."""
+    if text is not None:
+        path = tmp_path / path.name
+        path.write_text(text)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        model = read_feb(path)
+        scene = load_febio(path)
+        sim = scene.simulation
+        for _ in range(scene.run["steps"]):
+            sim.step()
+    assert sim.time == pytest.approx(1.0)
+    return model, sim.body_positions("body"), scene
+
+
+def test_quad4_cantilever_against_the_beam_with_the_locking_factor():
+    """Tip deflection of the 80 x 2 plate: the Timoshenko beam P L^3 / (3 E I) + P L / (k G A)
+    (0.002012), times the fully integrated bilinear element's shear-locking factor in pure
+    bending, 1 / (1 + (1 - v)/2 (a/h)^2) = 0.99225 for a = L / 80, h = 0.1 (one hexahedron
+    through the thickness, as FEBio's shell). tissuesim (and FEBio's element) gives 0.99111 of
+    the beam: within 0.12 % of the locking-corrected value; 20 elements would give 0.89."""
+    model, x, scene = run(CANTILEVER)
+    assert scene.simulation.mesh.cell_type == "hexahedron"
+    tip = np.isclose(model.nodes[:, 0], L)
+    assert tip.sum() == 2 * 3  # the front and the back face's nodes
+    deflection = (x - model.nodes)[tip, 2].mean()
+    P, I, G = 1e-4, W * H**3 / 12, E / 2
+    beam = P * L**3 / (3 * E * I) + P * L / (5 / 6 * G * W * H)
+    locking = 1.0 / (1.0 + 0.5 * (L / 80 / H) ** 2)
+    assert deflection == pytest.approx(beam * locking, rel=2e-3)
+    assert deflection == pytest.approx(beam, rel=1e-2)
+    assert not deflection == pytest.approx(beam, rel=5e-3)  # the locking is there
+
+
+def plate_points():
+    nx, ny = 80, 2
+    gx, gy = np.meshgrid(np.linspace(0, L, nx + 1), np.linspace(0, W, ny + 1), indexing="xy")
+    points = np.column_stack([gx.ravel(), gy.ravel(), np.zeros(gx.size)])
+    idx = np.arange(len(points)).reshape(ny + 1, nx + 1)
+    quads = np.stack([idx[:-1, :-1], idx[:-1, 1:], idx[1:, 1:], idx[1:, :-1]], -1)
+    return points, quads.reshape(-1, 4)
+
+
+def test_quad4_plate_equals_the_solid_shell_built_in_the_api():
+    """The same plate through the API: solid_shell(reference="top") (FEBio's nodes are the
+    shell's top face), clamped, the end load ramped on the top face's tip vertices over the
+    same two steps: the same displacement to round-off."""
+    model, x, _ = run(CANTILEVER)
+    points, quads = plate_points()
+    mesh = ts.mesh.solid_shell(points, quads, H, reference="top", normalize=False)
+    n = len(points)
+    np.testing.assert_allclose(mesh.points[:n], model.nodes[:n], atol=1e-15)
+    np.testing.assert_allclose(mesh.points[n:], model.nodes[n:], atol=1e-15)  # same back nodes
+    sim = ts.Simulation(
+        mesh, ts.NeoHookean(youngs_modulus=E, poisson_ratio=0.0), integrator="quasistatic",
+        time_step=0.5,
+    )  # fmt: skip
+    sim.add_dirichlet(np.flatnonzero(np.isclose(mesh.points[:, 0], 0.0)))
+    tip = np.flatnonzero(np.isclose(mesh.points[:n, 0], L))
+    sim.add_nodal_forces(tip, lambda t: np.tile([0.0, 0.0, 1e-4 * t / 3], (len(tip), 1)))
+    sim.step()
+    sim.step()
+    np.testing.assert_allclose(mesh.points + sim.displacement, x, rtol=0, atol=1e-12)
+
+
+def test_tri3_strip_in_tension_is_exact(tmp_path):
+    """tri3 shells (wedges) in uniaxial tension, half the force on the back face (shell_bottom):
+    with v = 0 FEBio's neo-Hookean stretches as mu (lam - 1/lam) = F / (W h), lam = golden
+    ratio for F = 10, and the linear elements hold that state exactly."""
+    model, x, scene = run(TENSION)
+    assert scene.simulation.mesh.cell_type == "wedge"
+    u = x - model.nodes
+    end = np.isclose(model.nodes[:, 0], L)
+    lam = (1 + 5**0.5) / 2
+    np.testing.assert_allclose(u[end, 0], lam - 1, rtol=1e-8)
+    np.testing.assert_allclose(u[:, 0], model.nodes[:, 0] * (lam - 1), atol=1e-8)
+    np.testing.assert_allclose(u[:, 1:], 0.0, atol=1e-9)
+    # all of it on the front face: the strip bends, so shell_bottom reached the back nodes
+    text = TENSION.read_text().replace("<shell_bottom>1<", "<shell_bottom>0<")
+    model, x, _ = run(TENSION, text, tmp_path)
+    assert abs((x - model.nodes)[:, 2]).max() > 1e-3
+
+
+def test_back_face_geometry_from_the_thickness_and_the_directors(tmp_path):
+    """The back nodes sit at X - D: D the mean unit corner normal times the thickness (from
+    <ElementData type="shell thickness">), here -0.1 z everywhere; one per shell node."""
+    model = read_feb(CANTILEVER)
+    n = 81 * 3
+    assert model.nodes.shape == (2 * n, 3)
+    np.testing.assert_allclose(model.nodes[n:, :2], model.nodes[:n, :2], atol=1e-15)
+    np.testing.assert_allclose(model.nodes[n:, 2], -H, atol=1e-15)
+    cells = model.parts["plate"][1]
+    assert model.parts["plate"][0] == "hexahedron" and cells.shape == (160, 8)
+    assert (cells[:, :4] >= n).all() and (cells[:, 4:] < n).all()  # back face first
+    # a curved strip: the directors follow the surface (a crease of 90 degrees at x = 0.5)
+    bent = bent_model(tmp_path / "bent.feb")
+    k = np.flatnonzero(np.isclose(bent.nodes[:n, 0], 0.5) & np.isclose(bent.nodes[:n, 2], 0))
+    d = bent.nodes[:n][k] - bent.nodes[n:][k]
+    np.testing.assert_allclose(d, np.tile([-H / 2, 0, H / 2], (len(k), 1)), atol=1e-12)
+
+
+def bent_model(path: Path):
+    """The cantilever's model with its nodes past x = 0.5 turned up (a crease), read."""
+    import re
+
+    def turn(match):
+        x, y, z = (float(v) for v in match.group(2).split(","))
+        if x > 0.5:
+            x, z = 0.5, x - 0.5
+        return f'<node id="{match.group(1)}">{x!r},{y!r},{z!r}</node>'
+
+    path.write_text(re.sub(r'<node id="(\d+)">([^<]+)</node>', turn, CANTILEVER.read_text()))
+    return read_feb(path)
+
+
+@pytest.mark.parametrize(
+    ("old", "new", "match"),
+    [
+        ('<Elements type="quad4"', '<Elements type="quad8"', r":\d+ <Elements>: element type "
+         r"'quad8' is not supported by tissuesim; .*shells quad4, tri3 .*quadratic shells quad8"),
+        ('<ShellDomain name="plate" mat="plate">',
+         '<ShellDomain name="plate" mat="plate" type="elastic-shell-eas">',
+         r"<ShellDomain>: shell domain type 'elastic-shell-eas' is not supported"),
+        ('<bc name="clamp" node_set="clamped" type="zero displacement">',
+         '<bc name="clamp" node_set="clamped" type="zero shell displacement">',
+         r"<x_dof>: this parameter of <bc> is not supported"),
+        ("<shell_thickness>0</shell_thickness>",
+         "<shell_thickness>0</shell_thickness><shell_normal_nodal>0</shell_normal_nodal>",
+         r"<shell_normal_nodal>: shell_normal_nodal = 0"),
+    ],
+)  # fmt: skip
+def test_refused_in_one_line_naming_the_element_and_its_line(old, new, match, tmp_path):
+    text = CANTILEVER.read_text()
+    assert old in text
+    path = tmp_path / "shell.feb"
+    path.write_text(text.replace(old, new, 1))
+    with pytest.raises(InputError, match=match) as info:
+        load_febio(path)
+    assert "\n" not in str(info.value) and "shell.feb:" in str(info.value)
+
+
+def test_a_shell_without_thickness_is_refused(tmp_path):
+    text = CANTILEVER.read_text()
+    start, end = text.index("  <MeshData>"), text.index("  </MeshData>") + len("  </MeshData>\n")
+    path = tmp_path / "thin.feb"
+    path.write_text(text[:start] + text[end:])
+    with pytest.raises(InputError, match=r"<ShellDomain>: shell part 'plate' has no thickness"):
+        load_febio(path)
