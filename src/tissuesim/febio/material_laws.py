@@ -14,6 +14,7 @@ __all__ = [
     "UNCOUPLED",
     "VISCOELASTIC",
     "DAMAGE",
+    "REACTIVE_VISCOELASTIC",
 ]
 
 #: FEBio material types tissuesim runs -> (model, FEBio parameter -> tissuesim keyword; None:
@@ -98,3 +99,8 @@ DAMAGE = {
 }
 #: parameters given as a list (one value per axis), by FEBio type
 VECTOR_PARAMETERS = {"TC nonlinear orthotropic": ("beta", "ksi")}
+#: FEBio's reactive viscoelastic wrappers -> tissuesim's model
+REACTIVE_VISCOELASTIC = {
+    "reactive viscoelastic": "reactive_viscoelastic",
+    "uncoupled reactive viscoelastic": "uncoupled_reactive_viscoelastic",
+}

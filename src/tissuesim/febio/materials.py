@@ -18,6 +18,10 @@ components only."""
 
 from __future__ import annotations
 
+import re
+
+import numpy as np
+
 from tissuesim.febio.material_axes import (
     MixtureOrientation,
     Orientation,
@@ -34,6 +38,7 @@ from tissuesim.febio.material_laws import (
     FIBRES_ONLY,
     MATERIAL_TYPES,
     MIXTURES,
+    REACTIVE_VISCOELASTIC,
     UNCOUPLED,
     VECTOR_PARAMETERS,
     VISCOELASTIC,
@@ -87,6 +92,8 @@ def _law(
         return _viscoelastic(model, mat, kind)
     if kind in DAMAGE:
         return _damage(model, mat, kind, component, bulk)
+    if kind in REACTIVE_VISCOELASTIC and top:
+        return _reactive_viscoelastic(model, mat, kind)
     if kind in MIXTURES:
         if component:
             raise mat.error(f"{kind!r}: a mixture is not a component of a mixture (nor in FEBio)")
@@ -103,7 +110,7 @@ def _law(
         return ("energy", params, density, kind, None)
     if kind not in MATERIAL_TYPES or (kind in FIBRES_ONLY and not component):
         known = [k for k in MATERIAL_TYPES if component or k not in FIBRES_ONLY] + list(GENERIC)
-        known += list(VISCOELASTIC) if top else []
+        known += list(VISCOELASTIC) + list(REACTIVE_VISCOELASTIC) if top else []
         known += list(DAMAGE)
         known += list(MIXTURES) if not component else []
         where = " in a solid mixture" if component else ""
@@ -310,3 +317,105 @@ def _damage(model: FebModel, mat: Node, kind: str, component: bool, bulk: bool) 
     except TissueSimError as exc:
         raise mat.error(f"material {kind!r}: {exc}") from None
     return (DAMAGE[kind], params, density, kind, orientation)
+
+
+def _k2_function(p: Node) -> object:
+    """A ``-dist-user`` relaxation's parameter, a function of K2: a number, ``type="math"``
+    (FEBio's syntax: ^ for powers, ln, log10 as log) or ``type="point"`` (a curve of K2)."""
+    from tissuesim.febio.curves import curve_expression
+    from tissuesim.febio.model import Curve
+
+    kind = p.attrib.get("type", "const")
+    if kind == "math":
+        math_nodes = [c for c in p.children if c.tag == "math"]
+        text = (math_nodes[0].text if math_nodes else p.text).strip()
+        text = re.sub(r"\blog\(", "log10(", text).replace("^", "**")
+        return re.sub(r"\bln\(", "log(", text)
+    if kind == "point":
+        interpolate, points = "LINEAR", []
+        for c in p.children:
+            if c.tag == "interpolate":
+                interpolate = c.text.strip().upper()
+            elif c.tag == "points":
+                points = [_floats(q, 2) for q in c.children]
+            elif c.tag != "extend" or c.text.strip().upper() != "CONSTANT":
+                raise _unsupported(c, "a relaxation curve setting other than CONSTANT extend")
+        if interpolate not in ("LINEAR", "STEP", "SMOOTH") or len(points) < 1:
+            raise _unsupported(p, f"a relaxation curve with {interpolate} interpolation")
+        curve = Curve(np.array(points, dtype=float), interpolate, "CONSTANT")
+        return re.sub(r"\bt\b", "K2", curve_expression(curve))
+    if p.children or "lc" in p.attrib or kind != "const":
+        raise _unsupported(p, "a relaxation parameter of this type")
+    return float(_floats(p, 1)[0])
+
+
+def _relaxation(node: Node) -> dict:
+    """<relaxation type="relaxation-..."> as tissuesim's table: numbers, Prony's g1..g6 and
+    t1..t6 as lists (its terms with g = 0 dropped), the -dist-user functions of K2."""
+    kind = node.attrib.get("type", "")
+    table: dict = {"model": kind}
+    prony = {"g": [0.0] * 6, "t": [1.0] * 6}
+    _once(node)
+    for p in node.children:
+        if kind.endswith("dist-user"):
+            table[p.tag] = _k2_function(p)
+        elif kind == "relaxation-Prony" and len(p.tag) == 2 and p.tag[1] in "123456":
+            prony[p.tag[0]][int(p.tag[1]) - 1] = float(_floats(p, 1)[0])
+        else:
+            if p.children or "lc" in p.attrib or p.attrib.get("type") not in (None, "const"):
+                raise _unsupported(p, "a relaxation parameter that is a field, curve or table")
+            table[p.tag] = float(_floats(p, 1)[0])
+    if kind == "relaxation-Prony":
+        used = [i for i in range(6) if prony["g"][i] != 0.0]
+        table["g"] = [prony["g"][i] for i in used]
+        table["t"] = [prony["t"][i] for i in used]
+    return table
+
+
+def _reactive_viscoelastic(model: FebModel, mat: Node, kind: str) -> tuple:
+    """FEBio's (uncoupled) reactive viscoelastic: <elastic> (strong bonds), <bond> (weak
+    bonds), <relaxation> and wmin, kinetics, trigger, emin (and the uncoupled one's k,
+    pressure_model: its bulk term; the laws' own k are not used)."""
+    from tissuesim.errors import TissueSimError
+    from tissuesim.materials import make_material
+
+    uc = kind == "uncoupled reactive viscoelastic"
+    laws: dict = {}
+    params: dict = {}
+    density = None
+    _once(mat)
+    for p in mat.children:
+        if p.tag in ("elastic", "bond"):
+            if p.tag in laws:
+                raise p.error(f"a second <{p.tag}>")
+            laws[p.tag] = (_law(model, p, top=False, component=uc, bulk=not uc), p)
+        elif p.tag == "relaxation":
+            params["relaxation"] = _relaxation(p)
+        elif p.tag == "density":
+            density = _density(p)
+        elif p.tag in ("wmin", "kinetics", "trigger", "emin") or (uc and p.tag == "k"):
+            if p.children or "lc" in p.attrib or p.attrib.get("type") not in (None, "const"):
+                raise _unsupported(p, "a material parameter that is a field, a curve or a table")
+            params[p.tag] = float(_floats(p, 1)[0])
+        elif uc and p.tag == "pressure_model":
+            params[p.tag] = int(p.text) if p.text.strip().isdigit() else p.text.strip()
+        else:
+            more = ", k, pressure_model" if uc else ""
+            raise p.error(
+                f"parameter {p.tag!r} of {kind!r}: it takes <elastic>, <bond>, <relaxation>, "
+                f"wmin, kinetics, trigger, emin, density{more}"
+            )
+    for need in ("elastic", "bond", "relaxation"):
+        if need not in laws and need not in params:
+            raise mat.error(f"a {kind!r} material needs a <{need}>")
+    (base, base_params, base_density, _, orientation), _ = laws["elastic"]
+    (bond, bond_params, _, _, bond_orientation), where = laws["bond"]
+    if bond_orientation is not None:
+        raise _unsupported(where, "a bond law with fibre directions")
+    params["elastic"] = {"model": base, **base_params}
+    params["bond"] = {"model": bond, **bond_params}
+    try:
+        make_material(REACTIVE_VISCOELASTIC[kind], **params)
+    except TissueSimError as exc:
+        raise mat.error(f"material {kind!r}: {exc}") from None
+    return (REACTIVE_VISCOELASTIC[kind], params, density or base_density, kind, orientation)

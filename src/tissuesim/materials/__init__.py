@@ -37,6 +37,10 @@ from tissuesim.materials.orthotropic import (
 )
 from tissuesim.materials.psd import project_psd, project_tangent_psd
 from tissuesim.materials.reactive.damage import ElasticDamage, UncoupledElasticDamage
+from tissuesim.materials.reactive.reactive_viscoelastic import (
+    ReactiveViscoelastic,
+    UncoupledReactiveViscoelastic,
+)
 from tissuesim.materials.registry import (
     ALIASES,
     FIBRE_LAWS,
@@ -97,6 +101,8 @@ __all__ = [
     "UncoupledViscoelastic",
     "ElasticDamage",
     "UncoupledElasticDamage",
+    "ReactiveViscoelastic",
+    "UncoupledReactiveViscoelastic",
     "EnergyLaw",
     "from_energy",
     "lame_parameters",

@@ -8,7 +8,9 @@ tissuesim's coupled forms where FEBio has none. ``<law>_uncoupled`` and ``<law>_
 accepted as aliases (``ALIASES``). ``viscoelastic`` and ``uncoupled_viscoelastic`` wrap another
 law given as ``elastic`` (a material or a table with its ``model``), ``VISCOELASTIC_LAWS``.
 ``elastic_damage`` and ``uncoupled_elastic_damage`` scale another law (``elastic``) by 1 - D
-(``DAMAGE_LAWS``; a mixture with such a component steps its history, ``HISTORY_MIXTURES``).
+(``DAMAGE_LAWS``; a mixture with such a component steps its history, ``HISTORY_MIXTURES``);
+``reactive_viscoelastic`` and ``uncoupled_reactive_viscoelastic`` take ``elastic`` and ``bond``
+laws (``REACTIVE_VISCOELASTIC_LAWS``).
 ``energy`` is a law from its strain-energy density ``psi`` (``EnergyLaw``), its other keys the
 parameters psi names. ``solid_mixture`` and ``uncoupled_solid_mixture`` sum the laws given as
 ``components`` (``MIXTURES``); FEBio's fibre laws ``fiber_exp_pow``, ``fiber_pow_linear``,
@@ -46,6 +48,7 @@ from tissuesim.materials.orthotropic import (
 )
 from tissuesim.materials.reactive.damage import DAMAGE_LAWS
 from tissuesim.materials.reactive.history_mixture import HISTORY_MIXTURES
+from tissuesim.materials.reactive.reactive_viscoelastic import REACTIVE_VISCOELASTIC_LAWS
 from tissuesim.materials.soft_tissue.arruda_boyce import ArrudaBoyce, CoupledArrudaBoyce
 from tissuesim.materials.soft_tissue.arruda_boyce_unconstrained import ArrudaBoyceUnconstrained
 from tissuesim.materials.soft_tissue.hencky import IsotropicHencky
@@ -209,6 +212,32 @@ def _damage(key: str, params: dict) -> Material:
     return DAMAGE_LAWS[key](elastic, **rest)
 
 
+def _reactive_viscoelastic(key: str, params: dict) -> Material:
+    """Reactive visco-elasticity: ``elastic`` and ``bond`` materials or tables (uncoupled: a
+    law's own k is not used, any will do), ``relaxation`` and the wrapper's parameters."""
+    cls = REACTIVE_VISCOELASTIC_LAWS[key]
+    allowed = ["elastic", "bond", "relaxation", "kinetics", "trigger", "emin", "wmin"]
+    allowed += ["k", "pressure_model"] if cls.uncoupled else []
+    for name in params:
+        if name not in allowed:
+            raise MaterialError(
+                f"unknown parameter {short(name)} for material {key!r}; {_suggest(name, allowed)}"
+            )
+    laws = {}
+    for part in ("elastic", "bond"):
+        value = params.get(part)
+        if cls.uncoupled and isinstance(value, dict) and "k" not in value:
+            law = law_class(value.get("model"))
+            if law is not None and "k" in inspect.signature(law.__init__).parameters:
+                value = {**value, "k": 1.0}
+        try:
+            laws[part] = _elastic_table(key, value, {})
+        except MaterialError as exc:
+            raise MaterialError(str(exc).replace(": elastic:", f": {part}:")) from None
+    rest = {k: v for k, v in params.items() if k not in ("elastic", "bond")}
+    return cls(laws["elastic"], bond=laws["bond"], **rest)
+
+
 def _mixture(key: str, params: dict) -> Material:
     """A solid mixture: ``components`` materials or tables with their model; a component law of
     an uncoupled mixture that takes k gets the mixture's (FEBio ignores the component's)."""
@@ -252,6 +281,8 @@ def make_material(model: str, **params: object) -> Material:
         return _viscoelastic(key, params)
     if key in DAMAGE_LAWS:
         return _damage(key, params)
+    if key in REACTIVE_VISCOELASTIC_LAWS:
+        return _reactive_viscoelastic(key, params)
     if key == EnergyLaw.name:
         if "psi" not in params:
             raise MaterialError(
@@ -260,7 +291,8 @@ def make_material(model: str, **params: object) -> Material:
             )
         return EnergyLaw(params.pop("psi"), **params)
     if key not in MATERIALS:
-        names = [*MATERIALS, *VISCOELASTIC_LAWS, *DAMAGE_LAWS, *MIXTURES, EnergyLaw.name]
+        names = [*MATERIALS, *VISCOELASTIC_LAWS, *DAMAGE_LAWS, *REACTIVE_VISCOELASTIC_LAWS]
+        names += [*MIXTURES, EnergyLaw.name]
         raise MaterialError(f"unknown material model {short(model)}; {_suggest(key, names)}")
     cls = MATERIALS[key]
     sig = inspect.signature(cls.__init__).parameters

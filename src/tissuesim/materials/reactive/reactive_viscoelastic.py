@@ -1,0 +1,379 @@
+"""FEBio's ``reactive viscoelastic`` and ``uncoupled reactive viscoelastic``
+(``FEReactiveViscoelastic.cpp``, ``FEUncoupledReactiveViscoelastic.cpp``): strong bonds (an
+elastic law, ``elastic``) plus weak bonds (``bond``, another law) that break and reform in
+generations, each generation loaded from the stretch at which it formed and decaying with a
+relaxation function g (``relaxation.py``).
+
+FEBio's definition. Per point FEBio keeps a list of generations: generation k formed at the
+right stretch U_k^ref (the identity for the first, the original bonds), started breaking at
+time v_k, with mass f_k and the stretch U_k at v_k (its K2 = |dev ln U_k| for the
+distortion-dependent g). At time t the weak bonds' stress is
+
+    sigma_w = sum_k w_k sigma_b(F (U_k^ref)^-1) / det U_k^ref,
+    kinetics 1 (type I):  w_k = f_k g(t - v_k),
+    kinetics 2 (type II): w_k = g(t - v_k) - g(t - v_(k-1))  (w_0 = g(t - v_0)),
+
+and the newest generation is created while solving the step to t (FEBio's
+``UpdateSpecializedMaterialPoints`` runs at each iterate): when the strain of F relative to the
+last stretch U_r (any strain: |E|; distortional: |dev h|; dilatational: |ln J|, ``trigger``)
+exceeds max(emin, 10 machine epsilon) and the reforming mass f_r = 1 - sum_k w_k(t) is at least
+wmin, the bonds formed at U_r start breaking at v = t with mass f_r and weight f_r g(0) = f_r,
+and U_r becomes U(F). Before any generation the weak bonds carry sigma_b(F) in full.
+
+The incremental potential. Within the step to t = t_n + h every generation's reference, time
+and mass are fixed, and sigma_b(F U^-1)/det U is the Cauchy stress of the energy
+psi_b(F U^-1) per unit reference volume (d psi_b(F U^-1)/dF = P_b(F U^-1) U^-1, U symmetric),
+so the step is the minimum of
+
+    psi_step(F) = psi_s(F) + sum_k w_k(t) psi_b(F (U_k^ref)^-1) + f_r(t) psi_b(F U_r^-1)
+
+with P = P_s + sum_k w_k P_b(F_k) U_k^-1 (+ the reforming term alike) and
+dP_ij/dF_kl = A_s,ijkl + sum_k w_k A_b,ipkq(F_k) U^-1_pj U^-1_lq: exact and symmetric (FEBio's
+tangent is the same sum of the bonds' tangents). ``accept_step(F)`` then applies FEBio's rule
+at the converged F: the generation is created (or not) and U_r set. The one difference: the
+reforming term counts in every step, where FEBio drops it at iterates whose strain from U_r is
+below the trigger threshold (its stress is then of order E emin: zero for emin = 0 and exactly
+zero at a held stretch). Culling (``wmin`` > 0) and recruitment are not implemented (refused).
+Uncoupled: strong and weak bonds are the deviatoric parts of uncoupled laws (each law less its
+own bulk term), and the wrapper's ``k`` and ``pressure_model`` give the bulk term U(J).
+
+State per integration point (``bind``): the generations (references, times, masses, K2) in
+arrays padded to the largest count, U_r, and the time since the start; ``state_arrays`` for
+checkpoints.
+"""
+
+from __future__ import annotations
+
+import copy
+import math
+
+import numpy as np
+
+from tissuesim.errors import MaterialError
+from tissuesim.materials.base import Material, MaterialResponse
+from tissuesim.materials.isotropic._common import check_input
+from tissuesim.materials.reactive.relaxation import Relaxation
+from tissuesim.materials.soft_tissue._hyperelastic import bulk_response, parameter
+from tissuesim.materials.soft_tissue._hyperelastic import pressure_model as pressure_model_kind
+from tissuesim.validate import short
+
+__all__ = ["ReactiveViscoelastic", "UncoupledReactiveViscoelastic", "REACTIVE_VISCOELASTIC_LAWS"]
+
+_EPS = 10.0 * np.finfo(float).eps
+_STATE = ("uinv", "v", "f", "k2", "count", "ur", "time")
+
+
+def _embed3(F: np.ndarray) -> np.ndarray:
+    if F.shape[-1] == 3:
+        return F
+    out = np.zeros((*F.shape[:-2], 3, 3))
+    out[..., :2, :2], out[..., 2, 2] = F, 1.0
+    return out
+
+
+def _stretch(F: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(U, U^-1) of F (n, d, d): U = sqrt(F^T F)."""
+    w, v = np.linalg.eigh(np.swapaxes(F, -1, -2) @ F)
+    s = np.sqrt(np.maximum(w, 0.0))
+    U = np.einsum("...ik,...k,...jk->...ij", v, s, v)
+    return U, np.einsum("...ik,...k,...jk->...ij", v, 1.0 / s, v)
+
+
+def _dev_norm_log(U: np.ndarray) -> np.ndarray:
+    """|dev ln U| (Frobenius) of symmetric U (..., d, d), as plane strain in 2D."""
+    w, _ = np.linalg.eigh(_embed3(U))
+    h = np.log(w)
+    return np.sqrt(np.sum((h - h.mean(axis=-1, keepdims=True)) ** 2, axis=-1))
+
+
+class ReactiveViscoelastic(Material):
+    """FEBio's ``reactive viscoelastic``: ``elastic`` (strong bonds) plus ``bond`` (weak bonds
+    in generations) relaxing by ``relaxation``; see the module docstring.
+
+    ``ReactiveViscoelastic(NeoHookean(...), bond=NeoHookean(...), relaxation={"model":
+    "exponential", "tau": 0.2})``. Parameters: ``kinetics`` 1 or 2 (FEBio's type I, II),
+    ``trigger`` 0 (any strain), 1 (distortional), 2 (dilatational), ``emin`` >= 0,
+    ``wmin`` (0 only: FEBio's culling is not implemented)."""
+
+    name = "reactive_viscoelastic"
+    febio_name = "reactive viscoelastic"
+    uncoupled = False
+
+    def __init__(
+        self,
+        elastic: Material | None = None,
+        *,
+        bond: Material | None = None,
+        relaxation: object = None,
+        kinetics: int = 1,
+        trigger: int = 0,
+        emin: float = 0.0,
+        wmin: float = 0.0,
+    ) -> None:
+        law = self.name
+        for key, part in (("elastic", elastic), ("bond", bond)):
+            if not isinstance(part, Material) or hasattr(part, "begin_step"):
+                raise MaterialError(
+                    f"{law} needs {key} = an elastic law without a history (e.g. "
+                    f"NeoHookean(...) or {{ model = 'neo_hookean', ... }}), not "
+                    f"{getattr(part, 'name', None) or short(part)}"
+                )
+            self._check_part(key, part)
+        self.elastic, self.bond = elastic, bond
+        self.relaxation = Relaxation(law, relaxation)
+        self.kinetics = self._choice("kinetics", kinetics, (1, 2))
+        self.trigger = self._choice("trigger", trigger, (0, 1, 2))
+        self.emin = parameter(law, "emin", emin, unit="")
+        if self.emin < 0.0:
+            raise MaterialError(f"{law}: emin must be >= 0, got {self.emin!r}")
+        self.wmin = parameter(law, "wmin", wmin, unit="")
+        if self.wmin != 0.0:
+            raise MaterialError(f"{law}: wmin {self.wmin!r}: FEBio's culling of generations "
+                                "(wmin > 0) is not implemented; use wmin = 0")  # fmt: skip
+        self.mu, self.lam = elastic.mu + bond.mu, elastic.lam + bond.lam
+        self._n: int | None = None
+        self._s: dict[str, np.ndarray] = {}
+        self._h: float | None = None  # the step in progress
+
+    def _choice(self, key: str, value: object, allowed: tuple[int, ...]) -> int:
+        x = parameter(self.name, key, value, unit="")
+        if x not in allowed:
+            raise MaterialError(f"{self.name}: {key} must be one of {allowed}, got {value!r}")
+        return int(x)
+
+    def _check_part(self, key: str, part: Material) -> None:
+        """Coupled: any law."""
+
+    def __repr__(self) -> str:
+        return (f"{type(self).__name__}({self.elastic!r}, bond={self.bond!r}, relaxation="
+                f"{self.relaxation.as_table()!r}, kinetics={self.kinetics})")  # fmt: skip
+
+    # -- the state ------------------------------------------------------------------------
+    @property
+    def bound(self) -> bool:
+        return self._n is not None
+
+    def bind(self, n_points: int, dim: int, n_cells: int | None = None) -> ReactiveViscoelastic:
+        """A copy with no generations at ``n_points`` points (d = ``dim``)."""
+        out = copy.copy(self)
+        for key in ("elastic", "bond"):
+            part = getattr(self, key)
+            if hasattr(part, "bind"):
+                setattr(out, key, part.bind(n_points, dim, n_cells))
+        n = out._n = int(n_points)
+        eye = np.broadcast_to(np.eye(dim), (n, dim, dim)).copy()
+        out._s = {"uinv": np.zeros((n, 0, dim, dim)), "v": np.zeros((n, 0)),
+                  "f": np.zeros((n, 0)), "k2": np.zeros((n, 0)), "count": np.zeros(n),
+                  "ur": eye, "time": np.zeros(1)}  # fmt: skip
+        out._h = None
+        return out
+
+    def _need_state(self, what: str) -> None:
+        if not self.bound:
+            raise MaterialError(
+                f"{self.name}: {what} needs the state of a body's integration points; a "
+                "reactive viscoelastic material works on FEM bodies"
+            )
+
+    def begin_step(self, h: float) -> None:
+        """A step of ``h`` s starts from the accepted state (which it does not change)."""
+        self._need_state("begin_step")
+        self._h = float(h)
+
+    def state_arrays(self) -> dict[str, np.ndarray]:
+        self._need_state("state_arrays")
+        return {k: v.copy() for k, v in self._s.items()}
+
+    def set_state_arrays(self, arrays: dict[str, np.ndarray]) -> None:
+        self._need_state("set_state_arrays")
+        s = {k: np.asarray(arrays[k], dtype=float).copy() for k in _STATE}
+        if s["ur"].shape != self._s["ur"].shape or s["v"].shape[0] != self._n:
+            raise MaterialError(f"{self.name}: a state for {s['v'].shape[0]} points does not fit "
+                                f"{self._n}")  # fmt: skip
+        self._s, self._h = s, None
+
+    @property
+    def generations(self) -> np.ndarray:
+        """The number of breaking generations at each point (n,)."""
+        self._need_state("generations")
+        return self._s["count"].astype(int)
+
+    # -- the weights ----------------------------------------------------------------------
+    def _time(self) -> float:
+        return float(self._s["time"][0]) + (self._h or 0.0)
+
+    def weights(self, t: float | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """(w (n, G) of the breaking generations, f_r (n,) of the reforming one) at time t
+        (default: the step's end, or the accepted time between steps)."""
+        s = self._s
+        t = self._time() if t is None else t
+        G = s["v"].shape[1]
+        live = np.arange(G)[None, :] < s["count"][:, None]
+        g = np.where(live, self.relaxation(np.where(live, t - s["v"], 0.0), s["k2"]), 0.0)
+        if self.kinetics == 1:
+            w = s["f"] * g
+        else:
+            w = g.copy()
+            w[:, 1:] -= np.where(live[:, 1:], g[:, :-1], 0.0)
+        return w, 1.0 - w.sum(axis=1)
+
+    def accept_step(self, F: np.ndarray) -> None:
+        """The step converged at ``F``: FEBio's new generation where the strain from U_r
+        exceeds the trigger threshold; the time moves on."""
+        self._need_state("accept_step")
+        if self._h is None:
+            raise MaterialError(f"{self.name}: accept_step without begin_step")
+        F = check_input(np.asarray(F, dtype=float), 1)
+        s, t = self._s, self._time()
+        _, fr = self.weights(t)
+        U, _ = _stretch(F)
+        Ur_inv = np.linalg.inv(s["ur"])
+        new = (self._trigger(F @ Ur_inv) > max(self.emin, _EPS)) & (fr >= self.wmin)
+        if new.any():
+            c = s["count"].astype(int)
+            G = s["v"].shape[1]
+            if (c[new] >= G).any():  # one more slot for every point
+                for key in ("uinv", "v", "f", "k2"):
+                    more = np.zeros((s[key].shape[0], 1, *s[key].shape[2:]))
+                    s[key] = np.concatenate([s[key], more], axis=1)
+            idx = np.flatnonzero(new)
+            slot = c[idx]
+            s["uinv"][idx, slot] = Ur_inv[idx]
+            s["v"][idx, slot] = t
+            s["f"][idx, slot] = fr[idx]
+            s["k2"][idx, slot] = _dev_norm_log(U[idx])
+            s["count"][idx] += 1
+            s["ur"][idx] = U[idx]
+        s["time"] = np.array([t])
+        self._h = None
+
+    def _trigger(self, Fu: np.ndarray) -> np.ndarray:
+        if self.trigger == 0:
+            E = 0.5 * (np.swapaxes(Fu, -1, -2) @ Fu - np.eye(Fu.shape[-1]))
+            return np.sqrt(np.einsum("...ij,...ij->...", E, E))
+        if self.trigger == 1:
+            return _dev_norm_log(_stretch(Fu)[0])  # |dev ln V| = |dev ln U|: same eigenvalues
+        return np.abs(np.log(np.linalg.det(Fu)))
+
+    # -- the law --------------------------------------------------------------------------
+    def _strong(self, F: np.ndarray, order: int) -> MaterialResponse:
+        return self.elastic.evaluate(F, order)
+
+    def _weak(self, F: np.ndarray, order: int) -> MaterialResponse:
+        return self.bond.evaluate(F, order)
+
+    def _rest(self, F: np.ndarray, order: int) -> MaterialResponse | None:
+        return None
+
+    def evaluate(self, F: np.ndarray, order: int = 2) -> MaterialResponse:
+        """psi_s + sum_k w_k psi_b(F U_k^-1) + f_r psi_b(F U_r^-1) (+ U(J) uncoupled), its P
+        and dP/dF; unbound or at other points: the strong and weak bonds intact."""
+        F = check_input(F, order)
+        q, d = F.shape[0], F.shape[-1]
+        strong = self._strong(F, order)
+        rest = self._rest(F, order)
+        if self.bound and q == self._n:
+            s = self._s
+            w, fr = self.weights()
+            uinv = np.concatenate([s["uinv"], np.linalg.inv(s["ur"])[:, None]], axis=1)
+            w = np.concatenate([w, fr[:, None]], axis=1)
+        else:
+            uinv = np.broadcast_to(np.eye(d), (q, 1, d, d))
+            w = np.ones((q, 1))
+        G = w.shape[1]
+        Fr = np.einsum("qij,qgjk->qgik", F, uinv).reshape(q * G, d, d)
+        active = (w != 0.0).ravel()
+        weak = self._weak(Fr[active], order) if active.any() else None
+        psi_b = np.zeros(q * G)
+        if weak is not None:
+            psi_b[active] = weak.energy
+        with np.errstate(invalid="ignore"):
+            psi = strong.energy + np.sum((w.ravel() * np.where(active, psi_b, 0.0)).reshape(q, G),
+                                         axis=1)  # fmt: skip
+        if rest is not None:
+            psi = psi + rest.energy
+        if order == 0:
+            return MaterialResponse(psi)
+        Pb = np.zeros((q * G, d, d))
+        if weak is not None:
+            Pb[active] = weak.stress
+        Pb = Pb.reshape(q, G, d, d) * w[..., None, None]
+        P = strong.stress + np.einsum("qgip,qgpj->qij", Pb, uinv)
+        if rest is not None:
+            P = P + rest.stress
+        if order == 1:
+            return MaterialResponse(psi, P)
+        Ab = np.zeros((q * G, d, d, d, d))
+        if weak is not None:
+            Ab[active] = weak.tangent
+        Ab = Ab.reshape(q, G, d, d, d, d) * w[..., None, None, None, None]
+        A = strong.tangent + np.einsum("qgipkr,qgpj,qglr->qijkl", Ab, uinv, uinv)
+        if rest is not None:
+            A = A + rest.tangent
+        return MaterialResponse(psi, P, A)
+
+
+def _deviatoric(law: Material, F: np.ndarray, order: int) -> MaterialResponse:
+    """An uncoupled law less its own bulk term."""
+    full = law.evaluate(F, order)
+    k0 = float(getattr(law, "k", 0.0) or 0.0)
+    if k0 == 0.0:
+        return full
+    bulk = bulk_response(law.name, getattr(law, "bulk_kind", "log"), k0, F, order)
+    with np.errstate(invalid="ignore"):
+        psi = np.where(np.isfinite(full.energy), full.energy - bulk.energy, math.inf)
+    if order == 0:
+        return MaterialResponse(psi)
+    if order == 1:
+        return MaterialResponse(psi, full.stress - bulk.stress)
+    return MaterialResponse(psi, full.stress - bulk.stress, full.tangent - bulk.tangent)
+
+
+class UncoupledReactiveViscoelastic(ReactiveViscoelastic):
+    """FEBio's ``uncoupled reactive viscoelastic``: the deviatoric parts of uncoupled
+    ``elastic`` and ``bond`` laws (their own k unused) and the wrapper's bulk term (``k``,
+    ``pressure_model``)."""
+
+    name = "uncoupled_reactive_viscoelastic"
+    febio_name = "uncoupled reactive viscoelastic"
+    uncoupled = True
+
+    def __init__(
+        self,
+        elastic: Material | None = None,
+        *,
+        k: float = 0.0,
+        pressure_model: str | int = "default",
+        **kwargs: object,
+    ) -> None:
+        super().__init__(elastic, **kwargs)  # type: ignore[arg-type]
+        self.k = parameter(self.name, "k", k, meaning="bulk modulus")
+        if self.k < 0.0:
+            raise MaterialError(f"{self.name}: k (bulk modulus) must be >= 0 Pa, got {self.k!r}")
+        self.bulk_kind = pressure_model_kind(self.name, pressure_model)
+        self.lam = self.k - 2.0 * self.mu / 3.0
+
+    def _check_part(self, key: str, part: Material) -> None:
+        from tissuesim.materials.soft_tissue.ogden import Ogden
+
+        if not (isinstance(part, Ogden) or getattr(part, "uncoupled", False) is True):
+            raise MaterialError(f"{self.name} needs an uncoupled {key} law (mooney_rivlin, "
+                                f"ogden, ...), not {getattr(part, 'name', '?')}")  # fmt: skip
+
+    def _strong(self, F: np.ndarray, order: int) -> MaterialResponse:
+        return _deviatoric(self.elastic, F, order)
+
+    def _weak(self, F: np.ndarray, order: int) -> MaterialResponse:
+        return _deviatoric(self.bond, F, order)
+
+    def _rest(self, F: np.ndarray, order: int) -> MaterialResponse | None:
+        if self.k == 0.0:
+            return None
+        return bulk_response(self.name, self.bulk_kind, self.k, F, order)
+
+
+#: the wrappers by name (``make_material`` builds ``elastic`` and ``bond`` from tables)
+REACTIVE_VISCOELASTIC_LAWS: dict[str, type[ReactiveViscoelastic]] = {
+    ReactiveViscoelastic.name: ReactiveViscoelastic,
+    UncoupledReactiveViscoelastic.name: UncoupledReactiveViscoelastic,
+}
