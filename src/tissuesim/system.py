@@ -377,6 +377,11 @@ class System:
             self._add_contact(acc, c, contact_project)
         return self._reduce_rigid(acc, c)
 
+    def _pattern_keys(self) -> np.ndarray:
+        if getattr(self, "_keys", None) is None or self._keys.size != self.pattern.nnz:
+            self._keys = self.pattern.keys()
+        return self._keys
+
     def _reduce_rigid(self, acc: Accumulator, c: np.ndarray) -> Accumulator:
         """The rigid bodies' loads, and what acts on their linked vertices mapped onto their
         six DOFs (rigid/links.py)."""
@@ -385,10 +390,13 @@ class System:
         for r, sc, st in zip(
             self.rigid, self.rigid_config_slices, self.rigid_tangent_slices, strict=True
         ):
-            value, g = r.load_energy(c[sc], self.load_time, acc.order)
+            value, g, diagonal = r.load_energy(c[sc], self.load_time, acc.order)
             acc.add_value(f"{r.name}.load", value)
             if acc.order >= 1:
                 acc.gradient[st] += g
+            if acc.order >= 2 and diagonal is not None:
+                k = np.arange(st.start, st.stop)
+                acc.hessian[self.pattern.positions(k, k, keys=self._pattern_keys())] += diagonal
         links = self.links
         if links is None or acc.order < 1:
             return acc
@@ -397,9 +405,8 @@ class System:
             pat = self.pattern
             H = sp.csr_matrix((acc.hessian, pat.indices, pat.indptr), shape=(pat.n, pat.n))
             extra = links.reduced_hessian(H, acc.gradient, p)
-            if not hasattr(self, "_keys"):
-                self._keys = pat.keys()
-            np.add.at(acc.hessian, pat.positions(extra.row, extra.col, keys=self._keys), extra.data)
+            keys = self._pattern_keys()
+            np.add.at(acc.hessian, pat.positions(extra.row, extra.col, keys=keys), extra.data)
             if acc.extra_hessian is not None:
                 E = sp.csr_matrix(acc.extra_hessian)
                 zero = np.zeros(pat.n)  # the curvature is in the main Hessian already

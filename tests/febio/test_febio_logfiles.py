@@ -155,7 +155,7 @@ def test_variables_tissuesim_cannot_write_are_one_note(tmp_path):
 @pytest.mark.parametrize(
     "request_text, message",
     [
-        ('<rigid_body_data data="x;y;z">1</rigid_body_data>', "no rigid bodies"),
+        ('<rigid_body_data data="x;y;z">1</rigid_body_data>', "rigid body tables"),
         ('<node_data data="ux" node_set="nowhere"/>', "no NodeSet"),
         ('<element_data data="J">99</element_data>', "element id 99"),
         ('<node_data data="ux" kind="x"/>', 'attribute kind="x"'),

@@ -154,3 +154,56 @@ def test_refusals_name_the_element_and_line(old, new, message, tmp_path):
     with pytest.raises(TissueSimError, match=message) as info:
         read_feb(path)
     assert "bad.feb:" in str(info.value) and "\n" not in str(info.value)
+
+
+def test_a_platen_pressed_through_contact_moves_inside_the_solve(tmp_path):
+    """The platen on nodes of its own, pressed onto the block through frictionless
+    sliding-elastic contact (set dhat apart by the converter): a prescribed rigid DOF in
+    contact is pulled by a stiff spring inside the Newton solve (set at its end place it would
+    cross the block's face). The block then is the block with its top pushed down 0.05 and free
+    to slide: the force within 2e-3 (the barrier's gap), the platen within 1e-5 of its value."""
+    text = PLATEN
+    copies = "".join(
+        f'      <node id="{100 + k}">{x:g},{y:g},0.5</node>\n'
+        for k, (y, x) in enumerate((y, x) for y in (0, 0.5, 1) for x in (0, 0.5, 1))
+    )
+    text = text.replace("    </Nodes>", copies + "    </Nodes>")
+    plate = text[text.index('<Elements type="hex8" name="plate">') :]
+    plate = plate[: plate.index("</Elements>")]
+    new = plate
+    for k, node in enumerate(TOP):
+        new = new.replace(f">{node},", f">{100 + k},").replace(f",{node},", f",{100 + k},")
+    text = text.replace(plate, new)
+    faces = "".join(
+        f'      <quad4 id="{i + 1}">{",".join(str(n) for n in q)}</quad4>\n'
+        for i, q in enumerate([(10, 11, 14, 13), (11, 12, 15, 14), (13, 14, 17, 16),
+                               (14, 15, 18, 17)])
+    )  # fmt: skip
+    under = "".join(
+        f'      <quad4 id="{i + 1}">{",".join(str(100 + n - 10) for n in q)}</quad4>\n'
+        for i, q in enumerate([(10, 13, 14, 11), (11, 14, 15, 12), (13, 16, 17, 14),
+                               (14, 17, 18, 15)])
+    )  # fmt: skip
+    text = text.replace(
+        "  </Mesh>",
+        f'    <Surface name="block_top">\n{faces}    </Surface>\n'
+        f'    <Surface name="plate_under">\n{under}    </Surface>\n'
+        '    <SurfacePair name="press">\n      <primary>plate_under</primary>\n'
+        "      <secondary>block_top</secondary>\n    </SurfacePair>\n  </Mesh>",
+    )
+    text = text.replace(
+        "  <LoadData>",
+        '  <Contact>\n    <contact type="sliding-elastic" surface_pair="press">\n'
+        "      <fric_coeff>0</fric_coeff>\n    </contact>\n  </Contact>\n  <LoadData>",
+    )
+    sim, _ = _run(text, tmp_path)
+    free = _prescribed(-0.05).replace(
+        '    <bc name="top" node_set="top" type="zero displacement">\n'
+        "      <x_dof>1</x_dof>\n      <y_dof>1</y_dof>\n      <z_dof>0</z_dof>\n    </bc>\n",
+        "",
+    )
+    ref, _ = _run(free, tmp_path, "ref.feb")
+    pushed = sim.forces()["platen"][2]
+    assert pushed == pytest.approx(ref.forces()["press"][2], rel=2e-3)
+    centre, _ = sim.rigid_state("platen")
+    assert centre[2] == pytest.approx(0.55 - 0.05, abs=1e-5)

@@ -47,6 +47,12 @@ class RigidModel:
     held: dict[int, TimeFunction | None] = field(default_factory=dict)
     force: Callable[[float], np.ndarray] | None = None
     moment: Callable[[float], np.ndarray] | None = None
+    #: with contact, a prescribed DOF is pulled to its value by a stiff spring (N/m; times the
+    #: length scale squared per radian) instead of being set: a rigid indenter driven into a
+    #: body then moves inside the step's Newton solve, its line searches limited by CCD, as
+    #: IPC moves kinematic objects, where set at its end place it would cross the surface
+    soft: float | None = None
+    length: float = 1.0
 
     n_config = 12
     n_dofs = 6
@@ -56,7 +62,16 @@ class RigidModel:
 
     @property
     def prescribed_dofs(self) -> np.ndarray:
-        return np.array(sorted(self.held), dtype=np.int64)
+        return np.array(sorted(self._set()), dtype=np.int64)
+
+    def _set(self) -> dict:
+        """The held DOFs set to their values (the soft ones are pulled there instead)."""
+        if self.soft is None:
+            return self.held
+        return {k: f for k, f in self.held.items() if f is None}
+
+    def _pulled(self) -> dict:
+        return {} if self.soft is None else {k: f for k, f in self.held.items() if f is not None}
 
     def rest_config(self) -> np.ndarray:
         return np.concatenate([self.center, np.eye(3).ravel()])
@@ -85,10 +100,11 @@ class RigidModel:
         return {k: 0.0 if f is None else float(f(t)) for k, f in self.held.items()}
 
     def apply_prescribed(self, z: np.ndarray, t: float) -> np.ndarray:
-        if not self.held:
+        held = self._set()
+        if not held:
             return z
         out = z.copy()
-        values = self.values(t)
+        values = {k: v for k, v in self.values(t).items() if k in held}
         for k in range(3):
             if k in values:
                 out[k] = self.center[k] + values[k]
@@ -106,11 +122,35 @@ class RigidModel:
         return f, m
 
     def load_energy(self, z: np.ndarray, t: float, order: int):
-        """(value, gradient (6,) or None) of the dead load at z; its Hessian is zero."""
+        """(value, gradient (6,) or None, Hessian diagonal (6,) or None) of the dead load at z
+        (no Hessian) and of the springs pulling soft DOFs to their values."""
         f, m = self.loads(t)
-        if not (f.any() or m.any()):
-            return 0.0, (np.zeros(6) if order >= 1 else None)
+        pulled = self._pulled()
+        if not (f.any() or m.any() or pulled):
+            return 0.0, (np.zeros(6) if order >= 1 else None), None
         c, R = self.split(z)
-        theta = log_map(R)[0] if m.any() else np.zeros(3)
+        theta = log_map(R)[0] if (m.any() or pulled) else np.zeros(3)
         value = -float(f @ (c - self.center)) - float(m @ theta)
-        return value, (np.concatenate([-f, -m]) if order >= 1 else None)
+        gradient = np.concatenate([-f, -m])
+        diagonal = np.zeros(6)
+        q = np.concatenate([c - self.center, theta])
+        for k, fn in pulled.items():
+            stiffness = self.soft * (1.0 if k < 3 else self.length**2)
+            gap = q[k] - float(fn(t))
+            value += 0.5 * stiffness * gap * gap
+            gradient[k] += stiffness * gap
+            diagonal[k] += stiffness
+        return value, (gradient if order >= 1 else None), (diagonal if pulled else None)
+
+    def spring_forces(self, z: np.ndarray, t: float) -> np.ndarray:
+        """The force and moment (6,) the springs of the soft DOFs apply (0 on the others)."""
+        out = np.zeros(6)
+        pulled = self._pulled()
+        if not pulled:
+            return out
+        c, R = self.split(z)
+        q = np.concatenate([c - self.center, log_map(R)[0]])
+        for k, fn in pulled.items():
+            stiffness = self.soft * (1.0 if k < 3 else self.length**2)
+            out[k] = -stiffness * (q[k] - float(fn(t)))
+        return out

@@ -15,7 +15,12 @@ from tissuesim.bodies.fem import vertex_indices
 from tissuesim.errors import InputError
 from tissuesim.rigid.body import DOF_NAMES, RigidModel
 
-__all__ = ["RigidCalls", "RigidBodySpec"]
+__all__ = ["RigidCalls", "RigidBodySpec", "SOFT_STIFFNESS"]
+
+#: a prescribed rigid DOF in contact is pulled to its value by a spring this many times the
+#: bodies' stiffness (force scale / length scale): it ends within about 1e-6 of the bodies'
+#: own displacements of its value (measured in tests/febio/test_febio_rigid.py)
+SOFT_STIFFNESS = 1e6
 
 
 @dataclass(eq=False)
@@ -143,6 +148,16 @@ class RigidCalls:
             members += [(j, v, k) for j, v in mine]
         return models, members
 
+    def _soften_rigid(self, system) -> None:
+        """With contact, prescribed rigid DOFs are pulled by stiff springs (rigid/body.py
+        ``soft``): SOFT_STIFFNESS times the system's force scale over its length scale."""
+        if system.contact is None or not system.rigid:
+            return
+        stiffness = SOFT_STIFFNESS * system.force_scale / system.length_scale
+        for r in system.rigid:
+            r.soft, r.length = stiffness, system.length_scale
+        system.set_prescribed()
+
     def _rigid_center(self, spec: RigidBodySpec) -> np.ndarray:
         """The centre of mass of the bodies made rigid as a whole (their lumped vertex masses),
         else the mean of the linked vertices."""
@@ -169,8 +184,10 @@ class RigidCalls:
         """Each rigid body's force (N) and moment (N m, about its centre) from its held DOFs'
         supports: the last solve's gradient at its six DOFs (zero on the free ones)."""
         s, out = self.system, {}
-        for r, st in zip(s.rigid, s.rigid_tangent_slices, strict=True):
+        slices = zip(s.rigid, s.rigid_config_slices, s.rigid_tangent_slices, strict=True)
+        for r, sc, st in slices:
             g = np.zeros(6) if gradient is None or gradient.size != s.n_dofs else gradient[st]
+            g = g + r.spring_forces(self._state.x[sc], self.time)  # a soft DOF's support
             out[r.name] = g[:3].tolist()
             out[f"{r.name}.moment"] = g[3:].tolist()
         return out

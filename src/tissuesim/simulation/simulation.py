@@ -254,6 +254,7 @@ class Simulation(
             self._system.contact = self._contact_model()
             if old is not None and old.contact is not None:
                 self._system.contact.carry_over(old.contact)
+            self._soften_rigid(self._system)
         self._system_dirty = False
         x, v, a, carry_a = [], [], [], False
         for b in bodies:
