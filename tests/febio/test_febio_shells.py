@@ -169,3 +169,41 @@ def test_a_shell_without_thickness_is_refused(tmp_path):
     path.write_text(text[:start] + text[end:])
     with pytest.raises(InputError, match=r"<ShellDomain>: shell part 'plate' has no thickness"):
         load_febio(path)
+
+
+def with_block(material: str) -> str:
+    """The cantilever with a hex8 block under its first element (nodes 1, 2, 83, 82), of a
+    second material: a neo-Hookean or a rigid body."""
+    text = CANTILEVER.read_text()
+    below = [(0.0, 0.0), (0.0125, 0.0), (0.0125, 0.1), (0.0, 0.1)]
+    nodes = "".join(f'<node id="{301 + k}">{x},{y},-0.5</node>' for k, (x, y) in enumerate(below))
+    text = text.replace("    </Nodes>", f"{nodes}\n    </Nodes>")
+    block = '<Elements type="hex8" name="block"><elem id="1000">301,302,303,304,1,2,83,82</elem>'
+    text = text.replace("    <NodeSet", f"    {block}</Elements>\n    <NodeSet", 1)
+    law = "<E>1</E><v>0</v>" if material == "rigid body" else "<E>10</E><v>0.3</v>"
+    text = text.replace(
+        "  </Material>", f'<material id="2" name="block" type="{material}">{law}</material>\n'
+        "  </Material>",
+    )  # fmt: skip
+    return text.replace(
+        "  </MeshDomains>", '<SolidDomain name="block" mat="block"/>\n  </MeshDomains>'
+    )
+
+
+def test_a_shell_on_a_rigid_part_is_clamped_to_it_and_on_a_solid_refused(tmp_path):
+    """FEBio clamps a deformable shell node's back face to the rigid body the node joins
+    (RIGID_CLAMP): the back nodes of the shared nodes become a rigid node set; a shell on a
+    deformable solid (FEBio's shell-solid interface) is refused in one line."""
+    path = tmp_path / "on_rigid.feb"
+    path.write_text(with_block("rigid body"))
+    model = read_feb(path)
+    ((set_name, body, _),) = model.rigid_nodes
+    assert body == "block"
+    shells = model._shells
+    np.testing.assert_array_equal(
+        np.sort(model.node_sets[set_name]), sorted(shells.back[i] for i in (0, 1, 81, 82))
+    )
+    path.write_text(with_block("neo-Hookean"))
+    with pytest.raises(InputError, match=r"shell part 'plate' shares nodes with the solid part "
+                       r"'block': shells attached to solids .* are not supported"):  # fmt: skip
+        read_feb(path)

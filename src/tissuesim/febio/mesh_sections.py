@@ -11,6 +11,7 @@ from tissuesim.febio.shells import (
     QUADRATIC_SHELLS,
     SHELL_ELEMENTS,
     add_shell_part,
+    check_shared_nodes,
     read_mesh_data,
     read_shell_domain,
     shells_of,
@@ -282,6 +283,7 @@ def _mesh_domains(model: FebModel, section: Node) -> None:
             what = sorted(extra)[0] if extra else f"<{node.children[0].tag}>"
             raise node.error(f"{what}: domain options are not supported by tissuesim")
         model.domains[name] = (mat, DOMAIN_TYPES.get(kind), node)
+    check_shared_nodes(model)  # shells on rigid parts clamped to them, on solids refused
 
 
 #: "MeshData" here replaces reader.py's entry (``reader.SECTIONS`` spreads these after it):

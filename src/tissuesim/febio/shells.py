@@ -128,14 +128,42 @@ def read_shell_domain(model: FebModel, node: Node) -> None:
     formulation = SHELL_DOMAINS.get(kind) if kind else None
     if formulation is None and shells.kinds[name] == "tri3":
         formulation = "displacement"  # FEBio: no three-field tri3 shell by default
-    others = [p for p in model.parts if p not in shells.faces]
-    shared = [p for p in others if np.intersect1d(model.parts[p][1], shells.faces[name]).size]
-    if shared:
-        raise node.error(
-            f"shell part {name!r} shares nodes with the solid part {shared[0]!r}: shells "
-            "attached to solids (FEBio's shell-solid interface) are not supported by tissuesim"
-        )
     model.domains[name] = (mat, formulation, node)
+
+
+def check_shared_nodes(model: FebModel) -> None:
+    """After <MeshDomains>: a deformable shell node shared with a rigid part moves with the
+    rigid body, its back node too (FEBio clamps every deformable shell node's shell DOFs to
+    the rigid body it joins: ``FEMechModel``'s RIGID_CLAMP), so the back nodes become a rigid
+    node set (``model.rigid_nodes``); a shell sharing nodes with a deformable solid (FEBio's
+    shell-solid interface, where the solid takes the shell's back DOFs) is refused."""
+    from tissuesim.febio.rigid_scene import rigid_material_of
+
+    shells = shells_of(model)
+    for name, faces in shells.faces.items():
+        if name not in model.domains or rigid_material_of(model, name) is not None:
+            continue
+        for part, (_, cells, _, _) in model.parts.items():
+            if part == name or part not in model.domains:
+                continue
+            shared = np.intersect1d(cells, faces)
+            if not shared.size:
+                continue
+            body = rigid_material_of(model, part)
+            if body is None and part in shells.faces:
+                continue  # two deformable shell parts: one back node per node
+            node = model.domains[name][2]
+            if body is None:
+                raise node.error(
+                    f"shell part {name!r} shares nodes with the solid part {part!r}: shells "
+                    "attached to solids (FEBio's shell-solid interface) are not supported by "
+                    "tissuesim"
+                )
+            set_name = f"{name}.{part}.clamped"
+            model.node_sets[set_name] = np.array(
+                [shells.back[int(i)] for i in shared], dtype=np.int64
+            )
+            model.rigid_nodes.append((set_name, body, node))
 
 
 def read_shell_thickness(model: FebModel, data: Node) -> None:
