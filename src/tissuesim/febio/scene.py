@@ -23,6 +23,7 @@ from tissuesim.febio.rigid_scene import (
     rigid_bodies,
     rigid_material_of,
 )
+from tissuesim.febio.shells import check_thickness
 from tissuesim.febio.time_stepper import adaptive_table, run_steps
 from tissuesim.febio.toml import dumps
 
@@ -113,6 +114,7 @@ def febio_scene(model: FebModel, stem: str) -> tuple[dict, dict]:
     (``contact_start.py``: ``model.nodes`` moved, a line in ``model.changes``)."""
     from tissuesim.mesh.checks import validate_mesh
 
+    check_thickness(model)  # a shell part left without a thickness (febio/shells.py)
     bodies = _bodies(model)
     dhat = separate_touching(model, bodies)  # contact that starts touching: moved apart
     tables_per_body, meshes, gravity = [], {}, np.zeros(3)

@@ -206,14 +206,19 @@ def read_mesh_data(model: FebModel, section: Node) -> None:
 
 
 def check_thickness(model: FebModel) -> None:
-    """Refuse a shell part left without a thickness (FEBio: "Zero shell thickness")."""
+    """Refuse a shell part left without a thickness (FEBio: "Zero shell thickness"); called
+    by a shell condition and when the scene is built (``febio/scene.py``)."""
+    from tissuesim.febio.rigid_scene import rigid_material_of
+
     shells = shells_of(model)
     for name, h in shells.thickness.items():
         if (h <= 0.0).any():
             node = model.domains.get(name, (None, None, model.parts[name][3]))[2]
+            rigid = name in model.domains and rigid_material_of(model, name) is not None
+            why = " (FEBio takes a rigid shell without one; tissuesim's needs a volume)"
             raise node.error(
                 f"shell part {name!r} has no thickness: give <shell_thickness> in its "
-                '<ShellDomain> or <ElementData type="shell thickness">'
+                f'<ShellDomain> or <ElementData type="shell thickness">{why if rigid else ""}'
             )
 
 
