@@ -215,7 +215,7 @@ def test_by_name_and_one_line_errors():
         ({"relaxation": {"model": "exponential", "tau": -1.0}}, "tau must be >"),
         ({"relaxation": {"model": "exp_dist_user", "tau": "1 + t"}}, "its variable is K2"),
         ({"relaxation": EXP, "kinetics": 3}, "kinetics must be one of"),
-        ({"relaxation": EXP, "wmin": 0.01}, "culling"),
+        ({"relaxation": EXP, "wmin": 1.5}, "wmin must be in"),
         ({"relaxation": EXP, "emin": -1.0}, "emin must be >= 0"),
     ]
     for kwargs, message in bad:

@@ -25,21 +25,28 @@ and mass are fixed, and sigma_b(F U^-1)/det U is the Cauchy stress of the energy
 psi_b(F U^-1) per unit reference volume (d psi_b(F U^-1)/dF = P_b(F U^-1) U^-1, U symmetric),
 so the step is the minimum of
 
-    psi_step(F) = psi_s(F) + sum_k w_k(t) psi_b(F (U_k^ref)^-1) + f_r(t) psi_b(F U_r^-1)
+    psi_step(F) = psi_s(F) + sum_k w_k(t) psi_b(F (U_k^ref)^-1) + c(F) f_r(t) psi_b(F U_r^-1)
 
 with P = P_s + sum_k w_k P_b(F_k) U_k^-1 (+ the reforming term alike) and
 dP_ij/dF_kl = A_s,ijkl + sum_k w_k A_b,ipkq(F_k) U^-1_pj U^-1_lq: exact and symmetric (FEBio's
-tangent is the same sum of the bonds' tangents). ``accept_step(F)`` then applies FEBio's rule
-at the converged F: the generation is created (or not) and U_r set. The one difference: the
-reforming term counts in every step, where FEBio drops it at iterates whose strain from U_r is
-below the trigger threshold (its stress is then of order E emin: zero for emin = 0 and exactly
-zero at a held stretch). Culling (``wmin`` > 0) and recruitment are not implemented (refused).
+tangent is the same sum of the bonds' tangents). c(F) is FEBio's rule: the reforming bonds
+count once the strain from U_r passes the threshold and f_r >= wmin (always before the first
+generation), so
+psi_step jumps by f_r psi_b, of order E emin^2, where the strain crosses emin, and its stress by
+order E emin (nothing for emin = 0). ``accept_step(F)`` applies the same rule to the converged F:
+the generation is created (or not) and U_r set. (FEBio keeps a generation created at an earlier
+iterate of the step even if the converged strain fell back below the threshold.)
+
+FEBio's culling (``wmin`` > 0, ``generations.py``) runs on the accepted step too, where FEBio
+culls at the first iterate that creates the generation (the merged generation, whose weight is
+below wmin, enters the stress a step later). Recruitment is not implemented (refused). A strong
+bond with FEBio's ``elastic damage`` scales the weak bonds by its 1 - D, D frozen over the step
+as the damage law's own (``damage.py``).
 Uncoupled: strong and weak bonds are the deviatoric parts of uncoupled laws (each law less its
 own bulk term), and the wrapper's ``k`` and ``pressure_model`` give the bulk term U(J).
 
-State per integration point (``bind``): the generations (references, times, masses, K2) in
-arrays padded to the largest count, U_r, and the time since the start; ``state_arrays`` for
-checkpoints.
+State per integration point (``bind``): the generations (``generations.py``: FEBio's lists
+padded to the largest count, U_r, the time since the start); ``state_arrays`` for checkpoints.
 """
 
 from __future__ import annotations
@@ -52,6 +59,8 @@ import numpy as np
 from tissuesim.errors import MaterialError
 from tissuesim.materials.base import Material, MaterialResponse
 from tissuesim.materials.isotropic._common import check_input
+from tissuesim.materials.reactive import generations as gen
+from tissuesim.materials.reactive.damage import ElasticDamage
 from tissuesim.materials.reactive.relaxation import Relaxation
 from tissuesim.materials.soft_tissue._hyperelastic import bulk_response, parameter
 from tissuesim.materials.soft_tissue._hyperelastic import pressure_model as pressure_model_kind
@@ -60,30 +69,6 @@ from tissuesim.validate import short
 __all__ = ["ReactiveViscoelastic", "UncoupledReactiveViscoelastic", "REACTIVE_VISCOELASTIC_LAWS"]
 
 _EPS = 10.0 * np.finfo(float).eps
-_STATE = ("uinv", "v", "f", "k2", "count", "ur", "time")
-
-
-def _embed3(F: np.ndarray) -> np.ndarray:
-    if F.shape[-1] == 3:
-        return F
-    out = np.zeros((*F.shape[:-2], 3, 3))
-    out[..., :2, :2], out[..., 2, 2] = F, 1.0
-    return out
-
-
-def _stretch(F: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(U, U^-1) of F (n, d, d): U = sqrt(F^T F)."""
-    w, v = np.linalg.eigh(np.swapaxes(F, -1, -2) @ F)
-    s = np.sqrt(np.maximum(w, 0.0))
-    U = np.einsum("...ik,...k,...jk->...ij", v, s, v)
-    return U, np.einsum("...ik,...k,...jk->...ij", v, 1.0 / s, v)
-
-
-def _dev_norm_log(U: np.ndarray) -> np.ndarray:
-    """|dev ln U| (Frobenius) of symmetric U (..., d, d), as plane strain in 2D."""
-    w, _ = np.linalg.eigh(_embed3(U))
-    h = np.log(w)
-    return np.sqrt(np.sum((h - h.mean(axis=-1, keepdims=True)) ** 2, axis=-1))
 
 
 class ReactiveViscoelastic(Material):
@@ -93,7 +78,7 @@ class ReactiveViscoelastic(Material):
     ``ReactiveViscoelastic(NeoHookean(...), bond=NeoHookean(...), relaxation={"model":
     "exponential", "tau": 0.2})``. Parameters: ``kinetics`` 1 or 2 (FEBio's type I, II),
     ``trigger`` 0 (any strain), 1 (distortional), 2 (dilatational), ``emin`` >= 0,
-    ``wmin`` (0 only: FEBio's culling is not implemented)."""
+    ``wmin`` in [0, 1] (FEBio's culling of generations lighter than wmin)."""
 
     name = "reactive_viscoelastic"
     febio_name = "reactive viscoelastic"
@@ -112,7 +97,8 @@ class ReactiveViscoelastic(Material):
     ) -> None:
         law = self.name
         for key, part in (("elastic", elastic), ("bond", bond)):
-            if not isinstance(part, Material) or hasattr(part, "begin_step"):
+            damaged = key == "elastic" and isinstance(part, ElasticDamage)  # FEBio's too
+            if not isinstance(part, Material) or (hasattr(part, "begin_step") and not damaged):
                 raise MaterialError(
                     f"{law} needs {key} = an elastic law without a history (e.g. "
                     f"NeoHookean(...) or {{ model = 'neo_hookean', ... }}), not "
@@ -127,9 +113,8 @@ class ReactiveViscoelastic(Material):
         if self.emin < 0.0:
             raise MaterialError(f"{law}: emin must be >= 0, got {self.emin!r}")
         self.wmin = parameter(law, "wmin", wmin, unit="")
-        if self.wmin != 0.0:
-            raise MaterialError(f"{law}: wmin {self.wmin!r}: FEBio's culling of generations "
-                                "(wmin > 0) is not implemented; use wmin = 0")  # fmt: skip
+        if not 0.0 <= self.wmin <= 1.0:
+            raise MaterialError(f"{law}: wmin must be in [0, 1], got {self.wmin!r}")
         self.mu, self.lam = elastic.mu + bond.mu, elastic.lam + bond.lam
         self._n: int | None = None
         self._s: dict[str, np.ndarray] = {}
@@ -160,11 +145,8 @@ class ReactiveViscoelastic(Material):
             part = getattr(self, key)
             if hasattr(part, "bind"):
                 setattr(out, key, part.bind(n_points, dim, n_cells))
-        n = out._n = int(n_points)
-        eye = np.broadcast_to(np.eye(dim), (n, dim, dim)).copy()
-        out._s = {"uinv": np.zeros((n, 0, dim, dim)), "v": np.zeros((n, 0)),
-                  "f": np.zeros((n, 0)), "k2": np.zeros((n, 0)), "count": np.zeros(n),
-                  "ur": eye, "time": np.zeros(1)}  # fmt: skip
+        out._n = int(n_points)
+        out._s = gen.new_state(out._n, dim)
         out._h = None
         return out
 
@@ -179,17 +161,26 @@ class ReactiveViscoelastic(Material):
         """A step of ``h`` s starts from the accepted state (which it does not change)."""
         self._need_state("begin_step")
         self._h = float(h)
+        if hasattr(self.elastic, "begin_step"):  # a damaged strong bond
+            self.elastic.begin_step(h)
 
     def state_arrays(self) -> dict[str, np.ndarray]:
+        """The generations (``generations.KEYS``) and a damaged strong bond's (``base_...``)."""
         self._need_state("state_arrays")
-        return {k: v.copy() for k, v in self._s.items()}
+        out = {k: v.copy() for k, v in self._s.items()}
+        if hasattr(self.elastic, "state_arrays"):
+            out.update({f"base_{k}": v for k, v in self.elastic.state_arrays().items()})
+        return out
 
     def set_state_arrays(self, arrays: dict[str, np.ndarray]) -> None:
         self._need_state("set_state_arrays")
-        s = {k: np.asarray(arrays[k], dtype=float).copy() for k in _STATE}
+        s = {k: np.asarray(arrays[k], dtype=float).copy() for k in gen.KEYS}
         if s["ur"].shape != self._s["ur"].shape or s["v"].shape[0] != self._n:
             raise MaterialError(f"{self.name}: a state for {s['v'].shape[0]} points does not fit "
                                 f"{self._n}")  # fmt: skip
+        if hasattr(self.elastic, "set_state_arrays"):
+            base = {k[5:]: v for k, v in arrays.items() if k.startswith("base_")}
+            self.elastic.set_state_arrays(base)
         self._s, self._h = s, None
 
     @property
@@ -205,54 +196,34 @@ class ReactiveViscoelastic(Material):
     def weights(self, t: float | None = None) -> tuple[np.ndarray, np.ndarray]:
         """(w (n, G) of the breaking generations, f_r (n,) of the reforming one) at time t
         (default: the step's end, or the accepted time between steps)."""
-        s = self._s
         t = self._time() if t is None else t
-        G = s["v"].shape[1]
-        live = np.arange(G)[None, :] < s["count"][:, None]
-        g = np.where(live, self.relaxation(np.where(live, t - s["v"], 0.0), s["k2"]), 0.0)
-        if self.kinetics == 1:
-            w = s["f"] * g
-        else:
-            w = g.copy()
-            w[:, 1:] -= np.where(live[:, 1:], g[:, :-1], 0.0)
-        return w, 1.0 - w.sum(axis=1)
+        return gen.weights(self._s, self.relaxation, self.kinetics, t)
 
     def accept_step(self, F: np.ndarray) -> None:
         """The step converged at ``F``: FEBio's new generation where the strain from U_r
-        exceeds the trigger threshold; the time moves on."""
+        exceeds the trigger threshold and the reforming mass is at least wmin, then its
+        culling; the time moves on (and a damaged strong bond's history)."""
         self._need_state("accept_step")
         if self._h is None:
             raise MaterialError(f"{self.name}: accept_step without begin_step")
         F = check_input(np.asarray(F, dtype=float), 1)
         s, t = self._s, self._time()
         _, fr = self.weights(t)
-        U, _ = _stretch(F)
-        Ur_inv = np.linalg.inv(s["ur"])
-        new = (self._trigger(F @ Ur_inv) > max(self.emin, _EPS)) & (fr >= self.wmin)
-        if new.any():
-            c = s["count"].astype(int)
-            G = s["v"].shape[1]
-            if (c[new] >= G).any():  # one more slot for every point
-                for key in ("uinv", "v", "f", "k2"):
-                    more = np.zeros((s[key].shape[0], 1, *s[key].shape[2:]))
-                    s[key] = np.concatenate([s[key], more], axis=1)
-            idx = np.flatnonzero(new)
-            slot = c[idx]
-            s["uinv"][idx, slot] = Ur_inv[idx]
-            s["v"][idx, slot] = t
-            s["f"][idx, slot] = fr[idx]
-            s["k2"][idx, slot] = _dev_norm_log(U[idx])
-            s["count"][idx] += 1
-            s["ur"][idx] = U[idx]
+        Fu = F @ np.linalg.inv(s["ur"])
+        new = np.flatnonzero((self._trigger(Fu) > max(self.emin, _EPS)) & (fr >= self.wmin))
+        gen.push(s, new, gen.right_stretch(F[new]), t, fr[new])
+        gen.cull(s, new, self.relaxation, self.kinetics, t, self.wmin)
         s["time"] = np.array([t])
         self._h = None
+        if hasattr(self.elastic, "accept_step"):
+            self.elastic.accept_step(F)
 
     def _trigger(self, Fu: np.ndarray) -> np.ndarray:
         if self.trigger == 0:
             E = 0.5 * (np.swapaxes(Fu, -1, -2) @ Fu - np.eye(Fu.shape[-1]))
             return np.sqrt(np.einsum("...ij,...ij->...", E, E))
         if self.trigger == 1:
-            return _dev_norm_log(_stretch(Fu)[0])  # |dev ln V| = |dev ln U|: same eigenvalues
+            return gen.dev_log_norm(gen.right_stretch(Fu))  # |dev ln V| = |dev ln U|
         return np.abs(np.log(np.linalg.det(Fu)))
 
     # -- the law --------------------------------------------------------------------------
@@ -275,8 +246,16 @@ class ReactiveViscoelastic(Material):
         if self.bound and q == self._n:
             s = self._s
             w, fr = self.weights()
-            uinv = np.concatenate([s["uinv"], np.linalg.inv(s["ur"])[:, None]], axis=1)
-            w = np.concatenate([w, fr[:, None]], axis=1)
+            ur_inv = np.linalg.inv(s["ur"])
+            # the reforming bonds: FEBio's original bonds before any generation, later a
+            # generation only where the strain from U_r passes the trigger threshold (and
+            # their mass is at least wmin)
+            trig = self._trigger(F @ ur_inv) > max(self.emin, _EPS)
+            formed = (s["count"] == 0) | (trig & (fr >= self.wmin))
+            uinv = np.concatenate([s["uinv"], ur_inv[:, None]], axis=1)
+            w = np.concatenate([w, np.where(formed, fr, 0.0)[:, None]], axis=1)
+            if isinstance(self.elastic, ElasticDamage):  # FEBio's (1 - D) on the weak bonds
+                w = w * (1.0 - self.elastic.damage)[:, None]
         else:
             uinv = np.broadcast_to(np.eye(d), (q, 1, d, d))
             w = np.ones((q, 1))
