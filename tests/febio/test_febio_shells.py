@@ -112,6 +112,11 @@ def test_back_face_geometry_from_the_thickness_and_the_directors(tmp_path):
     assert model.nodes.shape == (2 * n, 3)
     np.testing.assert_allclose(model.nodes[n:, :2], model.nodes[:n, :2], atol=1e-15)
     np.testing.assert_allclose(model.nodes[n:, 2], -H, atol=1e-15)
+    path = tmp_path / "var.feb"  # FEBio 3 names the data var=
+    path.write_text(
+        CANTILEVER.read_text().replace('type="shell thickness"', 'var="shell thickness"')
+    )
+    np.testing.assert_array_equal(read_feb(path).nodes, model.nodes)
     cells = model.parts["plate"][1]
     assert model.parts["plate"][0] == "hexahedron" and cells.shape == (160, 8)
     assert (cells[:, :4] >= n).all() and (cells[:, 4:] < n).all()  # back face first

@@ -167,8 +167,8 @@ def check_shared_nodes(model: FebModel) -> None:
 
 
 def read_shell_thickness(model: FebModel, data: Node) -> None:
-    """<ElementData type="shell thickness" elem_set=...>: <e lid=...> one thickness per node
-    of the element (or one for all)."""
+    """<ElementData type="shell thickness" elem_set=...> (FEBio 3: var=): <e lid=...> one
+    thickness per node of the element (or one for all)."""
     from tissuesim.febio.material_axes import _element_set
 
     shells = shells_of(model)
@@ -196,7 +196,8 @@ def read_mesh_data(model: FebModel, section: Node) -> None:
 
     rest = []
     for data in section.children:
-        if data.tag == "ElementData" and data.attrib.get("type") == "shell thickness":
+        kind = data.attrib.get("type") or data.attrib.get("var")  # FEBio 3: var=
+        if data.tag == "ElementData" and kind == "shell thickness":
             read_shell_thickness(model, data)
         else:
             rest.append(data)
