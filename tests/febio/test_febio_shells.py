@@ -155,6 +155,8 @@ def bent_model(path: Path):
         ("<shell_thickness>0</shell_thickness>",
          "<shell_thickness>0</shell_thickness><shell_normal_nodal>0</shell_normal_nodal>",
          r"<shell_normal_nodal>: shell_normal_nodal = 0"),
+        ('<elem id="1">1, 2, 83, 82</elem>', '<elem id="1">1, 2, 2, 82</elem>',
+         r"<ElementData>: shell face 0 has a corner of zero area"),
     ],
 )  # fmt: skip
 def test_refused_in_one_line_naming_the_element_and_its_line(old, new, match, tmp_path):

@@ -80,15 +80,21 @@ def add_shell_part(model: FebModel, name: str, kind: str, faces: np.ndarray) -> 
     return np.concatenate([back, faces], axis=1)
 
 
-def _place(model: FebModel) -> None:
-    """Back nodes at X - D (FEBio's directors, over every shell part)."""
+def _place(model: FebModel, node: Node) -> None:
+    """Back nodes at X - D (FEBio's directors, over every shell part); ``node`` the element
+    that gave the thickness, named by a refusal."""
+    from tissuesim.errors import MeshError
+
     shells = shells_of(model)
     if not shells.faces:
         return
     front = np.array(list(shells.back), dtype=np.int64)
     faces = np.concatenate(list(shells.faces.values()))
     thickness = np.concatenate(list(shells.thickness.values()))
-    directors = shell_directors(model.nodes, faces, thickness, normalize=False)
+    try:
+        directors = shell_directors(model.nodes, faces, thickness, normalize=False)
+    except MeshError as exc:
+        raise node.error(str(exc)) from None
     model.nodes[[shells.back[i] for i in front.tolist()]] = model.nodes[front] - directors[front]
 
 
@@ -124,7 +130,7 @@ def read_shell_domain(model: FebModel, node: Node) -> None:
             raise p["shell_thickness"].error("a shell thickness must not be negative")
         if h > 0.0:  # FEBio's AssignDefaultShellThickness: 0 leaves it to <MeshData>
             shells.thickness[name][:] = h
-            _place(model)
+            _place(model, node)
     formulation = SHELL_DOMAINS.get(kind) if kind else None
     if formulation is None and shells.kinds[name] == "tri3":
         formulation = "displacement"  # FEBio: no three-field tri3 shell by default
@@ -187,7 +193,7 @@ def read_shell_thickness(model: FebModel, data: Node) -> None:
         if values.size not in (1, nv) or (values <= 0.0).any():
             raise e.error(f"a shell thickness is 1 or {nv} positive numbers")
         shells.thickness[part][row] = values
-    _place(model)
+    _place(model, data)
 
 
 def read_mesh_data(model: FebModel, section: Node) -> None:
