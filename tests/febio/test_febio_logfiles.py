@@ -155,7 +155,8 @@ def test_variables_tissuesim_cannot_write_are_one_note(tmp_path):
 @pytest.mark.parametrize(
     "request_text, message",
     [
-        ('<rigid_body_data data="x;y;z">1</rigid_body_data>', "rigid body tables"),
+        ('<rigid_body_data data="x;y;z">1</rigid_body_data>', "not a 'rigid body' material"),
+        ('<rigid_connector_data data="Fx">1</rigid_connector_data>', "no rigid connectors"),
         ('<node_data data="ux" node_set="nowhere"/>', "no NodeSet"),
         ('<element_data data="J">99</element_data>', "element id 99"),
         ('<node_data data="ux" kind="x"/>', 'attribute kind="x"'),
@@ -200,6 +201,8 @@ def test_the_python_api_checks_its_request():
     request = sim.add_logfile("element_data", ["J"])
     assert request.file == "element_data_1.csv"
     with pytest.raises(InputError, match="kind must be one of"):
+        sim.add_logfile("rigid_connector_data", ["x"])
+    with pytest.raises(InputError, match="the simulation has no rigid bodies"):
         sim.add_logfile("rigid_body_data", ["x"])
     with pytest.raises(InputError, match="2 ids for 1 items"):
         sim.add_logfile("node_data", ["ux"], items=[0], ids=[1, 2])

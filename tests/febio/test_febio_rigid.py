@@ -207,3 +207,37 @@ def test_a_platen_pressed_through_contact_moves_inside_the_solve(tmp_path):
     assert pushed == pytest.approx(ref.forces()["press"][2], rel=2e-3)
     centre, _ = sim.rigid_state("platen")
     assert centre[2] == pytest.approx(0.55 - 0.05, abs=1e-5)
+
+
+def test_rigid_body_data_is_logged_as_febio_names_it(tmp_path):
+    """<rigid_body_data> (material id 2, the platen): a CSV table per frame with FEBio's
+    variable names, its force the forces.csv column's, its centre the rigid state's; the
+    converted scene writes the same table."""
+    from tissuesim.cli import main
+
+    text = PLATEN.replace(
+        "  <LoadData>",
+        '  <Output>\n    <logfile>\n      <rigid_body_data data="x;y;z;Fz;Mx;qw;thy;R33" '
+        'file="platen.txt">2</rigid_body_data>\n    </logfile>\n  </Output>\n  <LoadData>',
+    )
+    path = tmp_path / "logged.feb"
+    path.write_text(text)
+    out = tmp_path / "out"
+    assert main(["run", str(path), "--out", str(out), "--no-render", "--quiet"]) == 0
+    lines = (out / "platen.txt").read_text().splitlines()
+    assert lines[0] == "time,body,x,y,z,Fz,Mx,qw,thy,R33"
+    last = [float(v) for v in lines[-1].split(",")]
+    assert last[0] == pytest.approx(1.0) and last[1] == 2  # FEBio's material id
+    assert last[2:5] == pytest.approx([0.5, 0.5, 0.5])  # the centre pressed 0.05 down
+    forces = (out / "forces.csv").read_text().splitlines()
+    column = forces[0].split(",").index("platen_z_N")
+    assert "platen.moment_x_Nm" in forces[0]
+    assert last[5] == pytest.approx(float(forces[-1].split(",")[column]), rel=1e-9)
+    assert last[6:] == pytest.approx([0.0, 1.0, 0.0, 1.0], abs=1e-9)
+    assert len(lines) == 1 + 3  # the start and two steps
+    scene = tmp_path / "logged.toml"
+    convert_febio(path, scene)
+    assert 'kind = "rigid_body_data"' in scene.read_text()
+    again = tmp_path / "again"
+    assert main(["run", str(scene), "--out", str(again), "--no-render", "--quiet"]) == 0
+    assert (again / "platen.txt").read_text() == (out / "platen.txt").read_text()

@@ -28,10 +28,10 @@ def read_logfile(model: FebModel, node: Node) -> None:
         model.note(node, f"FEBio's log file {node.attrib['file']!r} is not written: tissuesim "
                    "writes summary.json, and each data request as a CSV table")  # fmt: skip
     for c in node.children:
-        if c.tag in ("rigid_body_data", "rigid_connector_data"):
+        if c.tag == "rigid_connector_data":
             raise c.error(
-                f"{c.tag}: tissuesim does not write FEBio's rigid body tables yet; a rigid "
-                "body's force and moment are in forces.csv (remove the request to run)"
+                f"{c.tag}: tissuesim runs no rigid connectors, so there is none to log "
+                "(remove the request to run)"
             )
         if c.tag not in KINDS:
             raise _unsupported(c, "this logfile request is not supported by tissuesim")
@@ -56,7 +56,7 @@ def _request(model: FebModel, node: Node) -> None:
     if layout:
         model.note(node, f"FEBio's table layout ({', '.join(layout)}) not used: tissuesim "
                    "writes comma-separated tables")  # fmt: skip
-    items = _items(model, node, kind)
+    items = _rigid_items(model, node) if kind == "rigid_body_data" else _items(model, node, kind)
     file = node.attrib.get("file")
     if file is not None:
         file = PureWindowsPath(PurePosixPath(file).name).name  # FEBio's path: the model's
@@ -64,6 +64,21 @@ def _request(model: FebModel, node: Node) -> None:
         model.logfiles.append(
             {"kind": kind, "data": known, "items": items, "file": file, "node": node}
         )
+
+
+def _rigid_items(model: FebModel, node: Node) -> list[str] | None:
+    """A rigid_body_data request's rigid bodies (material names) from its material ids; None
+    for all."""
+    if not node.text.strip():
+        return None
+    names = []
+    for i in _id_ranges(node):
+        spec = model.materials.get(f"#{i}")
+        if spec is None or spec[3] != "rigid body":
+            raise node.error(f"material id {i} is not a 'rigid body' material of this model")
+        names.append(next(k for k, v in model.materials.items()
+                          if v is spec and not k.startswith("#")))  # fmt: skip
+    return names
 
 
 def _items(model: FebModel, node: Node, kind: str):
@@ -110,7 +125,25 @@ def _id_ranges(node: Node) -> list[int]:
     return ids
 
 
-def logfile_tables(model: FebModel, bodies: list[dict], names: list[str]) -> list[dict]:
+def _material_id(model: FebModel, name: str) -> int:
+    spec = model.materials[name]
+    return next(int(k[1:]) for k, v in model.materials.items() if v is spec and k.startswith("#"))
+
+
+def _rigid_table(model: FebModel, request: dict, n: int, rigid: dict[str, str]) -> dict:
+    """A rigid_body_data request as a [[logfiles]] table: the scene's names of its rigid
+    bodies (``rigid``: material -> scene name) and their FEBio material ids."""
+    materials = request["items"] if request["items"] is not None else list(rigid)
+    table = {"kind": "rigid_body_data", "data": list(request["data"])}
+    table["bodies"] = [rigid[m] for m in materials]
+    table["ids"] = [_material_id(model, m) for m in materials]
+    table["file"] = request["file"] or f"rigid_body_data_{n}.csv"
+    return table
+
+
+def logfile_tables(
+    model: FebModel, bodies: list[dict], names: list[str], rigid: dict[str, str] | None = None
+) -> list[dict]:
     """The <logfile> requests as [[logfiles]] tables: per body the rows of its mesh and their
     FEBio ids; a request over several bodies is one table per body (``<file stem>_<body>``).
     A request without a file is written as ``<kind>_<n>.csv`` (n: its place among them)."""
@@ -119,6 +152,9 @@ def logfile_tables(model: FebModel, bodies: list[dict], names: list[str]) -> lis
     tables = []
     for n, request in enumerate(model.logfiles, start=1):
         kind, items = request["kind"], request["items"]
+        if kind == "rigid_body_data":
+            tables.append(_rigid_table(model, request, n, rigid or {}))
+            continue
         per_body = []
         for name, body in zip(names, bodies, strict=True):
             if kind == "node_data":

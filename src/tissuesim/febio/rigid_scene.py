@@ -91,3 +91,12 @@ def rigid_bodies(model: FebModel, bodies: list[dict], names: list[str], times) -
         if t["name"] in names_used:
             t["name"] = f"{t['name']}.rigid"
     return tables
+
+
+def rigid_names(tables: list[dict], model: FebModel) -> dict[str, str]:
+    """rigid body material -> its [[rigid_bodies]] name in the scene."""
+    out = {}
+    for t in tables:
+        name = t["name"]
+        out[name.removesuffix(".rigid") if name not in model.materials else name] = name
+    return out

@@ -22,6 +22,7 @@ from tissuesim.febio.rigid_scene import (
     interface_sets,
     rigid_bodies,
     rigid_material_of,
+    rigid_names,
 )
 from tissuesim.febio.shells import check_thickness
 from tissuesim.febio.time_stepper import adaptive_table, run_steps
@@ -284,7 +285,8 @@ def febio_scene(model: FebModel, stem: str) -> tuple[dict, dict]:
     data.update(_contact(model, [n for n, _ in tables_per_body], bodies, meshes))
     if dhat is not None:
         data["contact"] = {"dhat": dhat, **data["contact"]}
-    logfiles = logfile_tables(model, bodies, [n for n, _ in tables_per_body])
+    names = rigid_names(rigid, model)
+    logfiles = logfile_tables(model, bodies, [n for n, _ in tables_per_body], names)
     if logfiles:
         data["logfiles"] = logfiles
     data["run"] = {

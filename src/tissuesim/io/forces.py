@@ -35,9 +35,14 @@ def force_table(history: Sequence) -> tuple[list[str], np.ndarray, np.ndarray]:
     return names, times, table
 
 
+def _unit(name: str) -> str:
+    """N for a force, Nm for a rigid body's moment (``<name>.moment``)."""
+    return "Nm" if name.endswith(".moment") else "N"
+
+
 def write_forces_csv(path: str | os.PathLike[str], history: Sequence) -> Path:
     names, times, table = force_table(history)
-    header = ["time_s"] + [f"{n}_{c}_N" for n in names for c in "xyz"]
+    header = ["time_s"] + [f"{n}_{c}_{_unit(n)}" for n in names for c in "xyz"]
     rows = [",".join(header)]
     for i, t in enumerate(times):
         rows.append(",".join([repr(float(t))] + [repr(float(f)) for f in table[i].ravel()]))
@@ -82,9 +87,11 @@ def render_forces_png(path: str | os.PathLike[str], history: Sequence) -> Path |
         for k, (label, colour) in enumerate(
             zip("xyz", ("#1f77b4", "#2ca02c", "#d62728"), strict=True)
         ):
-            ax.plot(times, forces[:, k], color=colour, lw=1.2, label=f"$F_{label}$")
-        ax.plot(times, np.linalg.norm(forces, axis=1), color="k", lw=1.6, ls="--", label="|F|")
-        ax.set_ylabel("force (N)")
+            symbol = "M" if _unit(name) == "Nm" else "F"
+            ax.plot(times, forces[:, k], color=colour, lw=1.2, label=f"${symbol}_{label}$")
+        magnitude = "|M|" if _unit(name) == "Nm" else "|F|"
+        ax.plot(times, np.linalg.norm(forces, axis=1), color="k", lw=1.6, ls="--", label=magnitude)
+        ax.set_ylabel("moment (N m)" if _unit(name) == "Nm" else "force (N)")
         ax.set_title(name, loc="left", fontsize=10)
         ax.grid(alpha=0.3)
         ax.legend(loc="best", fontsize=8, ncols=4)

@@ -1,4 +1,5 @@
-"""FEBio's log tables (``<logfile>``'s node_data and element_data) as CSV files of a run:
+"""FEBio's log tables (``<logfile>``'s node_data, element_data and rigid_body_data) as CSV
+files of a run:
 ``Simulation.add_logfile`` asks for one, ``RunOutput`` writes it (``io/run_output.py``).
 
 One table per request, in the long layout a pandas user reads with ``pd.read_csv``: the
@@ -14,7 +15,11 @@ frames, the first at the start time included). FEBio's names:
   E3`` (its principal values), ``J`` (volume ratio); each the mean over the element's
   integration points, as FEBio's log takes it (principal values per point, then their mean;
   the VTU series' cell data weights the points by their volume: the same on an undistorted
-  element).
+  element);
+- rigid_body_data (one row per rigid body, ``body`` its id): ``x, y, z`` (the centre),
+  ``vx, vy, vz``, ``thx, thy, thz`` (the rotation vector), ``omx, omy, omz`` (the angular
+  velocity), ``qx, qy, qz, qw`` (the quaternion), ``R11`` .. ``R33``, ``Fx, Fy, Fz`` and
+  ``Mx, My, Mz`` (the force and moment its held DOFs' supports apply, as in forces.csv).
 
 The table is appended frame by frame, each frame's rows in one write, flushed and fsynced;
 the checkpoint counts its lines, so a resumed run first cuts it back to the frames the
@@ -36,7 +41,10 @@ from tissuesim.errors import InputError
 from tissuesim.io.atomic import write_text_atomic
 from tissuesim.validate import short
 
-__all__ = ["LogRequest", "LogTable", "make_request", "NODE_DATA", "ELEMENT_DATA", "KINDS"]
+__all__ = [
+    "LogRequest", "LogTable", "make_request", "NODE_DATA", "ELEMENT_DATA", "RIGID_BODY_DATA",
+    "KINDS",
+]  # fmt: skip
 
 #: FEBio's node_data variables tissuesim writes -> what they are
 NODE_DATA = {
@@ -54,9 +62,20 @@ ELEMENT_DATA = {
     **{f"E{k}": f"principal Green-Lagrange strain {k}" for k in "123"},
     "J": "volume ratio",
 }
-KINDS = {"node_data": NODE_DATA, "element_data": ELEMENT_DATA}
+#: FEBio's rigid_body_data variables tissuesim writes -> what they are
+RIGID_BODY_DATA = {
+    **{c: f"{c} coordinate of the centre" for c in "xyz"},
+    **{f"v{c}": f"{c} velocity of the centre" for c in "xyz"},
+    **{f"th{c}": f"{c} component of the rotation vector (rad)" for c in "xyz"},
+    **{f"om{c}": f"{c} angular velocity (rad/s)" for c in "xyz"},
+    **{f"q{c}": f"{c} component of the rotation quaternion" for c in "xyzw"},
+    **{f"R{i}{k}": f"rotation matrix entry {i}{k}" for i in "123" for k in "123"},
+    **{f"F{c}": f"{c} force its held DOFs' supports apply (N)" for c in "xyz"},
+    **{f"M{c}": f"{c} moment about the centre its held DOFs' supports apply (N m)" for c in "xyz"},
+}
+KINDS = {"node_data": NODE_DATA, "element_data": ELEMENT_DATA, "rigid_body_data": RIGID_BODY_DATA}
 #: the id column of each kind
-ID_COLUMN = {"node_data": "node", "element_data": "element"}
+ID_COLUMN = {"node_data": "node", "element_data": "element", "rigid_body_data": "body"}
 _FILE = re.compile(r"[A-Za-z0-9][A-Za-z0-9_.-]*")
 
 
@@ -97,7 +116,7 @@ def make_request(
             )
     if len(set(names)) < len(names):
         raise InputError(f"data names a variable twice: {short(names)}")
-    what = "vertex" if kind == "node_data" else "cell"
+    what = {"node_data": "vertex", "element_data": "cell"}.get(kind, "rigid body")
     rows = None if items is None else indices(items, "items", n_items, what=what)
     if rows is not None and not rows.size:
         raise InputError("items is empty: give the rows to log, or none for all of them")
@@ -216,9 +235,36 @@ def element_values(sim: Any, request: LogRequest) -> dict[str, np.ndarray]:
     return out
 
 
+def rigid_values(sim: Any, request: LogRequest) -> dict[str, np.ndarray]:
+    """The rigid_body_data variables of ``request`` now, one value per rigid body (in the
+    order they were added; ``items`` picks some)."""
+    from scipy.spatial.transform import Rotation
+
+    s, state = sim.system, sim.state
+    forces = sim._rigid_forces(sim._last_gradient)
+    rows = []
+    for r, sc, st in zip(s.rigid, s.rigid_config_slices, s.rigid_tangent_slices, strict=True):
+        z, v = state.x[sc], state.v[st]
+        R = z[3:12].reshape(3, 3)
+        turn = Rotation.from_matrix(R)
+        row = dict(zip("xyz", z[:3], strict=True))
+        row.update({f"v{c}": v[k] for k, c in enumerate("xyz")})
+        row.update({f"th{c}": a for c, a in zip("xyz", turn.as_rotvec(), strict=True)})
+        row.update({f"om{c}": v[3 + k] for k, c in enumerate("xyz")})
+        row.update({f"q{c}": a for c, a in zip("xyzw", turn.as_quat(), strict=True)})
+        row.update({f"R{i + 1}{k + 1}": R[i, k] for i in range(3) for k in range(3)})
+        row.update({f"F{c}": a for c, a in zip("xyz", forces[r.name], strict=True)})
+        row.update({f"M{c}": a for c, a in zip("xyz", forces[f"{r.name}.moment"], strict=True)})
+        rows.append(row)
+    picked = rows if request.items is None else [rows[i] for i in request.items]
+    return {name: np.array([row[name] for row in picked]) for name in request.data}
+
+
 def check_uncut(sim: Any, request: LogRequest) -> None:
     """A logged body is never cut nor torn (its vertices and elements would be others than
     the rows asked for): InputError in one line when the run starts."""
+    if request.kind == "rigid_body_data":
+        return
     body = request.body
     cutters = [c.name for c in sim.organ_cuts if c.body == body]
     cutters += [f"{body}.tear" for t in sim.organ_tears if t.body == body]
@@ -261,7 +307,8 @@ class LogTable:
 
     def write(self, sim: Any, t: float) -> None:
         r = self.request
-        values = node_values(sim, r) if r.kind == "node_data" else element_values(sim, r)
+        read = {"node_data": node_values, "element_data": element_values}
+        values = read.get(r.kind, rigid_values)(sim, r)
         n = len(next(iter(values.values())))
         if r.ids is not None:
             ids = r.ids

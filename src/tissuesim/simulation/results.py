@@ -146,16 +146,24 @@ class BodyResults:
         file: str | None = None,
     ):
         """Ask a run with output for a CSV table, FEBio's ``<logfile>`` request: ``kind``
-        "node_data" (vertices) or "element_data" (cells) of FEM body ``body``, the variables
+        "node_data" (vertices) or "element_data" (cells) of FEM body ``body``, or
+        "rigid_body_data" (the rigid bodies in the order they were added; ``body`` unused), the
+        variables
         ``data`` by FEBio's names (``ux``, ``Rx``, ``sx``, ``E1``, ``J``, ...: ``io/logfiles.py``),
         for the mesh rows ``items`` (None: all), labelled ``ids`` in the table (default: the
         rows + 1), written as ``file`` in the output directory (default ``<kind>_<n>.csv``)
         at every frame the run writes. Returns the checked request."""
         from tissuesim.io.logfiles import make_request
 
+        taken = {r.file for r in self.logfiles}
+        if kind == "rigid_body_data":
+            if not self.rigid_bodies:
+                raise InputError("rigid_body_data: the simulation has no rigid bodies")
+            request = make_request(kind, data, "", len(self.rigid_bodies), items, ids, file, taken)
+            self.logfiles.append(request)
+            return request
         b = self.body(body, ("fem",))
         n = b.mesh.n_points if kind == "node_data" else b.mesh.n_cells
-        taken = {r.file for r in self.logfiles}
         request = make_request(kind, data, b.name, n, items, ids, file, taken)
         self.logfiles.append(request)
         return request
