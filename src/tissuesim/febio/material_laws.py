@@ -91,7 +91,11 @@ UNCOUPLED = {
     "uncoupled solid mixture", "fiber-exp-pow-uncoupled", "fiber-pow-linear-uncoupled",
     "uncoupled fiber-exp-linear",
 }  # fmt: skip
-VISCOELASTIC = {"viscoelastic": "viscoelastic", "uncoupled viscoelastic": "uncoupled_viscoelastic"}
+VISCOELASTIC = {
+    "viscoelastic": "viscoelastic",
+    "uncoupled viscoelastic": "uncoupled_viscoelastic",
+    "viscoelastic damage": "viscoelastic_damage",  # its <elastic> an elastic damage
+}
 #: FEBio's damage wrappers (alone or a solid mixture's component) -> tissuesim's model
 DAMAGE = {
     "elastic damage": "elastic_damage",
@@ -103,4 +107,7 @@ VECTOR_PARAMETERS = {"TC nonlinear orthotropic": ("beta", "ksi")}
 REACTIVE_VISCOELASTIC = {
     "reactive viscoelastic": "reactive_viscoelastic",
     "uncoupled reactive viscoelastic": "uncoupled_reactive_viscoelastic",
+    # (1 - D) on a reactive viscoelastic <viscoelastic>, D of its strong bonds' law: the same
+    # law as a reactive viscoelastic whose <elastic> is an elastic damage
+    "reactive viscoelastic damage": "reactive_viscoelastic",
 }

@@ -92,6 +92,8 @@ def _law(
         return _viscoelastic(model, mat, kind)
     if kind in DAMAGE:
         return _damage(model, mat, kind, component, bulk)
+    if kind == "reactive viscoelastic damage" and top:
+        return _rve_damage(model, mat)
     if kind in REACTIVE_VISCOELASTIC and top:
         return _reactive_viscoelastic(model, mat, kind)
     if kind in MIXTURES:
@@ -268,6 +270,17 @@ def _viscoelastic(model: FebModel, mat: Node, kind: str) -> tuple:
     return (VISCOELASTIC[kind], params, density, kind, orientation)
 
 
+def _damage_table(p: Node) -> dict:
+    """A <damage type="CDF ..."> or <criterion type="DC ..."> with its numbers."""
+    table: dict = {"model": p.attrib.get("type", "")}
+    _once(p)
+    for q in p.children:
+        if q.children or "lc" in q.attrib or q.attrib.get("type") not in (None, "const"):
+            raise _unsupported(q, "a damage parameter that is a field, curve or table")
+        table[q.tag] = float(_floats(q, 1)[0])
+    return table
+
+
 def _damage(model: FebModel, mat: Node, kind: str, component: bool, bulk: bool) -> tuple:
     """FEBio's (uncoupled) elastic damage: an <elastic> law, a <damage> CDF ("CDF log-normal",
     ...) and a <criterion> ("DC von Mises stress", ...), each with its parameters; read alone
@@ -287,13 +300,7 @@ def _damage(model: FebModel, mat: Node, kind: str, component: bool, bulk: bool) 
         elif p.tag in ("damage", "criterion"):
             if p.tag in parts:
                 raise p.error(f"a second <{p.tag}>")
-            table: dict = {"model": p.attrib.get("type", "")}
-            _once(p)
-            for q in p.children:
-                if q.children or "lc" in q.attrib or q.attrib.get("type") not in (None, "const"):
-                    raise _unsupported(q, "a damage parameter that is a field, curve or table")
-                table[q.tag] = float(_floats(q, 1)[0])
-            parts[p.tag] = table
+            parts[p.tag] = _damage_table(p)
         elif p.tag == "density":
             density = _density(p)
         elif p.tag in ("k", "pressure_model") and kind == "uncoupled elastic damage":
@@ -419,3 +426,39 @@ def _reactive_viscoelastic(model: FebModel, mat: Node, kind: str) -> tuple:
     except TissueSimError as exc:
         raise mat.error(f"material {kind!r}: {exc}") from None
     return (REACTIVE_VISCOELASTIC[kind], params, density or base_density, kind, orientation)
+
+
+def _rve_damage(model: FebModel, mat: Node) -> tuple:
+    """FEBio's reactive viscoelastic damage: (1 - D) times a <viscoelastic type="reactive
+    viscoelastic">, D of <damage> and <criterion> on its strong bonds' law; read as the reactive
+    viscoelastic law with an elastic damage as <elastic> (which scales strong and weak bonds by
+    the same 1 - D: FEBio's two definitions agree)."""
+    from tissuesim.errors import TissueSimError
+    from tissuesim.materials import make_material
+
+    inner, parts, density = None, {}, None
+    _once(mat)
+    for p in mat.children:
+        if p.tag == "viscoelastic" and p.attrib.get("type") == "reactive viscoelastic":
+            if inner is not None:
+                raise p.error("a second <viscoelastic>")
+            inner = _reactive_viscoelastic(model, p, "reactive viscoelastic")
+        elif p.tag in ("damage", "criterion") and p.tag not in parts:
+            parts[p.tag] = _damage_table(p)
+        elif p.tag == "density":
+            density = _density(p)
+        else:
+            raise p.error(f"parameter {p.tag!r} of 'reactive viscoelastic damage': it takes one "
+                          "<viscoelastic type=\"reactive viscoelastic\">, <damage>, <criterion>, "
+                          "density")  # fmt: skip
+    if inner is None or len(parts) < 2:
+        raise mat.error("a 'reactive viscoelastic damage' material needs <viscoelastic type="
+                        "\"reactive viscoelastic\">, <damage> and <criterion>")  # fmt: skip
+    name, params, inner_density, _, orientation = inner
+    damaged = {"model": "elastic_damage", "elastic": params["elastic"], **parts}
+    params = {**params, "elastic": {**damaged, "density": inner_density}}
+    try:
+        make_material(name, **params)
+    except TissueSimError as exc:
+        raise mat.error(f"material 'reactive viscoelastic damage': {exc}") from None
+    return (name, params, density or inner_density, "reactive viscoelastic damage", orientation)

@@ -41,6 +41,7 @@ from tissuesim.materials.reactive.reactive_viscoelastic import (
     ReactiveViscoelastic,
     UncoupledReactiveViscoelastic,
 )
+from tissuesim.materials.reactive.viscoelastic_damage import ViscoelasticDamage
 from tissuesim.materials.registry import (
     ALIASES,
     FIBRE_LAWS,
@@ -103,6 +104,7 @@ __all__ = [
     "UncoupledElasticDamage",
     "ReactiveViscoelastic",
     "UncoupledReactiveViscoelastic",
+    "ViscoelasticDamage",
     "EnergyLaw",
     "from_energy",
     "lame_parameters",

@@ -10,7 +10,7 @@ law given as ``elastic`` (a material or a table with its ``model``), ``VISCOELAS
 ``elastic_damage`` and ``uncoupled_elastic_damage`` scale another law (``elastic``) by 1 - D
 (``DAMAGE_LAWS``; a mixture with such a component steps its history, ``HISTORY_MIXTURES``);
 ``reactive_viscoelastic`` and ``uncoupled_reactive_viscoelastic`` take ``elastic`` and ``bond``
-laws (``REACTIVE_VISCOELASTIC_LAWS``).
+laws (``REACTIVE_VISCOELASTIC_LAWS``); ``viscoelastic_damage`` takes an ``elastic_damage``.
 ``energy`` is a law from its strain-energy density ``psi`` (``EnergyLaw``), its other keys the
 parameters psi names. ``solid_mixture`` and ``uncoupled_solid_mixture`` sum the laws given as
 ``components`` (``MIXTURES``); FEBio's fibre laws ``fiber_exp_pow``, ``fiber_pow_linear``,
@@ -49,6 +49,7 @@ from tissuesim.materials.orthotropic import (
 from tissuesim.materials.reactive.damage import DAMAGE_LAWS
 from tissuesim.materials.reactive.history_mixture import HISTORY_MIXTURES
 from tissuesim.materials.reactive.reactive_viscoelastic import REACTIVE_VISCOELASTIC_LAWS
+from tissuesim.materials.reactive.viscoelastic_damage import ViscoelasticDamage
 from tissuesim.materials.soft_tissue.arruda_boyce import ArrudaBoyce, CoupledArrudaBoyce
 from tissuesim.materials.soft_tissue.arruda_boyce_unconstrained import ArrudaBoyceUnconstrained
 from tissuesim.materials.soft_tissue.hencky import IsotropicHencky
@@ -157,7 +158,8 @@ def _suggest(word: str, choices: list[str]) -> str:
 
 
 def _viscoelastic(key: str, params: dict) -> Material:
-    """A Prony-series wrapper: ``elastic`` a material or a table with its ``model``."""
+    """A Prony-series wrapper: ``elastic`` a material or a table with its ``model``
+    (``viscoelastic_damage``: an ``elastic_damage``)."""
     allowed = ["elastic", "g", "tau", "g0"]
     for name in params:
         if name not in allowed:
@@ -174,6 +176,8 @@ def _viscoelastic(key: str, params: dict) -> Material:
         except MaterialError as exc:
             raise MaterialError(f"{key}: elastic: {exc}") from None
     rest = {k: v for k, v in params.items() if k != "elastic"}
+    if key == ViscoelasticDamage.name:
+        return ViscoelasticDamage(elastic, **rest)
     return VISCOELASTIC_LAWS[key](elastic, **rest)
 
 
@@ -277,7 +281,7 @@ def make_material(model: str, **params: object) -> Material:
     key = _key(model)
     if key in MIXTURES:
         return _mixture(key, params)
-    if key in VISCOELASTIC_LAWS:
+    if key in VISCOELASTIC_LAWS or key == ViscoelasticDamage.name:
         return _viscoelastic(key, params)
     if key in DAMAGE_LAWS:
         return _damage(key, params)
@@ -292,6 +296,7 @@ def make_material(model: str, **params: object) -> Material:
         return EnergyLaw(params.pop("psi"), **params)
     if key not in MATERIALS:
         names = [*MATERIALS, *VISCOELASTIC_LAWS, *DAMAGE_LAWS, *REACTIVE_VISCOELASTIC_LAWS]
+        names.append(ViscoelasticDamage.name)
         names += [*MIXTURES, EnergyLaw.name]
         raise MaterialError(f"unknown material model {short(model)}; {_suggest(key, names)}")
     cls = MATERIALS[key]
