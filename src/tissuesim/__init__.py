@@ -5,6 +5,7 @@ The names users need most are re-exported here; each lives in one module (see do
 
 from __future__ import annotations
 
+from tissuesim import sweep  # a callable module: tissuesim.sweep(...), tissuesim.sweep.load_dataset
 from tissuesim._version import __version__
 from tissuesim.contact.obstacles import capsule, cylinder, plane, sphere
 from tissuesim.contact.pairs import ContactPair
@@ -121,4 +122,5 @@ __all__ = [
     "rectangle",
     "select",
     "sphere",
+    "sweep",
 ]

@@ -1,0 +1,150 @@
+"""The study's dataset of fields (HDF5 through h5py): one file per run, written by the worker
+that ran it, so workers write in parallel with no lock and a killed study keeps every finished
+run's file whole (each is written to a temporary name and renamed):
+
+    fields/rest.h5              /<body>/points (n, d) float64, /<body>/cells (m, k) int64:
+                                the rest mesh the runs share (written once, by the first run)
+    fields/<run_id>.h5          /<body>/displacement (n, d) float64: the final displacement
+                                of each FEM body's vertices from rest; attributes: run_id,
+                                index, rest_sha256 and each parameter as "param:<key path>";
+                                a run whose rest mesh differs from rest.h5 (a mesh per sample)
+                                also holds its own /<body>/points and /<body>/cells
+
+``load_dataset(DIR)`` reads every run into NumPy arrays in one call.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import time
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from tissuesim.errors import InputError
+
+__all__ = ["FIELDS", "write_run_fields", "load_dataset"]
+
+#: the fields a study can save per run
+FIELDS = ("displacement",)
+
+
+def _h5py():
+    try:
+        import h5py
+    except ImportError:
+        raise InputError(
+            "the fields dataset needs h5py: pip install 'tissuesim[sweep]' (or h5py)"
+        ) from None
+    return h5py
+
+
+def _rest(sim) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+    return {
+        name: (np.asarray(b.mesh.points, float), np.asarray(b.mesh.cells, np.int64))
+        for name, b in sim.bodies.items()
+        if b.kind == "fem"
+    }
+
+
+def _sha(rest: dict[str, tuple[np.ndarray, np.ndarray]]) -> str:
+    h = hashlib.sha256()
+    for name in sorted(rest):
+        points, cells = rest[name]
+        h.update(name.encode())
+        h.update(np.ascontiguousarray(points).tobytes())
+        h.update(np.ascontiguousarray(cells).tobytes())
+    return h.hexdigest()[:16]
+
+
+def write_run_fields(out: Path, task: Any, sim: Any, result: dict[str, Any]) -> None:
+    """Write the run's fields (``task.fields``) to ``fields/<run_id>.h5``; the time it took
+    and the file's size go into ``result`` (``fields_write_s``, ``fields_bytes``)."""
+    from tissuesim.io.atomic import atomic_output
+
+    h5py = _h5py()
+    start = time.perf_counter()
+    folder = out / "fields"
+    folder.mkdir(parents=True, exist_ok=True)
+    rest = _rest(sim)
+    sha = _sha(rest)
+    shared = folder / "rest.h5"
+    own_rest = False
+    if not shared.exists():
+        with atomic_output(shared) as tmp, h5py.File(tmp, "w") as f:
+            f.attrs["rest_sha256"] = sha
+            for name, (points, cells) in rest.items():
+                f.create_dataset(f"{name}/points", data=points)
+                f.create_dataset(f"{name}/cells", data=cells)
+    else:
+        with h5py.File(shared, "r") as f:
+            own_rest = f.attrs["rest_sha256"] != sha
+    target = folder / f"{task.run_id}.h5"
+    with atomic_output(target) as tmp, h5py.File(tmp, "w") as f:
+        f.attrs["run_id"] = task.run_id
+        f.attrs["index"] = task.index
+        f.attrs["rest_sha256"] = sha
+        for key, value in task.values.items():
+            f.attrs[f"param:{key}"] = value
+        for name, (points, cells) in rest.items():
+            if "displacement" in task.fields:
+                f.create_dataset(f"{name}/displacement", data=sim.body_displacement(name))
+            if own_rest:
+                f.create_dataset(f"{name}/points", data=points)
+                f.create_dataset(f"{name}/cells", data=cells)
+    result["fields_write_s"] = time.perf_counter() - start
+    result["fields_bytes"] = target.stat().st_size
+
+
+def load_dataset(directory: str | Path) -> dict[str, np.ndarray]:
+    """Every completed run's fields in a study's directory as NumPy arrays, runs in the order
+    of their index:
+
+    - ``run_id`` (r,) str, ``index`` (r,) int;
+    - each parameter by its key path, e.g. ``material.youngs_modulus`` (r,) (a vector: (r, k));
+    - per FEM body: ``<body>/displacement`` (r, n, d), ``<body>/points`` (n, d) and
+      ``<body>/cells`` (m, k), the rest mesh the runs share.
+
+    Runs on different rest meshes (a mesh per sample) cannot be stacked: InputError; read
+    their files one by one with h5py."""
+    h5py = _h5py()
+    folder = Path(directory) / "fields"
+    if not (folder / "rest.h5").exists():
+        raise InputError(
+            f"{directory}: no fields dataset (fields/rest.h5); run the study with "
+            "--fields displacement (fields=('displacement',))"
+        )
+    out: dict[str, Any] = {}
+    with h5py.File(folder / "rest.h5", "r") as f:
+        sha = f.attrs["rest_sha256"]
+        for name in f:
+            out[f"{name}/points"] = f[name]["points"][()]
+            out[f"{name}/cells"] = f[name]["cells"][()]
+    files = sorted(p for p in folder.glob("r[0-9]*.h5") if not p.name.startswith("."))
+    runs: list[dict[str, Any]] = []
+    for path in files:
+        with h5py.File(path, "r") as f:
+            if f.attrs["rest_sha256"] != sha:
+                raise InputError(
+                    f"{path}: this run's rest mesh differs from fields/rest.h5 (a mesh per "
+                    "sample): its fields cannot be stacked with the others; read each run's "
+                    "file with h5py (its own <body>/points and <body>/cells)"
+                )
+            run = {k: f.attrs[k] for k in f.attrs}
+            run["fields"] = {
+                f"{name}/{field}": f[name][field][()]
+                for name in f
+                for field in f[name]
+                if field in FIELDS
+            }
+            runs.append(run)
+    runs.sort(key=lambda r: int(r["index"]))
+    out["run_id"] = np.array([str(r["run_id"]) for r in runs])
+    out["index"] = np.array([int(r["index"]) for r in runs], dtype=np.int64)
+    keys = sorted({k for r in runs for k in r if k.startswith("param:")})
+    for key in keys:
+        out[key.removeprefix("param:")] = np.array([r.get(key) for r in runs])
+    for key in sorted({k for r in runs for k in r["fields"]}):
+        out[key] = np.stack([r["fields"][key] for r in runs]) if runs else np.empty((0,))
+    return out

@@ -1,0 +1,151 @@
+"""One run of a study, as a worker runs it: the scene's data with the sample's values put in,
+built by ``build_scene``, stepped to its ``[run]`` steps without output or pictures; its result
+a plain dict, written atomically to ``runs/<run_id>.json`` (and, where asked, its final fields
+to ``fields/<run_id>.h5``) by the worker itself. A run whose result file exists is not run again
+(a resumed study, or an executor that ran a task twice)."""
+
+from __future__ import annotations
+
+import copy
+import json
+import os
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+__all__ = ["RunTask", "execute_run", "prepare_worker", "THREAD_VARIABLES", "run_id"]
+
+#: set to 1 in every worker: one thread per worker, the workers are the parallelism
+THREAD_VARIABLES = (
+    "OMP_NUM_THREADS",
+    "OPENBLAS_NUM_THREADS",
+    "MKL_NUM_THREADS",
+    "BLIS_NUM_THREADS",
+    "VECLIB_MAXIMUM_THREADS",
+    "NUMEXPR_NUM_THREADS",
+    "NUMBA_NUM_THREADS",
+)
+_prepared = False
+
+
+def run_id(index: int) -> str:
+    """The run's name in the output: r00000, r00001, ..."""
+    return f"r{index:05d}"
+
+
+@dataclass(frozen=True)
+class RunTask:
+    """What a worker needs for one run (plain data: it travels to a worker process)."""
+
+    index: int
+    data: dict  # the scene's tables, this run's values not yet put in
+    values: dict[str, Any]  # key path -> value
+    base_dir: str  # the scene's folder: mesh files are relative to it
+    source: str
+    name: str
+    steps: int | None
+    out: str | None  # the study's directory; None: nothing written
+    fields: tuple[str, ...] = ()
+    extra: dict[str, Any] = field(default_factory=dict)
+
+    @property
+    def run_id(self) -> str:
+        return run_id(self.index)
+
+
+def prepare_worker() -> None:
+    """One thread per worker (BLAS, OpenMP, numba) and the heavy imports, once per process.
+    The default pool also sets the variables before its workers start (executors.py), since
+    a BLAS reads them when it loads; here they reach what loads later (numba) and, through
+    threadpoolctl where installed, a BLAS already loaded."""
+    global _prepared
+    if _prepared:
+        return
+    for name in THREAD_VARIABLES:
+        os.environ[name] = "1"
+    try:
+        from threadpoolctl import threadpool_limits
+
+        threadpool_limits(1)
+    except ImportError:
+        pass
+    import sys
+
+    if "numba" in sys.modules:
+        import numba
+
+        numba.set_num_threads(1)
+    import tissuesim.scene.loader  # noqa: F401  (the scene readers and the Simulation)
+    import tissuesim.simulation  # noqa: F401
+
+    _prepared = True
+
+
+def execute_run(task: RunTask) -> dict[str, Any]:
+    """Run one sample and return its result (see ``result`` for the keys); never raises for a
+    failed run: its status is "failed" and ``error`` the one-line reason."""
+    prepare_worker()
+    out = Path(task.out) if task.out is not None else None
+    if out is not None:
+        done = out / "runs" / f"{task.run_id}.json"
+        if done.exists():
+            return json.loads(done.read_text(encoding="utf-8"))
+    from tissuesim.errors import InputError, RunError
+    from tissuesim.sweep.samples import coerce
+
+    start = time.perf_counter()
+    result: dict[str, Any] = {
+        "run_id": task.run_id,
+        "index": task.index,
+        "status": "completed",
+        "error": "",
+        "wall_time_s": 0.0,
+        "solve_time_s": 0.0,
+        "steps": 0,
+        "newton_iterations": 0,
+        "params": dict(task.values),
+        "forces": {},
+    }
+    sim = None
+    try:
+        from tissuesim.scene.loader import build_scene
+        from tissuesim.sweep.keypaths import parse_key_path
+
+        data = copy.deepcopy(task.data)
+        for key, value in task.values.items():
+            path = parse_key_path(key)
+            path.set(data, coerce(value, path.get(data)))
+        scene = build_scene(data, base_dir=Path(task.base_dir), source=task.source, name=task.name)
+        sim = scene.simulation
+        steps = task.steps
+        if steps is None:
+            schedule = sim.schedule
+            steps = scene.run.get("steps", 100 if schedule is None else schedule.steps)
+        history = sim.run(steps, progress=False, render=False)
+        result["steps"] = len(history)
+        result["newton_iterations"] = int(sum(r.newton_iterations for r in history))
+        result["solve_time_s"] = float(sum(r.wall_time_s for r in history))
+        result["forces"] = {k: [float(c) for c in v] for k, v in sim.forces().items()}
+    except (InputError, RunError) as exc:
+        result.update(status="failed", error=_one_line(exc))
+    except Exception as exc:  # a bug: recorded, the study goes on
+        result.update(status="failed", error=_one_line(exc, internal=True))
+    if sim is not None:
+        result["steps"] = result["steps"] or len(sim.history)
+    result["wall_time_s"] = time.perf_counter() - start
+    if out is not None:
+        if task.fields and result["status"] == "completed":
+            from tissuesim.sweep.dataset import write_run_fields
+
+            write_run_fields(out, task, sim, result)
+        from tissuesim.io.atomic import write_json_atomic
+
+        write_json_atomic(out / "runs" / f"{task.run_id}.json", result, indent=None)
+    return result
+
+
+def _one_line(exc: BaseException, internal: bool = False) -> str:
+    text = f"{type(exc).__name__}: {exc}" if internal else str(exc)
+    text = " ".join(text.split())
+    return text if len(text) <= 500 else text[:480] + f" ... ({len(text)} characters)"
