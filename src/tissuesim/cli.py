@@ -338,6 +338,56 @@ def main(argv: list[str] | None = None) -> int:
         choices=VERIFY_FAMILIES,
         help="run only this family (repeatable)",
     )
+    p_sweep = sub.add_parser(
+        "sweep",
+        parents=common,
+        help="run a scene many times over varied keys (a parameter study, training data)",
+        description="Run a scene for every sample of the varied keys and write one table of "
+        "the runs (runs.csv, runs.parquet) and, with --fields, a dataset of fields "
+        "(docs/guide/sweeps.md). A killed study resumes: rerun the same command.",
+    )
+    p_sweep.add_argument(
+        "scene", help="a scene file (.toml) or a shipped example's name (tissuesim examples)"
+    )
+    p_sweep.add_argument(
+        "--vary",
+        action="append",
+        required=True,
+        metavar="KEY=VALUES",
+        help="a scene key by its path (material.youngs_modulus, bodies[0].material.density, "
+        "obstacles[probe].translation[2]) and its values: a list 1e3,2e3; LOW:HIGH:N (N values, "
+        "both ends; LOW:HIGH:N:log); an interval LOW:HIGH (LOW:HIGH:log) for --sampler "
+        "sobol|lhs|random; repeatable, the lists form a grid",
+    )
+    p_sweep.add_argument("--out", required=True, help="the study's directory")
+    p_sweep.add_argument(
+        "--samples", type=_frames, help="points drawn in the intervals (sobol, lhs, random)"
+    )
+    p_sweep.add_argument(
+        "--sampler",
+        choices=("grid", "sobol", "lhs", "random"),
+        default=None,
+        help="grid (default without intervals), sobol (default with them), lhs, random",
+    )
+    p_sweep.add_argument("--seed", type=_steps, default=0, help="the samplers' seed (default 0)")
+    p_sweep.add_argument("--steps", type=_steps, help="steps per run (default the scene's [run])")
+    p_sweep.add_argument("--workers", type=_frames, help="worker processes (default one per core)")
+    p_sweep.add_argument(
+        "--executor",
+        default="local",
+        help="local (a process pool, default), dask-local (a Dask LocalCluster) or "
+        "dask://HOST:PORT (a running Dask scheduler)",
+    )
+    p_sweep.add_argument(
+        "--fields",
+        action="append",
+        choices=("displacement",),
+        help="save this field of every run's end (fields/<run>.h5; repeatable)",
+    )
+    p_sweep.add_argument(
+        "--no-render", action="store_true", help="accepted for symmetry: a study draws nothing"
+    )
+    p_sweep.add_argument("--quiet", action="store_true", help="no progress lines")
     args = parser.parse_args(argv)
     with warnings.catch_warnings():
         warnings.showwarning = _show_warning
@@ -435,7 +485,60 @@ def _dispatch(args) -> int:
         return 0
     if args.command == "verify":
         return _verify(args.json, args.only)
+    if args.command == "sweep":
+        return _sweep(args)
     return _examples(args.json)
+
+
+def _sweep(args) -> int:
+    """``tissuesim sweep``: the study (tissuesim/sweep/), then a JSON report; exit 0 when it
+    ran to its end, failed runs included (they are rows of the table, status "failed")."""
+    import time
+
+    from tissuesim.sweep import sweep
+    from tissuesim.sweep.executors import close, executor_from_spec
+    from tissuesim.sweep.samples import Interval, parameters
+    from tissuesim.sweep.study import read_scene_data
+
+    started = time.perf_counter()
+    sampler = args.sampler
+    if sampler is None:  # sobol where there is an interval to sample, else the grid
+        data, _ = read_scene_data(args.scene)
+        params = parameters(args.vary, data)
+        sampler = "sobol" if any(isinstance(p.interval, Interval) for p in params) else "grid"
+    executor, resources = (None, [])
+    if args.executor != "local":
+        executor, resources = executor_from_spec(args.executor, args.workers)
+    try:
+        results = sweep(
+            args.scene,
+            args.vary,
+            out=args.out,
+            samples=args.samples,
+            sampler=sampler,
+            seed=args.seed,
+            steps=args.steps,
+            executor=executor,
+            workers=args.workers,
+            fields=tuple(args.fields or ()),
+            progress=not args.quiet,
+        )
+    finally:
+        close(resources)
+    failed = [r for r in results if r["status"] != "completed"]
+    out = Path(args.out)
+    report = {
+        "output": str(out),
+        "runs": len(results),
+        "completed": len(results) - len(failed),
+        "failed": len(failed),
+        "first_failure": failed[0]["error"] if failed else None,
+        "table": [str(p) for p in (out / "runs.csv", out / "runs.parquet") if p.exists()],
+        "fields": str(out / "fields") if args.fields else None,
+        "wall_time_s": time.perf_counter() - started,
+    }
+    print(json.dumps(report, indent=2))
+    return 0
 
 
 def _verify(as_json: bool, only: list[str] | None) -> int:

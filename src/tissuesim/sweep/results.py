@@ -45,6 +45,7 @@ def table_rows(results: list[dict[str, Any]], keys: list[str]) -> list[dict[str,
     rows = []
     for r in results:
         row = {c: r.get(c) for c in BASE_COLUMNS}
+        row["error"] = row["error"] or None  # empty in the CSV, null in Parquet
         for key in keys:
             value = r["params"].get(key)
             if isinstance(value, list):

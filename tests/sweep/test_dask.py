@@ -1,0 +1,43 @@
+"""A study on a real Dask LocalCluster of worker processes (2 workers, 1 thread each) through
+``Client.get_executor()`` equals the same study on the default process pool, bit for bit."""
+
+from __future__ import annotations
+
+import csv
+
+import pytest
+
+import tissuesim
+
+distributed = pytest.importorskip("distributed")  # in the test extra: CI runs this
+
+TIMES = ("wall_time_s", "solve_time_s", "fields_write_s")
+
+
+def _rows(path):
+    with open(path, newline="") as f:
+        return [{k: v for k, v in row.items() if k not in TIMES} for row in csv.DictReader(f)]
+
+
+def test_a_dask_local_cluster_study_equals_the_process_pool_one(bar_scene, tmp_path):
+    vary = {"material.youngs_modulus": "500:2000", "material.poisson_ratio": [0.25, 0.45]}
+    kwargs = {"samples": 2, "sampler": "lhs", "seed": 11, "fields": ["displacement"]}
+    pool = tissuesim.sweep(bar_scene, vary, out=tmp_path / "pool", workers=2, **kwargs)
+    with (
+        distributed.LocalCluster(
+            n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None
+        ) as cluster,
+        distributed.Client(cluster) as client,
+    ):
+        dask = tissuesim.sweep(
+            bar_scene, vary, out=tmp_path / "dask", executor=client.get_executor(), **kwargs
+        )
+        pids = client.run(lambda: __import__("os").getpid())
+    assert len(set(pids.values())) == 2  # two worker processes
+    assert [r["status"] for r in dask] == ["completed"] * 4
+    assert [r["forces"] for r in dask] == [r["forces"] for r in pool]
+    assert [r["params"] for r in dask] == [r["params"] for r in pool]
+    assert _rows(tmp_path / "dask" / "runs.csv") == _rows(tmp_path / "pool" / "runs.csv")
+    a = tissuesim.sweep.load_dataset(tmp_path / "pool")
+    b = tissuesim.sweep.load_dataset(tmp_path / "dask")
+    assert (a["body/displacement"] == b["body/displacement"]).all()
