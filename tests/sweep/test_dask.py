@@ -11,7 +11,7 @@ import tissuesim
 
 distributed = pytest.importorskip("distributed")  # in the test extra: CI runs this
 
-TIMES = ("wall_time_s", "solve_time_s", "fields_write_s")
+TIMES = ("wall_time_s", "build_time_s", "setup_time_s", "solve_time_s", "fields_write_s")
 
 
 def _rows(path):

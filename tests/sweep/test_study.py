@@ -23,7 +23,7 @@ VARY = {
     "material.youngs_modulus": [800.0, 1500.0],
     "dirichlet[pull].displacement[0]": ["0.1 * t", "0.2 * t"],
 }
-TIMES = ("wall_time_s", "solve_time_s", "fields_write_s")
+TIMES = ("wall_time_s", "build_time_s", "setup_time_s", "solve_time_s", "fields_write_s")
 
 
 def _single_run(scene, values):

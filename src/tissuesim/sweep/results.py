@@ -1,6 +1,7 @@
 """The study's table: one row per run, assembled from the runs' own result files
 (``runs/<run_id>.json``), written as ``runs.csv`` always and ``runs.parquet`` where pyarrow is
-installed. Columns: run_id, index, status, error, wall_time_s, solve_time_s, steps,
+installed. Columns: run_id, index, status, error, wall_time_s, build_time_s (the scene
+built), setup_time_s (the model set up), solve_time_s (the steps), steps,
 newton_iterations, then each parameter by its key path (a vector as ``KEY[0]``, ``KEY[1]``,
 ...), then each force as ``<name>_x_N``, ``<name>_y_N``, ``<name>_z_N`` (as in forces.csv), then
 ``fields_write_s`` and ``fields_bytes`` when fields were saved."""
@@ -21,6 +22,8 @@ BASE_COLUMNS = (
     "status",
     "error",
     "wall_time_s",
+    "build_time_s",
+    "setup_time_s",
     "solve_time_s",
     "steps",
     "newton_iterations",

@@ -78,7 +78,8 @@ def sweep(
     steps: the runs' step count (default the scene's ``[run] steps``).
 
     A run's result: run_id, index, status ("completed" or "failed"), error (one line),
-    wall_time_s, solve_time_s (its steps' own time), steps, newton_iterations (summed), params
+    wall_time_s, build_time_s (build_scene), setup_time_s (the model set up), solve_time_s (its
+    steps' own time), steps, newton_iterations (summed), params
     ({key path: value}), forces ({name: [fx, fy, fz]} at the end, ``Simulation.forces()``)."""
     from tissuesim.sweep.dataset import FIELDS
     from tissuesim.sweep.results import read_results, table_rows, write_table
