@@ -261,7 +261,7 @@ class ReactiveViscoelastic(Material):
             w = np.ones((q, 1))
         G = w.shape[1]
         Fr = np.einsum("qij,qgjk->qgik", F, uinv).reshape(q * G, d, d)
-        active = (w != 0.0).ravel()
+        active = (np.abs(w) > 1e-15).ravel()  # fractions of the bonds: lighter add nothing
         weak = self._weak(Fr[active], order) if active.any() else None
         psi_b = np.zeros(q * G)
         if weak is not None:
