@@ -35,6 +35,7 @@ from tissuesim.constraints.dirichlet import Elimination
 from tissuesim.coupling.attachment import Attachment, OrganSide, TissueSide
 from tissuesim.energies.accumulator import Accumulator
 from tissuesim.errors import InputError
+from tissuesim.rigid.in_system import RigidSystemPart
 
 __all__ = ["System", "is_frame_body"]
 
@@ -55,7 +56,7 @@ class _Cross:
 
 
 @dataclass(eq=False)
-class System:
+class System(RigidSystemPart):
     """Bodies (``Model`` or ``FrameModel``) named ``names``, and attachments between a FEM body
     (``Attachment.organ``) and a frame body (``Attachment.tissue_body``; None: the only frame
     body). Built once per topology: a cut rebuilds it."""
@@ -69,6 +70,8 @@ class System:
     #: the FEM vertices that follow them: (body index, vertex indices, rigid index) each
     rigid: Sequence = ()
     rigid_members: Sequence = ()
+    #: joints and springs between rigid bodies (rigid/joints.py), by the rigid bodies' names
+    joints: Sequence = ()
     #: the time of the rigid bodies' loads (the step's end time: Simulation.step_energies)
     load_time: float = 0.0
     # the last implicit step's body energies (inertia about its prediction, loads): its Phi,
@@ -111,6 +114,13 @@ class System:
         self.ties = list(self.ties)
         self.single = len(self.bodies) == 1 and not self.attachments and not self.rigid
         self.links = self._rigid_links()
+        self.joints = list(self.joints)
+        names = [r.name for r in self.rigid]
+        for j in self.joints:
+            for end in (j.a, j.b):
+                if end not in names:
+                    raise InputError(f"joint {j.name!r}: {end!r} is not a rigid body")
+        self._joint_ends = [(names.index(j.a), names.index(j.b)) for j in self.joints]
         self._tie_matrices = [self._tie_matrix(t) for t in self.ties]
         self._build_pattern()
         self.organ_hessians = [
@@ -152,6 +162,15 @@ class System:
             r, c = self.links.pattern_entries(np.concatenate(rows), np.concatenate(cols))
             rows.append(r.astype(np.int64))
             cols.append(c.astype(np.int64))
+        for ka, kb in self._joint_ends:  # a joint couples its two rigid blocks
+            q = np.concatenate([self._rigid_dofs(ka), self._rigid_dofs(kb)])
+            rows.append(np.repeat(q, 12))
+            cols.append(np.tile(q, 12))
+        if self.rigid and not self.links:
+            for k in range(len(self.rigid)):
+                q = self._rigid_dofs(k)
+                rows.append(np.repeat(q, 6))
+                cols.append(np.tile(q, 6))
         self.pattern = SparsityPattern.from_entries(
             self.n_dofs, np.concatenate(rows), np.concatenate(cols)
         )
@@ -174,33 +193,6 @@ class System:
             )
             for (r, c, frames, coeff) in pairs
         ]
-
-    def _rigid_links(self):
-        """The linked vertices of every rigid block (rigid/links.py), or None."""
-        from tissuesim.rigid.links import RigidLinks
-
-        if not self.rigid:
-            return None
-        dofs, rigid, offsets = [], [], []
-        for j, vertices, k in self.rigid_members:
-            body = self.bodies[j]
-            if is_frame_body(body) or body.mesh.dim != 3:
-                raise InputError("a rigid body links vertices of 3D FEM bodies only")
-            v = np.asarray(vertices, dtype=np.int64)
-            start = self.tangent_slices[j].start
-            dofs.append(start + 3 * v[:, None] + np.arange(3))
-            rigid.append(np.full(len(v), k))
-            offsets.append(body.mesh.points[v] - self.rigid[k].center)
-        if not dofs:
-            return None
-        dofs = np.concatenate(dofs)
-        if len(np.unique(dofs[:, 0])) < len(dofs):
-            raise InputError("a vertex is linked to two rigid bodies (or twice to one)")
-        k_dofs = np.array([np.arange(s.start, s.stop) for s in self.rigid_tangent_slices])
-        k_conf = np.array([np.arange(s.start, s.stop) for s in self.rigid_config_slices])
-        return RigidLinks(
-            dofs, np.concatenate(rigid), np.concatenate(offsets), k_dofs, k_conf, self.n_dofs
-        )
 
     def _tie_matrix(self, tie):
         """G over the configuration (for G c) and over the tangent DOFs (gradient, Hessian)."""
@@ -269,16 +261,6 @@ class System:
         for b, sc, st in zip(self.bodies, self.config_slices, self.tangent_slices, strict=True):
             out[sc] = b.retract(c[sc], dq[st])
         return self._place_rigid(c, dq, out)
-
-    def _place_rigid(self, c: np.ndarray, dq: np.ndarray, out: np.ndarray) -> np.ndarray:
-        """The rigid blocks retracted too, and their linked vertices placed on them."""
-        if not self.rigid:
-            return out
-        for r, sc, st in zip(
-            self.rigid, self.rigid_config_slices, self.rigid_tangent_slices, strict=True
-        ):
-            out[sc] = r.retract(c[sc], dq[st])
-        return self.links.place(out) if self.links is not None else out
 
     def difference(self, c1: np.ndarray, c0: np.ndarray) -> np.ndarray:
         """The tangent step from c0 to c1 (velocities times h)."""
@@ -376,43 +358,6 @@ class System:
         if contact:
             self._add_contact(acc, c, contact_project)
         return self._reduce_rigid(acc, c)
-
-    def _pattern_keys(self) -> np.ndarray:
-        if getattr(self, "_keys", None) is None or self._keys.size != self.pattern.nnz:
-            self._keys = self.pattern.keys()
-        return self._keys
-
-    def _reduce_rigid(self, acc: Accumulator, c: np.ndarray) -> Accumulator:
-        """The rigid bodies' loads, and what acts on their linked vertices mapped onto their
-        six DOFs (rigid/links.py)."""
-        if not self.rigid:
-            return acc
-        for r, sc, st in zip(
-            self.rigid, self.rigid_config_slices, self.rigid_tangent_slices, strict=True
-        ):
-            value, g, diagonal = r.load_energy(c[sc], self.load_time, acc.order)
-            acc.add_value(f"{r.name}.load", value)
-            if acc.order >= 1:
-                acc.gradient[st] += g
-            if acc.order >= 2 and diagonal is not None:
-                k = np.arange(st.start, st.stop)
-                acc.hessian[self.pattern.positions(k, k, keys=self._pattern_keys())] += diagonal
-        links = self.links
-        if links is None or acc.order < 1:
-            return acc
-        p = links.arms(c)
-        if acc.order >= 2:
-            pat = self.pattern
-            H = sp.csr_matrix((acc.hessian, pat.indices, pat.indptr), shape=(pat.n, pat.n))
-            extra = links.reduced_hessian(H, acc.gradient, p)
-            keys = self._pattern_keys()
-            np.add.at(acc.hessian, pat.positions(extra.row, extra.col, keys=keys), extra.data)
-            if acc.extra_hessian is not None:
-                E = sp.csr_matrix(acc.extra_hessian)
-                zero = np.zeros(pat.n)  # the curvature is in the main Hessian already
-                acc.extra_hessian = (E + links.reduced_hessian(E, zero, p)).tocsr()
-        links.reduce_gradient(acc.gradient, p)
-        return acc
 
     def _add_contact(self, acc: Accumulator, c: np.ndarray, project: bool) -> Accumulator:
         """The barrier contact energy (contact/model.py) on top of everything else."""

@@ -142,7 +142,7 @@ def test_the_converted_scene_runs_the_same(tmp_path):
         ("<rb>platen</rb>\n      <dof>z</dof>", "<rb>tissue</rb>\n      <dof>z</dof>",
          "not a 'rigid body' material"),
         ("  </Rigid>", '    <rigid_connector type="rigid spring"/>\n  </Rigid>',
-         "rigid connector 'rigid spring'"),
+         "a rigid spring needs <body_a>"),
         ("<value lc=\"1\">-0.05</value>\n      <relative>0</relative>",
          "<value lc=\"1\">-0.05</value>\n      <relative>1</relative>", "relative = 1"),
     ],

@@ -68,6 +68,9 @@ class FebModel:
     #: Load)]} (febio/rigid.py); node sets that move with a rigid body: (set, body, element)
     rigid: dict = field(default_factory=dict)
     rigid_nodes: list = field(default_factory=list)
+    #: rigid connectors (febio/rigid_connectors.py): dicts of a [[rigid_joints]] table with
+    #: Loads for prescribed values and material names for the bodies
+    rigid_connectors: list = field(default_factory=list)
     #: "file:line <tag>: what the converter changed" (contact surfaces set apart)
     changes: list = field(default_factory=list)
     steps: int = 1

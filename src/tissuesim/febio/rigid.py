@@ -30,6 +30,8 @@ def rigid_material(model: FebModel, mat: Node) -> tuple:
     not given); E and v only condition FEBio's own solve."""
     params: dict = {}
     density = 1.0
+    name = mat.attrib.get("name") or mat.attrib.get("id", "")
+    _rigid(model, name)["node"] = mat
     for p in _once(mat).values():
         if p.children or "lc" in p.attrib or p.attrib.get("type") not in (None, "const"):
             raise _unsupported(p, "a rigid body parameter that is a field, a curve or a table")
@@ -53,6 +55,11 @@ def _body(model: FebModel, node: Node) -> str:
     rb = _once(node).get("rb")
     if rb is None:
         raise node.error("needs <rb>, the rigid body's material")
+    return rigid_body_name(model, rb)
+
+
+def rigid_body_name(model: FebModel, rb: Node) -> str:
+    """The rigid body material an element's text names (its name or id)."""
     name = rb.text.strip()
     for key in (name, f"#{name}"):
         spec = model.materials.get(key)
@@ -90,10 +97,10 @@ def read_rigid(model: FebModel, section: Node) -> None:
     for c in section.children:
         kind = c.attrib.get("type", "")
         if c.tag == "rigid_connector":
-            raise c.error(
-                f"rigid connector {kind!r}: tissuesim does not run rigid joints, springs or "
-                "dampers yet"
-            )
+            from tissuesim.febio.rigid_connectors import read_connector
+
+            read_connector(model, c, kind)
+            continue
         if model.window is not None:
             raise c.error(
                 "a rigid body condition inside a <step>: tissuesim holds a rigid body's DOFs "

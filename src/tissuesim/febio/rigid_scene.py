@@ -9,7 +9,10 @@ import numpy as np
 
 from tissuesim.febio.model import FebModel, Load
 
-__all__ = ["rigid_material_of", "rigid_bodies", "interface_sets", "RIGID_SET"]
+__all__ = [
+    "rigid_material_of", "rigid_bodies", "rigid_joints", "rigid_names", "interface_sets",
+    "RIGID_SET",
+]  # fmt: skip
 
 #: the point set of a deformable body's nodes glued to rigid body <name>
 RIGID_SET = "{}.rigid_interface"
@@ -58,14 +61,19 @@ def rigid_bodies(model: FebModel, bodies: list[dict], names: list[str], times) -
             for n, b in zip(names, bodies, strict=True)
             if material in b.get("interfaces", {})
         ]
-        if not own and not glued:
+        params = model.materials[material][1]
+        joined = any(material in (c["a"], c["b"]) for c in model.rigid_connectors)
+        if not own and not glued and not joined:
             model.notes.append(f"rigid body {material!r}: no elements and no nodes, not used")
             continue
+        if not own and not glued and "center" not in params:
+            raise model.rigid[material]["node"].error(
+                f"rigid body {material!r} has no elements: give its <center_of_mass>"
+            )
         if own:
             entry["bodies"] = own
         if glued:
             entry["vertices"] = glued
-        params = model.materials[material][1]
         if "center" in params:
             entry["center"] = list(params["center"])
         conditions = model.rigid.get(material, {"held": {}, "force": [], "moment": []})
@@ -100,3 +108,17 @@ def rigid_names(tables: list[dict], model: FebModel) -> dict[str, str]:
         name = t["name"]
         out[name.removesuffix(".rigid") if name not in model.materials else name] = name
     return out
+
+
+def rigid_joints(model: FebModel, names: dict[str, str], times) -> list[dict]:
+    """The [[rigid_joints]] tables of the model's rigid connectors (``names``: rigid body
+    material -> its scene name; ``times(Load, model)`` a prescribed value's expression)."""
+    tables = []
+    for entry in model.rigid_connectors:
+        table = {k: v for k, v in entry.items() if v is not None}
+        table["a"], table["b"] = names[entry["a"]], names[entry["b"]]
+        for key in ("rotation", "translation"):
+            if key in table:
+                table[key] = times(table[key], model)
+        tables.append(table)
+    return tables

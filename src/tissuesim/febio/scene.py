@@ -21,6 +21,7 @@ from tissuesim.febio.rigid_scene import (
     RIGID_SET,
     interface_sets,
     rigid_bodies,
+    rigid_joints,
     rigid_material_of,
     rigid_names,
 )
@@ -286,6 +287,9 @@ def febio_scene(model: FebModel, stem: str) -> tuple[dict, dict]:
     if dhat is not None:
         data["contact"] = {"dhat": dhat, **data["contact"]}
     names = rigid_names(rigid, model)
+    joints = rigid_joints(model, names, lambda load, m: _times(load, m, windowed=False))
+    if joints:
+        data["rigid_joints"] = joints
     logfiles = logfile_tables(model, bodies, [n for n, _ in tables_per_body], names)
     if logfiles:
         data["logfiles"] = logfiles

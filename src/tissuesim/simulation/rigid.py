@@ -107,10 +107,10 @@ class RigidCalls:
             if body.dim != 3:
                 raise InputError(f"add_rigid_body: body {b!r} is 2D; rigid bodies are 3D")
             members.append((body.name, vertex_indices(which, body.mesh.n_points, "add_rigid_body")))
-        if not members:
+        if not members and center is None:
             raise InputError(
-                f"add_rigid_body {name!r}: give the bodies it is made of, or vertices that "
-                "move with it"
+                f"add_rigid_body {name!r}: give the bodies it is made of, vertices that move "
+                "with it, or (a body of no mass: a ground for joints) its center"
             )
         held: dict[int, Callable[[float], float] | None] = {}
         for dof in fixed:
@@ -135,6 +135,88 @@ class RigidCalls:
         self._system_dirty = True
         return name
 
+    def add_rigid_joint(
+        self,
+        kind: str,
+        a: str,
+        b: str,
+        origin: Sequence[float],
+        *,
+        axis: Sequence[float] | None = None,
+        transverse: Sequence[float] | None = None,
+        rotation: float | Callable[[float], float] | None = None,
+        translation: float | Callable[[float], float] | None = None,
+        name: str | None = None,
+    ) -> str:
+        """A joint between rigid bodies ``a`` and ``b`` (``rigid/joints.py``): ``kind``
+        "spherical", "revolute" (about ``axis``), "prismatic" (along ``axis``), "cylindrical"
+        (along and about ``axis``) or "planar" (``axis`` its normal), at ``origin`` (m) with
+        a ``transverse`` axis (the zero of ``rotation``); ``rotation`` (rad, about the axis)
+        and ``translation`` (m, along it) prescribe the relative motion (numbers or functions
+        of t). Held by an augmented Lagrangian to 1e-9 of the length scale; its force and
+        moment on ``b`` are reported as ``name`` and ``<name>.moment``."""
+        from tissuesim.rigid.joints import RigidJoint
+
+        for end in (a, b):
+            if end not in self.rigid_bodies:
+                raise InputError(
+                    f"add_rigid_joint: {end!r} is not a rigid body; rigid bodies: "
+                    f"{sorted(self.rigid_bodies) or 'none'}"
+                )
+        name = self._joint_name(name, kind)
+        rot = None if rotation is None else _time_function(rotation, "rotation")
+        tra = None if translation is None else _time_function(translation, "translation")
+        c = validate.vector(origin, "origin", 3, unit="m")
+        self.rigid_joints.append(RigidJoint(name, kind, a, b, c, axis, transverse, rot, tra))
+        self._system_dirty = True
+        return name
+
+    def add_rigid_spring(
+        self,
+        a: str,
+        b: str,
+        point_a: Sequence[float],
+        point_b: Sequence[float],
+        stiffness: float,
+        *,
+        free_length: float | None = None,
+        name: str | None = None,
+    ) -> str:
+        """A linear spring (N/m) between ``point_a`` of rigid body ``a`` and ``point_b`` of
+        ``b`` (m, at rest), of ``free_length`` (default their rest distance); its force on
+        ``b`` is reported as ``name``."""
+        from tissuesim.rigid.joints import RigidSpring
+
+        for end in (a, b):
+            if end not in self.rigid_bodies:
+                raise InputError(f"add_rigid_spring: {end!r} is not a rigid body")
+        name = self._joint_name(name, "spring")
+        pa = validate.vector(point_a, "point_a", 3, unit="m")
+        pb = validate.vector(point_b, "point_b", 3, unit="m")
+        k = validate.real(stiffness, "stiffness", low=0.0, low_open=True, unit="N/m")
+        self.rigid_joints.append(RigidSpring(name, a, b, pa, pb, k, free_length))
+        self._system_dirty = True
+        return name
+
+    def _joint_name(self, name: str | None, kind: str) -> str:
+        taken = {j.name for j in self.rigid_joints} | set(self.rigid_bodies) | set(self.bodies)
+        if name is None:
+            k = 1
+            while f"{kind}_{k}" in taken:
+                k += 1
+            return f"{kind}_{k}"
+        if name in taken:
+            raise InputError(f"a joint, spring or body named {name!r} exists; give another name")
+        return name
+
+    def _joint_forces(self) -> dict[str, list[float]]:
+        """Each joint's force and moment on its body b (minus its energy's gradient there)."""
+        s, out = self.system, {}
+        for j, (_, grad, _, _, _) in zip(s.joints, s.joint_terms(self._state.x, 1), strict=True):
+            out[j.name] = (-grad[6:9]).tolist()
+            out[f"{j.name}.moment"] = (-grad[9:12]).tolist()
+        return out
+
     def _rigid_models(self, names: list[str]) -> tuple[list, list]:
         """(RigidModel per rigid body, (body index, vertices, rigid index) per member) for a
         system of the FEM bodies ``names``."""
@@ -147,6 +229,15 @@ class RigidCalls:
             models.append(RigidModel(spec.name, center, spec.held, spec.force, spec.moment))
             members += [(j, v, k) for j, v in mine]
         return models, members
+
+    @staticmethod
+    def _rigid_parts(old, state) -> dict:
+        """The rigid blocks' (configuration, velocity, None) of the system being replaced,
+        by "rigid:<name>", for the new one to start from."""
+        if old is None or state is None:
+            return {}
+        slices = zip(old.rigid, old.rigid_config_slices, old.rigid_tangent_slices, strict=True)
+        return {f"rigid:{r.name}": (state.x[sc], state.v[st], None) for r, sc, st in slices}
 
     def _soften_rigid(self, system) -> None:
         """With contact, prescribed rigid DOFs are pulled by stiff springs (rigid/body.py
@@ -190,4 +281,6 @@ class RigidCalls:
             g = g + r.spring_forces(self._state.x[sc], self.time)  # a soft DOF's support
             out[r.name] = g[:3].tolist()
             out[f"{r.name}.moment"] = g[3:].tolist()
+        if s.joints:
+            out.update(self._joint_forces())
         return out

@@ -129,6 +129,7 @@ class Simulation(
         self.bodies: dict[str, FemBody | FrameBody | TissueBody] = {}
         self.tissue: TissueBody | None = None
         self.rigid_bodies: dict = {}  # name -> simulation/rigid.py RigidBodySpec
+        self.rigid_joints: list = []  # rigid/joints.py RigidJoint, RigidSpring
         self.history: list[StepRecord] = []
         self.gravity: list[np.ndarray] = []  # on every body, those added later too
         self._force_names: set[str] = set()
@@ -239,17 +240,9 @@ class Simulation(
                 attachments.append(spec.build(names.index(spec.fem), j, bodies[j].model))
         ties = [t for t in self.ties if t.a in names and t.b in names]
         rigid, members = self._rigid_models(names)
-        self._system = System(
-            [b.model for b in bodies], names, attachments, ties, rigid=rigid, rigid_members=members
-        )
-        for r, sc, st in zip(
-            old.rigid if old is not None else (),
-            old.rigid_config_slices if old is not None else (),
-            old.rigid_tangent_slices if old is not None else (),
-            strict=True,
-        ):
-            if state is not None:
-                parts[f"rigid:{r.name}"] = (state.x[sc], state.v[st], None)
+        self._system = System([b.model for b in bodies], names, attachments, ties, rigid=rigid,
+                              rigid_members=members, joints=self.rigid_joints)  # fmt: skip
+        parts.update(self._rigid_parts(old, state))
         if self.contact is not None:
             self._system.contact = self._contact_model()
             if old is not None and old.contact is not None:

@@ -291,7 +291,15 @@ class _Lags:
         )
         if self.pressures is not None:
             self.pressures.start(c0)
-        self.max_relags = max(self.friction_max, MAX_RELAGS if self.pressures else 0)
+        self.system = system
+        self.joints = bool(getattr(system, "joints", ()))  # rigid/joints.py: their multipliers
+        from tissuesim.rigid.joints import MAX_UPDATES
+
+        self.max_relags = max(
+            self.friction_max,
+            MAX_RELAGS if self.pressures else 0,
+            MAX_UPDATES if self.joints else 0,
+        )
 
     def relag(self, c: np.ndarray, y: np.ndarray | None = None) -> bool:
         """Re-lag at c (obstacles at y); whether anything changed."""
@@ -301,11 +309,13 @@ class _Lags:
             changed = self.friction(c, y)
         if self.pressures is not None:
             changed = self.pressures.relag(c) or changed
+        if self.joints:
+            changed = self.system.update_joints(c) or changed
         return changed
 
     def newton_relag(self):
         """The relag(c) for ``minimize`` (None when nothing is lagged)."""
-        if self.friction is None and self.pressures is None:
+        if self.friction is None and self.pressures is None and not self.joints:
             return None
         return lambda c: self.relag(c)
 

@@ -78,7 +78,7 @@ from tissuesim.scene.tables.contact import CONTACT_KEYS, OBSTACLE_KEYS
 from tissuesim.scene.tables.cuts import CUT_KEYS, TEARING_KEYS, add_cut_tables, add_tearing_table
 from tissuesim.scene.tables.fem_body import _mesh, _select
 from tissuesim.scene.tables.logfiles import LOGFILE_KEYS, add_logfiles
-from tissuesim.scene.tables.rigid import RIGID_KEYS, add_rigid_bodies
+from tissuesim.scene.tables.rigid import JOINT_KEYS, RIGID_KEYS, add_rigid_bodies
 from tissuesim.scene.tables.visual import VISUAL_KEYS, add_visual_surfaces
 from tissuesim.validate import short
 
@@ -121,10 +121,11 @@ COUPLED_SCENE_KEYS: dict[str, Any] = {
     "visual_surfaces": set(VISUAL_KEYS),
     "logfiles": set(LOGFILE_KEYS),
     "rigid_bodies": set(RIGID_KEYS),
+    "rigid_joints": set(JOINT_KEYS),
 }
 ARRAYS = (
     "organs", "bodies", "graspers", "attachments", "cuts", "obstacles", "visual_surfaces",
-    "logfiles", "rigid_bodies",
+    "logfiles", "rigid_bodies", "rigid_joints",
 )  # fmt: skip
 MESH_GENERATORS = {
     "ellipsoid": ("center", "radii", "divisions"),

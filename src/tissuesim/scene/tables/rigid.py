@@ -1,6 +1,16 @@
 """``[[rigid_bodies]]``: rigid bodies of a scene of several bodies (``Simulation.add_rigid_body``,
 ``simulation/rigid.py``); ``convert`` writes one per FEBio rigid body.
 
+    [[rigid_joints]]                      # between two rigid bodies (rigid/joints.py)
+    kind = "revolute"                     # spherical, revolute, prismatic, cylindrical,
+    a = "ground"                          # planar, or spring
+    b = "arm"
+    origin = [0.0, 0.0, 0.0]              # m, at rest
+    axis = [0.0, 0.0, 1.0]
+    transverse = [1.0, 0.0, 0.0]          # the zero of rotation
+    rotation = "0.5 * t"                  # rad (translation: m), prescribed, optional
+    # a spring: point_a, point_b (m, at rest), stiffness (N/m), free_length (m)
+
     [[rigid_bodies]]
     name = "platen"
     bodies = ["platen_mesh"]              # FEM bodies that move rigidly as a whole
@@ -19,9 +29,13 @@ from tissuesim.scene.common import _context, _table, _unknown, of_time
 from tissuesim.scene.expressions import compile_expression
 from tissuesim.validate import short
 
-__all__ = ["RIGID_KEYS", "add_rigid_bodies"]
+__all__ = ["RIGID_KEYS", "JOINT_KEYS", "add_rigid_bodies"]
 
 RIGID_KEYS = ("name", "bodies", "vertices", "center", "fixed", "prescribed", "force", "moment")
+JOINT_KEYS = (
+    "kind", "a", "b", "origin", "axis", "transverse", "rotation", "translation", "name",
+    "point_a", "point_b", "stiffness", "free_length",
+)  # fmt: skip
 
 
 def _names(value, where: str) -> list[str]:
@@ -86,3 +100,32 @@ def add_rigid_bodies(sim, data: dict, source: str) -> None:
                 prescribed=prescribed,
                 **loads,
             )
+    add_rigid_joints(sim, data, source)
+
+
+def add_rigid_joints(sim, data: dict, source: str) -> None:
+    """Read the scene's [[rigid_joints]] into ``sim``."""
+    for i, item in enumerate(_table(data, "rigid_joints", source, array=True), start=1):
+        where = f"{source} rigid_joints[{i}]"
+        _unknown(item, JOINT_KEYS, where)
+        kind = item.get("kind")
+        for key in ("kind", "a", "b"):
+            if not isinstance(item.get(key), str):
+                raise SceneError(f"{where}: {key} must be a text (the joint's kind, its bodies)")
+        with _context(where):
+            if kind == "spring":
+                sim.add_rigid_spring(
+                    item["a"], item["b"], item.get("point_a"), item.get("point_b"),
+                    item.get("stiffness"), free_length=item.get("free_length"),
+                    name=item.get("name"),
+                )  # fmt: skip
+                continue
+            motion = {
+                key: _scalar_of_time(item[key], f"{where} {key}")
+                for key in ("rotation", "translation")
+                if key in item
+            }
+            sim.add_rigid_joint(
+                kind, item["a"], item["b"], item.get("origin"), axis=item.get("axis"),
+                transverse=item.get("transverse"), name=item.get("name"), **motion,
+            )  # fmt: skip

@@ -1,0 +1,169 @@
+"""Joints and springs between rigid bodies (rigid/joints.py): their energies against finite
+differences (multipliers and prescribed motions included), a revolute joint turned by its
+prescribed rotation, a prismatic joint with a spring under a force off its axis, against
+closed forms; the augmented Lagrangian holds each joint to its tolerance."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import scipy.sparse as sp
+
+from tissuesim.errors import InputError
+from tissuesim.materials import make_material
+from tissuesim.mesh import box
+from tissuesim.rigid.joints import TOLERANCE
+from tissuesim.simulation import Simulation
+
+MAT = make_material("neo_hookean", youngs_modulus=1e3, poisson_ratio=0.3)
+GROUND = box((-0.5, -0.5, -1.0), (0.5, 0.5, 0.0), (1, 1, 1))
+ARM = box((0.0, -0.1, 0.0), (2.0, 0.1, 0.2), (2, 1, 1))
+
+
+def _pair(**kw) -> Simulation:
+    sim = Simulation(integrator="quasistatic", time_step=0.5, **kw)
+    sim.add_body("ground", GROUND, MAT)
+    sim.add_body("arm", ARM, MAT)
+    sim.add_rigid_body("G", ["ground"], fixed=("x", "y", "z", "rx", "ry", "rz"))
+    return sim
+
+
+@pytest.mark.parametrize("kind", ["spherical", "revolute", "prismatic", "cylindrical", "planar"])
+def test_joint_energies_against_finite_differences(kind):
+    """Phi of a system with the joint (and a spring) at a moved, turned state, with
+    multipliers and the prescribed motion the kind takes: the first difference along random
+    retractions against the gradient, the second against the Hessian's quadratic form."""
+    sim = _pair()
+    sim.add_rigid_body("A", ["arm"], force=(1.0, -2.0, 0.5))
+    extra = {}
+    if kind in ("revolute", "cylindrical"):
+        extra["rotation"] = lambda t: 0.3 + t
+    if kind in ("prismatic", "cylindrical"):
+        extra["translation"] = lambda t: 0.1 * t
+    joint = sim.add_rigid_joint(kind, "G", "A", (0.2, 0.1, 0.05), axis=(0.2, 0.1, 1.0),
+                                transverse=(1.0, 0.3, 0.0), **extra)  # fmt: skip
+    sim.add_rigid_spring("G", "A", (0.0, 0.3, 0.0), (1.5, 0.0, 0.1), 50.0, free_length=0.7)
+    s = sim.system
+    s.load_time = 0.4
+    rng = np.random.default_rng(7)
+    free = np.ones(s.n_dofs, dtype=bool)
+    free[s.elimination.dofs] = False
+    c = s.apply_prescribed(
+        s.retract(s.rest_config(), np.where(free, rng.normal(scale=0.1, size=s.n_dofs), 0)), 0.0
+    )
+    (j,) = [j for j in s.joints if j.name == joint]
+    g = s.joint_terms(c, 0)[0][3]
+    j.multipliers = rng.normal(size=g.size)
+    acc = s.evaluate(c, 2)
+    H = sp.csr_matrix((acc.hessian, s.pattern.indices, s.pattern.indptr), shape=(s.n_dofs,) * 2)
+    for _ in range(3):
+        d = np.where(free, rng.normal(size=s.n_dofs), 0.0)
+        e = 1e-6
+        plus = s.evaluate(s.retract(c, e * d), 0).value
+        minus = s.evaluate(s.retract(c, -e * d), 0).value
+        assert (plus - minus) / (2 * e) == pytest.approx(acc.gradient @ d, rel=1e-6)
+        e = 1e-4
+        plus = s.evaluate(s.retract(c, e * d), 0).value
+        minus = s.evaluate(s.retract(c, -e * d), 0).value
+        second = (plus + minus - 2 * acc.value) / e**2
+        assert second == pytest.approx(d @ (H @ d), rel=1e-4)
+
+
+def test_a_revolute_joint_turns_the_arm_by_its_prescribed_rotation():
+    """The arm (centre (1, 0, 0.1)) turned 0.6 rad about z through the origin: its centre at
+    Rz(0.6) (1, 0, 0.1), its rotation Rz(0.6); the joint holds to its tolerance and carries no
+    load (nothing else acts)."""
+    sim = _pair()
+    sim.add_rigid_body("A", ["arm"])
+    name = sim.add_rigid_joint("revolute", "G", "A", (0, 0, 0), axis=(0, 0, 1),
+                               transverse=(1, 0, 0), rotation=lambda t: 0.6 * t)  # fmt: skip
+    for _ in range(2):
+        sim.step()
+    c, R = sim.rigid_state("A")
+    phi = 0.6
+    Rz = np.array([[np.cos(phi), -np.sin(phi), 0], [np.sin(phi), np.cos(phi), 0], [0, 0, 1]])
+    assert c == pytest.approx(Rz @ [1.0, 0.0, 0.1], abs=1e-8)
+    assert R == pytest.approx(Rz, abs=1e-8)
+    residual = sim.system.joint_terms(sim.state.x, 0)[0][3]
+    assert np.abs(residual).max() <= TOLERANCE * sim.system.length_scale
+    assert np.allclose(sim.forces()[name], 0.0, atol=1e-9)
+
+
+def test_a_prismatic_joint_with_a_spring_slides_as_far_as_the_force_pulls():
+    """The arm on a prismatic joint along x, a spring k = 200 N/m from the ground along x,
+    a force (10, 4, -3) N and a moment on it: it slides 10 / 200 = 0.05 m along x and not at
+    all across or turning; the joint takes the force's other components and the moment."""
+    sim = _pair()
+    sim.add_rigid_body("A", ["arm"], force=(10.0, 4.0, -3.0), moment=(0.5, 0.2, -0.1))
+    joint = sim.add_rigid_joint("prismatic", "G", "A", (0.0, 0.0, 0.1), axis=(1, 0, 0))
+    spring = sim.add_rigid_spring("G", "A", (-1.0, 0.0, 0.1), (0.0, 0.0, 0.1), 200.0)
+    sim.step()
+    sim.step()
+    c, R = sim.rigid_state("A")
+    assert c == pytest.approx([1.05, 0.0, 0.1], abs=1e-8)
+    assert R == pytest.approx(np.eye(3), abs=1e-8)
+    f = sim.forces()
+    assert f[spring] == pytest.approx([-10.0, 0.0, 0.0], abs=1e-6)
+    assert f[joint] == pytest.approx([0.0, -4.0, 3.0], abs=1e-6)
+
+
+def test_joint_refusals_name_what_is_wrong():
+    sim = _pair()
+    sim.add_rigid_body("A", ["arm"])
+    with pytest.raises(InputError, match="the kinds are"):
+        sim.add_rigid_joint("hinge", "G", "A", (0, 0, 0), axis=(0, 0, 1))
+        sim.build()
+    with pytest.raises(InputError, match="is not a rigid body"):
+        sim.add_rigid_joint("spherical", "G", "arm", (0, 0, 0))
+    with pytest.raises(InputError, match="needs its axis"):
+        sim.add_rigid_joint("revolute", "G", "A", (0, 0, 0))
+    with pytest.raises(InputError, match="no prescribed rotation"):
+        sim.add_rigid_joint("prismatic", "G", "A", (0, 0, 0), axis=(1, 0, 0), rotation=0.1)
+
+
+def _features(joint, z, centres0):
+    """The joint's features at the two bodies' configurations z (2, 12), as system.py's."""
+    rest = joint.rest_features(centres0)
+    c = [zk[:3] for zk in z]
+    R = [zk[3:12].reshape(3, 3) for zk in z]
+    y = [c[0] + R[0] @ rest[0], c[1] + R[1] @ rest[1]]
+    y += [R[0] @ rest[i] for i in (2, 3, 4)] + [R[1] @ rest[i] for i in (5, 6)]
+    return np.array(y), np.array(c)
+
+
+@pytest.mark.parametrize("kind", ["revolute", "prismatic", "cylindrical", "planar"])
+def test_a_joint_alone_against_finite_differences(kind):
+    """joint_energy with unit penalties and random multipliers (so that the multipliers'
+    bilinear and curvature terms weigh as much as the penalty's), on random rigid states."""
+    from tissuesim.rigid.body import RigidModel
+    from tissuesim.rigid.joints import RigidJoint, joint_energy
+
+    rng = np.random.default_rng(3)
+    extra = {}
+    if kind in ("revolute", "cylindrical"):
+        extra["rotation"] = lambda t: 0.4
+    if kind in ("prismatic", "cylindrical"):
+        extra["translation"] = lambda t: 0.2
+    joint = RigidJoint("j", kind, "a", "b", rng.normal(size=3), rng.normal(size=3),
+                       rng.normal(size=3), **extra)  # fmt: skip
+    centres0 = (rng.normal(size=3), rng.normal(size=3))
+    z = [RigidModel.retract(np.concatenate([c, np.eye(3).ravel()]), rng.normal(size=6))
+         for c in centres0]  # fmt: skip
+    y, c = _features(joint, z, centres0)
+    g = joint.residuals(y, 0.0)[0]
+    joint.multipliers = 5.0 * rng.normal(size=g.size)
+    k = np.ones(g.size)
+
+    def energy(dq):
+        zz = [RigidModel.retract(z[0], dq[:6]), RigidModel.retract(z[1], dq[6:])]
+        yy, cc = _features(joint, zz, centres0)
+        return joint_energy(joint, yy, cc, 0.0, k)[0]
+
+    value, grad, hess, _ = joint_energy(joint, y, c, 0.0, k)
+    for _ in range(4):
+        d = rng.normal(size=12)
+        e = 1e-6
+        assert (energy(e * d) - energy(-e * d)) / (2 * e) == pytest.approx(grad @ d, rel=1e-6)
+        e = 1e-4
+        second = (energy(e * d) + energy(-e * d) - 2 * value) / e**2
+        assert second == pytest.approx(d @ hess @ d, rel=1e-5, abs=1e-6)
