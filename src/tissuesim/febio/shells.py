@@ -179,6 +179,12 @@ def read_shell_thickness(model: FebModel, data: Node) -> None:
 
     shells = shells_of(model)
     members = _element_set(model, data)
+    solid = next((part for part, _ in members if part not in shells.faces), None)
+    if solid is not None:
+        raise data.error(
+            f"element data 'shell thickness' on part {solid!r}, which has no shell elements "
+            "(quad4, tri3)"
+        )
     for e in data.children:
         if e.tag not in ("e", "elem") or "lid" not in e.attrib:
             raise _unsupported(e, "expected <e lid=...>")
@@ -186,8 +192,6 @@ def read_shell_thickness(model: FebModel, data: Node) -> None:
         if not 1 <= lid <= len(members):
             raise e.error(f"lid {lid} is outside the element set (1..{len(members)})")
         part, row = members[lid - 1]
-        if part not in shells.faces:
-            raise e.error(f"a shell thickness on part {part!r}, which has no shell elements")
         nv = shells.faces[part].shape[1]
         values = _floats(e)
         if values.size not in (1, nv) or (values <= 0.0).any():
