@@ -53,6 +53,21 @@ def _ready() -> int:
     return os.getpid()
 
 
+def _init_pool_worker(parent: int) -> None:
+    """The default pool's worker initializer: leave when the study's process is gone (killed
+    with SIGKILL, a pool's workers would wait for work forever), then ``prepare_worker``."""
+    import threading
+    import time
+
+    def watch() -> None:
+        while os.getppid() == parent:
+            time.sleep(1.0)
+        os._exit(1)
+
+    threading.Thread(target=watch, name="tissuesim-parent-watch", daemon=True).start()
+    prepare_worker()
+
+
 def process_pool(workers: int | None = None) -> ProcessPoolExecutor:
     """The default executor: ``workers`` processes (default: one per core), one thread each,
     all started now (so the start-up, imports included, is paid before the first run)."""
@@ -63,7 +78,10 @@ def process_pool(workers: int | None = None) -> ProcessPoolExecutor:
     workers = default_workers() if workers is None else integer(workers, "workers", low=1)
     with single_thread_environment():
         pool = ProcessPoolExecutor(
-            workers, mp_context=multiprocessing.get_context("spawn"), initializer=prepare_worker
+            workers,
+            mp_context=multiprocessing.get_context("spawn"),
+            initializer=_init_pool_worker,
+            initargs=(os.getpid(),),
         )
         # a pool starts a worker per task submitted while none is idle: start them all here,
         # inside the environment, where each runs prepare_worker once

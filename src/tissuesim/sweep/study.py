@@ -119,7 +119,9 @@ def sweep(
     results = dict(done)
     try:
         _run_all(todo, executor, workers, results, progress, len(tasks))
-    finally:
+    finally:  # the files on disk (runs a worker finished after an interrupt too), then the
+        # runs the executor lost, which have none
+        results.update({r["index"]: r for r in read_results(directory)})
         rows = [results[i] for i in sorted(results)]
         write_table(directory, table_rows(rows, [p.key for p in params]))
     return [results[t.index] for t in tasks]
