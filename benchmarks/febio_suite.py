@@ -235,7 +235,7 @@ def solution_norm(model: Any, sim: Any, np: Any) -> dict[str, Any]:
     node_sets = getattr(model, "rigid_nodes", [])  # <bc type="rigid">: (set, body, element)
     for entry in node_sets:
         rigid_nodes[model.node_sets[entry[0]]] = True
-    several = len(groups) + len(rigid_materials) > 1 or bool(node_sets)
+    several = len(groups) + len(rigid_materials) > 1 or bool(node_sets) or bool(rigid_materials)
     u = np.zeros(model.nodes.shape)
     deformable = np.zeros(len(model.nodes), dtype=bool)
     for parts in groups.values():

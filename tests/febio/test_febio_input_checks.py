@@ -230,3 +230,25 @@ def test_a_solver_tuning_given_twice_is_a_note_an_integrator_parameter_is_refuse
                                  "      <beta>0.25</beta>\n      <beta>0.3</beta>"))  # fmt: skip
     with pytest.raises(FebError, match="<beta> is given twice in <solver>"):
         read_feb(path)
+
+
+def test_a_body_load_with_a_curve_per_component_is_a_load_per_component(tmp_path):
+    """FEBio 3's const body load may give x, y and z each its own curve (dy05): one body
+    force per component that is not zero, each with its curve."""
+    text = (MODELS / "uniaxial_neo_hookean.feb").read_text()
+    body = ('  <Loads>\n    <body_load type="const">\n      <x lc="1">2</x>\n'
+            '      <y lc="1">0</y>\n      <z lc="2">-9.81</z>\n    </body_load>\n  </Loads>\n'
+            "  <LoadData>")  # fmt: skip
+    text = text.replace("  <LoadData>", body, 1)
+    text = text.replace(
+        "  </LoadData>",
+        '    <load_controller id="2" type="loadcurve">\n      <points>\n        <pt>0,1</pt>\n'
+        "        <pt>1,1</pt>\n      </points>\n    </load_controller>\n  </LoadData>",
+    )
+    path = tmp_path / "body.feb"
+    path.write_text(text)
+    loads = read_feb(path).body_loads
+    assert [(load.value.tolist(), load.curve) for load in loads] == [
+        ([2.0, 0.0, 0.0], 1),
+        ([0.0, 0.0, -9.81], 2),
+    ]

@@ -44,6 +44,16 @@ def _node_set(model: FebModel, node: Node, attr: str = "node_set") -> str:
         if surface not in model.surfaces:
             raise node.error(f"no Surface named {surface!r}")
         model.node_sets.setdefault(name, np.unique(model.surfaces[surface][0]))
+    elif name.startswith("@elem_set:"):  # FEBio 4: the nodes of an element set or a part
+        elements = name.removeprefix("@elem_set:")
+        if elements in model.parts:
+            nodes = np.unique(model.parts[elements][1])
+        elif elements in model.element_sets:
+            members = model.element_sets[elements][0]
+            nodes = np.unique(np.concatenate([model.parts[p][1][r] for p, r in members]))
+        else:
+            raise node.error(f"no ElementSet or part named {elements!r}")
+        model.node_sets.setdefault(name, nodes)
     elif name not in model.node_sets:
         raise node.error(f"no NodeSet named {name!r}")
     if len(model.node_sets[name]) == 0:  # FEBio would run it on nothing: a silent no-op
@@ -156,11 +166,16 @@ def _loads(model: FebModel, section: Node) -> None:
         elif load.tag == "body_load" and kind == "const":  # FEBio 3: x, y, z
             p = _children(load, {"x", "y", "z"})
             curves = {_int_attr(c, "lc", "a load curve id") for c in p.values()}
-            if len(curves) > 1:
-                raise load.error("x, y and z must share one load curve (or none)")
             value = np.array([_floats(p[a], 1)[0] if a in p else 0.0 for a in "xyz"])
-            curve = curves.pop() if curves else None
-            model.body_loads.append(Load(value, curve, model.window))
+            if len(curves) <= 1:
+                model.body_loads.append(Load(value, curves.pop() if curves else None, model.window))
+                continue
+            for k, a in enumerate("xyz"):  # a curve per component: a load per component
+                if a in p and value[k] != 0.0:
+                    part = np.zeros(3)
+                    part[k] = value[k]
+                    curve = _int_attr(p[a], "lc", "a load curve id")
+                    model.body_loads.append(Load(part, curve, model.window))
         elif load.tag == "body_load" and kind == "body force":  # FEBio 4: force vector
             p = _children(load, {"force"})
             if "force" not in p:

@@ -12,6 +12,7 @@ springs, dampers) are refused in one line."""
 from __future__ import annotations
 
 from tissuesim.febio.model import FebModel, Load, _flag, _floats, _int_attr, _once, _unsupported
+from tissuesim.febio.rigid_connectors import read_connector, rigid_body_name
 from tissuesim.febio.xml import Node
 
 __all__ = ["rigid_material", "read_rigid", "read_rigid_nodes", "RIGID_DOFS"]
@@ -58,22 +59,6 @@ def _body(model: FebModel, node: Node) -> str:
     return rigid_body_name(model, rb)
 
 
-def rigid_body_name(model: FebModel, rb: Node) -> str:
-    """The rigid body material an element's text names (its name or id)."""
-    name = rb.text.strip()
-    for key in (name, f"#{name}"):
-        spec = model.materials.get(key)
-        if spec is not None and spec[3] == "rigid body":
-            return key if not key.startswith("#") else _named(model, key)
-    raise rb.error(f"<rb>{name}</rb> is not a 'rigid body' material of this model")
-
-
-def _named(model: FebModel, key: str) -> str:
-    """The material's name for an id key (materials are listed under both)."""
-    spec = model.materials[key]
-    return next(k for k, v in model.materials.items() if v is spec and not k.startswith("#"))
-
-
 def _rigid(model: FebModel, name: str) -> dict:
     return model.rigid.setdefault(name, {"held": {}, "force": [], "moment": []})
 
@@ -97,8 +82,6 @@ def read_rigid(model: FebModel, section: Node) -> None:
     for c in section.children:
         kind = c.attrib.get("type", "")
         if c.tag == "rigid_connector":
-            from tissuesim.febio.rigid_connectors import read_connector
-
             read_connector(model, c, kind)
             continue
         if model.window is not None:

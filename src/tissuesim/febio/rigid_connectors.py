@@ -21,7 +21,7 @@ from __future__ import annotations
 from tissuesim.febio.model import FebModel, Load, _flag, _floats, _int_attr, _once
 from tissuesim.febio.xml import Node
 
-__all__ = ["read_connector", "CONNECTORS"]
+__all__ = ["read_connector", "rigid_body_name", "CONNECTORS"]
 
 #: FEBio connector type -> (tissuesim kind, FEBio's name of the axis, of the transverse axis)
 CONNECTORS = {
@@ -40,9 +40,23 @@ TUNING = {
 LOADS = ("force", "moment", "moment_x", "moment_y", "moment_z", "torsion_stiffness")
 
 
-def _body(model: FebModel, node: Node) -> str:
-    from tissuesim.febio.rigid import rigid_body_name
+def _named(model: FebModel, key: str) -> str:
+    """The material's name for an id key (materials are listed under both)."""
+    spec = model.materials[key]
+    return next(k for k, v in model.materials.items() if v is spec and not k.startswith("#"))
 
+
+def rigid_body_name(model: FebModel, rb: Node) -> str:
+    """The rigid body material an element's text names (its name or id)."""
+    name = rb.text.strip()
+    for key in (name, f"#{name}"):
+        spec = model.materials.get(key)
+        if spec is not None and spec[3] == "rigid body":
+            return key if not key.startswith("#") else _named(model, key)
+    raise rb.error(f"<rb>{name}</rb> is not a 'rigid body' material of this model")
+
+
+def _body(model: FebModel, node: Node) -> str:
     return rigid_body_name(model, node)
 
 

@@ -120,7 +120,8 @@ def febio_scene(model: FebModel, stem: str) -> tuple[dict, dict]:
     bodies = _bodies(model)
     dhat = separate_touching(model, bodies)  # contact that starts touching: moved apart
     tables_per_body, meshes, gravity = [], {}, np.zeros(3)
-    several = len(bodies) > 1 or bool(model.rigid_nodes)
+    # rigid bodies are [[rigid_bodies]] tables of a scene of [[bodies]]
+    several = len(bodies) > 1 or bool(model.rigid_nodes) or any(b["rigid"] for b in bodies)
     for body in bodies:
         name = body["parts"][0] if several else "body"
         used = np.unique(body["cells"])
