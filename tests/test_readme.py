@@ -8,6 +8,7 @@ import json
 import re
 import subprocess
 import sys
+import textwrap
 import tomllib
 from pathlib import Path
 
@@ -304,7 +305,32 @@ TESTED_PYTHON_BLOCKS = {
     'sim.add_logfile("node_data"': "test_logfile_python_example_runs",
     'sim.add_rigid_body(\n    "press"': "test_rigid_body_python_example_runs",
     'sim.add_rigid_joint("revolute"': "test_rigid_joint_python_example_runs",
+    'out="out/fat_study"': "test_sweep_python_example_runs",
+    'out="out/fat_dask"': "test_sweep_dask_python_example_runs",
 }
+
+
+def test_sweep_python_example_runs(tmp_path):
+    """The parameter studies page's study: 8 runs completed, the dataset's shape as printed."""
+    code = block("python", 'out="out/fat_study"')
+    result = subprocess.run(
+        [sys.executable, "-c", code], cwd=tmp_path, capture_output=True, text=True, timeout=300
+    )
+    assert result.returncode == 0, result.stderr
+    lines = result.stdout.splitlines()
+    assert lines[0] == "8 runs completed" and lines[-1] == "(8, 105, 3)"
+    assert (tmp_path / "out" / "fat_study" / "runs.csv").exists()
+
+
+def test_sweep_dask_python_example_runs(tmp_path):
+    """The parameter studies page's Dask LocalCluster study, as shown (indented in a list)."""
+    pytest.importorskip("distributed")
+    code = textwrap.dedent(block("python", 'out="out/fat_dask"'))
+    result = subprocess.run(
+        [sys.executable, "-c", code], cwd=tmp_path, capture_output=True, text=True, timeout=300
+    )
+    assert result.returncode == 0, result.stderr
+    assert result.stdout.splitlines()[-1] == "['completed', 'completed', 'completed']"
 
 
 def test_rigid_body_python_example_runs(tmp_path):
