@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 import csv
+import json
 
 import pytest
 
@@ -41,3 +42,15 @@ def test_a_dask_local_cluster_study_equals_the_process_pool_one(bar_scene, tmp_p
     a = tissuesim.sweep.load_dataset(tmp_path / "pool")
     b = tissuesim.sweep.load_dataset(tmp_path / "dask")
     assert (a["body/displacement"] == b["body/displacement"]).all()
+
+
+def test_the_command_line_starts_a_dask_local_cluster(bar_scene, tmp_path, capsys):
+    from tissuesim.cli import main
+
+    out = tmp_path / "s"
+    args = ["sweep", str(bar_scene), "--vary", "material.youngs_modulus=800,1500"]
+    code = main([*args, "--out", str(out), "--executor", "dask-local", "--workers", "2", "--quiet"])
+    assert code == 0
+    assert json.loads(capsys.readouterr().out)["completed"] == 2
+    tissuesim.sweep(bar_scene, {"material.youngs_modulus": "800,1500"}, out=tmp_path / "p")
+    assert _rows(out / "runs.csv") == _rows(tmp_path / "p" / "runs.csv")
