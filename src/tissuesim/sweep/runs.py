@@ -10,6 +10,7 @@ import copy
 import json
 import os
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -48,6 +49,9 @@ class RunTask:
     out: str | None  # the study's directory; None: nothing written
     fields: tuple[str, ...] = ()
     extra: dict[str, Any] = field(default_factory=dict)
+    #: a study of a function: ``builder(**values)`` returns the Simulation (or a Scene) to
+    #: run ``steps`` steps; importable by name (a module's function) to reach a worker
+    builder: Callable[..., Any] | None = None
 
     @property
     def run_id(self) -> str:
@@ -135,20 +139,28 @@ def execute_run(task: RunTask) -> dict[str, Any]:
     }
     sim = None
     try:
-        from tissuesim.scene.loader import build_scene
-        from tissuesim.sweep.keypaths import parse_key_path
+        if task.builder is not None:
+            built = task.builder(**task.values)
+            scene = built if hasattr(built, "simulation") else None  # a Scene, or a Simulation
+            sim = built if scene is None else scene.simulation
+            run_table = {} if scene is None else scene.run
+        else:
+            from tissuesim.scene.loader import build_scene
+            from tissuesim.sweep.keypaths import parse_key_path
 
-        data = copy.deepcopy(task.data)
-        for key, value in task.values.items():
-            path = parse_key_path(key)
-            path.set(data, coerce(value, path.get(data)))
-        scene = build_scene(data, base_dir=Path(task.base_dir), source=task.source, name=task.name)
-        sim = scene.simulation
+            data = copy.deepcopy(task.data)
+            for key, value in task.values.items():
+                path = parse_key_path(key)
+                path.set(data, coerce(value, path.get(data)))
+            scene = build_scene(
+                data, base_dir=Path(task.base_dir), source=task.source, name=task.name
+            )
+            sim, run_table = scene.simulation, scene.run
         result["build_time_s"] = time.perf_counter() - start
         steps = task.steps
         if steps is None:
             schedule = sim.schedule
-            steps = scene.run.get("steps", 100 if schedule is None else schedule.steps)
+            steps = run_table.get("steps", 100 if schedule is None else schedule.steps)
         history = sim.run(steps, progress=False, render=False)
         result["steps"] = len(history)
         result["newton_iterations"] = int(sum(r.newton_iterations for r in history))

@@ -138,9 +138,10 @@ def _scalar(item: str, key: str, text: str) -> Any:
         ) from None
 
 
-def parameters(vary: Mapping[str, Any] | Sequence[str], data: dict) -> list[Parameter]:
+def parameters(vary: Mapping[str, Any] | Sequence[str], data: dict | None) -> list[Parameter]:
     """The study's parameters from ``vary`` ({key path: values} or ["KEY=VALUES", ...]),
-    each path checked against the scene's ``data``."""
+    each path checked against the scene's ``data``; ``data`` None (a study of a function):
+    each key is a keyword argument's name."""
     if isinstance(vary, Mapping):
         items = list(vary.items())
     else:
@@ -161,7 +162,13 @@ def parameters(vary: Mapping[str, Any] | Sequence[str], data: dict) -> list[Para
         if path.text in seen:
             raise InputError(f"--vary {path.text}: given twice; give each key once")
         seen.add(path.text)
-        path.get(data)  # the key must be in the scene
+        if data is not None:
+            path.get(data)  # the key must be in the scene
+        elif len(path.parts) != 1:
+            raise InputError(
+                f"vary[{path.text!r}]: a study of a function varies its keyword arguments: "
+                "give each as a name (E, probe_depth), not a path"
+            )
         if isinstance(spec, str):
             spec = parse_values(spec, path.text)
         if isinstance(spec, Interval):

@@ -9,7 +9,7 @@ import json
 import sys
 import time
 import tomllib
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from concurrent.futures import Executor, Future, as_completed
 from pathlib import Path
 from typing import Any
@@ -49,7 +49,7 @@ def read_scene_data(scene: str | Path) -> tuple[dict, Path]:
 
 
 def sweep(
-    scene: str | Path,
+    scene: str | Path | Callable[..., Any],
     vary: Mapping[str, Any] | Sequence[str],
     *,
     out: str | Path,
@@ -64,6 +64,11 @@ def sweep(
 ) -> list[dict[str, Any]]:
     """Run a parameter study of a scene file and return one result dict per run, in the
     order of the samples (docs/guide/sweeps.md).
+
+    scene: a scene file (.toml) or a shipped example's name; or a function of keyword
+    arguments that builds the ``Simulation`` (or returns a ``Scene``), varied by its
+    arguments' names, ``steps`` then required (a module's function, so that a worker process
+    can import it).
 
     vary: {key path: values} (a list of values, an ``Interval(low, high)`` or a string as on
     the command line: ``"1e3:5e3:5"`` five values, ``"1e3:5e3"`` an interval, ``"1,2,3"``) or
@@ -85,8 +90,17 @@ def sweep(
     from tissuesim.sweep.results import read_results, table_rows, write_table
     from tissuesim.validate import integer
 
-    data, path = read_scene_data(scene)
-    params = parameters(vary, data)
+    builder = None
+    if callable(scene):
+        builder, data, path = scene, {}, None
+        params = parameters(vary, None)
+        if steps is None:
+            raise InputError("a study of a function needs steps= (it has no [run] table)")
+        name = f"{getattr(scene, '__module__', '?')}.{getattr(scene, '__qualname__', scene)}"
+    else:
+        data, path = read_scene_data(scene)
+        params = parameters(vary, data)
+        name = str(path)
     seed = integer(seed, "seed", low=0)
     if samples is not None:
         samples = integer(samples, "samples", low=1)
@@ -99,7 +113,7 @@ def sweep(
     values = make_samples(params, samples, sampler, seed)
     directory = Path(out)
     study = {
-        "scene": str(path),
+        "scene": name,
         "scene_sha256": hashlib.sha256(json.dumps(data, sort_keys=True).encode()).hexdigest(),
         "vary": [p.key for p in params],
         "sampler": sampler,
@@ -110,8 +124,13 @@ def sweep(
         "runs": values,
     }
     _open_directory(directory, study)
+    base = (
+        (".", name, getattr(builder, "__name__", "study"))
+        if path is None
+        else (str(path.parent), name, path.stem)
+    )
     tasks = [
-        RunTask(i, data, v, str(path.parent), str(path), path.stem, steps, str(directory), fields)
+        RunTask(i, data, v, *base, steps, str(directory), fields, builder=builder)
         for i, v in enumerate(values)
     ]
     done = {r["index"]: r for r in read_results(directory)}
