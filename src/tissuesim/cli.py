@@ -378,11 +378,14 @@ def main(argv: list[str] | None = None) -> int:
         help="local (a process pool, default), dask-local (a Dask LocalCluster) or "
         "dask://HOST:PORT (a running Dask scheduler)",
     )
+    from tissuesim.sweep.dataset import FIELDS as SWEEP_FIELDS
+
     p_sweep.add_argument(
         "--fields",
         action="append",
-        choices=("displacement",),
-        help="save this field of every run's end (fields/<run>.h5; repeatable)",
+        choices=SWEEP_FIELDS,
+        help="save this field of every run's end (fields/<run>.h5; repeatable): the vertices' "
+        "displacement or a cell field",
     )
     p_sweep.add_argument(
         "--no-render", action="store_true", help="accepted for symmetry: a study draws nothing"

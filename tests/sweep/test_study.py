@@ -37,6 +37,13 @@ def _single_run(scene, values):
     return sim, history
 
 
+def _single_run_e(scene, youngs_modulus):
+    return _single_run(
+        scene,
+        {"material.youngs_modulus": youngs_modulus, "dirichlet[pull].displacement[0]": "0.1 * t"},
+    )
+
+
 def _rows(path):
     with open(path, newline="") as f:
         return [{k: v for k, v in row.items() if k not in TIMES} for row in csv.DictReader(f)]
@@ -144,7 +151,7 @@ def test_the_dataset_holds_what_the_docs_say(bar_scene, tmp_path):
             {"material.youngs_modulus": [700.0, 900.0]},
             out=out,
             executor=pool,
-            fields=("displacement",),
+            fields=("displacement", "J", "cauchy_stress"),
         )
     mesh = tissuesim.read_mesh(bar_scene.parent / "mesh" / "bar.vtu")
     with h5py.File(out / "fields" / "rest.h5", "r") as f:
@@ -156,9 +163,18 @@ def test_the_dataset_holds_what_the_docs_say(bar_scene, tmp_path):
         u = f["body/displacement"][()]
         assert u.shape == (20, 3) and u.dtype == np.float64
         assert "points" not in f["body"]  # the shared rest mesh is in rest.h5 only
+        assert sorted(f["body"]) == ["J", "cauchy_stress", "displacement"]
+        J, stress = f["body/J"][()], f["body/cauchy_stress"][()]
+    assert J.shape == (mesh.n_cells,) and stress.shape == (mesh.n_cells, 3, 3)
+    sim, _ = _single_run_e(bar_scene, 900.0)
+    assert np.array_equal(J, sim.cell_fields("body")["J"])
+    assert np.array_equal(stress, sim.cell_fields("body")["cauchy_stress"])
+    assert (stress[:, 0, 0] > 0).all()  # the pulled bar is in tension along x
     assert u[:, 0].max() == pytest.approx(0.1, abs=1e-12)  # the pulled end: 0.1 * t at t = 1
     data = tissuesim.sweep.load_dataset(out)
     assert data["body/displacement"].shape == (2, 20, 3)
+    assert data["body/cauchy_stress"].shape == (2, mesh.n_cells, 3, 3)
+    assert np.array_equal(data["body/J"][1], J)
     assert np.array_equal(data["body/displacement"][1], u)
     assert list(data["material.youngs_modulus"]) == [700.0, 900.0]
     assert np.array_equal(data["body/points"], mesh.points)

@@ -5,7 +5,9 @@ run's file whole (each is written to a temporary name and renamed):
     fields/rest.h5              /<body>/points (n, d) float64, /<body>/cells (m, k) int64:
                                 the rest mesh the runs share (written once, by the first run)
     fields/<run_id>.h5          /<body>/displacement (n, d) float64: the final displacement
-                                of each FEM body's vertices from rest; attributes: run_id,
+                                of each FEM body's vertices from rest; /<body>/J,
+                                von_mises, energy_density (m,), green_strain, cauchy_stress
+                                (m, 3, 3): its final cell fields, where asked; attributes: run_id,
                                 index, rest_sha256 and each parameter as "param:<key path>";
                                 a run whose rest mesh differs from rest.h5 (a mesh per sample)
                                 also holds its own /<body>/points and /<body>/cells
@@ -26,8 +28,11 @@ from tissuesim.errors import InputError
 
 __all__ = ["FIELDS", "write_run_fields", "load_dataset"]
 
-#: the fields a study can save per run
-FIELDS = ("displacement",)
+#: the fields a study can save per run: the displacement of the vertices, and the cell fields
+#: every FEM body writes (``Simulation.cell_fields``: J, Green strain, Cauchy stress, von
+#: Mises stress, energy density; one value or 3 x 3 tensor per cell)
+FIELDS = ("displacement", "J", "green_strain", "cauchy_stress", "von_mises", "energy_density")
+CELL_FIELDS = FIELDS[1:]
 
 
 def _h5py():
@@ -90,6 +95,11 @@ def write_run_fields(out: Path, task: Any, sim: Any, result: dict[str, Any]) -> 
         for name, (points, cells) in rest.items():
             if "displacement" in task.fields:
                 f.create_dataset(f"{name}/displacement", data=sim.body_displacement(name))
+            wanted = [k for k in CELL_FIELDS if k in task.fields]
+            if wanted:
+                cell = sim.cell_fields(name)
+                for key in wanted:
+                    f.create_dataset(f"{name}/{key}", data=np.asarray(cell[key], float))
             if own_rest:
                 f.create_dataset(f"{name}/points", data=points)
                 f.create_dataset(f"{name}/cells", data=cells)
@@ -103,8 +113,9 @@ def load_dataset(directory: str | Path) -> dict[str, np.ndarray]:
 
     - ``run_id`` (r,) str, ``index`` (r,) int;
     - each parameter by its key path, e.g. ``material.youngs_modulus`` (r,) (a vector: (r, k));
-    - per FEM body: ``<body>/displacement`` (r, n, d), ``<body>/points`` (n, d) and
-      ``<body>/cells`` (m, k), the rest mesh the runs share.
+    - per FEM body: ``<body>/displacement`` (r, n, d), the cell fields asked for
+      (``<body>/J`` (r, m), ``<body>/cauchy_stress`` (r, m, 3, 3), ...), ``<body>/points``
+      (n, d) and ``<body>/cells`` (m, k), the rest mesh the runs share.
 
     Runs on different rest meshes (a mesh per sample) cannot be stacked: InputError; read
     their files one by one with h5py."""
