@@ -379,3 +379,27 @@ def test_an_uncoupled_viscoelastic_law_on_hex8_runs_febios_three_field_element(t
     md, disp = np.array(pulls["mean_dilatation"]), np.array(pulls["displacement"])
     assert md[0] > 0 and md[-1] < 0.9 * md[0]  # pulled, then relaxing
     np.testing.assert_allclose(md, disp, rtol=1e-9)
+
+
+@pytest.mark.parametrize("extend", ["REPEAT", "REPEAT_OFFSET"])
+@pytest.mark.parametrize("interpolate", ["LINEAR", "SMOOTH"])
+def test_repeating_curves_follow_febios_point_curve(extend, interpolate):
+    """extend REPEAT / REPEAT_OFFSET as FEBio's PointCurve::value: t shifted by whole periods
+    (a loop, as FEBio's) into the curve's range, the offset adding (fN - f0) per period."""
+    from tissuesim.febio.curves import curve_expression
+    from tissuesim.febio.model import Curve
+    from tissuesim.scene.expressions import compile_expression
+
+    points = np.array([[0.5, 0.0], [1.0, 1.0], [1.5, 0.25], [2.5, 0.5]])
+    inside = compile_expression(curve_expression(Curve(points, interpolate)), "inside")
+    repeating = compile_expression(curve_expression(Curve(points, interpolate, extend)), "x")
+    origin = np.zeros((1, 3))
+    period, jump = 2.0, 0.5
+    for t in np.linspace(-3.0, 9.0, 97):
+        tau, n = t, 0
+        while tau < 0.5:
+            tau, n = tau + period, n - 1
+        while tau > 2.5:
+            tau, n = tau - period, n + 1
+        expected = inside(origin, tau)[0] + (n * jump if extend == "REPEAT_OFFSET" else 0.0)
+        assert repeating(origin, t)[0] == pytest.approx(expected, abs=1e-12), t

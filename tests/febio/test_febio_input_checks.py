@@ -252,3 +252,19 @@ def test_a_body_load_with_a_curve_per_component_is_a_load_per_component(tmp_path
         ([2.0, 0.0, 0.0], 1),
         ([0.0, 0.0, -9.81], 2),
     ]
+
+
+@pytest.mark.parametrize("value", ["0", "1"])
+def test_contact_on_the_shells_front_faces_is_read_their_back_faces_refused(value, tmp_path):
+    """shell_bottom_primary / _secondary 0 (FEBio's default: the front faces, tissuesim's
+    shells' contact faces) read; 1 refused in one line."""
+    text = (MODELS / "contact_touching.feb").read_text()
+    path = tmp_path / "bottom.feb"
+    path.write_text(text.replace("<fric_coeff>0</fric_coeff>",
+                                 f"<fric_coeff>0</fric_coeff>\n      <shell_bottom_primary>{value}"
+                                 "</shell_bottom_primary>"))  # fmt: skip
+    if value == "0":
+        assert read_feb(path).contacts
+    else:
+        with pytest.raises(FebError, match="back faces"):
+            read_feb(path)

@@ -252,11 +252,12 @@ def _load_data(model: FebModel, section: Node) -> None:
                 f"interpolate {interpolate!r}: tissuesim writes {', '.join(INTERPOLATIONS)}"
             )
         extend = p["extend"].text.upper() if "extend" in p else "CONSTANT"
-        if extend not in ("CONSTANT", "EXTRAPOLATE") or (
+        if extend not in ("CONSTANT", "EXTRAPOLATE", "REPEAT", "REPEAT_OFFSET") or (
             extend == "EXTRAPOLATE" and interpolate != "LINEAR"
         ):
             raise p["extend"].error(
-                f"extend {extend!r}: tissuesim writes CONSTANT (and EXTRAPOLATE for LINEAR)"
+                f"extend {extend!r}: tissuesim writes CONSTANT, REPEAT, REPEAT_OFFSET (and "
+                "EXTRAPOLATE for LINEAR)"
             )
         if "points" not in p:
             raise lc.error("needs <points>")
@@ -282,13 +283,17 @@ def _contact(model: FebModel, section: Node) -> None:
                 f"contact type {kind!r} is not supported by tissuesim; it maps "
                 f"{', '.join(CONTACT_TYPES)} onto its barrier contact"
             )
-        allowed = CONTACT_TUNING | {"fric_coeff", "tension", "offset", "plane"}
+        bottoms = {"shell_bottom_primary", "shell_bottom_secondary"}
+        allowed = CONTACT_TUNING | {"fric_coeff", "tension", "offset", "plane"} | bottoms
         p = _children(c, allowed)
         item = {"type": kind, "node": c, "friction": 0.0}
         if "fric_coeff" in p:
             item["friction"] = float(_floats(p["fric_coeff"], 1)[0])
         if "tension" in p and _flag(p["tension"]):
             raise _unsupported(p["tension"], "contact in tension (tension = 1)")
+        for key in sorted(bottoms & set(p)):  # 0: the shells' front faces, as tissuesim's
+            if _flag(p[key]):
+                raise _unsupported(p[key], f"contact on the shells' back faces ({key} = 1)")
         if kind == "rigid_wall":
             surface = c.attrib.get("surface")
             if surface not in model.surfaces:

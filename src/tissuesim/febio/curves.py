@@ -2,7 +2,7 @@
 (``FECore/PointCurve``): LINEAR, STEP (the next point's value on each interval), SMOOTH
 (the quadratic through three points on the end intervals, and between two such quadratics
 linearly inside), SMOOTH STEP (f0 + (f1 - f0) w^3 (10 - 15 w + 6 w^2)); extend CONSTANT,
-or EXTRAPOLATE with LINEAR."""
+EXTRAPOLATE with LINEAR, REPEAT and REPEAT_OFFSET."""
 
 from __future__ import annotations
 
@@ -60,7 +60,23 @@ def _segment(curve: Curve, n: int) -> str:
 
 
 def curve_expression(curve: Curve) -> str:
-    """The curve's value as an expression of t (nested ``where`` over its intervals)."""
+    """The curve's value as an expression of t (nested ``where`` over its intervals); extend
+    REPEAT / REPEAT_OFFSET as FEBio's PointCurve: t shifted by whole periods Dt = tN - t0
+    into (t0, tN] (from above) or [t0, tN) (from below), REPEAT_OFFSET adding (fN - f0) per
+    period."""
+    if curve.extend in ("REPEAT", "REPEAT_OFFSET") and len(curve.points) > 1:
+        import re
+
+        t0, tn = float(curve.points[0, 0]), float(curve.points[-1, 0])
+        dt = tn - t0
+        tau = (f"where(t > {_r(tn)}, {_r(tn)} - ({_r(tn)} - t) % {_r(dt)}, "
+               f"where(t < {_r(t0)}, {_r(t0)} + (t - {_r(t0)}) % {_r(dt)}, t))")  # fmt: skip
+        inner = curve_expression(Curve(curve.points, curve.interpolate, "CONSTANT"))
+        text = re.sub(r"\bt\b", f"({tau})", inner)
+        if curve.extend == "REPEAT_OFFSET":
+            jump = float(curve.points[-1, 1] - curve.points[0, 1])
+            text = f"({text} + (t - ({tau})) / {_r(dt)} * {_r(jump)})"
+        return text
     p = curve.points
     if len(p) == 1:
         return _r(p[0, 1])
