@@ -18,9 +18,12 @@ from tissuesim.verification.result import Check
 def test_every_problem_passes():
     """The whole set, run once in the suite (about 5 s; its Hertz check is looked at here too,
     as xdist would run a shared fixture once per worker)."""
+    from tissuesim.verification import damage, reactive_viscoelastic
+
     checks = run()
-    expected = 3 * len(laws.LAWS) + len(fibres.CASES) + 3 + 4 + 2 + len(cook.CASES) + 2
-    assert len(checks) == expected
+    reactive = len(reactive_viscoelastic.checks()) + len(damage.checks())
+    expected = 3 * len(laws.LAWS) + len(fibres.CASES) + 3 + reactive + 4 + 2 + len(cook.CASES)
+    assert len(checks) == expected + 2
     failed = [c for c in checks if not c.passed]
     assert failed == []
     assert table(checks).splitlines()[-1] == f"{len(checks)} of {len(checks)} checks pass"
@@ -119,8 +122,19 @@ def test_every_family_can_be_chosen(capsys):
     out = capsys.readouterr().out
     assert f"{len(fibres.CASES) + len(cook.CASES)} of" in out
     assert set(FAMILIES) == {
-        "laws", "fibres", "patch", "viscoelastic", "dynamics", "cook", "hertz",
+        "laws", "fibres", "patch", "viscoelastic", "reactive", "dynamics", "cook", "hertz",
     }  # fmt: skip
+
+
+def test_the_reactive_family_checks_the_history_laws(capsys):
+    """FEBio's reactive viscoelasticity (types I and II) and damage (load, unload, reload,
+    hold) against their closed forms, as tissuesim verify prints them."""
+    from tissuesim.verification import damage, reactive_viscoelastic
+
+    checks = reactive_viscoelastic.checks() + damage.checks()
+    assert checks and all(c.passed for c in checks)
+    assert main(["verify", "--only", "reactive"]) == 0
+    assert f"{len(checks)} of {len(checks)}" in capsys.readouterr().out
 
 
 def test_the_dynamics_checks_pass_and_fail_backward_euler():

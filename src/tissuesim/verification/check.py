@@ -11,13 +11,24 @@ __all__ = ["FAMILIES", "run", "table"]
 
 
 def _families() -> dict[str, Callable[[], list[Check]]]:
-    from tissuesim.verification import cook, dynamics, fibres, hertz, laws, patch, viscoelastic
+    from tissuesim.verification import (
+        cook,
+        damage,
+        dynamics,
+        fibres,
+        hertz,
+        laws,
+        patch,
+        reactive_viscoelastic,
+        viscoelastic,
+    )
 
     return {
         "laws": laws.checks,
         "fibres": fibres.checks,
         "patch": patch.checks,
         "viscoelastic": viscoelastic.checks,
+        "reactive": lambda: reactive_viscoelastic.checks() + damage.checks(),
         "dynamics": dynamics.checks,
         "cook": cook.checks,
         "hertz": hertz.checks,
@@ -25,7 +36,9 @@ def _families() -> dict[str, Callable[[], list[Check]]]:
 
 
 #: the families by name, in the order they run
-FAMILIES = ("laws", "fibres", "patch", "viscoelastic", "dynamics", "cook", "hertz")
+FAMILIES = (
+    "laws", "fibres", "patch", "viscoelastic", "reactive", "dynamics", "cook", "hertz",
+)  # fmt: skip
 
 
 def run(families: tuple[str, ...] | None = None) -> list[Check]:
