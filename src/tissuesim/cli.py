@@ -388,6 +388,12 @@ def main(argv: list[str] | None = None) -> int:
         "displacement or a cell field",
     )
     p_sweep.add_argument(
+        "--every",
+        type=_frames,
+        help="with --fields: save them at the start, every N steps and at the end (default "
+        "only the end)",
+    )
+    p_sweep.add_argument(
         "--no-render", action="store_true", help="accepted for symmetry: a study draws nothing"
     )
     p_sweep.add_argument("--quiet", action="store_true", help="no progress lines")
@@ -524,6 +530,7 @@ def _sweep(args) -> int:
             executor=executor,
             workers=args.workers,
             fields=tuple(args.fields or ()),
+            every=args.every,
             progress=not args.quiet,
         )
     finally:

@@ -181,3 +181,26 @@ def test_the_dataset_holds_what_the_docs_say(bar_scene, tmp_path):
     assert results[1]["fields_bytes"] == (out / "fields" / "r00001.h5").stat().st_size
     table = tissuesim.sweep.load_table(out)
     assert [row["fields_bytes"] for row in table] == [r["fields_bytes"] for r in results]
+
+
+def test_fields_at_every_saved_time(bar_scene, tmp_path):
+    out = tmp_path / "s"
+    with ThreadPoolExecutor(1) as pool:
+        tissuesim.sweep(
+            bar_scene,
+            {"material.youngs_modulus": [700.0, 900.0]},
+            out=out,
+            executor=pool,
+            fields=("displacement", "J"),
+            every=1,
+        )
+    data = tissuesim.sweep.load_dataset(out)
+    assert data["times"].tolist() == [[0.0, 0.5, 1.0]] * 2
+    assert data["body/displacement"].shape == (2, 3, 20, 3)
+    assert data["body/J"].shape == (2, 3, 24)
+    assert (data["body/displacement"][:, 0] == 0).all() and (data["body/J"][:, 0] == 1).all()
+    sim, _ = _single_run_e(bar_scene, 900.0)
+    assert np.array_equal(data["body/displacement"][1, -1], sim.body_displacement("body"))
+    assert data["body/displacement"][1, 1, :, 0].max() == pytest.approx(0.05, abs=1e-12)
+    with pytest.raises(tissuesim.InputError, match="give --fields too"):
+        tissuesim.sweep(bar_scene, {"material.youngs_modulus": [1.0]}, out=out / "x", every=2)

@@ -63,9 +63,30 @@ def _sha(rest: dict[str, tuple[np.ndarray, np.ndarray]]) -> str:
     return h.hexdigest()[:16]
 
 
-def write_run_fields(out: Path, task: Any, sim: Any, result: dict[str, Any]) -> None:
-    """Write the run's fields (``task.fields``) to ``fields/<run_id>.h5``; the time it took
-    and the file's size go into ``result`` (``fields_write_s``, ``fields_bytes``)."""
+def frame_fields(sim: Any, fields: tuple[str, ...]) -> dict[str, dict[str, np.ndarray]]:
+    """The asked ``fields`` of every FEM body now: {body: {field: array}}."""
+    out: dict[str, dict[str, np.ndarray]] = {}
+    for name, body in sim.bodies.items():
+        if body.kind != "fem":
+            continue
+        values = {}
+        if "displacement" in fields:
+            values["displacement"] = sim.body_displacement(name)
+        wanted = [k for k in CELL_FIELDS if k in fields]
+        if wanted:
+            cell = sim.cell_fields(name)
+            values.update({k: np.asarray(cell[k], float) for k in wanted})
+        out[name] = values
+    return out
+
+
+def write_run_fields(
+    out: Path, task: Any, sim: Any, result: dict[str, Any], frames: list | None = None
+) -> None:
+    """Write the run's fields (``task.fields``) to ``fields/<run_id>.h5``: at its end, or with
+    ``frames`` [(time, {body: {field: array}})] at each saved time (a leading axis, and
+    ``/times``); the time it took and the file's size go into ``result`` (``fields_write_s``,
+    ``fields_bytes``)."""
     from tissuesim.io.atomic import atomic_output
 
     h5py = _h5py()
@@ -92,14 +113,17 @@ def write_run_fields(out: Path, task: Any, sim: Any, result: dict[str, Any]) -> 
         f.attrs["rest_sha256"] = sha
         for key, value in task.values.items():
             f.attrs[f"param:{key}"] = value
+        if frames:
+            f.create_dataset("times", data=np.array([t for t, _ in frames], float))
+            for name in rest:
+                for key in frames[0][1][name]:
+                    stacked = np.stack([values[name][key] for _, values in frames])
+                    f.create_dataset(f"{name}/{key}", data=stacked)
+        else:
+            for name, values in frame_fields(sim, task.fields).items():
+                for key, value in values.items():
+                    f.create_dataset(f"{name}/{key}", data=value)
         for name, (points, cells) in rest.items():
-            if "displacement" in task.fields:
-                f.create_dataset(f"{name}/displacement", data=sim.body_displacement(name))
-            wanted = [k for k in CELL_FIELDS if k in task.fields]
-            if wanted:
-                cell = sim.cell_fields(name)
-                for key in wanted:
-                    f.create_dataset(f"{name}/{key}", data=np.asarray(cell[key], float))
             if own_rest:
                 f.create_dataset(f"{name}/points", data=points)
                 f.create_dataset(f"{name}/cells", data=cells)
@@ -146,9 +170,12 @@ def load_dataset(directory: str | Path) -> dict[str, np.ndarray]:
             run["fields"] = {
                 f"{name}/{field}": f[name][field][()]
                 for name in f
+                if name != "times"
                 for field in f[name]
                 if field in FIELDS
             }
+            if "times" in f:
+                run["fields"]["times"] = f["times"][()]
             runs.append(run)
     runs.sort(key=lambda r: int(r["index"]))
     out["run_id"] = np.array([str(r["run_id"]) for r in runs])
@@ -157,5 +184,12 @@ def load_dataset(directory: str | Path) -> dict[str, np.ndarray]:
     for key in keys:
         out[key.removeprefix("param:")] = np.array([r.get(key) for r in runs])
     for key in sorted({k for r in runs for k in r["fields"]}):
+        shapes = {r["fields"][key].shape for r in runs}
+        if len(shapes) > 1:
+            raise InputError(
+                f"{directory}: the runs' {key} have different shapes {sorted(shapes)} (saved "
+                "times that differ between runs: adaptive steps, a run that ended early); "
+                "read each run's file with h5py"
+            )
         out[key] = np.stack([r["fields"][key] for r in runs]) if runs else np.empty((0,))
     return out

@@ -137,7 +137,7 @@ def execute_run(task: RunTask) -> dict[str, Any]:
         "params": dict(task.values),
         "forces": {},
     }
-    sim = None
+    sim, frames = None, []
     try:
         if task.builder is not None:
             built = task.builder(**task.values)
@@ -161,11 +161,10 @@ def execute_run(task: RunTask) -> dict[str, Any]:
         if steps is None:
             schedule = sim.schedule
             steps = run_table.get("steps", 100 if schedule is None else schedule.steps)
-        history = sim.run(steps, progress=False, render=False)
+        history, frames = _step(sim, steps, task, result)
         result["steps"] = len(history)
         result["newton_iterations"] = int(sum(r.newton_iterations for r in history))
         result["solve_time_s"] = float(sum(r.wall_time_s for r in history))
-        result["setup_time_s"] = float(sim.run_time_split.get("setup_s", 0.0))
         result["forces"] = {k: [float(c) for c in v] for k, v in sim.forces().items()}
     except (InputError, RunError) as exc:
         result.update(status="failed", error=_one_line(exc))
@@ -178,11 +177,38 @@ def execute_run(task: RunTask) -> dict[str, Any]:
         if task.fields and result["status"] == "completed":
             from tissuesim.sweep.dataset import write_run_fields
 
-            write_run_fields(out, task, sim, result)
+            write_run_fields(out, task, sim, result, frames)
         from tissuesim.io.atomic import write_json_atomic
 
         write_json_atomic(out / "runs" / f"{task.run_id}.json", result, indent=None)
     return result
+
+
+def _step(sim: Any, steps: int, task: RunTask, result: dict) -> tuple[list, list]:
+    """``steps`` steps as ``Simulation.run`` takes them without output (the same ``step``
+    calls: the same numbers), the set-up timed apart; with ``task.extra["every"]`` the fields
+    at every ``every``-th step and the last: [(time, {body: {field: array}})]."""
+    from tissuesim.sweep.dataset import frame_fields
+    from tissuesim.time.grid import check_time_resolution
+    from tissuesim.validate import integer
+
+    steps = integer(steps, "steps", low=0)
+    start = time.perf_counter()
+    sim.build()
+    result["setup_time_s"] = time.perf_counter() - start
+    check_time_resolution(sim.time + steps * sim.time_step, sim.time_step, "the end time")
+    every = task.extra.get("every") if task.fields else None
+    history, frames = [], []
+    if every:
+        frames.append((sim.time, frame_fields(sim, task.fields)))
+    for k in range(steps):
+        history.append(sim.step())
+        last = k + 1 == steps or sim.finished
+        if every and (last or (k + 1) % every == 0):
+            frames.append((sim.time, frame_fields(sim, task.fields)))
+        if last:
+            break
+    return history, frames
 
 
 def _one_line(exc: BaseException, internal: bool = False) -> str:

@@ -60,6 +60,7 @@ def sweep(
     executor: Executor | None = None,
     workers: int | None = None,
     fields: Sequence[str] = (),
+    every: int | None = None,
     progress: bool = True,
 ) -> list[dict[str, Any]]:
     """Run a parameter study of a scene file and return one result dict per run, in the
@@ -81,6 +82,8 @@ def sweep(
     executor: any ``concurrent.futures.Executor`` (a Dask ``Client.get_executor()``, ...);
     default a process pool of ``workers`` processes (one per core), one thread each.
     steps: the runs' step count (default the scene's ``[run] steps``).
+    every: with ``fields``, save them at the start, every ``every``-th step and the last (a
+    leading axis of saved times, and ``times``); default only the end.
 
     A run's result: run_id, index, status ("completed" or "failed"), error (one line),
     wall_time_s, build_time_s (build_scene), setup_time_s (the model set up), solve_time_s (its
@@ -107,6 +110,10 @@ def sweep(
     if steps is not None:
         steps = integer(steps, "steps", low=0)
     fields = tuple(fields)
+    if every is not None:
+        every = integer(every, "every", low=1)
+        if not fields:
+            raise InputError("--every N saves fields at the saved times: give --fields too")
     for name in fields:
         if name not in FIELDS:
             raise InputError(f"--fields {name!r}: choose from {', '.join(FIELDS)}")
@@ -121,6 +128,7 @@ def sweep(
         "seed": seed,
         "steps": steps,
         "fields": list(fields),
+        "every": every,
         "runs": values,
     }
     _open_directory(directory, study)
@@ -130,7 +138,7 @@ def sweep(
         else (str(path.parent), name, path.stem)
     )
     tasks = [
-        RunTask(i, data, v, *base, steps, str(directory), fields, builder=builder)
+        RunTask(i, data, v, *base, steps, str(directory), fields, {"every": every}, builder)
         for i, v in enumerate(values)
     ]
     done = {r["index"]: r for r in read_results(directory)}
