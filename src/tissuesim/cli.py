@@ -357,7 +357,8 @@ def main(argv: list[str] | None = None) -> int:
         help="a scene key by its path (material.youngs_modulus, bodies[0].material.density, "
         "obstacles[probe].translation[2]) and its values: a list 1e3,2e3; LOW:HIGH:N (N values, "
         "both ends; LOW:HIGH:N:log); an interval LOW:HIGH (LOW:HIGH:log) for --sampler "
-        "sobol|lhs|random; repeatable, the lists form a grid",
+        "sobol|lhs|random; glob:meshes/*.vtu (files in the scene's folder); repeatable, the "
+        "lists form a grid",
     )
     p_sweep.add_argument("--out", required=True, help="the study's directory")
     p_sweep.add_argument(
@@ -512,8 +513,8 @@ def _sweep(args) -> int:
     started = time.perf_counter()
     sampler = args.sampler
     if sampler is None:  # sobol where there is an interval to sample, else the grid
-        data, _ = read_scene_data(args.scene)
-        params = parameters(args.vary, data)
+        data, path = read_scene_data(args.scene)
+        params = parameters(args.vary, data, path.parent)
         sampler = "sobol" if any(isinstance(p.interval, Interval) for p in params) else "grid"
     executor, resources = (None, [])
     if args.executor != "local":

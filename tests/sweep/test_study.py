@@ -204,3 +204,29 @@ def test_fields_at_every_saved_time(bar_scene, tmp_path):
     assert data["body/displacement"][1, 1, :, 0].max() == pytest.approx(0.05, abs=1e-12)
     with pytest.raises(tissuesim.InputError, match="give --fields too"):
         tissuesim.sweep(bar_scene, {"material.youngs_modulus": [1.0]}, out=out / "x", every=2)
+
+
+def test_a_mesh_per_sample_from_a_folder(bar_scene, tmp_path):
+    from tissuesim.mesh.io import write_mesh
+
+    folder = tmp_path / "scene"
+    (folder / "meshes").mkdir(parents=True)
+    for n in (4, 8):
+        mesh = tissuesim.box((0, 0, 0), (1.0, 0.25, 0.25), (n, 1, 1))
+        write_mesh(mesh, folder / "meshes" / f"bar{n}.vtu")
+    scene = folder / "bar.toml"
+    scene.write_text(bar_scene.read_text())
+    out = tmp_path / "s"
+    with ThreadPoolExecutor(1) as pool:
+        results = tissuesim.sweep(
+            scene, ["mesh.file=glob:meshes/*.vtu"], out=out, executor=pool, fields=["displacement"]
+        )
+    assert [r["params"]["mesh.file"] for r in results] == ["meshes/bar4.vtu", "meshes/bar8.vtu"]
+    assert [r["status"] for r in results] == ["completed", "completed"]
+    assert results[0]["forces"] != results[1]["forces"]  # another mesh, another answer
+    with h5py.File(out / "fields" / "r00001.h5", "r") as f:
+        assert f["body/points"].shape == (36, 3)  # its own rest mesh: not rest.h5's
+    with pytest.raises(tissuesim.InputError, match="rest mesh differs"):
+        tissuesim.sweep.load_dataset(out)
+    with pytest.raises(tissuesim.InputError, match="no file matches"):
+        tissuesim.sweep(scene, ["mesh.file=glob:meshes/*.stl"], out=tmp_path / "t")

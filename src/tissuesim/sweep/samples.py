@@ -9,7 +9,9 @@ Values on the command line (``--vary KEY=VALUES``; the same strings in Python):
 - ``1e3:5e3:5``: 5 values evenly spaced from 1e3 to 5e3, both ends included (NumPy's
   ``linspace``); ``1e3:1e5:5:log``: 5 values evenly spaced in log (``geomspace``);
 - ``1e3:5e3``: the interval [1e3, 5e3], sampled by ``--sampler sobol|lhs|random``;
-  ``1e3:1e5:log``: sampled uniformly in log.
+  ``1e3:1e5:log``: sampled uniformly in log;
+- ``glob:meshes/*.vtu``: the files matching the pattern in the scene's folder (a mesh per
+  sample), sorted.
 """
 
 from __future__ import annotations
@@ -21,6 +23,7 @@ import tomllib
 import warnings
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -138,10 +141,13 @@ def _scalar(item: str, key: str, text: str) -> Any:
         ) from None
 
 
-def parameters(vary: Mapping[str, Any] | Sequence[str], data: dict | None) -> list[Parameter]:
+def parameters(
+    vary: Mapping[str, Any] | Sequence[str], data: dict | None, base_dir: Path | None = None
+) -> list[Parameter]:
     """The study's parameters from ``vary`` ({key path: values} or ["KEY=VALUES", ...]),
     each path checked against the scene's ``data``; ``data`` None (a study of a function):
-    each key is a keyword argument's name."""
+    each key is a keyword argument's name. ``glob:PATTERN`` values are the files matching it
+    in ``base_dir`` (the scene's folder; default the working directory), sorted."""
     if isinstance(vary, Mapping):
         items = list(vary.items())
     else:
@@ -169,6 +175,8 @@ def parameters(vary: Mapping[str, Any] | Sequence[str], data: dict | None) -> li
                 f"vary[{path.text!r}]: a study of a function varies its keyword arguments: "
                 "give each as a name (E, probe_depth), not a path"
             )
+        if isinstance(spec, str) and spec.strip().startswith("glob:"):
+            spec = _files(spec.strip().removeprefix("glob:"), path.text, base_dir)
         if isinstance(spec, str):
             spec = parse_values(spec, path.text)
         if isinstance(spec, Interval):
@@ -184,6 +192,23 @@ def parameters(vary: Mapping[str, Any] | Sequence[str], data: dict | None) -> li
             f"string such as '1e3:5e3:5'; not {_short(repr(spec))}"
         )
     return out
+
+
+def _files(pattern: str, key: str, base_dir: Path | None) -> tuple[str, ...]:
+    """The files matching ``pattern`` in ``base_dir``, as paths relative to it, sorted."""
+    base = Path(".") if base_dir is None else Path(base_dir)
+    if not pattern or Path(pattern).is_absolute():
+        raise InputError(
+            f"--vary {key}=glob:{_short(pattern)}: give a pattern relative to the scene's "
+            "folder, e.g. glob:meshes/*.vtu"
+        )
+    found = sorted(p.relative_to(base).as_posix() for p in base.glob(pattern) if p.is_file())
+    if not found:
+        raise InputError(
+            f"--vary {key}=glob:{_short(pattern)}: no file matches in {base} (the pattern is "
+            "relative to the scene's folder)"
+        )
+    return tuple(found)
 
 
 def make_samples(

@@ -102,7 +102,7 @@ def sweep(
         name = f"{getattr(scene, '__module__', '?')}.{getattr(scene, '__qualname__', scene)}"
     else:
         data, path = read_scene_data(scene)
-        params = parameters(vary, data)
+        params = parameters(vary, data, path.parent)
         name = str(path)
     seed = integer(seed, "seed", low=0)
     if samples is not None:
