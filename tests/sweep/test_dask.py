@@ -54,3 +54,24 @@ def test_the_command_line_starts_a_dask_local_cluster(bar_scene, tmp_path, capsy
     assert json.loads(capsys.readouterr().out)["completed"] == 2
     tissuesim.sweep(bar_scene, {"material.youngs_modulus": "800,1500"}, out=tmp_path / "p")
     assert _rows(out / "runs.csv") == _rows(tmp_path / "p" / "runs.csv")
+
+
+def test_the_command_line_connects_to_a_running_scheduler(bar_scene, tmp_path, capsys):
+    from tissuesim.cli import main
+
+    with distributed.LocalCluster(
+        n_workers=1, threads_per_worker=1, processes=True, dashboard_address=None
+    ) as cluster:
+        address = cluster.scheduler_address.removeprefix("tcp://")
+        args = ["sweep", str(bar_scene), "--vary", "material.youngs_modulus=800,1500", "--quiet"]
+        assert main([*args, "--out", str(tmp_path / "s"), "--executor", f"dask://{address}"]) == 0
+        assert json.loads(capsys.readouterr().out)["completed"] == 2
+        # the scheduler and its worker are the caller's: still running after the study
+        with distributed.Client(cluster) as client:
+            assert len(client.scheduler_info()["workers"]) == 1
+    import dask
+
+    with dask.config.set({"distributed.comm.timeouts.connect": "1s"}):
+        code = main([*args, "--out", str(tmp_path / "t"), "--executor", f"dask://{address}"])
+    assert code == 2
+    assert "cannot reach a Dask scheduler" in capsys.readouterr().err

@@ -115,7 +115,7 @@ def executor_from_spec(spec: str | None, workers: int | None) -> tuple[Executor,
             return client.get_executor(), [client, cluster]
         address = "tcp://" + spec.removeprefix("dask://") if spec.startswith("dask://") else spec
         try:
-            client = Client(address, timeout="20s")
+            client = Client(address)  # waits Dask's distributed.comm.timeouts.connect
         except OSError as exc:
             raise InputError(
                 f"--executor {spec}: cannot reach a Dask scheduler at {address} ({exc}); start "
