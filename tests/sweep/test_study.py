@@ -181,6 +181,7 @@ def test_the_dataset_holds_what_the_docs_say(bar_scene, tmp_path):
     assert results[1]["fields_bytes"] == (out / "fields" / "r00001.h5").stat().st_size
     table = tissuesim.sweep.load_table(out)
     assert [row["fields_bytes"] for row in table] == [r["fields_bytes"] for r in results]
+    assert json.loads((out / "study.json").read_text())["scene"] == str(bar_scene)
 
 
 def test_fields_at_every_saved_time(bar_scene, tmp_path):

@@ -114,9 +114,9 @@ def sweep(
         every = integer(every, "every", low=1)
         if not fields:
             raise InputError("--every N saves fields at the saved times: give --fields too")
-    for name in fields:
-        if name not in FIELDS:
-            raise InputError(f"--fields {name!r}: choose from {', '.join(FIELDS)}")
+    for field_name in fields:
+        if field_name not in FIELDS:
+            raise InputError(f"--fields {field_name!r}: choose from {', '.join(FIELDS)}")
     values = make_samples(params, samples, sampler, seed)
     directory = Path(out)
     study = {
@@ -163,7 +163,11 @@ def _open_directory(directory: Path, study: dict) -> None:
     file = directory / STUDY_FILE
     if file.exists():
         before = json.loads(file.read_text(encoding="utf-8"))
-        differs = [k for k in study if before.get(k) != json.loads(json.dumps(study[k]))]
+        # the scene by its tables (scene_sha256), not its path: a resume from another folder,
+        # or of a moved scene, is the same study
+        differs = [
+            k for k in study if k != "scene" and before.get(k) != json.loads(json.dumps(study[k]))
+        ]
         if differs:
             raise OutputError(
                 f"--out {directory}: holds another study (its {', '.join(differs)} differ); "
