@@ -34,11 +34,12 @@ def load() -> str:
     return "/".join(f"{x:.2f}" for x in os.getloadavg())
 
 
-def study(scene: str, runs: int, workers: int, executor, fields=()) -> dict:
+def study(scene: str, runs: int, workers: int, executor, fields=(), key=None) -> dict:
     import tissuesim
     from tissuesim.sweep.executors import process_pool
 
-    vary = {"bodies[fat].material.youngs_modulus": f"2e3:8e3:{runs}"}
+    low, high = (2e3, 8e3) if key is None else (5e4, 2e5)
+    vary = {key or "bodies[fat].material.youngs_modulus": f"{low}:{high}:{runs}"}
     before = load()
     t0 = time.perf_counter()
     owned = None
@@ -91,11 +92,18 @@ def main() -> None:
     parser.add_argument("--workers", type=int, nargs="+", default=[1, 2])
     parser.add_argument("--dask", action="store_true", help="also on a Dask LocalCluster")
     parser.add_argument("--write", help="write the markdown table to this file")
+    parser.add_argument(
+        "--key",
+        help="the key to vary over 5e4..2e5 Pa (default bodies[fat].material.youngs_modulus "
+        "over 2e3..8e3, for two_blocks_tied); e.g. material.youngs_modulus for "
+        "friction_incline (contact)",
+    )
+    parser.add_argument("--no-fields", action="store_true", help="skip the dataset's figures")
     args = parser.parse_args()
     print(f"load before: {load()} (1, 5, 15 min), {os.cpu_count()} cores")
     rows = []
     for w in args.workers:
-        rows.append(("process pool", study(args.scene, args.runs, w, None)))
+        rows.append(("process pool", study(args.scene, args.runs, w, None, key=args.key)))
         print(rows[-1])
     if args.dask:
         from distributed import Client, LocalCluster
@@ -109,19 +117,29 @@ def main() -> None:
                 Client(cluster) as client,
             ):
                 started = time.perf_counter() - t0
-                row = study(args.scene, args.runs, w, client.get_executor())
+                row = study(args.scene, args.runs, w, client.get_executor(), key=args.key)
                 row["start_s"] = started
                 rows.append(("Dask LocalCluster", row))
                 print(rows[-1])
-    fields = study(args.scene, args.runs, max(args.workers), None, fields=("displacement",))
-    print(fields)
+    fields = None
+    if not args.no_fields:
+        fields = study(
+            args.scene, args.runs, max(args.workers), None, ("displacement",), key=args.key
+        )
+        print(fields)
     lines = [
         f"# Parameter study: {args.runs} runs of `{args.scene}` (`benchmarks/sweep.py`)",
         "",
         f"Measured {time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}, "
-        f"{os.cpu_count()} cores; `python3 benchmarks/sweep.py --runs {args.runs} --workers "
+        f"{os.cpu_count()} cores; `python3 benchmarks/sweep.py --scene {args.scene} "
+        f"{'' if args.key is None else '--key ' + args.key + ' '}--runs {args.runs} --workers "
         f"{' '.join(map(str, args.workers))}{' --dask' if args.dask else ''}`. Each run: "
-        f"{rows[0][1]['steps']} quasistatic steps, the fat layer's E from 2e3 to 8e3 Pa.",
+        f"{rows[0][1]['steps']} steps, "
+        + (
+            "the fat layer's E from 2e3 to 8e3 Pa."
+            if args.key is None
+            else f"`{args.key}` from 5e4 to 2e5 Pa."
+        ),
         "",
         "| executor | workers | start-up s | study s | runs/min | runs/min with start-up "
         "| run wall s | run solve s | build + setup s | rest / solve | study overhead s/run "
@@ -137,15 +155,16 @@ def main() -> None:
             f"| {100 * r['run_rest_share']:.0f} % "
             f"| {r['study_overhead_s']:.3f} | {r['load_before']} -> {r['load_after']} |"
         )
-    lines += [
-        "",
-        f"Fields dataset (`--fields displacement`, {fields['workers']} workers): "
-        f"{fields['fields_bytes'] / 1024:.1f} KiB per run, written in "
-        f"{1e3 * fields['fields_write_s']:.1f} ms per run (median); every run read back by "
-        f"`load_dataset` in {fields['read_all_s']:.2f} s; load {fields['load_before']} -> "
-        f"{fields['load_after']}.",
-        "",
-    ]
+    if fields is not None:
+        lines += [
+            "",
+            f"Fields dataset (`--fields displacement`, {fields['workers']} workers): "
+            f"{fields['fields_bytes'] / 1024:.1f} KiB per run, written in "
+            f"{1e3 * fields['fields_write_s']:.1f} ms per run (median); every run read back by "
+            f"`load_dataset` in {fields['read_all_s']:.2f} s; load {fields['load_before']} -> "
+            f"{fields['load_after']}.",
+        ]
+    lines.append("")
     text = "\n".join(lines)
     print(text)
     if args.write:

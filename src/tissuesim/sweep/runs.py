@@ -59,10 +59,11 @@ class RunTask:
 
 
 def prepare_worker() -> None:
-    """One thread per worker (BLAS, OpenMP, numba) and the heavy imports, once per process.
-    The default pool also sets the variables before its workers start (executors.py), since
-    a BLAS reads them when it loads; here they reach what loads later (numba) and, through
-    threadpoolctl where installed, a BLAS already loaded."""
+    """Once per process: one thread (BLAS, OpenMP, numba), tissuesim's notes silenced, and a
+    warm-up step (imports and first calls). The default pool also sets the thread variables
+    before its workers start (executors.py), since a BLAS reads them when it loads; here they
+    reach what loads later (numba) and, through threadpoolctl where installed, a BLAS already
+    loaded. In the caller's own process (a ThreadPoolExecutor) this limits its threads too."""
     global _prepared
     if _prepared:
         return
@@ -111,8 +112,8 @@ def _warm_up() -> None:
 
 
 def execute_run(task: RunTask) -> dict[str, Any]:
-    """Run one sample and return its result (see ``result`` for the keys); never raises for a
-    failed run: its status is "failed" and ``error`` the one-line reason."""
+    """Run one sample and return its result (the keys: ``tissuesim.sweep.sweep``); never
+    raises for a failed run: its status is "failed" and ``error`` the one-line reason."""
     prepare_worker()
     out = Path(task.out) if task.out is not None else None
     if out is not None:
