@@ -80,10 +80,13 @@ def test_a_grid_study_equals_single_runs_bit_for_bit(bar_scene, tmp_path, monkey
     assert [float(row["pull_x_N"]) for row in table] == pull  # repr floats: exact
 
 
-def test_a_failing_sample_is_recorded_and_the_others_finish(bar_scene, tmp_path):
+def test_a_failing_sample_is_recorded_and_the_others_finish(bar_scene, tmp_path, capsys):
     vary = {"material.poisson_ratio": [0.3, 0.7, 0.4]}
     with ThreadPoolExecutor(2) as pool:
         results = tissuesim.sweep(bar_scene, vary, out=tmp_path / "s", executor=pool)
+    progress = capsys.readouterr().err.splitlines()  # not a terminal: one line per tenth
+    assert len(progress) == 3 and progress[-1].startswith("tissuesim: run 3/3 done, 1 failed, ")
+    assert progress[-1].endswith("about 0 s left")
     assert [r["status"] for r in results] == ["completed", "failed", "completed"]
     assert "poisson_ratio" in results[1]["error"] and "\n" not in results[1]["error"]
     assert results[1]["forces"] == {}
