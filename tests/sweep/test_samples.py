@@ -146,3 +146,21 @@ def test_values_take_the_type_of_the_scene_value():
     assert type(coerce(2, 1000.0)) is float
     assert coerce(np.float64(0.5), 1.0) == 0.5 and type(coerce(np.float64(0.5), 1.0)) is float
     assert coerce("yeoh", "neo_hookean") == "yeoh"
+
+
+def test_python_values_lists_arrays_and_intervals():
+    params = parameters(
+        {
+            "material.youngs_modulus": Interval(1e3, 1e5, log=True),
+            "material.poisson_ratio": np.array([0.3, 0.4]),
+        },
+        DATA,
+    )
+    assert params[0].interval == Interval(1e3, 1e5, log=True)
+    assert params[1].values == (0.3, 0.4) and type(params[1].values[0]) is float
+    runs = make_samples(params, 4, "random", 2)
+    assert len(runs) == 8 and all(1e3 <= r["material.youngs_modulus"] <= 1e5 for r in runs)
+    with pytest.raises(InputError, match="give a non-empty list of values"):
+        parameters({"material.youngs_modulus": []}, DATA)
+    with pytest.raises(InputError, match="given twice"):
+        parameters(["material.youngs_modulus=1,2", "material.youngs_modulus=3"], DATA)

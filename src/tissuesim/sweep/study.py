@@ -194,11 +194,11 @@ def _run_all(
     worker that died, is recorded as failed but not written: a resume runs it again)."""
     if not tasks:
         return
-    from tissuesim.sweep.executors import close, process_pool
+    from tissuesim.sweep.executors import close, default_workers, process_pool
 
     owned = []
     if executor is None:
-        executor = process_pool(min(workers, len(tasks)) if workers else None)
+        executor = process_pool(min(workers or default_workers(), len(tasks)))
         owned.append(executor)
     bar = _Progress(len(tasks), total - len(tasks), progress)
     futures: dict[Future, RunTask] = {}
