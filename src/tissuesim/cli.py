@@ -507,15 +507,8 @@ def _sweep(args) -> int:
 
     from tissuesim.sweep import sweep
     from tissuesim.sweep.executors import close, executor_from_spec
-    from tissuesim.sweep.samples import Interval, parameters
-    from tissuesim.sweep.study import read_scene_data
 
     started = time.perf_counter()
-    sampler = args.sampler
-    if sampler is None:  # sobol where there is an interval to sample, else the grid
-        data, path = read_scene_data(args.scene)
-        params = parameters(args.vary, data, path.parent)
-        sampler = "sobol" if any(isinstance(p.interval, Interval) for p in params) else "grid"
     executor, resources = (None, [])
     if args.executor != "local":
         executor, resources = executor_from_spec(args.executor, args.workers)
@@ -525,7 +518,7 @@ def _sweep(args) -> int:
             args.vary,
             out=args.out,
             samples=args.samples,
-            sampler=sampler,
+            sampler=args.sampler,  # None: sobol where there is an interval, else the grid
             seed=args.seed,
             steps=args.steps,
             executor=executor,

@@ -137,13 +137,19 @@ def test_sobol_study_runs_the_samples_asked_for(bar_scene, tmp_path):
     vary = ["material.youngs_modulus=500:2000", "material.poisson_ratio=0.2,0.4"]
     with ThreadPoolExecutor(2) as pool:
         results = tissuesim.sweep(
-            bar_scene, vary, out=tmp_path / "s", samples=2, sampler="sobol", seed=5, executor=pool
+            bar_scene,
+            vary,
+            out=tmp_path / "s",
+            samples=2,
+            seed=5,
+            executor=pool,  # sobol
         )
     params = tissuesim.sweep.parameters(vary, tomllib.loads(bar_scene.read_text()))
     assert [r["params"] for r in results] == tissuesim.sweep.make_samples(params, 2, "sobol", 5)
     assert [r["params"]["material.poisson_ratio"] for r in results] == [0.2, 0.2, 0.4, 0.4]
     study = json.loads((tmp_path / "s" / "study.json").read_text())
     assert study["runs"] == [r["params"] for r in results] and study["seed"] == 5
+    assert study["sampler"] == "sobol"  # the default where a key is an interval
 
 
 def test_the_dataset_holds_what_the_docs_say(bar_scene, tmp_path):

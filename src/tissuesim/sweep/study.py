@@ -54,7 +54,7 @@ def sweep(
     *,
     out: str | Path,
     samples: int | None = None,
-    sampler: str = "grid",
+    sampler: str | None = None,
     seed: int = 0,
     steps: int | None = None,
     executor: Executor | None = None,
@@ -74,7 +74,8 @@ def sweep(
     vary: {key path: values} (a list of values, an ``Interval(low, high)`` or a string as on
     the command line: ``"1e3:5e3:5"`` five values, ``"1e3:5e3"`` an interval, ``"1,2,3"``) or
     ["KEY=VALUES", ...]; lists make a grid (their product), intervals are filled by
-    ``sampler`` ("sobol", "lhs", "random") with ``samples`` points for the same ``seed``.
+    ``sampler`` ("sobol", "lhs", "random"; default "sobol" where there is an interval, else
+    "grid") with ``samples`` points for the same ``seed``.
     out: the study's directory: ``study.json``, ``runs/<run_id>.json`` (each run's result,
     written by the worker that ran it), ``runs.csv`` and ``runs.parquet``, and with ``fields``
     (("displacement",)) ``fields/`` (``load_dataset``). Runs whose result file is there are not
@@ -117,6 +118,8 @@ def sweep(
     for field_name in fields:
         if field_name not in FIELDS:
             raise InputError(f"--fields {field_name!r}: choose from {', '.join(FIELDS)}")
+    if sampler is None:
+        sampler = "sobol" if any(p.interval is not None for p in params) else "grid"
     values = make_samples(params, samples, sampler, seed)
     directory = Path(out)
     study = {
