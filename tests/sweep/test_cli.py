@@ -83,3 +83,23 @@ def test_a_study_from_the_command_line(bar_scene, tmp_path, capsys):
     assert pq.read_table(out / "runs.parquet").to_pylist() == load_table(out)
     assert main(args) == 0  # again: everything is there, nothing runs
     assert json.loads(capsys.readouterr().out)["completed"] == 2
+
+
+def test_the_guide_s_command_varies_keys_the_shipped_scene_has():
+    """docs/guide/sweeps.md's first command: its keys and values are valid for palpation."""
+    import re
+    import shlex
+    from pathlib import Path
+
+    from tissuesim.sweep.samples import make_samples, parameters
+    from tissuesim.sweep.study import read_scene_data
+
+    page = Path(__file__).resolve().parents[2] / "docs" / "guide" / "sweeps.md"
+    command = re.search(r"```bash\n(.*?)```", page.read_text(), flags=re.S).group(1)
+    line = " ".join(command.split("\\\n")).splitlines()[3]
+    words = shlex.split(line)
+    assert words[:3] == ["tissuesim", "sweep", "palpation"]
+    vary = [words[i + 1] for i, w in enumerate(words) if w == "--vary"]
+    data, _ = read_scene_data("palpation")
+    runs = make_samples(parameters(vary, data), 256, "sobol", 1)
+    assert len(runs) == 256 and len(vary) == 2
