@@ -194,57 +194,30 @@ def run_one(path: Path) -> dict[str, Any]:
 def solution_norm(model: Any, sim: Any, np: Any) -> dict[str, Any]:
     """tissuesim's final displacement over FEBio's equations.
 
-    The bodies are the converter's: deformable parts joined by shared nodes make one body
-    (its vertices ``np.unique`` of its cells, in order), the parts of each ``rigid body``
-    material one of their own; a body is named after its first part when the scene has
-    several bodies (or rigid node sets), else "body". Every vertex of a deformable body is
+    The bodies are the converter's (``febio/scene.py`` ``scene_bodies``: its names, its
+    vertices ``np.unique`` of a body's cells, in order). Every vertex of a deformable body is
     mapped back to its FEBio node. Left out, as FEBio's equations leave them out: the
     components held by a condition active in the last step (held in one body, held), and
     FEBio's rigid nodes (``FERigidSystem``: every node of a rigid element, shared ones
     included, and the nodes of a ``<bc type="rigid">`` set)."""
 
-    def rigid(part: str) -> bool:
-        material = model.materials.get(model.domains[part][0])
-        if material is None:
-            material = model.materials.get(f"#{model.domains[part][0]}")
-        return material is not None and str(material[3]) == "rigid body"
-
-    names = [p for p in model.parts if not rigid(p)]
-    rigid_materials = {model.domains[p][0] for p in model.parts if rigid(p)}
-    parent = list(range(len(names)))
-
-    def root(i: int) -> int:
-        while parent[i] != i:
-            i = parent[i]
-        return i
-
-    owner = np.full(len(model.nodes), -1)
-    for i, name in enumerate(names):
-        nodes = np.unique(model.parts[name][1])
-        for j in np.unique(owner[nodes][owner[nodes] >= 0]):
-            parent[root(int(j))] = root(i)
-        owner[nodes] = i
-    groups: dict[int, list[str]] = {}
-    for i, name in enumerate(names):
-        groups.setdefault(root(i), []).append(name)
+    from tissuesim.febio.rigid_scene import rigid_material_of
+    from tissuesim.febio.scene import scene_bodies
 
     rigid_nodes = np.zeros(len(model.nodes), dtype=bool)
     for part in model.parts:
-        if rigid(part):
+        if rigid_material_of(model, part) is not None:
             rigid_nodes[np.unique(model.parts[part][1])] = True
-    node_sets = getattr(model, "rigid_nodes", [])  # <bc type="rigid">: (set, body, element)
-    for entry in node_sets:
+    for entry in model.rigid_nodes:  # <bc type="rigid">: (set, body, element)
         rigid_nodes[model.node_sets[entry[0]]] = True
-    several = len(groups) + len(rigid_materials) > 1 or bool(node_sets) or bool(rigid_materials)
     u = np.zeros(model.nodes.shape)
     deformable = np.zeros(len(model.nodes), dtype=bool)
-    for parts in groups.values():
-        name = parts[0] if several else "body"
-        if name not in sim.bodies and len(groups) == 1:  # the converter named it otherwise
-            name = "body" if name == parts[0] else parts[0]
+    for name, body in scene_bodies(model):
+        if body["rigid"] is not None:
+            continue
         if name not in sim.bodies:
-            raise KeyError(f"body {parts[0]!r} not in the simulation (it has {list(sim.bodies)})")
-        used = np.unique(np.vstack([model.parts[p][1] for p in parts]))
+            raise KeyError(f"body {name!r} not in the simulation (it has {list(sim.bodies)})")
+        used = np.unique(body["cells"])
         x = sim.body_positions(name)
         if x.shape != (len(used), 3):
             raise ValueError(f"body {name!r} has {x.shape} positions for {len(used)} nodes")

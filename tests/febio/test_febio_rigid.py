@@ -51,9 +51,21 @@ def _prescribed(dz: float) -> str:
     )
 
 
-def _block(sim, model) -> np.ndarray:
-    """The block's node positions by FEBio node row (its body is named after its part)."""
-    return sim.body_positions("block")
+def _own_nodes() -> str:
+    """The platen model with the platen on nodes of its own (ids 100..108, a copy of the
+    block's top face), so that it no longer shares the block's."""
+    text = PLATEN
+    copies = "".join(
+        f'      <node id="{100 + k}">{x:g},{y:g},0.5</node>\n'
+        for k, (y, x) in enumerate((y, x) for y in (0, 0.5, 1) for x in (0, 0.5, 1))
+    )
+    text = text.replace("    </Nodes>", copies + "    </Nodes>")
+    plate = text[text.index('<Elements type="hex8" name="plate">') :]
+    plate = plate[: plate.index("</Elements>")]
+    new = plate
+    for k, node in enumerate(TOP):
+        new = new.replace(f">{node},", f">{100 + k},").replace(f",{node},", f",{100 + k},")
+    return text.replace(plate, new)
 
 
 def test_a_pressed_platen_is_the_same_motion_prescribed_on_the_nodes(tmp_path):
@@ -97,18 +109,7 @@ def test_a_free_platen_under_a_force_sinks_as_far_as_that_force_presses(tmp_path
 def test_a_platen_glued_by_a_rigid_bc_is_the_shared_nodes_platen(tmp_path):
     """The platen on nodes of its own (a copy of the top face) and the block's top node set
     glued to it by <bc type="rigid">: the same block as the one sharing its nodes."""
-    text = PLATEN
-    copies = "".join(
-        f'      <node id="{100 + k}">{x:g},{y:g},0.5</node>\n'
-        for k, (y, x) in enumerate((y, x) for y in (0, 0.5, 1) for x in (0, 0.5, 1))
-    )
-    text = text.replace("    </Nodes>", copies + "    </Nodes>")
-    plate = text[text.index('<Elements type="hex8" name="plate">') :]
-    plate = plate[: plate.index("</Elements>")]
-    new = plate
-    for k, node in enumerate(TOP):
-        new = new.replace(f">{node},", f">{100 + k},").replace(f",{node},", f",{100 + k},")
-    text = text.replace(plate, new)
+    text = _own_nodes()
     text = text.replace(
         "  </Boundary>",
         '    <bc name="glue" node_set="top" type="rigid">\n      <rb>platen</rb>\n    </bc>\n'
@@ -162,18 +163,7 @@ def test_a_platen_pressed_through_contact_moves_inside_the_solve(tmp_path):
     contact is pulled by a stiff spring inside the Newton solve (set at its end place it would
     cross the block's face). The block then is the block with its top pushed down 0.05 and free
     to slide: the force within 2e-3 (the barrier's gap), the platen within 1e-5 of its value."""
-    text = PLATEN
-    copies = "".join(
-        f'      <node id="{100 + k}">{x:g},{y:g},0.5</node>\n'
-        for k, (y, x) in enumerate((y, x) for y in (0, 0.5, 1) for x in (0, 0.5, 1))
-    )
-    text = text.replace("    </Nodes>", copies + "    </Nodes>")
-    plate = text[text.index('<Elements type="hex8" name="plate">') :]
-    plate = plate[: plate.index("</Elements>")]
-    new = plate
-    for k, node in enumerate(TOP):
-        new = new.replace(f">{node},", f">{100 + k},").replace(f",{node},", f",{100 + k},")
-    text = text.replace(plate, new)
+    text = _own_nodes()
     faces = "".join(
         f'      <quad4 id="{i + 1}">{",".join(str(n) for n in q)}</quad4>\n'
         for i, q in enumerate([(10, 11, 14, 13), (11, 12, 15, 14), (13, 14, 17, 16),

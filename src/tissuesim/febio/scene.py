@@ -29,7 +29,7 @@ from tissuesim.febio.shells import check_thickness
 from tissuesim.febio.time_stepper import adaptive_table, run_steps
 from tissuesim.febio.toml import dumps
 
-__all__ = ["febio_scene", "convert_febio"]
+__all__ = ["febio_scene", "convert_febio", "scene_bodies"]
 
 INTEGRATORS = {"static": "quasistatic", "dynamic": "newmark"}
 
@@ -105,6 +105,18 @@ def _bodies(model: FebModel) -> list[dict]:
     return bodies
 
 
+def scene_bodies(model: FebModel) -> list[tuple[str, dict]]:
+    """(the scene's name, body) of every body the converter makes: a body is named after its
+    first part in a scene of several bodies (or with rigid bodies), else "body"."""
+    bodies = _bodies(model)
+    return [(b["parts"][0] if _several(model, bodies) else "body", b) for b in bodies]
+
+
+def _several(model: FebModel, bodies: list[dict]) -> bool:
+    """Whether the scene is one of [[bodies]]: several bodies, or any rigid body."""
+    return len(bodies) > 1 or bool(model.rigid_nodes) or any(b["rigid"] for b in bodies)
+
+
 def _material_of(model: FebModel, part: str) -> str:
     mat = model.domains[part][0]
     return mat if mat in model.materials else f"#{mat}"
@@ -117,13 +129,12 @@ def febio_scene(model: FebModel, stem: str) -> tuple[dict, dict]:
     from tissuesim.mesh.checks import validate_mesh
 
     check_thickness(model)  # a shell part left without a thickness (febio/shells.py)
-    bodies = _bodies(model)
+    named = scene_bodies(model)  # rigid bodies: [[rigid_bodies]] of a scene of [[bodies]]
+    bodies = [b for _, b in named]
+    several = _several(model, bodies)
     dhat = separate_touching(model, bodies)  # contact that starts touching: moved apart
     tables_per_body, meshes, gravity = [], {}, np.zeros(3)
-    # rigid bodies are [[rigid_bodies]] tables of a scene of [[bodies]]
-    several = len(bodies) > 1 or bool(model.rigid_nodes) or any(b["rigid"] for b in bodies)
-    for body in bodies:
-        name = body["parts"][0] if several else "body"
+    for name, body in named:
         used = np.unique(body["cells"])
         local = np.full(len(model.nodes), -1)
         local[used] = np.arange(len(used))
