@@ -381,6 +381,33 @@ def test_an_uncoupled_viscoelastic_law_on_hex8_runs_febios_three_field_element(t
     np.testing.assert_allclose(md, disp, rtol=1e-9)
 
 
+def test_the_uncoupled_wrappers_k_and_default_pressure_model_hold_its_laws_bulk(tmp_path):
+    """FEBio's ma07 / ma16 give the uncoupled viscoelastic wrapper k and pressure_model
+    "default" and its law k = 0: read as the law with that k (the same pulls as the law given
+    the k itself); another pressure_model on the wrapper is refused in one line."""
+    text = (MODELS / "viscoelastic_relaxation.feb").read_text()
+    old_elastic = '<elastic type="neo-Hookean">\n        <E>1000</E>\n        <v>0</v>'
+    text = text.replace('type="viscoelastic"', 'type="uncoupled viscoelastic"')
+    own = text.replace(old_elastic, '<elastic type="Mooney-Rivlin">\n        <c1>200</c1>\n'
+                       "        <c2>50</c2>\n        <k>5000</k>")  # fmt: skip
+    wrapped = text.replace(
+        "      <density>1000</density>",
+        "      <density>1000</density>\n      <k>5000</k>\n"
+        "      <pressure_model>default</pressure_model>",
+    ).replace(old_elastic, '<elastic type="Mooney-Rivlin">\n        <c1>200</c1>\n'
+              "        <c2>50</c2>\n        <k>0</k>")  # fmt: skip
+    pulls = []
+    for version in (own, wrapped):
+        feb = tmp_path / "v.feb"
+        feb.write_text(version)
+        sim = load_febio(feb).simulation
+        pulls.append([sim.step().extra["forces"]["pull"][0] for _ in range(3)])
+    assert pulls[0] == pulls[1] and pulls[0][0] > 0
+    feb.write_text(wrapped.replace(">default<", ">1<"))
+    with pytest.raises(FebError, match="pressure_model '1' on the 'uncoupled viscoelastic'"):
+        read_feb(feb)
+
+
 @pytest.mark.parametrize("extend", ["REPEAT", "REPEAT_OFFSET"])
 @pytest.mark.parametrize("interpolate", ["LINEAR", "SMOOTH"])
 def test_repeating_curves_follow_febios_point_curve(extend, interpolate):

@@ -74,7 +74,12 @@ def read_materials(model: FebModel, node: Node) -> None:
 
 
 def _law(
-    model: FebModel, mat: Node, top: bool, component: bool = False, bulk: bool = True
+    model: FebModel,
+    mat: Node,
+    top: bool,
+    component: bool = False,
+    bulk: bool = True,
+    check: bool = True,
 ) -> tuple:
     """(model name, parameters, density, FEBio type, Orientation or None); ``component``: a
     solid mixture's ``<solid>`` (not built alone: an uncoupled mixture's component has no k);
@@ -151,7 +156,7 @@ def _law(
             params[key] = _floats(p).tolist()
             continue
         params[key] = float(_floats(p, 1)[0])
-    if not component:
+    if not component and check:  # (an uncoupled viscoelastic's law: once its k is added)
         try:
             make_material(model_name, **params)
         except TissueSimError as exc:
@@ -230,10 +235,18 @@ def _viscoelastic(model: FebModel, mat: Node, kind: str) -> tuple:
         if p.tag == "elastic":
             if elastic is not None:
                 raise p.error("a second <elastic>")
-            elastic = (_law(model, p, top=False), p)
+            # FEBio's uncoupled wrapper adds its k to its law's, which may be 0 alone
+            elastic = (_law(model, p, top=False, check=kind != "uncoupled viscoelastic"), p)
             continue
         if p.children or "lc" in p.attrib or p.attrib.get("type") not in (None, "const"):
             raise _unsupported(p, "a material parameter that is a field, a curve or a table")
+        if p.tag == "pressure_model" and kind == "uncoupled viscoelastic":
+            if p.text.strip() not in ("default", "0"):  # FEBio's default: its elastic law's
+                raise p.error(
+                    f"pressure_model {p.text.strip()!r} on the {kind!r} wrapper: tissuesim "
+                    "takes its elastic law's (give it there)"
+                )
+            continue
         value = float(_floats(p, 1)[0])
         if p.tag == "density":
             density = _density(p)
