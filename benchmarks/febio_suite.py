@@ -178,6 +178,9 @@ def run_one(path: Path) -> dict[str, Any]:
         out["status"] = "ran"
     except RunError as exc:
         out.update(status="failed", error=type(exc).__name__, message=one_line(exc))
+    except InputError as exc:  # refused at the first step (its start), in one line
+        out.update(status="refused", error=type(exc).__name__, message=one_line(exc))
+        return out
     except Exception as exc:  # noqa: BLE001
         out.update(status="crashed", error=type(exc).__name__, message=crash_line(exc))
     out["run_s"] = time.perf_counter() - started
