@@ -162,6 +162,13 @@ def test_refusals_name_what_is_wrong():
     sim.add_rigid_body("r", ["b"])
     with pytest.raises(InputError, match="exists"):
         sim.add_rigid_body("r", ["b"])
+    with pytest.raises(InputError, match="moves with rigid body 'r'"):
+        sim.set_tearing(body="b", stress=1e3)
+    other = Simulation(integrator="quasistatic")
+    other.add_body("b", MESH, MAT)
+    other.set_tearing(body="b", stress=1e3)
+    with pytest.raises(InputError, match="is cut or cutting"):
+        other.add_rigid_body("r", ["b"])
 
 
 def test_newmark_drops_a_rigid_body_exactly():

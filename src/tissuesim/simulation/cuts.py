@@ -70,6 +70,7 @@ class CutCalls:
 
             b = self.body(body, ("fem",))
             self._no_cut_with_visual(b.name, f"add_cut {name!r}")
+            self._no_cut_of_rigid(b.name, f"add_cut {name!r}")
             if kerf is not None:
                 raise InputError(
                     f"add_cut: kerf is for cuts of the connective tissue; a cut of body "
@@ -156,6 +157,7 @@ class CutCalls:
 
         b = self.body(body, ("fem",))
         self._no_cut_with_visual(b.name, "set_tearing")
+        self._no_cut_of_rigid(b.name, "set_tearing")
         if threshold is not None:
             raise InputError(
                 f"set_tearing: body {b.name!r} tears at a stress (stress=, Pa) or a stretch "
@@ -184,6 +186,7 @@ class CutCalls:
 
         b = self.body(body, ("fem",))
         self._no_cut_with_visual(b.name, "cut_body")
+        self._no_cut_of_rigid(b.name, "cut_body")
         if b.mesh.order != 1 or not b.mesh.simplicial:
             raise InputError(
                 f"cut_body: body {b.name!r} has {b.mesh.cell_type} cells; cuts apply to P1 "

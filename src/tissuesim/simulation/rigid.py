@@ -129,6 +129,17 @@ class RigidCalls:
             _vector_function(force, "force"),
             _vector_function(moment, "moment"),
         )
+        for body, _ in members:
+            b = self.bodies[body]
+            if (
+                b.cut_state is not None
+                or any(c.body == body for c in self.organ_cuts)
+                or any(t.body == body for t in self.organ_tears)
+            ):
+                raise InputError(
+                    f"add_rigid_body {name!r}: body {body!r} is cut or cutting; a rigid body "
+                    "names vertices a cut changes"
+                )
         for body, v in members:  # held in their bodies; the system places them
             self.bodies[body].fix(v, name=f"{name}.{body}")
         self.rigid_bodies[name] = spec
@@ -216,6 +227,16 @@ class RigidCalls:
             out[j.name] = (-grad[6:9]).tolist()
             out[f"{j.name}.moment"] = (-grad[9:12]).tolist()
         return out
+
+    def _no_cut_of_rigid(self, body: str, what: str) -> None:
+        """A body that is (part of) a rigid body or glued to one is never cut: its vertices,
+        which the rigid body names, would be others after the cut."""
+        for spec in self.rigid_bodies.values():
+            if any(b == body for b, _ in spec.members):
+                raise InputError(
+                    f"{what}: body {body!r} moves with rigid body {spec.name!r}; a cut would "
+                    "change the vertices it names: cut another body, or leave the rigid body out"
+                )
 
     def _rigid_models(self, names: list[str]) -> tuple[list, list]:
         """(RigidModel per rigid body, (body index, vertices, rigid index) per member) for a
