@@ -204,7 +204,7 @@ def solution_norm(model: Any, sim: Any, np: Any) -> dict[str, Any]:
     FEBio's rigid nodes (``FERigidSystem``: every node of a rigid element, shared ones
     included, and the nodes of a ``<bc type="rigid">`` set)."""
 
-    from tissuesim.febio.rigid_scene import rigid_material_of
+    from tissuesim.febio.rigid.scene import rigid_material_of
     from tissuesim.febio.scene import scene_bodies
 
     rigid_nodes = np.zeros(len(model.nodes), dtype=bool)

@@ -15,6 +15,7 @@ import warnings
 from pathlib import Path
 
 from tissuesim.cli_mesh import add_mesh_parser, mesh_command
+from tissuesim.cli_sweep import add_sweep_parser, sweep_command
 from tissuesim.scene.examples import example_path, list_examples
 from tissuesim.verification.check import FAMILIES as VERIFY_FAMILIES
 
@@ -338,66 +339,7 @@ def main(argv: list[str] | None = None) -> int:
         choices=VERIFY_FAMILIES,
         help="run only this family (repeatable)",
     )
-    p_sweep = sub.add_parser(
-        "sweep",
-        parents=common,
-        help="run a scene many times over varied keys (a parameter study, training data)",
-        description="Run a scene for every sample of the varied keys and write one table of "
-        "the runs (runs.csv, runs.parquet) and, with --fields, a dataset of fields "
-        "(docs/guide/sweeps.md). A killed study resumes: rerun the same command.",
-    )
-    p_sweep.add_argument(
-        "scene", help="a scene file (.toml) or a shipped example's name (tissuesim examples)"
-    )
-    p_sweep.add_argument(
-        "--vary",
-        action="append",
-        required=True,
-        metavar="KEY=VALUES",
-        help="a scene key by its path (material.youngs_modulus, bodies[0].material.density, "
-        "obstacles[probe].translation[2]) and its values: a list 1e3,2e3; LOW:HIGH:N (N values, "
-        "both ends; LOW:HIGH:N:log); an interval LOW:HIGH (LOW:HIGH:log) for --sampler "
-        "sobol|lhs|random; glob:meshes/*.vtu (files in the scene's folder); repeatable, the "
-        "lists form a grid",
-    )
-    p_sweep.add_argument("--out", required=True, help="the study's directory")
-    p_sweep.add_argument(
-        "--samples", type=_frames, help="points drawn in the intervals (sobol, lhs, random)"
-    )
-    p_sweep.add_argument(
-        "--sampler",
-        choices=("grid", "sobol", "lhs", "random"),
-        default=None,
-        help="grid (default without intervals), sobol (default with them), lhs, random",
-    )
-    p_sweep.add_argument("--seed", type=_steps, default=0, help="the samplers' seed (default 0)")
-    p_sweep.add_argument("--steps", type=_steps, help="steps per run (default the scene's [run])")
-    p_sweep.add_argument("--workers", type=_frames, help="worker processes (default one per core)")
-    p_sweep.add_argument(
-        "--executor",
-        default="local",
-        help="local (a process pool, default), dask-local (a Dask LocalCluster) or "
-        "dask://HOST:PORT (a running Dask scheduler)",
-    )
-    from tissuesim.sweep.dataset import FIELDS as SWEEP_FIELDS
-
-    p_sweep.add_argument(
-        "--fields",
-        action="append",
-        choices=SWEEP_FIELDS,
-        help="save this field of every run's end (fields/<run>.h5; repeatable): the vertices' "
-        "displacement or a cell field",
-    )
-    p_sweep.add_argument(
-        "--every",
-        type=_frames,
-        help="with --fields: save them at the start, every N steps and at the end (default "
-        "only the end)",
-    )
-    p_sweep.add_argument(
-        "--no-render", action="store_true", help="accepted for symmetry: a study draws nothing"
-    )
-    p_sweep.add_argument("--quiet", action="store_true", help="no progress lines")
+    add_sweep_parser(sub, common, _frames, _steps)
     args = parser.parse_args(argv)
     with warnings.catch_warnings():
         warnings.showwarning = _show_warning
@@ -496,53 +438,8 @@ def _dispatch(args) -> int:
     if args.command == "verify":
         return _verify(args.json, args.only)
     if args.command == "sweep":
-        return _sweep(args)
+        return sweep_command(args)
     return _examples(args.json)
-
-
-def _sweep(args) -> int:
-    """``tissuesim sweep``: the study (tissuesim/sweep/), then a JSON report; exit 0 when it
-    ran to its end, failed runs included (they are rows of the table, status "failed")."""
-    import time
-
-    from tissuesim.sweep import sweep
-    from tissuesim.sweep.executors import close, executor_from_spec
-
-    started = time.perf_counter()
-    executor, resources = (None, [])
-    if args.executor != "local":
-        executor, resources = executor_from_spec(args.executor, args.workers)
-    try:
-        results = sweep(
-            args.scene,
-            args.vary,
-            out=args.out,
-            samples=args.samples,
-            sampler=args.sampler,  # None: sobol where there is an interval, else the grid
-            seed=args.seed,
-            steps=args.steps,
-            executor=executor,
-            workers=args.workers,
-            fields=tuple(args.fields or ()),
-            every=args.every,
-            progress=not args.quiet,
-        )
-    finally:
-        close(resources)
-    failed = [r for r in results if r["status"] != "completed"]
-    out = Path(args.out)
-    report = {
-        "output": str(out),
-        "runs": len(results),
-        "completed": len(results) - len(failed),
-        "failed": len(failed),
-        "first_failure": failed[0]["error"] if failed else None,
-        "table": [str(p) for p in (out / "runs.csv", out / "runs.parquet") if p.exists()],
-        "fields": str(out / "fields") if args.fields else None,
-        "wall_time_s": time.perf_counter() - started,
-    }
-    print(json.dumps(report, indent=2))
-    return 0
 
 
 def _verify(as_json: bool, only: list[str] | None) -> int:

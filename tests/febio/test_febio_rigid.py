@@ -1,4 +1,4 @@
-"""FEBio's rigid bodies (febio/rigid.py, febio/rigid_scene.py): a model of our own, a hex8
+"""FEBio's rigid bodies (febio/rigid/): a model of our own, a hex8
 block under a rigid platen sharing its top nodes, pressed, then free under a force, then a
 platen of its own glued by <bc type="rigid">; each against the same block with its top nodes
 prescribed, and the converted scene against the model."""

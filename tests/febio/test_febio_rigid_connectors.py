@@ -1,4 +1,4 @@
-"""FEBio's rigid connectors (febio/rigid_connectors.py): a model of our own, two rigid cubes
+"""FEBio's rigid connectors (febio/rigid/connectors.py): a model of our own, two rigid cubes
 (a fixed ground and a free block) joined by a revolute joint turned by its prescribed
 rotation, and by a prismatic joint with a rigid spring under a rigid force, against closed
 forms; the converted scene the same; refusals in one line."""

@@ -120,7 +120,7 @@ def _boundary(model: FebModel, section: Node) -> None:
 
             read_shell_bc(model, bc, _node_set(model, bc))
         elif kind == "rigid":  # the node set moves with a rigid body
-            from tissuesim.febio.rigid import read_rigid_nodes
+            from tissuesim.febio.rigid.conditions import read_rigid_nodes
 
             if model.window is not None:
                 raise bc.error(

@@ -287,5 +287,5 @@ def _mesh_domains(model: FebModel, section: Node) -> None:
 
 
 #: "MeshData" here replaces reader.py's entry (``reader.SECTIONS`` spreads these after it):
-#: shell thickness data, the rest passed on to ``material_axes.read_mesh_data``
+#: shell thickness data, the rest passed on to ``materials/axes.py read_mesh_data``
 SECTIONS = {"Mesh": _mesh, "MeshDomains": _mesh_domains, "MeshData": read_mesh_data}

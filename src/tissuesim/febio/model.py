@@ -65,10 +65,11 @@ class FebModel:
     #: (None: all), file, node
     logfiles: list = field(default_factory=list)
     #: rigid body material name -> {"held": {dof: Load or None}, "force" / "moment": [(axis,
-    #: Load)]} (febio/rigid.py); node sets that move with a rigid body: (set, body, element)
+    #: Load)]} (febio/rigid/conditions.py); node sets that move with a rigid body: (set,
+    #: body, element)
     rigid: dict = field(default_factory=dict)
     rigid_nodes: list = field(default_factory=list)
-    #: rigid connectors (febio/rigid_connectors.py): dicts of a [[rigid_joints]] table with
+    #: rigid connectors (febio/rigid/connectors.py): dicts of a [[rigid_joints]] table with
     #: Loads for prescribed values and material names for the bodies
     rigid_connectors: list = field(default_factory=list)
     #: "file:line <tag>: what the converter changed" (contact surfaces set apart)

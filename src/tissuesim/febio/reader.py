@@ -12,7 +12,7 @@ import os
 
 from tissuesim.febio.materials import MATERIAL_TYPES, UNCOUPLED, read_materials, read_mesh_data
 from tissuesim.febio.model import FebModel, Node, _floats, _ints, _once, _unsupported
-from tissuesim.febio.rigid import read_rigid
+from tissuesim.febio.rigid.conditions import read_rigid
 from tissuesim.febio.time_stepper import read_plot_level, read_time_stepper
 from tissuesim.febio.xml import parse_feb
 

@@ -17,7 +17,7 @@ from tissuesim.febio.logfiles import cell_rows, logfile_tables
 from tissuesim.febio.materials import body_directions, with_directions
 from tissuesim.febio.model import FebModel, Load
 from tissuesim.febio.reader import UNCOUPLED, read_feb
-from tissuesim.febio.rigid_scene import (
+from tissuesim.febio.rigid.scene import (
     RIGID_SET,
     interface_sets,
     rigid_bodies,
@@ -54,7 +54,7 @@ def _times(load: Load, model: FebModel, k: int = 0, windowed: bool = True) -> st
 def _bodies(model: FebModel) -> list[dict]:
     """Parts joined by shared nodes make one body (one material, one cell type); the parts of
     a rigid body material make one body of their own (``rigid`` its material), whatever nodes
-    they share (febio/rigid_scene.py)."""
+    they share (febio/rigid/scene.py)."""
     rigid = {p: rigid_material_of(model, p) for p in model.parts}
     names = [p for p in model.parts if rigid[p] is None]
     owner = np.full(len(model.nodes), -1)

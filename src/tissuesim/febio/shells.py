@@ -143,7 +143,7 @@ def check_shared_nodes(model: FebModel) -> None:
     the rigid body it joins: ``FEMechModel``'s RIGID_CLAMP), so the back nodes become a rigid
     node set (``model.rigid_nodes``); a shell sharing nodes with a deformable solid (FEBio's
     shell-solid interface, where the solid takes the shell's back DOFs) is refused."""
-    from tissuesim.febio.rigid_scene import rigid_material_of
+    from tissuesim.febio.rigid.scene import rigid_material_of
 
     shells = shells_of(model)
     for name, faces in shells.faces.items():
@@ -175,7 +175,7 @@ def check_shared_nodes(model: FebModel) -> None:
 def read_shell_thickness(model: FebModel, data: Node) -> None:
     """<ElementData type="shell thickness" elem_set=...> (FEBio 3: var=): <e lid=...> one
     thickness per node of the element (or one for all)."""
-    from tissuesim.febio.material_axes import _element_set
+    from tissuesim.febio.materials.axes import _element_set
 
     shells = shells_of(model)
     members = _element_set(model, data)
@@ -201,8 +201,8 @@ def read_shell_thickness(model: FebModel, data: Node) -> None:
 
 
 def read_mesh_data(model: FebModel, section: Node) -> None:
-    """<MeshData>: shell thickness data here, the rest by ``material_axes.read_mesh_data``."""
-    from tissuesim.febio.material_axes import read_mesh_data as read_axes
+    """<MeshData>: shell thickness data here, the rest by ``materials/axes.py read_mesh_data``."""
+    from tissuesim.febio.materials.axes import read_mesh_data as read_axes
 
     rest = []
     for data in section.children:
@@ -219,7 +219,7 @@ def read_mesh_data(model: FebModel, section: Node) -> None:
 def check_thickness(model: FebModel) -> None:
     """Refuse a shell part left without a thickness (FEBio: "Zero shell thickness"); called
     by a shell condition and when the scene is built (``febio/scene.py``)."""
-    from tissuesim.febio.rigid_scene import rigid_material_of
+    from tissuesim.febio.rigid.scene import rigid_material_of
 
     shells = shells_of(model)
     for name, h in shells.thickness.items():

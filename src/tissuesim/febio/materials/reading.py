@@ -22,7 +22,7 @@ import re
 
 import numpy as np
 
-from tissuesim.febio.material_axes import (
+from tissuesim.febio.materials.axes import (
     MixtureOrientation,
     Orientation,
     _direction,
@@ -31,8 +31,8 @@ from tissuesim.febio.material_axes import (
     read_mesh_data,
     with_directions,
 )
-from tissuesim.febio.material_expressions import GENERIC, generic_hyperelastic
-from tissuesim.febio.material_laws import (
+from tissuesim.febio.materials.expressions import GENERIC, generic_hyperelastic
+from tissuesim.febio.materials.laws import (
     DAMAGE,
     FIBRE_TYPES,
     FIBRES_ONLY,
@@ -90,7 +90,7 @@ def _law(
 
     kind = mat.attrib.get("type", "")
     if kind == "rigid body" and top:
-        from tissuesim.febio.rigid import rigid_material
+        from tissuesim.febio.rigid.conditions import rigid_material
 
         return rigid_material(model, mat)
     if kind in VISCOELASTIC and top:

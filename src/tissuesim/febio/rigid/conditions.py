@@ -12,7 +12,7 @@ springs, dampers) are refused in one line."""
 from __future__ import annotations
 
 from tissuesim.febio.model import FebModel, Load, _flag, _floats, _int_attr, _once, _unsupported
-from tissuesim.febio.rigid_connectors import read_connector, rigid_body_name
+from tissuesim.febio.rigid.connectors import read_connector, rigid_body_name
 from tissuesim.febio.xml import Node
 
 __all__ = ["rigid_material", "read_rigid", "read_rigid_nodes", "RIGID_DOFS"]
