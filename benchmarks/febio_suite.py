@@ -170,9 +170,11 @@ def run_one(path: Path) -> dict[str, Any]:
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
+            turns: dict[str, np.ndarray] = {}  # each rigid body's quaternion, followed
             for _ in range(scene.run["steps"]):
                 sim.step()
                 out["steps"] += 1
+                follow_rotations(sim, turns)
                 if sim.finished:  # an adaptive model's [run] steps is an upper bound
                     break
         out["status"] = "ran"
@@ -188,13 +190,27 @@ def run_one(path: Path) -> dict[str, Any]:
     if out["status"] != "ran":
         return out
     try:
-        out.update(solution_norm(model, sim, np))
+        out.update(solution_norm(model, sim, np, turns))
     except Exception as exc:  # noqa: BLE001 - the script's own error, not tissuesim's
         out.update(status="script error", error=type(exc).__name__, message=crash_line(exc))
     return out
 
 
-def solution_norm(model: Any, sim: Any, np: Any) -> dict[str, Any]:
+def follow_rotations(sim: Any, turns: dict) -> None:
+    """Each rigid body's rotation as a quaternion (x, y, z, w) followed step by step (the sign
+    of the two that give one rotation kept next to the last step's), as FEBio carries it: a
+    full turn is then the quaternion -1, angle 2 pi, not the identity."""
+    import numpy as np
+    from scipy.spatial.transform import Rotation
+
+    system = sim.system
+    for r, sc in zip(system.rigid, system.rigid_config_slices, strict=True):
+        q = Rotation.from_matrix(sim.state.x[sc][3:12].reshape(3, 3)).as_quat()
+        last = turns.get(r.name, np.array([0.0, 0.0, 0.0, 1.0]))
+        turns[r.name] = q if q @ last >= 0 else -q
+
+
+def solution_norm(model: Any, sim: Any, np: Any, turns: dict | None = None) -> dict[str, Any]:
     """tissuesim's final displacement over FEBio's equations.
 
     The bodies are the converter's (``febio/scene.py`` ``scene_bodies``: its names, its
@@ -232,14 +248,21 @@ def solution_norm(model: Any, sim: Any, np: Any) -> dict[str, Any]:
             continue  # a condition of an earlier step: its DOFs are free in the last one
         free[np.ix_(model.node_sets[nodes], range(3) if comps is None else comps)] = False
     # FEBio's vector also holds each rigid body's free DOFs: the centre's displacement and
-    # the rotation vector (FERigidSolver UpdateIncrements, the exponential map)
+    # the rotation vector (FERigidSolver UpdateIncrements, the exponential map, of the
+    # quaternion it carries from step to step: ``follow_rotations``)
+    turns = turns or {}
     from tissuesim.frames.rotations import log_map
 
     own = []
     state, system = sim.state, sim.system
     for r, sc in zip(system.rigid, system.rigid_config_slices, strict=True):
         z = state.x[sc]
-        values = np.concatenate([z[:3] - r.center, log_map(z[3:12].reshape(3, 3))[0]])
+        rotation = log_map(z[3:12].reshape(3, 3))[0]
+        if r.name in turns:  # FEBio's angle 2 acos(w) of the quaternion it carries: up to 2 pi
+            q = turns[r.name]
+            sin = float(np.linalg.norm(q[:3]))
+            rotation = q[:3] / sin * 2.0 * np.arccos(np.clip(q[3], -1.0, 1.0)) if sin else 0 * q[:3]
+        values = np.concatenate([z[:3] - r.center, rotation])
         own += [values[k] for k in range(6) if k not in r.held]
     values = np.concatenate([u[free], np.asarray(own, dtype=float)])
     return {"norm": float(np.linalg.norm(values)), "dofs": int(values.size), "note": ""}

@@ -164,3 +164,18 @@ def test_refusals_are_one_line(old, new, message, tmp_path):
     with pytest.raises(TissueSimError, match=message) as info:
         read_feb(path)
     assert "bad.feb:" in str(info.value) and "\n" not in str(info.value)
+
+
+@pytest.mark.parametrize("analysis", ["STATIC", "DYNAMIC"])
+def test_an_initial_rigid_velocity_is_a_note_in_a_static_analysis(analysis, tmp_path):
+    """FEBio's rj04 gives its crank an initial angular velocity in a STATIC analysis, where
+    it has no effect: a note; in a DYNAMIC one tissuesim refuses it in one line."""
+    ic = ('    <rigid_ic name="spin" type="initial_rigid_angular_velocity">\n'
+          "      <rb>block</rb>\n      <value>0,0,0.2</value>\n    </rigid_ic>\n")  # fmt: skip
+    path = tmp_path / "ic.feb"
+    path.write_text(model(REVOLUTE, ic).replace("STATIC", analysis))
+    if analysis == "STATIC":
+        assert any("no effect in a STATIC analysis" in n for n in read_feb(path).notes)
+    else:
+        with pytest.raises(TissueSimError, match="starts a rigid body at rest"):
+            read_feb(path)

@@ -15,7 +15,10 @@ from tissuesim.febio.model import FebModel, Load, _flag, _floats, _int_attr, _on
 from tissuesim.febio.rigid.connectors import read_connector, rigid_body_name
 from tissuesim.febio.xml import Node
 
-__all__ = ["rigid_material", "read_rigid", "read_rigid_nodes", "RIGID_DOFS"]
+__all__ = ["rigid_material", "read_rigid", "read_rigid_nodes", "RIGID_DOFS", "IC_TYPES"]
+
+#: FEBio's initial conditions of a rigid body (a note in a static analysis)
+IC_TYPES = ("initial_rigid_velocity", "initial_rigid_angular_velocity")
 
 #: FEBio's rigid DOF names (rigid_fixed's R*_dof, rigid_displacement's / rigid_force's dof)
 #: -> tissuesim's DOF index (rigid/body.py DOF_NAMES)
@@ -83,6 +86,14 @@ def read_rigid(model: FebModel, section: Node) -> None:
         kind = c.attrib.get("type", "")
         if c.tag == "rigid_connector":
             read_connector(model, c, kind)
+            continue
+        if c.tag == "rigid_ic" and kind in IC_TYPES:
+            if model.analysis != "static":
+                raise c.error(
+                    f"{kind}: tissuesim starts a rigid body at rest in a dynamic analysis (an "
+                    "initial rigid velocity is not supported yet)"
+                )
+            model.note(c, f"{kind} has no effect in a STATIC analysis (nor in FEBio's)")
             continue
         if model.window is not None:
             raise c.error(
