@@ -91,16 +91,21 @@ class RigidSystemPart:
         return out
 
     def _add_joints(self, acc: Accumulator, c: np.ndarray) -> None:
-        for (ka, kb), (value, grad, hess, _, _) in zip(
-            self._joint_ends, self.joint_terms(c, acc.order), strict=True
+        if getattr(self, "_joint_positions", None) is None:  # the pattern is fixed: once
+            self._joint_positions = []
+            for ka, kb in self._joint_ends:
+                q = np.concatenate([self._rigid_dofs(ka), self._rigid_dofs(kb)])
+                rows, cols = np.repeat(q, 12), np.tile(q, 12)
+                self._joint_positions.append(
+                    (q, self.pattern.positions(rows, cols, keys=self._pattern_keys()))
+                )
+        for (q, positions), (value, grad, hess, _, _) in zip(
+            self._joint_positions, self.joint_terms(c, acc.order), strict=True
         ):
             acc.add_value("joints", value)
-            q = np.concatenate([self._rigid_dofs(ka), self._rigid_dofs(kb)])
             if acc.order >= 1:
                 np.add.at(acc.gradient, q, grad)
             if acc.order >= 2:
-                rows, cols = np.repeat(q, 12), np.tile(q, 12)
-                positions = self.pattern.positions(rows, cols, keys=self._pattern_keys())
                 np.add.at(acc.hessian, positions, hess.ravel())
 
     def update_joints(self, c: np.ndarray) -> bool:

@@ -8,6 +8,7 @@ from __future__ import annotations
 import numpy as np
 
 from tissuesim.febio.model import FebModel, Load
+from tissuesim.rigid.body import DOF_NAMES
 
 __all__ = [
     "rigid_material_of", "rigid_bodies", "rigid_joints", "rigid_names", "interface_sets",
@@ -16,8 +17,6 @@ __all__ = [
 
 #: the point set of a deformable body's nodes glued to rigid body <name>
 RIGID_SET = "{}.rigid_interface"
-
-DOF_NAMES = ("x", "y", "z", "rx", "ry", "rz")
 
 
 def rigid_material_of(model: FebModel, part: str) -> str | None:
