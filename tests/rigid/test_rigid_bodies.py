@@ -63,6 +63,43 @@ def test_reduced_gradient_and_hessian_against_finite_differences():
         assert curvature / e**2 == pytest.approx(d @ (H @ d), rel=1e-4)
 
 
+def test_the_spring_of_a_soft_prescribed_dof_against_finite_differences():
+    """With contact a prescribed rigid DOF is pulled to its value by a spring (rigid/body.py
+    soft): its energy, gradient and Hessian along retractions that move the plate's centre
+    (its rotations held), against finite differences."""
+    sim = _block(fixed=("rx", "ry", "rz"), prescribed={"z": lambda t: -0.1 * t})
+    s = sim.system
+    (plate,) = s.rigid
+    plate.soft, plate.length = 5e3, 1.0
+    s.set_prescribed()
+    assert 2 not in plate.prescribed_dofs  # pulled, not set
+    s.load_time = 0.7
+    rng = np.random.default_rng(2)
+    free = np.ones(s.n_dofs, dtype=bool)
+    free[s.elimination.dofs] = False
+    c = s.retract(s.rest_config(), np.where(free, rng.normal(scale=0.02, size=s.n_dofs), 0.0))
+    acc = s.evaluate(c, 2)
+    import scipy.sparse as sp
+
+    H = sp.csr_matrix((acc.hessian, s.pattern.indices, s.pattern.indptr), shape=(s.n_dofs,) * 2)
+    spring = plate.spring_forces(c[s.rigid_config_slices[0]], 0.7)
+    assert spring[2] == pytest.approx(-5e3 * (c[s.rigid_config_slices[0]][2] - 1.0 + 0.07))
+    for _ in range(3):
+        d = np.where(free, rng.normal(size=s.n_dofs), 0.0)
+        e = 1e-6
+        plus, minus = (
+            s.evaluate(s.retract(c, e * d), 0).value,
+            s.evaluate(s.retract(c, -e * d), 0).value,
+        )
+        assert (plus - minus) / (2 * e) == pytest.approx(acc.gradient[free] @ d[free], rel=1e-6)
+        e = 1e-4
+        plus, minus = (
+            s.evaluate(s.retract(c, e * d), 0).value,
+            s.evaluate(s.retract(c, -e * d), 0).value,
+        )
+        assert (plus + minus - 2 * acc.value) / e**2 == pytest.approx(d @ (H @ d), rel=1e-4)
+
+
 def test_prescribed_rigid_motion_equals_it_prescribed_on_the_vertices():
     """A plate pressed and turned through its rigid body and the same motion as a Dirichlet
     condition on its vertices: the same positions and the same force; the moment is the
