@@ -277,8 +277,8 @@ def test_sliding_contact_and_rigid_wall_carry_the_load():
 
 
 NEW_REFUSALS = {
-    "angles": ("hgo_uniaxial", '<mat_axis type="vector">', '<mat_axis type="angles">',
-               "mat_axis type 'angles'"),
+    "map": ("hgo_uniaxial", '<mat_axis type="vector">', '<mat_axis type="cylindrical">',
+            "mat_axis type 'cylindrical'"),
     "data": ("trans_iso_mesh_data", '<ElementData var="fiber"',
              '<ElementData var="shell thickness"', "element data 'shell thickness'"),
     "three_field": ("viscoelastic_relaxation", 'mat="tissue"/>',

@@ -23,6 +23,7 @@ import difflib
 import inspect
 
 from tissuesim.errors import MaterialError
+from tissuesim.materials.active import ACTIVE_CONTRACTION_LAWS
 from tissuesim.materials.base import Material
 from tissuesim.materials.energy_law.energy import EnergyLaw
 from tissuesim.materials.fibres.fibre_exp_linear import FiberExpLinear, FiberExpLinearUncoupled
@@ -118,6 +119,7 @@ MATERIALS: dict[str, type[Material]] = {
         FixedCorotated,
         *SOFT_TISSUE_LAWS,
         *FIBRE_LAWS,
+        *ACTIVE_CONTRACTION_LAWS.values(),
     )
 }
 

@@ -59,6 +59,16 @@ def _direction(orientation: Orientation, p: Node, kind: str) -> None:
             if np.linalg.norm(np.cross(a, d)) <= 1e-12 * np.linalg.norm(a) * np.linalg.norm(d):
                 raise p.error("mat_axis: a and d must not be parallel (or zero)")
             orientation.axis = ("vector", a, d)
+        elif how == "angles":  # FEBio's FEMat3dSphericalAngleMap: Q = [a b c], degrees
+            parts = _once(p)
+            if not set(parts) <= {"theta", "phi"}:
+                extra = next(c for c in p.children if c.tag not in ("theta", "phi"))
+                raise _unsupported(extra, 'a mat_axis type="angles" takes <theta> and <phi>')
+            the = np.radians(float(_floats(parts["theta"], 1)[0])) if "theta" in parts else 0.0
+            phi = np.radians(float(_floats(parts["phi"], 1)[0])) if "phi" in parts else np.pi / 2
+            a = np.array([np.cos(the) * np.sin(phi), np.sin(the) * np.sin(phi), np.cos(phi)])
+            b = np.array([-np.sin(the), np.cos(the), 0.0])  # e2; e3 = a x b = c
+            orientation.axis = ("vector", a, b)
         elif how == "local":
             nodes = _ints(p) if p.text else [0, 0, 0]
             if len(nodes) != 3 or min(nodes) < 0:
@@ -68,8 +78,8 @@ def _direction(orientation: Orientation, p: Node, kind: str) -> None:
             orientation.axis = ("local", tuple(n - 1 for n in nodes), p)
         else:
             raise p.error(
-                f'mat_axis type {how!r} is not supported by tissuesim; it reads "vector" and '
-                '"local" (and per-element <ElementData type="mat_axis">)'
+                f'mat_axis type {how!r} is not supported by tissuesim; it reads "vector", '
+                '"angles" and "local" (and per-element <ElementData type="mat_axis">)'
             )
         return
     if orientation.kind != "fiber":

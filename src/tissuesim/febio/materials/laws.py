@@ -15,6 +15,8 @@ __all__ = [
     "VISCOELASTIC",
     "DAMAGE",
     "REACTIVE_VISCOELASTIC",
+    "ACTIVE",
+    "CURVE_PARAMETERS",
 ]
 
 #: FEBio material types tissuesim runs -> (model, FEBio parameter -> tissuesim keyword; None:
@@ -56,7 +58,24 @@ MATERIAL_TYPES = {
         name: (name, {"c3": "c3", "c4": "c4", "c5": "c5", "lambda": "lam_max"})
         for name in ("fiber-exp-linear", "uncoupled fiber-exp-linear")
     },
+    **{
+        f"{pre}prescribed {kind} active contraction": (
+            f"{pre}prescribed {kind} active contraction",
+            {"T0": "T0"},
+        )
+        for pre in ("", "uncoupled ")
+        for kind in ("isotropic", "trans iso", "uniaxial")
+    },
 }
+#: FEBio's prescribed active contraction (``materials/active/``): an active stress T0(t), read
+#: as a solid mixture's component only (it adds no stiffness); n0 its first local axis
+ACTIVE = {
+    f"{pre}prescribed {kind} active contraction"
+    for pre in ("", "uncoupled ")
+    for kind in ("isotropic", "trans iso", "uniaxial")
+}
+#: parameters that may follow a load curve (``<T0 lc="1">``: value times the curve)
+CURVE_PARAMETERS = {name: ("T0",) for name in ACTIVE}
 #: FEBio's fibre laws, read as components of a solid mixture only (they have no matrix)
 FIBRES_ONLY = {
     "fiber-exp-pow", "fiber-exp-pow-uncoupled", "fiber-pow-linear", "fiber-pow-linear-uncoupled",
@@ -81,6 +100,7 @@ FIBRE_TYPES = {
         )
     },
     **{name: "fiber" for name in FIBRES_ONLY},
+    **{name: "fiber" for name in ACTIVE if "isotropic" not in name},
 }
 #: the uncoupled laws, which FEBio runs with its three-field (mean dilatation) hex8 / tet10
 UNCOUPLED = {
@@ -90,6 +110,7 @@ UNCOUPLED = {
     "uncoupled viscoelastic",
     "uncoupled solid mixture", "fiber-exp-pow-uncoupled", "fiber-pow-linear-uncoupled",
     "uncoupled fiber-exp-linear",
+    *(name for name in ACTIVE if name.startswith("uncoupled")),
 }  # fmt: skip
 VISCOELASTIC = {
     "viscoelastic": "viscoelastic",

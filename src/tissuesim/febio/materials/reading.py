@@ -32,7 +32,10 @@ from tissuesim.febio.materials.axes import (
     with_directions,
 )
 from tissuesim.febio.materials.expressions import GENERIC, generic_hyperelastic
+from tissuesim.febio.materials.curve_values import checked_values, curve_value
 from tissuesim.febio.materials.laws import (
+    ACTIVE,
+    CURVE_PARAMETERS,
     DAMAGE,
     FIBRE_TYPES,
     FIBRES_ONLY,
@@ -115,14 +118,17 @@ def _law(
             except TissueSimError as exc:
                 raise mat.error(f"material {kind!r}: {exc}") from None
         return ("energy", params, density, kind, None)
-    if kind not in MATERIAL_TYPES or (kind in FIBRES_ONLY and not component):
-        known = [k for k in MATERIAL_TYPES if component or k not in FIBRES_ONLY] + list(GENERIC)
+    if kind not in MATERIAL_TYPES or (kind in FIBRES_ONLY | ACTIVE and not component):
+        known = [k for k in MATERIAL_TYPES if component or k not in FIBRES_ONLY | ACTIVE]
+        known += list(GENERIC)
         known += list(VISCOELASTIC) + list(REACTIVE_VISCOELASTIC) if top else []
         known += list(DAMAGE)
         known += list(MIXTURES) if not component else []
         where = " in a solid mixture" if component else ""
         alone = (
-            " alone (it has no matrix): put it in a solid mixture" if kind in FIBRES_ONLY else ""
+            " alone (it has no matrix): put it in a solid mixture"
+            if kind in FIBRES_ONLY | ACTIVE
+            else ""
         )
         if alone:
             raise mat.error(f"material type {kind!r} is read as a mixture's <solid> only{alone}")
@@ -138,6 +144,9 @@ def _law(
     for p in mat.children:
         if p.tag in ("mat_axis", "fiber") and orientation is not None:
             _direction(orientation, p, kind)
+            continue
+        if "lc" in p.attrib and p.tag in CURVE_PARAMETERS.get(kind, ()):
+            params[p.tag] = curve_value(p)
             continue
         if p.children or "lc" in p.attrib or p.attrib.get("type") not in (None, "const"):
             raise _unsupported(p, "a material parameter that is a field, a curve or a table")
@@ -204,7 +213,7 @@ def _mixture(model: FebModel, mat: Node, kind: str) -> tuple:
         raise mat.error(f"a {kind!r} needs at least one <solid>")
     params["components"] = components
     try:
-        make_material(MIXTURES[kind], **params)
+        make_material(MIXTURES[kind], **checked_values(params))
     except TissueSimError as exc:
         raise mat.error(f"material {kind!r}: {exc}") from None
     orientation = None

@@ -3,7 +3,8 @@
 mixture of ``mixture.py`` (W the sum of the components' energies) that also steps its
 components' histories: ``begin_step`` / ``accept_step`` go to each such component, and its state
 (``state_arrays``, for checkpoints) is theirs, keyed ``c<i>_<key>``. ``make_material`` builds
-one when a component has a history (``registry.py``); the name stays ``solid_mixture`` /
+one when a component has a history (``registry.py``; a prescribed active contraction's is
+its time, ``materials/active/``); the name stays ``solid_mixture`` /
 ``uncoupled_solid_mixture`` (the same law)."""
 
 from __future__ import annotations
@@ -31,9 +32,17 @@ class _History:
             return
         parts = list(components)
         # the mixture's checks on the wrapped laws (a history is refused there), then back
-        stand_ins = [p.elastic if isinstance(p, ElasticDamage) else p for p in parts]
+        # (a prescribed active contraction, whose state is the time: its ``stand_in``)
+        stand_ins = [
+            p.elastic
+            if isinstance(p, ElasticDamage)
+            else (p.stand_in() if hasattr(p, "stand_in") else p)
+            for p in parts
+        ]
         super()._init(stand_ins, extra)
         for i, p in enumerate(parts):
+            if hasattr(p, "stand_in"):
+                self.components[i] = copy.copy(p)
             if isinstance(p, ElasticDamage):
                 if self.uncoupled and not p.uncoupled:
                     raise MaterialError(
