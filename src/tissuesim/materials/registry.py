@@ -11,6 +11,7 @@ law given as ``elastic`` (a material or a table with its ``model``), ``VISCOELAS
 (``DAMAGE_LAWS``; a mixture with such a component steps its history, ``HISTORY_MIXTURES``);
 ``reactive_viscoelastic`` and ``uncoupled_reactive_viscoelastic`` take ``elastic`` and ``bond``
 laws (``REACTIVE_VISCOELASTIC_LAWS``); ``viscoelastic_damage`` takes an ``elastic_damage``.
+``kinematic_growth`` takes an ``elastic`` law at Fe = F Fg^-1 (``materials/active/``).
 ``energy`` is a law from its strain-energy density ``psi`` (``EnergyLaw``), its other keys the
 parameters psi names. ``solid_mixture`` and ``uncoupled_solid_mixture`` sum the laws given as
 ``components`` (``MIXTURES``); FEBio's fibre laws ``fiber_exp_pow``, ``fiber_pow_linear``,
@@ -23,7 +24,7 @@ import difflib
 import inspect
 
 from tissuesim.errors import MaterialError
-from tissuesim.materials.active import ACTIVE_CONTRACTION_LAWS
+from tissuesim.materials.active import ACTIVE_CONTRACTION_LAWS, KinematicGrowth
 from tissuesim.materials.base import Material
 from tissuesim.materials.energy_law.energy import EnergyLaw
 from tissuesim.materials.fibres.fibre_exp_linear import FiberExpLinear, FiberExpLinearUncoupled
@@ -289,6 +290,9 @@ def make_material(model: str, **params: object) -> Material:
         return _damage(key, params)
     if key in REACTIVE_VISCOELASTIC_LAWS:
         return _reactive_viscoelastic(key, params)
+    if key == KinematicGrowth.name:  # its elastic law: a material or a table
+        elastic = _elastic_table(key, params.get("elastic"), {})
+        return KinematicGrowth(**{**params, "elastic": elastic})
     if key == EnergyLaw.name:
         if "psi" not in params:
             raise MaterialError(
@@ -298,6 +302,7 @@ def make_material(model: str, **params: object) -> Material:
         return EnergyLaw(params.pop("psi"), **params)
     if key not in MATERIALS:
         names = [*MATERIALS, *VISCOELASTIC_LAWS, *DAMAGE_LAWS, *REACTIVE_VISCOELASTIC_LAWS]
+        names.append(KinematicGrowth.name)
         names.append(ViscoelasticDamage.name)
         names += [*MIXTURES, EnergyLaw.name]
         raise MaterialError(f"unknown material model {short(model)}; {_suggest(key, names)}")

@@ -32,6 +32,7 @@ from tissuesim.febio.materials.axes import (
     with_directions,
 )
 from tissuesim.febio.materials.expressions import GENERIC, generic_hyperelastic
+from tissuesim.febio.materials.growth import kinematic_growth
 from tissuesim.febio.materials.curve_values import checked_values, curve_value
 from tissuesim.febio.materials.laws import (
     ACTIVE,
@@ -98,6 +99,8 @@ def _law(
         return rigid_material(model, mat)
     if kind in VISCOELASTIC and top:
         return _viscoelastic(model, mat, kind)
+    if kind == "kinematic growth" and top:
+        return kinematic_growth(model, mat, _law)
     if kind in DAMAGE:
         return _damage(model, mat, kind, component, bulk)
     if kind == "reactive viscoelastic damage" and top:
@@ -122,6 +125,7 @@ def _law(
         known = [k for k in MATERIAL_TYPES if component or k not in FIBRES_ONLY | ACTIVE]
         known += list(GENERIC)
         known += list(VISCOELASTIC) + list(REACTIVE_VISCOELASTIC) if top else []
+        known += ["kinematic growth"] if top else []
         known += list(DAMAGE)
         known += list(MIXTURES) if not component else []
         where = " in a solid mixture" if component else ""
