@@ -60,6 +60,9 @@ class FebModel:
     curves: dict = field(default_factory=dict)
     #: "mat_axis" / "fiber" -> {(part, row): (value, XML element)} from <MeshData>
     element_data: dict = field(default_factory=dict)
+    #: named <ElementData name=...> maps (a material parameter given as type="map"): name ->
+    #: (XML element, {(part, row): value}) (febio/materials/axes.py)
+    element_maps: dict = field(default_factory=dict)
     notes: list = field(default_factory=list)  # "file:line <tag>: what is not used"
     #: <logfile> requests (febio/logfiles.py): kind, data, node rows or (part, row) cells
     #: (None: all), file, node

@@ -15,8 +15,8 @@ from tissuesim.febio.contact_start import separate_touching
 from tissuesim.febio.curves import curve_expression
 from tissuesim.febio.logfiles import cell_rows, logfile_tables
 from tissuesim.febio.materials import body_directions, with_directions
-from tissuesim.febio.model import FebModel, Load
 from tissuesim.febio.materials.curve_values import resolve_curve_values
+from tissuesim.febio.model import FebModel, Load
 from tissuesim.febio.reader import UNCOUPLED, read_feb
 from tissuesim.febio.rigid.scene import (
     RIGID_SET,
@@ -213,7 +213,8 @@ def febio_scene(model: FebModel, stem: str) -> tuple[dict, dict]:
                 'displacement form only: give the SolidDomain type="elastic-solid"'
             )
         directions = body_directions(model, spec, body["parts"], model.nodes, body["cells"])
-        params = resolve_curve_values(with_directions(params, directions), model)
+        params = with_directions(params, directions)
+        params = resolve_curve_values(params, model, body["parts"])
         tables.update(
             mesh={"file": file},
             material={"model": model_name, **params},

@@ -11,7 +11,8 @@ law given as ``elastic`` (a material or a table with its ``model``), ``VISCOELAS
 (``DAMAGE_LAWS``; a mixture with such a component steps its history, ``HISTORY_MIXTURES``);
 ``reactive_viscoelastic`` and ``uncoupled_reactive_viscoelastic`` take ``elastic`` and ``bond``
 laws (``REACTIVE_VISCOELASTIC_LAWS``); ``viscoelastic_damage`` takes an ``elastic_damage``.
-``kinematic_growth`` takes an ``elastic`` law at Fe = F Fg^-1 (``materials/active/``).
+``kinematic_growth`` takes an ``elastic`` law at Fe = F Fg^-1 (``materials/active/``),
+``prestrain_elastic`` one at F Fp (``prestrain.py``).
 ``energy`` is a law from its strain-energy density ``psi`` (``EnergyLaw``), its other keys the
 parameters psi names. ``solid_mixture`` and ``uncoupled_solid_mixture`` sum the laws given as
 ``components`` (``MIXTURES``); FEBio's fibre laws ``fiber_exp_pow``, ``fiber_pow_linear``,
@@ -48,6 +49,7 @@ from tissuesim.materials.orthotropic import (
     FungOrthotropicCompressible,
     OrthotropicElastic,
 )
+from tissuesim.materials.prestrain import PrestrainElastic
 from tissuesim.materials.reactive.damage import DAMAGE_LAWS
 from tissuesim.materials.reactive.history_mixture import HISTORY_MIXTURES
 from tissuesim.materials.reactive.reactive_viscoelastic import REACTIVE_VISCOELASTIC_LAWS
@@ -290,6 +292,9 @@ def make_material(model: str, **params: object) -> Material:
         return _damage(key, params)
     if key in REACTIVE_VISCOELASTIC_LAWS:
         return _reactive_viscoelastic(key, params)
+    if key == PrestrainElastic.name:  # its elastic law: a material or a table
+        elastic = _elastic_table(key, params.get("elastic"), {})
+        return PrestrainElastic(**{**params, "elastic": elastic})
     if key == KinematicGrowth.name:  # its elastic law: a material or a table
         elastic = _elastic_table(key, params.get("elastic"), {})
         return KinematicGrowth(**{**params, "elastic": elastic})
@@ -302,7 +307,7 @@ def make_material(model: str, **params: object) -> Material:
         return EnergyLaw(params.pop("psi"), **params)
     if key not in MATERIALS:
         names = [*MATERIALS, *VISCOELASTIC_LAWS, *DAMAGE_LAWS, *REACTIVE_VISCOELASTIC_LAWS]
-        names.append(KinematicGrowth.name)
+        names += [KinematicGrowth.name, PrestrainElastic.name]
         names.append(ViscoelasticDamage.name)
         names += [*MIXTURES, EnergyLaw.name]
         raise MaterialError(f"unknown material model {short(model)}; {_suggest(key, names)}")

@@ -130,6 +130,9 @@ def read_mesh_data(model: FebModel, section: Node) -> None:
         if data.tag != "ElementData":
             raise _unsupported(data, "this MeshData element is not supported by tissuesim")
         kind = data.attrib.get("type") or data.attrib.get("var")
+        if kind is None and "name" in data.attrib:
+            _element_map(model, data)
+            continue
         if kind not in ("mat_axis", "fiber"):
             raise data.error(
                 f"element data {kind!r} is not supported by tissuesim; it reads 'mat_axis' and "
@@ -156,6 +159,28 @@ def read_mesh_data(model: FebModel, section: Node) -> None:
                     raise e.error("mat_axis: a and d must not be parallel (or zero)")
                 value = (a, d)
             store[members[lid - 1]] = (value, e)
+
+
+#: a named map's data_type -> the numbers each element gives
+MAP_SIZES = {"scalar": 1, "vec3": 3, "mat3": 9}
+
+
+def _element_map(model: FebModel, data: Node) -> None:
+    """<ElementData name=... elem_set=... [data_type="scalar"|"vec3"|"mat3"]>: a map that a
+    material parameter names (``<F0 type="map">name</F0>``)."""
+    kind = data.attrib.get("data_type", "scalar")
+    if kind not in MAP_SIZES:
+        raise data.error(f"data_type {kind!r}: tissuesim reads {', '.join(MAP_SIZES)} maps")
+    members = _element_set(model, data)
+    values = {}
+    for e in data.children:
+        if e.tag not in ("e", "elem") or "lid" not in e.attrib:
+            raise _unsupported(e, "expected <e lid=...>")
+        lid = _int_attr(e, "lid", "an element's local id")
+        if not 1 <= lid <= len(members):
+            raise e.error(f"lid {lid} is outside the element set (1..{len(members)})")
+        values[members[lid - 1]] = _floats(e, MAP_SIZES[kind])
+    model.element_maps[data.attrib["name"]] = (data, values)
 
 
 def _element_set(model: FebModel, data: Node) -> list:

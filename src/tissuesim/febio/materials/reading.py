@@ -31,9 +31,9 @@ from tissuesim.febio.materials.axes import (
     read_mesh_data,
     with_directions,
 )
+from tissuesim.febio.materials.curve_values import checked_values, curve_value
 from tissuesim.febio.materials.expressions import GENERIC, generic_hyperelastic
 from tissuesim.febio.materials.growth import kinematic_growth
-from tissuesim.febio.materials.curve_values import checked_values, curve_value
 from tissuesim.febio.materials.laws import (
     ACTIVE,
     CURVE_PARAMETERS,
@@ -47,6 +47,7 @@ from tissuesim.febio.materials.laws import (
     VECTOR_PARAMETERS,
     VISCOELASTIC,
 )
+from tissuesim.febio.materials.prestrain import prestrain_elastic
 from tissuesim.febio.model import FebModel, _floats, _once, _unsupported
 from tissuesim.febio.xml import Node
 
@@ -101,6 +102,8 @@ def _law(
         return _viscoelastic(model, mat, kind)
     if kind == "kinematic growth" and top:
         return kinematic_growth(model, mat, _law)
+    if kind == "prestrain elastic" and top:
+        return prestrain_elastic(model, mat, _law)
     if kind in DAMAGE:
         return _damage(model, mat, kind, component, bulk)
     if kind == "reactive viscoelastic damage" and top:
@@ -125,7 +128,7 @@ def _law(
         known = [k for k in MATERIAL_TYPES if component or k not in FIBRES_ONLY | ACTIVE]
         known += list(GENERIC)
         known += list(VISCOELASTIC) + list(REACTIVE_VISCOELASTIC) if top else []
-        known += ["kinematic growth"] if top else []
+        known += ["kinematic growth", "prestrain elastic"] if top else []
         known += list(DAMAGE)
         known += list(MIXTURES) if not component else []
         where = " in a solid mixture" if component else ""
