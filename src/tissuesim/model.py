@@ -16,7 +16,12 @@ import numpy as np
 from tissuesim.assembly.pattern import SparsityPattern
 from tissuesim.assembly.pattern_renewal import renew_pattern
 from tissuesim.backend import resolve_backend
-from tissuesim.constraints.dirichlet import DirichletCondition, Elimination, PrescribedDofs
+from tissuesim.constraints.dirichlet import (
+    DirichletCondition,
+    Elimination,
+    PrescribedDofs,
+    constant_displacement,
+)
 from tissuesim.energies.accumulator import Accumulator
 from tissuesim.energies.elastic import ElasticEnergy
 from tissuesim.energies.mass import MassKind, MassMatrix
@@ -52,7 +57,11 @@ MODEL_BYTES_PER_CELL = {
 }
 
 
-def _kinematics(mesh: Mesh, rest: tuple | None = None):
+def _kinematics(mesh: Mesh, rest: tuple | None = None, formulation: str = "displacement"):
+    if formulation == "shell":  # FEBio's quad8 shells on hexahedron20 cells
+        from tissuesim.kinematics.shell import ShellKinematics
+
+        return ShellKinematics.from_mesh(mesh)
     if mesh.cell_type == "wedge":
         from tissuesim.kinematics.wedge import WedgeKinematics
 
@@ -79,7 +88,9 @@ class Model:
     loads: list = field(default_factory=list)
     conditions: Sequence[DirichletCondition] = ()
     backend: str = "auto"  # "auto", "numba" or "numpy" (see backend.py)
-    formulation: str = "displacement"  # or "mean_dilatation" (energies/mean_dilatation.py)
+    #: or "mean_dilatation" (energies/mean_dilatation.py), or "shell": hexahedron20 cells read
+    #: as FEBio's quad8 shells (kinematics/shell.py; their thickness midside nodes held)
+    formulation: str = "displacement"
     #: P1 cells' (shape gradients, rest measures) when known: a cut's copies keep their parent's
     rest: tuple | None = field(default=None, repr=False)
     #: (pattern, cells) of the P1 model this one replaces and, per cell, the cell of it with
@@ -95,7 +106,7 @@ class Model:
             "Use a coarser mesh.",
         )
         self.density = positive_field(self.density, "density", self.mesh.n_cells, "kg/m^3")
-        self.kinematics = _kinematics(self.mesh, self.rest)
+        self.kinematics = _kinematics(self.mesh, self.rest, self.formulation)
         if hasattr(self.material, "bind"):  # internal variables per integration point
             self.material = self.material.bind(
                 self.kinematics.weights.size, self.mesh.dim, self.mesh.n_cells
@@ -103,7 +114,7 @@ class Model:
         self.backend, self.backend_reason = resolve_backend(
             self.backend, self.mesh.n_cells, self.mesh.dim
         )
-        if self.formulation == "displacement":
+        if self.formulation in ("displacement", "shell"):
             self.elastic = ElasticEnergy(
                 self.kinematics, self.material, stencil_id=0, backend=self.backend
             )
@@ -113,7 +124,7 @@ class Model:
             extra = self.elastic.extra_entries()
         else:
             raise InputError(
-                f"formulation must be 'displacement' or 'mean_dilatation', not "
+                f"formulation must be 'displacement', 'mean_dilatation' or 'shell', not "
                 f"{short(self.formulation)}"
             )
         pattern = None
@@ -129,7 +140,13 @@ class Model:
 
     def set_conditions(self, conditions: Sequence[DirichletCondition]) -> None:
         self.conditions = tuple(conditions)
-        self.prescribed = PrescribedDofs.build(self.conditions, self.mesh.points)
+        held = self.conditions
+        if self.formulation == "shell":  # the midside nodes through the thickness: no energy
+            nodes = self.kinematics.thickness_midsides()
+            zero = constant_displacement([0.0] * 3)
+            midsides = DirichletCondition(nodes, zero, name="the shells' thickness midsides")
+            held = (*held, midsides)
+        self.prescribed = PrescribedDofs.build(held, self.mesh.points)
         self.elimination = Elimination.build(self.pattern, self.prescribed.dofs)
 
     @property

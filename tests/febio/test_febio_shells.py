@@ -144,8 +144,9 @@ def bent_model(path: Path):
 @pytest.mark.parametrize(
     ("old", "new", "match"),
     [
-        ('<Elements type="quad4"', '<Elements type="quad8"', r":\d+ <Elements>: element type "
-         r"'quad8' is not supported by tissuesim; .*shells quad4, tri3 .*quadratic shells quad8"),
+        ('<Elements type="quad4"', '<Elements type="quad9"', r":\d+ <Elements>: element type "
+         r"'quad9' is not supported by tissuesim; .*shells quad4, tri3, quad8 .*quadratic "
+         r"shells quad9"),
         ('<ShellDomain name="plate" mat="plate">',
          '<ShellDomain name="plate" mat="plate" type="elastic-shell-eas">',
          r"<ShellDomain>: shell domain type 'elastic-shell-eas' is not supported"),
@@ -197,10 +198,11 @@ def with_block(material: str) -> str:
     )
 
 
-def test_a_shell_on_a_rigid_part_is_clamped_to_it_and_on_a_solid_refused(tmp_path):
+def test_a_shell_on_a_rigid_part_is_clamped_to_it_and_on_a_solid_attached(tmp_path):
     """FEBio clamps a deformable shell node's back face to the rigid body the node joins
-    (RIGID_CLAMP): the back nodes of the shared nodes become a rigid node set; a shell on a
-    deformable solid (FEBio's shell-solid interface) is refused in one line."""
+    (RIGID_CLAMP): the back nodes of the shared nodes become a rigid node set; a deformable
+    solid behind the shell takes its back nodes (FEBio's shell-solid interface,
+    test_febio_shells_solids.py), refused when its material is another."""
     path = tmp_path / "on_rigid.feb"
     path.write_text(with_block("rigid body"))
     model = read_feb(path)
@@ -211,6 +213,10 @@ def test_a_shell_on_a_rigid_part_is_clamped_to_it_and_on_a_solid_refused(tmp_pat
         np.sort(model.node_sets[set_name]), sorted(shells.back[i] for i in (0, 1, 81, 82))
     )
     path.write_text(with_block("neo-Hookean"))
-    with pytest.raises(InputError, match=r"shell part 'plate' shares nodes with the solid part "
-                       r"'block': shells attached to solids .* are not supported"):  # fmt: skip
-        read_feb(path)
+    model = read_feb(path)  # the block behind the shell takes its back face
+    np.testing.assert_array_equal(
+        model.parts["block"][1][0, 4:], [shells.back[i] for i in (0, 1, 82, 81)]
+    )
+    with pytest.raises(InputError, match=r"parts \['plate', 'block'\] share nodes but have "
+                       r"different materials"):  # fmt: skip
+        load_febio(path)

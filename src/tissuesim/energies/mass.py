@@ -77,7 +77,8 @@ class MassMatrix:
             ref = (np.ones((nv, nv)) + np.eye(nv)) / (nv * (nv + 1))  # sums to 1
             scalar = element_mass[:, None, None] * ref[None]
         else:  # P2 / Q1: rho N^a N^b by a rule exact on the element's rest map
-            N, w = _element_rule(kinematics.mesh)  # (q, nv), (m, q)
+            rule = getattr(kinematics, "mass_rule", None)  # a shell's (kinematics/shell.py)
+            N, w = rule() if rule is not None else _element_rule(kinematics.mesh)  # (q, nv), (m, q)
             scalar = np.einsum("mq,qa,qb->mab", density[:, None] * w, N, N)
         if nv == d + 1:  # (m, nv) consistent row sums, column by column: numpy's own sums
             row = scalar[:, :, 0].copy()  # below 8 terms, without its loop over rows of nv

@@ -6,6 +6,7 @@ the same objects (``run`` converts into a temporary directory and loads that sce
 from __future__ import annotations
 
 import os
+import re
 import warnings
 from pathlib import Path
 
@@ -110,7 +111,37 @@ def scene_bodies(model: FebModel) -> list[tuple[str, dict]]:
     """(the scene's name, body) of every body the converter makes: a body is named after its
     first part in a scene of several bodies (or with rigid bodies), else "body"."""
     bodies = _bodies(model)
-    return [(b["parts"][0] if _several(model, bodies) else "body", b) for b in bodies]
+    if not _several(model, bodies):
+        return [("body", b) for b in bodies]
+    valid = re.compile(r"[A-Za-z0-9][A-Za-z0-9_.-]*")
+    used = {b["parts"][0] for b in bodies if valid.fullmatch(b["parts"][0])}
+    named = []
+    for b in bodies:
+        part = b["parts"][0]
+        name = part if valid.fullmatch(part) else body_name(part, used)
+        line = (
+            f"{b['node'].where()}: part {part!r} is the body {name!r} (a body's name names "
+            "its output files: letters, digits, '_', '-' or '.')"
+        )
+        if name != part and line not in model.changes:  # e.g. FEBio's "Part3(2)"
+            model.changes.append(line)
+        used.add(name)
+        named.append((name, b))
+    return named
+
+
+def body_name(part: str, used: set[str]) -> str:
+    """A valid body name for a FEBio part (letters, digits, '_', '-', '.', starting with a
+    letter or digit, as ``simulation/bodies.py`` takes): FEBio's name when it is one, else
+    its other characters as '_' ("Part3(2)" -> "Part3_2"); unique among ``used`` (then
+    ".2", ".3", ...)."""
+    name = re.sub(r"[^A-Za-z0-9_.-]+", "_", part).strip("_.-") or "part"
+    if not name[0].isalnum():
+        name = f"part{name}"
+    unique, k = name, 2
+    while unique in used:
+        unique, k = f"{name}.{k}", k + 1
+    return unique
 
 
 def _several(model: FebModel, bodies: list[dict]) -> bool:

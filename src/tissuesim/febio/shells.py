@@ -1,4 +1,4 @@
-"""FEBio's shells (``quad4``, ``tri3`` in a ``<ShellDomain>``) as the solids they are.
+"""FEBio's shells (``quad4``, ``tri3``, ``quad8`` in a ``<ShellDomain>``) as the solids they are.
 
 FEBio 3/4's shell (``FESSIShellDomain``, ``FEElasticShellDomain``: "elastic-shell") gives each
 node its displacement u and a second one, w (the DOFs ``sx, sy, sz``), the displacement of
@@ -13,6 +13,10 @@ moved by -D, with tissuesim's hex8 (wedge) quadrature: so each shell part become
 ``model.nodes``), and w is that node's displacement (FEBio's solution vector, and its
 ``solution_norm``, holds w). ``zero shell displacement`` / ``prescribed shell displacement``
 hold the back nodes. The mesh is ``tissuesim.mesh.generators.shells``' (``solid_shell``).
+A quad8 shell (FEBio's FEShellQuad8G18: 3 x 3 points in the plane times 2) is a hexahedron20
+with the "shell" formulation (``kinematics/shell.py``: quadratic in the plane, linear through
+the thickness, the 16 nodes' functions on FEBio's 18 points), one more node halfway through
+the thickness at each corner (it carries nothing and is held; it draws the element).
 """
 
 from __future__ import annotations
@@ -36,9 +40,9 @@ __all__ = [
 ]
 
 #: FEBio shell element -> (nodes, the solid it is here)
-SHELL_ELEMENTS = {"quad4": (4, "hexahedron"), "tri3": (3, "wedge")}
-#: FEBio's quadratic shells: a 16 (12) node solid tissuesim has no element for
-QUADRATIC_SHELLS = ("quad8", "quad9", "tri6", "tri7")
+SHELL_ELEMENTS = {"quad4": (4, "hexahedron"), "tri3": (3, "wedge"), "quad8": (8, "hexahedron20")}
+#: FEBio's quadratic shells tissuesim has no solid for (tri6: a 12-node wedge)
+QUADRATIC_SHELLS = ("quad9", "tri6", "tri7")
 #: ShellDomain type -> formulation (None: FEBio's default for the law: three-field for an
 #: uncoupled law on quad4, as tissuesim's hexahedra; tri3 gets "displacement" below)
 SHELL_DOMAINS = {"elastic-shell": "displacement", "three-field-shell": "mean_dilatation"}
@@ -55,6 +59,9 @@ class Shells:
     kinds: dict = field(default_factory=dict)  # part -> "quad4" / "tri3"
     thickness: dict = field(default_factory=dict)  # part -> (k, nv)
     back: dict = field(default_factory=dict)  # front node row -> back node row
+    #: a quad8 shell's corner node row -> the hexahedron20's midside node between it and its
+    #: back node (kinematics/shell.py: it carries nothing, it draws the element)
+    middle: dict = field(default_factory=dict)
 
 
 def shells_of(model: FebModel) -> Shells:
@@ -64,19 +71,33 @@ def shells_of(model: FebModel) -> Shells:
     return model._shells  # type: ignore[attr-defined]
 
 
-def add_shell_part(model: FebModel, name: str, kind: str, faces: np.ndarray) -> np.ndarray:
-    """The solid cells of a shell part: new back nodes (at the front nodes until the thickness
-    is read) appended to ``model.nodes``; (k, 2 nv) cells, back face first."""
-    shells = shells_of(model)
-    new = [int(i) for i in np.unique(faces) if int(i) not in shells.back]  # in node order
+def _new_nodes(model: FebModel, table: dict, rows: np.ndarray) -> np.ndarray:
+    """``rows`` mapped through ``table`` (front node row -> a new node row), the rows not in
+    it yet given new nodes (at their front node until the thickness is read) appended to
+    ``model.nodes`` in node order."""
+    new = [int(i) for i in np.unique(rows) if int(i) not in table]
     first = len(model.nodes)
     for k, i in enumerate(new):
-        shells.back[i] = first + k
+        table[i] = first + k
     model.nodes = np.vstack([model.nodes, model.nodes[new]])
-    back = np.vectorize(shells.back.__getitem__, otypes=[np.int64])(faces)
+    return np.vectorize(table.__getitem__, otypes=[np.int64])(rows)
+
+
+def add_shell_part(model: FebModel, name: str, kind: str, faces: np.ndarray) -> np.ndarray:
+    """The solid cells of a shell part: new back nodes appended to ``model.nodes``; (k, 2 nv)
+    cells, back face first; a quad8 shell's (k, 20) hexahedron20 cells (VTK's order: back
+    corners, front corners, back midsides, front midsides, then a new node halfway along each
+    corner's thickness, ``kinematics/shell.py``)."""
+    shells = shells_of(model)
+    back = _new_nodes(model, shells.back, faces)
     shells.faces[name] = faces
     shells.kinds[name] = kind
     shells.thickness[name] = np.zeros(faces.shape)
+    if kind == "quad8":
+        middle = _new_nodes(model, shells.middle, faces[:, :4])
+        return np.concatenate(
+            [back[:, :4], faces[:, :4], back[:, 4:], faces[:, 4:], middle], axis=1
+        )
     return np.concatenate([back, faces], axis=1)
 
 
@@ -89,13 +110,25 @@ def _place(model: FebModel, node: Node) -> None:
     if not shells.faces:
         return
     front = np.array(list(shells.back), dtype=np.int64)
-    faces = np.concatenate(list(shells.faces.values()))
-    thickness = np.concatenate(list(shells.thickness.values()))
-    try:
-        directors = shell_directors(model.nodes, faces, thickness, normalize=False)
-    except MeshError as exc:
-        raise node.error(str(exc)) from None
+    n = len(model.nodes)
+    total, count = np.zeros((n, 3)), np.zeros(n)
+    for nv in {f.shape[1] for f in shells.faces.values()}:  # quad4, tri3, quad8 parts
+        parts = [p for p, f in shells.faces.items() if f.shape[1] == nv]
+        faces = np.concatenate([shells.faces[p] for p in parts])
+        thickness = np.concatenate([shells.thickness[p] for p in parts])
+        try:
+            mean = shell_directors(model.nodes, faces, thickness, normalize=False)
+        except MeshError as exc:
+            raise node.error(str(exc)) from None
+        corners = np.bincount(faces.ravel(), minlength=n).astype(float)
+        total += mean * corners[:, None]
+        count += corners
+    directors = total / np.maximum(count, 1.0)[:, None]  # FEModel::InitShells' mean
     model.nodes[[shells.back[i] for i in front.tolist()]] = model.nodes[front] - directors[front]
+    if shells.middle:  # quad8: halfway through the thickness
+        corner = np.array(list(shells.middle), dtype=np.int64)
+        half = model.nodes[corner] - 0.5 * directors[corner]
+        model.nodes[[shells.middle[i] for i in corner.tolist()]] = half
 
 
 def read_shell_domain(model: FebModel, node: Node) -> None:
@@ -105,7 +138,7 @@ def read_shell_domain(model: FebModel, node: Node) -> None:
     if name not in model.parts:
         raise node.error(f"no <Elements> part named {name!r}")
     if name not in shells.faces:
-        raise node.error(f"part {name!r} is not made of shell elements (quad4, tri3)")
+        raise node.error(f"part {name!r} is not made of shell elements (quad4, tri3, quad8)")
     if mat not in model.materials:
         raise node.error(f"no <material> named {mat!r}")
     kind = node.attrib.get("type")
@@ -132,6 +165,13 @@ def read_shell_domain(model: FebModel, node: Node) -> None:
             shells.thickness[name][:] = h
             _place(model, node)
     formulation = SHELL_DOMAINS.get(kind) if kind else None
+    if shells.kinds[name] == "quad8":  # kinematics/shell.py; FEBio: no three-field by default
+        if formulation == "mean_dilatation":
+            raise node.error(
+                "three-field-shell on quad8 shells is not supported by tissuesim (their "
+                "elastic-shell is)"
+            )
+        formulation = "shell"
     if formulation is None and shells.kinds[name] == "tri3":
         formulation = "displacement"  # FEBio: no three-field tri3 shell by default
     model.domains[name] = (mat, formulation, node)
@@ -141,8 +181,8 @@ def check_shared_nodes(model: FebModel) -> None:
     """After <MeshDomains>: a deformable shell node shared with a rigid part moves with the
     rigid body, its back node too (FEBio clamps every deformable shell node's shell DOFs to
     the rigid body it joins: ``FEMechModel``'s RIGID_CLAMP), so the back nodes become a rigid
-    node set (``model.rigid_nodes``); a shell sharing nodes with a deformable solid (FEBio's
-    shell-solid interface, where the solid takes the shell's back DOFs) is refused."""
+    node set (``model.rigid_nodes``); a shell sharing nodes with a deformable solid joins it
+    as FEBio's shell-solid interface does (``attach_solid``)."""
     from tissuesim.febio.rigid.scene import rigid_material_of
 
     shells = shells_of(model)
@@ -160,16 +200,51 @@ def check_shared_nodes(model: FebModel) -> None:
                 continue  # two deformable shell parts: one back node per node
             node = model.domains[name][2]
             if body is None:
-                raise node.error(
-                    f"shell part {name!r} shares nodes with the solid part {part!r}: shells "
-                    "attached to solids (FEBio's shell-solid interface) are not supported by "
-                    "tissuesim"
-                )
+                attach_solid(model, name, part, shared)
+                continue
             set_name = f"{name}.{part}.clamped"
             model.node_sets[set_name] = np.array(
                 [shells.back[int(i)] for i in shared], dtype=np.int64
             )
             model.rigid_nodes.append((set_name, body, node))
+
+
+def attach_solid(model: FebModel, name: str, part: str, shared: np.ndarray) -> bool:
+    """A deformable solid part sharing the nodes ``shared`` with the shell part ``name``
+    (FEBio's ``FESSIShellDomain::FindSSI``): where one of the solid's cells has a whole shell
+    element as a face and lies behind the shell (the face's outward normal along the shell's
+    normal), the solid is attached to the shell's back face: every shared node of the solid's
+    cells is the shell's back node there (FEBio's ``m_bitfc``: the solid takes X - D and the
+    shell DOFs w, ``FESolidDomain::GetCurrentNodalCoordinates``), so its cells are renumbered
+    to the back nodes. A solid in front of the shell, or touching it along edges only, shares
+    the nodes' displacement u as they are. True when the solid was attached to the back."""
+    from scipy import sparse
+
+    shells = shells_of(model)
+    faces = shells.faces[name]
+    cell_type, cells, ids, node = model.parts[part]
+    n = len(model.nodes)
+
+    def incidence(rows: np.ndarray) -> sparse.csr_matrix:
+        k, nv = rows.shape
+        r = np.repeat(np.arange(k), nv)
+        return sparse.csr_matrix((np.ones(k * nv), (r, rows.ravel())), shape=(k, n))
+
+    common = (incidence(faces) @ incidence(cells).T).tocoo()
+    whole = common.data == faces.shape[1]  # the cell holds every node of the shell element
+    e, c = common.row[whole], common.col[whole]
+    if not e.size:
+        return False
+    x = model.nodes
+    f = x[faces[e]]
+    normal = np.cross(f[:, 1] - f[:, 0], f[:, 2] - f[:, 0])  # the shell's normal (front)
+    outward = f.mean(axis=1) - x[cells[c]].mean(axis=1)  # from the cell into the face
+    if not ((normal * outward).sum(axis=1) > 0.0).any():
+        return False
+    back = np.arange(n)
+    back[shared] = [shells.back[int(i)] for i in shared]
+    model.parts[part] = (cell_type, back[cells], ids, node)
+    return True
 
 
 def read_shell_thickness(model: FebModel, data: Node) -> None:
@@ -183,7 +258,7 @@ def read_shell_thickness(model: FebModel, data: Node) -> None:
     if solid is not None:
         raise data.error(
             f"element data 'shell thickness' on part {solid!r}, which has no shell elements "
-            "(quad4, tri3)"
+            "(quad4, tri3, quad8)"
         )
     for e in data.children:
         if e.tag not in ("e", "elem") or "lid" not in e.attrib:

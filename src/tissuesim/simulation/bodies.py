@@ -136,7 +136,9 @@ class BodyCalls:
         vertex indices are kept, point sets gain the midside nodes between their vertices).
         formulation: "displacement", or "mean_dilatation" for nearly incompressible laws
         (nu >= 0.45): the lambda term on element (P2) or vertex-patch (P1) volume averages,
-        free of volumetric locking (``energies/mean_dilatation.py``)."""
+        free of volumetric locking (``energies/mean_dilatation.py``); "shell" for hexahedron20
+        cells read as FEBio's quad8 shells (``solid_shell`` on quad8 faces;
+        ``kinematics/shell.py``)."""
         name = self._new_name(name, "body")
         if self.tissue is not None:
             raise InputError("add the organs before the tissue that connects them")
@@ -148,7 +150,7 @@ class BodyCalls:
                 f"{validate.short(material)}"
             )
         validate.choice(mass, "mass", ("consistent", "lumped"))
-        validate.choice(formulation, "formulation", ("displacement", "mean_dilatation"))
+        validate.choice(formulation, "formulation", ("displacement", "mean_dilatation", "shell"))
         if order is not None:
             if isinstance(order, bool) or order not in (1, 2):
                 raise InputError(f"order must be 1 or 2, not {validate.short(order)}")

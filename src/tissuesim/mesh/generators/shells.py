@@ -79,7 +79,10 @@ def shell_cells(
     """(points, cells) of the solid shell: ``layers + 1`` copies of the points, the first at
     the top face (rows 0..n-1), each next one ``directors / layers`` further down; cells
     (k layers, 8) hexahedra or (k layers, 6) wedges in tissuesim's (VTK's / Gmsh's) order,
-    bottom face first, layer by layer from the top."""
+    bottom face first, layer by layer from the top. On quad8 faces (k, 8): (k layers, 20)
+    hexahedra20, their vertical edges' midside nodes appended after the levels (one per
+    corner vertex and layer, halfway down it), for the "shell" formulation
+    (``kinematics/shell.py``, FEBio's quad8 shell)."""
     if reference not in REFERENCES:
         raise MeshError(f"reference {reference!r}: expected one of {', '.join(REFERENCES)}")
     x = np.asarray(points, dtype=np.float64)
@@ -87,6 +90,26 @@ def shell_cells(
     n = len(x)
     top = x + REFERENCES[reference] * directors
     levels = [top - (i / layers) * directors for i in range(layers + 1)]
+    if faces.shape[1] == 8:  # quad8: hexahedra20, a node halfway down each corner's edge
+        corners = np.unique(faces[:, :4])
+        row = np.full(n, -1)
+        row[corners] = np.arange(len(corners))
+        start = (layers + 1) * n
+        halves = [top[corners] - ((i + 0.5) / layers) * directors[corners] for i in range(layers)]
+        cells = [
+            np.concatenate(
+                [
+                    faces[:, :4] + (i + 1) * n,
+                    faces[:, :4] + i * n,
+                    faces[:, 4:] + (i + 1) * n,
+                    faces[:, 4:] + i * n,
+                    start + i * len(corners) + row[faces[:, :4]],
+                ],
+                axis=1,
+            )  # fmt: skip
+            for i in range(layers)
+        ]
+        return np.concatenate(levels + halves), np.concatenate(cells)
     cells = [np.concatenate([faces + (i + 1) * n, faces + i * n], axis=1) for i in range(layers)]
     return np.concatenate(levels), np.concatenate(cells)
 
@@ -99,15 +122,18 @@ def solid_shell(
     reference: str = "middle",
     normalize: bool = True,
 ) -> Mesh:
-    """A solid-shell mesh of a surface: hexahedra on quadrilaterals, wedges on triangles.
+    """A solid-shell mesh of a surface: hexahedra on quadrilaterals, wedges on triangles,
+    hexahedra20 on quad8 quadrilaterals (corners, then the midside nodes of the edges from
+    corner 0 to 1, 1 to 2, 2 to 3, 3 to 0: FEBio's quad8 shell, run with the body's
+    formulation "shell", ``kinematics/shell.py``).
 
-    points: (n, 3) surface vertices; faces: (k, 4) quadrilaterals or (k, 3) triangles,
-    counter-clockwise seen from the top (their normals point to the top face); thickness: the
-    shell's thickness (> 0); layers: cells through the thickness; reference: where the surface
-    lies, "middle" (the default: the surface is the wall's mid-surface), "top" (FEBio's shell
-    nodes: the shell extends opposite the normals) or "bottom"; normalize: directors of the
-    full thickness (False: FEBio's mean of unit normals times the thickness, shorter on a
-    curved surface).
+    points: (n, 3) surface vertices; faces: (k, 4) quadrilaterals, (k, 8) quad8 ones or (k, 3)
+    triangles, counter-clockwise seen from the top (their normals point to the top face);
+    thickness: the shell's thickness (> 0); layers: cells through the thickness; reference:
+    where the surface lies, "middle" (the default: the surface is the wall's mid-surface),
+    "top" (FEBio's shell nodes: the shell extends opposite the normals) or "bottom";
+    normalize: directors of the full thickness (False: FEBio's mean of unit normals times the
+    thickness, shorter on a curved surface).
 
     Vertex i of the surface is vertex i of the mesh's top face (rows 0..n-1; at the surface
     itself with reference "top"), the levels
@@ -121,9 +147,10 @@ def solid_shell(
     f = np.asarray(faces)
     if x.ndim != 2 or x.shape[1] != 3 or not np.isfinite(x).all():
         raise MeshError(f"shell points must be (n, 3) finite coordinates, got shape {x.shape}")
-    if f.ndim != 2 or f.shape[1] not in (3, 4) or len(f) == 0:
+    if f.ndim != 2 or f.shape[1] not in (3, 4, 8) or len(f) == 0:
         raise MeshError(
-            f"shell faces must be (k, 3) triangles or (k, 4) quadrilaterals, got shape {f.shape}"
+            "shell faces must be (k, 3) triangles, (k, 4) quadrilaterals or (k, 8) quad8 "
+            f"quadrilaterals, got shape {f.shape}"
         )
     if not np.issubdtype(f.dtype, np.integer) or f.min() < 0 or f.max() >= len(x):
         raise MeshError(f"shell faces must be vertex indices 0..{len(x) - 1}")
@@ -147,7 +174,7 @@ def solid_shell(
         cells,
         source="solid_shell",
         point_sets={"top": np.unique(f), "bottom": np.unique(f) + layers * n},
-        facet_sets={"top": f, "bottom": f[:, ::-1] + layers * n},
+        facet_sets={"top": f[:, :4], "bottom": f[:, 3::-1] + layers * n},
         cell_sets={f"layer{i}": np.arange(i * k, (i + 1) * k) for i in range(layers)}
         if layers > 1
         else None,
