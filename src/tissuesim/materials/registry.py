@@ -45,8 +45,10 @@ from tissuesim.materials.isotropic.neo_hookean import NeoHookean
 from tissuesim.materials.isotropic.stvk import StVenantKirchhoff
 from tissuesim.materials.mixture import MIXTURES
 from tissuesim.materials.orthotropic import (
+    CubicCLE,
     FungOrthotropic,
     FungOrthotropicCompressible,
+    OrthotropicCLE,
     OrthotropicElastic,
 )
 from tissuesim.materials.prestrain import PrestrainElastic
@@ -70,6 +72,7 @@ __all__ = [
     "ALIASES",
     "SOFT_TISSUE_LAWS",
     "FIBRE_LAWS",
+    "FEBIO_LAWS",
     "MIXTURES",
     "make_material",
     "law_class",
@@ -122,8 +125,16 @@ MATERIALS: dict[str, type[Material]] = {
         FixedCorotated,
         *SOFT_TISSUE_LAWS,
         *FIBRE_LAWS,
-        *ACTIVE_CONTRACTION_LAWS.values(),
     )
+}
+
+#: FEBio's laws with FEBio's own parameters that are not elastic laws on their own, or not of
+#: the families above: the prescribed active contractions (a stress in time, a mixture's
+#: component) and the conewise linear elastic laws
+FEBIO_LAWS: dict[str, type[Material]] = {
+    **ACTIVE_CONTRACTION_LAWS,
+    OrthotropicCLE.name: OrthotropicCLE,
+    CubicCLE.name: CubicCLE,
 }
 
 #: other spellings of the soft-tissue laws' names: "<law>_uncoupled", "<law>_coupled"
@@ -153,7 +164,7 @@ def law_class(model: object) -> type[Material] | None:
     """The class ``make_material(model, ...)`` builds, or None (a wrapper, an energy law or an
     unknown name)."""
     key = _key(model)
-    return MATERIALS.get(key) or MIXTURES.get(key)
+    return MATERIALS.get(key) or FEBIO_LAWS.get(key) or MIXTURES.get(key)
 
 
 def _suggest(word: str, choices: list[str]) -> str:
@@ -305,13 +316,19 @@ def make_material(model: str, **params: object) -> Material:
                 "'mu/2*(I1 - 3) - mu*log(J) + lam/2*log(J)**2' with mu and lam"
             )
         return EnergyLaw(params.pop("psi"), **params)
-    if key not in MATERIALS:
-        names = [*MATERIALS, *VISCOELASTIC_LAWS, *DAMAGE_LAWS, *REACTIVE_VISCOELASTIC_LAWS]
+    if key not in MATERIALS and key not in FEBIO_LAWS:
+        names = [
+            *FEBIO_LAWS,
+            *MATERIALS,
+            *VISCOELASTIC_LAWS,
+            *DAMAGE_LAWS,
+            *REACTIVE_VISCOELASTIC_LAWS,
+        ]
         names += [KinematicGrowth.name, PrestrainElastic.name]
         names.append(ViscoelasticDamage.name)
         names += [*MIXTURES, EnergyLaw.name]
         raise MaterialError(f"unknown material model {short(model)}; {_suggest(key, names)}")
-    cls = MATERIALS[key]
+    cls = MATERIALS.get(key) or FEBIO_LAWS[key]
     sig = inspect.signature(cls.__init__).parameters
     allowed = [n for n, p in sig.items() if p.kind is inspect.Parameter.KEYWORD_ONLY]
     for name in params:

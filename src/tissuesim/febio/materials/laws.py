@@ -47,6 +47,8 @@ MATERIAL_TYPES = {
             "TC nonlinear orthotropic",
             "Arruda-Boyce unconstrained",
             "isotropic Hencky",
+            "orthotropic CLE",
+            "cubic CLE",
             "uncoupled Holmes-Mow",
             "fiber-exp-pow",
             "fiber-exp-pow-uncoupled",
@@ -97,6 +99,8 @@ FIBRE_TYPES = {
             "Fung orthotropic",
             "Fung-ortho-compressible",
             "TC nonlinear orthotropic",
+            "orthotropic CLE",
+            "cubic CLE",
         )
     },
     **{name: "fiber" for name in FIBRES_ONLY},
