@@ -49,6 +49,7 @@ from tissuesim.simulation.checks import StepChecks
 from tissuesim.simulation.cuts import CutCalls
 from tissuesim.simulation.interactions import InteractionCalls
 from tissuesim.simulation.loads import LoadCalls
+from tissuesim.simulation.penalty_contact import PenaltyContactCalls, carry_penalty_state
 from tissuesim.simulation.results import BodyResults
 from tissuesim.simulation.rigid import RigidCalls
 from tissuesim.simulation.stepping import Stepping
@@ -78,6 +79,7 @@ class Simulation(
     BodyCalls,
     LoadCalls,
     InteractionCalls,
+    PenaltyContactCalls,
     CutCalls,
     RigidCalls,
     StepChecks,
@@ -134,6 +136,7 @@ class Simulation(
         self.gravity: list[np.ndarray] = []  # on every body, those added later too
         self._force_names: set[str] = set()
         self.ties: list = []  # coupling/tie.py
+        self.penalty_contacts: list = []  # simulation/penalty_contact.py PenaltySpec
         self._named_attachments: list = []  # (name, sign, index in system.attachments)
         self.frame_attachments: list = []  # (coupling/frame_attachment.py spec, sign)
         self.contact = None  # contact/model.py ContactSettings when contact is on
@@ -243,6 +246,9 @@ class Simulation(
         self._system = System([b.model for b in bodies], names, attachments, ties, rigid=rigid,
                               rigid_members=members, joints=self.rigid_joints)  # fmt: skip
         parts.update(self._rigid_parts(old, state))
+        self._system.penalty_contacts = self._penalty_pairs(self._system)
+        if old is not None:  # a rebuild keeps the pairs' multipliers (same facets, same points)
+            carry_penalty_state(old.penalty_contacts, self._system.penalty_contacts)
         if self.contact is not None:
             self._system.contact = self._contact_model()
             if old is not None and old.contact is not None:

@@ -78,6 +78,7 @@ from tissuesim.scene.tables.contact import CONTACT_KEYS, OBSTACLE_KEYS
 from tissuesim.scene.tables.cuts import CUT_KEYS, TEARING_KEYS, add_cut_tables, add_tearing_table
 from tissuesim.scene.tables.fem_body import _mesh, _select
 from tissuesim.scene.tables.logfiles import LOGFILE_KEYS, add_logfiles
+from tissuesim.scene.tables.penalty_contact import PENALTY_KEYS, add_penalty_contacts
 from tissuesim.scene.tables.rigid import JOINT_KEYS, RIGID_KEYS, add_rigid_bodies
 from tissuesim.scene.tables.visual import VISUAL_KEYS, add_visual_surfaces
 from tissuesim.validate import short
@@ -122,10 +123,11 @@ COUPLED_SCENE_KEYS: dict[str, Any] = {
     "logfiles": set(LOGFILE_KEYS),
     "rigid_bodies": set(RIGID_KEYS),
     "rigid_joints": set(JOINT_KEYS),
+    "penalty_contact": set(PENALTY_KEYS),
 }
 ARRAYS = (
     "organs", "bodies", "graspers", "attachments", "cuts", "obstacles", "visual_surfaces",
-    "logfiles", "rigid_bodies", "rigid_joints",
+    "logfiles", "rigid_bodies", "rigid_joints", "penalty_contact",
 )  # fmt: skip
 MESH_GENERATORS = {
     "ellipsoid": ("center", "radii", "divisions"),
@@ -206,6 +208,7 @@ def build_bodies_scene(data: dict, base_dir: Path, source: str, name: str) -> Sc
     from tissuesim.scene.tables.contact import add_contact_tables
 
     add_rigid_bodies(sim, data, source)
+    add_penalty_contacts(sim, data, source)
     add_contact_tables(sim, data, base_dir, source)
     tissue = _table(data, "tissue", source)
     if tissue:
