@@ -99,8 +99,8 @@ def test_closed_triangles_take_the_energy_other_surfaces_the_lag_and_bad_facets_
     assert not on_hexes.bodies["body"].pressures[0].closed
     with pytest.raises(InputError, match=r"facets must be \(k, 4\)"):
         on_hexes.add_follower_pressure(mesh.facet_sets["zmax"], 100.0)
-    quadratic = ts.box((0.0, 0.0, 0.0), (1.0, 1.0, 1.0), (1, 1, 1), element="hex20")
-    with pytest.raises(InputError, match="hexahedron20 cells"):
+    quadratic = ts.box((0.0, 0.0, 0.0), (1.0, 1.0, 1.0), (1, 1, 1), element="hex27")
+    with pytest.raises(InputError, match="hexahedron27 cells"):  # hexahedron20's: quad8 faces
         ts.Simulation(quadratic, ts.make_material("neo_hookean", youngs_modulus=1e4,
                       poisson_ratio=0.3)).add_follower_pressure([[0, 1, 2]], 1.0)  # fmt: skip
     from tissuesim.mesh.cutting.virtual_nodes import PlanarCut

@@ -307,3 +307,78 @@ def test_three_field_quad8_is_refused_in_one_line(cantilever, tmp_path):
         InputError, match=r"three.feb:\d+ <ShellDomain>: three-field-shell on quad8"
     ):
         read_feb(bad)
+
+
+# -- a follower pressure on quad8 faces ------------------------------------------------------
+def test_quad8_face_pressure_loads_and_their_stiffness():
+    """FEBio's FEQuad8G9 pressure on a flat rectangle a x b (midside nodes halfway): p a b
+    along the normal, -1/12 of it at each corner and 1/3 at each midside node (the
+    serendipity element's consistent load); on a warped face its stiffness dG/dx against
+    central differences."""
+    from tissuesim.energies.pressure_lag import facet_loads, facet_stiffness
+
+    a, b, p = 2.0, 0.5, 3.0
+    corners = np.array([[0, 0, 0], [a, 0, 0], [a, b, 0], [0, b, 0]], dtype=float)
+    X = np.concatenate([corners, 0.5 * (corners + np.roll(corners, -1, axis=0))])[None]
+    G = facet_loads(X, p)[0]
+    np.testing.assert_allclose(G[:, :2], 0.0, atol=1e-14)
+    np.testing.assert_allclose(G[:4, 2], -p * a * b / 12, rtol=1e-13)
+    np.testing.assert_allclose(G[4:, 2], p * a * b / 3, rtol=1e-13)
+    rng = np.random.default_rng(8)
+    Y = X + 0.1 * rng.standard_normal(X.shape)
+    K = facet_stiffness(Y, p)[0].reshape(24, 24)
+    dx = rng.standard_normal(24)
+    eps = 1e-6
+    up = facet_loads(Y + eps * dx.reshape(1, 8, 3), p)[0].ravel()
+    down = facet_loads(Y - eps * dx.reshape(1, 8, 3), p)[0].ravel()
+    np.testing.assert_allclose((up - down) / (2 * eps), K @ dx, atol=1e-8 * abs(K @ dx).max())
+
+
+def with_pressure(text: str, p: float) -> str:
+    """The cantilever deck with a follower pressure p on its shells' front faces (all of
+    them) instead of the tip load."""
+    _, faces = plate()
+    quads = "".join(
+        f'<quad8 id="{k + 1}">{",".join(str(i + 1) for i in f)}</quad8>'
+        for k, f in enumerate(faces)
+    )
+    text = text.replace("  </Mesh>", f'    <Surface name="top">{quads}</Surface>\n  </Mesh>')
+    start, end = text.index("    <nodal_load"), text.index("</nodal_load>") + len("</nodal_load>")
+    load = (
+        '<surface_load name="press" surface="top" type="pressure">'
+        f'<pressure lc="1">{p / P!r}</pressure><linear>0</linear></surface_load>'
+    )
+    return text[:start] + load + text[end:]
+
+
+def test_quad8_plate_under_a_follower_pressure_equals_the_api(tmp_path):
+    """A follower pressure on the quad8 shells' front faces (FEBio's pressure load, sh55,
+    sh57): the deck and the API's solid_shell with add_follower_pressure on the mesh's top
+    facets end at the same positions (1e-10), the tip's deflection within 0.3 % of the
+    Timoshenko beam under q = p W."""
+    path = tmp_path / "pressed.feb"
+    p = 2e-2
+    path.write_text(with_pressure(deck(), p))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        model = read_feb(path)
+        scene = load_febio(path)
+        sim = scene.simulation
+        for _ in range(scene.run["steps"]):
+            sim.step()
+    x = sim.body_positions("body")
+    points, faces = plate()
+    mesh = ts.mesh.solid_shell(points, faces, H, reference="top", normalize=False)
+    api = ts.Simulation(integrator="quasistatic", time_step=0.5)
+    api.add_body("body", mesh, ts.NeoHookean(youngs_modulus=E, poisson_ratio=0.0),
+                 density=1.0, formulation="shell")  # fmt: skip
+    n = len(points)
+    api.add_dirichlet(np.flatnonzero(np.isclose(mesh.points[: 2 * n, 0], 0.0)))
+    api.add_follower_pressure(mesh.facet_sets["top"], lambda t: p * t)
+    api.step()
+    api.step()
+    np.testing.assert_allclose(api.body_positions("body"), x, rtol=0, atol=1e-10)
+    tip = np.isclose(model.nodes[:n, 0], L)
+    q, I, G = p * W, W * H**3 / 12, E / 2  # the beam under q per length, down (the normal's +z)
+    beam = q * L**4 / (8 * E * I) + q * L**2 / (2 * 5 / 6 * G * W * H)
+    assert (x - model.nodes)[:n][tip, 2].mean() == pytest.approx(-beam, rel=3e-3)

@@ -155,3 +155,91 @@ def test_a_part_named_with_brackets_runs_under_a_valid_name(tmp_path):
         warnings.simplefilter("ignore")
         scene = load_febio(path)
     assert "block_2" in scene.simulation.bodies
+
+
+def pressed_block(thickness: float, domain: str = "") -> str:
+    """A unit hex8 block (neo-Hookean), its bottom held, under a rigid quad4 shell on its top
+    face (sharing its four nodes) pushed down 0.1 by a rigid_displacement: the rigid shell
+    of ``thickness`` (0: none, as FEBio's sh01) and ``domain`` the ShellDomain's type."""
+    corners = [(0, 0), (1, 0), (1, 1), (0, 1)]
+    nodes = "".join(
+        f'<node id="{k + 1 + 4 * z}">{x},{y},{z}</node>' for z in (0, 1)
+        for k, (x, y) in enumerate(corners)
+    )  # fmt: skip
+    kind = f' type="{domain}"' if domain else ""
+    return f"""<?xml version="1.0" encoding="ISO-8859-1"?>
+<febio_spec version="4.0">
+  <Module type="solid"/>
+  <Control><analysis>STATIC</analysis><time_steps>2</time_steps><step_size>0.5</step_size>
+  </Control>
+  <Material>
+    <material id="1" name="block" type="neo-Hookean"><density>1</density><E>1000</E><v>0.3</v>
+    </material>
+    <material id="2" name="plate" type="rigid body"><density>1</density>
+      <center_of_mass>0.5,0.5,1</center_of_mass></material>
+  </Material>
+  <Mesh>
+    <Nodes name="all">{nodes}</Nodes>
+    <Elements type="hex8" name="block"><elem id="1">1,2,3,4,5,6,7,8</elem></Elements>
+    <Elements type="quad4" name="plate"><elem id="2">5,6,7,8</elem></Elements>
+    <NodeSet name="bottom">1, 2, 3, 4</NodeSet>
+  </Mesh>
+  <MeshDomains>
+    <SolidDomain name="block" mat="block"/>
+    <ShellDomain name="plate" mat="plate"{kind}><shell_thickness>{thickness}</shell_thickness>
+    </ShellDomain>
+  </MeshDomains>
+  <Boundary>
+    <bc name="hold" node_set="bottom" type="zero displacement">
+      <x_dof>1</x_dof><y_dof>1</y_dof><z_dof>1</z_dof>
+    </bc>
+  </Boundary>
+  <Rigid>
+    <rigid_bc name="fix" type="rigid_fixed"><rb>plate</rb><Rx_dof>1</Rx_dof><Ry_dof>1</Ry_dof>
+      <Rz_dof>0</Rz_dof><Ru_dof>1</Ru_dof><Rv_dof>1</Rv_dof><Rw_dof>1</Rw_dof></rigid_bc>
+    <rigid_bc name="push" type="rigid_displacement"><rb>plate</rb><dof>z</dof>
+      <value lc="1">-0.1</value><relative>0</relative></rigid_bc>
+  </Rigid>
+  <LoadData>
+    <load_controller id="1" name="LC1" type="loadcurve"><interpolate>LINEAR</interpolate>
+      <points><pt>0,0</pt><pt>1,1</pt></points></load_controller>
+  </LoadData>
+</febio_spec>
+"""
+
+
+def test_a_rigid_shell_without_thickness_makes_no_body_and_pushes_its_nodes(tmp_path):
+    """FEBio takes a rigid shell of no thickness (sh01): here it makes no FEM body (a line in
+    the changes says so), its nodes shared with the block move with the rigid body, and the
+    block ends as under the same rigid shell 0.05 thick (the rigid body's motion is
+    prescribed: its mass plays no part), its top 0.1 down."""
+    runs = {}
+    for h in (0.0, 0.05):
+        path = tmp_path / f"pressed{h}.feb"
+        path.write_text(pressed_block(h))
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            scene = load_febio(path)
+            sim = scene.simulation
+            for _ in range(scene.run["steps"]):
+                sim.step()
+        runs[h] = sim.body_positions("block")
+        if h == 0.0:
+            model = read_feb(path)
+            assert "plate" not in sim.bodies and len(sim.bodies) == 1
+    np.testing.assert_allclose(runs[0.0], runs[0.05], rtol=0, atol=1e-12)
+    np.testing.assert_allclose(runs[0.0][4:, 2], 0.9, atol=1e-12)
+    assert abs(runs[0.0][4:, :2] - model.nodes[4:8, :2]).max() < 1e-12
+
+
+def test_a_rigid_shell_domain_takes_a_rigid_material_only(tmp_path):
+    """type="rigid-shell" (FERigidShellDomain) on a rigid body material reads as the default
+    shell does; on a deformable law it is refused in one line."""
+    path = tmp_path / "rigid.feb"
+    path.write_text(pressed_block(0.05, "rigid-shell"))
+    assert read_feb(path).domains["plate"][0] == "plate"
+    text = pressed_block(0.05, "rigid-shell").replace('mat="plate" type', 'mat="block" type')
+    path.write_text(text)
+    with pytest.raises(InputError, match=r"rigid.feb:\d+ <ShellDomain>: a rigid-shell domain "
+                       r"takes a rigid body material, not 'neo-Hookean'"):  # fmt: skip
+        read_feb(path)

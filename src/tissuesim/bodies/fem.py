@@ -287,8 +287,9 @@ class FemBody:
 
     def add_follower_pressure(self, facets, pressure, name: str) -> None:
         """A follower pressure p (Pa; a number or a callable t -> p) on boundary facets of this
-        3D body (P1 triangles (k, 3), Q1 quad faces (k, 4)): an energy on a closed surface of
-        triangles, lagged on any other (``energies/pressure.py``, ``pressure_lag.py``)."""
+        3D body (P1 triangles (k, 3), Q1 or hexahedron20 quad faces (k, 4)): an energy on a
+        closed surface of triangles, lagged on any other (``energies/pressure.py``,
+        ``pressure_lag.py``)."""
         from tissuesim.energies.pressure import follower_pressure
 
         self.pressures.append(follower_pressure(self.mesh, facets, pressure, name, self.name))

@@ -60,17 +60,19 @@ def is_closed(facets: np.ndarray) -> bool:
 
 def follower_pressure(mesh, facets, pressure, name: str, body: str) -> FollowerPressure:
     """A follower pressure p (Pa; a number or a callable t -> p) on boundary facets of a 3D
-    body of ``mesh`` (P1 tetrahedra: triangles (k, 3); Q1 hexahedra: quad faces (k, 4)), given
+    body of ``mesh`` (P1 tetrahedra: triangles (k, 3); Q1 hexahedra and hexahedra20: quad
+    faces (k, 4), the latter's taken with their midside nodes (k, 8)), given
     in any vertex order; they are matched to the boundary and oriented outward. Closed
     triangles take the energy, every other surface is lagged."""
     from tissuesim.mesh.queries.boundary import boundary_facets, match_facets
     from tissuesim.validate import indices
 
     where = f"add_follower_pressure {name!r}"
-    if mesh.dim != 3 or mesh.order != 1 or mesh.cell_type not in ("tetra", "hexahedron"):
+    if mesh.dim != 3 or mesh.cell_type not in ("tetra", "hexahedron", "hexahedron20"):
         raise InputError(
             f"{where}: body {body!r} has {mesh.cell_type} cells; a follower pressure acts on "
-            "the boundary triangles of P1 tetrahedra or the quad faces of Q1 hexahedra"
+            "the boundary triangles of P1 tetrahedra or the quad faces of Q1 hexahedra and "
+            "hexahedra20"
         )
     width = 3 if mesh.simplicial else 4
     shape = "triangles" if width == 3 else "quadrilaterals (the hexahedra's faces)"
@@ -83,7 +85,7 @@ def follower_pressure(mesh, facets, pressure, name: str, body: str) -> FollowerP
     else:
         from tissuesim.mesh.cells.tensor import boundary_faces
 
-        boundary = boundary_faces(mesh.cells, 3)
+        boundary = boundary_faces(mesh.cells[:, :8], 3)  # a hexahedron20's by its corners
     row = match_facets(boundary, facets)
     if np.any(row < 0):
         raise InputError(
@@ -94,6 +96,10 @@ def follower_pressure(mesh, facets, pressure, name: str, body: str) -> FollowerP
     facets = np.asarray(boundary[row], dtype=np.int64)  # outward, whatever order was given
     if len(np.unique(row)) < len(row):
         raise InputError(f"{where}: a facet is given twice")
+    if mesh.cell_type == "hexahedron20":  # quad8 faces (lagged, energies/pressure_lag.py)
+        from tissuesim.mesh.cells.tensor_quadratic import full_facets
+
+        facets = full_facets(mesh, facets)
     if callable(pressure):
         value = pressure
     else:

@@ -7,7 +7,8 @@ The follower load of a pressure p on facets oriented outward is f_a = -G_a(x) at
 the nodal share of p times the area-weighted normal of the deformed facet (N_a the facet's
 shape functions: linear on triangles, where G_a = p/6 (x_b - x_a) x (x_c - x_a) for each corner,
 one third of p times the area vector; bilinear on the quadrilateral faces of hexahedra,
-integrated exactly by 2 x 2 Gauss points, FEBio's consistent pressure load). On an open
+integrated exactly by 2 x 2 Gauss points, FEBio's consistent pressure load; the quad8 faces of
+hexahedra20 on 3 x 3, FEBio's FEQuad8G9). On an open
 surface G has no potential (its derivative K_ab = dG_a/dx_b is not symmetric), so a step
 freezes it at a lag configuration x_lag and minimises with the dead load
 
@@ -62,6 +63,13 @@ def _rule(m: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     if m == 3:  # linear triangle on (0,0) (1,0) (0,1): the centroid is exact (G is linear)
         N = np.full((1, 3), 1.0 / 3.0)
         return N, np.array([[-1.0, 1.0, 0.0]]), np.array([[-1.0, 0.0, 1.0]]), np.array([0.5])
+    if m == 8:  # a hexahedron20's quad8 face: FEBio's FEQuad8G9, 3 x 3 Gauss points
+        from tissuesim.mesh.cells import tensor_quadratic as tq
+        from tissuesim.mesh.cells.tensor import gauss_rule
+
+        points, w = gauss_rule(2, 3)
+        N, dN = tq.shape_functions("quad8", points)
+        return N, dN[:, :, 0], dN[:, :, 1], w
     s, t = _QUAD_SIGNS[:, 0], _QUAD_SIGNS[:, 1]
     xi, eta = _QUAD_POINTS[:, :1], _QUAD_POINTS[:, 1:]
     N = (1 + s * xi) * (1 + t * eta) / 4.0
@@ -76,7 +84,7 @@ def _tangents(X: np.ndarray) -> tuple[np.ndarray, np.ndarray, tuple]:
 
 
 def facet_loads(X: np.ndarray, p: float) -> np.ndarray:
-    """G (k, m, 3): p int N_a (x_,xi x x_,eta) per node of each facet X (k, m, 3), m = 3 or 4;
+    """G (k, m, 3): p int N_a (x_,xi x x_,eta) per node of each facet X (k, m, 3), m = 3, 4, 8;
     minus the follower force of pressure p on the facets (outward-oriented)."""
     a, b, (N, _, _, w) = _tangents(X)
     return p * np.einsum("q,qa,kqi->kai", w, N, np.cross(a, b))

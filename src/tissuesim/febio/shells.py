@@ -45,7 +45,11 @@ SHELL_ELEMENTS = {"quad4": (4, "hexahedron"), "tri3": (3, "wedge"), "quad8": (8,
 QUADRATIC_SHELLS = ("quad9", "tri6", "tri7")
 #: ShellDomain type -> formulation (None: FEBio's default for the law: three-field for an
 #: uncoupled law on quad4, as tissuesim's hexahedra; tri3 gets "displacement" below)
-SHELL_DOMAINS = {"elastic-shell": "displacement", "three-field-shell": "mean_dilatation"}
+SHELL_DOMAINS = {
+    "elastic-shell": "displacement",
+    "three-field-shell": "mean_dilatation",
+    "rigid-shell": None,  # FERigidShellDomain: a rigid body material's shells (a rigid body)
+}
 SHELL_BCS = ("zero shell displacement", "prescribed shell displacement")
 AXES = {"sx": 0, "sy": 1, "sz": 2}
 
@@ -174,6 +178,10 @@ def read_shell_domain(model: FebModel, node: Node) -> None:
         formulation = "shell"
     if formulation is None and shells.kinds[name] == "tri3":
         formulation = "displacement"  # FEBio: no three-field tri3 shell by default
+    if kind == "rigid-shell" and model.materials[mat][3] != "rigid body":
+        raise node.error(
+            f"a rigid-shell domain takes a rigid body material, not {model.materials[mat][3]!r}"
+        )
     model.domains[name] = (mat, formulation, node)
 
 
@@ -291,21 +299,34 @@ def read_mesh_data(model: FebModel, section: Node) -> None:
                               section.text, rest))  # fmt: skip
 
 
-def check_thickness(model: FebModel) -> None:
-    """Refuse a shell part left without a thickness (FEBio: "Zero shell thickness"); called
-    by a shell condition and when the scene is built (``febio/scene.py``)."""
+def check_thickness(model: FebModel) -> set[str]:
+    """Refuse a deformable shell part left without a thickness (FEBio: "Zero shell
+    thickness"); called by a shell condition and when the scene is built (``febio/scene.py``).
+    Returns the rigid shell parts without one (FEBio's ``FERigidShellDomain`` takes them: a
+    rigid body of no mass there): they make no FEM body, their nodes still join the rigid
+    body (a deformable part's shared nodes are glued to it), a line in ``model.changes``."""
     from tissuesim.febio.rigid.scene import rigid_material_of
 
     shells = shells_of(model)
+    thin = set()
     for name, h in shells.thickness.items():
         if (h <= 0.0).any():
             node = model.domains.get(name, (None, None, model.parts[name][3]))[2]
-            rigid = name in model.domains and rigid_material_of(model, name) is not None
-            why = " (FEBio takes a rigid shell without one; tissuesim's needs a volume)"
+            body = rigid_material_of(model, name) if name in model.domains else None
+            if body is not None and (h <= 0.0).all():
+                thin.add(name)
+                line = (
+                    f"{node.where()}: rigid shell part {name!r} has no thickness: no FEM body "
+                    f"(no mass); its nodes move with the rigid body {body!r}"
+                )
+                if line not in model.changes:
+                    model.changes.append(line)
+                continue
             raise node.error(
                 f"shell part {name!r} has no thickness: give <shell_thickness> in its "
-                f'<ShellDomain> or <ElementData type="shell thickness">{why if rigid else ""}'
+                '<ShellDomain> or <ElementData type="shell thickness">'
             )
+    return thin
 
 
 def back_set(model: FebModel, node: Node, nodes: str) -> str:

@@ -77,7 +77,8 @@ class LoadCalls:
     ) -> None:
         """A follower pressure (Pa) on boundary facets of a 3D body: it acts normal to the
         surface where it is now (FEBio's non-linear pressure). ``facets``: (k, 3) boundary
-        triangles of P1 tetrahedra or (k, 4) quad faces of Q1 hexahedra, in any vertex order
+        triangles of P1 tetrahedra or (k, 4) quad faces of Q1 hexahedra or hexahedra20 (by
+        their corners; a quad8 face's midside nodes join it), in any vertex order
         (they are oriented outward from the material: a positive p pushes on the body, on a
         cavity's wall it inflates it); ``pressure``: a number or a callable ``t -> p``.
 
