@@ -415,9 +415,12 @@ def _contact(model: FebModel, names: list[str], bodies: list[dict], meshes: dict
         for s in mesh.facet_sets:
             owner.setdefault(s, name)
     surfaces: dict[str, list[str]] = {}
-    pairs, obstacles = [], []
+    pairs, obstacles, penalty = [], [], []
     scale = float(np.linalg.norm(np.ptp(model.nodes, axis=0)))
     for k, c in enumerate(model.contacts, start=1):
+        if "penalty" in c:  # FEBio's penalty / augmented Lagrangian, as FEBio enforces it
+            penalty.append(_penalty_table(c, k, owner))
+            continue
         sides = []
         for s in c["surfaces"]:
             if s not in owner:
@@ -453,6 +456,8 @@ def _contact(model: FebModel, names: list[str], bodies: list[dict], meshes: dict
             f"body {body!r} touches through several surfaces {surfaces[body]}: tissuesim takes "
             "one contact surface per body (join them into one Surface)"
         )
+    if not pairs and not obstacles:
+        return {"penalty_contact": penalty}
     listed = {tuple(sorted(p["bodies"])) for p in pairs}
     everyone = names + [o["name"] for o in obstacles]
     for i, a in enumerate(everyone):
@@ -464,7 +469,25 @@ def _contact(model: FebModel, names: list[str], bodies: list[dict], meshes: dict
     out = {"contact": {"surfaces": {n: s[0] for n, s in surfaces.items()}, "pairs": pairs}}
     if obstacles:
         out["obstacles"] = obstacles
+    if penalty:
+        out["penalty_contact"] = penalty
     return out
+
+
+def _penalty_table(c: dict, k: int, owner: dict) -> dict:
+    """A FEBio sliding contact as a [[penalty_contact]] table (FEBio's primary surface is the
+    one whose points are projected: ``FEFacet2FacetSliding::m_ss``)."""
+    primary, secondary = c["surfaces"]
+    for s in (primary, secondary):
+        if s not in owner:
+            raise c["node"].error(f"surface {s!r} is on no body")
+    if primary == secondary:
+        raise c["node"].error(
+            f"contact of surface {primary!r} with itself is not supported by tissuesim"
+        )
+    name = c["node"].attrib.get("name") or f"contact{k}"
+    return {"name": name, "primary": owner[primary], "secondary": owner[secondary],
+            "primary_facets": primary, "secondary_facets": secondary, **c["penalty"]}  # fmt: skip
 
 
 def convert_febio(
