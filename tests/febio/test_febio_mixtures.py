@@ -88,8 +88,8 @@ FIBRE_SOLID = '<solid type="fiber-exp-pow">'
 MATERIAL = '<material id="1"'
 #: case -> (text replaced, its replacement, the element named, a text on its line, message)
 REFUSALS = {
-    "cfd": (FIBRE_SOLID, '<solid type="continuous fiber distribution">', "solid",
-            "continuous fiber", "not supported by tissuesim in a solid mixture"),
+    "unknown": (FIBRE_SOLID, '<solid type="fiber-Kiousis-uncoupled">', "solid",
+                "fiber-Kiousis", "not supported by tissuesim in a solid mixture"),
     "nested": (FIBRE_SOLID, '<solid type="solid mixture">', "solid",
                '<solid type="solid mixture">', "a mixture is not a component of a mixture"),
     "alone": ('type="solid mixture">', 'type="fiber-exp-pow">', "material", MATERIAL,

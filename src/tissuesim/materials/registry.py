@@ -28,6 +28,10 @@ from tissuesim.errors import MaterialError
 from tissuesim.materials.active import ACTIVE_CONTRACTION_LAWS, KinematicGrowth
 from tissuesim.materials.base import Material
 from tissuesim.materials.energy_law.energy import EnergyLaw
+from tissuesim.materials.fibres.continuous_distribution import (
+    ContinuousFiberDistribution,
+    ContinuousFiberDistributionUncoupled,
+)
 from tissuesim.materials.fibres.fibre_exp_linear import FiberExpLinear, FiberExpLinearUncoupled
 from tissuesim.materials.fibres.fibre_exp_pow import FiberExpPow, FiberExpPowUncoupled
 from tissuesim.materials.fibres.fibre_pow_linear import FiberPowLinear, FiberPowLinearUncoupled
@@ -113,6 +117,8 @@ FIBRE_LAWS: tuple[type[Material], ...] = (
     FiberPowLinearUncoupled,
     FiberExpLinear,
     FiberExpLinearUncoupled,
+    ContinuousFiberDistribution,
+    ContinuousFiberDistributionUncoupled,
 )
 
 MATERIALS: dict[str, type[Material]] = {

@@ -15,6 +15,7 @@ __all__ = [
     "VISCOELASTIC",
     "DAMAGE",
     "REACTIVE_VISCOELASTIC",
+    "CONTINUOUS",
     "ACTIVE",
     "CURVE_PARAMETERS",
 ]
@@ -54,6 +55,8 @@ MATERIAL_TYPES = {
             "fiber-exp-pow-uncoupled",
             "fiber-pow-linear",
             "fiber-pow-linear-uncoupled",
+            "continuous fiber distribution",
+            "continuous fiber distribution uncoupled",
         )
     },
     **{
@@ -82,7 +85,11 @@ CURVE_PARAMETERS = {name: ("T0",) for name in ACTIVE}
 FIBRES_ONLY = {
     "fiber-exp-pow", "fiber-exp-pow-uncoupled", "fiber-pow-linear", "fiber-pow-linear-uncoupled",
     "fiber-exp-linear", "uncoupled fiber-exp-linear",
+    "continuous fiber distribution", "continuous fiber distribution uncoupled",
 }  # fmt: skip
+#: FEBio's continuous fibre distributions: their <fibers>, <distribution> and <scheme> are
+#: tables of a type and its parameters (``materials/fibres/continuous_distribution.py``)
+CONTINUOUS = {"continuous fiber distribution", "continuous fiber distribution uncoupled"}
 #: FEBio's solid mixtures -> tissuesim's model
 MIXTURES = {"solid mixture": "solid_mixture", "uncoupled solid mixture": "uncoupled_solid_mixture"}
 #: the fibre laws: FEBio type -> what their directions are ("axes": e1, e2; "fiber": Q fiber)
@@ -104,6 +111,7 @@ FIBRE_TYPES = {
         )
     },
     **{name: "fiber" for name in FIBRES_ONLY},
+    **{name: "axes" for name in CONTINUOUS},
     **{name: "fiber" for name in ACTIVE if "isotropic" not in name},
 }
 #: the uncoupled laws, which FEBio runs with its three-field (mean dilatation) hex8 / tet10
@@ -113,7 +121,7 @@ UNCOUPLED = {
     "Fung orthotropic", "uncoupled Holmes-Mow", "TC nonlinear orthotropic",
     "uncoupled viscoelastic",
     "uncoupled solid mixture", "fiber-exp-pow-uncoupled", "fiber-pow-linear-uncoupled",
-    "uncoupled fiber-exp-linear",
+    "uncoupled fiber-exp-linear", "continuous fiber distribution uncoupled",
     *(name for name in ACTIVE if name.startswith("uncoupled")),
 }  # fmt: skip
 VISCOELASTIC = {

@@ -32,10 +32,12 @@ from tissuesim.febio.materials.axes import (
     with_directions,
 )
 from tissuesim.febio.materials.curve_values import checked_values, curve_value
+from tissuesim.febio.materials.distributions import PARTS, read_part
 from tissuesim.febio.materials.expressions import GENERIC, generic_hyperelastic
 from tissuesim.febio.materials.growth import kinematic_growth
 from tissuesim.febio.materials.laws import (
     ACTIVE,
+    CONTINUOUS,
     CURVE_PARAMETERS,
     DAMAGE,
     FIBRE_TYPES,
@@ -151,6 +153,9 @@ def _law(
     for p in mat.children:
         if p.tag in ("mat_axis", "fiber") and orientation is not None:
             _direction(orientation, p, kind)
+            continue
+        if kind in CONTINUOUS and p.tag in PARTS:
+            params[p.tag] = read_part(model, p)
             continue
         if "lc" in p.attrib and p.tag in CURVE_PARAMETERS.get(kind, ()):
             params[p.tag] = curve_value(p)
