@@ -48,6 +48,7 @@ from tissuesim.materials.isotropic.linear import LinearElastic
 from tissuesim.materials.isotropic.neo_hookean import NeoHookean
 from tissuesim.materials.isotropic.stvk import StVenantKirchhoff
 from tissuesim.materials.mixture import MIXTURES
+from tissuesim.materials.multigeneration import Multigeneration
 from tissuesim.materials.orthotropic import (
     CubicCLE,
     FungOrthotropic,
@@ -55,11 +56,13 @@ from tissuesim.materials.orthotropic import (
     OrthotropicCLE,
     OrthotropicElastic,
 )
+from tissuesim.materials.porous_neo_hookean import PorousNeoHookean
 from tissuesim.materials.prestrain import PrestrainElastic
 from tissuesim.materials.reactive.damage import DAMAGE_LAWS
 from tissuesim.materials.reactive.history_mixture import HISTORY_MIXTURES
 from tissuesim.materials.reactive.reactive_viscoelastic import REACTIVE_VISCOELASTIC_LAWS
 from tissuesim.materials.reactive.viscoelastic_damage import ViscoelasticDamage
+from tissuesim.materials.shenoy import Shenoy
 from tissuesim.materials.soft_tissue.arruda_boyce import ArrudaBoyce, CoupledArrudaBoyce
 from tissuesim.materials.soft_tissue.arruda_boyce_unconstrained import ArrudaBoyceUnconstrained
 from tissuesim.materials.soft_tissue.hencky import IsotropicHencky
@@ -136,11 +139,13 @@ MATERIALS: dict[str, type[Material]] = {
 
 #: FEBio's laws with FEBio's own parameters that are not elastic laws on their own, or not of
 #: the families above: the prescribed active contractions (a stress in time, a mixture's
-#: component) and the conewise linear elastic laws
+#: component), the conewise linear elastic laws, the porous neo-Hookean and Shenoy
 FEBIO_LAWS: dict[str, type[Material]] = {
     **ACTIVE_CONTRACTION_LAWS,
     OrthotropicCLE.name: OrthotropicCLE,
     CubicCLE.name: CubicCLE,
+    PorousNeoHookean.name: PorousNeoHookean,
+    Shenoy.name: Shenoy,
 }
 
 #: other spellings of the soft-tissue laws' names: "<law>_uncoupled", "<law>_coupled"
@@ -309,6 +314,16 @@ def make_material(model: str, **params: object) -> Material:
         return _damage(key, params)
     if key in REACTIVE_VISCOELASTIC_LAWS:
         return _reactive_viscoelastic(key, params)
+    if key == Multigeneration.name:  # each generation's solid: a material or a table
+        gens = params.get("generations")
+        if isinstance(gens, (list, tuple)):
+            gens = [
+                {**g, "solid": _elastic_table(f"{key}: generations[{i}]", g.get("solid"), {})}
+                if isinstance(g, dict)
+                else g
+                for i, g in enumerate(gens)
+            ]
+        return Multigeneration(**{**params, "generations": gens})
     if key == PrestrainElastic.name:  # its elastic law: a material or a table
         elastic = _elastic_table(key, params.get("elastic"), {})
         return PrestrainElastic(**{**params, "elastic": elastic})
@@ -330,7 +345,7 @@ def make_material(model: str, **params: object) -> Material:
             *DAMAGE_LAWS,
             *REACTIVE_VISCOELASTIC_LAWS,
         ]
-        names += [KinematicGrowth.name, PrestrainElastic.name]
+        names += [KinematicGrowth.name, PrestrainElastic.name, Multigeneration.name]
         names.append(ViscoelasticDamage.name)
         names += [*MIXTURES, EnergyLaw.name]
         raise MaterialError(f"unknown material model {short(model)}; {_suggest(key, names)}")

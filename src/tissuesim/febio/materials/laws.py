@@ -50,6 +50,8 @@ MATERIAL_TYPES = {
             "isotropic Hencky",
             "orthotropic CLE",
             "cubic CLE",
+            "porous neo-Hookean",
+            "Shenoy",
             "uncoupled Holmes-Mow",
             "fiber-exp-pow",
             "fiber-exp-pow-uncoupled",

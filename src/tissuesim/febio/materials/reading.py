@@ -49,6 +49,7 @@ from tissuesim.febio.materials.laws import (
     VECTOR_PARAMETERS,
     VISCOELASTIC,
 )
+from tissuesim.febio.materials.multigeneration import multigeneration
 from tissuesim.febio.materials.prestrain import prestrain_elastic
 from tissuesim.febio.model import FebModel, _floats, _once, _unsupported
 from tissuesim.febio.xml import Node
@@ -106,6 +107,8 @@ def _law(
         return kinematic_growth(model, mat, _law)
     if kind == "prestrain elastic" and top:
         return prestrain_elastic(model, mat, _law)
+    if kind == "multigeneration" and top:
+        return multigeneration(model, mat, _law)
     if kind in DAMAGE:
         return _damage(model, mat, kind, component, bulk)
     if kind == "reactive viscoelastic damage" and top:
@@ -130,7 +133,7 @@ def _law(
         known = [k for k in MATERIAL_TYPES if component or k not in FIBRES_ONLY | ACTIVE]
         known += list(GENERIC)
         known += list(VISCOELASTIC) + list(REACTIVE_VISCOELASTIC) if top else []
-        known += ["kinematic growth", "prestrain elastic"] if top else []
+        known += ["kinematic growth", "prestrain elastic", "multigeneration"] if top else []
         known += list(DAMAGE)
         known += list(MIXTURES) if not component else []
         where = " in a solid mixture" if component else ""
