@@ -66,6 +66,8 @@ class System(RigidSystemPart):
     attachments: Sequence[Attachment] = ()
     ties: Sequence = ()  # coupling/tie.py: FEM bodies glued where they touch
     contact: object = None  # contact/model.py ContactModel, or None
+    #: penalty contact pairs between FEM bodies' facets (contact/penalty/pair.py)
+    penalty_contacts: Sequence = ()
     #: rigid bodies (rigid/body.py RigidModel), their blocks after the bodies' in c and q, and
     #: the FEM vertices that follow them: (body index, vertex indices, rigid index) each
     rigid: Sequence = ()
@@ -328,6 +330,7 @@ class System(RigidSystemPart):
         project = project is True
         if self.single:
             acc = self.bodies[0].evaluate(c, order, project, energies[0])
+            self._add_penalty_contacts(acc, c, contact_project)
             return self._add_contact(acc, c, contact_project) if contact else acc
         acc = Accumulator(self.pattern, order, project)
         parts = [list(e) for e in energies]
@@ -355,6 +358,7 @@ class System(RigidSystemPart):
             for i, cross in enumerate(self.cross):
                 j = self._tissue_of[i]
                 self._add_cross(cross, self.bodies[j], c[self.config_slices[j]], acc.hessian)
+        self._add_penalty_contacts(acc, c, contact_project)
         if contact:
             self._add_contact(acc, c, contact_project)
         return self._reduce_rigid(acc, c)
@@ -368,8 +372,45 @@ class System(RigidSystemPart):
         if grad is not None and acc.order >= 1:
             acc.gradient += grad
         if hess is not None and acc.order >= 2:
-            acc.extra_hessian = hess
+            acc.extra_hessian = hess if acc.extra_hessian is None else acc.extra_hessian + hess
         return acc
+
+    def body_positions_and_dofs(self, c: np.ndarray) -> tuple[list, list]:
+        """Every body's vertex positions (k, 3) at c and their tangent DOFs (k, 3) (FEM
+        bodies; a frame body's entries are None)."""
+        positions, dofs = [], []
+        for b, sc, st in zip(self.bodies, self.config_slices, self.tangent_slices, strict=True):
+            if is_frame_body(b):
+                positions.append(None)
+                dofs.append(None)
+                continue
+            d = b.mesh.dim
+            positions.append(c[sc].reshape(-1, d))
+            dofs.append(np.arange(st.start, st.stop).reshape(-1, d))
+        return positions, dofs
+
+    def _add_penalty_contacts(self, acc: Accumulator, c: np.ndarray, project: bool) -> None:
+        """FEBio-style penalty contact pairs (contact/penalty/pair.py), their Hessians added
+        to the changing-sparsity part."""
+        if not self.penalty_contacts:
+            return
+        positions, dofs = self.body_positions_and_dofs(c)
+        for pair in self.penalty_contacts:
+            value, grad, hess = pair.evaluate(positions, dofs, self.n_dofs, acc.order, project)
+            acc.add_value(f"penalty_contact.{pair.name}", value)
+            if grad is not None and acc.order >= 1:
+                acc.gradient += grad
+            if hess is not None and acc.order >= 2:
+                acc.extra_hessian = hess if acc.extra_hessian is None else acc.extra_hessian + hess
+
+    def update_penalty_contacts(self, c: np.ndarray) -> bool:
+        """The penalty pairs' lagged terms at a solution c (augmentation, current areas);
+        whether any changed."""
+        positions, _ = self.body_positions_and_dofs(c)
+        changed = False
+        for pair in self.penalty_contacts:
+            changed = pair.update(positions) or changed
+        return changed
 
     def _merge(self, acc: Accumulator, part: Accumulator, j: int) -> None:
         for term, value in part.terms.items():

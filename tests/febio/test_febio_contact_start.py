@@ -153,3 +153,27 @@ def test_the_secondary_surface_moves_into_its_own_body(tmp_path):
     assert set(np.round(lower[:, 2], 12)) == {0.0, 0.5}
     bottom = np.isclose(upper[:, 2], 0.5 + DHAT_HERE, rtol=0, atol=1e-15)
     assert bottom.sum() == 9 and set(np.round(upper[~bottom, 2], 12)) == {1.0}
+
+
+def test_frictionless_touching_blocks_run_as_febio_does_by_its_penalty(tmp_path, capfd):
+    """Without friction, FEBio's sliding contact converts to tissuesim's penalty contact as
+    FEBio enforces it (contact/penalty/): the touching surfaces stay where they are (no
+    move, no warning) and, augmented (AUGLAG, tolerance 1e-8), the press's force is the
+    closed form of the stacked blocks to 1e-6 at both steps."""
+    text = MODEL.read_text().replace(
+        "<fric_coeff>0.01</fric_coeff>\n      <penalty>1</penalty>",
+        "<fric_coeff>0</fric_coeff>\n      <laugon>AUGLAG</laugon>\n      <penalty>1e5</penalty>"
+        "\n      <tolerance>1e-8</tolerance>\n      <maxaug>50</maxaug>",
+    )
+    assert "AUGLAG" in text
+    feb = tmp_path / "penalty.feb"
+    feb.write_text(text)
+    assert main(["convert", str(feb), str(tmp_path / "scene.toml")]) == 0
+    said = capfd.readouterr()
+    scene = (tmp_path / "scene.toml").read_text()
+    assert "changed" not in said.err and "[[penalty_contact]]" in scene
+    assert 'integration = "gauss"' in scene and 'area = "current"' in scene
+    summary, _ = _run(feb, tmp_path / "out", capfd)
+    for step, press in zip(summary["steps"], (PRESS / 2, PRESS), strict=True):
+        force = step["extra"]["forces"]["press"][2]
+        assert force == pytest.approx(_closed_form(press), rel=1e-6)

@@ -312,11 +312,63 @@ def _contact(model: FebModel, section: Node) -> None:
             if pair not in model.surface_pairs:
                 raise c.error(f"no SurfacePair named {pair!r}")
             item["surfaces"] = model.surface_pairs[pair]
-        tuning = sorted(set(p) & CONTACT_TUNING)
-        if tuning:
-            model.note(c, f"FEBio's contact enforcement settings not used ({', '.join(tuning)}): "
-                       "tissuesim's barrier keeps the surfaces apart")  # fmt: skip
+        if kind == "sliding-facet-on-facet":  # FEBio ignores its friction (a warning)
+            item["friction"] = 0.0
+        if kind != "rigid_wall" and item["friction"] == 0.0:
+            item["penalty"] = _penalty_settings(kind, c, p)  # FEBio's own enforcement
+        else:
+            tuning = sorted(set(p) & CONTACT_TUNING)
+            if tuning:
+                model.note(c, "FEBio's contact enforcement settings not used "
+                           f"({', '.join(tuning)}): with friction, tissuesim's barrier keeps the "
+                           "surfaces apart")  # fmt: skip
         model.contacts.append(item)
+
+
+#: FEBio's defaults per contact type: tolerance (FEFacet2FacetSliding, FESlidingInterface:
+#: 0.01; FESlidingElasticInterface: 0.1)
+_DEFAULT_TOLERANCE = {"sliding-elastic": 0.1}
+#: settings that change what FEBio solves and that tissuesim does not do (on = refused)
+_PENALTY_REFUSED = {
+    "smooth_aug": "smoothed augmentations (smooth_aug = 1)",
+    "node_reloc": "node relocation onto the secondary surface (node_reloc = 1)",
+    "flip_primary": "flipped surface normals (flip_primary = 1)",
+    "flip_secondary": "flipped surface normals (flip_secondary = 1)",
+    "update_penalty": "an auto penalty recomputed every step (update_penalty = 1)",
+}
+
+
+def _penalty_settings(kind: str, c: Node, p: dict) -> dict:
+    """FEBio's penalty / augmented-Lagrangian settings of a sliding contact, for tissuesim's
+    penalty contact (contact/penalty/pair.py)."""
+    for key, what in _PENALTY_REFUSED.items():
+        if key in p and _flag(p[key]):
+            raise _unsupported(p[key], what)
+    method = (p["laugon"].text or "").strip().upper() if "laugon" in p else "PENALTY"
+    methods = {"0": False, "PENALTY": False, "1": True, "AUGLAG": True}
+    if method not in methods:
+        raise _unsupported(p["laugon"], f"contact enforcement laugon = {method!r} (tissuesim "
+                           "runs PENALTY (0) and AUGLAG (1))")  # fmt: skip
+
+    def number(key: str, default: float) -> float:
+        return float(_floats(p[key], 1)[0]) if key in p else default
+
+    penalty = number("penalty", 1.0)
+    if penalty <= 0:
+        raise p["penalty"].error(f"penalty = {penalty}: give a positive penalty")
+    return {
+        "penalty": penalty,
+        "auto_penalty": _flag(p["auto_penalty"]) if "auto_penalty" in p else False,
+        "integration": "nodes" if kind == "sliding-node-on-facet" else "gauss",
+        "area": "current" if kind == "sliding-elastic" else "reference",
+        "two_pass": _flag(p["two_pass"]) if "two_pass" in p else False,
+        "augmented": methods[method],
+        "tolerance": number("tolerance", _DEFAULT_TOLERANCE.get(kind, 0.01)),
+        "gap_tolerance": number("gaptol", 0.0),
+        "min_augmentations": int(number("minaug", 0)),
+        "max_augmentations": int(number("maxaug", 10)),
+        "search_tolerance": number("search_tol", 0.01),
+    }
 
 
 def _globals(model: FebModel, section: Node) -> None:

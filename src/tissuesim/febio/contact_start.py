@@ -91,10 +91,11 @@ def separate_touching(model: FebModel, bodies: list[dict]) -> float | None:
     half ``OFFSET`` dhat) into its body by ``OFFSET`` dhat, in ``model.nodes``; each move is
     one line in ``model.changes``. Returns the dhat to write in ``[contact]`` (None: nothing
     moved)."""
-    pairs = [c for c in model.contacts if c["type"] != "rigid_wall"]
+    # penalty contact (FEBio's own enforcement) takes surfaces that touch as they are
+    pairs = [c for c in model.contacts if c["type"] != "rigid_wall" and "penalty" not in c]
     if not pairs:
         return None
-    touching = np.unique(np.concatenate([model.surfaces[s][0].ravel() for c in model.contacts
+    touching = np.unique(np.concatenate([model.surfaces[s][0].ravel() for c in pairs
                                          for s in c["surfaces"]]))  # fmt: skip
     scale = float(np.linalg.norm(np.ptp(model.nodes[touching], axis=0)))
     dhat = DHAT * scale

@@ -290,6 +290,8 @@ class BodyResults:
             # the frames pull the FEM body's points towards p: sign -1 reports the force on
             # the frame body instead
             out[name] = (sign * (a.stiffness[:, None] * (p - y)).sum(axis=0)).tolist()
+        if s.penalty_contacts:
+            out.update(self._penalty_forces(s, self._state.x))
         if s.contact is not None:
             t0, s.contact.time = s.contact.time, self.time
             for name, force in s.contact.obstacle_forces(self._state.x).items():

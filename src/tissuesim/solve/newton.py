@@ -270,11 +270,14 @@ def minimize(
     # there saves the iterations from it to the target (they are redone after the re-lag)
     relag_target = max(target, RELAG_AT * reference)
     iteration = 0
+    lagged_at = 0  # the iteration of the last re-lag: max_iterations counts from there (an
+    # augmented Lagrangian's augmentations are each a solve, as FEBio counts them)
     while True:
         gnorm = result.gradient_norms[-1]
         if relag is not None and result.relags < max_relags and gnorm <= relag_target:
             result.relags += 1
             if relag(x):
+                lagged_at = iteration
                 current = evaluate(x, 1, False)
                 result.gradient_norms[-1] = float(np.linalg.norm(current.gradient[free]))
                 result.energies[-1] = current.value
@@ -283,12 +286,13 @@ def minimize(
             done, current = converged_at(x, current, "gradient")
             if done:
                 break
+            lagged_at = iteration
             continue
         if iteration >= 1 and _budget_spent(budget, iteration):
             result.budget_stop = True
             result.reason = "stopped by the step's budget before converging"
             break
-        if iteration >= options.max_iterations:
+        if iteration - lagged_at >= options.max_iterations:
             result.reason = f"no convergence in {options.max_iterations} iterations"
             break
         system = {}  # the assembled (eliminated) system at x, built at most once per kind
@@ -366,12 +370,14 @@ def minimize(
             done, current = converged_at(x, current, "physical")
             if done:
                 break
+            lagged_at = iteration
             continue
         if result.step_norms[-1] <= options.step_tolerance * length_scale:
             if g_new <= 1e3 * target:
                 done, current = converged_at(x, current, "round-off (step below step_tolerance)")
                 if done:
                     break
+                lagged_at = iteration
                 continue
             result.reason = "stagnated: steps below step_tolerance, gradient still large"
             break

@@ -273,6 +273,10 @@ def _lagged_pressure(body_energies) -> bool:
     return any(isinstance(e, LaggedPressureEnergy) for body in body_energies for e in body)
 
 
+#: re-lags of a penalty pair's current-area weights beyond its augmentations
+PENALTY_AREA_RELAGS = 10
+
+
 class _Lags:
     """The lagged terms of one step, re-lagged together by Newton's ``relag``: friction (IPC,
     ``friction_iterations`` - 1 re-lags, then kept) and the follower pressures on open
@@ -293,12 +297,17 @@ class _Lags:
             self.pressures.start(c0)
         self.system = system
         self.joints = bool(getattr(system, "joints", ()))  # rigid/joints.py: their multipliers
+        # contact/penalty/pair.py: augmentations and lagged current areas, counted per solve
+        self.penalty = list(getattr(system, "penalty_contacts", ()))
+        for pair in self.penalty:
+            pair.begin_step()
         from tissuesim.rigid.joints import MAX_UPDATES
 
         self.max_relags = max(
             self.friction_max,
             MAX_RELAGS if self.pressures else 0,
             MAX_UPDATES if self.joints else 0,
+            max((p.max_augmentations + PENALTY_AREA_RELAGS for p in self.penalty), default=0),
         )
 
     def relag(self, c: np.ndarray, y: np.ndarray | None = None) -> bool:
@@ -311,11 +320,14 @@ class _Lags:
             changed = self.pressures.relag(c) or changed
         if self.joints:
             changed = self.system.update_joints(c) or changed
+        if self.penalty:
+            changed = self.system.update_penalty_contacts(c) or changed
         return changed
 
     def newton_relag(self):
         """The relag(c) for ``minimize`` (None when nothing is lagged)."""
-        if self.friction is None and self.pressures is None and not self.joints:
+        lagged = self.friction is not None or self.pressures is not None
+        if not (lagged or self.joints or self.penalty):
             return None
         return lambda c: self.relag(c)
 

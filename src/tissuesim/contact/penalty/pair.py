@@ -1,0 +1,276 @@
+"""Penalty (and augmented-Lagrangian) contact between two facet surfaces, as FEBio enforces it:
+one more energy in the incremental potential, with no barrier and no CCD (surfaces may
+interpenetrate by what the penalty allows: FEBio's semantics, for FEBio's models).
+
+Points sampled on the primary surface (``faces.py``: Gauss points, or the corners for FEBio's
+node-on-facet) are projected onto the secondary surface (``projection.py``); a point whose
+projection lies on a facet (within ``search_tolerance`` in natural coordinates; the closest such
+facet) has the gap g (> 0: penetration). With the point's weight W (rule weight x area
+Jacobian, of the reference surface, or of the current surface lagged: FEBio's sliding-elastic
+integrates over the current one) and penalty eps, its energy is
+
+    W / (2 eps) <L + eps g>^2,     <a> = max(a, 0),
+
+whose gradient is FEBio's contact force W <L + eps g> dg/dy (``FEFacet2FacetSliding::
+LoadVector``); the multiplier L is 0 for a penalty method and is updated as FEBio's augmented
+Lagrangian does (``Augment``: L <- <L + eps g> until the multipliers' norm changes by less than
+``tolerance`` and the rms penetration is under ``gap_tolerance``, between ``min_augmentations``
+and ``max_augmentations`` per step). ``two_pass``: the secondary surface's points are projected
+onto the primary too (a second, symmetric energy). The Hessian is exact (``projection.py``).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+import scipy.sparse as sp
+from scipy.spatial import cKDTree
+
+from tissuesim.contact.penalty.faces import Facets, SamplePoints, area_jacobians, sample_points
+from tissuesim.contact.penalty.projection import gap_derivatives, outside, project
+
+__all__ = ["PenaltyContact", "PenaltySide", "PenaltyPass"]
+
+#: facets tried per point (the nearest by centroid)
+CANDIDATES = 8
+#: points farther than this many facet sizes (centre to corner) from every facet centre of
+#: the other surface are out of contact (FEBio's search radius)
+SEARCH_RADIUS = 2.0
+#: how far outside every facet (natural coordinates) a point still takes the nearest one
+EDGE_REACH = 0.25
+#: relative change of a lagged current-area weight below which it has settled
+AREA_SETTLED = 1e-9
+
+
+@dataclass(frozen=True)
+class PenaltySide:
+    """One surface: its body's index in the system, its facets (body vertex indices), and the
+    per-facet penalty scale (FEBio's auto penalty, 1 otherwise)."""
+
+    body: int
+    facets: Facets
+    scale: np.ndarray
+
+
+@dataclass(eq=False)
+class PenaltyPass:
+    """Points of ``sampled`` projected onto ``target``; state: multipliers and weights."""
+
+    sampled: PenaltySide
+    target: PenaltySide
+    points: SamplePoints
+    weights: np.ndarray  # W per point (reference, or the lagged current one)
+    multipliers: np.ndarray  # L per point (Pa)
+
+
+@dataclass(eq=False)
+class PenaltyContact:
+    """A contact pair (module docstring). ``penalty``: eps (Pa/m), times each primary
+    facet's ``scale``."""
+
+    name: str
+    primary: PenaltySide
+    secondary: PenaltySide
+    penalty: float
+    rule: str = "gauss"  # "gauss" or "nodal" (FEBio's node-on-facet)
+    area: str = "reference"  # or "current" (lagged; FEBio's sliding-elastic)
+    two_pass: bool = False
+    augmented: bool = False
+    tolerance: float = 0.0  # relative change of the multipliers' norm (0: not checked)
+    gap_tolerance: float = 0.0  # rms penetration (m; 0: not checked)
+    min_augmentations: int = 0
+    max_augmentations: int = 10
+    search_tolerance: float = 0.01
+    passes: list = field(default_factory=list)
+    augmentations: int = 0  # in this step's solve
+
+    def setup(self, rest: list[np.ndarray]) -> None:
+        """The passes' points and reference weights, from every body's rest positions."""
+        sides = [(self.primary, self.secondary)]
+        if self.two_pass:
+            sides.append((self.secondary, self.primary))
+        self.passes = []
+        for sampled, target in sides:
+            points = sample_points(sampled.facets, self.rule)
+            w = points.weight * area_jacobians(rest[sampled.body], sampled.facets, points)
+            self.passes.append(PenaltyPass(sampled, target, points, w, np.zeros(len(w))))
+        self._rest_weights = [p.weights.copy() for p in self.passes]
+
+    # -- geometry --------------------------------------------------------------------------
+    def _contacts(self, p: PenaltyPass, positions: list[np.ndarray]):
+        """(points with a facet, their facet, (r, s), their positions) of pass p at body
+        positions; the last answer again for the same positions (Newton asks for a point's
+        Hessian after its line search asked for its gradient)."""
+        here = (positions[p.sampled.body], positions[p.target.body])
+        last = getattr(p, "_last", None)
+        if last is not None and all(
+            np.array_equal(a, b) for a, b in zip(last[0], here, strict=True)
+        ):
+            return last[1]
+        out = self._find_contacts(p, positions)
+        p._last = ((here[0].copy(), here[1].copy()), out)
+        return out
+
+    def _find_contacts(self, p: PenaltyPass, positions: list[np.ndarray]):
+        xs = positions[p.sampled.body][p.sampled.facets.corners[p.points.facet]]
+        x = np.einsum("na,nad->nd", p.points.H, xs)
+        tf = p.target.facets
+        X_all = positions[p.target.body][tf.corners]
+        centroids = X_all.mean(axis=1)
+        # points farther from every facet centre than SEARCH_RADIUS facet sizes touch nothing
+        size = float(np.max(np.linalg.norm(X_all - centroids[:, None], axis=2)))
+        k = min(CANDIDATES, len(centroids))
+        tree = cKDTree(centroids)
+        d0, _ = tree.query(x, k=1)
+        near_rows = np.flatnonzero(d0 <= SEARCH_RADIUS * size)
+        empty = (np.zeros(0, int), np.zeros(0, int), np.zeros((0, 2)), np.zeros((0, 3)))
+        if len(near_rows) == 0:
+            return empty
+        _, near = tree.query(x[near_rows], k=k)
+        near = near.reshape(len(near_rows), k)
+        flat = near.ravel()
+        xr = np.repeat(x[near_rows], k, axis=0)
+        rs = project(xr, X_all[flat], tf.triangle[flat])
+        excess = outside(rs, tf.triangle[flat])
+        g, _, _ = gap_derivatives(xr, None, X_all[flat], rs, tf.triangle[flat], 0)
+        # the closest facet whose projection is on it (within the search tolerance); a point
+        # over a convex edge, on no facet, takes the facet it is least outside (its surface
+        # extended: contact does not drop there, FEBio's special cases), up to EDGE_REACH
+        on = (excess <= self.search_tolerance).reshape(len(near_rows), k)
+        dist = np.where(on, np.abs(g).reshape(on.shape), np.inf)
+        best = np.argmin(dist, axis=1)
+        rows = np.arange(len(near_rows))
+        off = ~np.isfinite(dist[rows, best])
+        reach = np.where(excess <= EDGE_REACH, excess, np.inf).reshape(on.shape)
+        best = np.where(off, np.argmin(reach, axis=1), best)
+        found = ~off | np.isfinite(reach[rows, best])
+        pick = rows * k + best
+        rows = np.flatnonzero(found)
+        return near_rows[rows], flat[pick[rows]], rs[pick[rows]], x[near_rows[rows]]
+
+    def _eps(self, p: PenaltyPass) -> np.ndarray:
+        return self.penalty * p.sampled.scale[p.points.facet]
+
+    # -- energy ---------------------------------------------------------------------------
+    def evaluate(self, positions: list[np.ndarray], dofs: list[np.ndarray], n: int, order: int,
+                 project_psd: bool = False):  # fmt: skip
+        """(value, gradient (n,) or None, sparse Hessian or None) at body positions
+        ``positions[j]`` (vertices, 3) whose DOFs are ``dofs[j]`` (vertices, 3) in the system."""
+        value = 0.0
+        grad = np.zeros(n) if order >= 1 else None
+        rows, cols, vals = [], [], []
+        for p in self.passes:
+            pts, facet, rs, x = self._contacts(p, positions)
+            if len(pts) == 0:
+                continue
+            tf, sf = p.target.facets, p.sampled.facets
+            X = positions[p.target.body][tf.corners[facet]]
+            Hs = p.points.H[pts]
+            parts = gap_derivatives(x, Hs, X, rs, tf.triangle[facet], min(order, 2))
+            g = parts[0]
+            eps = self._eps(p)[pts]
+            L = p.multipliers[pts]
+            t = np.maximum(L + eps * g, 0.0)
+            W = p.weights[pts]
+            value += float(np.sum(W * t * t / (2 * eps)))
+            if order < 1:
+                continue
+            on = t > 0
+            stencil = np.concatenate(
+                [
+                    dofs[p.sampled.body][sf.corners[p.points.facet[pts]]],
+                    dofs[p.target.body][tf.corners[facet]],
+                ],
+                axis=1,
+            ).reshape(len(pts), 24)
+            dg = parts[3].reshape(len(pts), 24)
+            np.add.at(grad, stencil[on], (W * t)[on, None] * dg[on])
+            if order >= 2 and on.any():
+                dg_on = dg[on]
+                h = (W * eps)[on, None, None] * dg_on[:, :, None] * dg_on[:, None, :]
+                h += (W * t)[on, None, None] * parts[4][on]
+                if project_psd:
+                    lam, V = np.linalg.eigh(h)
+                    h = np.einsum("nij,nj,nkj->nik", V, np.maximum(lam, 0.0), V)
+                s = stencil[on]
+                rows.append(np.repeat(s, 24, axis=1).ravel())
+                cols.append(np.tile(s, (1, 24)).ravel())
+                vals.append(h.ravel())
+        hess = None
+        if order >= 2:
+            hess = sp.csr_matrix(
+                (
+                    np.concatenate(vals) if vals else np.zeros(0),
+                    (
+                        np.concatenate(rows) if rows else np.zeros(0, int),
+                        np.concatenate(cols) if cols else np.zeros(0, int),
+                    ),
+                ),
+                shape=(n, n),
+            )
+        return value, grad, hess
+
+    def forces(self, positions: list[np.ndarray]) -> tuple[np.ndarray, float]:
+        """(the force the secondary surface puts on the primary (N, 3), the contact area's
+        sum of point weights in contact (m^2)); with two passes, both passes' forces add
+        (as FEBio's two-pass load vectors do)."""
+        total, area = np.zeros(3), 0.0
+        for k, p in enumerate(self.passes):
+            pts, facet, rs, x = self._contacts(p, positions)
+            if len(pts) == 0:
+                continue
+            X = positions[p.target.body][p.target.facets.corners[facet]]
+            g, nu, _ = gap_derivatives(x, None, X, rs, p.target.facets.triangle[facet], 0)
+            t = np.maximum(p.multipliers[pts] + self._eps(p)[pts] * g, 0.0)
+            f = np.sum((p.weights[pts] * t)[:, None] * nu, axis=0)
+            total += f if k == 0 else -f
+            area += float(np.sum(p.weights[pts][t > 0]))
+        return total, area
+
+    # -- the lagged terms: multipliers and current-area weights -------------------------------
+    def begin_step(self) -> None:
+        self.augmentations = 0
+
+    def update(self, positions: list[np.ndarray]) -> bool:
+        """At a converged solution: re-lag current-area weights and do FEBio's augmentation;
+        whether anything changed (then Newton solves again)."""
+        changed = False
+        if self.area == "current":
+            for p in self.passes:
+                sf = p.sampled.facets
+                w = p.points.weight * area_jacobians(positions[p.sampled.body], sf, p.points)
+                if np.max(np.abs(w - p.weights) / np.maximum(p.weights, 1e-300)) > AREA_SETTLED:
+                    changed = True
+                p.weights = w
+        if not self.augmented:
+            return changed
+        old, new, gaps = 0.0, 0.0, []
+        updates = []
+        for p in self.passes:
+            g = np.zeros(len(p.multipliers))
+            pts, facet, rs, x = self._contacts(p, positions)
+            if len(pts):
+                X = positions[p.target.body][p.target.facets.corners[facet]]
+                g[pts] = gap_derivatives(x, None, X, rs, p.target.facets.triangle[facet], 0)[0]
+            L1 = np.maximum(p.multipliers + self._eps(p) * g, 0.0)
+            old += float(p.multipliers @ p.multipliers)
+            new += float(L1 @ L1)
+            gaps.append(g[g > 0])
+            updates.append(L1)
+        old, new = np.sqrt(old), np.sqrt(new)
+        lnorm = abs(new - old) / new if new != 0 else abs(new - old)
+        positive = np.concatenate(gaps)
+        gnorm = float(np.sqrt(np.mean(positive**2))) if len(positive) else 0.0
+        converged = not (self.tolerance > 0 and lnorm > self.tolerance)
+        converged &= not (self.gap_tolerance > 0 and gnorm > self.gap_tolerance)
+        if self.augmentations < self.min_augmentations:
+            converged = False
+        if self.augmentations >= self.max_augmentations:
+            converged = True
+        if not converged:
+            for p, L1 in zip(self.passes, updates, strict=True):
+                p.multipliers = L1
+            self.augmentations += 1
+            changed = True
+        return changed

@@ -1,0 +1,249 @@
+"""``Simulation.add_penalty_contact`` (a mixin): FEBio-style penalty / augmented-Lagrangian
+contact between two FEM bodies' facet surfaces (``contact/penalty/pair.py``), built into the
+system with the other energies. The barrier contact (``set_contact``) keeps surfaces apart
+with a guarantee; this one lets them overlap by what the penalty allows, as FEBio's sliding
+contacts do: it is what a FEBio model's contact converts to."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from tissuesim.errors import InputError
+from tissuesim.validate import short
+
+__all__ = ["PenaltyContactCalls", "PenaltySpec", "INTEGRATIONS", "AREAS", "carry_penalty_state"]
+
+#: where the contact's points are: Gauss points of the primary facets (FEBio's
+#: sliding-facet-on-facet and sliding-elastic) or their corners (sliding-node-on-facet)
+INTEGRATIONS = ("gauss", "nodes")
+#: the area the points' weights measure: the rest surface, or the current one (lagged)
+AREAS = ("reference", "current")
+
+
+@dataclass(frozen=True)
+class PenaltySpec:
+    name: str
+    primary: str
+    secondary: str
+    primary_facets: object
+    secondary_facets: object
+    penalty: float
+    auto_penalty: bool
+    integration: str
+    area: str
+    two_pass: bool
+    augmented: bool
+    tolerance: float
+    gap_tolerance: float
+    min_augmentations: int
+    max_augmentations: int
+    search_tolerance: float
+
+
+class PenaltyContactCalls:
+    """Mixed into ``Simulation`` (which sets ``self.penalty_contacts = []``)."""
+
+    def add_penalty_contact(
+        self,
+        primary: str,
+        secondary: str,
+        *,
+        primary_facets=None,
+        secondary_facets=None,
+        penalty: float | None = None,
+        auto_penalty: bool = False,
+        integration: str = "gauss",
+        area: str = "reference",
+        two_pass: bool = False,
+        augmented: bool = False,
+        tolerance: float = 0.0,
+        gap_tolerance: float = 0.0,
+        min_augmentations: int = 0,
+        max_augmentations: int = 10,
+        search_tolerance: float = 0.01,
+        name: str | None = None,
+    ) -> str:
+        """Penalty contact: points of body ``primary``'s facets (a facet set name, (k, 3) or
+        (k, 4) vertex indices, or None: its whole boundary) pressed out of body
+        ``secondary``'s facets with the pressure ``penalty`` x penetration (``penalty`` in
+        Pa/m; with ``auto_penalty`` a factor on FEBio's automatic penalty, the Young's modulus x
+        facet area / element volume, per primary facet; default 1 then). ``integration``
+        "gauss" or "nodes" (FEBio's node-on-facet); ``area`` "reference" or "current";
+        ``two_pass``: the secondary's points pressed out of the primary too; ``augmented``:
+        FEBio's augmented Lagrangian, augmenting until the multipliers' norm changes by less
+        than ``tolerance`` (relative) and the rms penetration is under ``gap_tolerance`` (m),
+        ``min_augmentations`` to ``max_augmentations`` times per step. A point is in contact
+        where its projection falls on a facet within ``search_tolerance`` (natural
+        coordinates). Its force on ``primary`` is reported by ``forces()`` under ``name``
+        (default ``penalty_contact<n>``). Returns the name."""
+        for body in (primary, secondary):
+            if body not in self.bodies or self.bodies[body].kind != "fem":
+                raise InputError(
+                    f"add_penalty_contact: {short(body)} is not a FEM body; FEM bodies: "
+                    f"{sorted(n for n, b in self.bodies.items() if b.kind == 'fem') or 'none'}"
+                )
+        if integration not in INTEGRATIONS:
+            raise InputError(
+                f"add_penalty_contact: integration {short(integration)}: give one of "
+                f"{', '.join(INTEGRATIONS)}"
+            )
+        if area not in AREAS:
+            raise InputError(
+                f"add_penalty_contact: area {short(area)}: give one of {', '.join(AREAS)}"
+            )
+        if penalty is None:
+            if not auto_penalty:
+                raise InputError(
+                    "add_penalty_contact: give penalty (Pa/m), or auto_penalty = True (FEBio's "
+                    "automatic penalty: Young's modulus x facet area / element volume)"
+                )
+            penalty = 1.0
+        checks = {"penalty": (penalty, True), "tolerance": (tolerance, False),
+                  "gap_tolerance": (gap_tolerance, False),
+                  "search_tolerance": (search_tolerance, False)}  # fmt: skip
+        for key, (value, positive) in checks.items():
+            ok = isinstance(value, int | float) and np.isfinite(value)
+            ok = ok and (value > 0 if positive else value >= 0)
+            if not ok:
+                raise InputError(
+                    f"add_penalty_contact: {key} = {short(value)}: give a "
+                    f"{'positive' if positive else 'non-negative'} number"
+                )
+        if not (0 <= int(min_augmentations) <= int(max_augmentations)):
+            raise InputError(
+                f"add_penalty_contact: min_augmentations = {min_augmentations}, max_augmentations "
+                f"= {max_augmentations}: give 0 <= min <= max"
+            )
+        name = self._claim_force_name(name, f"penalty_contact{len(self.penalty_contacts) + 1}")
+        self.penalty_contacts.append(
+            PenaltySpec(
+                name,
+                primary,
+                secondary,
+                primary_facets,
+                secondary_facets,
+                float(penalty),
+                bool(auto_penalty),
+                integration,
+                area,
+                bool(two_pass),
+                bool(augmented),
+                float(tolerance),
+                float(gap_tolerance),
+                int(min_augmentations),
+                int(max_augmentations),
+                float(search_tolerance),
+            )  # fmt: skip
+        )
+        self._system_dirty = True
+        return name
+
+    def _penalty_pairs(self, system) -> list:
+        """The system's PenaltyContact pairs (its bodies' indices), set up at rest."""
+        from tissuesim.contact.penalty.pair import PenaltyContact
+
+        pairs = []
+        for spec in self.penalty_contacts:
+            if spec.primary not in system.names or spec.secondary not in system.names:
+                continue
+            sides = []
+            for body, facets in ((spec.primary, spec.primary_facets),
+                                 (spec.secondary, spec.secondary_facets)):  # fmt: skip
+                j = system.names.index(body)
+                sides.append(_side(spec, body, j, system.bodies[j], facets))
+            pair = PenaltyContact(
+                spec.name, sides[0], sides[1], spec.penalty,
+                rule="nodal" if spec.integration == "nodes" else "gauss", area=spec.area,
+                two_pass=spec.two_pass, augmented=spec.augmented, tolerance=spec.tolerance,
+                gap_tolerance=spec.gap_tolerance, min_augmentations=spec.min_augmentations,
+                max_augmentations=spec.max_augmentations,
+                search_tolerance=spec.search_tolerance,
+            )  # fmt: skip
+            pair.setup([None if b is None else b for b in _rest(system)])
+            pairs.append(pair)
+        return pairs
+
+    def _penalty_forces(self, system, c: np.ndarray) -> dict:
+        positions, _ = system.body_positions_and_dofs(c)
+        return {p.name: p.forces(positions)[0].tolist() for p in system.penalty_contacts}
+
+
+def carry_penalty_state(old: list, new: list) -> None:
+    """Keep each pair's multipliers and lagged weights across a system rebuild where its
+    points are the same."""
+    by_name = {p.name: p for p in old}
+    for pair in new:
+        before = by_name.get(pair.name)
+        if before is None or len(before.passes) != len(pair.passes):
+            continue
+        for a, b in zip(before.passes, pair.passes, strict=True):
+            if a.multipliers.shape == b.multipliers.shape:
+                b.multipliers, b.weights = a.multipliers, a.weights
+
+
+def _rest(system) -> list:
+    return [None if not hasattr(b, "mesh") else b.mesh.points for b in system.bodies]
+
+
+def _side(spec: PenaltySpec, body: str, j: int, model, facets):
+    """One surface of a pair: its facets (vertex indices of body j) and the per-facet scale
+    (FEBio's auto penalty: E A / V of the element behind the facet; 1 without)."""
+    from tissuesim.contact.pairs import contact_facets
+    from tissuesim.contact.penalty.faces import Facets
+    from tissuesim.contact.penalty.pair import PenaltySide
+
+    mesh = model.mesh
+    if mesh.dim != 3:
+        raise InputError(f"penalty contact {spec.name!r}: body {body!r} is not 3D")
+    if isinstance(facets, str) and facets in mesh.facet_sets:
+        rows = np.asarray(mesh.facet_sets[facets])
+    elif facets is None or isinstance(facets, str):
+        rows = contact_facets(body, mesh, facets)  # the boundary, or its one-line error
+    else:
+        rows = np.asarray(facets)
+    f = Facets.of(rows, f"penalty contact {spec.name!r}, body {body!r}")
+    if f.corners.max() >= mesh.n_points or f.corners.min() < 0:
+        raise InputError(
+            f"penalty contact {spec.name!r}: body {body!r} has {mesh.n_points} vertices; a "
+            "facet names one outside 0..n-1"
+        )
+    scale = np.ones(len(f.corners))
+    if spec.auto_penalty:
+        scale = _auto_scale(model, f)
+    return PenaltySide(j, f, scale)
+
+
+def _auto_scale(model, facets) -> np.ndarray:
+    """FEBio's ``FEContactInterface::AutoPenalty``: E x (facet area) / (volume of the element
+    the facet bounds), at rest; E the material's Young's modulus (isotropic small-strain
+    equivalent, ``mu (3 lam + 2 mu) / (lam + mu)``)."""
+    from tissuesim.contact.penalty.faces import area_jacobians, sample_points
+
+    mesh = model.mesh
+    cells = np.asarray(mesh.cells)
+    volumes = model.kinematics.cell_weights
+    mu, lam = np.asarray(model.material.mu, float), np.asarray(model.material.lam, float)
+    E = mu * (3 * lam + 2 * mu) / (lam + mu)
+    E = np.broadcast_to(E, (len(cells),)) if E.ndim == 0 else E
+    points = sample_points(facets, "gauss")
+    area = np.bincount(points.facet, points.weight * area_jacobians(mesh.points, facets, points),
+                       minlength=len(facets.corners))  # fmt: skip
+    # the cell behind each facet: the one holding all its corners
+    incidence = {}
+    for k, cell in enumerate(cells):
+        for v in cell:
+            incidence.setdefault(int(v), []).append(k)
+    scale = np.empty(len(facets.corners))
+    for i, corners in enumerate(facets.corners):
+        wanted = set(corners.tolist())
+        cell = next((k for k in incidence.get(int(corners[0]), ()) if wanted <= set(cells[k])),
+                    None)  # fmt: skip
+        if cell is None:
+            raise InputError(
+                f"penalty contact auto_penalty: facet {corners.tolist()} bounds no element of "
+                "its body; give penalty without auto_penalty"
+            )
+        scale[i] = E[cell] * area[i] / volumes[cell]
+    return scale

@@ -1,0 +1,283 @@
+"""Penalty / augmented-Lagrangian contact (contact/penalty/, FEBio's sliding contacts): the gap's
+exact derivatives and the pair's energy against finite differences, the force balance, a
+closed form for the penetration (pressure / penalty), the augmented Lagrangian converging to
+the contact of one block, Newton's quadratic convergence, the scene table and its errors."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import tissuesim as ts
+from tissuesim.contact.penalty.faces import Facets
+from tissuesim.contact.penalty.pair import PenaltyContact, PenaltySide
+from tissuesim.contact.penalty.projection import gap_derivatives, project
+from tissuesim.errors import InputError, SceneError
+from tissuesim.materials import NeoHookean
+from tissuesim.mesh import box
+from tissuesim.scene.loader import build_scene
+
+RNG = np.random.default_rng(7)
+
+
+def _stencil_gap(y, Hs, triangle, order):
+    S, X = y[:12].reshape(4, 3), y[12:].reshape(4, 3)
+    x = (Hs @ S)[None]
+    t = np.array([triangle])
+    rs = project(x, X[None], t)
+    return gap_derivatives(x, Hs[None], X[None], rs, t, order)
+
+
+@pytest.mark.parametrize("triangle", [False, True])
+def test_gap_gradient_and_hessian_match_finite_differences(triangle):
+    """A warped quadrilateral (or a triangle) and a point behind it: g > 0, dg/dy and d2g/dy2
+    over the 8-vertex stencil against central differences of g and dg/dy."""
+    X = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]], float)
+    X += 0.2 * RNG.standard_normal((4, 3))
+    if triangle:
+        X[3] = X[2]
+    S = np.array([[0, 0, -0.3], [1, 0, -0.3], [1, 1, -0.3], [0, 1, -0.3]], float)
+    S += 0.1 * RNG.standard_normal((4, 3))
+    Hs = np.array([0.3, 0.2, 0.4, 0.1])
+    y = np.concatenate([S.ravel(), X.ravel()])
+    g, _, _, dg, d2g = _stencil_gap(y, Hs, triangle, 2)
+    assert g[0] > 1e-3  # behind the facet
+    e, fd, fh = 1e-6, np.zeros(24), np.zeros((24, 24))
+    for i in range(24):
+        d = np.zeros(24)
+        d[i] = e
+        gp = _stencil_gap(y + d, Hs, triangle, 1)
+        gm = _stencil_gap(y - d, Hs, triangle, 1)
+        fd[i] = (gp[0][0] - gm[0][0]) / (2 * e)
+        fh[:, i] = (gp[3].ravel() - gm[3].ravel()) / (2 * e)
+    used = slice(0, 21) if triangle else slice(0, 24)  # a triangle's 4th corner is unused
+    np.testing.assert_allclose(dg.ravel()[used], fd[used], atol=1e-8)
+    np.testing.assert_allclose(d2g[0][used, used], fh[used, used], atol=1e-7)
+    np.testing.assert_allclose(d2g[0], d2g[0].T, atol=1e-12)
+
+
+def _blocks(dz: float = 0.02, element: str = "hex"):
+    lower = box((0, 0, 0), (1, 1, 0.5), (3, 3, 2), element=element)
+    upper = box((0.2, 0.15, 0.5 - dz), (0.8, 0.75, 1.0), (2, 2, 2), element=element)
+    return lower, upper
+
+
+@pytest.mark.parametrize(
+    "options",
+    [
+        {"rule": "gauss"},
+        {"rule": "nodal", "two_pass": True},
+        {"rule": "gauss", "augmented": True},
+    ],
+)
+def test_pair_energy_gradient_and_hessian_match_finite_differences(options):
+    """Two hex blocks overlapping by 2 % (upper's bottom quads into lower's top), perturbed:
+    the pair's gradient and Hessian against central differences of its energy and gradient
+    (augmented: with non-zero multipliers, some on points out of contact)."""
+    lower, upper = _blocks()
+    rest = [lower.points, upper.points]
+    sides = (
+        PenaltySide(1, Facets.of(upper.facet_sets["zmin"], "u"), np.ones(4)),
+        PenaltySide(0, Facets.of(lower.facet_sets["zmax"], "l"), np.full(9, 2.0)),
+    )
+    augmented = options.pop("augmented", False)
+    pair = PenaltyContact("p", *sides, penalty=50.0, **options)
+    pair.setup(rest)
+    if augmented:
+        for p in pair.passes:
+            p.multipliers = RNG.uniform(0.0, 2.0, len(p.multipliers))
+    positions = [r + 0.01 * RNG.standard_normal(r.shape) for r in rest]
+    n0 = lower.n_points * 3
+    dofs = [np.arange(n0).reshape(-1, 3), n0 + np.arange(upper.n_points * 3).reshape(-1, 3)]
+    n = n0 + upper.n_points * 3
+    flat = np.concatenate([p.ravel() for p in positions])
+
+    def split(v):
+        return [v[:n0].reshape(-1, 3), v[n0:].reshape(-1, 3)]
+
+    value, grad, hess = pair.evaluate(positions, dofs, n, 2)
+    assert value > 0 and np.abs(grad).max() > 0
+    e = 1e-7
+    active = np.flatnonzero(np.abs(grad) > 0)
+    for i in active[:: max(1, len(active) // 12)]:
+        d = np.zeros(n)
+        d[i] = e
+        vp, gp, _ = pair.evaluate(split(flat + d), dofs, n, 1)
+        vm, gm, _ = pair.evaluate(split(flat - d), dofs, n, 1)
+        assert grad[i] == pytest.approx((vp - vm) / (2 * e), rel=1e-5, abs=1e-9)
+        np.testing.assert_allclose(hess[:, i].toarray().ravel(), (gp - gm) / (2 * e), atol=1e-5)
+
+
+def _pressed(penalty=1e4, augmented=False, two_pass=False, steps=3, integration="gauss"):
+    """Upper block (0.6 x 0.6 x 0.5, nu = 0) on lower (1 x 1 x 0.5, base fixed), upper's top
+    moved down 0.01 per step, laterally held."""
+    lower, upper = _blocks(dz=0.0)
+    mat = NeoHookean(youngs_modulus=1000.0, poisson_ratio=0.0)
+    sim = ts.Simulation(integrator="quasistatic", time_step=1.0)
+    sim.add_body("lower", lower, mat)
+    sim.add_body("upper", upper, mat)
+    sim.fix(np.flatnonzero(lower.points[:, 2] < 1e-9), body="lower", name="table")
+    top = np.flatnonzero(upper.points[:, 2] > 1 - 1e-9)
+    sim.grasp(top, lambda t: np.array([0.0, 0.0, -0.01 * t]), body="upper", name="press")
+    sim.add_penalty_contact(
+        "upper", "lower", primary_facets="zmin", secondary_facets="zmax", penalty=penalty,
+        augmented=augmented, tolerance=1e-6, max_augmentations=50, two_pass=two_pass,
+        integration=integration, name="contact",
+    )  # fmt: skip
+    for _ in range(steps):
+        record = sim.step()
+    return sim, record
+
+
+def _column(penalty=None, augmented=False, single=False, **options):
+    """A 1 x 1 column (nu = 0) pressed 0.02 down at its top, base fixed: two blocks of
+    matching facets in penalty contact at z = 0.5, or (``single``) one block."""
+    mat = NeoHookean(youngs_modulus=1000.0, poisson_ratio=0.0)
+    sim = ts.Simulation(integrator="quasistatic", time_step=1.0)
+    if single:
+        blocks = {"upper": box((0, 0, 0), (1, 1, 1.0), (2, 2, 4), element="hex")}
+    else:
+        blocks = {
+            "lower": box((0, 0, 0), (1, 1, 0.5), (2, 2, 1), element="hex"),
+            "upper": box((0, 0, 0.5), (1, 1, 1.0), (2, 2, 3), element="hex"),
+        }
+    for name, mesh in blocks.items():
+        sim.add_body(name, mesh, mat)
+    base = blocks.get("lower", blocks["upper"])
+    sim.fix(np.flatnonzero(base.points[:, 2] < 1e-9), body=next(iter(blocks)), name="table")
+    top = np.flatnonzero(blocks["upper"].points[:, 2] > 1 - 1e-9)
+    sim.grasp(top, lambda t: np.array([0.0, 0.0, -0.02 * t]), body="upper", name="press")
+    if not single:
+        sim.add_penalty_contact("upper", "lower", primary_facets="zmin",
+                                secondary_facets="zmax", penalty=penalty, augmented=augmented,
+                                tolerance=1e-8, max_augmentations=60, name="contact",
+                                **options)  # fmt: skip
+    sim.step()
+    return sim, blocks
+
+
+def test_forces_balance_and_the_penetration_is_the_pressure_over_the_penalty():
+    """The contact's force on 'upper' equals the press's and the table's reactions (an
+    offset block on a larger one). In a column of matching facets (nu = 0: uniform uniaxial
+    stress), upper's bottom sits below lower's top by (force / area) / penalty everywhere:
+    FEBio's penalty law t = eps g."""
+    sim, _ = _pressed(penalty=2e3)
+    f = sim.forces()
+    assert f["contact"][2] > 1.0
+    np.testing.assert_allclose(f["contact"], -np.asarray(f["press"]), rtol=1e-9, atol=1e-9)
+    np.testing.assert_allclose(f["table"], -np.asarray(f["press"]), rtol=1e-9, atol=1e-9)
+    sim, blocks = _column(penalty=5e3)
+    force = sim.forces()["contact"][2]
+    bottom = sim.body_positions("upper")[blocks["upper"].points[:, 2] < 0.5 + 1e-9, 2]
+    lower_top = sim.body_positions("lower")[blocks["lower"].points[:, 2] > 0.5 - 1e-9, 2]
+    assert np.ptp(bottom) < 1e-9 and np.ptp(lower_top) < 1e-9
+    assert lower_top[0] - bottom[0] == pytest.approx(force / 1.0 / 5e3, rel=1e-7)
+
+
+def test_the_augmented_lagrangian_closes_the_gap_and_matches_one_block():
+    """Augmented to a multiplier change of 1e-8, the column's force is one block's (exact
+    contact) to 1e-7, where the penalty alone is 4 % softer."""
+    exact = _column(single=True)[0].forces()["press"][2]
+    plain = _column(penalty=2e3)[0].forces()["press"][2]
+    sim, _ = _column(penalty=2e3, augmented=True)
+    assert abs(plain / exact - 1) > 0.03
+    assert sim.forces()["press"][2] == pytest.approx(exact, rel=1e-7)
+    assert sim.system.penalty_contacts[0].augmentations > 3
+
+
+def test_newton_converges_quadratically_with_penalty_contact():
+    """The last Newton iterations of a contact step: each residual at most C x the last
+    squared (the exact Hessian of the gap)."""
+    sim, record = _pressed(penalty=2e3, steps=2)
+    norms = [n for n in record.residual_norms[-1] if n > 1e-10]
+    assert len(norms) >= 3
+    rates = [np.log(norms[k + 1]) / np.log(norms[k]) for k in range(len(norms) - 3, len(norms) - 1)]
+    assert min(rates) > 1.6, norms
+
+
+def test_two_pass_and_nodal_integration_carry_the_same_load():
+    """In the column (matching facets, uniform pressure): two passes at half the penalty
+    carry the press as one pass does (FEBio's two passes add), and FEBio's node-on-facet points
+    as the Gauss points; on the offset block the contact balances the press in each."""
+    ref = _column(penalty=4e3)[0].forces()["press"][2]
+    two = _column(penalty=2e3, two_pass=True)[0].forces()["press"][2]
+    nodes = _column(penalty=4e3, integration="nodes")[0].forces()["press"][2]
+    assert two == pytest.approx(ref, rel=1e-8)
+    assert nodes == pytest.approx(ref, rel=1e-8)
+    for kwargs in ({"two_pass": True}, {"integration": "nodes"}):
+        sim, _ = _pressed(penalty=2e3, **kwargs)
+        f = sim.forces()
+        np.testing.assert_allclose(f["contact"], -np.asarray(f["press"]), rtol=1e-8, atol=1e-9)
+
+
+SCENE = """
+[simulation]
+integrator = "quasistatic"
+time_step = 1.0
+[[bodies]]
+name = "lower"
+mesh = { generator = "box", lower = [0, 0, 0], upper = [1, 1, 0.5], divisions = [3, 3, 2], \
+element = "hex" }
+material = { model = "neo_hookean", youngs_modulus = 1000.0, poisson_ratio = 0.0 }
+fix = { tagged = "zmin" }
+[[bodies]]
+name = "upper"
+mesh = { generator = "box", lower = [0.2, 0.15, 0.5], upper = [0.8, 0.75, 1.0], \
+divisions = [2, 2, 2], element = "hex" }
+material = { model = "neo_hookean", youngs_modulus = 1000.0, poisson_ratio = 0.0 }
+[[graspers]]
+body = "upper"
+vertices = { tagged = "zmax" }
+displacement = ["0", "0", "-0.01 * t"]
+name = "press"
+[[penalty_contact]]
+name = "contact"
+primary = "upper"
+secondary = "lower"
+primary_facets = "zmin"
+secondary_facets = "zmax"
+penalty = 2000.0
+"""
+
+
+def test_the_scene_table_runs_as_the_python_call():
+    import tomllib
+
+    scene = build_scene(tomllib.loads(SCENE))
+    for _ in range(3):
+        scene.simulation.step()
+    sim, _ = _pressed(penalty=2e3)
+    assert scene.simulation.forces()["contact"] == pytest.approx(sim.forces()["contact"])
+
+
+@pytest.mark.parametrize(
+    "change, message",
+    [
+        ("penalty = 2000.0", 'penalty = 2000.0\nintegration = "node"'),
+        ("penalty = 2000.0", "pennalty = 2000.0"),
+        ("penalty = 2000.0", "penalty = -1.0"),
+        ('primary = "upper"', 'primary = "uper"'),
+    ],
+)
+def test_bad_scene_tables_give_one_line(change, message):
+    import tomllib
+
+    text = SCENE.replace(change, message)
+    with pytest.raises(SceneError) as info:
+        build_scene(tomllib.loads(text), source="s.toml")
+    said = str(info.value)
+    assert "\n" not in said and "penalty_contact[1]" in said
+
+
+def test_python_call_errors():
+    lower, upper = _blocks()
+    sim = ts.Simulation(integrator="quasistatic")
+    mat = NeoHookean(youngs_modulus=1000.0, poisson_ratio=0.0)
+    sim.add_body("lower", lower, mat)
+    sim.add_body("upper", upper, mat)
+    with pytest.raises(InputError, match="give penalty"):
+        sim.add_penalty_contact("upper", "lower")
+    with pytest.raises(InputError, match="integration"):
+        sim.add_penalty_contact("upper", "lower", penalty=1.0, integration="node")
+    with pytest.raises(InputError, match="not a FEM body"):
+        sim.add_penalty_contact("upper", "nothing", penalty=1.0)
