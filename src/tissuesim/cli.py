@@ -157,7 +157,7 @@ def _play(args) -> int:
 
     scene = load_scene(_resolve_scene(args.scene))
     sim = scene.simulation
-    if sim.integrator not in ("backward_euler", "quasistatic", "newmark"):
+    if sim.integrator not in ("backward_euler", "quasistatic", "newmark", "generalized_alpha"):
         from tissuesim.errors import InputError
 
         raise InputError("play needs an implicit scene (contact): integrator = backward_euler")

@@ -175,28 +175,28 @@ def _solver(model: FebModel, node: Node) -> None:
                    "Newton converges to its own tolerances")  # fmt: skip
 
 
-def _newmark(model: FebModel) -> tuple[float, float] | None:
-    """A DYNAMIC step's (beta, gamma), checked: FEBio's generalised-alpha (0 <= rhoi <= 1)
-    and an alpha other than 1 (FEBio's HHT-like weighting) are refused."""
+def _newmark(model: FebModel) -> tuple[float, ...] | None:
+    """A DYNAMIC step's scheme, checked, as FEBio's ``FESolidSolver2::Init`` sets it up:
+    Newmark's (beta, gamma) (rhoi = -1: the trapezoidal rule; any other rhoi outside [0, 1]
+    with alpha = 1: beta and gamma as given), or generalised-alpha's (alpha_f, alpha_m, beta,
+    gamma) (0 <= rhoi <= 1: FEBio's weights from rhoi, its beta and gamma ignored; otherwise an
+    alpha other than 1: alpha_f = alpha_m = alpha with beta and gamma as given)."""
     if model.analysis != "dynamic":
         return None
     beta, gamma, rhoi, alpha, node = model.newmark_parameters or (0.25, 0.5, -2.0, 1.0, None)
-    if 0.0 <= rhoi <= 1.0:
-        raise model.integrator_nodes["rhoi"].error(
-            f"rhoi = {rhoi:g} selects FEBio's generalised-alpha integration; tissuesim runs "
-            "Newmark's method (rhoi = -2 with beta and gamma, or rhoi = -1)"
-        )
-    if rhoi != -1.0 and alpha != 1.0:
-        raise model.integrator_nodes["alpha"].error(
-            f"alpha = {alpha:g}: tissuesim runs Newmark's method with alpha = 1"
-        )
     from tissuesim.errors import InputError
+    from tissuesim.time.integrators.generalized_alpha import check_generalized_alpha
     from tissuesim.time.integrators.newmark import check_newmark
 
     try:
+        if 0.0 <= rhoi <= 1.0:
+            return check_generalized_alpha(rhoi)
+        if rhoi != -1.0 and alpha != 1.0:
+            return check_generalized_alpha((alpha, alpha, beta, gamma))
         return check_newmark((beta, gamma))
     except InputError as exc:
-        raise node.error(str(exc)) from None
+        tag = "rhoi" if 0.0 <= rhoi <= 1.0 else "alpha" if rhoi != -1.0 and alpha != 1.0 else ""
+        raise model.integrator_nodes.get(tag, node).error(str(exc)) from None
 
 
 def _module(model: FebModel, node: Node) -> None:

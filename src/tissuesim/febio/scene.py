@@ -300,7 +300,9 @@ def febio_scene(model: FebModel, stem: str) -> tuple[dict, dict]:
             "runs one (beta, gamma) per model"
         )
     if schemes:
-        sim["newmark"] = list(schemes.pop())
+        scheme = schemes.pop()
+        # (beta, gamma): Newmark's method; (alpha_f, alpha_m, beta, gamma): generalised-alpha
+        sim["generalized_alpha" if len(scheme) == 4 else "newmark"] = list(scheme)
     steps = model.phases or [
         {"time_steps": model.time_steps, "step_size": model.step_size, "analysis": model.analysis,
          "time_stepper": model.time_stepper, "plot_level": model.plot_level}
@@ -317,6 +319,10 @@ def febio_scene(model: FebModel, stem: str) -> tuple[dict, dict]:
         for phase, table in zip(sim["phases"], adaptive, strict=True):
             if table is not None:  # FEBio's time stepper over the step's time
                 phase["adaptive"] = table
+    if "generalized_alpha" in sim:  # FEBio's DYNAMIC steps with rhoi in [0, 1] or alpha != 1
+        for table in [sim, *sim.get("phases", ())]:
+            if table["integrator"] == "newmark":
+                table["integrator"] = "generalized_alpha"
     data: dict = {}
     if not several:
         ((_, tables),) = tables_per_body

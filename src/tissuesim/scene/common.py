@@ -40,6 +40,7 @@ SIMULATION_KEYS = (
     "formulation",
     "phases",
     "newmark",
+    "generalized_alpha",
     "adaptive",
 )
 

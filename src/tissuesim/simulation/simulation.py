@@ -58,6 +58,7 @@ from tissuesim.solve.newton import NewtonOptions
 from tissuesim.time.adaptive import AdaptiveStepping
 from tissuesim.time.attempts.retry import validate_stepping
 from tissuesim.time.grid import check_time_resolution
+from tissuesim.time.integrators.generalized_alpha import check_generalized_alpha
 from tissuesim.time.integrators.newmark import check_newmark
 from tissuesim.time.phases import Phase, Schedule
 from tissuesim.time.state import State
@@ -69,9 +70,18 @@ if TYPE_CHECKING:  # frames and the system pull in scipy.spatial: imported when 
 
 __all__ = ["Simulation", "INTEGRATORS"]
 
-Integrator = Literal["backward_euler", "quasistatic", "explicit", "symplectic_euler", "newmark"]
+Integrator = Literal[
+    "backward_euler", "quasistatic", "explicit", "symplectic_euler", "newmark", "generalized_alpha"
+]
 #: "symplectic_euler" is the FEM name of the explicit scheme; both step every body explicitly
-INTEGRATORS = ("backward_euler", "quasistatic", "explicit", "symplectic_euler", "newmark")
+INTEGRATORS = (
+    "backward_euler",
+    "quasistatic",
+    "explicit",
+    "symplectic_euler",
+    "newmark",
+    "generalized_alpha",
+)
 EXPLICIT = ("explicit", "symplectic_euler")
 
 
@@ -91,7 +101,10 @@ class Simulation(
     mesh, material (optional): the short form, one FEM body named ``name`` with ``density``
     (kg/m^3, scalar or per element) and ``mass`` ("consistent" or "lumped").
     integrator: "backward_euler", "quasistatic", "newmark" (``newmark`` = (beta, gamma), the
-    trapezoidal rule (0.25, 0.5) by default: FEBio's dynamics, no numerical damping) or
+    trapezoidal rule (0.25, 0.5) by default: FEBio's dynamics, no numerical damping),
+    "generalized_alpha" (``generalized_alpha`` = rho_inf in [0, 1], the spectral radius at
+    infinite step, 1 by default, or (alpha_f, alpha_m, beta, gamma) in FEBio's weights: FEBio's
+    rhoi; ``time/integrators/generalized_alpha.py``) or
     "explicit" ("symplectic_euler": the same; FEM bodies then use the lumped mass).
     time_step: s (quasistatics: the load-step length).
     gravity: (d,) m/s^2 on every body, or None. newton: NewtonOptions. max_step_halvings: how
@@ -117,10 +130,12 @@ class Simulation(
         backend: str = "auto",
         phases: Sequence[Phase | dict] | None = None,
         newmark: Sequence[float] = (0.25, 0.5),
+        generalized_alpha: float | Sequence[float] = 1.0,
         adaptive: AdaptiveStepping | dict | None = None,
     ) -> None:
         self.integrator = validate.choice(integrator, "integrator", INTEGRATORS)
         self.newmark = check_newmark(newmark)
+        self.generalized_alpha = check_generalized_alpha(generalized_alpha)
         self.time_step, self.max_step_halvings = validate_stepping(time_step, max_step_halvings)
         self.start_time = validate.real(start_time, "start_time", unit="s")
         check_time_resolution(self.start_time, self.time_step, "start_time")

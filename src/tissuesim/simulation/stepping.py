@@ -33,7 +33,8 @@ class Stepping:
 
         if self.rigid_bodies and self.explicit:
             raise InputError(
-                f"rigid bodies run with the quasistatic, backward_euler and newmark integrators, "
+                f"rigid bodies run with the quasistatic, backward_euler, newmark and "
+                f"generalized_alpha integrators, "
                 f"not {self.integrator!r} (its steps have no rigid body DOFs yet)"
             )
         if self.explicit:
@@ -64,6 +65,22 @@ class Stepping:
                 budget=budget,
             )
             return step_fn, solver
+        if self.integrator == "generalized_alpha":
+            from tissuesim.time.integrators.generalized_alpha import generalized_alpha_step
+
+            self._check_newmark_bodies()
+            alpha_f, alpha_m, beta, gamma = self.generalized_alpha
+            step_fn = functools.partial(
+                generalized_alpha_step,
+                alpha_f=alpha_f,
+                alpha_m=alpha_m,
+                beta=beta,
+                gamma=gamma,
+                implicit_step=implicit_step,
+                energies=self.step_energies,
+                budget=budget,
+            )
+            return step_fn, solver
         step_fn = functools.partial(
             implicit_step,
             dynamic=self.integrator == "backward_euler",
@@ -79,18 +96,19 @@ class Stepping:
         return step_fn, solver
 
     def _check_newmark_bodies(self) -> None:
-        """Newmark steps FEM bodies without Rayleigh damping; the first step of a run starts
-        from the initial acceleration of the loads (FEBio's)."""
+        """Newmark (and generalised-alpha) steps FEM bodies without Rayleigh damping; the first
+        step of a run starts from the initial acceleration of the loads (FEBio's)."""
         for b in self.bodies.values():
             if b.kind != "fem":
                 raise InputError(
-                    f"integrator 'newmark' steps FEM bodies; {b.kind} body {b.name!r} needs "
-                    "'backward_euler'"
+                    f"integrator {self.integrator!r} steps FEM bodies; {b.kind} body {b.name!r} "
+                    "needs 'backward_euler'"
                 )
             if b.model.damping is not None:
                 raise InputError(
-                    f"integrator 'newmark' with Rayleigh damping on {b.name!r}: the damping is "
-                    "a term of Backward Euler's step; use 'backward_euler', or no damping"
+                    f"integrator {self.integrator!r} with Rayleigh damping on {b.name!r}: the "
+                    "damping is a term of Backward Euler's step; use 'backward_euler', or no "
+                    "damping"
                 )
         s, state = self.system, self._state
         if state.a is None and not self.history and state.time == self.start_time:
@@ -119,7 +137,8 @@ class Stepping:
     def set_phases(self, phases: Sequence[Phase | dict]) -> None:
         """Run in phases from the start time: each ``Phase(steps, time_step, integrator)`` (or
         dict with those keys) starts where the previous one ends, with its own time step and
-        integrator ("quasistatic", "backward_euler" or "newmark"; None keeps the simulation's).
+        integrator ("quasistatic", "backward_euler", "newmark" or "generalized_alpha"; None keeps
+        the simulation's).
         After the last phase, steps go on with its settings. ``sim.set_phases([Phase(5, 0.2,
         "quasistatic"), Phase(20, 0.01, "backward_euler")])``: a static preload to t = 1 s,
         then 0.2 s of dynamics. Conditions and loads follow time (``active`` windows of

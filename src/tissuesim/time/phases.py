@@ -23,7 +23,7 @@ from tissuesim.errors import InputError
 __all__ = ["Phase", "Schedule", "check_window", "in_window", "PHASE_INTEGRATORS"]
 
 #: the integrators a phase may switch between (the mass a body is built with is the same)
-PHASE_INTEGRATORS = ("quasistatic", "backward_euler", "newmark")
+PHASE_INTEGRATORS = ("quasistatic", "backward_euler", "newmark", "generalized_alpha")
 
 
 @dataclass(frozen=True)

@@ -47,6 +47,8 @@ def _scheme(sim) -> str:
     uses = [sim.integrator] if schedule is None else [p.integrator for p in schedule.phases]
     if "newmark" in uses or sim.integrator == "newmark":
         text += f", newmark {tuple(sim.newmark)}"
+    if "generalized_alpha" in uses or sim.integrator == "generalized_alpha":
+        text += f", generalized_alpha {tuple(sim.generalized_alpha)}"
     adaptive = [getattr(sim, "adaptive", None)]  # FEBio's adaptive steps, where they run
     adaptive += [] if schedule is None else [p.adaptive for p in schedule.phases]
     if any(a is not None for a in adaptive):

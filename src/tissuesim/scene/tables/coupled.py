@@ -87,7 +87,7 @@ __all__ = ["build_bodies_scene", "COUPLED_SCENE_KEYS"]
 
 COUPLED_SIMULATION_KEYS = (
     "integrator", "time_step", "max_step_halvings", "start_time", "backend", "phases", "newmark",
-    "adaptive",
+    "generalized_alpha", "adaptive",
 )  # fmt: skip
 ORGAN_KEYS = ("name", "mesh", "material", "density", "mass", "order", "formulation", "fix")
 GRASPER_KEYS = ("body", "organ", "name", "vertices", "displacement", "stiffness", "release")

@@ -70,7 +70,9 @@ __all__ = ["build_frame_scene", "FRAME_SCENE_KEYS"]
 
 #: element order and formulation are FEM options: a frame body has neither
 FRAME_SIMULATION_KEYS = tuple(
-    k for k in SIMULATION_KEYS if k not in ("order", "formulation", "phases", "newmark")
+    k
+    for k in SIMULATION_KEYS
+    if k not in ("order", "formulation", "phases", "newmark", "generalized_alpha")
 )
 
 FRAMES_KEYS = {

@@ -1,0 +1,160 @@
+"""The generalised-alpha method (Chung & Hulbert 1993) as FEBio runs it, as an incremental
+potential: Newmark's update with the inertia taken at a_{n+alpha_m} and the internal forces at
+x_{n+alpha_f} (FEBio's ``FESolidSolver2`` and ``FEElasticSolidDomain``).
+
+FEBio's weights are those of the new state (``FESolidSolver2::Init``): with rhoi = rho_inf in
+[0, 1] (the spectral radius at infinite step), alpha_f = 1 / (1 + rho), alpha_m = (2 - rho) /
+(1 + rho), beta = (1 + alpha_m - alpha_f)^2 / 4, gamma = 1/2 + alpha_m - alpha_f; rhoi = -1
+is the trapezoidal rule (all weights 1, beta = 1/4, gamma = 1/2) and any other rhoi (FEBio's
+default -2) takes beta, gamma and alpha_f = alpha_m = alpha as given. Chung & Hulbert's
+alpha's are 1 - these. The step solves
+
+    M (alpha_m a_{n+1} + (1 - alpha_m) a_n) + f_int(y) = f(t_{n+1}),
+    y = alpha_f x_{n+1} + (1 - alpha_f) x_n,
+
+with Newmark's a_{n+1} = (x_{n+1} - x_pred) / (beta h^2), x_pred = x_n + h v_n + h^2 (1/2 -
+beta) a_n (the elastic stresses at F_{n+alpha_f}, ``UpdateElementStress``; the loads at
+t_{n+1}, ``FESolidSolver2::InitStep``). Solved for y instead of x_{n+1} (x_{n+1} = x_n +
+(y - x_n) / alpha_f), the inertia is alpha_m / (beta h^2 alpha_f) M (y - y_pred) with
+y_pred = x_n + alpha_f (x_pred - x_n - (1 - alpha_m) / alpha_m beta h^2 a_n), and the equation
+is the stationarity condition of
+
+    Phi(y) = 1 / (2 h_e^2) |y - y_pred|_M^2 + E(y) - f(t_{n+1}) . y,   h_e^2 = beta alpha_f
+    h^2 / alpha_m,
+
+Backward Euler's incremental potential in y (the same Phi's gradient is the residual of the
+equation above, unscaled). Over x_{n+1} this is W(x_{n+alpha_f}) / alpha_f plus the quadratic
+inertia: an incremental potential, exactly. The step is Backward Euler's minimisation
+(``time/steps.py implicit_step``: contact, line search and all) in y with the step h_e and the
+prediction y_pred; the prescribed values of y are those at t_n + alpha_f h (exact for values
+linear over the step, FEBio's load curves between their points), and x_{n+1} gets them at
+t_{n+1}. Rotations (rigid bodies) go through the system's retraction and difference as in
+Newmark's step (``newmark.py``): y = x_n (+) alpha_f (x_{n+1} (-) x_n).
+
+Rigid bodies: FEBio's connectors (springs, joints: ``FERigidSpring``, ``FERigidRevoluteJoint``
+...) act at x_{n+alpha_f} too, with the bodies' points interpolated linearly, their inertia with
+alpha_m (``FERigidSolverNew::InertialForces``). tissuesim's y interpolates a rotation on the
+rotation manifold: the same for translations, O(h^2) apart for rotations (a joint held at y
+leaves x_{n+1} that far off it; FEBio's linear interpolation holds x_{n+1} itself).
+
+Not FEBio's: at alpha_f = 1/2 (rhoi = 1) FEBio also corrects the stress towards energy
+conservation (``UpdateElementStress``, "mid-point rule"), a term with no potential; tissuesim
+runs the plain midpoint of the potential above.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+
+import numpy as np
+
+from tissuesim.errors import InputError
+from tissuesim.time.state import State, StepOutcome
+
+__all__ = ["generalized_alpha_step", "check_generalized_alpha", "febio_weights"]
+
+
+def febio_weights(rho_inf: float) -> tuple[float, float, float, float]:
+    """(alpha_f, alpha_m, beta, gamma) of FEBio's rhoi = rho_inf in [0, 1]
+    (``FESolidSolver2::Init``; the weights of the new state)."""
+    af = 1.0 / (1.0 + rho_inf)
+    am = (2.0 - rho_inf) / (1.0 + rho_inf)
+    return af, am, (1.0 + am - af) ** 2 / 4.0, 0.5 + am - af
+
+
+def check_generalized_alpha(
+    parameters: float | Sequence[float],
+) -> tuple[float, float, float, float]:
+    """(alpha_f, alpha_m, beta, gamma) from rho_inf (a number in [0, 1]) or from the four
+    given in FEBio's weights (those of the new state), checked to lie where the method is
+    unconditionally stable for linear systems (Chung & Hulbert: 1/2 <= alpha_f <= alpha_m,
+    gamma >= 1/2 + alpha_m - alpha_f, beta >= gamma / 2)."""
+    if isinstance(parameters, (int, float)) and not isinstance(parameters, bool):
+        rho = float(parameters)
+        if not 0.0 <= rho <= 1.0:
+            raise InputError(
+                f"generalized_alpha rho_inf = {rho:g}: the spectral radius at infinite step must "
+                "lie in [0, 1] (1 keeps every frequency, 0 damps the highest in one step)"
+            )
+        return febio_weights(rho)
+    try:
+        af, am, beta, gamma = (float(v) for v in parameters)
+    except (TypeError, ValueError):
+        raise InputError(
+            "generalized_alpha must be rho_inf (a number in [0, 1]) or (alpha_f, alpha_m, beta, "
+            f"gamma), not {parameters!r:.60}"
+        ) from None
+    if not (0.5 <= af <= 1.0 and af <= am and gamma >= 0.5 + am - af - 1e-12
+            and 2.0 * beta >= gamma - 1e-12):  # fmt: skip
+        raise InputError(
+            f"generalized_alpha (alpha_f, alpha_m, beta, gamma) = ({af:g}, {am:g}, {beta:g}, "
+            f"{gamma:g}): tissuesim runs the unconditionally stable range 1/2 <= alpha_f <= 1, "
+            "alpha_f <= alpha_m, gamma >= 1/2 + alpha_m - alpha_f, 2 beta >= gamma"
+        )
+    return af, am, beta, gamma
+
+
+class _Intermediate:
+    """The system as the step in y sees it: everything the system's, except that the
+    prescribed values are those at t_n + alpha_f h (y's), whatever time is asked."""
+
+    def __init__(self, system, t_alpha: float) -> None:
+        object.__setattr__(self, "_system", system)
+        object.__setattr__(self, "_t_alpha", t_alpha)
+
+    def __getattr__(self, name: str):
+        return getattr(self._system, name)
+
+    def __setattr__(self, name: str, value) -> None:
+        setattr(self._system, name, value)
+
+    def apply_prescribed(self, c: np.ndarray, t: float) -> np.ndarray:
+        return self._system.apply_prescribed(c, self._t_alpha)
+
+
+def generalized_alpha_step(
+    system,
+    state: State,
+    h: float,
+    solver,
+    options,
+    *,
+    alpha_f: float,
+    alpha_m: float,
+    beta: float,
+    gamma: float,
+    implicit_step,
+    **kwargs,
+) -> StepOutcome:
+    """One generalised-alpha step of h s: Backward Euler's minimisation over the intermediate
+    configuration y (inertia of h_e about y_pred), then x_{n+1}, Newmark's acceleration and
+    velocity."""
+    a_n = np.zeros(system.n_dofs) if state.a is None else state.a
+    t1 = state.time + h
+    # tangent steps from x_n (rotations on the left, rigid/body.py): to x_pred, and to y_pred
+    to_pred = h * state.v + h * h * (0.5 - beta) * a_n
+    to_y_pred = alpha_f * (to_pred - (1.0 - alpha_m) / alpha_m * beta * h * h * a_n)
+    h_e = h * math.sqrt(beta * alpha_f / alpha_m)
+    carried = State(state.time, state.x, to_y_pred / h_e)
+    outcome = implicit_step(
+        _Intermediate(system, state.time + alpha_f * h),
+        carried,
+        h_e,
+        solver,
+        options,
+        dynamic=True,
+        t_end=t1,
+        friction_h=h,
+        **kwargs,
+    )
+    if not outcome.converged:
+        return outcome
+    y = outcome.state.x
+    x1 = system.retract(state.x, system.difference(y, state.x) / alpha_f)
+    x1 = system.apply_prescribed(x1, t1)
+    x_pred = system.retract(state.x, to_pred)
+    a1 = system.difference(x1, x_pred) / (beta * h * h)
+    v1 = state.v + h * ((1.0 - gamma) * a_n + gamma * a1)
+    outcome.state = State(t1, x1, v1, a1)
+    return outcome
