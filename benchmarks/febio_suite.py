@@ -247,6 +247,9 @@ def solution_norm(model: Any, sim: Any, np: Any, turns: dict | None = None) -> d
         if window is not None and not window[0] < sim.time <= window[1]:
             continue  # a condition of an earlier step: its DOFs are free in the last one
         free[np.ix_(model.node_sets[nodes], range(3) if comps is None else comps)] = False
+    for c in getattr(model, "linear_constraints", ()):  # a linear constraint's parent DOF:
+        if c.get("parent") is not None:  # FEBio eliminates it (FELinearConstraintManager)
+            free[c["parent"]] = False
     # FEBio's vector also holds each rigid body's free DOFs: the centre's displacement and
     # the rotation vector (FERigidSolver UpdateIncrements, the exponential map, of the
     # quaternion it carries from step to step: ``follow_rotations``)

@@ -96,6 +96,9 @@ class Model:
     #: (pattern, cells) of the P1 model this one replaces and, per cell, the cell of it with
     #: the same nodes (-1 none): a cut renews only the pattern's rows it touched
     renew: tuple | None = field(default=None, repr=False)
+    #: (k, 2) vertex pairs coupled outside the cells (discrete springs,
+    #: ``energies/node_springs.py``): their blocks join the pattern
+    links: np.ndarray | None = field(default=None, repr=False)
 
     def __post_init__(self) -> None:
         cells = self.mesh.n_cells
@@ -128,10 +131,16 @@ class Model:
                 f"{short(self.formulation)}"
             )
         pattern = None
-        if self.renew is not None and extra is None and self.mesh.simplicial:
+        stencils = [self.kinematics.cell_stencil]
+        if self.links is not None and len(self.links):
+            from tissuesim.energies.node_springs import spring_stencil
+
+            link = spring_stencil(self.links, self.mesh.dim)
+            stencils.append(link.astype(self.kinematics.cell_stencil.dtype))
+        elif self.renew is not None and extra is None and self.mesh.simplicial:
             pattern = renew_pattern(*self.renew, self.mesh.cells, self.mesh.n_points)
         self.pattern = pattern or SparsityPattern.from_stencils(
-            self.kinematics.n_dofs, [self.kinematics.cell_stencil], extra
+            self.kinematics.n_dofs, stencils, extra
         )
         if extra is not None:
             self.elastic.set_pattern(self.pattern)

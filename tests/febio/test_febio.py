@@ -140,7 +140,7 @@ REFUSALS = {
     "pyra5": ('<Elements type="pyra5" name="p">', "element type 'pyra5'"),
     "material": ('<material id="1" name="m" type="biphasic">', "material type 'biphasic'"),
     "contact": ('<contact type="tied-elastic" surface_pair="p">', "contact type 'tied-elastic'"),
-    "element": ("<Constraints>", "<Constraints>: this section is not supported"),
+    "element": ("<MeshAdaptor>", "<MeshAdaptor>: this section is not supported"),
     "follower": ("<linear>0</linear>", "traction on the deformed surface"),
     "bc": (
         '<bc type="normal displacement" node_set="x0">',
@@ -162,7 +162,7 @@ def test_refusals_are_one_line_naming_the_element_and_its_line(case, tmp_path):
             "  <LoadData>", f"  <Contact>\n    {opening}</contact>\n  </Contact>\n  <LoadData>"
         )
     elif case == "element":
-        text = text.replace("  <LoadData>", "  <Constraints/>\n  <LoadData>")
+        text = text.replace("  <LoadData>", "  <MeshAdaptor/>\n  <LoadData>")
     elif case == "follower":  # a follower traction (a follower pressure runs)
         text = text.replace('type="pressure"', 'type="traction"').replace(
             '<pressure lc="1">500</pressure>', '<traction lc="1">0,0,-500</traction>'

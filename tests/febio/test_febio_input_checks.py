@@ -234,7 +234,8 @@ def test_a_solver_tuning_given_twice_is_a_note_an_integrator_parameter_is_refuse
 
 def test_a_body_load_with_a_curve_per_component_is_a_load_per_component(tmp_path):
     """FEBio 3's const body load may give x, y and z each its own curve (dy05): one body
-    force per component that is not zero, each with its curve."""
+    force per component that is not zero, each with its curve; the force applied is the
+    negative of the vector given (FEBio adds -rho f: z = -9.81 pushes up)."""
     text = (MODELS / "uniaxial_neo_hookean.feb").read_text()
     body = ('  <Loads>\n    <body_load type="const">\n      <x lc="1">2</x>\n'
             '      <y lc="1">0</y>\n      <z lc="2">-9.81</z>\n    </body_load>\n  </Loads>\n'
@@ -249,8 +250,8 @@ def test_a_body_load_with_a_curve_per_component_is_a_load_per_component(tmp_path
     path.write_text(text)
     loads = read_feb(path).body_loads
     assert [(load.value.tolist(), load.curve) for load in loads] == [
-        ([2.0, 0.0, 0.0], 1),
-        ([0.0, 0.0, -9.81], 2),
+        ([-2.0, 0.0, 0.0], 1),
+        ([0.0, 0.0, 9.81], 2),
     ]
 
 

@@ -130,10 +130,15 @@ def _boundary(model: FebModel, section: Node) -> None:
             from tissuesim.febio.shells import clamped_set  # shells: their back nodes too
 
             read_rigid_nodes(model, bc, clamped_set(model, bc, _node_set(model, bc)))
+        elif kind == "linear constraint":  # febio/linear_constraints.py
+            from tissuesim.febio.linear_constraints import read_linear_constraint
+
+            read_linear_constraint(model, bc)
         else:
             raise bc.error(
                 f"boundary condition type {kind!r} is not supported by tissuesim; it runs "
-                "'zero displacement' (or 'fix'), 'prescribed displacement' and 'rigid'"
+                "'zero displacement' (or 'fix'), 'prescribed displacement', 'linear constraint' "
+                "and 'rigid'"
             )
 
 
@@ -168,19 +173,20 @@ def _loads(model: FebModel, section: Node) -> None:
             curves = {_int_attr(c, "lc", "a load curve id") for c in p.values()}
             value = np.array([_floats(p[a], 1)[0] if a in p else 0.0 for a in "xyz"])
             if len(curves) <= 1:
-                model.body_loads.append(Load(value, curves.pop() if curves else None, model.window))
+                curve = curves.pop() if curves else None
+                model.body_loads.append(_body_force(Load(value, curve, model.window)))
                 continue
             for k, a in enumerate("xyz"):  # a curve per component: a load per component
                 if a in p and value[k] != 0.0:
                     part = np.zeros(3)
                     part[k] = value[k]
                     curve = _int_attr(p[a], "lc", "a load curve id")
-                    model.body_loads.append(Load(part, curve, model.window))
+                    model.body_loads.append(_body_force(Load(part, curve, model.window)))
         elif load.tag == "body_load" and kind == "body force":  # FEBio 4: force vector
             p = _children(load, {"force"})
             if "force" not in p:
                 raise load.error("needs a <force> (per unit mass)")
-            model.body_loads.append(_load(model, p["force"], 3))
+            model.body_loads.append(_body_force(_load(model, p["force"], 3)))
         else:
             raise load.error(
                 f"<{load.tag}> type {kind!r} is not supported by tissuesim; it runs nodal_load "
@@ -189,6 +195,13 @@ def _loads(model: FebModel, section: Node) -> None:
             )
         if "elem_set" in load.attrib:
             raise _unsupported(load, "a body load on an element set")
+
+
+def _body_force(load: Load) -> Load:
+    """The force per unit mass a FEBio body load applies: the negative of the vector given
+    (FEElasticSolidDomain::BodyForce adds -rho f to FEBio's external force, so f = (0, 0,
+    9.81) is gravity along -z)."""
+    return Load(-load.value, load.curve, load.window)
 
 
 def _surface_load(model: FebModel, load: Node, kind: str) -> None:

@@ -66,6 +66,13 @@ def _id_list(model: FebModel, node: Node) -> list[int]:
     return _ints(node)
 
 
+def read_discrete_set(model: FebModel, node: Node) -> None:
+    """<DiscreteSet> (febio/discrete.py)."""
+    from tissuesim.febio.discrete import read_discrete_set as read
+
+    read(model, node)
+
+
 def _mesh(model: FebModel, section: Node) -> None:
     model._node_index = getattr(model, "_node_index", {})
     model._element_index = getattr(model, "_element_index", {})
@@ -255,6 +262,7 @@ MESH_PARTS = {
     "Surface": _surface,
     "ElementSet": _element_set,
     "SurfacePair": _surface_pair,
+    "DiscreteSet": read_discrete_set,
 }
 
 #: SolidDomain type -> tissuesim formulation (None: FEBio's default for the law)

@@ -55,7 +55,7 @@ class FebModel:
     dirichlet: list = field(default_factory=list)
     nodal: list = field(default_factory=list)  # (node set, Load (3,))
     tractions: list = field(default_factory=list)  # (surface, "pressure"|"traction", Load)
-    body_loads: list = field(default_factory=list)  # Load (3,): force per unit mass
+    body_loads: list = field(default_factory=list)  # Load (3,): force per unit mass applied
     contacts: list = field(default_factory=list)  # dicts: type, surfaces, friction, wall...
     curves: dict = field(default_factory=dict)
     #: "mat_axis" / "fiber" -> {(part, row): (value, XML element)} from <MeshData>
@@ -77,6 +77,17 @@ class FebModel:
     rigid_connectors: list = field(default_factory=list)
     #: "file:line <tag>: what the converter changed" (contact surfaces set apart)
     changes: list = field(default_factory=list)
+    #: <DiscreteSet> name -> ((k, 2) node rows, element); <Discrete> springs: dicts of a set,
+    #: its law and parameters (febio/discrete.py)
+    discrete_sets: dict = field(default_factory=dict)
+    #: <bc type="linear constraint">: dicts of parent (row, axis), children (row, axis, Load),
+    #: offset Load (febio/linear_constraints.py)
+    linear_constraints: list = field(default_factory=list)
+    #: <Initial> velocities: (node set, (3,) velocity, element) (febio/initial.py)
+    initial_velocity: list = field(default_factory=list)
+    springs: list = field(default_factory=list)
+    #: the barrier's dhat a rigid wall was moved apart by (febio/constraint_sections.py)
+    contact_dhat: float | None = None
     steps: int = 1
     #: a DYNAMIC analysis' Newmark (beta, gamma); the <solver> values read and their elements
     newmark: tuple[float, float] | None = None

@@ -59,9 +59,12 @@ def _read(path: str | os.PathLike[str]) -> FebModel:
     loads = [d[2] for d in model.dirichlet if d[2] is not None]
     loads += [n[1] for n in model.nodal] + [t[2] for t in model.tractions] + model.body_loads
     loads += [c["offset"] for c in model.contacts if "offset" in c]
+    for c in model.linear_constraints:  # febio/linear_constraints.py
+        loads += [c["offset"], *(d[2] for d in c["terms"])]
     for load in loads:
         if load.curve is not None and load.curve not in model.curves:
             raise root.error(f"load curve {load.curve} is used but not defined in <LoadData>")
+    set_walls_apart(model)  # rigid walls the surface starts on (febio/constraint_sections.py)
     steppers = [p["time_stepper"] for p in model.phases] or [model.time_stepper]
     for stepper in steppers:
         number, node = (stepper or {}).get("curve", (None, None))
@@ -241,12 +244,16 @@ def _control(model: FebModel, node: Node) -> None:
 
 
 from tissuesim.febio.condition_sections import SECTIONS as _CONDITION_SECTIONS  # noqa: E402
+from tissuesim.febio.constraint_sections import read_constraints, set_walls_apart  # noqa: E402
+from tissuesim.febio.discrete import read_discrete  # noqa: E402
+from tissuesim.febio.initial import read_initial  # noqa: E402
 from tissuesim.febio.mesh_sections import SECTIONS as _MESH_SECTIONS  # noqa: E402
 
 STEP_SECTIONS = {
     "Control": _control,
     **{k: v for k, v in _CONDITION_SECTIONS.items() if k in ("Boundary", "Loads", "Contact")},
     "Rigid": read_rigid,
+    "Constraints": read_constraints,
 }
 SECTIONS = {
     "Module": _module,
@@ -255,6 +262,9 @@ SECTIONS = {
     "Material": read_materials,
     "MeshData": read_mesh_data,
     "Rigid": read_rigid,
+    "Constraints": read_constraints,
+    "Discrete": read_discrete,
+    "Initial": read_initial,
     **_MESH_SECTIONS,
     **_CONDITION_SECTIONS,
 }

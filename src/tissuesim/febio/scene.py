@@ -14,6 +14,9 @@ import numpy as np
 
 from tissuesim.febio.contact_start import separate_touching
 from tissuesim.febio.curves import curve_expression
+from tissuesim.febio.discrete import spring_tables
+from tissuesim.febio.initial import initial_velocity
+from tissuesim.febio.linear_constraints import linear_constraint_tables
 from tissuesim.febio.logfiles import cell_rows, logfile_tables
 from tissuesim.febio.materials import body_directions, with_directions
 from tissuesim.febio.materials.curve_values import resolve_curve_values
@@ -170,6 +173,7 @@ def febio_scene(model: FebModel, stem: str) -> tuple[dict, dict]:
     bodies = [b for _, b in named]
     several = _several(model, bodies)
     dhat = separate_touching(model, bodies)  # contact that starts touching: moved apart
+    dhat = dhat or model.contact_dhat  # a rigid wall the surface starts on, moved apart
     tables_per_body, meshes, gravity = [], {}, np.zeros(3)
     for name, body in named:
         used = np.unique(body["cells"])
@@ -285,6 +289,16 @@ def febio_scene(model: FebModel, stem: str) -> tuple[dict, dict]:
                 density_load = Load(density * load.value, load.curve, load.window)
                 force = [_times(density_load, model, i) for i in range(3)]
                 tables.setdefault("body_force", []).append({"force_density": force})
+        j = next(i for i, b in enumerate(bodies) if b is body)
+        springs = spring_tables(model, bodies, j, local)  # <Discrete> (febio/discrete.py)
+        if springs:
+            tables["discrete_springs"] = springs
+        constraints = linear_constraint_tables(model, body, local, lambda load: _times(load, model))
+        if constraints:  # <bc type="linear constraint"> (febio/linear_constraints.py)
+            tables["linear_constraints"] = constraints
+        velocity = initial_velocity(model, body)  # <Initial> (febio/initial.py)
+        if velocity is not None:
+            tables["initial"] = {"velocity": velocity}
         tables_per_body.append((name, tables))
     _unique_support_names(tables_per_body)
     sim = {

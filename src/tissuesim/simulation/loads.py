@@ -93,6 +93,51 @@ class LoadCalls:
         at 1 kPa."""
         self.body(body, ("fem",)).add_follower_pressure(facets, pressure, name)
 
+    def add_springs(
+        self,
+        pairs,
+        stiffness: float | None = None,
+        *,
+        tension_only: bool = False,
+        force=None,
+        measure: str = "elongation",
+        scale: float = 1.0,
+        anchors=None,
+        body: str | None = None,
+        name: str = "springs",
+    ):
+        """Discrete springs between vertex pairs (k, 2) of a FEM body (a second vertex -1: a
+        spring to the fixed point ``anchors[i]``, m), of rest lengths their rest distances:
+        linear (``stiffness`` N/m; ``tension_only``: no force in compression) or with a
+        ``force`` curve (an ``energies.node_springs.ForceCurve``, N, of the ``measure``
+        elongation (m), strain or stretch, times ``scale``). An energy with its exact
+        gradient and Hessian (``energies/node_springs.py``). Returns the spring set.
+
+        ``sim.add_springs([[0, 9]], 50.0)`` joins vertices 0 and 9 by a 50 N/m spring."""
+        from tissuesim.energies.node_springs import SpringLaw
+
+        if (stiffness is None) == (force is None):
+            raise InputError("add_springs: give a stiffness (N/m) or a force curve, not both")
+        if force is not None:
+            law = SpringLaw("curve", curve=force, measure=measure, scale=float(scale))
+        else:
+            kind = "tension_only" if tension_only else "linear"
+            law = SpringLaw(kind, stiffness=float(stiffness))
+        return self.body(body, ("fem",)).add_springs(pairs, law, anchors=anchors, name=name)
+
+    def add_linear_constraint(self, terms, offset=0.0, *, stiffness=None, body=None, name=None):
+        """Hold sum_i c_i u[v_i, a_i] = offset (m) over displacement components of a FEM
+        body: ``terms`` [(vertex, axis, c_i), ...], c_i a number or a callable of t (FEBio's
+        linear constraint: a parent DOF = the sum of child DOFs times their values), by a
+        stiff penalty (``constraints/linear.py``; ``stiffness`` N/m, default 1e5 times the
+        shear modulus times the median boundary edge). Returns the constraint.
+
+        ``sim.add_linear_constraint([(5, 0, 1.0), (8, 0, -1.0)])``: vertex 5 moves along x
+        as vertex 8 does."""
+        return self.body(body, ("fem",)).add_linear_constraint(
+            terms, offset, stiffness=stiffness, name=name
+        )
+
     def add_nodal_forces(self, vertices, force, *, body=None) -> None:
         """Dead point loads (N) on vertices of a FEM body: a vector (d,) on each vertex, (k, d)
         per vertex, or a callable ``t -> (k, d)``. ``sim.add_nodal_forces(tip, (0, 0, -0.1))``

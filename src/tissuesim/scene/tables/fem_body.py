@@ -34,6 +34,17 @@ FEM_TABLE_KEYS = {
     "body_force": {"force_density"},
     "initial": {"velocity"},
     "nodal_forces": {"vertices", "force"},
+    "linear_constraints": {"terms", "offset", "stiffness", "name"},
+    "discrete_springs": {
+        "name",
+        "pairs",
+        "anchors",
+        "stiffness",
+        "tension_only",
+        "force",
+        "measure",
+        "scale",
+    },
 }
 
 MESH_KEYS = {
@@ -72,7 +83,7 @@ FEM_BODY_OPTIONS = ("density", "mass", "order", "formulation")
 #: the tables of one FEM body (top level in a one-body scene, inside each [[bodies]] entry)
 FEM_BODY_KEYS = ("mesh", "material", "dirichlet", "traction", "body_force", "nodal_forces")
 
-FEM_BODY_KEYS += ("initial", "pressure")
+FEM_BODY_KEYS += ("initial", "pressure", "discrete_springs", "linear_constraints")
 
 
 def add_fem_body(
@@ -154,6 +165,16 @@ def add_fem_body(
         force = of_time(entry["force"], d, f"{where} force", "a nodal force")
         with _context(where):
             sim.add_nodal_forces(vertices, force, body=name)
+    springs = _table(item, "discrete_springs", source, array=True)
+    if springs:
+        from tissuesim.scene.tables.springs import add_spring_tables
+
+        add_spring_tables(sim, name, springs, label)
+    constraints = _table(item, "linear_constraints", source, array=True)
+    if constraints:
+        from tissuesim.scene.tables.springs import add_linear_constraint_tables
+
+        add_linear_constraint_tables(sim, name, constraints, label)
     initial = _table(item, "initial", source)
     _unknown(initial, FEM_TABLE_KEYS["initial"], label("initial"))
     if "velocity" in initial:
