@@ -162,3 +162,28 @@ def test_refusals(tmp_path):
         read_feb(_deck(tmp_path, UNIAXIAL.replace("<theta>90</theta>", "<psi>90</psi>")))
     with pytest.raises(FebError, match=r"active.feb:\d+ <E>: .*curve"):
         read_feb(_deck(tmp_path, UNIAXIAL.replace("<E>10000</E>", '<E lc="1">10000</E>')))
+
+
+def test_laws_without_an_energy_are_refused_with_the_reason(tmp_path):
+    """FEBio's Newtonian viscous solid (its stress from the rate (F - Fp) F^-1 / dt) and the
+    active fibre contraction of a trans iso law have no energy of F: one line each says so."""
+    viscous = UNIAXIAL.replace(
+        """      <solid type="prescribed uniaxial active contraction">
+        <T0 lc="1">2000</T0>
+        <mat_axis type="angles"><theta>90</theta><phi>90</phi></mat_axis>
+      </solid>""",
+        '      <solid type="Newtonian viscous solid"><mu>1</mu><kappa>1</kappa></solid>',
+    )
+    with pytest.raises(FebError, match=r"active.feb:\d+ <solid>: .*Newtonian viscous solid.*"
+                       "not the derivative of an energy"):  # fmt: skip
+        read_feb(_deck(tmp_path, viscous))
+    text = DECK.format(material="", mixture="solid mixture").replace(
+        '<material id="1" name="tissue" type="solid mixture">',
+        '<material id="1" name="tissue" type="trans iso Mooney-Rivlin">\n'
+        "      <c1>1</c1><c2>0</c2><c3>1</c3><c4>1</c4><c5>1</c5><lam_max>10</lam_max><k>100</k>\n"
+        '      <active_contraction><ascl lc="1">1</ascl><Tmax>1</Tmax></active_contraction>',
+    )
+    path = tmp_path / "fibre.feb"
+    path.write_text(text)
+    with pytest.raises(FebError, match=r"fibre.feb:\d+ <active_contraction>: .*energy"):
+        read_feb(path)

@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 from tissuesim.febio import febio_scene, load_febio, read_feb
+from tissuesim.materials import make_material
 
 DECK = """<?xml version="1.0" encoding="ISO-8859-1"?>
 <febio_spec version="4.0">
@@ -101,3 +102,28 @@ def test_orthotropic_cle_reads_its_moduli_and_axes(tmp_path):
     assert material["lp11"] == 2.0 and material["mu3"] == 0.1
     np.testing.assert_allclose(material["mat_axis_a"], [0, 1, 0])
     np.testing.assert_allclose(material["mat_axis_d"], [-1, 0, 0])
+
+
+def test_st_venant_kirchhoff_is_stvk_alone_and_in_a_mixture(tmp_path):
+    """FEBio's St.Venant-Kirchhoff (FEStVenantKirchhoff, the stress of isotropic elastic)."""
+    path = tmp_path / "svk.feb"
+    path.write_text(DECK.format(kind="St.Venant-Kirchhoff", params="      <E>1000</E><v>0.3</v>"))
+    data, _ = febio_scene(read_feb(path), "x")
+    assert data["material"] == {"model": "stvk", "youngs_modulus": 1000.0, "poisson_ratio": 0.3}
+    mixture = ('      <solid type="St.Venant-Kirchhoff"><E>1000</E><v>0.3</v></solid>\n'
+               '      <solid type="neo-Hookean"><E>500</E><v>0.2</v></solid>')  # fmt: skip
+    path.write_text(DECK.format(kind="solid mixture", params=mixture))
+    data, _ = febio_scene(read_feb(path), "x")
+    assert data["material"]["components"][0]["model"] == "stvk"
+    sim = load_febio(path).simulation
+    sim.step()
+    forces = sim.step().extra["forces"]
+    X, x = sim.body("body").mesh.points, sim.body_positions("body")
+    stretch = np.array([np.polyfit(X[:, i], x[:, i], 1)[0] for i in range(3)])
+    law = make_material("solid_mixture", components=[
+        {"model": "stvk", "youngs_modulus": 1000.0, "poisson_ratio": 0.3},
+        {"model": "neo_hookean", "youngs_modulus": 500.0, "poisson_ratio": 0.2},
+    ])  # fmt: skip
+    P = law.stress(np.diag(stretch)[None])[0]
+    np.testing.assert_allclose([P[1, 1], P[2, 2]], 0.0, atol=1e-6 * P[0, 0])
+    assert forces["pull"][0] == pytest.approx(P[0, 0], rel=1e-6)

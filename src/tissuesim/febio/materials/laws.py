@@ -18,6 +18,7 @@ __all__ = [
     "CONTINUOUS",
     "ACTIVE",
     "CURVE_PARAMETERS",
+    "NO_ENERGY",
 ]
 
 #: FEBio material types tissuesim runs -> (model, FEBio parameter -> tissuesim keyword; None:
@@ -25,6 +26,8 @@ __all__ = [
 MATERIAL_TYPES = {
     "neo-Hookean": ("neo_hookean", {"E": "youngs_modulus", "v": "poisson_ratio"}),
     "isotropic elastic": ("stvk", {"E": "youngs_modulus", "v": "poisson_ratio"}),
+    # FEBio's FEStVenantKirchhoff: the same stress as isotropic elastic's
+    "St.Venant-Kirchhoff": ("stvk", {"E": "youngs_modulus", "v": "poisson_ratio"}),
     **{
         name: (name, None)
         for name in (
@@ -80,6 +83,17 @@ ACTIVE = {
     f"{pre}prescribed {kind} active contraction"
     for pre in ("", "uncoupled ")
     for kind in ("isotropic", "trans iso", "uniaxial")
+}
+#: FEBio's laws whose stress is not the derivative of an energy of F (their tangent is not
+#: symmetric), which tissuesim, minimising an energy in each step, does not run: the reason
+NO_ENERGY = {
+    **{
+        name: "its Cauchy stress 2 mu D + (kappa - 2 mu/3) tr(D) I, D = sym((F - Fp) F^-1)/dt "
+        "(FEBio's rate in a quasi-static step), is not the derivative of an energy of F"
+        for name in ("Newtonian viscous solid", "Newtonian viscous solid uncoupled")
+    },
+    "active_contraction": "FEBio's active fibre stress Tmax f(lambda~) a (x) a (lambda~ = "
+    "J^(-1/3) |F a0|) is not the derivative of an energy of F",
 }
 #: parameters that may follow a load curve (``<T0 lc="1">``: value times the curve)
 CURVE_PARAMETERS = {name: ("T0",) for name in ACTIVE}

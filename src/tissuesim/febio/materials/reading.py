@@ -44,6 +44,7 @@ from tissuesim.febio.materials.laws import (
     FIBRES_ONLY,
     MATERIAL_TYPES,
     MIXTURES,
+    NO_ENERGY,
     REACTIVE_VISCOELASTIC,
     UNCOUPLED,
     VECTOR_PARAMETERS,
@@ -144,6 +145,9 @@ def _law(
         )
         if alone:
             raise mat.error(f"material type {kind!r} is read as a mixture's <solid> only{alone}")
+        if kind in NO_ENERGY:
+            raise mat.error(f"material type {kind!r} is not run by tissuesim: {NO_ENERGY[kind]}, "
+                            "and tissuesim minimises an energy in each step")  # fmt: skip
         raise mat.error(
             f"material type {kind!r} is not supported by tissuesim{where}; it runs "
             f"{', '.join(repr(k) for k in known)}"
@@ -160,6 +164,9 @@ def _law(
         if kind in CONTINUOUS and p.tag in PARTS:
             params[p.tag] = read_part(model, p)
             continue
+        if p.tag in NO_ENERGY:
+            raise p.error(f"<{p.tag}> of {kind!r} is not run by tissuesim: {NO_ENERGY[p.tag]}, "
+                          "and tissuesim minimises an energy in each step")  # fmt: skip
         if "lc" in p.attrib and p.tag in CURVE_PARAMETERS.get(kind, ()):
             params[p.tag] = curve_value(p)
             continue
