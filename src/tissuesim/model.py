@@ -114,9 +114,10 @@ class Model:
             self.material = self.material.bind(
                 self.kinematics.weights.size, self.mesh.dim, self.mesh.n_cells
             )
-        self.backend, self.backend_reason = resolve_backend(
-            self.backend, self.mesh.n_cells, self.mesh.dim
-        )
+        cells = self.mesh.n_cells
+        if self.formulation == "shell":  # 18 points of 60 x 60 Hessians per cell: as many
+            cells *= 18 * 25  # tetrahedra's work (1 point, 12 x 12) as "auto" weighs its size
+        self.backend, self.backend_reason = resolve_backend(self.backend, cells, self.mesh.dim)
         if self.formulation in ("displacement", "shell"):
             self.elastic = ElasticEnergy(
                 self.kinematics, self.material, stencil_id=0, backend=self.backend

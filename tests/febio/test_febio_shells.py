@@ -220,3 +220,37 @@ def test_a_shell_on_a_rigid_part_is_clamped_to_it_and_on_a_solid_attached(tmp_pa
     with pytest.raises(InputError, match=r"parts \['plate', 'block'\] share nodes but have "
                        r"different materials"):  # fmt: skip
         load_febio(path)
+
+
+def test_three_field_shell_augmentation_off_is_read_and_on_refused(tmp_path):
+    """FE3FieldElasticShellDomain's laugon = 0 (its default) reads, its atol / minaug / maxaug
+    then unused notes; laugon = 1 (the augmented dilatation) is refused in one line."""
+    text = CANTILEVER.read_text().replace(
+        '<ShellDomain name="plate" mat="plate">',
+        '<ShellDomain name="plate" mat="plate" type="three-field-shell"><laugon>0</laugon>'
+        "<atol>0.01</atol><minaug>0</minaug><maxaug>0</maxaug>",
+    )
+    path = tmp_path / "augmented.feb"
+    path.write_text(text)
+    model = read_feb(path)
+    assert model.domains["plate"][1] == "mean_dilatation"
+    assert sum("augmentation, off" in n for n in model.notes) == 3
+    path.write_text(text.replace("<laugon>0</laugon>", "<laugon>1</laugon>"))
+    with pytest.raises(InputError, match=r"augmented.feb:\d+ <laugon>: laugon = 1"):
+        read_feb(path)
+
+
+def test_secant_options_read_as_febio_defaults(tmp_path):
+    """secant_stress 0 and secant_tangent (FEBio's Newton tangent only) read; secant_stress 1
+    is refused in one line."""
+    text = CANTILEVER.read_text().replace(
+        '<ShellDomain name="plate" mat="plate">',
+        '<ShellDomain name="plate" mat="plate"><secant_stress>0</secant_stress>'
+        "<secant_tangent>1</secant_tangent>",
+    )
+    path = tmp_path / "secant.feb"
+    path.write_text(text)
+    assert any("Newton tangent" in n for n in read_feb(path).notes)
+    path.write_text(text.replace("<secant_stress>0<", "<secant_stress>1<"))
+    with pytest.raises(InputError, match=r"secant.feb:\d+ <secant_stress>: secant_stress = 1"):
+        read_feb(path)

@@ -4,6 +4,7 @@ FEShellQuad8G18 rule); its shape functions and rule, patch test, energy, gradien
 Hessian against finite differences on both backends, mass; a quad8 cantilever deck against
 the beam and against the same plate built with ``solid_shell`` in the API."""
 
+import os
 import warnings
 from pathlib import Path
 
@@ -382,3 +383,19 @@ def test_quad8_plate_under_a_follower_pressure_equals_the_api(tmp_path):
     q, I, G = p * W, W * H**3 / 12, E / 2  # the beam under q per length, down (the normal's +z)
     beam = q * L**4 / (8 * E * I) + q * L**2 / (2 * 5 / 6 * G * W * H)
     assert (x - model.nodes)[:n][tip, 2].mean() == pytest.approx(-beam, rel=3e-3)
+
+
+@pytest.mark.skipif(
+    not numba_available() or os.environ.get("TISSUESIM_BACKEND", "auto") not in ("", "auto"),
+    reason="numba not installed, or the backend set by TISSUESIM_BACKEND",
+)
+def test_auto_backend_weighs_a_shell_cell_as_the_work_it_is():
+    """A shell cell is 18 points of 60 x 60 Hessians: "auto" counts it as 450 tetrahedra, so
+    even a small shell mesh runs the fused loop (NumPy took 0.7 s per Hessian on FEBio's
+    sh57, 180 cells), while the same cells as plain hexahedra20 stay under the threshold."""
+    mesh = ts.box(divisions=(2, 2, 1), element="hex20")
+    mat = make_material("neo_hookean", youngs_modulus=1e3, poisson_ratio=0.3)
+    shell = Model(mesh, mat, np.full(mesh.n_cells, 2.0), formulation="shell")
+    solid = Model(mesh, mat, np.full(mesh.n_cells, 2.0))
+    assert shell.backend == "numba" and shell.elastic.fused
+    assert solid.backend == "numpy"

@@ -159,6 +159,16 @@ def read_shell_domain(model: FebModel, node: Node) -> None:
         if tag == "shell_normal_nodal":
             if not _flag(child):
                 raise _unsupported(child, "shell_normal_nodal = 0 (element normals)")
+        elif tag == "laugon" and kind == "three-field-shell":  # FE3FieldElasticShellDomain
+            if _flag(child):
+                raise _unsupported(child, "laugon = 1 (the augmented three-field shell)")
+        elif tag == "secant_stress":  # FEElasticShellDomain: the law's secant stress
+            if _flag(child):
+                raise _unsupported(child, "secant_stress = 1 (the law's secant stress)")
+        elif tag == "secant_tangent":  # only FEBio's Newton tangent: the solution is the same
+            model.note(child, "FEBio's Newton tangent (secant or not): the solution is the same")
+        elif tag in ("atol", "minaug", "maxaug") and kind == "three-field-shell":
+            model.note(child, "the three-field shell's augmentation, off (laugon = 0)")
         elif tag != "shell_thickness":
             raise _unsupported(child, "this ShellDomain parameter is not supported by tissuesim")
     if "shell_thickness" in p:
