@@ -69,3 +69,26 @@ def test_cfd_refusals_name_the_element_and_line(tmp_path, old, new, match):
     path.write_text(text.replace(old, new, 1))
     with pytest.raises(FebError, match=match):
         febio_scene(read_feb(path), "x")
+
+
+def test_2d_trans_iso_mooney_rivlin_pull_is_the_laws_stress():
+    """FEBio's 2D trans iso Mooney-Rivlin (tests/febio/models/trans_iso_2d_uniaxial.feb: fibres
+    in the x-y plane, normal to the axis z, weighted by the ellipse w = (3, 1)) pulled along x,
+    hex8 with FEBio's three-field element: the homogeneous state's lateral stresses are zero and
+    its pull is the law's P_xx; the fibres stiffen x more than y (y shortens more than z)."""
+    data, _ = febio_scene(read_feb(MODELS / "trans_iso_2d_uniaxial.feb"), "x")
+    assert data["simulation"]["formulation"] == "mean_dilatation"
+    table = dict(data["material"])
+    assert table["w"] == [3.0, 1.0] and table["fiber"] == [0.0, 0.0, 1.0]
+    law = make_material(table.pop("model"), **table)
+    sim = load_febio(MODELS / "trans_iso_2d_uniaxial.feb").simulation
+    for _ in range(3):
+        sim.step()
+    X, x = sim.body("body").mesh.points, sim.body_positions("body")
+    stretch = np.array([np.polyfit(X[:, i], x[:, i], 1)[0] for i in range(3)])
+    force = abs(sim.step().extra["forces"]["pull"][0])
+    P = law.stress(np.diag(stretch)[None])[0]
+    assert stretch[0] == pytest.approx(1.15)
+    np.testing.assert_allclose([P[1, 1], P[2, 2]], 0.0, atol=1e-6 * P[0, 0])
+    assert force == pytest.approx(P[0, 0], rel=1e-6)
+    assert stretch[1] < stretch[2] - 1e-3

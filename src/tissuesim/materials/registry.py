@@ -37,6 +37,7 @@ from tissuesim.materials.fibres.fibre_exp_pow import FiberExpPow, FiberExpPowUnc
 from tissuesim.materials.fibres.fibre_pow_linear import FiberPowLinear, FiberPowLinearUncoupled
 from tissuesim.materials.fibres.holzapfel_gasser_ogden import HGOUnconstrained, HolzapfelGasserOgden
 from tissuesim.materials.fibres.tc_nonlinear_orthotropic import TCNonlinearOrthotropic
+from tissuesim.materials.fibres.trans_iso_2d_mooney_rivlin import TransIso2DMooneyRivlin
 from tissuesim.materials.fibres.trans_iso_mooney_rivlin import (
     CoupledTransIsoMooneyRivlin,
     TransIsoMooneyRivlin,
@@ -122,6 +123,7 @@ FIBRE_LAWS: tuple[type[Material], ...] = (
     FiberExpLinearUncoupled,
     ContinuousFiberDistribution,
     ContinuousFiberDistributionUncoupled,
+    TransIso2DMooneyRivlin,
 )
 
 MATERIALS: dict[str, type[Material]] = {

@@ -23,6 +23,8 @@ theta is the law's measure of volume change and U its lambda term, the part that
     holmes_mow           none (U = 0: its J terms are inside its exponential, psi_rest the law)
     fiber_exp_pow, fiber_pow_linear, fiber_exp_linear (and their _uncoupled forms): none
                          (U = 0, a fibre has no bulk term)
+    continuous_fiber_distribution (and _uncoupled): none (U = 0, fibres only)
+    2d_trans_iso_mooney_rivlin  theta = J  U = its matrix's bulk term with k
     solid_mixture        the sum of its components' U, which must share theta and U's kind
     uncoupled_solid_mixture  theta = J, its own bulk term with k (pressure_model as above)
 
@@ -75,6 +77,11 @@ VOLUMETRIC_LAWS = {
         for name in (law, f"{law}_uncoupled")
     },
     "uncoupled_solid_mixture": ("J", "log"),
+    # FEBio's continuous fibre distributions (no bulk term, k = 0) and 2D trans iso
+    # Mooney-Rivlin (its matrix's k and pressure_model)
+    "continuous_fiber_distribution": ("J", "log"),
+    "continuous_fiber_distribution_uncoupled": ("J", "log"),
+    "2d_trans_iso_mooney_rivlin": ("J", "log"),
 }
 
 

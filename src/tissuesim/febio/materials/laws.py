@@ -62,6 +62,7 @@ MATERIAL_TYPES = {
             "fiber-pow-linear-uncoupled",
             "continuous fiber distribution",
             "continuous fiber distribution uncoupled",
+            "2D trans iso Mooney-Rivlin",
         )
     },
     **{
@@ -128,6 +129,7 @@ FIBRE_TYPES = {
     },
     **{name: "fiber" for name in FIBRES_ONLY},
     **{name: "axes" for name in CONTINUOUS},
+    "2D trans iso Mooney-Rivlin": "fiber",
     **{name: "fiber" for name in ACTIVE if "isotropic" not in name},
 }
 #: the uncoupled laws, which FEBio runs with its three-field (mean dilatation) hex8 / tet10
@@ -138,6 +140,7 @@ UNCOUPLED = {
     "uncoupled viscoelastic",
     "uncoupled solid mixture", "fiber-exp-pow-uncoupled", "fiber-pow-linear-uncoupled",
     "uncoupled fiber-exp-linear", "continuous fiber distribution uncoupled",
+    "2D trans iso Mooney-Rivlin",
     *(name for name in ACTIVE if name.startswith("uncoupled")),
 }  # fmt: skip
 VISCOELASTIC = {
@@ -151,7 +154,10 @@ DAMAGE = {
     "uncoupled elastic damage": "uncoupled_elastic_damage",
 }
 #: parameters given as a list (one value per axis), by FEBio type
-VECTOR_PARAMETERS = {"TC nonlinear orthotropic": ("beta", "ksi")}
+VECTOR_PARAMETERS = {
+    "TC nonlinear orthotropic": ("beta", "ksi"),
+    "2D trans iso Mooney-Rivlin": ("w", "a"),
+}
 #: FEBio's reactive viscoelastic wrappers -> tissuesim's model
 REACTIVE_VISCOELASTIC = {
     "reactive viscoelastic": "reactive_viscoelastic",

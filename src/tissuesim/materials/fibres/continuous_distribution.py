@@ -81,7 +81,7 @@ def fibre_sum(
     s = Js ** (-2.0 / 3.0) if uncoupled else np.ones(q)
     cJ = 2.0 / (3.0 * Js) if uncoupled else np.zeros(q)
     Ib = I4 * s[:, None]
-    f, f1, f2 = (x.reshape(Ib.shape) for x in law.fibre(Ib.ravel(), order))
+    f, f1, f2 = (None if x is None else x.reshape(Ib.shape) for x in law.fibre(Ib.ravel(), order))
     psi = np.where(ok, np.sum(c * f, axis=-1), np.inf)
     if order == 0:
         return MaterialResponse(psi)
