@@ -68,6 +68,8 @@ def _blocks(dz: float = 0.02, element: str = "hex"):
         {"rule": "gauss"},
         {"rule": "nodal", "two_pass": True},
         {"rule": "gauss", "augmented": True},
+        {"rule": "gauss", "augmented": True, "tied": True, "two_pass": True},
+        {"rule": "nodal", "tied": True},
     ],
 )
 def test_pair_energy_gradient_and_hessian_match_finite_differences(options):
@@ -85,7 +87,7 @@ def test_pair_energy_gradient_and_hessian_match_finite_differences(options):
     pair.setup(rest)
     if augmented:
         for p in pair.passes:
-            p.multipliers = RNG.uniform(0.0, 2.0, len(p.multipliers))
+            p.multipliers = RNG.uniform(0.0, 2.0, p.multipliers.shape)
     positions = [r + 0.01 * RNG.standard_normal(r.shape) for r in rest]
     n0 = lower.n_points * 3
     dofs = [np.arange(n0).reshape(-1, 3), n0 + np.arange(upper.n_points * 3).reshape(-1, 3)]
@@ -129,7 +131,7 @@ def _pressed(penalty=1e4, augmented=False, two_pass=False, steps=3, integration=
     return sim, record
 
 
-def _column(penalty=None, augmented=False, single=False, **options):
+def _column(penalty=None, augmented=False, single=False, press=-0.02, **options):
     """A 1 x 1 column (nu = 0) pressed 0.02 down at its top, base fixed: two blocks of
     matching facets in penalty contact at z = 0.5, or (``single``) one block."""
     mat = NeoHookean(youngs_modulus=1000.0, poisson_ratio=0.0)
@@ -146,7 +148,7 @@ def _column(penalty=None, augmented=False, single=False, **options):
     base = blocks.get("lower", blocks["upper"])
     sim.fix(np.flatnonzero(base.points[:, 2] < 1e-9), body=next(iter(blocks)), name="table")
     top = np.flatnonzero(blocks["upper"].points[:, 2] > 1 - 1e-9)
-    sim.grasp(top, lambda t: np.array([0.0, 0.0, -0.02 * t]), body="upper", name="press")
+    sim.grasp(top, lambda t: np.array([0.0, 0.0, press * t]), body="upper", name="press")
     if not single:
         sim.add_penalty_contact("upper", "lower", primary_facets="zmin",
                                 secondary_facets="zmax", penalty=penalty, augmented=augmented,
@@ -193,6 +195,22 @@ def test_newton_converges_quadratically_with_penalty_contact():
     assert len(norms) >= 3
     rates = [np.log(norms[k + 1]) / np.log(norms[k]) for k in range(len(norms) - 3, len(norms) - 1)]
     assert min(rates) > 1.6, norms
+
+
+def test_a_tied_pair_carries_tension_as_one_block():
+    """FEBio's tied contact: the column pulled up 2 % holds together; tied with a penalty,
+    its force is one block's in series with the penalty's spring (1 %: the law's small
+    non-linearity), augmented one block's to 1e-7 (and with a
+    sliding contact instead, nothing holds the upper block: no force)."""
+    exact = _column(single=True, press=0.02)[0].forces()["press"][2]
+    plain = _column(penalty=2e3, press=0.02, tied=True)[0].forces()["press"][2]
+    tied, _ = _column(penalty=2e3, press=0.02, tied=True, augmented=True)
+    sliding = _column(penalty=2e3, press=0.02)[0].forces()["press"][2]
+    # the tie is a spring of eps per area in series with the column (stiffness exact / 0.02)
+    series = 0.02 / (0.02 / exact + 1.0 / 2e3)
+    assert exact > 1.0 and plain == pytest.approx(series, rel=1e-2)
+    assert tied.forces()["press"][2] == pytest.approx(exact, rel=1e-7)
+    assert abs(sliding) < 1e-9 * exact
 
 
 def test_two_pass_and_nodal_integration_carry_the_same_load():

@@ -177,3 +177,25 @@ def test_frictionless_touching_blocks_run_as_febio_does_by_its_penalty(tmp_path,
     for step, press in zip(summary["steps"], (PRESS / 2, PRESS), strict=True):
         force = step["extra"]["forces"]["press"][2]
         assert force == pytest.approx(_closed_form(press), rel=1e-6)
+
+
+def test_a_tied_elastic_pair_runs_as_a_tied_penalty_contact(tmp_path, capfd):
+    """FEBio's tied-elastic converts to a tied [[penalty_contact]]; augmented (AUGLAG 1e-8),
+    the pressed blocks give the closed form to 1e-6 as the sliding pair does."""
+    text = (
+        MODEL.read_text()
+        .replace('<contact type="sliding-elastic"', '<contact type="tied-elastic"')
+        .replace(
+            "<fric_coeff>0.01</fric_coeff>\n      <penalty>1</penalty>",
+            "<laugon>AUGLAG</laugon>\n      <penalty>1e5</penalty>\n"
+            "      <tolerance>1e-8</tolerance>\n      <maxaug>50</maxaug>",
+        )
+    )
+    assert "tied-elastic" in text and "AUGLAG" in text
+    feb = tmp_path / "tied.feb"
+    feb.write_text(text)
+    assert main(["convert", str(feb), str(tmp_path / "scene.toml")]) == 0
+    assert "tied = true" in (tmp_path / "scene.toml").read_text()
+    summary, _ = _run(feb, tmp_path / "out", capfd)
+    force = summary["steps"][-1]["extra"]["forces"]["press"][2]
+    assert force == pytest.approx(_closed_form(PRESS), rel=1e-6)

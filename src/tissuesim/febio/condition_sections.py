@@ -22,6 +22,8 @@ __all__ = ["SECTIONS", "CONTACT_TYPES", "INTERPOLATIONS"]
 AXES = {"x": 0, "y": 1, "z": 2}
 #: FEBio contact types that map onto tissuesim's barrier contact
 CONTACT_TYPES = ("sliding-elastic", "sliding-facet-on-facet", "sliding-node-on-facet", "rigid_wall")
+#: FEBio's tied contacts: penalty contact with the points held where they project at rest
+TIED_TYPES = ("tied-elastic", "tied-node-on-facet", "tied-facet-on-facet")
 #: children of <contact> that tune FEBio's enforcement (penalty, augmentation, search):
 #: tissuesim's barrier keeps the surfaces apart by itself
 CONTACT_TUNING = {
@@ -291,13 +293,15 @@ def _load_data(model: FebModel, section: Node) -> None:
 def _contact(model: FebModel, section: Node) -> None:
     for c in section.children:
         kind = c.attrib.get("type", "")
-        if c.tag != "contact" or kind not in CONTACT_TYPES:
+        if c.tag != "contact" or kind not in CONTACT_TYPES + TIED_TYPES:
             raise c.error(
                 f"contact type {kind!r} is not supported by tissuesim; it maps "
-                f"{', '.join(CONTACT_TYPES)} onto its barrier contact"
+                f"{', '.join(CONTACT_TYPES + TIED_TYPES)} onto its contact"
             )
         bottoms = {"shell_bottom_primary", "shell_bottom_secondary"}
         allowed = CONTACT_TUNING | {"fric_coeff", "tension", "offset", "plane"} | bottoms
+        if kind in TIED_TYPES:  # a tie holds in tension by itself; its search settings
+            allowed |= {"search_tolerance", "offset_shells", "max_distance", "special"}
         p = _children(c, allowed)
         item = {"type": kind, "node": c, "friction": 0.0}
         if "fric_coeff" in p:
@@ -327,7 +331,12 @@ def _contact(model: FebModel, section: Node) -> None:
             item["surfaces"] = model.surface_pairs[pair]
         if kind == "sliding-facet-on-facet":  # FEBio ignores its friction (a warning)
             item["friction"] = 0.0
-        if kind != "rigid_wall" and item["friction"] == 0.0:
+        if kind in TIED_TYPES:
+            for key in ("offset_shells", "max_distance"):
+                if key in p and float(_floats(p[key], 1)[0]) != 0.0:
+                    raise _unsupported(p[key], f"a tied contact's {key} = {p[key].text.strip()}")
+            item["penalty"] = _penalty_settings(kind, c, p)
+        elif kind != "rigid_wall" and item["friction"] == 0.0:
             item["penalty"] = _penalty_settings(kind, c, p)  # FEBio's own enforcement
         else:
             tuning = sorted(set(p) & CONTACT_TUNING)
@@ -369,10 +378,12 @@ def _penalty_settings(kind: str, c: Node, p: dict) -> dict:
     penalty = number("penalty", 1.0)
     if penalty <= 0:
         raise p["penalty"].error(f"penalty = {penalty}: give a positive penalty")
-    return {
+    tied = kind in TIED_TYPES
+    search = "search_tolerance" if "search_tolerance" in p else "search_tol"
+    out = {
         "penalty": penalty,
         "auto_penalty": _flag(p["auto_penalty"]) if "auto_penalty" in p else False,
-        "integration": "nodes" if kind == "sliding-node-on-facet" else "gauss",
+        "integration": "nodes" if kind.endswith("node-on-facet") else "gauss",
         "area": "current" if kind == "sliding-elastic" else "reference",
         "two_pass": _flag(p["two_pass"]) if "two_pass" in p else False,
         "augmented": methods[method],
@@ -380,8 +391,11 @@ def _penalty_settings(kind: str, c: Node, p: dict) -> dict:
         "gap_tolerance": number("gaptol", 0.0),
         "min_augmentations": int(number("minaug", 0)),
         "max_augmentations": int(number("maxaug", 10)),
-        "search_tolerance": number("search_tol", 0.01),
+        "search_tolerance": number(search, 0.01),
     }
+    if tied:
+        out["tied"] = True
+    return out
 
 
 def _globals(model: FebModel, section: Node) -> None:

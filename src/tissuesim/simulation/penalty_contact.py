@@ -40,6 +40,7 @@ class PenaltySpec:
     min_augmentations: int
     max_augmentations: int
     search_tolerance: float
+    tied: bool = False
 
 
 class PenaltyContactCalls:
@@ -63,6 +64,7 @@ class PenaltyContactCalls:
         min_augmentations: int = 0,
         max_augmentations: int = 10,
         search_tolerance: float = 0.01,
+        tied: bool = False,
         name: str | None = None,
     ) -> str:
         """Penalty contact: points of body ``primary``'s facets (a facet set name, (k, 3) or
@@ -76,8 +78,9 @@ class PenaltyContactCalls:
         than ``tolerance`` (relative) and the rms penetration is under ``gap_tolerance`` (m),
         ``min_augmentations`` to ``max_augmentations`` times per step. A point is in contact
         where its projection falls on a facet within ``search_tolerance`` (natural
-        coordinates). Its force on ``primary`` is reported by ``forces()`` under ``name``
-        (default ``penalty_contact<n>``). Returns the name."""
+        coordinates). ``tied``: each point is held where it projects at rest (FEBio's
+        tied contacts; the vector gap, tension too). Its force on ``primary`` is reported by
+        ``forces()`` under ``name`` (default ``penalty_contact<n>``). Returns the name."""
         for body in (primary, secondary):
             if body not in self.bodies or self.bodies[body].kind != "fem":
                 raise InputError(
@@ -135,6 +138,7 @@ class PenaltyContactCalls:
                 int(min_augmentations),
                 int(max_augmentations),
                 float(search_tolerance),
+                bool(tied),
             )  # fmt: skip
         )
         self._system_dirty = True
@@ -159,7 +163,7 @@ class PenaltyContactCalls:
                 two_pass=spec.two_pass, augmented=spec.augmented, tolerance=spec.tolerance,
                 gap_tolerance=spec.gap_tolerance, min_augmentations=spec.min_augmentations,
                 max_augmentations=spec.max_augmentations,
-                search_tolerance=spec.search_tolerance,
+                search_tolerance=spec.search_tolerance, tied=spec.tied,
             )  # fmt: skip
             pair.setup([None if b is None else b for b in _rest(system)])
             pairs.append(pair)

@@ -182,6 +182,7 @@ def minimize(
     budget: dict | None = None,
     physical_default: bool = False,
     start: Accumulator | None = None,
+    relag_early: bool = True,
 ) -> tuple[np.ndarray, NewtonResult]:
     """Minimise Phi from x0 (prescribed DOFs already at their values) over the free DOFs.
 
@@ -268,7 +269,8 @@ def minimize(
     # lagged terms are re-lagged once the solve is loosely converged, not at the tight target:
     # the lag only needs the point to about RELAG_AT of the start's residual, and re-lagging
     # there saves the iterations from it to the target (they are redone after the re-lag)
-    relag_target = max(target, RELAG_AT * reference)
+    # (``relag_early`` False: only at converged points, as FEBio augments its contact)
+    relag_target = max(target, RELAG_AT * reference) if relag_early else target
     iteration = 0
     lagged_at = 0  # the iteration of the last re-lag: max_iterations counts from there (an
     # augmented Lagrangian's augmentations are each a solve, as FEBio counts them)

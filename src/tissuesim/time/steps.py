@@ -191,6 +191,7 @@ def implicit_step(
         max_relags=max_relags,
         budget=budget,
         start=start_acc if relag is None else None,
+        relag_early=not lags.penalty,  # FEBio augments its contact at converged points
     )
     lags.check(c1, record)
     if contact is not None:

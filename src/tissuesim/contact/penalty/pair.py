@@ -27,7 +27,13 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.spatial import cKDTree
 
-from tissuesim.contact.penalty.faces import Facets, SamplePoints, area_jacobians, sample_points
+from tissuesim.contact.penalty.faces import (
+    Facets,
+    SamplePoints,
+    area_jacobians,
+    sample_points,
+    shape,
+)
 from tissuesim.contact.penalty.projection import gap_derivatives, outside, project
 
 __all__ = ["PenaltyContact", "PenaltySide", "PenaltyPass"]
@@ -61,7 +67,8 @@ class PenaltyPass:
     target: PenaltySide
     points: SamplePoints
     weights: np.ndarray  # W per point (reference, or the lagged current one)
-    multipliers: np.ndarray  # L per point (Pa)
+    multipliers: np.ndarray  # L per point (Pa); tied: (points tied, 3)
+    tie: tuple | None = None  # tied: (points, their facets, (r, s)) at rest
 
 
 @dataclass(eq=False)
@@ -82,6 +89,10 @@ class PenaltyContact:
     min_augmentations: int = 0
     max_augmentations: int = 10
     search_tolerance: float = 0.01
+    # tied (FEBio's tied-elastic, tied-node-on-facet, tied-facet-on-facet): each point is held
+    # to the place on the secondary surface it projects to at rest, by the vector gap d = q - x:
+    # energy W / (2 eps) |L + eps d|^2, L a vector multiplier
+    tied: bool = False
     passes: list = field(default_factory=list)
     augmentations: int = 0  # in this step's solve
 
@@ -94,7 +105,11 @@ class PenaltyContact:
         for sampled, target in sides:
             points = sample_points(sampled.facets, self.rule)
             w = points.weight * area_jacobians(rest[sampled.body], sampled.facets, points)
-            self.passes.append(PenaltyPass(sampled, target, points, w, np.zeros(len(w))))
+            p = PenaltyPass(sampled, target, points, w, np.zeros(len(w)))
+            if self.tied:  # where each point sits on the secondary surface at rest, kept
+                p.tie = self._find_contacts(p, rest)[:3]
+                p.multipliers = np.zeros((len(p.tie[0]), 3))
+            self.passes.append(p)
         self._rest_weights = [p.weights.copy() for p in self.passes]
 
     # -- geometry --------------------------------------------------------------------------
@@ -161,6 +176,9 @@ class PenaltyContact:
         grad = np.zeros(n) if order >= 1 else None
         rows, cols, vals = [], [], []
         for p in self.passes:
+            if self.tied:
+                value += self._tied_terms(p, positions, dofs, order, grad, rows, cols, vals)
+                continue
             pts, facet, rs, x = self._contacts(p, positions)
             if len(pts) == 0:
                 continue
@@ -211,12 +229,58 @@ class PenaltyContact:
             )
         return value, grad, hess
 
+    def _tied_gaps(self, p: PenaltyPass, positions: list[np.ndarray]):
+        """(points, stencil weights w (n, 8), vector gaps d = q - x (n, 3)) of a tied pass."""
+        pts, facet, rs = p.tie
+        sf, tf = p.sampled.facets, p.target.facets
+        Hs = p.points.H[pts]
+        x = np.einsum("na,nad->nd", Hs, positions[p.sampled.body][sf.corners[p.points.facet[pts]]])
+        Hm = shape(rs[:, 0], rs[:, 1], tf.triangle[facet])
+        q = np.einsum("na,nad->nd", Hm, positions[p.target.body][tf.corners[facet]])
+        return pts, np.concatenate([-Hs, Hm], axis=1), q - x
+
+    def _tied_terms(self, p, positions, dofs, order, grad, rows, cols, vals) -> float:
+        """A tied pass: its energy, and its gradient and (constant) Hessian added in place."""
+        pts, w, d = self._tied_gaps(p, positions)
+        if len(pts) == 0:
+            return 0.0
+        eps = self._eps(p)[pts]
+        W = p.weights[pts]
+        t = p.multipliers + eps[:, None] * d
+        value = float(np.sum(W * np.sum(t * t, axis=1) / (2 * eps)))
+        if order < 1:
+            return value
+        _, facet, _ = p.tie
+        stencil = np.concatenate(
+            [
+                dofs[p.sampled.body][p.sampled.facets.corners[p.points.facet[pts]]],
+                dofs[p.target.body][p.target.facets.corners[facet]],
+            ],
+            axis=1,
+        ).reshape(len(pts), 24)
+        g = (w[:, :, None] * (W[:, None] * t)[:, None, :]).reshape(len(pts), 24)
+        np.add.at(grad, stencil, g)
+        if order >= 2:
+            ww = (W * eps)[:, None, None] * w[:, :, None] * w[:, None, :]  # (n, 8, 8)
+            h = np.einsum("nab,ij->naibj", ww, np.eye(3)).reshape(len(pts), 24, 24)
+            rows.append(np.repeat(stencil, 24, axis=1).ravel())
+            cols.append(np.tile(stencil, (1, 24)).ravel())
+            vals.append(h.ravel())
+        return value
+
     def forces(self, positions: list[np.ndarray]) -> tuple[np.ndarray, float]:
         """(the force the secondary surface puts on the primary (N, 3), the contact area's
         sum of point weights in contact (m^2)); with two passes, both passes' forces add
         (as FEBio's two-pass load vectors do)."""
         total, area = np.zeros(3), 0.0
         for k, p in enumerate(self.passes):
+            if self.tied:
+                pts, _, d = self._tied_gaps(p, positions)
+                t = p.multipliers + self._eps(p)[pts][:, None] * d
+                f = np.sum(p.weights[pts][:, None] * t, axis=0)
+                total += f if k == 0 else -f
+                area += float(np.sum(p.weights[pts]))
+                continue
             pts, facet, rs, x = self._contacts(p, positions)
             if len(pts) == 0:
                 continue
@@ -248,6 +312,14 @@ class PenaltyContact:
         old, new, gaps = 0.0, 0.0, []
         updates = []
         for p in self.passes:
+            if self.tied:
+                pts, _, d = self._tied_gaps(p, positions)
+                L1 = p.multipliers + self._eps(p)[pts][:, None] * d
+                old += float(np.sum(p.multipliers**2))
+                new += float(np.sum(L1**2))
+                gaps.append(np.linalg.norm(d, axis=1))
+                updates.append(L1)
+                continue
             g = np.zeros(len(p.multipliers))
             pts, facet, rs, x = self._contacts(p, positions)
             if len(pts):

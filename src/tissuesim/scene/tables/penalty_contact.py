@@ -18,6 +18,7 @@ bodies' facet surfaces (``Simulation.add_penalty_contact``, ``contact/penalty/pa
     min_augmentations = 0
     max_augmentations = 10
     search_tolerance = 0.01           # natural coordinates
+    tied = false                      # held where they project at rest (FEBio's tied contacts)
 """
 
 from __future__ import annotations
@@ -30,9 +31,9 @@ __all__ = ["PENALTY_KEYS", "add_penalty_contacts"]
 PENALTY_KEYS = (
     "name", "primary", "secondary", "primary_facets", "secondary_facets", "penalty",
     "auto_penalty", "integration", "area", "two_pass", "augmented", "tolerance",
-    "gap_tolerance", "min_augmentations", "max_augmentations", "search_tolerance",
+    "gap_tolerance", "min_augmentations", "max_augmentations", "search_tolerance", "tied",
 )  # fmt: skip
-_FLAGS = ("auto_penalty", "two_pass", "augmented")
+_FLAGS = ("auto_penalty", "two_pass", "augmented", "tied")
 _COUNTS = ("min_augmentations", "max_augmentations")
 
 
