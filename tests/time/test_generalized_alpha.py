@@ -203,3 +203,55 @@ def test_a_free_rigid_body_spins_at_its_angular_velocity(rho):
     centre, R = sim.rigid_state("box")
     assert log_map(R)[0] == pytest.approx([0.0, 0.0, 2.0], abs=1e-10)
     assert centre == pytest.approx([0.0, 0.0, 0.0], abs=1e-12)
+
+
+def test_prescribed_values_hold_at_the_step_end_and_at_t_n_plus_alpha_f():
+    """The cantilever's tip pushed up at 0.5 m/s (a prescribed displacement linear in t):
+    after each step x_{n+1} holds it at t_{n+1} exactly, the solve's y held it at t_n +
+    alpha_f h (= alpha_f x_{n+1} + (1 - alpha_f) x_n there), and FEBio's equation holds on
+    the free DOFs."""
+    h, rho = 0.05, 0.4
+    af, am, _, _ = febio_weights(rho)
+    sim = _cantilever(rho, h)
+    mesh = sim.body().mesh
+    tip = ts.select.vertices_on_plane(mesh, axis=0, value=1.0)
+    sim.add_dirichlet(
+        tip, lambda X, t: np.stack([0 * X[:, 0], 0 * X[:, 1], 0.5 * t + 0 * X[:, 2]], axis=1)
+    )
+    model = sim.body().model
+    M = model.mass.matrix().tocsr()
+    free = np.ones(sim.state.x.size, dtype=bool)
+    free[model.prescribed_dofs] = False
+    sim.step()
+    for _ in range(3):
+        x0, a0 = sim.state.x, sim.state.a
+        sim.step()
+        x1, a1 = sim.state.x, sim.state.a
+        lifted = (x1 - mesh.points.ravel()).reshape(-1, 3)[tip, 2]
+        assert lifted == pytest.approx(0.5 * sim.time, abs=1e-14)
+        y = af * x1 + (1 - af) * x0
+        static = sim.step_energies(sim.time, None, h)
+        grad = sim.system.evaluate(y, 1, False, static).gradient
+        residual = (M @ (am * a1 + (1 - am) * a0) + grad)[free]
+        assert np.abs(residual).max() < 1e-6 * (np.abs(M @ a1).max() + np.abs(grad[free]).max())
+
+
+def test_a_pulled_rigid_motion_under_contact_is_refused_in_one_line():
+    """With contact, a rigid body's prescribed DOFs are pulled by springs to their values at
+    the step's end: with alpha_f < 1 that would pull y there; refused in one line (rho_inf =
+    0, alpha_f = 1, runs)."""
+    mesh = ts.box((0, 0, 0), (0.2, 0.2, 0.2), (1, 1, 1))
+    for rho, refused in ((0.5, True), (0.0, False)):
+        sim = ts.Simulation(mesh, MATERIAL, density=1000.0, integrator="generalized_alpha",
+                            time_step=0.01, generalized_alpha=rho)  # fmt: skip
+        platen = ts.box((0, 0, 0.3), (0.2, 0.2, 0.4), (1, 1, 1))
+        sim.add_body("platen", platen, MATERIAL, density=1000.0)
+        sim.fix(ts.select.vertices_on_plane(mesh, axis=2, value=0.0), body="body")
+        sim.add_rigid_body("press", ["platen"], prescribed={"z": lambda t: -0.1 * t})
+        sim.set_contact(dhat=0.01)
+        if refused:
+            with pytest.raises(InputError, match="rigid body's prescribed") as info:
+                sim.step()
+            assert "\n" not in str(info.value)
+        else:
+            sim.step()

@@ -37,6 +37,9 @@ alpha_m (``FERigidSolverNew::InertialForces``). tissuesim's y interpolates a rot
 rotation manifold: the same for translations, O(h^2) apart for rotations (a joint held at y
 leaves x_{n+1} that far off it; FEBio's linear interpolation holds x_{n+1} itself).
 
+Contact acts at y too (FEBio's sliding interfaces at x_{n+1}); a rigid body's prescribed motion
+under contact (pulled to its values by a spring) is refused with alpha_f < 1.
+
 Not FEBio's: at alpha_f = 1/2 (rhoi = 1) FEBio also corrects the stress towards energy
 conservation (``UpdateElementStress``, "mid-point rule"), a term with no potential; tissuesim
 runs the plain midpoint of the potential above.
@@ -130,6 +133,15 @@ def generalized_alpha_step(
     """One generalised-alpha step of h s: Backward Euler's minimisation over the intermediate
     configuration y (inertia of h_e about y_pred), then x_{n+1}, Newmark's acceleration and
     velocity."""
+    if alpha_f < 1.0 and any(
+        r.soft is not None and any(f is not None for f in r.held.values())
+        for r in getattr(system, "rigid", ())
+    ):
+        raise InputError(
+            "generalized_alpha with alpha_f < 1 (rho_inf > 0) and a rigid body's prescribed "
+            "motion under contact (pulled to its values by a spring, rigid/body.py): the spring "
+            "would pull x_{n+alpha_f} to the step's end values; use rho_inf = 0 or 'newmark'"
+        )
     a_n = np.zeros(system.n_dofs) if state.a is None else state.a
     t1 = state.time + h
     # tangent steps from x_n (rotations on the left, rigid/body.py): to x_pred, and to y_pred
