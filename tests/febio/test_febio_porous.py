@@ -113,3 +113,32 @@ def test_shenoy_cube_pulled_is_the_laws_stress(tmp_path):
     assert stretch[0] == pytest.approx(1.15)
     np.testing.assert_allclose([P[1, 1], P[2, 2]], 0.0, atol=1e-6 * P[0, 0])
     assert forces["px"][0] == pytest.approx(P[0, 0], rel=1e-6)
+
+
+def test_muscle_cube_pulled_along_its_fibre_is_the_laws_stress(tmp_path):
+    """FEBio's muscle material (uncoupled: hex8 with the three-field element, tissuesim's mean
+    dilatation), a cube pulled 15 % along its fibre x, free across: the lateral stresses vanish
+    and the pull is P_xx of the law at the stretches (the law itself checked against finite
+    differences and FEBio's DevStress elsewhere)."""
+    from tissuesim.febio import febio_scene, read_feb
+    from tissuesim.materials import make_material
+
+    params = dict(g1=500.0, g2=500.0, g3=0.0, p1=0.05, p2=6.6, Lofl=1.05, smax=3e4,
+                  lam_max=1.4, activation=0.2, k=1e5)  # fmt: skip
+    muscle = "".join(f"<{k}>{v}</{k}>" for k, v in params.items())
+    muscle += '<fiber type="vector">1,0,0</fiber>'
+    pull = FACE.format(name="px", nodes="x1", dof="x").replace("-0.2", "0.15")
+    text = DECK.format(faces=pull).replace('type="porous neo-Hookean"', 'type="muscle material"')
+    path = tmp_path / "muscle.feb"
+    path.write_text(text.replace("<E>3000</E><phi0>0.3</phi0>", muscle))
+    data, _ = febio_scene(read_feb(path), "x")
+    assert data["simulation"]["formulation"] == "mean_dilatation"
+    sim = load_febio(path).simulation
+    sim.step()
+    forces = sim.step().extra["forces"]
+    X, x = sim.body("body").mesh.points, sim.body_positions("body")
+    stretch = np.array([np.polyfit(X[:, i], x[:, i], 1)[0] for i in range(3)])
+    P = make_material("muscle material", **params).stress(np.diag(stretch)[None])[0]
+    assert stretch[0] == pytest.approx(1.15)
+    np.testing.assert_allclose([P[1, 1], P[2, 2]], 0.0, atol=1e-6 * P[0, 0])
+    assert forces["px"][0] == pytest.approx(P[0, 0], rel=1e-6)

@@ -50,6 +50,7 @@ from tissuesim.materials.isotropic.neo_hookean import NeoHookean
 from tissuesim.materials.isotropic.stvk import StVenantKirchhoff
 from tissuesim.materials.mixture import MIXTURES
 from tissuesim.materials.multigeneration import Multigeneration
+from tissuesim.materials.muscle import MuscleMaterial
 from tissuesim.materials.orthotropic import (
     CubicCLE,
     FungOrthotropic,
@@ -141,13 +142,14 @@ MATERIALS: dict[str, type[Material]] = {
 
 #: FEBio's laws with FEBio's own parameters that are not elastic laws on their own, or not of
 #: the families above: the prescribed active contractions (a stress in time, a mixture's
-#: component), the conewise linear elastic laws, the porous neo-Hookean and Shenoy
+#: component), the conewise linear elastic laws, the porous neo-Hookean, Shenoy and muscle
 FEBIO_LAWS: dict[str, type[Material]] = {
     **ACTIVE_CONTRACTION_LAWS,
     OrthotropicCLE.name: OrthotropicCLE,
     CubicCLE.name: CubicCLE,
     PorousNeoHookean.name: PorousNeoHookean,
     Shenoy.name: Shenoy,
+    MuscleMaterial.name: MuscleMaterial,
 }
 
 #: other spellings of the soft-tissue laws' names: "<law>_uncoupled", "<law>_coupled"

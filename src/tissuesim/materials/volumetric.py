@@ -17,7 +17,7 @@ theta is the law's measure of volume change and U its lambda term, the part that
     trans_iso_veronda_westmann, fung_orthotropic, fung_ortho_compressible,
     tc_nonlinear_orthotropic: their bulk term with k
                          (HGO: FEBio's default k/4 (theta^2 - 1 - 2 ln theta))
-    uncoupled_holmes_mow  theta = J             U = its bulk term with k
+    uncoupled_holmes_mow, muscle_material  theta = J   U = its bulk term with k
     arruda_boyce_unconstrained  theta = J  U = kappa/2 (J^2 - 1 - 2 ln J) (k = 2 kappa, "goh")
     isotropic_hencky     theta = J             U = lam/2 (ln theta)^2
     holmes_mow           none (U = 0: its J terms are inside its exponential, psi_rest the law)
@@ -71,6 +71,7 @@ VOLUMETRIC_LAWS = {
     "holmes_mow": ("J", "log"),
     "arruda_boyce_unconstrained": ("J", "goh"),
     "isotropic_hencky": ("J", "log"),
+    "muscle_material": ("J", "log"),  # its bulk term with k (pressure_model as above)
     **{
         name: ("J", "log")
         for law in ("fiber_exp_pow", "fiber_pow_linear", "fiber_exp_linear")

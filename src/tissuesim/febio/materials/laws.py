@@ -55,6 +55,7 @@ MATERIAL_TYPES = {
             "cubic CLE",
             "porous neo-Hookean",
             "Shenoy",
+            "muscle material",
             "uncoupled Holmes-Mow",
             "fiber-exp-pow",
             "fiber-exp-pow-uncoupled",
@@ -131,6 +132,7 @@ FIBRE_TYPES = {
     **{name: "axes" for name in CONTINUOUS},
     "2D trans iso Mooney-Rivlin": "fiber",
     **{name: "fiber" for name in ACTIVE if "isotropic" not in name},
+    "muscle material": "fiber",
 }
 #: the uncoupled laws, which FEBio runs with its three-field (mean dilatation) hex8 / tet10
 UNCOUPLED = {
@@ -142,6 +144,7 @@ UNCOUPLED = {
     "uncoupled fiber-exp-linear", "continuous fiber distribution uncoupled",
     "2D trans iso Mooney-Rivlin",
     *(name for name in ACTIVE if name.startswith("uncoupled")),
+    "muscle material",
 }  # fmt: skip
 VISCOELASTIC = {
     "viscoelastic": "viscoelastic",
