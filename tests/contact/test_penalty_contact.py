@@ -299,3 +299,41 @@ def test_python_call_errors():
         sim.add_penalty_contact("upper", "lower", penalty=1.0, integration="node")
     with pytest.raises(InputError, match="not a FEM body"):
         sim.add_penalty_contact("upper", "nothing", penalty=1.0)
+
+
+def _stick_and_pull(**options):
+    """The column's upper block 0.005 above the lower, lowered 0.02 onto it, then raised
+    to 0.02 above its start (quasistatic steps of 0.25 s)."""
+    mat = NeoHookean(youngs_modulus=1000.0, poisson_ratio=0.0)
+    sim = ts.Simulation(integrator="quasistatic", time_step=0.25)
+    lower = box((0, 0, 0), (1, 1, 0.5), (2, 2, 1), element="hex")
+    upper = box((0, 0, 0.505), (1, 1, 1.0), (2, 2, 3), element="hex")
+    sim.add_body("lower", lower, mat)
+    sim.add_body("upper", upper, mat)
+    sim.fix(np.flatnonzero(lower.points[:, 2] < 1e-9), body="lower", name="table")
+    top = np.flatnonzero(upper.points[:, 2] > 1 - 1e-9)
+
+    def motion(t):
+        return np.array([0.0, 0.0, -0.02 * t if t <= 1 else -0.02 + 0.04 * (t - 1)])
+
+    sim.grasp(top, motion, body="upper", name="press")
+    sides = {"primary_facets": "zmin", "secondary_facets": "zmax"}
+    sim.add_penalty_contact("upper", "lower", **sides, penalty=1e5, integration="nodes",
+                            name="contact", **options)  # fmt: skip
+    forces = []
+    for _ in range(8):
+        sim.step()
+        forces.append(sim.forces()["press"][2])
+    return forces
+
+
+def test_a_sticky_pair_holds_once_touched_and_lets_go_past_its_traction():
+    """FEBio's sticky contact: the upper block, lowered onto the lower one, sticks and is
+    pulled back in tension (the press pulls: force > 0) where a sliding pair lets go (0); with
+    a small max_traction it lets go too."""
+    sticky = _stick_and_pull(sticky=True, snap_tolerance=1e-3)
+    sliding = _stick_and_pull()
+    weak = _stick_and_pull(sticky=True, snap_tolerance=1e-3, max_traction=1.0)
+    assert sticky[3] < -1.0 and sliding[3] == pytest.approx(sticky[3], rel=1e-3)  # pressed
+    assert sticky[-1] > 1.0  # stuck, pulled: tension through the contact
+    assert abs(sliding[-1]) < 1e-6 and abs(weak[-1]) < 1e-6  # vs ~10 N stuck

@@ -23,7 +23,7 @@ AXES = {"x": 0, "y": 1, "z": 2}
 #: FEBio contact types that map onto tissuesim's barrier contact
 CONTACT_TYPES = ("sliding-elastic", "sliding-facet-on-facet", "sliding-node-on-facet", "rigid_wall")
 #: FEBio's tied contacts: penalty contact with the points held where they project at rest
-TIED_TYPES = ("tied-elastic", "tied-node-on-facet", "tied-facet-on-facet")
+TIED_TYPES = ("tied-elastic", "tied-node-on-facet", "tied-facet-on-facet", "sticky")
 #: children of <contact> that tune FEBio's enforcement (penalty, augmentation, search):
 #: tissuesim's barrier keeps the surfaces apart by itself
 CONTACT_TUNING = {
@@ -301,7 +301,8 @@ def _contact(model: FebModel, section: Node) -> None:
         bottoms = {"shell_bottom_primary", "shell_bottom_secondary"}
         allowed = CONTACT_TUNING | {"fric_coeff", "tension", "offset", "plane"} | bottoms
         if kind in TIED_TYPES:  # a tie holds in tension by itself; its search settings
-            allowed |= {"search_tolerance", "offset_shells", "max_distance", "special"}
+            allowed |= {"search_tolerance", "offset_shells", "max_distance", "special",
+                        "max_traction", "snap_tol", "gap_offset"}
         p = _children(c, allowed)
         item = {"type": kind, "node": c, "friction": 0.0}
         if "fric_coeff" in p:
@@ -332,7 +333,7 @@ def _contact(model: FebModel, section: Node) -> None:
         if kind == "sliding-facet-on-facet":  # FEBio ignores its friction (a warning)
             item["friction"] = 0.0
         if kind in TIED_TYPES:
-            for key in ("offset_shells", "max_distance"):
+            for key in ("offset_shells", "max_distance", "gap_offset"):
                 if key in p and float(_floats(p[key], 1)[0]) != 0.0:
                     raise _unsupported(p[key], f"a tied contact's {key} = {p[key].text.strip()}")
             item["penalty"] = _penalty_settings(kind, c, p)
@@ -393,7 +394,10 @@ def _penalty_settings(kind: str, c: Node, p: dict) -> dict:
         "max_augmentations": int(number("maxaug", 10)),
         "search_tolerance": number(search, 0.01),
     }
-    if tied:
+    if kind == "sticky":  # FEStickyInterface: nodes, tied once within snap_tol
+        out.update(sticky=True, integration="nodes", snap_tolerance=number("snap_tol", 0.0),
+                   max_traction=number("max_traction", 0.0))  # fmt: skip
+    elif tied:
         out["tied"] = True
     return out
 

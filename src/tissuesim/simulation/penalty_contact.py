@@ -41,6 +41,9 @@ class PenaltySpec:
     max_augmentations: int
     search_tolerance: float
     tied: bool = False
+    sticky: bool = False
+    snap_tolerance: float = 0.0
+    max_traction: float = 0.0
 
 
 class PenaltyContactCalls:
@@ -65,6 +68,9 @@ class PenaltyContactCalls:
         max_augmentations: int = 10,
         search_tolerance: float = 0.01,
         tied: bool = False,
+        sticky: bool = False,
+        snap_tolerance: float = 0.0,
+        max_traction: float = 0.0,
         name: str | None = None,
     ) -> str:
         """Penalty contact: points of body ``primary``'s facets (a facet set name, (k, 3) or
@@ -79,7 +85,10 @@ class PenaltyContactCalls:
         ``min_augmentations`` to ``max_augmentations`` times per step. A point is in contact
         where its projection falls on a facet within ``search_tolerance`` (natural
         coordinates). ``tied``: each point is held where it projects at rest (FEBio's
-        tied contacts; the vector gap, tension too). Its force on ``primary`` is reported by
+        tied contacts; the vector gap, tension too); ``sticky``: a point is tied where it
+        projects once it comes within ``snap_tolerance`` (m) of the secondary surface, and lets
+        go where its normal traction passes ``max_traction`` (Pa; 0: never; FEBio's sticky
+        contact). Its force on ``primary`` is reported by
         ``forces()`` under ``name`` (default ``penalty_contact<n>``). Returns the name."""
         for body in (primary, secondary):
             if body not in self.bodies or self.bodies[body].kind != "fem":
@@ -103,7 +112,11 @@ class PenaltyContactCalls:
                     "automatic penalty: Young's modulus x facet area / element volume)"
                 )
             penalty = 1.0
+        if tied and sticky:
+            raise InputError("add_penalty_contact: a pair is tied or sticky, not both")
         checks = {"penalty": (penalty, True), "tolerance": (tolerance, False),
+                  "snap_tolerance": (snap_tolerance, False),
+                  "max_traction": (max_traction, False),
                   "gap_tolerance": (gap_tolerance, False),
                   "search_tolerance": (search_tolerance, False)}  # fmt: skip
         for key, (value, positive) in checks.items():
@@ -139,6 +152,9 @@ class PenaltyContactCalls:
                 int(max_augmentations),
                 float(search_tolerance),
                 bool(tied),
+                bool(sticky),
+                float(snap_tolerance),
+                float(max_traction),
             )  # fmt: skip
         )
         self._system_dirty = True
@@ -163,7 +179,8 @@ class PenaltyContactCalls:
                 two_pass=spec.two_pass, augmented=spec.augmented, tolerance=spec.tolerance,
                 gap_tolerance=spec.gap_tolerance, min_augmentations=spec.min_augmentations,
                 max_augmentations=spec.max_augmentations,
-                search_tolerance=spec.search_tolerance, tied=spec.tied,
+                search_tolerance=spec.search_tolerance, tied=spec.tied, sticky=spec.sticky,
+                snap_tolerance=spec.snap_tolerance, max_traction=spec.max_traction,
             )  # fmt: skip
             pair.setup([None if b is None else b for b in _rest(system)])
             pairs.append(pair)

@@ -67,8 +67,8 @@ class PenaltyPass:
     target: PenaltySide
     points: SamplePoints
     weights: np.ndarray  # W per point (reference, or the lagged current one)
-    multipliers: np.ndarray  # L per point (Pa); tied: (points tied, 3)
-    tie: tuple | None = None  # tied: (points, their facets, (r, s)) at rest
+    multipliers: np.ndarray  # L per point (Pa); tied and sticky: (points, 3)
+    tie: tuple | None = None  # tied / sticky: (points held, their facets, (r, s))
 
 
 @dataclass(eq=False)
@@ -93,6 +93,12 @@ class PenaltyContact:
     # to the place on the secondary surface it projects to at rest, by the vector gap d = q - x:
     # energy W / (2 eps) |L + eps d|^2, L a vector multiplier
     tied: bool = False
+    # sticky (FEBio's sticky): a point is tied where it projects once it comes within
+    # ``snap_tolerance`` of the secondary surface (or behind it), checked at converged
+    # solutions; it lets go when its normal traction exceeds ``max_traction`` (0: never)
+    sticky: bool = False
+    snap_tolerance: float = 0.0
+    max_traction: float = 0.0
     passes: list = field(default_factory=list)
     augmentations: int = 0  # in this step's solve
 
@@ -108,7 +114,10 @@ class PenaltyContact:
             p = PenaltyPass(sampled, target, points, w, np.zeros(len(w)))
             if self.tied:  # where each point sits on the secondary surface at rest, kept
                 p.tie = self._find_contacts(p, rest)[:3]
-                p.multipliers = np.zeros((len(p.tie[0]), 3))
+            if self.tied or self.sticky:
+                p.multipliers = np.zeros((len(w), 3))
+            if self.sticky:  # nothing stuck yet
+                p.tie = (np.zeros(0, int), np.zeros(0, int), np.zeros((0, 2)))
             self.passes.append(p)
         self._rest_weights = [p.weights.copy() for p in self.passes]
 
@@ -176,7 +185,7 @@ class PenaltyContact:
         grad = np.zeros(n) if order >= 1 else None
         rows, cols, vals = [], [], []
         for p in self.passes:
-            if self.tied:
+            if self.tied or self.sticky:
                 value += self._tied_terms(p, positions, dofs, order, grad, rows, cols, vals)
                 continue
             pts, facet, rs, x = self._contacts(p, positions)
@@ -246,7 +255,7 @@ class PenaltyContact:
             return 0.0
         eps = self._eps(p)[pts]
         W = p.weights[pts]
-        t = p.multipliers + eps[:, None] * d
+        t = p.multipliers[pts] + eps[:, None] * d
         value = float(np.sum(W * np.sum(t * t, axis=1) / (2 * eps)))
         if order < 1:
             return value
@@ -274,9 +283,9 @@ class PenaltyContact:
         (as FEBio's two-pass load vectors do)."""
         total, area = np.zeros(3), 0.0
         for k, p in enumerate(self.passes):
-            if self.tied:
+            if self.tied or self.sticky:
                 pts, _, d = self._tied_gaps(p, positions)
-                t = p.multipliers + self._eps(p)[pts][:, None] * d
+                t = p.multipliers[pts] + self._eps(p)[pts][:, None] * d
                 f = np.sum(p.weights[pts][:, None] * t, axis=0)
                 total += f if k == 0 else -f
                 area += float(np.sum(p.weights[pts]))
@@ -293,6 +302,43 @@ class PenaltyContact:
         return total, area
 
     # -- the lagged terms: multipliers and current-area weights -------------------------------
+    def _stick(self, positions: list[np.ndarray]) -> bool:
+        """Sticky: free points within the snap distance stick where they project; stuck ones
+        whose normal traction passes ``max_traction`` let go. Whether any changed."""
+        changed = False
+        for p in self.passes:
+            held, facet, rs = p.tie
+            let_go = np.zeros(0, int)  # not stuck again at once (FEBio: at its next update)
+            if self.max_traction > 0 and len(held):
+                _, _, d = self._tied_gaps(p, positions)
+                X = positions[p.target.body][p.target.facets.corners[facet]]
+                corners = p.sampled.facets.corners[p.points.facet[held]]
+                x = np.einsum("na,nad->nd", p.points.H[held], positions[p.sampled.body][corners])
+                _, nu, _ = gap_derivatives(x, None, X, rs, p.target.facets.triangle[facet], 0)
+                t = p.multipliers[held] + self._eps(p)[held][:, None] * d
+                keep = np.einsum("nd,nd->n", t, nu) >= -self.max_traction  # pulled off: let go
+                if not keep.all():
+                    p.multipliers[held[~keep]] = 0.0
+                    let_go = held[~keep]
+                    held, facet, rs = held[keep], facet[keep], rs[keep]
+                    changed = True
+            pts, f, r, x = self._contacts(p, positions)
+            free = ~np.isin(pts, held) & ~np.isin(pts, let_go)
+            if free.any():
+                X = positions[p.target.body][p.target.facets.corners[f[free]]]
+                g = gap_derivatives(
+                    x[free], None, X, r[free], p.target.facets.triangle[f[free]], 0
+                )[0]
+                new = g > -self.snap_tolerance
+                if new.any():
+                    sel = np.flatnonzero(free)[new]
+                    held = np.concatenate([held, pts[sel]])
+                    facet = np.concatenate([facet, f[sel]])
+                    rs = np.vstack([rs, r[sel]])
+                    changed = True
+            p.tie = (held, facet, rs)
+        return changed
+
     def begin_step(self) -> None:
         self.augmentations = 0
 
@@ -307,14 +353,17 @@ class PenaltyContact:
                 if np.max(np.abs(w - p.weights) / np.maximum(p.weights, 1e-300)) > AREA_SETTLED:
                     changed = True
                 p.weights = w
+        if self.sticky:
+            changed = self._stick(positions) or changed
         if not self.augmented:
             return changed
         old, new, gaps = 0.0, 0.0, []
         updates = []
         for p in self.passes:
-            if self.tied:
+            if self.tied or self.sticky:
                 pts, _, d = self._tied_gaps(p, positions)
-                L1 = p.multipliers + self._eps(p)[pts][:, None] * d
+                L1 = p.multipliers.copy()
+                L1[pts] += self._eps(p)[pts][:, None] * d
                 old += float(np.sum(p.multipliers**2))
                 new += float(np.sum(L1**2))
                 gaps.append(np.linalg.norm(d, axis=1))

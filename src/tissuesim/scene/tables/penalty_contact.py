@@ -19,6 +19,9 @@ bodies' facet surfaces (``Simulation.add_penalty_contact``, ``contact/penalty/pa
     max_augmentations = 10
     search_tolerance = 0.01           # natural coordinates
     tied = false                      # held where they project at rest (FEBio's tied contacts)
+    sticky = false                    # tied where they touch (FEBio's sticky), from within
+    snap_tolerance = 0.0              #   this distance (m), letting go above
+    max_traction = 0.0                #   this normal traction (Pa; 0: never)
 """
 
 from __future__ import annotations
@@ -32,8 +35,9 @@ PENALTY_KEYS = (
     "name", "primary", "secondary", "primary_facets", "secondary_facets", "penalty",
     "auto_penalty", "integration", "area", "two_pass", "augmented", "tolerance",
     "gap_tolerance", "min_augmentations", "max_augmentations", "search_tolerance", "tied",
+    "sticky", "snap_tolerance", "max_traction",
 )  # fmt: skip
-_FLAGS = ("auto_penalty", "two_pass", "augmented", "tied")
+_FLAGS = ("auto_penalty", "two_pass", "augmented", "tied", "sticky")
 _COUNTS = ("min_augmentations", "max_augmentations")
 
 
