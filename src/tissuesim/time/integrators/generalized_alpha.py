@@ -40,9 +40,14 @@ leaves x_{n+1} that far off it; FEBio's linear interpolation holds x_{n+1} itsel
 Contact acts at y too (FEBio's sliding interfaces at x_{n+1}); a rigid body's prescribed motion
 under contact (pulled to its values by a spring) is refused with alpha_f < 1.
 
-Not FEBio's: at alpha_f = 1/2 (rhoi = 1) FEBio also corrects the stress towards energy
-conservation (``UpdateElementStress``, "mid-point rule"), a term with no potential; tissuesim
-runs the plain midpoint of the potential above.
+At alpha_f = 1/2 (rhoi = 1, the midpoint rule) FEBio corrects the Cauchy stress at each point
+so that the step's internal work is the change of strain energy (``FEElasticSolidDomain::
+UpdateElementStress``): s <- s + D ((W_{n+1} - W_n) / (h J) - s : D) / (D : D), with s and J
+at F_{n+1/2}, D = sym((F_{n+1} - F_n) F_{n+1/2}^-1) / h. That force has no potential: it is
+added as a dead load fixed during one minimisation and updated from its x_{n+1} until it no
+longer changes (a fixed point, the solution FEBio's Newton reaches). Bodies whose elastic
+energy is the plain point rule (``energies/elastic.py``) get it; others run the plain
+midpoint rule.
 """
 
 from __future__ import annotations
@@ -52,10 +57,16 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from tissuesim.energies.loads import ExternalForce
 from tissuesim.errors import InputError
 from tissuesim.time.state import State, StepOutcome
 
-__all__ = ["generalized_alpha_step", "check_generalized_alpha", "febio_weights"]
+__all__ = [
+    "generalized_alpha_step",
+    "check_generalized_alpha",
+    "febio_weights",
+    "midpoint_correction",
+]
 
 
 def febio_weights(rho_inf: float) -> tuple[float, float, float, float]:
@@ -96,6 +107,39 @@ def check_generalized_alpha(
             "alpha_f <= alpha_m, gamma >= 1/2 + alpha_m - alpha_f, 2 beta >= gamma"
         )
     return af, am, beta, gamma
+
+
+#: the midpoint correction's fixed point: updates at most, and its tolerance on the force
+#: (relative to the body's force scale)
+MIDPOINT_UPDATES, MIDPOINT_TOLERANCE = 8, 1e-10
+
+
+def midpoint_correction(model, x0: np.ndarray, x1: np.ndarray, h: float) -> np.ndarray | None:
+    """FEBio's energy-conserving correction of the midpoint rule (``FEElasticSolidDomain::
+    UpdateElementStress`` with alpha_f = 1/2) as nodal forces (n_dofs,) of one FEM body, the
+    gradient's share: sum_q w_q J (D c) F^-T : grad N; None where the body's elastic energy is
+    not the plain point rule."""
+    from tissuesim.energies.elastic import ElasticEnergy
+
+    if not isinstance(getattr(model, "elastic", None), ElasticEnergy):
+        return None
+    K, material = model.kinematics, model.material
+    F0, F1 = K.deformation_gradients(x0), K.deformation_gradients(x1)
+    Fa = 0.5 * (F0 + F1)
+    Fa_inv = np.linalg.inv(Fa)
+    J = np.linalg.det(Fa)
+    P = material.evaluate(Fa, 1).stress
+    s = np.einsum("qij,qkj->qik", P, Fa) / J[:, None, None]  # Cauchy, J^-1 P F^T
+    L = np.einsum("qij,qjk->qik", F1 - F0, Fa_inv) / h
+    D = 0.5 * (L + np.swapaxes(L, 1, 2))
+    DD = np.einsum("qij,qij->q", D, D)
+    dW = material.evaluate(F1, 0).energy - material.evaluate(F0, 0).energy
+    c = np.zeros_like(DD)
+    on = DD > np.finfo(float).eps  # FEBio: only where D : D is above round-off
+    c[on] = (dW[on] / (h * J[on]) - np.einsum("qij,qij->q", s[on], D[on])) / DD[on]
+    dP = (J * c)[:, None, None] * np.einsum("qij,qkj->qik", D, Fa_inv)  # J (D c) F^-T
+    local = K.stress_to_gradient(dP)
+    return np.bincount(K.stencil.ravel(), weights=local.ravel(), minlength=model.n_dofs)
 
 
 class _Intermediate:
@@ -149,24 +193,63 @@ def generalized_alpha_step(
     to_y_pred = alpha_f * (to_pred - (1.0 - alpha_m) / alpha_m * beta * h * h * a_n)
     h_e = h * math.sqrt(beta * alpha_f / alpha_m)
     carried = State(state.time, state.x, to_y_pred / h_e)
-    outcome = implicit_step(
-        _Intermediate(system, state.time + alpha_f * h),
-        carried,
-        h_e,
-        solver,
-        options,
-        dynamic=True,
-        t_end=t1,
-        friction_h=h,
-        **kwargs,
-    )
-    if not outcome.converged:
-        return outcome
-    y = outcome.state.x
-    x1 = system.retract(state.x, system.difference(y, state.x) / alpha_f)
-    x1 = system.apply_prescribed(x1, t1)
+    intermediate = _Intermediate(system, state.time + alpha_f * h)
+    energies = kwargs.pop("energies")
+    corrections: list | None = None  # the midpoint correction's forces per body, or None
+    for _ in range(MIDPOINT_UPDATES + 1):
+
+        def step_energies(t, c_pred, h_step, corrections=corrections):
+            out = energies(t, c_pred, h_step)
+            if corrections is None:
+                return out
+            return [
+                [*e, ExternalForce(-f)] if f is not None else e
+                for e, f in zip(out, corrections, strict=True)
+            ]
+
+        outcome = implicit_step(
+            intermediate,
+            carried,
+            h_e,
+            solver,
+            options,
+            dynamic=True,
+            t_end=t1,
+            friction_h=h,
+            energies=step_energies,
+            **kwargs,
+        )
+        if not outcome.converged:
+            return outcome
+        y = outcome.state.x
+        x1 = system.retract(state.x, system.difference(y, state.x) / alpha_f)
+        x1 = system.apply_prescribed(x1, t1)
+        if alpha_f != 0.5:
+            break
+        updated = _corrections(system, state.x, x1, h)
+        if updated is None or (corrections is not None and _settled(system, corrections, updated)):
+            break
+        corrections = updated
     x_pred = system.retract(state.x, to_pred)
     a1 = system.difference(x1, x_pred) / (beta * h * h)
     v1 = state.v + h * ((1.0 - gamma) * a_n + gamma * a1)
     outcome.state = State(t1, x1, v1, a1)
     return outcome
+
+
+def _corrections(system, x0: np.ndarray, x1: np.ndarray, h: float) -> list | None:
+    """The midpoint correction of every FEM body (None entries for the others; None where no
+    body has one)."""
+    out = []
+    for j, body in enumerate(system.bodies):
+        sc = system.config_slices[j]
+        out.append(midpoint_correction(body, x0[sc], x1[sc], h))
+    return out if any(f is not None for f in out) else None
+
+
+def _settled(system, old: list, new: list) -> bool:
+    scale = MIDPOINT_TOLERANCE * system.force_scale
+    return all(
+        a is None or float(np.abs(a - b).max(initial=0.0)) <= scale
+        for a, b in zip(old, new, strict=True)
+    )
