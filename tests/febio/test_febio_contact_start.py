@@ -18,6 +18,8 @@ from scipy.optimize import brentq
 from tissuesim.cli import main
 from tissuesim.febio import convert_febio
 from tissuesim.febio.contact_start import DHAT
+from tissuesim.febio.model import FebError
+from tissuesim.febio.reader import read_feb
 from tissuesim.materials import NeoHookean
 from tissuesim.mesh import read_mesh
 from tissuesim.scene.loader import load_febio, load_scene
@@ -199,3 +201,28 @@ def test_a_tied_elastic_pair_runs_as_a_tied_penalty_contact(tmp_path, capfd):
     summary, _ = _run(feb, tmp_path / "out", capfd)
     force = summary["steps"][-1]["extra"]["forces"]["press"][2]
     assert force == pytest.approx(_closed_form(PRESS), rel=1e-6)
+
+
+def test_a_sticky_pair_converts_to_a_sticky_penalty_contact_on_nodes(tmp_path):
+    """FEBio's sticky contact: a [[penalty_contact]] on the primary's nodes with sticky = true
+    and its snap_tol and max_traction; a gap_offset is refused in one line."""
+    text = (
+        MODEL.read_text()
+        .replace('<contact type="sliding-elastic"', '<contact type="sticky"')
+        .replace(
+            "<fric_coeff>0.01</fric_coeff>\n      <penalty>1</penalty>",
+            "<penalty>1e5</penalty>\n      <snap_tol>0.01</snap_tol>\n"
+            "      <max_traction>50</max_traction>",
+        )
+    )
+    feb = tmp_path / "sticky.feb"
+    feb.write_text(text)
+    assert main(["convert", str(feb), str(tmp_path / "scene.toml")]) == 0
+    scene = (tmp_path / "scene.toml").read_text()
+    for line in ("sticky = true", 'integration = "nodes"', "snap_tolerance = 0.01",
+                 "max_traction = 50.0"):  # fmt: skip
+        assert line in scene
+    feb.write_text(text.replace("<snap_tol>", "<gap_offset>0.1</gap_offset>\n      <snap_tol>"))
+    with pytest.raises(FebError) as info:
+        read_feb(feb)
+    assert "\n" not in str(info.value) and "gap_offset" in str(info.value)
