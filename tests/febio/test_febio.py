@@ -139,7 +139,10 @@ def test_cli_runs_a_feb_and_converts_it(tmp_path, capsys):
 REFUSALS = {
     "pyra5": ('<Elements type="pyra5" name="p">', "element type 'pyra5'"),
     "material": ('<material id="1" name="m" type="biphasic">', "material type 'biphasic'"),
-    "contact": ('<contact type="tied-elastic" surface_pair="p">', "contact type 'tied-elastic'"),
+    "contact": (
+        '<contact type="contact potential" surface_pair="p">',
+        "contact type 'contact potential'",
+    ),
     "element": ("<MeshAdaptor>", "<MeshAdaptor>: this section is not supported"),
     "follower": ("<linear>0</linear>", "traction on the deformed surface"),
     "bc": (
