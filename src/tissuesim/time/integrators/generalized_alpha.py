@@ -227,7 +227,9 @@ def generalized_alpha_step(
         if alpha_f != 0.5:
             break
         updated = _corrections(system, state.x, x1, h)
-        if updated is None or (corrections is not None and _settled(system, corrections, updated)):
+        # settled: unchanged since the last solve (from none: nothing to correct, e.g. bodies
+        # that move rigidly)
+        if updated is None or _settled(system, corrections, updated):
             break
         corrections = updated
     x_pred = system.retract(state.x, to_pred)
@@ -247,9 +249,10 @@ def _corrections(system, x0: np.ndarray, x1: np.ndarray, h: float) -> list | Non
     return out if any(f is not None for f in out) else None
 
 
-def _settled(system, old: list, new: list) -> bool:
+def _settled(system, old: list | None, new: list) -> bool:
     scale = MIDPOINT_TOLERANCE * system.force_scale
+    old = old if old is not None else [None if f is None else 0.0 for f in new]
     return all(
-        a is None or float(np.abs(a - b).max(initial=0.0)) <= scale
+        b is None or float(np.abs(a - b).max(initial=0.0)) <= scale
         for a, b in zip(old, new, strict=True)
     )
