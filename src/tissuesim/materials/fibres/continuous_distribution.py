@@ -48,13 +48,10 @@ from tissuesim.validate import short
 
 __all__ = ["ContinuousFiberDistribution", "ContinuousFiberDistributionUncoupled", "fibre_sum"]
 
-#: the 15 sorted index quadruples of a fully symmetric 4th-order tensor in 3D, and for each of
-#: the 81 (p, j, r, l) the position of its sorted quadruple
-_SYM4 = np.array(sorted({tuple(sorted(t)) for t in np.ndindex(3, 3, 3, 3)}))
-_SYM4_OF = np.array([
-    next(i for i, s in enumerate(map(tuple, _SYM4)) if s == tuple(sorted(t)))
-    for t in np.ndindex(3, 3, 3, 3)
-])  # fmt: skip
+#: the index pairs (i <= j) of a symmetric 3 x 3 tensor, and the pair of each of the 9 (i, j)
+_PAIRS = ((0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2))
+_PAIR_OF = np.array([_PAIRS.index((min(i, j), max(i, j))) for i, j in np.ndindex(3, 3)])
+_PI, _PJ = np.array(_PAIRS).T
 
 
 def fibre_sum(
@@ -93,9 +90,11 @@ def fibre_sum(
     if order == 1:
         return MaterialResponse(psi, P)
     h = c * f2
-    i0, i1, i2, i3 = _SYM4.T  # K is fully symmetric: its 15 components, then all 81
-    mono = a[:, :, i0] * a[:, :, i1] * a[:, :, i2] * a[:, :, i3]  # (q, K, 15)
-    K = (h[:, None, :] @ mono)[:, 0, _SYM4_OF].reshape(q, 3, 3, 3, 3)  # p j r l
+    # K_pjrl = sum_k h_k (a_p a_j)_k (a_r a_l)_k: the 6 x 6 of the pairs, then all 81
+    at = np.ascontiguousarray(np.swapaxes(a, 1, 2))  # (q, 3, K)
+    pairs = at[:, _PI] * at[:, _PJ]  # (q, 6, K)
+    K6 = (pairs * h[:, None, :]) @ np.swapaxes(pairs, 1, 2)
+    K = K6[:, _PAIR_OF[:, None], _PAIR_OF[None, :]].reshape(q, 3, 3, 3, 3)  # p j r l
     A = 4.0 * bcast(s**2, 5) * np.einsum("qip,qmr,qpjrl->qijml", F, F, K, optimize=True)
     FM2 = F @ (np.swapaxes(a, 1, 2) @ ((h * Ib)[:, :, None] * a))
     hI2 = np.sum(h * Ib**2, axis=-1)
