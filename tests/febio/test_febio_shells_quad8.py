@@ -399,3 +399,39 @@ def test_auto_backend_weighs_a_shell_cell_as_the_work_it_is():
     solid = Model(mesh, mat, np.full(mesh.n_cells, 2.0))
     assert shell.backend == "numba" and shell.elastic.fused
     assert solid.backend == "numpy"
+
+
+def test_a_scene_of_quad8_shell_faces_runs_as_the_api(cantilever):
+    """A scene's mesh = { generator = "shell", quad8 faces } with formulation = "shell" builds
+    the same hexahedra20 and runs the shell element: the plate's tip load through the scene
+    gives the deck's positions (1e-12; the flat plate's directors need no normalize = false)."""
+    from tissuesim.scene.loader import build_scene
+
+    _, x, _, _ = cantilever
+    points, faces = plate()
+    mesh = {"generator": "shell", "points": points.tolist(), "faces": faces.tolist(),
+            "thickness": H, "reference": "top"}  # fmt: skip
+    table = {
+        "simulation": {
+            "integrator": "quasistatic",
+            "time_step": 0.5,
+            "density": 1.0,
+            "formulation": "shell",
+        },
+        "mesh": mesh,
+        "material": {"model": "neo_hookean", "youngs_modulus": E, "poisson_ratio": 0.0},
+        "dirichlet": [{"vertices": {"on_plane": {"axis": 0, "value": 0.0}}}],
+        "nodal_forces": [
+            {
+                "vertices": {
+                    "in_box": {"lower": [L - 1e-9, -1.0, -1e-9], "upper": [2.0, 1.0, 1.0]}
+                },
+                "force": ["0.0", "0.0", f"{P / 3!r} * t"],
+            }
+        ],  # the front face's tip: its 3 nodes
+    }
+    sim = build_scene(table, name="shell").simulation
+    assert sim.mesh.cell_type == "hexahedron20"
+    sim.step()
+    sim.step()
+    np.testing.assert_allclose(sim.body_positions("body"), x, rtol=0, atol=1e-12)
