@@ -58,7 +58,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from tissuesim.energies.loads import ExternalForce
-from tissuesim.errors import InputError
+from tissuesim.errors import InputError, InvertedElementError
 from tissuesim.time.state import State, StepOutcome
 
 __all__ = [
@@ -226,7 +226,13 @@ def generalized_alpha_step(
         x1 = system.apply_prescribed(x1, t1)
         if alpha_f != 0.5:
             break
-        updated = _corrections(system, state.x, x1, h)
+        try:
+            updated = _corrections(system, state.x, x1, h)
+        except InvertedElementError:
+            updated = [np.array([np.nan])]
+        if updated is not None and not all(f is None or np.isfinite(f).all() for f in updated):
+            # an element inverted at x_n, x_{n+1} or between: a smaller step
+            return StepOutcome(None, False, outcome.newton, "the midpoint configuration inverts")
         # settled: unchanged since the last solve (from none: nothing to correct, e.g. bodies
         # that move rigidly)
         if updated is None or _settled(system, corrections, updated):
