@@ -230,3 +230,158 @@ def test_a_linear_constraint_pulls_the_face_with_one_node(tmp_path):
     assert sim.positions[1, 0] == pytest.approx(1.15, abs=1e-5 * 0.15)
     model = read_feb(tmp_path / "m.feb")
     assert [c["parent"] for c in model.linear_constraints] == [(1, 0), (2, 0), (5, 0)]
+
+
+def _twisted(rotation: str) -> str:
+    """The rigid platen model with the platen turned about z instead of held (``rotation``
+    replaces its Ru, Rv, Rw rows)."""
+    text = (MODELS / "rigid_platen.feb").read_text()
+    return text.replace(
+        "      <Ru_dof>1</Ru_dof>\n      <Rv_dof>1</Rv_dof>\n      <Rw_dof>1</Rw_dof>\n"
+        "    </rigid_bc>",
+        f"      <Ru_dof>0</Ru_dof>\n      <Rv_dof>0</Rv_dof>\n      <Rw_dof>0</Rw_dof>\n"
+        f"    </rigid_bc>\n{rotation}",
+    )
+
+
+def test_a_rigid_rotation_vector_is_three_prescribed_rotations(tmp_path):
+    """FEBio's rigid_rotation_vector (FERigidRotationVector) prescribes Ru, Rv, Rw to vx, vy,
+    vz: the same motion as three rigid_rotation conditions; the platen ends turned 0.2 rad
+    about z (R = exp(0.2 e_z))."""
+    vector = _twisted(
+        '    <rigid_bc name="turn" type="rigid_rotation_vector">\n      <rb>platen</rb>\n'
+        '      <vx>0</vx>\n      <vy>0</vy>\n      <vz lc="1">0.2</vz>\n    </rigid_bc>\n'
+    )
+    three = _twisted("".join(
+        f'    <rigid_bc name="turn{d}" type="rigid_rotation">\n      <rb>platen</rb>\n'
+        f'      <dof>{d}</dof>\n      <value lc="1">{v}</value>\n    </rigid_bc>\n'
+        for d, v in (("Ru", 0.0), ("Rv", 0.0), ("Rw", 0.2))
+    ))  # fmt: skip
+    sim, ref = _run(vector, tmp_path), _run(three, tmp_path, "ref.feb")
+    np.testing.assert_allclose(sim.body_positions("block"), ref.body_positions("block"),
+                               atol=1e-12)  # fmt: skip
+    _, R = sim.rigid_state("platen")
+    c, s = np.cos(0.2), np.sin(0.2)
+    np.testing.assert_allclose(R, [[c, -s, 0], [s, c, 0], [0, 0, 1]], atol=1e-9)
+
+
+def _face_load(kind: str, body: str) -> str:
+    """The cube with its x = 1 face free and loaded by a surface_load of ``kind``."""
+    text = CUBE.replace(
+        '    <bc name="pull" node_set="x1" type="prescribed displacement">\n      <dof>x</dof>\n'
+        '      <value lc="1">0.15</value>\n      <relative>0</relative>\n    </bc>\n',
+        "",
+    )
+    text = text.replace("  </Mesh>", '    <Surface name="right">\n      <quad4 id="1">2,3,7,6'
+                        "</quad4>\n    </Surface>\n  </Mesh>")  # fmt: skip
+    return text.replace(
+        "  <LoadData>",
+        f'  <Loads>\n    <surface_load surface="right" type="{kind}">\n{body}'
+        "    </surface_load>\n  </Loads>\n  <LoadData>",
+    )
+
+
+def test_a_surface_force_is_the_traction_of_force_over_area(tmp_path):
+    """FEBio's surface_load type="force" (FESurfaceForceUniform): scale * force / A as a dead
+    traction (A = 1 here): the same cube as the traction 2 * (150, 0, 0) on the face."""
+    force = _face_load("force", '      <scale lc="1">2</scale>\n      <force>150,0,0</force>\n')
+    traction = _face_load("traction", '      <traction lc="1">300,0,0</traction>\n'
+                          "      <linear>1</linear>\n")  # fmt: skip
+    sim, ref = _run(force, tmp_path), _run(traction, tmp_path, "ref.feb")
+    np.testing.assert_allclose(sim.positions, ref.positions, atol=1e-12)
+    assert sim.positions[1, 0] > 1.05  # stretched
+
+
+def test_facet_area_of_triangles_and_quadrilaterals():
+    from tissuesim.febio.condition_sections import facet_area
+
+    points = np.array([[0, 0, 0], [2, 0, 0], [2, 1, 0], [0, 1, 0], [3, 1, 0.0]])
+    assert facet_area(points, np.array([[0, 1, 2, 3]])) == pytest.approx(2.0, rel=1e-14)
+    assert facet_area(points, np.array([[0, 1, 4, 3]])) == pytest.approx(2.5, rel=1e-14)
+    assert facet_area(points, np.array([[0, 1, 2]])) == pytest.approx(1.0, rel=1e-14)
+
+
+def _with_body_load(kind: str, x: str) -> str:
+    text = CUBE.replace('<value lc="1">0.15</value>', '<value lc="1">0.0</value>')
+    attr = ' type="math"' if kind == "non-const" else ""
+    return text.replace(
+        "  <LoadData>",
+        f'  <Loads>\n    <body_load type="{kind}">\n      <x lc="1"{attr}>{x}</x>\n'
+        "    </body_load>\n  </Loads>\n  <LoadData>",
+    )
+
+
+def test_a_non_const_body_load_is_its_expression_of_the_rest_coordinates(tmp_path):
+    """FEBio 3's non-const body load: f = 2 X (reference x) per unit mass, applied as -rho f
+    (as a const one): the x supports (x = 0 face and the held x = 1 face) carry
+    rho * int 2 X dV = 1000 N along +x; a constant expression equals the const load."""
+    sim = _run(_with_body_load("non-const", "2*X"), tmp_path)
+    f = sim.forces()
+    assert f["sx"][0] + f["pull"][0] == pytest.approx(1000.0, rel=1e-9)
+    flat = _run(_with_body_load("non-const", "3"), tmp_path, "flat.feb")
+    const = _run(_with_body_load("const", "3"), tmp_path, "const.feb")
+    np.testing.assert_allclose(flat.positions, const.positions, atol=1e-12)
+
+
+def _connectors():
+    """The rigid connector tests' two-cube model (a fixed ground, a free block)."""
+    import importlib.util
+
+    path = Path(__file__).parent / "test_febio_rigid_connectors.py"
+    spec = importlib.util.spec_from_file_location("_rigid_connectors", path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_a_force_on_a_prismatic_joint_pushes_its_bodies_apart_along_the_axis(tmp_path):
+    """FEBio's prismatic joint <force> F (FERigidPrismaticJoint: F e on body a, -F e on body
+    b): 6 N on the rail whose body a is the fixed ground moves the block -6 / 40 m along x
+    against the 40 N/m spring, as a rigid force of -6 N on the block does."""
+    rc = _connectors()
+    with_force = rc.model(rc.SLIDER.replace("<force>0</force>", '<force lc="1">6</force>'))
+    sim = _run(with_force, tmp_path)
+    centre, R = sim.rigid_state("block")
+    assert centre == pytest.approx([1.5 - 6.0 / 40.0, 0.0, 0.0], abs=1e-8)
+    ref = _run(rc.model(rc.SLIDER, rc.PULL.replace('lc="1">6<', 'lc="1">-6<')), tmp_path, "r.feb")
+    np.testing.assert_allclose(sim.state.x, ref.state.x, atol=1e-12)
+
+
+def test_a_force_on_a_prismatic_joint_of_free_bodies_is_refused(tmp_path):
+    rc = _connectors()
+    text = rc.model(rc.SLIDER.replace("<force>0</force>", "<force>6</force>"))
+    text = text.replace("<Ru_dof>1</Ru_dof>", "<Ru_dof>0</Ru_dof>")
+    path = tmp_path / "free.feb"
+    path.write_text(text)
+    with pytest.raises(FebError, match="a force on a prismatic joint whose bodies may turn"):
+        read_feb(path)
+
+
+def _quaternion_matrix(ex: float, ey: float, ez: float) -> np.ndarray:
+    """R of FEBio's quatd::SetEuler(X, Y, Z) (radians), from the unit quaternion."""
+    cx, sx, cy, sy, cz, sz = (f(a / 2) for a in (ex, ey, ez) for f in (np.cos, np.sin))
+    w = cz * cx * cy + sz * sx * sy
+    x = cz * sx * cy - sz * cx * sy
+    y = cz * cx * sy + sz * sx * cy
+    z = sz * cx * cy - cz * sx * sy
+    return np.array([
+        [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+        [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+        [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
+    ])  # fmt: skip
+
+
+@pytest.mark.parametrize("angles", [(0.0, 0.0, 30.0), (20.0, -35.0, 50.0)])
+def test_rigid_euler_angles_turn_the_platen_by_febios_quaternion(angles, tmp_path):
+    """FEBio's rigid_euler_angles (FERigidEulerAngles: Ex, Ey, Ez in degrees, each with its
+    curve): the platen ends turned by the quaternion's rotation (about z alone: the plain
+    rotation by Ez)."""
+    rows = "".join(f'      <E{a} lc="1">{v}</E{a}>\n' for a, v in zip("xyz", angles, strict=True))
+    text = _twisted(f'    <rigid_bc name="turn" type="rigid_euler_angles">\n      <rb>platen</rb>\n'
+                    f"{rows}    </rigid_bc>\n")  # fmt: skip
+    sim = _run(text, tmp_path)
+    _, R = sim.rigid_state("platen")
+    np.testing.assert_allclose(R, _quaternion_matrix(*np.radians(angles)), atol=1e-9)
+    if angles[:2] == (0.0, 0.0):
+        c, s = np.cos(np.radians(30.0)), np.sin(np.radians(30.0))
+        np.testing.assert_allclose(R, [[c, -s, 0], [s, c, 0], [0, 0, 1]], atol=1e-9)

@@ -56,6 +56,9 @@ class FebModel:
     nodal: list = field(default_factory=list)  # (node set, Load (3,))
     tractions: list = field(default_factory=list)  # (surface, "pressure"|"traction", Load)
     body_loads: list = field(default_factory=list)  # Load (3,): force per unit mass applied
+    #: FEBio 3's non-const body loads: (component, expression of x, y, z, t, Load of its
+    #: curve), the force per unit mass applied (condition_sections.py)
+    body_force_fields: list = field(default_factory=list)
     contacts: list = field(default_factory=list)  # dicts: type, surfaces, friction, wall...
     curves: dict = field(default_factory=dict)
     #: "mat_axis" / "fiber" -> {(part, row): (value, XML element)} from <MeshData>

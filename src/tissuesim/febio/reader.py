@@ -59,6 +59,7 @@ def _read(path: str | os.PathLike[str]) -> FebModel:
     loads = [d[2] for d in model.dirichlet if d[2] is not None]
     loads += [n[1] for n in model.nodal] + [t[2] for t in model.tractions] + model.body_loads
     loads += [c["offset"] for c in model.contacts if "offset" in c]
+    loads += [f[2] for f in model.body_force_fields]
     for c in model.linear_constraints:  # febio/linear_constraints.py
         loads += [c["offset"], *(d[2] for d in c["terms"])]
     for load in loads:

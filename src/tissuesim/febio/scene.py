@@ -289,6 +289,11 @@ def febio_scene(model: FebModel, stem: str) -> tuple[dict, dict]:
                 density_load = Load(density * load.value, load.curve, load.window)
                 force = [_times(density_load, model, i) for i in range(3)]
                 tables.setdefault("body_force", []).append({"force_density": force})
+        for k, expression, load in model.body_force_fields:  # FEBio 3's non-const body load
+            force = ["0.0"] * 3
+            scaled = Load(density * load.value, load.curve, load.window)
+            force[k] = f"{_times(scaled, model)} * ({expression})"
+            tables.setdefault("body_force", []).append({"force_density": force})
         j = next(i for i, b in enumerate(bodies) if b is body)
         springs = spring_tables(model, bodies, j, local)  # <Discrete> (febio/discrete.py)
         if springs:

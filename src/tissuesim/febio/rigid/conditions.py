@@ -11,6 +11,10 @@ springs, dampers) are refused in one line."""
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
+import numpy as np
+
 from tissuesim.febio.model import FebModel, Load, _flag, _floats, _int_attr, _once, _unsupported
 from tissuesim.febio.rigid.connectors import read_connector, rigid_body_name
 from tissuesim.febio.xml import Node
@@ -62,6 +66,32 @@ def _body(model: FebModel, node: Node) -> str:
     return rigid_body_name(model, rb)
 
 
+@dataclass(frozen=True)
+class EulerComponent:
+    """Component k of the rotation vector of FEBio's Euler angles (Ex, Ey, Ez in degrees,
+    each a Load): quatd::SetEuler's quaternion (half angles; w = cz cx cy + sz sx sy, ...)
+    and its rotation vector 2 atan2(|q|, w) q / |q| (quatd::GetRotationVector)."""
+
+    angles: tuple
+    k: int
+
+    def expression(self, times) -> str:
+        """As an expression of t, the angles' values written by ``times(load)``."""
+        half = [f"(0.5 * {np.pi / 180.0!r} * ({times(a)}))" for a in self.angles]
+        cx, cy, cz = (f"cos({h})" for h in half)
+        sx, sy, sz = (f"sin({h})" for h in half)
+        w = f"({cz} * {cx} * {cy} + {sz} * {sx} * {sy})"
+        q = [
+            f"({cz} * {sx} * {cy} - {sz} * {cx} * {sy})",
+            f"({cz} * {cx} * {sy} + {sz} * {sx} * {cy})",
+            f"({sz} * {cx} * {cy} - {cz} * {sx} * {sy})",
+        ]
+        n = f"sqrt({q[0]}**2 + {q[1]}**2 + {q[2]}**2)"
+        return (
+            f"where({n} > 0, {q[self.k]} / where({n} > 0, {n}, 1.0) * 2 * arctan2({n}, {w}), 0.0)"
+        )
+
+
 def _rigid(model: FebModel, name: str) -> dict:
     return model.rigid.setdefault(name, {"held": {}, "force": [], "moment": []})
 
@@ -81,6 +111,41 @@ def _value(model: FebModel, node: Node, p: dict) -> Load:
 
 
 def read_rigid(model: FebModel, section: Node) -> None:
+    """<Rigid>: rigid_bc (fixed, prescribed) and rigid_load (force, moment) per rigid body;
+    then the forces given on prismatic joints (``joint_forces``)."""
+    _read_rigid(model, section)
+    joint_forces(model)
+
+
+def joint_forces(model: FebModel) -> None:
+    """A prismatic joint's <force> (FERigidPrismaticJoint: F e on body a, -F e on body b, e
+    its translation axis, which turns with body a) as rigid forces on the two bodies: exact
+    where the axis does not turn, a body of the joint held in every rotation (the joint locks
+    their relative rotation); refused otherwise."""
+    for entry in model.rigid_connectors:
+        if "force" not in entry:
+            continue
+        load, node = entry.pop("force")
+        held = [set(model.rigid.get(b, {}).get("held", {})) for b in (entry["a"], entry["b"])]
+        fixed = [
+            {3, 4, 5} <= h and all(model.rigid[b]["held"][d] is None for d in (3, 4, 5))
+            for h, b in zip(held, (entry["a"], entry["b"]), strict=True)
+        ]
+        if not any(fixed):
+            raise node.error(
+                "a force on a prismatic joint whose bodies may turn: tissuesim applies it along "
+                "the joint's axis at rest (hold one body's rotations, rigid_fixed Ru, Rv, Rw)"
+            )
+        axis = np.asarray(entry["axis"], dtype=float)
+        axis = axis / np.linalg.norm(axis)
+        for body, sign in ((entry["a"], 1.0), (entry["b"], -1.0)):
+            for k in range(3):
+                if axis[k] != 0.0:
+                    value = load.value * sign * axis[k]
+                    _rigid(model, body)["force"].append((k, Load(value, load.curve, load.window)))
+
+
+def _read_rigid(model: FebModel, section: Node) -> None:
     """<Rigid>: rigid_bc (fixed, prescribed) and rigid_load (force, moment) per rigid body."""
     for c in section.children:
         kind = c.attrib.get("type", "")
@@ -122,6 +187,39 @@ def read_rigid(model: FebModel, section: Node) -> None:
                 )
             _hold(model, c, body, RIGID_DOFS[dof.text.strip()], _value(model, c, p))
             continue
+        if c.tag == "rigid_bc" and kind == "rigid_rotation_vector":
+            # FERigidRotationVector: the rotation vector's components vx, vy, vz (rad, each
+            # with its curve) prescribed on Ru, Rv, Rw, as three rigid_rotation conditions
+            for tag in p:
+                if tag not in ("rb", "vx", "vy", "vz"):
+                    raise p[tag].error(f"<{tag}>: a rigid_rotation_vector takes vx, vy, vz")
+            for k, tag in enumerate(("vx", "vy", "vz")):
+                value = p.get(tag)
+                load = (
+                    Load(np.zeros(1))
+                    if value is None
+                    else Load(
+                        _floats(value, 1), _int_attr(value, "lc", "a load curve id"), model.window
+                    )
+                )
+                _hold(model, c, body, 3 + k, load)
+            continue
+        if c.tag == "rigid_bc" and kind == "rigid_euler_angles":
+            # FERigidEulerAngles: Ex, Ey, Ez (degrees, each with its curve) turned into the
+            # rotation vector of quatd::SetEuler's quaternion, prescribed on Ru, Rv, Rw
+            for tag in p:
+                if tag not in ("rb", "Ex", "Ey", "Ez"):
+                    raise p[tag].error(f"<{tag}>: a rigid_euler_angles takes Ex, Ey, Ez")
+            angles = tuple(
+                Load(np.zeros(1))
+                if p.get(tag) is None
+                else Load(_floats(p[tag], 1), _int_attr(p[tag], "lc", "a load curve id"),
+                          model.window)
+                for tag in ("Ex", "Ey", "Ez")
+            )  # fmt: skip
+            for k in range(3):
+                _hold(model, c, body, 3 + k, EulerComponent(angles, k))
+            continue
         if c.tag == "rigid_load" and kind in ("rigid_force", "rigid_moment"):
             allowed = ("Rx", "Ry", "Rz") if kind == "rigid_force" else ("Ru", "Rv", "Rw")
             dof = p.get("dof")
@@ -141,7 +239,8 @@ def read_rigid(model: FebModel, section: Node) -> None:
             continue
         raise c.error(
             f"<{c.tag} type={kind!r}> is not supported by tissuesim; it runs rigid_fixed, "
-            "rigid_displacement, rigid_rotation, rigid_force and rigid_moment"
+            "rigid_displacement, rigid_rotation, rigid_rotation_vector, rigid_euler_angles, "
+            "rigid_force and rigid_moment"
         )
 
 

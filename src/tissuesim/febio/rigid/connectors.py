@@ -100,6 +100,8 @@ def read_connector(model: FebModel, c: Node, kind: str) -> None:
     for key, node in p.items():
         if key in TUNING:
             tuning.append(key)
+        elif key == "force" and joint == "prismatic" and float(_floats(node, 1)[0]) != 0.0:
+            entry["force"] = (_value(model, node), node)  # rigid/conditions.py joint_forces
         elif key in LOADS:
             if float(_floats(node, 1)[0]) != 0.0:
                 raise node.error(

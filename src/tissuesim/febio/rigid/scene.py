@@ -80,7 +80,9 @@ def rigid_bodies(model: FebModel, bodies: list[dict], names: list[str], times) -
         if fixed:
             entry["fixed"] = fixed
         prescribed = {
-            DOF_NAMES[k]: times(load, model)
+            DOF_NAMES[k]: load.expression(lambda a: times(a, model))
+            if hasattr(load, "expression")  # rigid_euler_angles (rigid/conditions.py)
+            else times(load, model)
             for k, load in sorted(conditions["held"].items())
             if load is not None
         }
@@ -89,8 +91,9 @@ def rigid_bodies(model: FebModel, bodies: list[dict], names: list[str], times) -
         for key in ("force", "moment"):
             if conditions[key]:
                 items = ["0.0"] * 3
-                for axis, load in conditions[key]:
-                    items[axis] = times(Load(load.value, load.curve, load.window), model)
+                for axis, load in conditions[key]:  # several on one axis: their sum
+                    term = times(Load(load.value, load.curve, load.window), model)
+                    items[axis] = term if items[axis] == "0.0" else f"{items[axis]} + {term}"
                 entry[key] = items
         tables.append(entry)
     names_used = set(names)
