@@ -308,3 +308,50 @@ def test_the_midpoint_correction_makes_the_internal_work_the_change_of_energy():
     f_c = midpoint_correction(model, x0, x1, h)
     assert (x1 - x0) @ (f_int + f_c) == pytest.approx(dW, rel=1e-10)
     assert abs((x1 - x0) @ f_int - dW) > 1e-4 * abs(dW)
+
+
+SCENE = """
+[mesh]
+generator = "box"
+lower = [0.0, 0.0, 0.0]
+upper = [1.0, 0.2, 0.2]
+divisions = [3, 1, 1]
+
+[material]
+model = "neo_hookean"
+youngs_modulus = 1e4
+poisson_ratio = 0.3
+
+[simulation]
+density = 1000.0
+integrator = "generalized_alpha"
+generalized_alpha = 0.5
+time_step = 0.05
+
+[gravity]
+acceleration = [0.0, 0.0, -9.81]
+
+[[dirichlet]]
+vertices = { on_plane = { axis = 0, value = 0.0 } }
+
+[run]
+steps = 3
+"""
+
+
+def test_a_scene_selects_generalized_alpha_as_the_api_does(tmp_path):
+    """[simulation] integrator = "generalized_alpha" with generalized_alpha = rho_inf: the same
+    steps as Simulation(integrator="generalized_alpha", generalized_alpha=0.5)."""
+    from tissuesim.scene.loader import load_scene
+
+    path = tmp_path / "s.toml"
+    path.write_text(SCENE)
+    scene = load_scene(path)
+    sim = scene.simulation
+    assert sim.integrator == "generalized_alpha"
+    assert sim.generalized_alpha == febio_weights(0.5)
+    api = _cantilever(0.5)
+    for _ in range(3):
+        sim.step()
+        api.step()
+    assert np.allclose(sim.state.x, api.state.x, rtol=0, atol=1e-12)
