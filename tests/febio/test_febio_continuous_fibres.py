@@ -92,3 +92,26 @@ def test_2d_trans_iso_mooney_rivlin_pull_is_the_laws_stress():
     np.testing.assert_allclose([P[1, 1], P[2, 2]], 0.0, atol=1e-6 * P[0, 0])
     assert force == pytest.approx(P[0, 0], rel=1e-6)
     assert stretch[1] < stretch[2] - 1e-3
+
+
+def test_mooney_rivlin_von_mises_fibers_pull_is_the_laws_stress():
+    """FEBio's Mooney-Rivlin von Mises Fibers (tests/febio/models/mr_von_mises_uniaxial.feb:
+    fibres in the x-y plane around x, kf = 5, the constrained density) pulled along x, hex8
+    with FEBio's three-field element: lateral stresses zero, the pull the law's P_xx, y
+    shortened more than z (the fibres near x also pull in y)."""
+    data, _ = febio_scene(read_feb(MODELS / "mr_von_mises_uniaxial.feb"), "x")
+    assert data["simulation"]["formulation"] == "mean_dilatation"
+    table = dict(data["material"])
+    assert table["gipt"] == 20.0 and table["vmc"] == 2.0
+    law = make_material(table.pop("model"), **table)
+    sim = load_febio(MODELS / "mr_von_mises_uniaxial.feb").simulation
+    for _ in range(3):
+        sim.step()
+    X, x = sim.body("body").mesh.points, sim.body_positions("body")
+    stretch = np.array([np.polyfit(X[:, i], x[:, i], 1)[0] for i in range(3)])
+    force = abs(sim.step().extra["forces"]["pull"][0])
+    P = law.stress(np.diag(stretch)[None])[0]
+    assert stretch[0] == pytest.approx(1.15)
+    np.testing.assert_allclose([P[1, 1], P[2, 2]], 0.0, atol=1e-6 * P[0, 0])
+    assert force == pytest.approx(P[0, 0], rel=1e-6)
+    assert stretch[1] < stretch[2] - 1e-3

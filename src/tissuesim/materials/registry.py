@@ -36,6 +36,7 @@ from tissuesim.materials.fibres.fibre_exp_linear import FiberExpLinear, FiberExp
 from tissuesim.materials.fibres.fibre_exp_pow import FiberExpPow, FiberExpPowUncoupled
 from tissuesim.materials.fibres.fibre_pow_linear import FiberPowLinear, FiberPowLinearUncoupled
 from tissuesim.materials.fibres.holzapfel_gasser_ogden import HGOUnconstrained, HolzapfelGasserOgden
+from tissuesim.materials.fibres.mooney_rivlin_von_mises import MooneyRivlinVonMisesFibers
 from tissuesim.materials.fibres.tc_nonlinear_orthotropic import TCNonlinearOrthotropic
 from tissuesim.materials.fibres.trans_iso_2d_mooney_rivlin import TransIso2DMooneyRivlin
 from tissuesim.materials.fibres.trans_iso_mooney_rivlin import (
@@ -125,6 +126,7 @@ FIBRE_LAWS: tuple[type[Material], ...] = (
     ContinuousFiberDistribution,
     ContinuousFiberDistributionUncoupled,
     TransIso2DMooneyRivlin,
+    MooneyRivlinVonMisesFibers,
 )
 
 MATERIALS: dict[str, type[Material]] = {

@@ -24,7 +24,8 @@ theta is the law's measure of volume change and U its lambda term, the part that
     fiber_exp_pow, fiber_pow_linear, fiber_exp_linear (and their _uncoupled forms): none
                          (U = 0, a fibre has no bulk term)
     continuous_fiber_distribution (and _uncoupled): none (U = 0, fibres only)
-    2d_trans_iso_mooney_rivlin  theta = J  U = its matrix's bulk term with k
+    2d_trans_iso_mooney_rivlin, mooney_rivlin_von_mises_fibers  theta = J  U = their
+                         matrix's bulk term with k
     solid_mixture        the sum of its components' U, which must share theta and U's kind
     uncoupled_solid_mixture  theta = J, its own bulk term with k (pressure_model as above)
 
@@ -83,6 +84,7 @@ VOLUMETRIC_LAWS = {
     "continuous_fiber_distribution": ("J", "log"),
     "continuous_fiber_distribution_uncoupled": ("J", "log"),
     "2d_trans_iso_mooney_rivlin": ("J", "log"),
+    "mooney_rivlin_von_mises_fibers": ("J", "log"),
 }
 
 

@@ -64,6 +64,7 @@ MATERIAL_TYPES = {
             "continuous fiber distribution",
             "continuous fiber distribution uncoupled",
             "2D trans iso Mooney-Rivlin",
+            "Mooney-Rivlin von Mises Fibers",
         )
     },
     **{
@@ -131,6 +132,7 @@ FIBRE_TYPES = {
     **{name: "fiber" for name in FIBRES_ONLY},
     **{name: "axes" for name in CONTINUOUS},
     "2D trans iso Mooney-Rivlin": "fiber",
+    "Mooney-Rivlin von Mises Fibers": "axes",
     **{name: "fiber" for name in ACTIVE if "isotropic" not in name},
     "muscle material": "fiber",
 }
@@ -142,7 +144,7 @@ UNCOUPLED = {
     "uncoupled viscoelastic",
     "uncoupled solid mixture", "fiber-exp-pow-uncoupled", "fiber-pow-linear-uncoupled",
     "uncoupled fiber-exp-linear", "continuous fiber distribution uncoupled",
-    "2D trans iso Mooney-Rivlin",
+    "2D trans iso Mooney-Rivlin", "Mooney-Rivlin von Mises Fibers",
     *(name for name in ACTIVE if name.startswith("uncoupled")),
     "muscle material",
 }  # fmt: skip
