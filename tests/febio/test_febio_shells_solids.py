@@ -243,3 +243,52 @@ def test_a_rigid_shell_domain_takes_a_rigid_material_only(tmp_path):
     with pytest.raises(InputError, match=r"rigid.feb:\d+ <ShellDomain>: a rigid-shell domain "
                        r"takes a rigid body material, not 'neo-Hookean'"):  # fmt: skip
         read_feb(path)
+
+
+def plate_over_block(thickness: float) -> str:
+    """The pressed block's deck with its rigid shell apart from the block (its own four nodes,
+    0.01 above the top face) and a sliding-elastic contact between the block's top and it."""
+    text = pressed_block(thickness)
+    above = "".join(
+        f'<node id="{9 + k}">{x},{y},1.01</node>'
+        for k, (x, y) in enumerate([(0, 0), (1, 0), (1, 1), (0, 1)])
+    )
+    text = text.replace("</Nodes>", f"{above}</Nodes>").replace(
+        '<elem id="2">5,6,7,8</elem>', '<elem id="2">9,10,11,12</elem>'
+    )
+    surfaces = (
+        '<Surface name="top"><quad4 id="1">5,6,7,8</quad4></Surface>'
+        '<Surface name="plate"><quad4 id="1">9,12,11,10</quad4></Surface>'
+        '<SurfacePair name="pair"><primary>top</primary><secondary>plate</secondary></SurfacePair>'
+    )
+    text = text.replace("</Mesh>", f"{surfaces}</Mesh>")
+    contact = (
+        '<Contact><contact name="c" surface_pair="pair" type="sliding-elastic">'
+        "<fric_coeff>0</fric_coeff></contact></Contact>"
+    )
+    return text.replace("  <Rigid>", f"  {contact}\n  <Rigid>")
+
+
+def test_a_rigid_shell_without_thickness_carrying_a_contact_surface_gets_one(tmp_path):
+    """A rigid shell of no thickness that carries a contact surface (FEBio's sh29) keeps a
+    body, given 1e-3 of its size as a thickness in a static analysis (a line in the changes
+    says so; its front face, the contact surface, is exact); one that shares nodes with a
+    deformable shell, or in a dynamic analysis, makes no body as before."""
+    from tissuesim.febio.scene import febio_scene
+
+    path = tmp_path / "contact.feb"
+    path.write_text(plate_over_block(0.0))
+    model = read_feb(path)
+    tables, meshes = febio_scene(model, "contact")
+    assert len(meshes) == 2 and any("is given 0.00141" in line for line in model.changes)
+    shells = model._shells
+    np.testing.assert_allclose(shells.thickness["plate"], 1e-3 * 2**0.5)
+    back = [shells.back[i] for i in range(8, 12)]
+    np.testing.assert_allclose(model.nodes[back, 2], 1.01 - 1e-3 * 2**0.5)
+    path.write_text(
+        plate_over_block(0.0).replace("<analysis>STATIC</analysis>", "<analysis>DYNAMIC</analysis>")
+    )
+    model = read_feb(path)
+    from tissuesim.febio.shells import check_thickness
+
+    assert check_thickness(model) == {"plate"}

@@ -323,6 +323,8 @@ def check_thickness(model: FebModel) -> set[str]:
         if (h <= 0.0).any():
             node = model.domains.get(name, (None, None, model.parts[name][3]))[2]
             body = rigid_material_of(model, name) if name in model.domains else None
+            if body is not None and (h <= 0.0).all() and _nominal(model, name, node):
+                continue
             if body is not None and (h <= 0.0).all():
                 thin.add(name)
                 line = (
@@ -337,6 +339,38 @@ def check_thickness(model: FebModel) -> set[str]:
                 '<ShellDomain> or <ElementData type="shell thickness">'
             )
     return thin
+
+
+#: the thickness a rigid shell without one is given where it carries a contact surface,
+#: relative to its size (its mass plays no part in a static analysis)
+NOMINAL_THICKNESS = 1e-3
+
+
+def _nominal(model: FebModel, name: str, node: Node) -> bool:
+    """A rigid shell part without thickness that carries a contact surface (every node of a
+    contact's surface on it) in a STATIC analysis, sharing no node with another shell part:
+    given NOMINAL_THICKNESS times its size, so that its body (and its surface) exists; a line
+    in ``model.changes``. Whether it was."""
+    shells = shells_of(model)
+    faces = shells.faces[name]
+    mine = np.unique(faces)
+    others = [f for p, f in shells.faces.items() if p != name]
+    if model.analysis != "static" or any(np.intersect1d(f, mine).size for f in others):
+        return False
+    named = [s for c in model.contacts for s in c.get("surfaces", ()) if s in model.surfaces]
+    carried = [s for s in named if np.isin(model.surfaces[s][0], mine).all()]
+    if not carried:
+        return False
+    x = model.nodes[mine]
+    h = NOMINAL_THICKNESS * float(np.linalg.norm(x.max(axis=0) - x.min(axis=0)))
+    shells.thickness[name][:] = h
+    _place(model, node)
+    model.changes.append(
+        f"{node.where()}: rigid shell part {name!r} has no thickness and carries the contact "
+        f"surface {carried[0]!r}: it is given {h:.3g} (its mass plays no part in a static "
+        "analysis; FEBio's rigid shell has none)"
+    )
+    return True
 
 
 def back_set(model: FebModel, node: Node, nodes: str) -> str:
