@@ -261,8 +261,9 @@ def test_contact_on_the_shells_front_faces_is_read_their_back_faces_refused(valu
     shells' contact faces) read; 1 refused in one line."""
     text = (MODELS / "contact_touching.feb").read_text()
     path = tmp_path / "bottom.feb"
-    path.write_text(text.replace("<fric_coeff>0</fric_coeff>",
-                                 f"<fric_coeff>0</fric_coeff>\n      <shell_bottom_primary>{value}"
+    old = "<fric_coeff>0.01</fric_coeff>"
+    assert old in text
+    path.write_text(text.replace(old, f"{old}\n      <shell_bottom_primary>{value}"
                                  "</shell_bottom_primary>"))  # fmt: skip
     if value == "0":
         assert read_feb(path).contacts
