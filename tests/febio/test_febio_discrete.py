@@ -385,3 +385,51 @@ def test_rigid_euler_angles_turn_the_platen_by_febios_quaternion(angles, tmp_pat
     if angles[:2] == (0.0, 0.0):
         c, s = np.cos(np.radians(30.0)), np.sin(np.radians(30.0))
         np.testing.assert_allclose(R, [[c, -s, 0], [s, c, 0], [0, 0, 1]], atol=1e-9)
+
+
+def test_a_part_of_two_pieces_meeting_at_coincident_nodes_is_two_bodies(tmp_path):
+    """FEBio keeps coincident nodes apart: a part of two cubes whose shared face has its own
+    nodes in each is two pieces (co01's blocks). The second cube (x in [1, 2], its x = 1
+    face held along x, its x = 2 face pulled 0.15) stretches as the first: the same
+    displacements, each a body of its own, one changed: line."""
+    coords = {2: (1, 0, 0), 3: (1, 1, 0), 4: (0, 1, 0), 6: (1, 0, 1), 7: (1, 1, 1), 8: (0, 1, 1)}
+    coords.update({1: (0, 0, 0), 5: (0, 0, 1)})
+    second = "".join(f'      <node id="{n + 8}">{x + 1},{y},{z}</node>\n'
+                     for n, (x, y, z) in sorted(coords.items()))  # fmt: skip
+    text = CUBE.replace("    </Nodes>", second + "    </Nodes>")
+    text = text.replace('<elem id="1">1,2,3,4,5,6,7,8</elem>',
+                        '<elem id="1">1,2,3,4,5,6,7,8</elem>\n'
+                        '      <elem id="2">9,10,11,12,13,14,15,16</elem>')  # fmt: skip
+    for name, first, more in (
+        ("x0", "1,4,5,8", "9,12,13,16"),
+        ("y0", "1,2,5,6", "9,10,13,14"),
+        ("z0", "1,2,3,4", "9,10,11,12"),
+        ("x1", "2,3,6,7", "10,11,14,15"),
+    ):
+        text = text.replace(f'<NodeSet name="{name}">{first}</NodeSet>',
+                            f'<NodeSet name="{name}">{first},{more}</NodeSet>')  # fmt: skip
+    sim = _run(text, tmp_path)
+    assert len(sim.bodies) == 2
+    one, two = (sim.body_positions(n) for n in sim.bodies)
+    np.testing.assert_allclose(two - one, np.tile([1.0, 0.0, 0.0], (8, 1)), atol=1e-9)
+    assert one[1, 0] == pytest.approx(1.15)
+    model = read_feb(tmp_path / "m.feb")
+    from tissuesim.febio.scene import scene_bodies
+
+    names = [n for n, _ in scene_bodies(model)]
+    assert names == ["cube", "cube.2"]
+    assert any("2 pieces" in line for line in model.changes)
+
+
+def test_an_edge_is_the_node_set_a_condition_names(tmp_path):
+    """<Edge> (line2 segments) read as the node set "@edge:name" (nl01's supports): the
+    cube's y0 support given on the edge of its nodes 1, 2, 5, 6 is the same cube."""
+    text = CUBE.replace(
+        "  </Mesh>",
+        '    <Edge name="side">\n      <line2 id="1">1,2</line2>\n      <line2 id="2">5,6</line2>\n'
+        "    </Edge>\n  </Mesh>",
+    ).replace('node_set="y0"', 'node_set="@edge:side"')
+    sim, ref = _run(text, tmp_path), _run(CUBE, tmp_path, "ref.feb")
+    np.testing.assert_allclose(sim.positions, ref.positions, atol=1e-12)
+    model = read_feb(tmp_path / "m.feb")
+    assert model.node_sets["@edge:side"].tolist() == [0, 1, 4, 5]

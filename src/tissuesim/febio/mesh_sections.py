@@ -66,6 +66,22 @@ def _id_list(model: FebModel, node: Node) -> list[int]:
     return _ints(node)
 
 
+def _edge(model: FebModel, node: Node) -> None:
+    """<Edge name=...> of <line2>/<line3> segments: its nodes, the node set "@edge:name" a
+    condition names (an edge's loads and contact are not read)."""
+    name = node.attrib.get("name")
+    if not name:
+        raise node.error("an Edge needs a name")
+    rows = []
+    for c in node.children:
+        if c.tag not in ("line2", "line3"):
+            raise _unsupported(c, "expected <line2> or <line3> segments")
+        rows.append(_index(model, c, _ints(c)))
+    if not rows:
+        raise node.error("an Edge needs at least one segment")
+    model.node_sets[f"@edge:{name}"] = np.unique(np.concatenate(rows))
+
+
 def read_discrete_set(model: FebModel, node: Node) -> None:
     """<DiscreteSet> (febio/discrete.py)."""
     from tissuesim.febio.discrete import read_discrete_set as read
@@ -263,6 +279,7 @@ MESH_PARTS = {
     "ElementSet": _element_set,
     "SurfacePair": _surface_pair,
     "DiscreteSet": read_discrete_set,
+    "Edge": _edge,
 }
 
 #: SolidDomain type -> tissuesim formulation (None: FEBio's default for the law)

@@ -99,18 +99,51 @@ def _bodies(model: FebModel) -> list[dict]:
         formulations = {model.domains[p][1] for p in parts}
         if len(formulations) > 1:
             raise first.error(f"parts {parts} share nodes but have different domain types")
-        bodies.append(
-            {
-                "parts": parts,
-                "material": materials.pop(),
-                "cell_type": types.pop(),
-                "cells": cells,
-                "formulation": formulations.pop(),
-                "node": first,
-                "rigid": rigid[parts[0]],
-            }
-        )
+        material, cell_type, formulation = materials.pop(), types.pop(), formulations.pop()
+        pieces = [cells] if rigid[parts[0]] is not None else _pieces(model, parts, cells)
+        for piece in pieces:
+            bodies.append(
+                {
+                    "parts": parts,
+                    "material": material,
+                    "cell_type": cell_type,
+                    "cells": piece,
+                    "formulation": formulation,
+                    "node": first,
+                    "rigid": rigid[parts[0]],
+                }
+            )
     return bodies
+
+
+def _pieces(model: FebModel, parts: list[str], cells: np.ndarray) -> list[np.ndarray]:
+    """The cells of a body split into the pieces that share no node, where pieces meet at
+    coincident nodes (FEBio keeps two nodes at one place apart: an unwelded seam is a cut,
+    and co01's two blocks in one part touch through contact only); one piece otherwise. A
+    split is one line in ``model.changes``."""
+    import scipy.sparse as sp
+    from scipy.sparse.csgraph import connected_components
+
+    used = np.unique(cells)
+    X = model.nodes[used]
+    tol = 1e-9 * max(float(np.linalg.norm(np.ptp(X, axis=0))), 1e-300)
+    _, counts = np.unique(np.round(X / tol), axis=0, return_counts=True)
+    if counts.max(initial=1) < 2:
+        return [cells]
+    k = len(cells)
+    incidence = sp.csr_matrix(
+        (np.ones(cells.size), (np.repeat(np.arange(k), cells.shape[1]), cells.ravel())),
+        shape=(k, len(model.nodes)),
+    )
+    count, label = connected_components(incidence @ incidence.T, directed=False)
+    if count < 2:
+        return [cells]
+    node = model.parts[parts[0]][3]
+    model.changes.append(
+        f"{node.where()}: part(s) {parts} hold {count} pieces that share no node and meet at "
+        "coincident nodes (FEBio keeps coincident nodes apart): one body per piece"
+    )
+    return [cells[label == c] for c in range(count)]
 
 
 def scene_bodies(model: FebModel) -> list[tuple[str, dict]]:
@@ -121,10 +154,12 @@ def scene_bodies(model: FebModel) -> list[tuple[str, dict]]:
         return [("body", b) for b in bodies]
     valid = re.compile(r"[A-Za-z0-9][A-Za-z0-9_.-]*")
     used = {b["parts"][0] for b in bodies if valid.fullmatch(b["parts"][0])}
-    named = []
+    named, taken = [], set()
     for b in bodies:
         part = b["parts"][0]
-        name = part if valid.fullmatch(part) else body_name(part, used)
+        # a part split in pieces (_pieces): the first keeps its name, the others ".2", ...
+        name = part if valid.fullmatch(part) and part not in taken else body_name(part, used)
+        taken.add(name)
         line = (
             f"{b['node'].where()}: part {part!r} is the body {name!r} (a body's name names "
             "its output files: letters, digits, '_', '-' or '.')"
