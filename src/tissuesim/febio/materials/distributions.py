@@ -5,6 +5,8 @@ type and its numbers), as the tables of tissuesim's ``continuous_fiber_distribut
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 from tissuesim.febio.model import FebModel, _floats, _once, _unsupported
 from tissuesim.febio.xml import Node
 
@@ -14,15 +16,14 @@ __all__ = ["PARTS", "read_part"]
 PARTS = ("fibers", "distribution", "scheme")
 
 
-def read_part(model: FebModel, p: Node) -> dict:
-    """A ``<fibers>``, ``<distribution>`` or ``<scheme>`` as a table {model, parameters}."""
-    from tissuesim.febio.materials.reading import _law
-
+def read_part(model: FebModel, p: Node, law: Callable) -> dict:
+    """A ``<fibers>``, ``<distribution>`` or ``<scheme>`` as a table {model, parameters};
+    ``law``: the reader of a material element (``reading._law``), for the fibre law."""
     kind = p.attrib.get("type")
     if not kind:
         raise p.error(f'<{p.tag}> needs its type, e.g. type="fiber-exp-pow"')
     if p.tag == "fibers":
-        name, params, _, _, _ = _law(model, p, top=False, component=True, bulk=False)
+        name, params, _, _, _ = law(model, p, top=False, component=True, bulk=False)
         return {"model": name, **params}
     table: dict = {"model": kind}
     _once(p)

@@ -162,7 +162,7 @@ def _law(
             _direction(orientation, p, kind)
             continue
         if kind in CONTINUOUS and p.tag in PARTS:
-            params[p.tag] = read_part(model, p)
+            params[p.tag] = read_part(model, p, _law)
             continue
         if p.tag in NO_ENERGY:
             raise p.error(f"<{p.tag}> of {kind!r} is not run by tissuesim: {NO_ENERGY[p.tag]}, "

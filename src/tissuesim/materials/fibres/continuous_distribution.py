@@ -23,7 +23,10 @@ M1 = sum g_k a_k (x) a_k, M2 = sum h_k Ib_k a_k (x) a_k, K = sum h_k a_k (x) a_k
 
 (s' = -cJ s, s'' = 10 s / (9 J^2)). The Gauss-Kronrod scheme moves its points with C; as
 FEBio, the stress and tangent are those of the points of the current C held fixed (its energy
-is then the stress's potential to the accuracy of the quadrature).
+is then the stress's potential to the accuracy of the quadrature). FEBio takes those points in
+the eigenvectors of the global C and reads them as local directions (R(n), then Q n): with
+local axes other than the global ones the stretched cap is missed and the stress is no
+energy's derivative, so that case is refused.
 """
 
 from __future__ import annotations
@@ -35,6 +38,9 @@ from tissuesim.materials.base import MaterialResponse
 from tissuesim.materials.fibres._fibres import local_axes, planar_keys
 from tissuesim.materials.fibres._single_fibre import SingleFibre
 from tissuesim.materials.fibres.fibre_distribution import make_distribution, make_scheme
+from tissuesim.materials.fibres.fibre_exp_linear import FiberExpLinear, FiberExpLinearUncoupled
+from tissuesim.materials.fibres.fibre_exp_pow import FiberExpPow, FiberExpPowUncoupled
+from tissuesim.materials.fibres.fibre_pow_linear import FiberPowLinear, FiberPowLinearUncoupled
 from tissuesim.materials.isotropic._common import (
     bcast,
     check_input,
@@ -52,6 +58,19 @@ __all__ = ["ContinuousFiberDistribution", "ContinuousFiberDistributionUncoupled"
 _PAIRS = ((0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2))
 _PAIR_OF = np.array([_PAIRS.index((min(i, j), max(i, j))) for i, j in np.ndindex(3, 3)])
 _PI, _PJ = np.array(_PAIRS).T
+
+#: the fibre laws a distribution takes, by name (FEBio's names work: case, spaces and dashes
+#: do not matter)
+_FIBRES = {
+    cls.name: cls
+    for cls in (FiberExpPow, FiberExpPowUncoupled, FiberPowLinear, FiberPowLinearUncoupled,
+                FiberExpLinear, FiberExpLinearUncoupled)
+}  # fmt: skip
+_ALIASES = {"uncoupled_fiber_exp_linear": "fiber_exp_linear_uncoupled"}
+
+
+def _key(model: str) -> str:
+    return model.strip().lower().replace("-", "_").replace(" ", "_").replace("fibre", "fiber")
 
 
 def fibre_sum(
@@ -126,15 +145,20 @@ class ContinuousFiberDistribution(HyperelasticMaterial):
         mat_axis_a: object = (1.0, 0.0, 0.0),
         mat_axis_d: object = (0.0, 1.0, 0.0),
     ) -> None:
-        from tissuesim.materials.registry import make_material
-
         law = self.name
         if isinstance(fibers, SingleFibre):
             fibre = fibers
         elif isinstance(fibers, dict) and "model" in fibers:
             table = dict(fibers)
+            model = str(table.pop("model"))
+            cls = _FIBRES.get(_ALIASES.get(_key(model), _key(model)))
+            if cls is None:
+                raise MaterialError(f"{law}: fibers: unknown fibre law {short(model)}; valid: "
+                                    f"{', '.join(_FIBRES)}")  # fmt: skip
             try:
-                fibre = make_material(table.pop("model"), **table)
+                fibre = cls(**table)
+            except TypeError as exc:
+                raise MaterialError(f"{law}: fibers: {exc}") from None
             except MaterialError as exc:
                 raise MaterialError(f"{law}: fibers: {exc}") from None
         else:
@@ -159,6 +183,13 @@ class ContinuousFiberDistribution(HyperelasticMaterial):
         e1, e2 = local_axes(law, mat_axis_a, mat_axis_d)
         self.planar = planar_keys(mat_axis_a=mat_axis_a, mat_axis_d=mat_axis_d)
         self.Q = np.stack([e1, e2, np.cross(e1, e2)], axis=-1).reshape(-1, 3, 3)
+        if self.scheme.adaptive and not np.allclose(self.Q, np.eye(3), rtol=0.0, atol=1e-12):
+            raise MaterialError(
+                f"{law}: FEBio's fibers-3d-gkt takes its points in the eigenvectors of the "
+                "global C and reads them as local directions, so with local axes other than "
+                "the global ones (a mat_axis) its stress is not the derivative of an energy of "
+                "F, which tissuesim minimises in each step: give global axes or another scheme"
+            )
         n, w = self.scheme.fixed
         self.ifd = float(np.sum(w * self.distribution.density(n))) or 1.0
         self.k = self.mu = self.lam = 0.0
