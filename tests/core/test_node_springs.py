@@ -142,3 +142,15 @@ def test_linear_constraint_energy_matches_finite_differences():
     fd_H = np.array([(value(x + e, 1).gradient - value(x - e, 1).gradient) / (2 * h) for e in eye])
     np.testing.assert_allclose(acc.gradient, fd_g, rtol=1e-6, atol=1e-8)
     np.testing.assert_allclose(pattern.matrix(acc.hessian).toarray(), fd_H.T, atol=1e-6)
+
+
+def test_a_scaled_spring_set_scales_energy_gradient_and_hessian():
+    """NodeSprings.at(t): the law times scale(t) (FEBio's node distance penalty on a curve)."""
+    from dataclasses import replace
+
+    springs, pattern, x = _springs(LAWS["elongation"])
+    scaled = replace(springs, scale=lambda t: 0.25 * t).at(2.0)
+    one, half = _evaluate(springs, pattern, x, 2), _evaluate(scaled, pattern, x, 2)
+    assert half.value == pytest.approx(0.5 * one.value, rel=1e-14)
+    np.testing.assert_allclose(half.gradient, 0.5 * one.gradient, rtol=1e-14)
+    np.testing.assert_allclose(half.hessian, 0.5 * one.hessian, rtol=1e-14, atol=1e-300)

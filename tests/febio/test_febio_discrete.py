@@ -433,3 +433,43 @@ def test_an_edge_is_the_node_set_a_condition_names(tmp_path):
     np.testing.assert_allclose(sim.positions, ref.positions, atol=1e-12)
     model = read_feb(tmp_path / "m.feb")
     assert model.node_sets["@edge:side"].tolist() == [0, 1, 4, 5]
+
+
+def _node_distance(rows: str) -> str:
+    """The cube with a node distance constraint between nodes 3 and 7 (0, 0, 1 apart)."""
+    return CUBE.replace(
+        "  <LoadData>",
+        '  <Constraints>\n    <constraint name="nd" type="node distance">\n'
+        f"      <laugon>0</laugon>\n      <node>3,7</node>\n{rows}"
+        "    </constraint>\n  </Constraints>\n  <LoadData>",
+    )
+
+
+@pytest.mark.parametrize(
+    "rows",
+    [
+        "      <penalty>40</penalty>\n      <target>0</target>\n      <relative>1</relative>\n",
+        '      <penalty lc="1">40</penalty>\n      <target>0</target>\n'
+        "      <relative>1</relative>\n",
+        "      <penalty>40</penalty>\n      <target>1</target>\n      <relative>0</relative>\n",
+    ],
+)
+def test_a_node_distance_constraint_is_a_spring_of_its_target_length(rows, tmp_path):
+    """FEBio's node distance (FEDistanceConstraint, laugon 0): the force eps (l - l0), l0 the
+    target (relative: the rest distance plus the target), eps the penalty (times its curve):
+    at the end of the pull the same cube as a 40 N/m linear spring between the two nodes."""
+    sim = _run(_node_distance(rows), tmp_path)
+    spring = CUBE.replace(
+        "  </Mesh>",
+        '    <DiscreteSet name="tie">\n      <delem>3,7</delem>\n    </DiscreteSet>\n  </Mesh>',
+    ).replace(
+        "  <LoadData>",
+        '  <Discrete>\n    <discrete_material id="1" name="s" type="linear spring">\n'
+        "      <E>40</E>\n    </discrete_material>\n"
+        '    <discrete dmat="1" discrete_set="tie"/>\n  </Discrete>\n  <LoadData>',
+    )
+    ref = _run(spring, tmp_path, "ref.feb")
+    np.testing.assert_allclose(sim.positions, ref.positions, atol=1e-9)
+    assert abs(sim.positions[6, 2] - ref.positions[6, 2]) < 1e-9
+    plain = _run(CUBE, tmp_path, "plain.feb")
+    assert np.abs(sim.positions - plain.positions).max() > 1e-4  # the spring does act

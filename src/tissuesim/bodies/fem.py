@@ -296,7 +296,9 @@ class FemBody:
 
         self.pressures.append(follower_pressure(self.mesh, facets, pressure, name, self.name))
 
-    def add_springs(self, pairs, law, *, anchors=None, name: str = "springs"):
+    def add_springs(
+        self, pairs, law, *, anchors=None, name: str = "springs", rest_length=None, scale=None
+    ):
         """Discrete springs of ``law`` (``energies/node_springs.py`` SpringLaw) between vertex
         pairs (k, 2) of this body, a second vertex -1 for a spring to the fixed point
         ``anchors[i]`` (k, d); rest lengths from the rest mesh. The springs' blocks join the
@@ -325,7 +327,11 @@ class FemBody:
         if np.any(P[:, 0] == P[:, 1]):
             raise InputError("add_springs: a spring joins a vertex to itself")
         rest = np.linalg.norm(ends - X[P[:, 0]], axis=1)
-        springs = NodeSprings(P, rest, law, A, name, self.dim)
+        if rest_length is not None:  # FEBio's node distance: its target, not the rest one
+            rest = np.broadcast_to(np.asarray(rest_length, dtype=float), rest.shape).copy()
+            if np.any(rest < 0) or not np.all(np.isfinite(rest)):
+                raise InputError("add_springs: rest_length must be >= 0 m")
+        springs = NodeSprings(P, rest, law, A, name, self.dim, scale)
         self.springs.append(springs)
         self._relink()
         return springs
@@ -516,7 +522,7 @@ class FemBody:
         energies += [s.energy(t) for _, s in self.spring_graspers]
         energies += [p.energy(t) for p in self.pressures]
         energies += [c.energy(t) for c in self.linear_constraints]
-        return energies + list(self.springs)
+        return energies + [s.at(t) for s in self.springs]
 
     def forces(self, x: np.ndarray, gradient: np.ndarray | None, t: float) -> dict:
         """Force (N, 3-vector) every prescribed set and grasper applies to the body: a set's

@@ -180,6 +180,21 @@ class NodeSprings:
     anchors: np.ndarray | None = None
     name: str = "springs"
     dim: int = 3
+    #: t -> the factor on the whole law at time t (None: 1; FEBio's node distance penalty
+    #: on a load curve), and that factor for the step being solved (``at``)
+    scale: Callable[[float], float] | None = None
+    factor: float = 1.0
+
+    def at(self, t: float) -> NodeSprings:
+        """These springs at time t: the law times ``scale(t)``."""
+        if self.scale is None:
+            return self
+        from dataclasses import replace
+
+        factor = float(self.scale(t))
+        if not np.isfinite(factor):
+            raise InputError(f"{self.name}: the stiffness scale is not finite at t = {t:g}")
+        return replace(self, factor=factor)
 
     def _ends(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         X = x.reshape(-1, self.dim)
@@ -196,7 +211,7 @@ class NodeSprings:
         length = np.linalg.norm(r, axis=1)
         _, f, _ = self.law.evaluate(length - self.rest, self.rest)
         zero = length == 0.0
-        return np.where(zero, 0.0, f), r / np.where(zero, 1.0, length)[:, None]
+        return np.where(zero, 0.0, self.factor * f), r / np.where(zero, 1.0, length)[:, None]
 
     def accumulate(self, x: np.ndarray, acc: Accumulator) -> None:
         d = self.dim
@@ -204,6 +219,8 @@ class NodeSprings:
         r = b - a
         length = np.linalg.norm(r, axis=1)
         W, f, df = self.law.evaluate(length - self.rest, self.rest)
+        if self.factor != 1.0:
+            W, f, df = self.factor * W, self.factor * f, self.factor * df
         acc.add_value(self.name, float(W.sum()))
         if acc.order < 1:
             return

@@ -13,7 +13,7 @@ from tissuesim.febio.xml import Node
 __all__ = ["read_constraints", "set_walls_apart", "CONSTRAINT_TYPES"]
 
 #: the <constraint> types read
-CONSTRAINT_TYPES = ("rigid_wall", "linear constraint")
+CONSTRAINT_TYPES = ("rigid_wall", "linear constraint", "node distance")
 
 
 def read_constraints(model: FebModel, section: Node) -> None:
@@ -31,6 +31,11 @@ def read_constraints(model: FebModel, section: Node) -> None:
                 f"<{c.tag}> type {kind!r} is not supported by tissuesim; it runs "
                 f"{', '.join(CONSTRAINT_TYPES)} (see docs/guide/febio.md)"
             )
+        if kind == "node distance":  # a spring of its target length (febio/discrete.py)
+            from tissuesim.febio.discrete import read_node_distance
+
+            read_node_distance(model, c)
+            continue
         if kind == "linear constraint":  # febio/linear_constraints.py
             from tissuesim.febio.linear_constraints import read_constraint_set
 

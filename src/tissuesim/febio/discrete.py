@@ -12,10 +12,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from tissuesim.febio.model import Curve, FebModel, _floats, _int_attr, _ints, _unsupported
+from tissuesim.febio.model import Curve, FebModel, _flag, _floats, _int_attr, _ints, _unsupported
 from tissuesim.febio.xml import Node
 
-__all__ = ["read_discrete_set", "read_discrete", "spring_tables", "SPRING_TYPES"]
+__all__ = [
+    "read_discrete_set", "read_discrete", "read_node_distance", "spring_tables", "SPRING_TYPES",
+]  # fmt: skip
 
 #: FEBio discrete material type -> tissuesim's spring law
 SPRING_TYPES = {
@@ -69,6 +71,46 @@ def read_discrete(model: FebModel, section: Node) -> None:
             model.springs.append({**materials[dmat], "set": name, "node": c})
         else:
             raise _unsupported(c, "expected <discrete_material> or <discrete>")
+
+
+def read_node_distance(model: FebModel, c: Node) -> None:
+    """<constraint type="node distance"> (FEDistanceConstraint) with laugon 0: the penalty
+    force eps(t) (l - l0) between two nodes, l0 = target (relative 1: the rest distance plus
+    target), eps the penalty times its curve: a linear spring of rest length l0 whose
+    stiffness follows the curve. Augmented (laugon 1) is refused."""
+    from tissuesim.febio.mesh_sections import _index
+
+    p = {k.tag: k for k in c.children}
+    for tag in p:
+        if tag not in ("laugon", "augtol", "penalty", "node", "minaug", "maxaug", "target",
+                       "relative"):  # fmt: skip
+            raise _unsupported(p[tag], "this parameter of a node distance constraint")
+    if "laugon" in p and p["laugon"].text.strip().upper() not in ("0", "PENALTY", "FALSE"):
+        raise p["laugon"].error(
+            "an augmented node distance constraint: tissuesim runs its penalty form (laugon 0)"
+        )
+    if "node" not in p or "penalty" not in p:
+        raise c.error("a node distance constraint needs <node>a,b</node> and a <penalty>")
+    ids = _ints(p["node"])
+    if len(ids) != 2 or ids[0] == ids[1]:
+        raise p["node"].error(f"expected two different node ids, got {p['node'].text!r}")
+    pairs = _index(model, p["node"], ids)[None, :]
+    eps = float(_floats(p["penalty"], 1)[0])
+    if not eps > 0:
+        raise p["penalty"].error("the penalty must be > 0")
+    name = f"{c.attrib.get('name') or 'node_distance'}"
+    while name in model.discrete_sets:
+        name += "_"
+    model.discrete_sets[name] = (pairs, c)
+    target = float(_floats(p["target"], 1)[0]) if "target" in p else 0.0
+    relative = _flag(p["relative"]) if "relative" in p else True  # FEBio's default
+    model.springs.append({
+        "law": "linear", "stiffness": eps, "material": c, "set": name, "node": c,
+        "target": target, "relative": relative,
+        "curve": _int_attr(p["penalty"], "lc", "a load curve id"),
+    })  # fmt: skip
+    if any(t in p for t in ("augtol", "minaug", "maxaug")):
+        model.note(c, "FEBio's augmentation settings not used: laugon 0, a penalty spring")
 
 
 def _material(model: FebModel, node: Node) -> dict:
@@ -183,6 +225,16 @@ def spring_tables(model: FebModel, bodies: list[dict], j: int, local: np.ndarray
             }  # fmt: skip
             if loose[:, 1].any():
                 table["anchors"] = [model.nodes[b].tolist() for b in mine[:, 1]]
+            if "target" in spring:  # a node distance constraint: rest length, scaled penalty
+                rest = np.linalg.norm(model.nodes[mine[:, 0]] - model.nodes[mine[:, 1]], axis=1)
+                length = spring["target"] + (rest if spring["relative"] else 0.0)
+                table["rest_length"] = [float(v) for v in np.broadcast_to(length, rest.shape)]
+                if spring["curve"] is not None:
+                    from tissuesim.febio.curves import curve_expression
+
+                    if spring["curve"] not in model.curves:
+                        raise where.error(f"load curve {spring['curve']} is not defined")
+                    table["stiffness_scale"] = curve_expression(model.curves[spring["curve"]])
             if spring["law"] == "curve":
                 curve, factor = _curve(model, spring)
                 table["force"] = {

@@ -103,6 +103,8 @@ class LoadCalls:
         measure: str = "elongation",
         scale: float = 1.0,
         anchors=None,
+        rest_length=None,
+        stiffness_scale=None,
         body: str | None = None,
         name: str = "springs",
     ):
@@ -112,6 +114,10 @@ class LoadCalls:
         ``force`` curve (an ``energies.node_springs.ForceCurve``, N, of the ``measure``
         elongation (m), strain or stretch, times ``scale``). An energy with its exact
         gradient and Hessian (``energies/node_springs.py``). Returns the spring set.
+
+        ``rest_length`` (m, one or one per spring) replaces the rest distances (FEBio's node
+        distance target); ``stiffness_scale`` (t -> factor) multiplies the law at time t
+        (FEBio's penalty on a load curve).
 
         ``sim.add_springs([[0, 9]], 50.0)`` joins vertices 0 and 9 by a 50 N/m spring."""
         from tissuesim.energies.node_springs import SpringLaw
@@ -123,7 +129,9 @@ class LoadCalls:
         else:
             kind = "tension_only" if tension_only else "linear"
             law = SpringLaw(kind, stiffness=float(stiffness))
-        return self.body(body, ("fem",)).add_springs(pairs, law, anchors=anchors, name=name)
+        return self.body(body, ("fem",)).add_springs(
+            pairs, law, anchors=anchors, name=name, rest_length=rest_length, scale=stiffness_scale
+        )
 
     def add_linear_constraint(self, terms, offset=0.0, *, stiffness=None, body=None, name=None):
         """Hold sum_i c_i u[v_i, a_i] = offset (m) over displacement components of a FEM

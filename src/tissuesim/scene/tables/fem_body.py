@@ -44,6 +44,8 @@ FEM_TABLE_KEYS = {
         "force",
         "measure",
         "scale",
+        "rest_length",
+        "stiffness_scale",
     },
 }
 

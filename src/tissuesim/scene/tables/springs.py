@@ -12,6 +12,8 @@ point, as ``Simulation.add_springs`` makes them (``energies/node_springs.py``)::
     # force = { points = [[-1, -1], [0, 0], [1, 2]], interpolate = "smooth", extend = "constant" }
     # measure = "elongation"     # or "strain" (dl / L0), "stretch" (l / L0)
     # scale = 1.0                # the force is scale * F(measure), N
+    rest_length = 0.0            # m: instead of the rest distance (FEBio's node distance)
+    stiffness_scale = "min(t, 1)"   # the law times this expression of t
 
 A force curve's ``interpolate`` is linear (default), step, smooth or smooth step and its
 ``extend`` constant (default) or extrapolate, with FEBio's point-curve definitions
@@ -43,7 +45,8 @@ __all__ = [
 ]  # fmt: skip
 
 LINEAR_CONSTRAINT_KEYS = {"terms", "offset", "stiffness", "name"}
-SPRING_KEYS = {"name", "pairs", "anchors", "stiffness", "tension_only", "force", "measure", "scale"}
+SPRING_KEYS = {"name", "pairs", "anchors", "stiffness", "tension_only", "force", "measure", "scale",
+               "rest_length", "stiffness_scale"}  # fmt: skip
 FORCE_KEYS = {"points", "interpolate", "extend"}
 INTERPOLATE = {"linear": "LINEAR", "step": "STEP", "smooth": "SMOOTH", "smooth step": "SMOOTH STEP"}
 
@@ -87,6 +90,14 @@ def point_force_curve(table: dict, where: str):
     )
 
 
+def _scale(entry: dict, where: str):
+    """``stiffness_scale``: a number or an expression of t (None: 1)."""
+    if "stiffness_scale" not in entry:
+        return None
+    value = _of_t(entry["stiffness_scale"], f"{where} stiffness_scale")
+    return value if callable(value) else (lambda t, v=value: v)
+
+
 def add_spring_tables(sim, body: str, entries: list, label) -> None:
     """Every [[discrete_springs]] table of ``body`` (``label(key, i)`` names it in errors)."""
     for i, entry in enumerate(entries, start=1):
@@ -116,6 +127,8 @@ def add_spring_tables(sim, body: str, entries: list, label) -> None:
                 measure=entry.get("measure", "elongation"),
                 scale=float(entry.get("scale", 1.0)),
                 anchors=entry.get("anchors"),
+                rest_length=entry.get("rest_length"),
+                stiffness_scale=_scale(entry, where),
                 body=body,
                 name=entry.get("name", "springs"),
             )
