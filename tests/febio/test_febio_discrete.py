@@ -293,7 +293,7 @@ def test_a_surface_force_is_the_traction_of_force_over_area(tmp_path):
 
 
 def test_facet_area_of_triangles_and_quadrilaterals():
-    from tissuesim.febio.condition_sections import facet_area
+    from tissuesim.febio.load_fields import facet_area
 
     points = np.array([[0, 0, 0], [2, 0, 0], [2, 1, 0], [0, 1, 0], [3, 1, 0.0]])
     assert facet_area(points, np.array([[0, 1, 2, 3]])) == pytest.approx(2.0, rel=1e-14)
