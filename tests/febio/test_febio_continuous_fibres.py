@@ -60,6 +60,9 @@ def test_cfd_tables_are_read():
         ('<distribution type="elliptical">', "<distribution>",
          r"cfd\.feb:\d+ <distribution>: <distribution> needs its type"),
         ("<b>3</b>", '<b lc="1">3</b>', r"cfd\.feb:\d+ <b>: .*field, a curve or a table"),
+        ("<a>1,0,0</a>", "<a>1,1,0</a>",
+         r"cfd\.feb:\d+ <solid>: a continuous fiber distribution with fibers-3d-gkt under a "
+         r"mat_axis other than the global axes"),
     ],
 )  # fmt: skip
 def test_cfd_refusals_name_the_element_and_line(tmp_path, old, new, match):

@@ -32,7 +32,7 @@ from tissuesim.febio.materials.axes import (
     with_directions,
 )
 from tissuesim.febio.materials.curve_values import checked_values, curve_value
-from tissuesim.febio.materials.distributions import PARTS, read_part
+from tissuesim.febio.materials.distributions import PARTS, check_adaptive_axes, read_part
 from tissuesim.febio.materials.expressions import GENERIC, generic_hyperelastic
 from tissuesim.febio.materials.growth import kinematic_growth
 from tissuesim.febio.materials.laws import (
@@ -233,6 +233,7 @@ def _mixture(model: FebModel, mat: Node, kind: str) -> tuple:
             raise p.error(f"parameter {p.tag!r} of {kind!r}: it takes {takes}")
     if not components:
         raise mat.error(f"a {kind!r} needs at least one <solid>")
+    check_adaptive_axes(mat, axis.axis, parts, components)
     params["components"] = components
     try:
         make_material(MIXTURES[kind], **checked_values(params))
