@@ -4,8 +4,9 @@ to run (``load_febio``; ``tissuesim run model.feb``). What is supported: docs/gu
 
 from __future__ import annotations
 
+from tissuesim.febio.convert import convert_febio
 from tissuesim.febio.reader import read_feb
-from tissuesim.febio.scene import convert_febio, febio_scene
+from tissuesim.febio.scene import febio_scene
 from tissuesim.febio.xml import FebError
 from tissuesim.scene.loader import load_febio
 

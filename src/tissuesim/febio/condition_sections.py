@@ -9,10 +9,11 @@ from tissuesim.febio.model import (
     Curve,
     FebModel,
     Load,
+    _children,
     _flag,
     _floats,
     _int_attr,
-    _once,
+    _load,
     _unsupported,
 )
 from tissuesim.febio.xml import Node
@@ -64,19 +65,6 @@ def _node_set(model: FebModel, node: Node, attr: str = "node_set") -> str:
             "set its nodes, or remove the condition"
         )
     return name
-
-
-def _load(model: FebModel, node: Node, count: int) -> Load:
-    """value * curve: the element's numbers and its lc attribute."""
-    curve = _int_attr(node, "lc", "a load curve id (a <load_controller>'s id)")
-    return Load(_floats(node, count), curve, model.window)
-
-
-def _children(node: Node, allowed: set[str]) -> dict[str, Node]:
-    for c in node.children:
-        if c.tag not in allowed:
-            raise _unsupported(c, f"this parameter of <{node.tag}> is not supported by tissuesim")
-    return _once(node)
 
 
 def _boundary(model: FebModel, section: Node) -> None:
@@ -309,8 +297,15 @@ def _contact(model: FebModel, section: Node) -> None:
         bottoms = {"shell_bottom_primary", "shell_bottom_secondary"}
         allowed = CONTACT_TUNING | {"fric_coeff", "tension", "offset", "plane"} | bottoms
         if kind in TIED_TYPES:  # a tie holds in tension by itself; its search settings
-            allowed |= {"search_tolerance", "offset_shells", "max_distance", "special",
-                        "max_traction", "snap_tol", "gap_offset"}
+            allowed |= {
+                "search_tolerance",
+                "offset_shells",
+                "max_distance",
+                "special",
+                "max_traction",
+                "snap_tol",
+                "gap_offset",
+            }
         p = _children(c, allowed)
         item = {"type": kind, "node": c, "friction": 0.0}
         if "fric_coeff" in p:

@@ -6,9 +6,9 @@ EXTRAPOLATE with LINEAR, REPEAT and REPEAT_OFFSET."""
 
 from __future__ import annotations
 
-from tissuesim.febio.model import Curve
+from tissuesim.febio.model import Curve, FebModel, Load
 
-__all__ = ["curve_expression"]
+__all__ = ["curve_expression", "load_expression"]
 
 
 def _r(x: float) -> str:
@@ -89,3 +89,20 @@ def curve_expression(curve: Curve) -> str:
     for n in range(last, 0, -1):
         text = f"where(t < {_r(p[n, 0])}, {_segment(curve, n)}, {text})"
     return f"where(t <= {_r(p[0, 0])}, {before}, {text})"
+
+
+def load_expression(load: Load, model: FebModel, k: int = 0, windowed: bool = True) -> str:
+    """value[k] * curve(t) as an expression (a number string when there is no curve), times
+    the indicator of its step's time window (``windowed``; a condition's ``active`` says it
+    instead)."""
+    value = float(load.value[k])
+    if value == 0.0:
+        return repr(value)
+    text = repr(value)
+    if load.curve is not None:
+        text = f"{value!r} * ({curve_expression(model.curves[load.curve])})"
+    if load.window is not None and windowed:
+        t0, t1 = load.window
+        on = f"(t > {t0!r})" if t1 == float("inf") else f"(t > {t0!r}) * (t <= {t1!r})"
+        text = f"{text} * {on}"
+    return text

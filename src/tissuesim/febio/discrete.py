@@ -30,7 +30,7 @@ MEASURES = ("elongation", "strain", "stretch")
 
 def read_discrete_set(model: FebModel, node: Node) -> None:
     """<DiscreteSet name=...>: <delem>a,b</delem> node pairs (FEBio node ids)."""
-    from tissuesim.febio.mesh_sections import _index
+    from tissuesim.febio.model import _index
 
     name = node.attrib.get("name")
     if not name:
@@ -78,7 +78,7 @@ def read_node_distance(model: FebModel, c: Node) -> None:
     force eps(t) (l - l0) between two nodes, l0 = target (relative 1: the rest distance plus
     target), eps the penalty times its curve: a linear spring of rest length l0 whose
     stiffness follows the curve. Augmented (laugon 1) is refused."""
-    from tissuesim.febio.mesh_sections import _index
+    from tissuesim.febio.model import _index
 
     p = {k.tag: k for k in c.children}
     for tag in p:

@@ -28,7 +28,7 @@ def _dof(model: FebModel, node: Node, p: dict) -> tuple[int, int]:
 
 
 def read_linear_constraint(model: FebModel, bc: Node) -> None:
-    from tissuesim.febio.condition_sections import _children, _load
+    from tissuesim.febio.model import _children, _load
 
     if model.window is not None and model.steps > 1:
         raise bc.error("a linear constraint inside one <step> of several: give it in <Boundary>")
@@ -61,7 +61,7 @@ def read_constraint_set(model: FebModel, node: Node) -> None:
     """<constraint type="linear constraint"> (FEBio's FELinearConstraintSet, augmented
     Lagrangian): each <linear_constraint> sum_i value_i u[node_i, bc_i] = rhs; FEBio's
     enforcement settings are a note (tissuesim holds it by its penalty)."""
-    from tissuesim.febio.condition_sections import _load
+    from tissuesim.febio.model import _load
 
     tuning = {"laugon", "tol", "penalty", "minaug", "maxaug"}
     rhs = Load(np.zeros(1))

@@ -21,7 +21,7 @@ def field_body_force(model: FebModel, load: Node) -> None:
     import re
 
     from tissuesim.errors import SceneError
-    from tissuesim.febio.condition_sections import _children
+    from tissuesim.febio.model import _children
     from tissuesim.scene.expressions import compile_expression
 
     p = _children(load, {"x", "y", "z"})
@@ -47,7 +47,7 @@ def surface_force(model: FebModel, load: Node) -> None:
     surface = load.attrib.get("surface")
     if surface not in model.surfaces:
         raise load.error(f"no Surface named {surface!r}")
-    from tissuesim.febio.condition_sections import _children, _load
+    from tissuesim.febio.model import _children, _load
 
     p = _children(load, {"force", "scale", "shell_bottom"})
     if "force" not in p:

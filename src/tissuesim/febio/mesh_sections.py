@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from tissuesim.febio.model import FebModel, _floats, _int_attr, _ints, _unsupported
+from tissuesim.febio.model import FebModel, _floats, _index, _int_attr, _ints, _unsupported
 from tissuesim.febio.shells import (
     QUADRATIC_SHELLS,
     SHELL_ELEMENTS,
@@ -43,15 +43,6 @@ PERMUTATIONS = {"hex27": np.array([*range(20), 23, 21, 20, 22, 24, 25, 26])}
 #: mesh's) keeps its triangles as (a, b, c, c), the rows of 4 a wedge mesh's facets are
 #: (``mesh/cells/wedge.py``)
 FACETS = {"tri3": 3, "tri6": 3, "quad4": 4, "quad8": 4, "quad9": 4}
-
-
-def _index(model: FebModel, node: Node, ids: list[int]) -> np.ndarray:
-    """FEBio node ids -> 0-based rows of model.nodes."""
-    lookup = model._node_index
-    try:
-        return np.array([lookup[i] for i in ids], dtype=np.int64)
-    except KeyError as exc:
-        raise node.error(f"node id {exc.args[0]} is not defined in <Nodes>") from None
 
 
 def _id_list(model: FebModel, node: Node) -> list[int]:

@@ -168,3 +168,25 @@ def _flag(node: Node) -> bool:
 
 def _unsupported(node: Node, what: str = "is not supported by tissuesim") -> FebError:
     return node.error(f"{what} (see docs/guide/febio.md for what is)")
+
+
+def _load(model: FebModel, node: Node, count: int) -> Load:
+    """value * curve: the element's numbers and its lc attribute."""
+    curve = _int_attr(node, "lc", "a load curve id (a <load_controller>'s id)")
+    return Load(_floats(node, count), curve, model.window)
+
+
+def _children(node: Node, allowed: set[str]) -> dict[str, Node]:
+    for c in node.children:
+        if c.tag not in allowed:
+            raise _unsupported(c, f"this parameter of <{node.tag}> is not supported by tissuesim")
+    return _once(node)
+
+
+def _index(model: FebModel, node: Node, ids: list[int]) -> np.ndarray:
+    """FEBio node ids -> 0-based rows of model.nodes."""
+    lookup = model._node_index
+    try:
+        return np.array([lookup[i] for i in ids], dtype=np.int64)
+    except KeyError as exc:
+        raise node.error(f"node id {exc.args[0]} is not defined in <Nodes>") from None

@@ -5,15 +5,13 @@ the same objects (``run`` converts into a temporary directory and loads that sce
 
 from __future__ import annotations
 
-import os
 import re
-import warnings
-from pathlib import Path
 
 import numpy as np
 
+from tissuesim.febio.contact_scene import contact_tables
 from tissuesim.febio.contact_start import separate_touching
-from tissuesim.febio.curves import curve_expression
+from tissuesim.febio.curves import load_expression as _times
 from tissuesim.febio.discrete import spring_tables
 from tissuesim.febio.initial import initial_velocity
 from tissuesim.febio.linear_constraints import linear_constraint_tables
@@ -21,7 +19,7 @@ from tissuesim.febio.logfiles import cell_rows, logfile_tables
 from tissuesim.febio.materials import body_directions, with_directions
 from tissuesim.febio.materials.curve_values import resolve_curve_values
 from tissuesim.febio.model import FebModel, Load
-from tissuesim.febio.reader import UNCOUPLED, read_feb
+from tissuesim.febio.reader import UNCOUPLED
 from tissuesim.febio.rigid.scene import (
     RIGID_SET,
     interface_sets,
@@ -32,28 +30,10 @@ from tissuesim.febio.rigid.scene import (
 )
 from tissuesim.febio.shells import check_thickness
 from tissuesim.febio.time_stepper import adaptive_table, run_steps
-from tissuesim.febio.toml import dumps
 
-__all__ = ["febio_scene", "convert_febio", "scene_bodies"]
+__all__ = ["febio_scene", "scene_bodies"]
 
 INTEGRATORS = {"static": "quasistatic", "dynamic": "newmark"}
-
-
-def _times(load: Load, model: FebModel, k: int = 0, windowed: bool = True) -> str:
-    """value[k] * curve(t) as an expression (a number string when there is no curve), times
-    the indicator of its step's time window (``windowed``; a condition's ``active`` says it
-    instead)."""
-    value = float(load.value[k])
-    if value == 0.0:
-        return repr(value)
-    text = repr(value)
-    if load.curve is not None:
-        text = f"{value!r} * ({curve_expression(model.curves[load.curve])})"
-    if load.window is not None and windowed:
-        t0, t1 = load.window
-        on = f"(t > {t0!r})" if t1 == float("inf") else f"(t > {t0!r}) * (t <= {t1!r})"
-        text = f"{text} * {on}"
-    return text
 
 
 def _bodies(model: FebModel) -> list[dict]:
@@ -393,7 +373,7 @@ def febio_scene(model: FebModel, stem: str) -> tuple[dict, dict]:
                          lambda load, m: _times(load, m, windowed=False))  # fmt: skip
     if rigid:
         data["rigid_bodies"] = rigid
-    data.update(_contact(model, [n for n, _ in tables_per_body], bodies, meshes))
+    data.update(contact_tables(model, [n for n, _ in tables_per_body], bodies, meshes))
     if dhat is not None:
         data["contact"] = {"dhat": dhat, **data["contact"]}
     names = rigid_names(rigid, model)
@@ -465,142 +445,3 @@ def _by_normal(points: np.ndarray, facets: np.ndarray, model: FebModel, surface:
             "traction is written per flat group of facets, at most 64"
         )
     return groups
-
-
-def _contact(model: FebModel, names: list[str], bodies: list[dict], meshes: dict) -> dict:
-    if not model.contacts:
-        return {}
-    owner = {}
-    for name, mesh in zip(names, meshes.values(), strict=True):
-        for s in mesh.facet_sets:
-            owner.setdefault(s, name)
-    surfaces: dict[str, list[str]] = {}
-    pairs, obstacles, penalty = [], [], []
-    scale = float(np.linalg.norm(np.ptp(model.nodes, axis=0)))
-    for k, c in enumerate(model.contacts, start=1):
-        if "penalty" in c:  # FEBio's penalty / augmented Lagrangian, as FEBio enforces it
-            penalty.append(_penalty_table(c, k, owner))
-            continue
-        sides = []
-        for s in c["surfaces"]:
-            if s not in owner:
-                raise c["node"].error(f"surface {s!r} is on no body")
-            surfaces.setdefault(owner[s], [])
-            if s not in surfaces[owner[s]]:
-                surfaces[owner[s]].append(s)
-            sides.append(owner[s])
-        if c["type"] == "rigid_wall":
-            a, b, cc, d = c["plane"]
-            n = np.array([a, b, cc])
-            point = d * n / (n @ n)
-            unit = n / np.linalg.norm(n)
-            wall = f"wall{k}"
-            offset = c["offset"]
-            move = [_times(Load(offset.value[0] * unit, offset.curve, offset.window), model, i)
-                    for i in range(3)]  # fmt: skip
-            obstacles.append(
-                {
-                    "name": wall,
-                    "plane": {"point": point.tolist(), "normal": n.tolist(), "size": 4 * scale},
-                    "translation": move,
-                }
-            )
-            sides.append(wall)
-        elif sides[0] == sides[1]:
-            raise c["node"].error("contact of a body with itself is not supported by tissuesim")
-        pairs.append({"bodies": sides, "friction": c["friction"]})
-    multi = {n for n, s in surfaces.items() if len(s) > 1}
-    if multi:
-        body = sorted(multi)[0]
-        raise model.contacts[0]["node"].error(
-            f"body {body!r} touches through several surfaces {surfaces[body]}: tissuesim takes "
-            "one contact surface per body (join them into one Surface)"
-        )
-    if not pairs and not obstacles:
-        return {"penalty_contact": penalty}
-    listed = {tuple(sorted(p["bodies"])) for p in pairs}
-    everyone = names + [o["name"] for o in obstacles]
-    for i, a in enumerate(everyone):
-        for b in everyone[i:]:
-            if (a, b) != tuple(sorted((a, b))) or tuple(sorted((a, b))) in listed:
-                continue
-            if a in names or b in names:
-                pairs.append({"bodies": [a, b], "enabled": False})
-    out = {"contact": {"surfaces": {n: s[0] for n, s in surfaces.items()}, "pairs": pairs}}
-    if obstacles:
-        out["obstacles"] = obstacles
-    if penalty:
-        out["penalty_contact"] = penalty
-    return out
-
-
-def _penalty_table(c: dict, k: int, owner: dict) -> dict:
-    """A FEBio sliding contact as a [[penalty_contact]] table (FEBio's primary surface is the
-    one whose points are projected: ``FEFacet2FacetSliding::m_ss``)."""
-    primary, secondary = c["surfaces"]
-    for s in (primary, secondary):
-        if s not in owner:
-            raise c["node"].error(f"surface {s!r} is on no body")
-    if primary == secondary:
-        raise c["node"].error(
-            f"contact of surface {primary!r} with itself is not supported by tissuesim"
-        )
-    name = c["node"].attrib.get("name") or f"contact{k}"
-    return {"name": name, "primary": owner[primary], "secondary": owner[secondary],
-            "primary_facets": primary, "secondary_facets": secondary, **c["penalty"]}  # fmt: skip
-
-
-def convert_febio(
-    path: str | os.PathLike[str], scene: str | os.PathLike[str], force: bool = False
-) -> list[Path]:
-    """Write the scene ``scene`` (TOML) equivalent to the FEBio model ``path`` and the mesh
-    file(s) it references next to it; refuses to overwrite unless ``force``, and refuses
-    outright an output that is the model itself or that two outputs share (``scene.msh``
-    would be the scene and its own mesh). The scene and its meshes are written as one: all
-    of them or, on a failure, none (the old files stay). Returns the paths written."""
-    from tissuesim.errors import OutputError
-    from tissuesim.io.atomic import atomic_outputs
-    from tissuesim.mesh import write_mesh
-
-    scene = Path(scene)
-    model = read_feb(path)
-    data, meshes = febio_scene(model, scene.stem)
-    targets = [scene] + [scene.parent / f for f in meshes]
-    if not scene.parent.is_dir():
-        raise OutputError(f"{scene}: no directory {scene.parent}")
-    source = Path(path).resolve()
-    for k, t in enumerate(targets):
-        what = "the scene" if k == 0 else "its mesh"
-        if t.resolve() == source:
-            raise OutputError(
-                f"{t}: {what} would replace the FEBio model it is converted from; give the "
-                "scene another name (convert MODEL.feb SCENE.toml)"
-            )
-        if t.is_dir():
-            raise OutputError(f"{t}: {what} would be written there, but it is a directory")
-    if len({t.resolve() for t in targets}) < len(targets):
-        clash = next(t for t in targets[1:] if t.resolve() == scene.resolve())
-        raise OutputError(
-            f"{clash}: the scene and its mesh would be this one file; give the scene a .toml "
-            f"name (e.g. {scene.with_suffix('.toml')})"
-        )
-    existing = [str(t) for t in targets if t.exists()]
-    if existing and not force:
-        raise OutputError(f"{existing[0]}: exists; give --force to overwrite it")
-    header = [f"converted by tissuesim from the FEBio model {Path(path).name}"]
-    header += [f"not used: {n}" for n in model.notes]
-    header += [f"changed: {n}" for n in model.changes]
-    text = dumps(data, header)
-    try:
-        with atomic_outputs(targets) as tmps:
-            Path(tmps[0]).write_text(text, encoding="utf-8")
-            for tmp, mesh in zip(tmps[1:], meshes.values(), strict=True):
-                write_mesh(mesh, tmp, file_format="gmsh22")
-    except OSError as exc:  # name the file asked for, never the temporary one
-        raise OutputError(
-            f"{scene}: cannot write the scene and its mesh ({exc.strerror or exc}); nothing "
-            "was written"
-        ) from None
-    for line in model.changes:  # one warning line each (run prints them too: load_febio)
-        warnings.warn(f"changed: {line}", UserWarning, stacklevel=2)
-    return targets

@@ -120,8 +120,8 @@ def load_febio(path: str | Path) -> Scene:
     import tempfile
     import warnings
 
+    from tissuesim.febio.convert import convert_febio
     from tissuesim.febio.reader import read_feb
-    from tissuesim.febio.scene import convert_febio
 
     path = Path(path)
     with tempfile.TemporaryDirectory(prefix="tissuesim-febio-") as tmp:
