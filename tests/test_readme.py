@@ -202,6 +202,37 @@ def test_haptic_thread_python_example_runs(tmp_path):
     assert words[-2:] == ["True", "True"]
 
 
+def test_active_contraction_python_example_runs(capsys):
+    """docs/guide/materials.md's active contraction: at rest, half-way up its ramp, the
+    mixture's stress along the fibre is T0 = 1000 Pa (the matrix is unstrained)."""
+    exec(block("python", "muscle.begin_step(0.5)"), {})
+    assert float(capsys.readouterr().out.split()[-1]) == pytest.approx(1000.0, rel=1e-12)
+
+
+def test_growth_python_example_runs(capsys):
+    """docs/guide/materials.md's fibre growth: the grown shape Fg = diag(1, 1, 1.5) is stress
+    free (round-off)."""
+    exec(block("python", "grown.begin_step(0.5)"), {})
+    assert float(capsys.readouterr().out.split()[-1]) < 1e-9
+
+
+def test_prestrain_python_example_runs(capsys):
+    """docs/guide/materials.md's prestrain: stressed at rest, free at F = F0^-1."""
+    exec(block("python", 'held = ts.make_material("prestrain_elastic"'), {})
+    assert capsys.readouterr().out.split() == ["True", "True"]
+
+
+def test_penalty_contact_python_example_runs():
+    """docs/guide/contact.md's penalty contact: the press carries the top's force and the
+    table's, pushing up."""
+    namespace: dict = {}
+    exec(block("python", "sim.add_penalty_contact("), namespace)
+    forces = namespace["sim"].forces()
+    assert forces["press"][2] > 1.0
+    np.testing.assert_allclose(forces["press"], -np.asarray(forces["top"]), rtol=1e-9, atol=1e-9)
+    np.testing.assert_allclose(forces["table"], -np.asarray(forces["top"]), rtol=1e-9, atol=1e-9)
+
+
 def test_contact_python_example_runs_as_shown(tmp_path):
     """The README's contact snippet, standalone: the probe presses on the clamped block."""
     code = block("python", "sim.set_contact(dhat=0.005")
@@ -288,6 +319,10 @@ TESTED_PYTHON_BLOCKS = {
     'sim.attach("fat", "muscle"': "test_several_bodies_python_example_runs",
     "Simulation.from_frames": "test_frames_python_example_runs",
     "sim.set_contact(dhat=0.005": "test_contact_python_example_runs_as_shown",
+    "sim.add_penalty_contact(": "test_penalty_contact_python_example_runs",
+    "muscle.begin_step(0.5)": "test_active_contraction_python_example_runs",
+    "grown.begin_step(0.5)": "test_growth_python_example_runs",
+    'held = ts.make_material("prestrain_elastic"': "test_prestrain_python_example_runs",
     "lin = sim.instrument_linearization(": "test_interactive_python_example_drives_the_probe",
     'report = record.extra["contact"]["prediction"]': "test_contact_modes_python_example_runs",
     'sim.haptic_contact("probe")': "test_haptic_thread_python_example_runs",

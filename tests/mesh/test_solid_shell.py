@@ -92,7 +92,7 @@ def test_directors_on_a_cylinder():
         ({"thickness": 0.0}, "thickness must be a positive number"),
         ({"layers": 0}, "layers must be a whole number"),
         ({"reference": "mid"}, "reference 'mid'"),
-        ({"faces": [[0, 1, 2, 3, 4]]}, r"\(k, 3\) triangles or \(k, 4\) quadrilaterals"),
+        ({"faces": [[0, 1, 2, 3, 4]]}, r"\(k, 3\) triangles, \(k, 4\) quadrilaterals or \(k, 8\)"),
         ({"faces": [[0, 1, 99, 5]]}, "vertex indices"),
         ({"faces": "drop the first"}, "1 shell points belong to no face"),
         ({"faces": "repeat a corner"}, "corner of zero area"),

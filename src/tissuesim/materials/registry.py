@@ -129,6 +129,14 @@ FIBRE_LAWS: tuple[type[Material], ...] = (
     MooneyRivlinVonMisesFibers,
 )
 
+#: fibre laws with FEBio's own parameters (no E, nu): in FEBIO_LAWS, not MATERIALS
+FEBIO_FIBRE_LAWS: tuple[type[Material], ...] = (
+    ContinuousFiberDistribution,
+    ContinuousFiberDistributionUncoupled,
+    TransIso2DMooneyRivlin,
+    MooneyRivlinVonMisesFibers,
+)
+
 MATERIALS: dict[str, type[Material]] = {
     cls.name: cls
     for cls in (
@@ -138,7 +146,7 @@ MATERIALS: dict[str, type[Material]] = {
         LinearElastic,
         FixedCorotated,
         *SOFT_TISSUE_LAWS,
-        *FIBRE_LAWS,
+        *(law for law in FIBRE_LAWS if law not in FEBIO_FIBRE_LAWS),
     )
 }
 
@@ -152,6 +160,7 @@ FEBIO_LAWS: dict[str, type[Material]] = {
     PorousNeoHookean.name: PorousNeoHookean,
     Shenoy.name: Shenoy,
     MuscleMaterial.name: MuscleMaterial,
+    **{law.name: law for law in FEBIO_FIBRE_LAWS},
 }
 
 #: other spellings of the soft-tissue laws' names: "<law>_uncoupled", "<law>_coupled"

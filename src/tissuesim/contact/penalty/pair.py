@@ -67,6 +67,7 @@ class PenaltyPass:
     weights: np.ndarray  # W per point (reference, or the lagged current one)
     multipliers: np.ndarray  # L per point (Pa); tied and sticky: (points, 3)
     tie: tuple | None = None  # tied / sticky: (points held, their facets, (r, s))
+    _last: tuple | None = None  # (positions, contacts) of the last search (_contacts)
 
 
 @dataclass(eq=False)
@@ -117,7 +118,6 @@ class PenaltyContact:
             if self.sticky:  # nothing stuck yet
                 p.tie = (np.zeros(0, int), np.zeros(0, int), np.zeros((0, 2)))
             self.passes.append(p)
-        self._rest_weights = [p.weights.copy() for p in self.passes]
 
     # -- geometry --------------------------------------------------------------------------
     def _contacts(self, p: PenaltyPass, positions: list[np.ndarray]):
@@ -125,7 +125,7 @@ class PenaltyContact:
         positions; the last answer again for the same positions (Newton asks for a point's
         Hessian after its line search asked for its gradient)."""
         here = (positions[p.sampled.body], positions[p.target.body])
-        last = getattr(p, "_last", None)
+        last = p._last
         if last is not None and all(
             np.array_equal(a, b) for a, b in zip(last[0], here, strict=True)
         ):
