@@ -338,3 +338,23 @@ def test_a_sticky_pair_holds_once_touched_and_lets_go_past_its_traction():
     assert sticky[3] < -1.0 and sliding[3] == pytest.approx(sticky[3], rel=1e-3)  # pressed
     assert sticky[-1] > 1.0  # stuck, pulled: tension through the contact
     assert abs(sliding[-1]) < 1e-6 and abs(weak[-1]) < 1e-6  # vs ~10 N stuck
+
+
+def test_auto_penalty_is_youngs_modulus_times_facet_area_over_element_volume():
+    """FEBio's auto penalty per facet, E A / V of the element behind it: the column's upper
+    block (elements 0.5 x 0.5 x 1/6) 1000 x 6, the lower (0.5 x 0.5 x 0.5) 1000 x 2; a facet
+    that bounds no element is refused in one line."""
+    sim, _ = _column(penalty=1.0, auto_penalty=True)
+    pair = sim.system.penalty_contacts[0]
+    np.testing.assert_allclose(pair.primary.scale, 6000.0, rtol=1e-12)
+    np.testing.assert_allclose(pair.secondary.scale, 2000.0, rtol=1e-12)
+    lower, upper = _blocks()
+    bad = ts.Simulation(integrator="quasistatic")
+    mat = NeoHookean(youngs_modulus=1000.0, poisson_ratio=0.0)
+    bad.add_body("lower", lower, mat)
+    bad.add_body("upper", upper, mat)
+    bad.add_penalty_contact("upper", "lower", primary_facets=np.array([[0, 1, 5, 7]]),
+                            secondary_facets="zmax", auto_penalty=True)  # fmt: skip
+    with pytest.raises(InputError, match="bounds no element") as info:
+        bad.step()
+    assert "\n" not in str(info.value)

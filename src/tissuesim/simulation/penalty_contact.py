@@ -251,20 +251,26 @@ def _auto_scale(model, facets) -> np.ndarray:
     points = sample_points(facets, "gauss")
     area = np.bincount(points.facet, points.weight * area_jacobians(mesh.points, facets, points),
                        minlength=len(facets.corners))  # fmt: skip
-    # the cell behind each facet: the one holding all its corners
-    incidence = {}
-    for k, cell in enumerate(cells):
-        for v in cell:
-            incidence.setdefault(int(v), []).append(k)
-    scale = np.empty(len(facets.corners))
-    for i, corners in enumerate(facets.corners):
-        wanted = set(corners.tolist())
-        cell = next((k for k in incidence.get(int(corners[0]), ()) if wanted <= set(cells[k])),
-                    None)  # fmt: skip
-        if cell is None:
-            raise InputError(
-                f"penalty contact auto_penalty: facet {corners.tolist()} bounds no element of "
-                "its body; give penalty without auto_penalty"
-            )
-        scale[i] = E[cell] * area[i] / volumes[cell]
-    return scale
+    # the cell behind each facet: the one holding all its distinct corners, found as the
+    # largest entry of (facet x vertex) @ (vertex x cell) incidence counts
+    import scipy.sparse as sp
+
+    n = mesh.n_points
+    A = sp.csr_matrix((np.ones(cells.size), (cells.ravel(), np.repeat(np.arange(len(cells)),
+                       cells.shape[1]))), shape=(n, len(cells)))  # fmt: skip
+    A.data[:] = 1.0  # a vertex counted once per cell
+    corners = facets.corners
+    distinct = np.where(facets.triangle, 3, 4)
+    rows = np.repeat(np.arange(len(corners)), 4)
+    F = sp.csr_matrix((np.ones(corners.size), (rows, corners.ravel())), shape=(len(corners), n))
+    F.data[:] = 1.0  # a triangle's repeated corner once
+    shared = (F @ A).tocsr()
+    cell = np.asarray(shared.argmax(axis=1)).ravel()
+    held = np.asarray(shared[np.arange(len(corners)), cell]).ravel()
+    missing = np.flatnonzero(held < distinct)
+    if len(missing):
+        raise InputError(
+            f"penalty contact auto_penalty: facet {corners[missing[0]].tolist()} bounds no "
+            "element of its body; give penalty without auto_penalty"
+        )
+    return E[cell] * area / volumes[cell]
