@@ -99,6 +99,10 @@ class Model:
     #: (k, 2) vertex pairs coupled outside the cells (discrete springs,
     #: ``energies/node_springs.py``): their blocks join the pattern
     links: np.ndarray | None = field(default=None, repr=False)
+    #: several regions, (name, cells, material, formulation, density) each (``model_regions``):
+    #: ``material``, ``formulation`` and ``density`` are then the regions' defaults
+    regions: tuple | None = field(default=None, repr=False)
+    parts: list | None = field(default=None, init=False, repr=False)
 
     def __post_init__(self) -> None:
         cells = self.mesh.n_cells
@@ -108,6 +112,12 @@ class Model:
             f"a model of {self.mesh.source} ({cells} cells)",
             "Use a coarser mesh.",
         )
+        if self.regions is not None:
+            from tissuesim.model_regions import build_regions
+
+            build_regions(self, _kinematics, resolve_backend)
+            self.set_conditions(self.conditions)
+            return
         self.density = positive_field(self.density, "density", self.mesh.n_cells, "kg/m^3")
         self.kinematics = _kinematics(self.mesh, self.rest, self.formulation)
         if hasattr(self.material, "bind"):  # internal variables per integration point
@@ -156,6 +166,14 @@ class Model:
             zero = constant_displacement([0.0] * 3)
             midsides = DirichletCondition(nodes, zero, name="the shells' thickness midsides")
             held = (*held, midsides)
+        elif self.parts is not None:
+            from tissuesim.model_regions import shell_midsides
+
+            nodes = shell_midsides(self.parts)
+            if nodes.size:
+                zero = constant_displacement([0.0] * 3)
+                midsides = DirichletCondition(nodes, zero, name="the shells' thickness midsides")
+                held = (*held, midsides)
         self.prescribed = PrescribedDofs.build(held, self.mesh.points)
         self.elimination = Elimination.build(self.pattern, self.prescribed.dofs)
 
@@ -215,6 +233,10 @@ class Model:
 
     def unit_mass(self) -> MassMatrix:
         """Consistent mass matrix of unit density (integrates vertex fields against N^a)."""
+        if not hasattr(self, "_unit_mass") and self.parts is not None:
+            from tissuesim.model_regions import region_mass
+
+            self._unit_mass = region_mass(self.parts, self.pattern, "consistent", unit=True)
         if not hasattr(self, "_unit_mass"):
             self._unit_mass = MassMatrix.build(
                 self.kinematics, np.ones(self.mesh.n_cells), self.pattern, "consistent"
@@ -245,8 +267,9 @@ class Model:
     def begin_step(self, x: np.ndarray, h: float) -> None:
         """A step of ``h`` s from positions x starts: the material's history is frozen for it
         and the Rayleigh damping about x is set up (``time/attempts/history.py``)."""
-        if hasattr(self.material, "begin_step"):
-            self.material.begin_step(h)
+        for material in self._materials():
+            if hasattr(material, "begin_step"):
+                material.begin_step(h)
         if self.damping is not None:
             from tissuesim.energies.damping import RayleighDamping
 
@@ -256,8 +279,18 @@ class Model:
         """The step ended at positions x (None: it was rejected): the material's history is
         updated once, and the damping term dropped."""
         self._step_damping = None
-        if x is not None and hasattr(self.material, "accept_step"):
+        if x is None:
+            return
+        if self.parts is not None:
+            for p in self.parts:
+                if hasattr(p.material, "accept_step"):
+                    p.material.accept_step(p.kinematics.deformation_gradients(x))
+        elif hasattr(self.material, "accept_step"):
             self.material.accept_step(self.kinematics.deformation_gradients(x))
+
+    def _materials(self) -> list:
+        """The material of each region (one without regions)."""
+        return [self.material] if self.parts is None else [p.material for p in self.parts]
 
     def evaluate(self, x: np.ndarray, order: int, project: bool, energies=()) -> Accumulator:
         """Elastic energy plus ``energies`` (inertia, loads, ...) at x, and in a step the

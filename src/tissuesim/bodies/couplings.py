@@ -102,7 +102,8 @@ class VertexCouplings:
         linked = [p[p[:, 0] != p[:, 1]] for p in linked]
         old = self.model
         model = Model(old.mesh, old.material, old.density, old.mass_kind, backend=old.backend,
-                      formulation=old.formulation, links=np.vstack(linked))  # fmt: skip
+                      formulation=old.formulation, links=np.vstack(linked),
+                      regions=old.regions)  # fmt: skip
         model.loads, model.damping = old.loads, old.damping
         model.set_conditions(old.conditions)
         self.model = model

@@ -1,5 +1,7 @@
-"""A finite-element body of a Simulation: a mesh of one material, its prescribed vertex sets
-(supports, prescribed motions, graspers), loads and initial velocity.
+"""A finite-element body of a Simulation: a mesh of one material or of several regions
+(``bodies/regions.py``: cells of one material and formulation each, sharing the body's
+vertices), its prescribed vertex sets (supports, prescribed motions, graspers), loads and
+initial velocity.
 
 The body owns its ``Model`` (kinematics, mass, pattern, elimination) from the moment it is
 added, so set-up calls check their arguments at once. Every prescribed set and grasper has a
@@ -12,11 +14,12 @@ from __future__ import annotations
 
 import functools
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
 
 import numpy as np
 
 from tissuesim.bodies.couplings import VertexCouplings
+from tissuesim.bodies.fem_output import FemOutput
+from tissuesim.bodies.graspers import Grasper, Motion, _vector, vertex_indices
 from tissuesim.constraints.dirichlet import DirichletCondition, constant_displacement
 from tissuesim.energies.loads import (
     BodyForce,
@@ -30,7 +33,6 @@ from tissuesim.energies.mass import Inertia, MassKind
 from tissuesim.energies.vertex_springs import VertexSprings
 from tissuesim.errors import InputError
 from tissuesim.materials.base import Material
-from tissuesim.materials.measures import continuum_fields
 from tissuesim.mesh.mesh import Mesh
 from tissuesim.mesh.rows import rows_all
 from tissuesim.model import Model
@@ -39,49 +41,8 @@ from tissuesim.validate import indices, short, vector
 
 __all__ = ["FemBody", "Grasper", "vertex_indices"]
 
-Motion = Callable[[float], np.ndarray]
 
-
-def vertex_indices(vertices, n_points: int, what: str, unique: bool = True) -> np.ndarray:
-    """Checked vertex indices (sorted and unique, or as given); a boolean mask or floats are
-    refused (they would silently select other vertices), and so is an empty selection."""
-    v = indices(vertices, what, n_points)
-    v = np.unique(v) if unique else v
-    if v.size == 0:
-        raise InputError(f"{what}: the vertex selection is empty")
-    return v
-
-
-def _vector(value, dim: int, what: str) -> np.ndarray:
-    v = np.asarray(value, dtype=float)
-    if v.shape != (dim,) or not np.all(np.isfinite(v)):
-        raise InputError(f"{what} must be {dim} finite numbers (m), got {short(value)}")
-    return v
-
-
-@dataclass(frozen=True, eq=False)
-class Grasper:
-    """Moves ``vertices`` of a body rigidly by ``displacement(t)`` (d,) m: prescribed
-    (stiffness None) or through zero-length springs of ``stiffness`` N/m per vertex."""
-
-    name: str
-    body: str
-    vertices: np.ndarray
-    displacement: Motion
-    stiffness: float | None = None
-    release: float | None = None  # s: the time it lets go (None: never)
-
-    def springs(self, rest: np.ndarray) -> VertexSprings:
-        X = rest[self.vertices]
-        dim = rest.shape[1]
-        return VertexSprings(
-            self.vertices,
-            float(self.stiffness),
-            lambda t: X + _vector(self.displacement(t), dim, f"grasper {self.name!r} motion"),
-        )
-
-
-class FemBody(VertexCouplings):
+class FemBody(VertexCouplings, FemOutput):
     """See the module docstring. Created by ``Simulation.add_body``; ``claim_name`` checks a
     force name is new across the simulation."""
 
@@ -91,7 +52,7 @@ class FemBody(VertexCouplings):
         self,
         name: str,
         mesh: Mesh,
-        material: Material,
+        material: Material | None,
         *,
         density: float | np.ndarray,
         mass: MassKind,
@@ -99,9 +60,22 @@ class FemBody(VertexCouplings):
         claim_name: Callable[[str], str],
         changed: Callable[[], None],
         formulation: str = "displacement",
+        regions=None,
     ) -> None:
         self.name = name
-        self.model = Model(mesh, material, density, mass, backend=backend, formulation=formulation)
+        specs = None
+        if regions is not None:
+            from tissuesim.bodies.regions import region_specs
+
+            specs = region_specs(name, mesh, material, regions, formulation, density)
+            if specs is None:  # one region of every cell: the plain model
+                ((_, only),) = regions.items()
+                material = only[1] if isinstance(only, tuple) else only.material
+            else:
+                material = specs[0][2]
+        self.model = Model(
+            mesh, material, density, mass, backend=backend, formulation=formulation, regions=specs
+        )
         self._claim, self._changed = claim_name, changed
         self.conditions: list[tuple[str, DirichletCondition]] = []
         self.windows: dict[str, tuple[float, float]] = {}  # name -> (t0, t1]: when it holds
@@ -354,6 +328,10 @@ class FemBody(VertexCouplings):
         ``carry`` (new n_points,) the current node each new one continues, kept as
         ``pending_origin`` for the simulation (positions and velocities)."""
         old = self.model
+        if old.parts is not None:
+            raise InputError(
+                f"body {self.name!r} has several regions: it cannot be cut or torn (yet)"
+            )
         if self.springs or self.linear_constraints:
             raise InputError(
                 f"body {self.name!r} has discrete springs or linear constraints: it cannot be cut"
@@ -460,47 +438,3 @@ class FemBody(VertexCouplings):
             ).sum(axis=0)
             out[g.name] = f.tolist()
         return out
-
-    def cell_fields(self, x: np.ndarray) -> dict[str, np.ndarray]:
-        """Per element: J, green_strain, cauchy_stress, von_mises, energy_density
-        (``materials/measures.py``); for P2 the volume averages over each element's points."""
-        K = self.model.kinematics
-        return {k: K.cell_average(v) for k, v in self.quadrature_fields(x).items()}
-
-    def quadrature_fields(self, x: np.ndarray) -> dict[str, np.ndarray]:
-        """``cell_fields`` at each integration point (``kinematics.points_per_cell``
-        consecutive points per element), before their average."""
-        K = self.model.kinematics
-        fields = continuum_fields(self.model.material, K.deformation_gradients(x))
-        if self.model.formulation == "mean_dilatation":  # the patch pressure, not the point's
-            from tissuesim.materials.measures import von_mises
-
-            fields["cauchy_stress"] = fields[
-                "cauchy_stress"
-            ] + self.model.elastic.cauchy_correction(x)
-            fields["von_mises"] = von_mises(fields["cauchy_stress"])
-            fields["energy_density"] = self.model.elastic.point_energy_density(x)
-        return fields
-
-    def min_J(self, x: np.ndarray) -> float:
-        return float(self.model.elastic.jacobians(x).min())
-
-    def describe(self) -> dict:
-        from tissuesim.mesh.io import describe_mesh
-
-        return {
-            "kind": "fem",
-            "mesh": describe_mesh(self.mesh),
-            "material": repr(self.model.material),
-            "mass": self.model.mass_kind,
-            "prescribed_dofs": int(self.model.prescribed.dofs.size),
-            "prescribed_sets": {n: int(c.vertices.size) for n, c in self.conditions},
-            "graspers": {
-                g.name: "prescribed" if g.stiffness is None else "spring" for g in self.graspers
-            },
-            "backend": {
-                "name": self.model.backend,
-                "reason": self.model.backend_reason,
-                "fused_elastic": self.model.elastic.fused,
-            },
-        }

@@ -6,12 +6,14 @@ from __future__ import annotations
 
 import functools
 import re
+from collections.abc import Mapping
 from typing import TYPE_CHECKING
 
 import numpy as np
 
 from tissuesim import validate
 from tissuesim.bodies.fem import FemBody
+from tissuesim.bodies.regions import Region
 from tissuesim.energies.mass import MassKind
 from tissuesim.errors import InputError
 from tissuesim.materials.base import Material
@@ -122,15 +124,21 @@ class BodyCalls:
         self,
         name: str,
         mesh: Mesh,
-        material: Material,
+        material: Material | None = None,
         *,
         density: float | np.ndarray = 1000.0,
         mass: MassKind = "consistent",
         order: int | None = None,
         formulation: str = "displacement",
+        regions: Mapping[str, Region | tuple] | None = None,
     ) -> FemBody:
         """A FEM body: a triangle or tetrahedral mesh (``mesh.box``, ``mesh.ellipsoid``,
         ``read_mesh``) of one material; density kg/m^3 (scalar or one per element).
+
+        regions: several materials in one body sharing its vertices, {name: (cells,
+        material)} or {name: Region(cells, material, formulation, density)}, cells a cell
+        set's name or cell indices; the cells no region names keep ``material`` (region
+        "default"). Each region has its own formulation and density (None: the body's).
 
         order: None (the mesh's), 1, or 2 (a linear mesh gets a node at every edge's midpoint;
         vertex indices are kept, point sets gain the midside nodes between their vertices).
@@ -144,7 +152,11 @@ class BodyCalls:
             raise InputError("add the organs before the tissue that connects them")
         if not isinstance(mesh, Mesh):
             raise InputError(f"add_body: mesh must be a tissuesim Mesh, not {validate.short(mesh)}")
-        if not isinstance(material, Material):
+        if (
+            regions is None
+            and not isinstance(material, Material)
+            or not (material is None or isinstance(material, Material))
+        ):
             raise InputError(
                 f"add_body: material must be a tissuesim material (make_material), not "
                 f"{validate.short(material)}"
@@ -163,7 +175,7 @@ class BodyCalls:
             if order == 2 and mesh.order == 1:
                 from tissuesim.mesh.cells.elevate import elevate_mesh
 
-                mesh = elevate_mesh(mesh)
+                mesh = elevate_mesh(mesh)  # the cells keep their order: regions hold
             elif order == 1 and mesh.order == 2:
                 raise InputError(
                     f"add_body {name!r}: order 1 was asked for but {mesh.source} has quadratic "
@@ -178,6 +190,7 @@ class BodyCalls:
             density=density,
             mass=mass,
             formulation=formulation,
+            regions=regions,
             backend=self.backend,
             claim_name=self._claim_force_name,
             changed=functools.partial(self._changed, name),
