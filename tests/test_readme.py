@@ -315,6 +315,7 @@ def test_fitting_python_example_recovers_the_parameters(tmp_path):
 #: each Python block of the README and docs/ and the test that runs it (by a text only it
 #: contains)
 TESTED_PYTHON_BLOCKS = {
+    'regions={"soft": (left, soft)}': "test_regions_python_example_runs",
     "import tissuesim as ts\nfrom tissuesim.mesh import select": "test_python_example_runs",
     'sim.attach("fat", "muscle"': "test_several_bodies_python_example_runs",
     "Simulation.from_frames": "test_frames_python_example_runs",
@@ -522,3 +523,13 @@ def test_every_python_block_of_the_readme_and_the_docs_is_run_by_a_test():
         owners = [test for marker, test in TESTED_PYTHON_BLOCKS.items() if marker in code]
         assert len(owners) == 1, code
         assert owners[0] in globals(), owners[0]
+
+
+def test_regions_python_example_runs():
+    """The bodies page's bar of two regions: 4 of its 10 columns of 24 tetrahedra soft, the
+    others the body's."""
+    scope: dict = {}
+    exec(block("python", 'regions={"soft": (left, soft)}'), scope)
+    parts = scope["body"].model.parts
+    assert [(p.name, p.cells.size) for p in parts] == [("soft", 96), ("default", 144)]
+

@@ -59,6 +59,7 @@ from tissuesim.materials import (
 )
 from tissuesim.mesh import Mesh, box, ellipsoid, mesh_surface, read_mesh, rectangle
 from tissuesim.mesh.queries import select
+from tissuesim.model_regions import Region
 from tissuesim.simulation import Simulation
 from tissuesim.solve.newton import NewtonOptions
 
@@ -68,6 +69,7 @@ __all__ = [
     "InputError",
     "InstabilityError",
     "OutputError",
+    "Region",
     "ResourceError",
     "RunError",
     "ArrudaBoyce",

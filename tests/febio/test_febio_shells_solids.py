@@ -116,14 +116,19 @@ def test_a_plate_on_a_block_runs_as_the_solid_built_in_the_api(tmp_path):
     assert abs(api_plate_on_block(False) - x).max() > 1e-6
 
 
-def test_a_solid_of_another_material_is_refused_in_one_line(tmp_path):
-    """tissuesim gives a body one material: a shell on a solid of another law is refused at
-    the part (FEBio's sh17 ... sh50 are)."""
+def test_a_solid_of_another_material_is_a_region_of_the_shell_body(tmp_path):
+    """A shell on a solid of another law is one body of two regions (FEBio's sh17 ... sh50
+    are): the plate's cells of its law, the block's of the other, on shared nodes."""
     path = tmp_path / "two.feb"
     path.write_text(with_block("below", "block"))
-    with pytest.raises(InputError, match=r"two.feb:\d+ <Elements>: parts \['plate', 'block'\] "
-                       r"share nodes but have different materials"):  # fmt: skip
-        load_febio(path)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        body = load_febio(path).simulation.body("plate")
+    plate, block = body.model.parts
+    assert (plate.name, block.name) == ("plate", "block")
+    assert block.cells.size == 1 and plate.cells.size == body.mesh.n_cells - 1
+    assert block.material.mu == pytest.approx(10 / 2.6)  # E 10, v 0.3
+    assert np.intersect1d(plate.mesh.cells, block.mesh.cells).size == 4
 
 
 def test_body_names_are_made_valid_and_unique():

@@ -37,7 +37,9 @@ INTEGRATORS = {"static": "quasistatic", "dynamic": "newmark"}
 
 
 def _bodies(model: FebModel) -> list[dict]:
-    """Parts joined by shared nodes make one body (one material, one cell type); the parts of
+    """Parts joined by shared nodes make one body (one cell type; parts of other materials or
+    domain formulations its ``regions``, each its parts, material, formulation and rows of
+    the body's cells); the parts of
     a rigid body material make one body of their own (``rigid`` its material), whatever nodes
     they share (febio/rigid/scene.py)."""
     rigid = {p: rigid_material_of(model, p) for p in model.parts}
@@ -66,38 +68,49 @@ def _bodies(model: FebModel) -> list[dict]:
             groups[-1 - len(groups)] = own
     for parts in groups.values():
         first = model.parts[parts[0]][3]
-        materials = {_material_of(model, p) for p in parts}
-        if len(materials) > 1:
-            raise first.error(
-                f"parts {parts} share nodes but have different materials; tissuesim gives one "
-                "body one material (join them with a tie, or give them one material)"
-            )
         types = {model.parts[p][0] for p in parts}
         if len(types) > 1:
-            raise first.error(f"parts {parts} share nodes but mix element types {sorted(types)}")
-        cells = np.vstack([model.parts[p][1] for p in parts])
-        formulations = {model.domains[p][1] for p in parts}
-        if len(formulations) > 1:
-            raise first.error(f"parts {parts} share nodes but have different domain types")
-        material, cell_type, formulation = materials.pop(), types.pop(), formulations.pop()
-        pieces = [cells] if rigid[parts[0]] is not None else _pieces(model, parts, cells)
-        for piece in pieces:
-            bodies.append(
-                {
-                    "parts": parts,
-                    "material": material,
-                    "cell_type": cell_type,
-                    "cells": piece,
-                    "formulation": formulation,
-                    "node": first,
-                    "rigid": rigid[parts[0]],
-                }
+            raise first.error(
+                f"parts {parts} share nodes but mix element types {sorted(types)}: the regions "
+                "of one tissuesim body share one cell type (join them with a tie)"
             )
+        cells = np.vstack([model.parts[p][1] for p in parts])
+        # one region per (material, domain formulation): cells of one material each
+        keys = [(_material_of(model, p), model.domains[p][1]) for p in parts]
+        order = list(dict.fromkeys(keys))
+        label = np.concatenate(
+            [np.full(len(model.parts[p][1]), order.index(k)) for p, k in zip(parts, keys, strict=True)]
+        )
+        whole = rigid[parts[0]] is not None  # a rigid body is one body, whatever its pieces
+        rows = [np.arange(len(cells))] if whole else _pieces(model, parts, cells)
+        for piece in rows:
+            present = [k for k in range(len(order)) if (label[piece] == k).any()]
+            material, formulation = order[present[0]]
+            body = {
+                "parts": parts,
+                "material": material,
+                "cell_type": next(iter(types)),
+                "cells": cells[piece],
+                "formulation": formulation,
+                "node": first,
+                "rigid": rigid[parts[0]],
+            }
+            if len(present) > 1:  # several materials on shared nodes: one body of regions
+                body["regions"] = [
+                    {
+                        "parts": [p for p, key in zip(parts, keys, strict=True) if key == order[k]],
+                        "material": order[k][0],
+                        "formulation": order[k][1],
+                        "rows": np.flatnonzero(label[piece] == k),
+                    }
+                    for k in present
+                ]
+            bodies.append(body)
     return bodies
 
 
 def _pieces(model: FebModel, parts: list[str], cells: np.ndarray) -> list[np.ndarray]:
-    """The cells of a body split into the pieces that share no node, where pieces meet at
+    """The rows of a body's cells split into the pieces that share no node, where pieces meet at
     coincident nodes (FEBio keeps two nodes at one place apart: an unwelded seam is a cut,
     and co01's two blocks in one part touch through contact only); one piece otherwise. A
     split is one line in ``model.changes``."""
@@ -109,7 +122,7 @@ def _pieces(model: FebModel, parts: list[str], cells: np.ndarray) -> list[np.nda
     tol = 1e-9 * max(float(np.linalg.norm(np.ptp(X, axis=0))), 1e-300)
     _, counts = np.unique(np.round(X / tol), axis=0, return_counts=True)
     if counts.max(initial=1) < 2:
-        return [cells]
+        return [np.arange(len(cells))]
     k = len(cells)
     incidence = sp.csr_matrix(
         (np.ones(cells.size), (np.repeat(np.arange(k), cells.shape[1]), cells.ravel())),
@@ -117,13 +130,13 @@ def _pieces(model: FebModel, parts: list[str], cells: np.ndarray) -> list[np.nda
     )
     count, label = connected_components(incidence @ incidence.T, directed=False)
     if count < 2:
-        return [cells]
+        return [np.arange(len(cells))]
     node = model.parts[parts[0]][3]
     model.changes.append(
         f"{node.where()}: part(s) {parts} hold {count} pieces that share no node and meet at "
         "coincident nodes (FEBio keeps coincident nodes apart): one body per piece"
     )
-    return [cells[label == c] for c in range(count)]
+    return [np.flatnonzero(label == c) for c in range(count)]
 
 
 def scene_bodies(model: FebModel) -> list[tuple[str, dict]]:
@@ -169,7 +182,11 @@ def _several(model: FebModel, bodies: list[dict]) -> bool:
     """Whether the scene is one of [[bodies]]: several bodies, or any rigid body (a rigid
     shell of no thickness makes none but is one)."""
     thin = any(rigid_material_of(model, p) is not None for p in model.parts)
-    return len(bodies) > 1 or bool(model.rigid_nodes) or any(b["rigid"] for b in bodies) or thin
+    regions = any("regions" in b for b in bodies)  # regions are [[bodies.regions]] tables
+    return (
+        len(bodies) > 1 or bool(model.rigid_nodes) or any(b["rigid"] for b in bodies) or thin
+        or regions
+    )  # fmt: skip
 
 
 def _material_of(model: FebModel, part: str) -> str:
@@ -236,6 +253,13 @@ def febio_scene(model: FebModel, stem: str) -> tuple[dict, dict]:
                 tables.setdefault("traction", []).append(
                     {"facets": {"tagged": set_name}, "traction": traction}
                 )
+        region_sets = {}  # a cell set per region, named after a part; written first (a
+        for region in body.get("regions", ()):  # mesh file's cell has one set: they win)
+            set_name = f"{body_name(region['parts'][0], set())}.region"
+            while {set_name} & (cell_sets.keys() | point_sets.keys() | facet_sets.keys()):
+                set_name = f"{set_name.removesuffix('.region')}_.region"
+            region_sets[set_name] = region["rows"]
+        cell_sets = {**region_sets, **cell_sets}
         mesh = validate_mesh(
             model.nodes[used],
             local[body["cells"]],
@@ -246,36 +270,28 @@ def febio_scene(model: FebModel, stem: str) -> tuple[dict, dict]:
         )
         file = f"{stem}.msh" if not several else f"{stem}.{name}.msh"
         meshes[file] = mesh
-        spec = model.materials[body["material"]]
-        model_name, params, density, kind, _ = spec
-        if body["rigid"] is not None:  # any law: a rigid motion strains nothing
-            model_name = "neo_hookean"
-            E, v = params.get("E", 1.0), params.get("v", 0.3)
-            params = {"youngs_modulus": E if E > 0 else 1.0,
-                      "poisson_ratio": v if -1.0 < v < 0.5 else 0.3}  # fmt: skip
-        formulation = body["formulation"]
-        if formulation is None:
-            linear = ("hexahedron", "tetra10", "wedge")  # FEBio's three-field default
-            three_field = kind in UNCOUPLED and body["cell_type"] in linear
-            formulation = "mean_dilatation" if three_field else "displacement"
-        elif formulation == "mean_dilatation" and body["cell_type"] == "tetra":
-            raise body["node"].error("three-field-solid on tet4: tissuesim's P1 mean dilatation "
-                                     "is a vertex patch, not FEBio's element")  # fmt: skip
-        if model_name == "viscoelastic" and formulation == "mean_dilatation":
-            raise model.domains[body["parts"][0]][2].error(
-                f"{kind!r} on {body['cell_type']} with the three-field element: tissuesim's "
-                "coupled viscoelastic law relaxes the volumetric stress too and runs the "
-                'displacement form only: give the SolidDomain type="elastic-solid"'
-            )
-        directions = body_directions(model, spec, body["parts"], model.nodes, body["cells"])
-        params = with_directions(params, directions)
-        params = resolve_curve_values(params, model, body["parts"])
-        tables.update(
-            mesh={"file": file},
-            material={"model": model_name, **params},
-            density=density,
-            formulation=formulation,
+        material, density, formulation = _law(
+            model, body, body["material"], body["formulation"], body["parts"], body["cells"]
         )
+        tables.update(mesh={"file": file}, density=density, formulation=formulation)
+        if "regions" not in body:
+            tables["material"] = material
+        else:  # parts of other materials on the body's nodes (_bodies)
+            tables["regions"] = []
+            for region, set_name in zip(body["regions"], region_sets, strict=True):
+                law, rho, kind = _law(model, body, region["material"], region["formulation"],
+                                      region["parts"], body["cells"][region["rows"]])  # fmt: skip
+                tables["regions"].append({"name": set_name.removesuffix(".region"),
+                                          "cells": set_name, "material": law,
+                                          "formulation": kind, "density": rho})  # fmt: skip
+            curved = model.body_force_fields or any(
+                load.curve is not None or load.window is not None for load in model.body_loads
+            )
+            if curved and len({r["density"] for r in tables["regions"]}) > 1:
+                raise body["node"].error(
+                    f"a body load with a load curve on parts {body['parts']} of different "
+                    "densities: tissuesim writes it as a force per volume of one density"
+                )
         for nodes, comps, load, bc_name, window in model.dirichlet:
             if _local_set(model, nodes) not in mesh.point_sets | mesh.facet_sets:
                 continue
@@ -445,3 +461,33 @@ def _by_normal(points: np.ndarray, facets: np.ndarray, model: FebModel, surface:
             "traction is written per flat group of facets, at most 64"
         )
     return groups
+
+
+def _law(model: FebModel, body: dict, key: str, formulation, parts: list[str], cells):
+    """(the material table, density, formulation) of the parts ``parts`` of material ``key``
+    on ``cells`` of ``body``: FEBio's three-field default for uncoupled laws on hexahedra,
+    tet10 and wedges, fibre directions per cell, curve-valued parameters."""
+    spec = model.materials[key]
+    model_name, params, density, kind, _ = spec
+    if body["rigid"] is not None:  # any law: a rigid motion strains nothing
+        model_name = "neo_hookean"
+        E, v = params.get("E", 1.0), params.get("v", 0.3)
+        params = {"youngs_modulus": E if E > 0 else 1.0,
+                  "poisson_ratio": v if -1.0 < v < 0.5 else 0.3}  # fmt: skip
+    if formulation is None:
+        linear = ("hexahedron", "tetra10", "wedge")  # FEBio's three-field default
+        three_field = kind in UNCOUPLED and body["cell_type"] in linear
+        formulation = "mean_dilatation" if three_field else "displacement"
+    elif formulation == "mean_dilatation" and body["cell_type"] == "tetra":
+        raise body["node"].error("three-field-solid on tet4: tissuesim's P1 mean dilatation "
+                                 "is a vertex patch, not FEBio's element")  # fmt: skip
+    if model_name == "viscoelastic" and formulation == "mean_dilatation":
+        raise model.domains[parts[0]][2].error(
+            f"{kind!r} on {body['cell_type']} with the three-field element: tissuesim's "
+            "coupled viscoelastic law relaxes the volumetric stress too and runs the "
+            'displacement form only: give the SolidDomain type="elastic-solid"'
+        )
+    directions = body_directions(model, spec, parts, model.nodes, cells)
+    params = with_directions(params, directions)
+    params = resolve_curve_values(params, model, parts)
+    return {"model": model_name, **params}, density, formulation

@@ -206,16 +206,14 @@ def element_values(sim: Any, request: LogRequest) -> dict[str, np.ndarray]:
     the element's integration points, as FEBio's log takes it (principal values per point,
     then their mean)."""
     b, c, _ = sim.body_state(request.body)
-    K = b.model.kinematics
-    fields = b.quadrature_fields(c)
-    n = K.points_per_cell
+    fields = b.quadrature_fields(c)  # a body of regions: region by region (cell_means)
     tensors = {
         "s": _padded(np.asarray(fields["cauchy_stress"])),
         "E": _padded(np.asarray(fields["green_strain"])),
     }
 
     def mean(values: np.ndarray) -> np.ndarray:
-        values = K.per_cell_sum(values) / n
+        values = b.cell_means(values)
         return values if request.items is None else values[request.items]
 
     out: dict[str, np.ndarray] = {}

@@ -84,6 +84,8 @@ class FemSeries(BodySeries):
             if self.writers[0].mesh is not b.mesh:  # cut since the last frame
                 self.writers[0].set_mesh(b.mesh)
             cell_data = _fields(fields)
+            if "region" in fields:  # a body of regions: colour by it in ParaView
+                cell_data["region"] = np.asarray(fields["region"])
             if b.mesh.cell_fractions is not None:  # a cut body: the copies' part of their cell
                 cell_data["material_fraction"] = np.asarray(b.mesh.cell_fractions)
             self.writers[0].write(

@@ -85,7 +85,40 @@ FEM_BODY_OPTIONS = ("density", "mass", "order", "formulation")
 #: the tables of one FEM body (top level in a one-body scene, inside each [[bodies]] entry)
 FEM_BODY_KEYS = ("mesh", "material", "dirichlet", "traction", "body_force", "nodal_forces")
 
-FEM_BODY_KEYS += ("initial", "pressure", "discrete_springs", "linear_constraints")
+FEM_BODY_KEYS += ("initial", "pressure", "discrete_springs", "linear_constraints", "regions")
+
+#: the keys of one of a body's [[bodies.regions]]
+REGION_KEYS = ("name", "cells", "material", "formulation", "density")
+
+
+def _regions(item: dict, mesh, source: str, label) -> dict:
+    """[[bodies.regions]]: name, cells (one of the mesh file's cell sets), material = {...},
+    formulation and density (default: the body's) -> ``add_body``'s regions."""
+    from tissuesim.bodies.regions import Region
+    from tissuesim.mesh.mesh import Mesh
+
+    regions = {}
+    for i, entry in enumerate(_table(item, "regions", source, array=True), start=1):
+        where = label("regions", i)
+        _unknown(entry, REGION_KEYS, where)
+        for key in ("name", "cells", "material"):
+            if key not in entry:
+                raise SceneError(f"{where}: missing key {key!r}")
+        cells = entry["cells"]
+        if not isinstance(cells, str) or cells not in mesh.cell_sets:
+            raise SceneError(
+                f"{where}: cells must name one of the mesh's cell sets {sorted(mesh.cell_sets)}, "
+                f"not {short(cells)}"
+            )
+        ids = np.asarray(mesh.cell_sets[cells])
+        own = Mesh(mesh.points, mesh.cells[ids], source=mesh.source)  # directions per cell
+        material = _material(entry, source, f"{where} material", own)
+        if entry["name"] in regions:
+            raise SceneError(f"{where}: region {entry['name']!r} is named twice")
+        regions[entry["name"]] = Region(
+            ids, material, entry.get("formulation"), entry.get("density")
+        )
+    return regions
 
 
 def add_fem_body(
@@ -99,10 +132,15 @@ def add_fem_body(
     with _context(label("mesh")):
         mesh = _mesh(_table(item, "mesh", source), base_dir, label("mesh"))
     d = mesh.dim
-    material = _material(item, source, label("material"), mesh)
+    regions = None
+    if "regions" in item:
+        regions = _regions(item, mesh, source, label)
+    material = None
+    if regions is None or "material" in item:
+        material = _material(item, source, label("material"), mesh)
     options = {k: item[k] for k in FEM_BODY_OPTIONS if k in item}
     with _context(options_where or label()):
-        sim.add_body(name, mesh, material, **options)
+        sim.add_body(name, mesh, material, regions=regions, **options)
     mesh = sim.body(name).mesh  # order = 2 adds midside nodes: select on the body's mesh
     if "fix" in item:
         vertices = _select(mesh, "vertices", item["fix"], label("fix"))
