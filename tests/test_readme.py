@@ -532,4 +532,3 @@ def test_regions_python_example_runs():
     exec(block("python", 'regions={"soft": (left, soft)}'), scope)
     parts = scope["body"].model.parts
     assert [(p.name, p.cells.size) for p in parts] == [("soft", 96), ("default", 144)]
-
