@@ -143,3 +143,52 @@ def test_regions_by_cell_set_and_their_errors():
         sim.add_body("d", mesh, regions={"x": ([0], m), "y": ([0, 1], m)})
     with pytest.raises(InputError, match="body 'a' has several regions: it cannot be cut"):
         body.apply_cut(None, None, None)
+
+
+def test_output_has_each_cell_with_its_region_and_cell_means(tmp_path):
+    """The VTU series holds every cell once with a `region` field; element means of the
+    regions' points are each cell's (equal Gauss weights on a box's hexahedra)."""
+    import meshio
+
+    mesh = ts.box((0, 0, 0), (0.1, 0.05, 0.05), (4, 2, 2), element="hex")
+    soft = _halves(mesh)
+    m1 = ts.make_material("neo_hookean", youngs_modulus=1e4, poisson_ratio=0.3)
+    m2 = ts.make_material("neo_hookean", youngs_modulus=3e4, poisson_ratio=0.3)
+    sim = ts.Simulation(integrator="quasistatic", time_step=1.0)
+    body = sim.add_body("b", mesh, m2, regions={"soft": (soft, m1)})
+    sim.fix(np.flatnonzero(mesh.points[:, 0] == 0))
+    sim.add_body_force([0, 0, -1e4])
+    sim.run(1, tmp_path / "out", progress=False, render=False)
+    (vtu,) = sorted((tmp_path / "out").glob("b*.vtu"))[-1:]
+    out = meshio.read(vtu)
+    assert sum(len(c.data) for c in out.cells) == mesh.n_cells
+    region = np.concatenate(out.cell_data["region"])
+    np.testing.assert_array_equal(region, np.where(np.isin(np.arange(16), soft), 0, 1))
+    _, x, _ = sim.body_state("b")
+    J = body.cell_means(body.quadrature_fields(x)["J"])
+    np.testing.assert_allclose(J, body.cell_fields(x)["J"], rtol=1e-12)
+    assert np.ptp(J) > 1e-6  # a field that varies, so the order of the cells is tested
+
+
+def test_regions_on_the_numba_path_equal_the_numpy_path():
+    """Each region's fused loop scatters through its own stencil of the body's pattern."""
+    from tissuesim.backend import numba_available
+
+    if not numba_available():
+        pytest.skip("numba not installed")
+    mesh = ts.box((0, 0, 0), (1, 0.6, 0.5), (3, 2, 2))
+    soft = _halves(mesh)
+    rest = np.setdiff1d(np.arange(mesh.n_cells), soft)
+    m1 = ts.make_material("neo_hookean", youngs_modulus=3.0, poisson_ratio=0.3)
+    m2 = ts.make_material("stvk", youngs_modulus=7.0, poisson_ratio=0.2)
+    regions = (("a", soft, m1, "displacement", None), ("b", rest, m2, "displacement", None))
+    x = (mesh.points * 1.02 + 0.01 * np.sin(7 * mesh.points)).ravel()
+    accs = []
+    for backend in ("numpy", "numba"):
+        model = Model(mesh, m1, 1.0, backend=backend, regions=regions)
+        assert model.elastic.fused == (backend == "numba")
+        accs.append(model.evaluate(x, 2, False))
+    a, b = accs
+    assert a.value == pytest.approx(b.value, rel=1e-12)
+    np.testing.assert_allclose(a.gradient, b.gradient, atol=1e-12 * np.abs(a.gradient).max())
+    np.testing.assert_allclose(a.hessian, b.hessian, atol=1e-12 * np.abs(a.hessian).max())
