@@ -84,6 +84,31 @@ class RegionMaterials:
         self.parts = parts
         self.mu = max(float(np.max(p.material.mu)) for p in parts)
         self.lam = max(float(np.max(p.material.lam)) for p in parts)
+        if any(hasattr(p.material, "accept_step") for p in parts):  # a region's history:
+            self.accept_step = self._accept_step  # the steps then call Model.begin/end_step
+        if any(hasattr(p.material, "state_arrays") for p in parts):  # checkpoints ask
+            self.state_arrays, self.set_state_arrays = self._state_arrays, self._set_state_arrays
+
+    def _accept_step(self, F: np.ndarray) -> None:
+        raise InputError(
+            "the regions' histories are updated region by region (Model.end_step), not from "
+            "one F of the body"
+        )
+
+    def _state_arrays(self) -> dict[str, np.ndarray]:
+        """Each region's history, its keys prefixed "r<k>_" (k: the region's index)."""
+        out = {}
+        for k, p in enumerate(self.parts):
+            if hasattr(p.material, "state_arrays"):
+                out.update({f"r{k}_{key}": v for key, v in p.material.state_arrays().items()})
+        return out
+
+    def _set_state_arrays(self, arrays: dict[str, np.ndarray]) -> None:
+        for k, p in enumerate(self.parts):
+            if hasattr(p.material, "set_state_arrays"):
+                own = {key.removeprefix(f"r{k}_"): v for key, v in arrays.items()
+                       if key.startswith(f"r{k}_")}  # fmt: skip
+                p.material.set_state_arrays(own)
 
     def __repr__(self) -> str:
         inner = ", ".join(f"{p.name}={p.material!r}" for p in self.parts)

@@ -192,3 +192,32 @@ def test_regions_on_the_numba_path_equal_the_numpy_path():
     assert a.value == pytest.approx(b.value, rel=1e-12)
     np.testing.assert_allclose(a.gradient, b.gradient, atol=1e-12 * np.abs(a.gradient).max())
     np.testing.assert_allclose(a.hessian, b.hessian, atol=1e-12 * np.abs(a.hessian).max())
+
+
+def test_a_resumed_run_keeps_each_regions_viscoelastic_history(tmp_path):
+    """Checkpoints save the history of every region's law ("r<k>_H", ...): 2 steps, then a
+    resumed run to 4, ends where 4 steps in one run end."""
+
+    def make() -> ts.Simulation:
+        mesh = ts.box((0, 0, 0), (0.1, 0.04, 0.04), (4, 2, 2), element="hex")
+        elastic = {"model": "neo_hookean", "youngs_modulus": 1e4, "poisson_ratio": 0.3}
+        visco = ts.make_material("viscoelastic", elastic=elastic, g=[0.5], tau=[0.05])
+        plain = ts.make_material("neo_hookean", youngs_modulus=2e4, poisson_ratio=0.3)
+        sim = ts.Simulation(integrator="quasistatic", time_step=0.02)
+        sim.add_body("b", mesh, plain, regions={"visco": (_halves(mesh), visco)})
+        X = mesh.points
+        sim.fix(np.flatnonzero(X[:, 0] == 0))
+        end = np.flatnonzero(np.isclose(X[:, 0], 0.1))
+        sim.add_dirichlet(end, lambda X, t: np.array([0.2 * t, 0, 0]) + 0 * X, body="b")
+        return sim
+
+    straight = make()
+    straight.run(4, progress=False)
+    make().run(2, tmp_path / "out", progress=False, render=False)
+    resumed = make()
+    resumed.run(4, tmp_path / "out", progress=False, render=False, resume=True)
+    keys = resumed.body("b").model.material.state_arrays()
+    assert sorted(keys) == ["r0_H", "r0_Se"]
+    np.testing.assert_allclose(
+        resumed.body_positions("b"), straight.body_positions("b"), rtol=0, atol=1e-12
+    )
