@@ -221,3 +221,46 @@ def test_a_resumed_run_keeps_each_regions_viscoelastic_history(tmp_path):
     np.testing.assert_allclose(
         resumed.body_positions("b"), straight.body_positions("b"), rtol=0, atol=1e-12
     )
+
+
+def test_a_scene_names_its_regions_by_the_mesh_files_cell_sets(tmp_path):
+    """[[bodies.regions]]: cells by a cell set of the mesh file, an inline material; a cell
+    set the file lacks is one line naming the table."""
+    from tissuesim.errors import SceneError
+    from tissuesim.mesh.io import write_mesh
+    from tissuesim.scene.loader import load_scene
+
+    mesh = ts.box((0, 0, 0), (0.1, 0.04, 0.04), (4, 2, 2), element="hex")
+    soft = _halves(mesh)
+    rest = np.setdiff1d(np.arange(mesh.n_cells), soft)
+    write_mesh(ts.Mesh(mesh.points, mesh.cells, cell_sets={"soft": soft, "hard": rest}),
+               tmp_path / "bar.msh")  # fmt: skip
+    law = 'material = {{ model = "neo_hookean", youngs_modulus = {}, poisson_ratio = 0.3 }}'
+    scene = f"""
+[simulation]
+integrator = "quasistatic"
+time_step = 1.0
+
+[[bodies]]
+name = "bar"
+mesh = {{ file = "bar.msh" }}
+
+[[bodies.regions]]
+name = "soft"
+cells = "soft"
+{law.format(1e4)}
+
+[[bodies.regions]]
+name = "hard"
+cells = "hard"
+density = 2000.0
+{law.format(4e4)}
+"""
+    (tmp_path / "s.toml").write_text(scene)
+    body = load_scene(tmp_path / "s.toml").simulation.body("bar")
+    assert [(p.name, p.cells.size) for p in body.model.parts] == [("soft", 8), ("hard", 8)]
+    assert body.model.parts[1].material.mu == pytest.approx(4e4 / 2.6)
+    np.testing.assert_array_equal(body.model.density[rest], 2000.0)
+    (tmp_path / "s.toml").write_text(scene.replace('cells = "hard"', 'cells = "bone"'))
+    with pytest.raises(SceneError, match=r"bodies\[1\].regions\[2\]: cells must name one of"):
+        load_scene(tmp_path / "s.toml")
