@@ -46,17 +46,34 @@ def new_state(n: int, d: int) -> dict[str, np.ndarray]:
     }  # fmt: skip
 
 
-def weights(s: dict, relaxation, kinetics: int, t: float) -> tuple[np.ndarray, np.ndarray]:
-    """(w (n, G) of the breaking generations at time t, the reforming mass 1 - sum w (n,))."""
+def weights(
+    s: dict, relaxation, kinetics: int, t: float, k2_new: np.ndarray | None = None
+) -> tuple[np.ndarray, np.ndarray]:
+    """(w (n, G) of the breaking generations at time t, the reforming bonds' weight (n,)).
+
+    Type I: w_k = f_k g(t - v_k; K2_k), reforming 1 - sum w_k. Type II, as FEBio's
+    ``BreakingBondMassFraction`` (which sets F to Uv[k] for both terms): w_k = g(t - v_k; K2_k)
+    - g(t - v_(k-1); K2_k), and the reforming generation (FEBio's newest, v = t) weighs
+    1 - g(t - v_last; K2) at its own K2 (``k2_new``, FEBio's current stretch; default the
+    last generation's), 1 before any generation. The type II weights need not sum to 1."""
     G = s["v"].shape[1]
     live = np.arange(G)[None, :] < s["count"][:, None]
     g = np.where(live, relaxation(np.where(live, t - s["v"], 0.0), s["k2"]), 0.0)
     if kinetics == 1:
         w = s["f"] * g
-    else:
-        w = g.copy()
-        w[:, 1:] -= np.where(live[:, 1:], g[:, :-1], 0.0)
-    return w, 1.0 - w.sum(axis=1)
+        return w, 1.0 - w.sum(axis=1)
+    w = g.copy()
+    if G > 1:
+        later = live[:, 1:]
+        dt = np.where(later, t - s["v"][:, :-1], 0.0)
+        w[:, 1:] -= np.where(later, relaxation(dt, s["k2"][:, 1:]), 0.0)
+    n = s["count"].shape[0]
+    last = np.maximum(s["count"].astype(int) - 1, 0)
+    if k2_new is None:
+        k2_new = s["k2"][np.arange(n), last] if G else np.zeros(n)
+    v_last = s["v"][np.arange(n), last] if G else np.zeros(n)
+    g_last = relaxation(np.maximum(t - v_last, 0.0), k2_new)
+    return w, np.where(s["count"] > 0, 1.0 - g_last, 1.0)
 
 
 def _derive(s: dict, idx: np.ndarray) -> None:

@@ -10,15 +10,22 @@ time v_k, with mass f_k and the stretch U_k at v_k (its K2 = |dev ln U_k| for th
 distortion-dependent g). At time t the weak bonds' stress is
 
     sigma_w = sum_k w_k sigma_b(F (U_k^ref)^-1) / det U_k^ref,
-    kinetics 1 (type I):  w_k = f_k g(t - v_k),
-    kinetics 2 (type II): w_k = g(t - v_k) - g(t - v_(k-1))  (w_0 = g(t - v_0)),
+    kinetics 1 (type I):  w_k = f_k g(t - v_k; K2_k),
+    kinetics 2 (type II): w_k = g(t - v_k; K2_k) - g(t - v_(k-1); K2_k)  (w_0 = g(t - v_0; K2_0)),
+
+both type II terms at generation k's own K2 (FEBio's ``BreakingBondMassFraction`` sets F to
+U_k for both), so the type II weights need not sum to 1,
 
 and the newest generation is created while solving the step to t (FEBio's
 ``UpdateSpecializedMaterialPoints`` runs at each iterate): when the strain of F relative to the
 last stretch U_r (any strain: |E|; distortional: |dev h|; dilatational: |ln J|, ``trigger``)
 exceeds max(emin, 10 machine epsilon) and the reforming mass f_r = 1 - sum_k w_k(t) is at least
 wmin, the bonds formed at U_r start breaking at v = t with mass f_r and weight f_r g(0) = f_r,
-and U_r becomes U(F). Before any generation the weak bonds carry sigma_b(F) in full.
+and U_r becomes U(F). Before any generation the weak bonds carry sigma_b(F) in full. Type II
+weighs the reforming bonds 1 - g(t - v_last; K2) (``generations.weights``), FEBio with K2 of
+the current F; tissuesim takes the last generation's K2 (the previous step's stretch), as a
+weight that followed F would leave the step without a potential: FEBio's ma28 (exp_distortion,
+type II) is -6.6e-5 from FEBio's norm with it, 2.8e-10 with K2 following F in the stress.
 
 The incremental potential. Within the step to t = t_n + h every generation's reference, time
 and mass are fixed, and sigma_b(F U^-1)/det U is the Cauchy stress of the energy
