@@ -13,6 +13,7 @@ import pytest
 
 from tissuesim.errors import TissueSimError
 from tissuesim.febio import convert_febio, load_febio, read_feb
+from tissuesim.rigid.joints import Enforcement
 from tissuesim.scene.loader import load_scene
 
 
@@ -179,3 +180,82 @@ def test_an_initial_rigid_velocity_is_a_note_in_a_static_analysis(analysis, tmp_
     else:
         with pytest.raises(TissueSimError, match="starts a rigid body at rest"):
             read_feb(path)
+
+
+BALL = """    <rigid_connector name="ball" type="{kind}">
+      <body_a>ground</body_a>
+      <body_b>block</body_b>
+      <{origin}>1.5,0,0</{origin}>
+{settings}    </rigid_connector>
+"""
+
+
+def _ball(kind: str, settings: str) -> str:
+    origin = "joint" if kind == "rigid joint" else "joint_origin"
+    return BALL.format(kind=kind, origin=origin, settings=settings)
+
+
+@pytest.mark.parametrize(
+    "kind, settings, expected",
+    [
+        ("rigid joint", "<laugon>1</laugon><tolerance>0.1</tolerance><penalty>10</penalty>",
+         {"penalty": 10.0, "augmented": True, "tolerance": 0.1}),
+        ("rigid joint", "<penalty>5</penalty>",  # FERigidJoint's defaults: AUGLAG, 0.01
+         {"penalty": 5.0, "augmented": True, "tolerance": 0.01}),
+        ("rigid joint", "<laugon>PENALTY</laugon><penalty>5</penalty>",
+         {"penalty": 5.0, "augmented": False, "tolerance": 0.01}),
+        ("rigid spherical joint", "",  # FERigidSphericalJoint's defaults
+         {"penalty": 1.0, "augmented": True, "tolerance": 0.0, "gap_tolerance": 0.0,
+          "min_augmentations": 0, "max_augmentations": 10}),
+        ("rigid spherical joint", "<laugon>1</laugon><tolerance>0.2</tolerance>"
+         "<gaptol>1e-3</gaptol><force_penalty>30</force_penalty><minaug>1</minaug>"
+         "<maxaug>4</maxaug>",
+         {"penalty": 30.0, "augmented": True, "tolerance": 0.2, "gap_tolerance": 1e-3,
+          "min_augmentations": 1, "max_augmentations": 4}),
+        ("rigid joint", "<laugon>2</laugon><penalty>5</penalty>", None),  # LAGMULT: tight
+        ("rigid spherical joint", "<auto_penalty>1</auto_penalty>", None),
+    ],
+)  # fmt: skip
+def test_a_rigid_joints_enforcement_is_febios(kind, settings, expected, tmp_path):
+    """FEBio's laugon, tolerance, penalty, gaptol, minaug, maxaug (and its defaults) become
+    the joint's enforcement; LAGMULT and auto_penalty leave tissuesim's tight hold, a note."""
+    path = tmp_path / "ball.feb"
+    path.write_text(model(_ball(kind, settings)))
+    feb = read_feb(path)
+    (entry,) = feb.rigid_connectors
+    assert entry.get("enforcement") == expected
+    assert any("joint enforcement" in n for n in feb.notes) == (expected is None)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        (joint,) = load_febio(path).simulation.rigid_joints
+    assert (joint.enforcement is None) == (expected is None)
+    if expected is not None:
+        assert joint.enforcement == Enforcement.of(expected, "test")
+
+
+@pytest.mark.parametrize(
+    "kind, settings, message",
+    [
+        ("rigid joint", "<laugon>1</laugon>", "positive <penalty>"),
+        ("rigid spherical joint", "<force_penalty>0</force_penalty>", "positive <force_pen"),
+        ("rigid joint", "<laugon>3</laugon><penalty>1</penalty>", "laugon = '3'"),
+        ("rigid spherical joint", "<maxaug>2.5</maxaug>", "maxaug = 2.5"),
+    ],
+)
+def test_enforcement_refusals_are_one_line(kind, settings, message, tmp_path):
+    path = tmp_path / "bad.feb"
+    path.write_text(model(_ball(kind, settings)))
+    with pytest.raises(TissueSimError, match=message) as info:
+        read_feb(path)
+    assert "bad.feb:" in str(info.value) and "\n" not in str(info.value)
+
+
+def test_a_converted_joints_enforcement_survives_the_scene_file(tmp_path):
+    path = tmp_path / "ball.feb"
+    path.write_text(model(_ball("rigid joint", "<tolerance>0.1</tolerance><penalty>10</penalty>")))
+    scene = tmp_path / "ball.toml"
+    convert_febio(path, scene)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        (joint,) = load_scene(scene).simulation.rigid_joints
+    assert joint.enforcement == Enforcement(10.0, True, 0.1)

@@ -167,3 +167,68 @@ def test_a_joint_alone_against_finite_differences(kind):
         e = 1e-4
         second = (energy(e * d) + energy(-e * d) - 2 * value) / e**2
         assert second == pytest.approx(d @ hess @ d, rel=1e-5, abs=1e-6)
+
+
+def _slider(F: float, ks: float, k: float, **enforcement) -> tuple[Simulation, str]:
+    """The arm free along x only, a spring ks along x and a spherical joint of penalty k at its
+    centre (1, 0, 0.1), pulled by F along x."""
+    sim = _pair()
+    sim.add_rigid_body("A", ["arm"], force=(F, 0.0, 0.0), fixed=("y", "z", "rx", "ry", "rz"))
+    sim.add_rigid_spring("G", "A", (-1.0, 0.0, 0.1), (1.0, 0.0, 0.1), ks)
+    rule = {"penalty": k, **enforcement}
+    return sim, sim.add_rigid_joint("spherical", "G", "A", (1.0, 0.0, 0.1), enforcement=rule)
+
+
+@pytest.mark.parametrize(
+    "rule, solves",
+    [
+        ({"tolerance": 0.1}, 4),  # changes 1, 1/3, 1/7, 1/15 < 0.1: the 4th solve stands
+        ({"tolerance": 0.05}, 5),  # 1/31 < 0.05
+        ({"tolerance": 0.1, "max_augmentations": 2}, 3),
+        ({"tolerance": 0.1, "min_augmentations": 5}, 6),
+        ({"gap_tolerance": 1.5 * 0.3 / 2**5}, 6),  # u_n = 0.3 / 2^n: the first below, n = 5
+        ({"augmented": False, "tolerance": 0.1}, 1),  # FEBio's penalty method
+    ],
+)
+def test_febios_augmentation_rule_stops_where_its_tolerance_says(rule, solves):
+    """F = 12 N, spring ks = penalty k = 20 N/m in parallel: each solve gives u_n =
+    (F + lambda_n) / (ks + k) and FEBio's update lambda <- lambda - k u_n halves F + lambda,
+    so u_n = F / (ks + k) / 2^n and lambda_n = -F (1 - 2^-n); the multipliers' relative change
+    after solve n is | |lambda_(n+1)| - |lambda_n| | / |lambda_(n+1)| = 1 / (2^(n+1) - 1):
+    1, 1/3, 1/7, 1/15, 1/31, 1/63 (n = 0, 1, ...). The arm ends where the last solve left it
+    (``solves`` of them)."""
+    sim, name = _slider(12.0, 20.0, 20.0, **rule)
+    x0 = sim.rigid_state("A")[0][0]
+    sim.step()
+    u = sim.rigid_state("A")[0][0] - x0
+    n = solves - 1
+    assert u == pytest.approx(12.0 / 40.0 / 2**n, rel=1e-7)
+    (joint,) = [j for j in sim.system.joints if j.name == name]
+    assert joint.multipliers[0] == pytest.approx(-12.0 * (1 - 2.0**-n), rel=1e-7, abs=1e-9)
+
+
+def test_without_an_enforcement_a_joint_holds_to_tissuesims_tolerance():
+    sim, _ = _slider(12.0, 20.0, 20.0)
+    sim.system.joints[-1].enforcement = None
+    x0 = sim.rigid_state("A")[0][0]
+    sim.step()
+    assert abs(sim.rigid_state("A")[0][0] - x0) <= TOLERANCE * sim.system.length_scale
+
+
+@pytest.mark.parametrize(
+    "rule, message",
+    [
+        ({"tolerance": 0.1}, "needs its penalty"),
+        ({"penalty": 0.0}, "penalty must be a number > 0"),
+        ({"penalty": 1.0, "tolerance": -1}, "tolerance must be a number >= 0"),
+        ({"penalty": 1.0, "maxaug": 3}, "not 'maxaug'"),
+        ({"penalty": 1.0, "max_augmentations": 1.5}, "must be a count"),
+        ({"penalty": 1.0, "augmented": 1}, "true or false"),
+    ],
+)
+def test_enforcement_refusals_are_one_line(rule, message):
+    sim = _pair()
+    sim.add_rigid_body("A", ["arm"])
+    with pytest.raises(InputError, match=message) as info:
+        sim.add_rigid_joint("spherical", "G", "A", (0, 0, 0), enforcement=rule)
+    assert "\n" not in str(info.value)

@@ -84,9 +84,9 @@ class RigidSystemPart:
                 + [R[0] @ rest[i] for i in (2, 3, 4)]
                 + [R[1] @ rest[i] for i in (5, 6)]
             )
-            g, D, _ = j.residuals(y, self.load_time)
-            lengths = np.abs(D[:, :2]).sum(axis=(1, 2)) > 0
-            k = np.where(lengths, k_force, k_force * self.length_scale**2)
+            lengths = j.point_rows(self.load_time)
+            k_point = k_force if j.enforcement is None else j.enforcement.penalty
+            k = np.where(lengths, k_point, k_force * self.length_scale**2)
             out.append((*joint_energy(j, y, centres, self.load_time, k), k))
         return out
 
@@ -109,19 +109,21 @@ class RigidSystemPart:
                 np.add.at(acc.hessian, positions, hess.ravel())
 
     def update_joints(self, c: np.ndarray) -> bool:
-        """The joints' augmented Lagrangian update at a solution c (lambda <- lambda - k g);
-        whether any residual was above TOLERANCE x the length scale (then solve again)."""
-        from tissuesim.rigid.joints import TOLERANCE, RigidSpring
+        """The joints' augmented Lagrangian update at a solution c (lambda <- lambda - k g,
+        ``joints.augment``: until every residual is below TOLERANCE x the length scale, or by
+        FEBio's rule for a joint with an enforcement); whether any changed (solve again)."""
+        from tissuesim.rigid.joints import TOLERANCE, RigidSpring, augment
 
+        if getattr(self, "_joints_time", None) != self.load_time:  # a new step: FEBio's naug
+            self._joints_time = self.load_time
+            for j in self.joints:
+                j.augmentations = 0
         again = False
         for j, (_, _, _, g, k) in zip(self.joints, self.joint_terms(c, 0), strict=True):
             if isinstance(j, RigidSpring):
                 continue
-            if j.multipliers.size != g.size:
-                j.multipliers = np.zeros(g.size)
-            if np.abs(g).max() > TOLERANCE * self.length_scale:
-                again = True
-                j.multipliers = j.multipliers - k * g
+            tight = TOLERANCE * self.length_scale
+            again = augment(j, g, k, j.point_rows(self.load_time), tight) or again
         return again
 
     def _pattern_keys(self) -> np.ndarray:

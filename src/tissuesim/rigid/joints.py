@@ -16,7 +16,17 @@ rest where the joint is given. Every residual is linear or bilinear in the featu
 (e the joint's axis, t its transverse axis, s = e x t), and each joint adds the augmented
 Lagrangian k/2 |g|^2 - lambda . g; after each Newton solve lambda <- lambda - k g until every
 residual is below TOLERANCE x the length scale (``time/steps.py``'s re-lags), so the joint
-holds to that tolerance whatever k (FEBio enforces its joints the same way, its ``laugon``).
+holds to that tolerance whatever k. A joint given an ``Enforcement`` (FEBio's ``laugon``,
+``tolerance``, ``penalty``, ``gaptol``, ``minaug``, ``maxaug``; the converter's) follows
+FEBio's rule instead (``FERigidJoint::Augment``, ``FERigidSphericalJoint::Augment``): its
+penalty on the point residuals, and after the n-th solve of a step (n = 0, 1, ...) the joint
+has converged unless the multipliers' norm would change by ``tolerance`` or more
+(| |lambda - k g| - |lambda| | / |lambda - k g|, 0 where |lambda - k g| <= 1e-10), |g| of the
+point is ``gap_tolerance`` or more, or n < ``min_augmentations``; n >= ``max_augmentations``
+converges; else lambda <- lambda - k g and the step is solved again. Such joints are augmented
+at converged points only (``time/steps.py``), as FEBio does, and left as loose as that
+tolerance leaves them, as FEBio leaves them (FEBio's ri02: -2.8e-8 from its norm; held to
+1e-9 of the size, -1.6e-3).
 A spring is k/2 (|p_b - p_a| - L0)^2 between two insertion points (FEBio's ``rigid spring``:
 L0 = 0 takes the rest length).
 
@@ -35,7 +45,10 @@ import numpy as np
 from tissuesim.errors import InputError
 from tissuesim.frames.rotations import skew
 
-__all__ = ["RigidJoint", "RigidSpring", "JOINT_KINDS", "TOLERANCE", "MAX_UPDATES"]
+__all__ = [
+    "RigidJoint", "RigidSpring", "Enforcement", "augment", "JOINT_KINDS", "TOLERANCE",
+    "MAX_UPDATES",
+]  # fmt: skip
 
 JOINT_KINDS = ("spherical", "revolute", "prismatic", "cylindrical", "planar")
 #: a joint holds when every residual is below this times the length scale
@@ -63,12 +76,78 @@ def _axes(axis, transverse) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return e, t, np.cross(e, t)
 
 
+_ENFORCEMENT_KEYS = (
+    "penalty", "augmented", "tolerance", "gap_tolerance", "min_augmentations",
+    "max_augmentations",
+)  # fmt: skip
+
+
+@dataclass(frozen=True)
+class Enforcement:
+    """FEBio's enforcement of a joint (module docstring): ``penalty`` (N/m, on the joint's
+    point residuals; its direction residuals keep tissuesim's), ``augmented`` (False: the
+    penalty alone, FEBio's laugon 0), ``tolerance`` (relative change of the multipliers'
+    norm; 0: unused), ``gap_tolerance`` (m; 0: unused), ``min_augmentations``,
+    ``max_augmentations`` (None: no limit, as FEBio's ``rigid joint``)."""
+
+    penalty: float
+    augmented: bool = True
+    tolerance: float = 0.0
+    gap_tolerance: float = 0.0
+    min_augmentations: int = 0
+    max_augmentations: int | None = None
+
+    @classmethod
+    def of(cls, spec: object, where: str) -> Enforcement | None:
+        """An Enforcement from a mapping of its fields (None: tissuesim's tight default)."""
+        if spec is None or isinstance(spec, Enforcement):
+            return spec
+        if not isinstance(spec, dict):
+            raise InputError(f"{where}: enforcement must be a table of "
+                             f"{', '.join(_ENFORCEMENT_KEYS)}, not {spec!r}")  # fmt: skip
+        for key in spec:
+            if key not in _ENFORCEMENT_KEYS:
+                raise InputError(f"{where}: enforcement takes {', '.join(_ENFORCEMENT_KEYS)}, "
+                                 f"not {key!r}")  # fmt: skip
+        if "penalty" not in spec:
+            raise InputError(f"{where}: enforcement needs its penalty (N/m)")
+
+        def number(key: str, low: float, open_: bool) -> float:
+            x = spec.get(key, 0.0)
+            ok = isinstance(x, (int, float)) and not isinstance(x, bool) and np.isfinite(x)
+            if not ok or x < low or (open_ and x == low):
+                raise InputError(f"{where}: enforcement {key} must be a number "
+                                 f"{'>' if open_ else '>='} {low:g}, not {x!r}")  # fmt: skip
+            return float(x)
+
+        def count(key: str, default: int | None) -> int | None:
+            x = spec.get(key, default)
+            if x is not None and (isinstance(x, bool) or not isinstance(x, int) or x < 0):
+                raise InputError(f"{where}: enforcement {key} must be a count >= 0, not {x!r}")
+            return x
+
+        augmented = spec.get("augmented", True)
+        if not isinstance(augmented, bool):
+            raise InputError(f"{where}: enforcement augmented must be true or false, not "
+                             f"{augmented!r}")  # fmt: skip
+        return cls(
+            number("penalty", 0.0, True), augmented, number("tolerance", 0.0, False),
+            number("gap_tolerance", 0.0, False), count("min_augmentations", 0),
+            count("max_augmentations", None),
+        )  # fmt: skip
+
+    def as_table(self) -> dict:
+        out = {k: getattr(self, k) for k in _ENFORCEMENT_KEYS}
+        return {k: v for k, v in out.items() if v is not None}
+
+
 @dataclass(eq=False)
 class RigidJoint:
     """A joint of ``kind`` between rigid bodies ``a`` and ``b`` (names) at ``origin`` (m, at
     rest) with ``axis`` (revolute: the rotation axis; prismatic: the translation axis;
     cylindrical: both; planar: the plane's normal) and ``transverse`` axis; ``rotation`` (rad)
-    and ``translation`` (m): functions of t prescribing the relative motion, or None."""
+    and ``translation`` (m): functions of t prescribing the relative motion, or None;
+    ``enforcement``: FEBio's augmented Lagrangian rule, or None (held to TOLERANCE)."""
 
     name: str
     kind: str
@@ -80,8 +159,11 @@ class RigidJoint:
     rotation: Callable[[float], float] | None = None
     translation: Callable[[float], float] | None = None
     multipliers: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    enforcement: Enforcement | None = None
+    augmentations: int = 0  # the multiplier updates tried in the step so far (FEBio's naug)
 
     def __post_init__(self) -> None:
+        self.enforcement = Enforcement.of(self.enforcement, f"rigid joint {self.name!r}")
         if self.kind not in JOINT_KINDS:
             raise InputError(f"rigid joint {self.kind!r}: the kinds are {', '.join(JOINT_KINDS)}")
         self.origin = np.asarray(self.origin, dtype=float).reshape(3)
@@ -97,6 +179,12 @@ class RigidJoint:
         """(7, 3): the origin's offsets from each centre, then the axes (rest directions)."""
         e, t, s = self.frame
         return np.array([self.origin - centres[0], self.origin - centres[1], e, t, s, e, t])
+
+    def point_rows(self, t: float) -> np.ndarray:
+        """(m,) bool: the residuals that are lengths (they involve the origin's points; the
+        rest are directions' differences)."""
+        _, D, _ = self.residuals(np.ones((7, 3)), t)
+        return np.abs(D[:, :2]).sum(axis=(1, 2)) > 0
 
     def residuals(self, y: np.ndarray, t: float):
         """(g (m,), dg/dy (m, 7, 3), [(i, j, c, w)]: bilinear terms w * y_i . y_j of row c)."""
@@ -144,6 +232,40 @@ class RigidJoint:
             D[c, i] += w * y[j]
             D[c, j] += w * y[i]
         return g, D, bilinear
+
+
+def augment(
+    joint: RigidJoint, g: np.ndarray, k: np.ndarray, points: np.ndarray, tight: float
+) -> bool:
+    """The joint's multiplier update after a solve with residuals g (penalties k, ``points``
+    the rows of the point residuals); whether it changed (then the step is solved again).
+    Without an enforcement: every |g| below ``tight`` (TOLERANCE x the length scale);
+    with one: FEBio's rule (module docstring)."""
+    if joint.multipliers.size != g.size:
+        joint.multipliers = np.zeros(g.size)
+    lam = joint.multipliers
+    trial = lam - k * g
+    rule = joint.enforcement
+    if rule is None:
+        if np.abs(g).max() <= tight:
+            return False
+        joint.multipliers = trial
+        return True
+    if not rule.augmented:
+        return False
+    n, joint.augmentations = joint.augmentations, joint.augmentations + 1
+    n0, n1 = float(np.linalg.norm(lam)), float(np.linalg.norm(trial))
+    change = abs(n1 - n0) / n1 if n1 > 1e-10 else 0.0
+    done = not (rule.tolerance > 0.0 and change >= rule.tolerance)
+    if rule.gap_tolerance > 0.0 and np.linalg.norm(g[points]) >= rule.gap_tolerance:
+        done = False
+    if n < rule.min_augmentations:
+        done = False
+    if rule.max_augmentations is not None and n >= rule.max_augmentations:
+        done = True
+    if not done:
+        joint.multipliers = trial
+    return not done
 
 
 @dataclass(eq=False)

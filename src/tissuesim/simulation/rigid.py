@@ -158,14 +158,17 @@ class RigidCalls:
         rotation: float | Callable[[float], float] | None = None,
         translation: float | Callable[[float], float] | None = None,
         name: str | None = None,
+        enforcement: dict | None = None,
     ) -> str:
         """A joint between rigid bodies ``a`` and ``b`` (``rigid/joints.py``): ``kind``
         "spherical", "revolute" (about ``axis``), "prismatic" (along ``axis``), "cylindrical"
         (along and about ``axis``) or "planar" (``axis`` its normal), at ``origin`` (m) with
         a ``transverse`` axis (the zero of ``rotation``); ``rotation`` (rad, about the axis)
         and ``translation`` (m, along it) prescribe the relative motion (numbers or functions
-        of t). Held by an augmented Lagrangian to 1e-9 of the length scale; its force and
-        moment on ``b`` are reported as ``name`` and ``<name>.moment``."""
+        of t). Held by an augmented Lagrangian to 1e-9 of the length scale, or by FEBio's rule
+        with ``enforcement`` ({"penalty": N/m, "tolerance": ..., ``joints.Enforcement``'s
+        fields}); its force and moment on ``b`` are reported as ``name`` and
+        ``<name>.moment``."""
         from tissuesim.rigid.joints import RigidJoint
 
         for end in (a, b):
@@ -178,7 +181,9 @@ class RigidCalls:
         rot = None if rotation is None else _time_function(rotation, "rotation")
         tra = None if translation is None else _time_function(translation, "translation")
         c = validate.vector(origin, "origin", 3, unit="m")
-        self.rigid_joints.append(RigidJoint(name, kind, a, b, c, axis, transverse, rot, tra))
+        joint = RigidJoint(name, kind, a, b, c, axis, transverse, rot, tra,
+                           enforcement=enforcement)  # fmt: skip
+        self.rigid_joints.append(joint)
         self._system_dirty = True
         return name
 

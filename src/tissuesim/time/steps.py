@@ -191,7 +191,7 @@ def implicit_step(
         max_relags=max_relags,
         budget=budget,
         start=start_acc if relag is None else None,
-        relag_early=not lags.penalty,  # FEBio augments its contact at converged points
+        relag_early=not (lags.penalty or lags.febio_joints),  # FEBio's: at converged points
     )
     lags.check(c1, record)
     if contact is not None:
@@ -298,6 +298,9 @@ class _Lags:
             self.pressures.start(c0)
         self.system = system
         self.joints = bool(getattr(system, "joints", ()))  # rigid/joints.py: their multipliers
+        # joints held by FEBio's rule (their enforcement) augment at converged points, as FEBio
+        joints = getattr(system, "joints", ()) or ()
+        self.febio_joints = any(getattr(j, "enforcement", None) for j in joints)
         # contact/penalty/pair.py: augmentations and lagged current areas, counted per solve
         self.penalty = list(getattr(system, "penalty_contacts", ()))
         for pair in self.penalty:

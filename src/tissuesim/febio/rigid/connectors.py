@@ -11,9 +11,16 @@ springs between rigid bodies (``rigid/joints.py``; the scene's ``[[rigid_joints]
     rigid spring                         a spring (``k``, ``insertion_a``, ``insertion_b``,
                                          ``free_length``)
 
-FEBio's enforcement settings (``laugon``, ``tolerance``, penalties, augmentations) are a note:
-tissuesim holds a joint by its own augmented Lagrangian to 1e-9 of the model's size. An
-applied force or moment on a joint, a prescribed rotation of a spherical or planar joint,
+A ``rigid joint`` or ``rigid spherical joint`` (whose constraint is FEBio's c = p_b - p_a)
+keeps FEBio's enforcement as the joint's ``enforcement`` (``joints.Enforcement``): ``laugon``
+PENALTY (0) / AUGLAG (1, FEBio's default) with the ``penalty`` (``force_penalty``) and the
+augmentation rule, FEBio's ``Augment``: ``rigid joint`` its ``tolerance`` (default 0.01), no
+limit on augmentations; ``rigid spherical joint`` ``tolerance``, ``gaptol`` (default 0, unused),
+``minaug`` (0), ``maxaug`` (10), ``force_penalty`` (default 1). So its residual is what FEBio's
+tolerance leaves (ri02: -2.8e-8 from FEBio's norm, -1.6e-3 held to 1e-9). LAGMULT (2),
+``auto_penalty`` on, or the other joints (whose residuals are not FEBio's, so its penalties
+would not mean the same): a note, and tissuesim holds the joint to 1e-9 of the model's size.
+An applied force or moment on a joint, a prescribed rotation of a spherical or planar joint,
 dampers and contractile forces are refused in one line."""
 
 from __future__ import annotations
@@ -122,10 +129,51 @@ def read_connector(model: FebModel, c: Node, kind: str) -> None:
             continue  # read with its flag
         elif key not in ("body_a", "body_b", origin_key, axis_key, transverse_key):
             raise node.error(f"parameter <{key}> of a {kind} is not supported by tissuesim")
-    if tuning:
-        model.note(c, f"FEBio's joint enforcement ({', '.join(tuning)}) not used: tissuesim "
-                   "holds joints by its own augmented Lagrangian")  # fmt: skip
+    enforcement = _enforcement(c, kind, p) if joint == "spherical" else None
+    if enforcement is not None:
+        entry["enforcement"] = enforcement
+    elif tuning or joint == "spherical":
+        model.note(c, f"FEBio's joint enforcement ({', '.join(tuning) or 'its defaults'}) not "
+                   "used: tissuesim holds this joint to 1e-9 of the model's size")  # fmt: skip
     model.rigid_connectors.append(entry)
+
+
+def _enforcement(c: Node, kind: str, p: dict) -> dict | None:
+    """FEBio's enforcement of a (spherical) rigid joint as the joint's ``enforcement`` table;
+    None where tissuesim holds it tight instead (LAGMULT, auto_penalty)."""
+    method = (p["laugon"].text or "").strip().upper() if "laugon" in p else "AUGLAG"
+    methods = {"0": False, "PENALTY": False, "1": True, "AUGLAG": True, "2": None,
+               "LAGMULT": None}  # fmt: skip
+    if method not in methods:
+        raise p["laugon"].error(f"laugon = {method!r}: FEBio's methods are PENALTY (0), AUGLAG "
+                                "(1) and LAGMULT (2)")  # fmt: skip
+    if methods[method] is None or ("auto_penalty" in p and _flag(p["auto_penalty"])):
+        return None
+
+    def number(key: str, default: float) -> float:
+        return float(_floats(p[key], 1)[0]) if key in p else default
+
+    def count(key: str, default: int) -> int:
+        x = number(key, default)
+        if x < 0 or x != int(x):
+            raise p[key].error(f"{key} = {x:g}: expected a count >= 0")
+        return int(x)
+
+    old = kind == "rigid joint"  # FERigidJoint: penalty, tolerance; no gaptol, min/maxaug
+    key = "penalty" if old else "force_penalty"
+    penalty = number(key, 0.0 if old else 1.0)
+    if penalty <= 0:
+        raise p.get(key, c).error(f"{kind}: FEBio's penalty and augmented Lagrangian need a "
+                                  f"positive <{key}>, got {penalty:g}")  # fmt: skip
+    tolerance = number("tolerance", 0.01 if old else 0.0)
+    for name, x in (("tolerance", tolerance), ("gaptol", number("gaptol", 0.0))):
+        if x < 0:
+            raise p[name].error(f"{name} = {x:g}: expected a number >= 0")
+    out: dict = {"penalty": penalty, "augmented": bool(methods[method]), "tolerance": tolerance}
+    if not old:
+        out.update(gap_tolerance=number("gaptol", 0.0), min_augmentations=count("minaug", 0),
+                   max_augmentations=count("maxaug", 10))  # fmt: skip
+    return out
 
 
 def _spring(model: FebModel, c: Node, p: dict) -> None:

@@ -9,6 +9,7 @@
     axis = [0.0, 0.0, 1.0]
     transverse = [1.0, 0.0, 0.0]          # the zero of rotation
     rotation = "0.5 * t"                  # rad (translation: m), prescribed, optional
+    enforcement = { penalty = 10.0, tolerance = 0.1 }   # FEBio's rule, optional (joints.py)
     # a spring: point_a, point_b (m, at rest), stiffness (N/m), free_length (m)
 
     [[rigid_bodies]]
@@ -34,7 +35,7 @@ __all__ = ["RIGID_KEYS", "JOINT_KEYS", "add_rigid_bodies"]
 RIGID_KEYS = ("name", "bodies", "vertices", "center", "fixed", "prescribed", "force", "moment")
 JOINT_KEYS = (
     "kind", "a", "b", "origin", "axis", "transverse", "rotation", "translation", "name",
-    "point_a", "point_b", "stiffness", "free_length",
+    "point_a", "point_b", "stiffness", "free_length", "enforcement",
 )  # fmt: skip
 
 
@@ -127,5 +128,6 @@ def add_rigid_joints(sim, data: dict, source: str) -> None:
             }
             sim.add_rigid_joint(
                 kind, item["a"], item["b"], item.get("origin"), axis=item.get("axis"),
-                transverse=item.get("transverse"), name=item.get("name"), **motion,
+                transverse=item.get("transverse"), name=item.get("name"),
+                enforcement=item.get("enforcement"), **motion,
             )  # fmt: skip
