@@ -10,18 +10,22 @@ import numpy as np
 from tissuesim.febio.model import FebModel
 from tissuesim.febio.xml import Node
 
-__all__ = ["read_constraints", "set_walls_apart", "CONSTRAINT_TYPES"]
+__all__ = ["read_constraints", "take_rigid_walls", "rigid_wall_tables", "CONSTRAINT_TYPES"]
 
 #: the <constraint> types read
 CONSTRAINT_TYPES = ("rigid_wall", "linear constraint", "node distance")
+#: FEBio's rigid wall's parameters (FERigidWallInterface); its enforcement's, read here
+WALL_PARAMETERS = {"laugon", "tolerance", "penalty", "offset", "plane"}
+#: augmentations a step at most (FEBio's rigid wall has no cap: it augments until its
+#: tolerance is met)
+MAX_AUGMENTATIONS = 50
 
 
 def read_constraints(model: FebModel, section: Node) -> None:
     """<Constraints>: a ``rigid_wall`` (FEBio's FERigidWallInterface: the surface's nodes kept
     on one side of the plane a x + b y + c z = d, moved along its normal by ``offset``) is the
-    same condition as FEBio's rigid_wall contact, and becomes tissuesim's contact with a
-    moving plane obstacle (FEBio's penalty is not used: the barrier keeps the nodes off the
-    plane)."""
+    same condition as FEBio's rigid_wall contact: read as one, then taken by
+    ``take_rigid_walls``."""
     from tissuesim.febio.condition_sections import _contact
 
     for c in section.children:
@@ -43,65 +47,95 @@ def read_constraints(model: FebModel, section: Node) -> None:
             continue
         if model.window is not None and model.steps > 1:
             raise c.error(
-                "a rigid_wall given in one <step> of several: tissuesim's contact holds for the "
+                "a rigid_wall given in one <step> of several: tissuesim's wall holds for the "
                 "whole run (give it in the model's <Constraints> section)"
             )
         # read as the <contact type="rigid_wall"> it is the same condition as (the element
         # keeps its attributes, children and line; only its tag is the contact's)
         copy = replace(c, tag="contact")
         _contact(model, replace(section, children=[copy]))
-        if any(n is copy for n in model.noted):  # its tuning noted: not checked, as a note
+        if any(n is copy for n in model.noted):
             model.noted.append(c)
         model.contacts[-1]["constraint"] = True
 
 
-def set_walls_apart(model: FebModel) -> None:
-    """Every rigid wall that its surface starts on, moved apart (``_set_wall_apart``); run once
-    the whole model is read (the offset's load curve may come after <Constraints>)."""
-    for c in model.contacts:
-        if c["type"] == "rigid_wall":
-            _set_wall_apart(model, c)
+def take_rigid_walls(model: FebModel) -> None:
+    """Every rigid wall (``<Contact>`` or ``<Constraints>``) moved from ``model.contacts`` to
+    ``model.rigid_walls`` with FEBio's enforcement (``_wall``): tissuesim's rigid wall energy
+    (contact/penalty/rigid_wall.py), as FEBio enforces it. Run once the whole model is read."""
+    walls = [(k, c) for k, c in enumerate(model.contacts, start=1) if c["type"] == "rigid_wall"]
+    model.contacts[:] = [c for c in model.contacts if c["type"] != "rigid_wall"]
+    for k, c in walls:  # k: its place among the contacts, its default name's number
+        wall = _wall(model, c, k)
+        if wall is not None:
+            model.rigid_walls.append(wall)
 
 
-def _set_wall_apart(model: FebModel, wall: dict) -> None:
-    """A wall the surface starts on (FEBio's usual set-up: the gap is zero at the start) is
-    moved away from the surface by the barrier's dhat (``contact_start.DHAT`` of the surface's
-    size, written as ``[contact] dhat``: ``model.contact_dhat``), so the surface starts where
-    the barrier begins to act, force-free as in FEBio; one line in ``model.changes``."""
-    from tissuesim.febio.contact_start import DHAT
+def _wall(model: FebModel, c: dict, k: int) -> dict | None:
+    """FEBio's rigid wall's settings (``FERigidWallInterface``: laugon, tolerance, penalty,
+    offset, plane); None for one of penalty 0 (FEBio's default: it pushes nothing), noted."""
+    from tissuesim.febio.model import _children, _floats, _unsupported
 
-    a = wall["plane"][:3]
-    norm = float(np.linalg.norm(a))
-    if norm == 0.0:
-        raise wall["node"].error("the rigid_wall's <plane> a,b,c,d has a zero normal (a, b, c)")
-    nodes = model.nodes[np.unique(model.surfaces[wall["surfaces"][0]][0])]
-    offset = wall["offset"]
-    start = float(offset.value[0]) * (curve_value(model, offset.curve, 0.0))
-    # FEBio's gap (FERigidWallInterface::ProjectSurface): the distance of a node from the
-    # plane along its unit normal, less the offset; the surface is on the normal's side
-    gap = float(np.min((nodes @ a - wall["plane"][3]) / norm - start))
-    dhat = DHAT * float(np.linalg.norm(np.ptp(nodes, axis=0)))
-    if gap >= 0.5 * dhat:
-        return
-    if gap < -0.5 * dhat:
-        raise wall["node"].error(
-            f"the surface {wall['surfaces'][0]!r} starts {-gap:.3g} behind the rigid wall "
-            "(FEBio keeps it on the side the plane's normal points to): move the wall"
-        )
-    wall["plane"] = np.append(a, wall["plane"][3] + (gap - dhat) * norm)
-    model.contact_dhat = max(model.contact_dhat or 0.0, dhat)
-    model.changes.append(
-        f"{wall['node'].where()}: the surface {wall['surfaces'][0]!r} starts "
-        f"{'on' if gap == 0.0 else f'{gap:.3g} from'} the rigid wall: tissuesim's barrier needs "
-        f"it apart, so the wall is moved {dhat - gap:.3g} (model units) away from it, to the "
-        "barrier's dhat (written in [contact]), so it starts with no force; the result differs "
-        "from FEBio's by at most that displacement"
-    )
+    node = c["node"]
+    prefix = f"{node.where()}: FEBio's contact enforcement settings not used"
+    model.notes[:] = [n for n in model.notes if not n.startswith(prefix)]  # they are now
+    for child in node.children:
+        if child.tag not in WALL_PARAMETERS:
+            raise _unsupported(child, f"<{child.tag}> in a rigid_wall (FEBio's rigid wall "
+                               "takes laugon, tolerance, penalty, offset and plane)")  # fmt: skip
+    p = _children(node, WALL_PARAMETERS)
+    method = (p["laugon"].text or "").strip().upper() if "laugon" in p else "PENALTY"
+    methods = {"0": False, "PENALTY": False, "1": True, "AUGLAG": True}
+    if method not in methods:
+        raise _unsupported(p["laugon"], f"rigid wall enforcement laugon = {method!r} (FEBio's "
+                           "rigid wall runs PENALTY (0) and AUGLAG (1))")  # fmt: skip
+    penalty = float(_floats(p["penalty"], 1)[0]) if "penalty" in p else 0.0
+    if penalty < 0:
+        raise p["penalty"].error("a rigid_wall's <penalty> must be >= 0")
+    if penalty == 0.0:
+        model.note(node, "a rigid_wall of penalty 0 (FEBio's default) pushes nothing: left out")
+        return None
+    tolerance = float(_floats(p["tolerance"], 1)[0]) if "tolerance" in p else 0.0
+    a = np.asarray(c["plane"][:3], float)
+    size = float(np.linalg.norm(a))
+    if size == 0.0:
+        raise node.error("the rigid_wall's <plane> a,b,c,d has a zero normal (a, b, c)")
+    return {
+        "name": node.attrib.get("name") or f"wall{k}",
+        "node": node,
+        "surface": c["surfaces"][0],
+        # FEBio's gap is offset - |a| (a . x - d) (ProjectToPlane does not normalise a) and
+        # its force pushes along a / |a|: on the unit plane, the offset / |a|^2 and the
+        # penalty eps |a|^2 give the same force (the same for |a| = 1)
+        "plane": np.append(a / size, c["plane"][3] / size),
+        "penalty": penalty * size**2,
+        "offset": replace(c["offset"], value=np.asarray(c["offset"].value, float) / size**2),
+        "augmented": methods[method],
+        "tolerance": tolerance,
+    }
 
 
-def curve_value(model: FebModel, curve: int | None, t: float) -> float:
-    """A load curve's value at t (1 without a curve)."""
-    if curve is None:
-        return 1.0
-    points = model.curves[curve].points
-    return float(np.interp(t, points[:, 0], points[:, 1]))
+def rigid_wall_tables(model: FebModel, names: list[str], meshes: dict) -> list[dict]:
+    """[[rigid_wall]] tables: one per wall and body holding its surface (a surface of parts
+    split into bodies is on each)."""
+    from tissuesim.febio.curves import load_expression
+
+    tables = []
+    for w in model.rigid_walls:
+        held = [n for n, mesh in zip(names, meshes.values(), strict=True)
+                if w["surface"] in mesh.facet_sets]  # fmt: skip
+        if not held:
+            raise w["node"].error(
+                f"the rigid_wall's surface {w['surface']!r} is on no deformable body "
+                "(tissuesim's rigid wall presses FEM bodies' nodes)"
+            )
+        for body in held:
+            name = w["name"] if len(held) == 1 else f"{w['name']}.{body}"
+            table = {"name": name, "body": body, "facets": w["surface"],
+                     "plane": w["plane"].tolist(), "penalty": w["penalty"],
+                     "offset": load_expression(w["offset"], model)}  # fmt: skip
+            if w["augmented"]:  # FEBio augments until the tolerance is met: no cap but ours
+                table.update(augmented=True, tolerance=w["tolerance"],
+                             max_augmentations=MAX_AUGMENTATIONS)  # fmt: skip
+            tables.append(table)
+    return tables

@@ -89,8 +89,9 @@ class FebModel:
     #: <Initial> velocities: (node set, (3,) velocity, element) (febio/initial.py)
     initial_velocity: list = field(default_factory=list)
     springs: list = field(default_factory=list)
-    #: the barrier's dhat a rigid wall was moved apart by (febio/constraint_sections.py)
-    contact_dhat: float | None = None
+    #: rigid walls (febio/constraint_sections.py): name, surface, unit plane, penalty, offset
+    #: Load, augmented, tolerance; taken from ``contacts`` once the model is read
+    rigid_walls: list = field(default_factory=list)
     steps: int = 1
     #: a DYNAMIC analysis' Newmark (beta, gamma); the <solver> values read and their elements
     newmark: tuple[float, float] | None = None

@@ -65,7 +65,7 @@ def _read(path: str | os.PathLike[str]) -> FebModel:
     for load in loads:
         if load.curve is not None and load.curve not in model.curves:
             raise root.error(f"load curve {load.curve} is used but not defined in <LoadData>")
-    set_walls_apart(model)  # rigid walls the surface starts on (febio/constraint_sections.py)
+    take_rigid_walls(model)  # FEBio's rigid walls as tissuesim's (febio/constraint_sections.py)
     steppers = [p["time_stepper"] for p in model.phases] or [model.time_stepper]
     for stepper in steppers:
         number, node = (stepper or {}).get("curve", (None, None))
@@ -245,7 +245,7 @@ def _control(model: FebModel, node: Node) -> None:
 
 
 from tissuesim.febio.condition_sections import SECTIONS as _CONDITION_SECTIONS  # noqa: E402
-from tissuesim.febio.constraint_sections import read_constraints, set_walls_apart  # noqa: E402
+from tissuesim.febio.constraint_sections import read_constraints, take_rigid_walls  # noqa: E402
 from tissuesim.febio.discrete import read_discrete  # noqa: E402
 from tissuesim.febio.initial import read_initial  # noqa: E402
 from tissuesim.febio.mesh_sections import SECTIONS as _MESH_SECTIONS  # noqa: E402

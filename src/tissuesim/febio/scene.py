@@ -9,6 +9,7 @@ import re
 
 import numpy as np
 
+from tissuesim.febio.constraint_sections import rigid_wall_tables
 from tissuesim.febio.contact_scene import contact_tables
 from tissuesim.febio.contact_start import separate_touching
 from tissuesim.febio.curves import load_expression as _times
@@ -205,7 +206,6 @@ def febio_scene(model: FebModel, stem: str) -> tuple[dict, dict]:
     bodies = [b for _, b in named]
     several = _several(model, bodies)
     dhat = separate_touching(model, bodies)  # contact that starts touching: moved apart
-    dhat = dhat or model.contact_dhat  # a rigid wall the surface starts on, moved apart
     tables_per_body, meshes, gravity = [], {}, np.zeros(3)
     for name, body in named:
         used = np.unique(body["cells"])
@@ -390,6 +390,9 @@ def febio_scene(model: FebModel, stem: str) -> tuple[dict, dict]:
     if rigid:
         data["rigid_bodies"] = rigid
     data.update(contact_tables(model, [n for n, _ in tables_per_body], bodies, meshes))
+    walls = rigid_wall_tables(model, [n for n, _ in tables_per_body], meshes)
+    if walls:  # FEBio's rigid walls as FEBio enforces them (febio/constraint_sections.py)
+        data["rigid_wall"] = walls
     if dhat is not None:
         data["contact"] = {"dhat": dhat, **data["contact"]}
     names = rigid_names(rigid, model)

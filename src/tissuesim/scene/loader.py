@@ -63,6 +63,7 @@ from tissuesim.scene.tables.fem_body import (
 )
 from tissuesim.scene.tables.logfiles import LOGFILE_KEYS, add_logfiles
 from tissuesim.scene.tables.penalty_contact import PENALTY_KEYS, add_penalty_contacts
+from tissuesim.scene.tables.rigid_wall import RIGID_WALL_KEYS, add_rigid_walls
 from tissuesim.scene.tables.visual import VISUAL_KEYS, add_visual_surfaces
 
 __all__ = ["Scene", "load_scene", "build_scene", "SCENE_KEYS"]
@@ -81,6 +82,7 @@ SCENE_KEYS = {
     "visual_surfaces": set(VISUAL_KEYS),
     "logfiles": set(LOGFILE_KEYS),
     "penalty_contact": set(PENALTY_KEYS),
+    "rigid_wall": set(RIGID_WALL_KEYS),
 }
 # Tables of frame scenes ([frames], scene/tables/frames.py) that mean nothing for a [mesh] body.
 FRAME_ONLY_KEYS = ("region", "fixed_frames", "prescribed_frames", "springs", "point_forces")
@@ -221,6 +223,7 @@ def _build(data: dict, base_dir: Path, source: str, name: str) -> Scene:
 
     add_contact_tables(sim, data, base_dir, source)
     add_penalty_contacts(sim, data, source)
+    add_rigid_walls(sim, data, source)
     add_visual_surfaces(sim, data, base_dir, source, "body")
     add_logfiles(sim, data, source, "body")
     return Scene(sim, name, source, _run_table(data, source))

@@ -52,6 +52,7 @@ from tissuesim.simulation.loads import LoadCalls
 from tissuesim.simulation.penalty_contact import PenaltyContactCalls, carry_penalty_state
 from tissuesim.simulation.results import BodyResults
 from tissuesim.simulation.rigid import RigidCalls
+from tissuesim.simulation.rigid_wall import RigidWallCalls, carry_wall_state
 from tissuesim.simulation.stepping import Stepping
 from tissuesim.solve.linear import make_linear_solver
 from tissuesim.solve.newton import NewtonOptions
@@ -90,6 +91,7 @@ class Simulation(
     LoadCalls,
     InteractionCalls,
     PenaltyContactCalls,
+    RigidWallCalls,
     CutCalls,
     RigidCalls,
     StepChecks,
@@ -152,6 +154,7 @@ class Simulation(
         self._force_names: set[str] = set()
         self.ties: list = []  # coupling/tie.py
         self.penalty_contacts: list = []  # simulation/penalty_contact.py PenaltySpec
+        self.rigid_walls: list = []  # simulation/rigid_wall.py RigidWallSpec
         self._named_attachments: list = []  # (name, sign, index in system.attachments)
         self.frame_attachments: list = []  # (coupling/frame_attachment.py spec, sign)
         self.contact = None  # contact/model.py ContactSettings when contact is on
@@ -261,9 +264,12 @@ class Simulation(
         self._system = System([b.model for b in bodies], names, attachments, ties, rigid=rigid,
                               rigid_members=members, joints=self.rigid_joints)  # fmt: skip
         parts.update(self._rigid_parts(old, state))
-        self._system.penalty_contacts = self._penalty_pairs(self._system)
+        # FEBio-style penalty energies: the pairs, then the rigid walls (same interface)
+        walls = self._rigid_wall_energies(self._system)
+        self._system.penalty_contacts = self._penalty_pairs(self._system) + walls
         if old is not None:  # a rebuild keeps the pairs' multipliers (same facets, same points)
             carry_penalty_state(old.penalty_contacts, self._system.penalty_contacts)
+            carry_wall_state(old.penalty_contacts, walls)
         if self.contact is not None:
             self._system.contact = self._contact_model()
             if old is not None and old.contact is not None:

@@ -80,6 +80,7 @@ from tissuesim.scene.tables.fem_body import _mesh, _select
 from tissuesim.scene.tables.logfiles import LOGFILE_KEYS, add_logfiles
 from tissuesim.scene.tables.penalty_contact import PENALTY_KEYS, add_penalty_contacts
 from tissuesim.scene.tables.rigid import JOINT_KEYS, RIGID_KEYS, add_rigid_bodies
+from tissuesim.scene.tables.rigid_wall import RIGID_WALL_KEYS, add_rigid_walls
 from tissuesim.scene.tables.visual import VISUAL_KEYS, add_visual_surfaces
 from tissuesim.validate import short
 
@@ -124,10 +125,11 @@ COUPLED_SCENE_KEYS: dict[str, Any] = {
     "rigid_bodies": set(RIGID_KEYS),
     "rigid_joints": set(JOINT_KEYS),
     "penalty_contact": set(PENALTY_KEYS),
+    "rigid_wall": set(RIGID_WALL_KEYS),
 }
 ARRAYS = (
     "organs", "bodies", "graspers", "attachments", "cuts", "obstacles", "visual_surfaces",
-    "logfiles", "rigid_bodies", "rigid_joints", "penalty_contact",
+    "logfiles", "rigid_bodies", "rigid_joints", "penalty_contact", "rigid_wall",
 )  # fmt: skip
 MESH_GENERATORS = {
     "ellipsoid": ("center", "radii", "divisions"),
@@ -209,6 +211,7 @@ def build_bodies_scene(data: dict, base_dir: Path, source: str, name: str) -> Sc
 
     add_rigid_bodies(sim, data, source)
     add_penalty_contacts(sim, data, source)
+    add_rigid_walls(sim, data, source)
     add_contact_tables(sim, data, base_dir, source)
     tissue = _table(data, "tissue", source)
     if tissue:
