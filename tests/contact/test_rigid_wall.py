@@ -22,11 +22,12 @@ RNG = np.random.default_rng(3)
 MAT = NeoHookean(youngs_modulus=1000.0, poisson_ratio=0.0)
 
 
-@pytest.mark.parametrize("augmented", [False, True])
+@pytest.mark.parametrize("augmented", [False, True, "penalty at 0"])
 def test_energy_gradient_and_hessian_match_finite_differences(augmented):
     """Twelve nodes about a tilted, moved plane (some behind it, some not), with multipliers
-    (augmented) or without: the gradient against central differences of the energy, the
-    Hessian against central differences of the gradient (the nodes 3 DOFs each, shuffled)."""
+    (augmented) or without, or with multipliers and a penalty curve at 0 (the multipliers'
+    force alone): the gradient against central differences of the energy, the Hessian
+    against central differences of the gradient (the nodes 3 DOFs each, shuffled)."""
     k = 12
     x = RNG.standard_normal((k, 3))
     normal = np.array([0.3, -0.5, 0.8]) / np.linalg.norm([0.3, -0.5, 0.8])
@@ -36,6 +37,9 @@ def test_energy_gradient_and_hessian_match_finite_differences(augmented):
         wall.multipliers = RNG.uniform(0.0, 20.0, k)
     t = wall.multipliers + wall.penalty * wall.gaps(x)
     assert (t > 0).sum() >= 3 and (t < 0).sum() >= 3 and np.abs(t).min() > 1e-3  # off kinks
+    if augmented == "penalty at 0":
+        wall.multipliers[::2] = 0.0
+        wall.scale = lambda t: 0.0
     dofs = RNG.permutation(3 * k).reshape(k, 3)
     n = 3 * k
 
@@ -51,9 +55,9 @@ def test_energy_gradient_and_hessian_match_finite_differences(augmented):
         d[i] = e
         fd[i] = (at(y + d, 0)[0] - at(y - d, 0)[0]) / (2 * e)
         fh[:, i] = (at(y + d, 1)[1] - at(y - d, 1)[1]) / (2 * e)
-    assert value > 0
+    assert value != 0 and np.abs(grad).max() > 1.0
     np.testing.assert_allclose(grad, fd, rtol=1e-7, atol=1e-7 * np.abs(grad).max())
-    np.testing.assert_allclose(hess.toarray(), fh, rtol=1e-6, atol=1e-6 * np.abs(fh).max())
+    np.testing.assert_allclose(hess.toarray(), fh, rtol=1e-6, atol=1e-6 * max(np.abs(fh).max(), 1))
 
 
 def test_node_areas_are_febios_nodal_rule():
@@ -109,6 +113,14 @@ def test_the_offset_moves_the_plane_along_its_normal():
         assert z[0] == pytest.approx(0.01 * t - force / 4e3, rel=1e-9)
 
 
+def test_a_penalty_scale_multiplies_the_penalty_at_the_step_time():
+    """penalty_scale(t) = t: at t = 0.5 and 1 the bottom sinks by force / (penalty t)."""
+    _, out = _block(penalty=5e3, steps=2, penalty_scale=lambda t: t)
+    for t, (force, z) in zip((0.5, 1.0), out, strict=True):
+        assert force > 1.0
+        assert -z[0] == pytest.approx(force / (5e3 * t), rel=1e-9)
+
+
 def test_the_augmented_lagrangian_closes_the_gap():
     """Augmented to a multiplier change of 1e-9 the penetration falls from 3e-3 to under
     1e-9 of it, and the force is the block's pressed with its bottom held at z = 0."""
@@ -154,6 +166,7 @@ facets = "zmin"
 plane = [0, 0, 2, 0]
 penalty = 4000.0
 offset = "0.01 * t"
+penalty_scale = "1 + t"
 """
 
 
@@ -161,7 +174,8 @@ def test_the_scene_table_runs_as_the_python_call():
     scene = build_scene(tomllib.loads(SCENE))
     for _ in range(2):
         scene.simulation.step()
-    _, out = _block(penalty=4e3, press=0.0, steps=2, offset=lambda t: 0.01 * t)
+    _, out = _block(penalty=4e3, press=0.0, steps=2, offset=lambda t: 0.01 * t,
+                    penalty_scale=lambda t: 1 + t)  # fmt: skip
     assert scene.simulation.forces()["floor"][2] == pytest.approx(out[-1][0], rel=1e-9)
 
 
@@ -174,6 +188,8 @@ def test_the_scene_table_runs_as_the_python_call():
         ('offset = "0.01 * t"', 'offset = "0.01 * x"'),
         ('facets = "zmin"', 'facets = "zmin"\nbody = "nobody"'),
         ('facets = "zmin"', "facets = 3"),
+        ('penalty_scale = "1 + t"', 'penalty_scale = "x"'),
+        ('penalty_scale = "1 + t"', "penalty_scale = [1]"),
     ],
 )
 def test_bad_scene_tables_give_one_line(change, message):
@@ -193,6 +209,7 @@ def test_python_call_errors():
         (("block", (0, 0, 1, 0)), {"penalty": 0.0}, "penalty"),
         (("block", (0, 0, 1, 0)), {"penalty": 1.0, "offset": "t"}, "offset"),
         (("block", (0, 0, 1, 0)), {"penalty": 1.0, "max_augmentations": -1}, "max_aug"),
+        (("block", (0, 0, 1, 0)), {"penalty": 1.0, "penalty_scale": 2.0}, "penalty_scale"),
         (("other", (0, 0, 1, 0)), {"penalty": 1.0}, "not a FEM body"),
     ]:
         with pytest.raises(InputError, match=match):

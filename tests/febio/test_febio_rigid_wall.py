@@ -133,6 +133,24 @@ def test_the_face_sinks_by_febios_gap(where, tmp_path):
     assert f["hold"][2] == pytest.approx(-f["floor"][2], rel=1e-7)
 
 
+def test_a_penalty_on_a_load_curve_scales_with_it(tmp_path):
+    """<penalty lc="1">: at t = 0.5 the penalty is half (the curve 0 -> 1 over [0, 1]) and the
+    offset 0.6 (1.2 at t = 1): the force is PENALTY / 2 x (0.6 - 4 (z - 0.1))."""
+    wall = PLAIN.replace("<penalty>", '<penalty lc="1">').replace(">0.6</offset>", ">1.2</offset>")
+    path = tmp_path / "wall.feb"
+    path.write_text(_deck(wall))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        scene = load_febio(path)
+    sim = scene.simulation
+    sim.step()
+    assert sim.time == pytest.approx(0.5)
+    z = sim.positions[sim.body(next(iter(sim.bodies))).mesh.points[:, 2] < 0.2 + 1e-9, 2]
+    force = sim.forces()["floor"][2]
+    assert force > 1.0
+    assert force == pytest.approx(PENALTY / 2 * (0.6 - 4 * (z[0] - 0.1)), rel=1e-9)
+
+
 def test_auglag_closes_febios_gap(tmp_path):
     """AUGLAG with tolerance 1e-8: the bottom ends on the moved plane, z = 0.1 + 0.6 / 4."""
     wall = PLAIN.replace("PENALTY", "AUGLAG") + "      <tolerance>1e-8</tolerance>\n"
@@ -167,6 +185,8 @@ def test_the_converted_scene_has_the_wall_and_runs_alike(tmp_path):
         ("<laugon>PENALTY</laugon>", "<laugon>2</laugon>", "laugon = '2'"),
         ("<laugon>PENALTY</laugon>", "<two_pass>1</two_pass>", "<two_pass> in a rigid_wall"),
         ("<plane>0,0,2,0.2</plane>", "<plane>0,0,0,0.2</plane>", "zero normal"),
+        ("<plane>0,0,2,0.2</plane>", '<plane lc="1">0,0,2,0.2</plane>', 'attribute lc="1"'),
+        ("<penalty>", '<penalty lc="7">', "load curve 7"),
     ],
 )
 def test_what_is_not_mapped_is_refused_in_one_line(old, new, message, tmp_path):

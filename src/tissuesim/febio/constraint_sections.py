@@ -7,7 +7,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from tissuesim.febio.model import FebModel
+from tissuesim.febio.model import FebModel, Load
 from tissuesim.febio.xml import Node
 
 __all__ = ["read_constraints", "take_rigid_walls", "rigid_wall_tables", "CONSTRAINT_TYPES"]
@@ -74,7 +74,7 @@ def take_rigid_walls(model: FebModel) -> None:
 def _wall(model: FebModel, c: dict, k: int) -> dict | None:
     """FEBio's rigid wall's settings (``FERigidWallInterface``: laugon, tolerance, penalty,
     offset, plane); None for one of penalty 0 (FEBio's default: it pushes nothing), noted."""
-    from tissuesim.febio.model import _children, _floats, _unsupported
+    from tissuesim.febio.model import _children, _floats, _load, _unsupported
 
     node = c["node"]
     prefix = f"{node.where()}: FEBio's contact enforcement settings not used"
@@ -89,7 +89,15 @@ def _wall(model: FebModel, c: dict, k: int) -> dict | None:
     if method not in methods:
         raise _unsupported(p["laugon"], f"rigid wall enforcement laugon = {method!r} (FEBio's "
                            "rigid wall runs PENALTY (0) and AUGLAG (1))")  # fmt: skip
-    penalty = float(_floats(p["penalty"], 1)[0]) if "penalty" in p else 0.0
+    load = _load(model, p["penalty"], 1) if "penalty" in p else Load(np.zeros(1))
+    penalty = float(load.value[0])
+    if load.curve is not None and load.curve not in model.curves:
+        raise p["penalty"].error(f"load curve {load.curve} is used but not defined in <LoadData>")
+    for child in node.children:  # an element kept as a note is not checked by the reader
+        unread = [k for k in child.attrib.unread() if k not in ("name", "id")]
+        if unread:
+            raise _unsupported(child, f'attribute {unread[0]}="{child.attrib[unread[0]]}" on a '
+                               "rigid_wall's parameter")  # fmt: skip
     if penalty < 0:
         raise p["penalty"].error("a rigid_wall's <penalty> must be >= 0")
     if penalty == 0.0:
@@ -109,6 +117,7 @@ def _wall(model: FebModel, c: dict, k: int) -> dict | None:
         # penalty eps |a|^2 give the same force (the same for |a| = 1)
         "plane": np.append(a / size, c["plane"][3] / size),
         "penalty": penalty * size**2,
+        "penalty_curve": load.curve,  # FEBio's penalty times this curve (None: constant)
         "offset": replace(c["offset"], value=np.asarray(c["offset"].value, float) / size**2),
         "augmented": methods[method],
         "tolerance": tolerance,
@@ -118,7 +127,7 @@ def _wall(model: FebModel, c: dict, k: int) -> dict | None:
 def rigid_wall_tables(model: FebModel, names: list[str], meshes: dict) -> list[dict]:
     """[[rigid_wall]] tables: one per wall and body holding its surface (a surface of parts
     split into bodies is on each)."""
-    from tissuesim.febio.curves import load_expression
+    from tissuesim.febio.curves import curve_expression, load_expression
 
     tables = []
     for w in model.rigid_walls:
@@ -134,6 +143,9 @@ def rigid_wall_tables(model: FebModel, names: list[str], meshes: dict) -> list[d
             table = {"name": name, "body": body, "facets": w["surface"],
                      "plane": w["plane"].tolist(), "penalty": w["penalty"],
                      "offset": load_expression(w["offset"], model)}  # fmt: skip
+            if w["penalty_curve"] is not None:
+                curve = model.curves[w["penalty_curve"]]
+                table["penalty_scale"] = curve_expression(curve)
             if w["augmented"]:  # FEBio augments until the tolerance is met: no cap but ours
                 table.update(augmented=True, tolerance=w["tolerance"],
                              max_augmentations=MAX_AUGMENTATIONS)  # fmt: skip

@@ -29,6 +29,7 @@ class RigidWallSpec:
     augmented: bool
     tolerance: float
     max_augmentations: int
+    penalty_scale: Callable[[float], float] | None = None
 
 
 class RigidWallCalls:
@@ -45,6 +46,7 @@ class RigidWallCalls:
         augmented: bool = False,
         tolerance: float = 0.0,
         max_augmentations: int = 10,
+        penalty_scale: Callable[[float], float] | None = None,
         name: str | None = None,
     ) -> str:
         """A rigid wall: the plane a x + b y + c z = d (``plane`` = (a, b, c, d); the surface
@@ -54,8 +56,10 @@ class RigidWallCalls:
         the pressure ``penalty`` x penetration (Pa/m) over the vertex's share of the surface
         (FEBio's rigid wall). ``augmented``: FEBio's augmented Lagrangian, augmenting at each
         converged solution while the multipliers' norm changes by ``tolerance`` (relative) or
-        more, at most ``max_augmentations`` times a step. Its force on the body is reported by
-        ``forces()`` under ``name`` (default ``rigid_wall<n>``). Returns the name."""
+        more, at most ``max_augmentations`` times a step. ``penalty_scale``: a function of t
+        the penalty is multiplied by (FEBio's penalty on a load curve). Its force on the body
+        is reported by ``forces()`` under ``name`` (default ``rigid_wall<n>``). Returns the
+        name."""
         if body not in self.bodies or self.bodies[body].kind != "fem":
             raise InputError(
                 f"add_rigid_wall: {short(body)} is not a FEM body; FEM bodies: "
@@ -96,10 +100,14 @@ class RigidWallCalls:
             raise InputError(
                 f"add_rigid_wall: offset = {short(offset)}: give a number (m) or a function of t"
             )
+        if penalty_scale is not None and not callable(penalty_scale):
+            raise InputError(
+                f"add_rigid_wall: penalty_scale = {short(penalty_scale)}: give a function of t"
+            )
         name = self._claim_force_name(name, f"rigid_wall{len(self.rigid_walls) + 1}")
         spec = RigidWallSpec(name, body, facets, p[:3] / size, float(p[3] / size),
                              float(penalty), move, bool(augmented), float(tolerance),
-                             int(max_augmentations))  # fmt: skip
+                             int(max_augmentations), penalty_scale)  # fmt: skip
         self.rigid_walls.append(spec)
         self._system_dirty = True
         return name
@@ -148,6 +156,8 @@ class RigidWallCalls:
                     spec.max_augmentations,
                 )  # fmt: skip
             )
+            if spec.penalty_scale is not None:
+                walls[-1].scale = spec.penalty_scale
         return walls
 
 

@@ -49,8 +49,9 @@ def node_areas(rest: np.ndarray, facets: Facets) -> tuple[np.ndarray, np.ndarray
 class RigidWall:
     """The wall of the module docstring on body ``body`` (its index in the system):
     ``nodes`` its vertices, ``areas`` their W, ``normal`` a unit vector, ``distance`` d,
-    ``offset(t)`` the plane's move along the normal, ``penalty`` eps (Pa/m); ``clock()`` the
-    time the offset is taken at (the system's load time: the step's end)."""
+    ``offset(t)`` the plane's move along the normal, ``penalty`` (Pa/m) times ``scale(t)``
+    eps (FEBio's penalty on a load curve); ``clock()`` the time the offset and the scale are
+    taken at (the system's load time: the step's end)."""
 
     name: str
     body: int
@@ -67,6 +68,7 @@ class RigidWall:
     multipliers: np.ndarray = field(default=None)  # type: ignore[assignment]
     augmentations: int = 0  # in this step's solve
     friction: float = 0.0  # none (FEBio's rigid wall is frictionless): as a penalty pair's
+    scale: Callable[[float], float] = lambda t: 1.0
 
     def __post_init__(self) -> None:
         self.normal = np.asarray(self.normal, float)
@@ -77,20 +79,28 @@ class RigidWall:
     def passes(self) -> list:  # a penalty pair's state for carry_penalty_state: none here
         return []
 
+    def eps(self) -> float:
+        """The penalty now (Pa/m)."""
+        return self.penalty * float(self.scale(self.clock()))
+
     def gaps(self, x: np.ndarray) -> np.ndarray:
         """g per wall node at the body's positions x (vertices, 3); > 0: behind the plane."""
         return float(self.offset(self.clock())) - (x[self.nodes] @ self.normal - self.distance)
 
     def _pressures(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         g = self.gaps(x)
-        return g, np.maximum(self.multipliers + self.penalty * g, 0.0)
+        return g, np.maximum(self.multipliers + self.eps() * g, 0.0)
 
     def evaluate(self, positions: list[np.ndarray], dofs: list[np.ndarray], n: int, order: int,
                  project_psd: bool = False):  # fmt: skip
         """(value, gradient (n,) or None, sparse Hessian or None), as a penalty pair's
         (``pair.py``); the Hessian is PSD already (``project_psd`` changes nothing)."""
-        _, t = self._pressures(positions[self.body])
-        value = float(np.sum(self.areas * t * t) / (2 * self.penalty))
+        g, t = self._pressures(positions[self.body])
+        eps = self.eps()
+        if eps > 0:
+            value = float(np.sum(self.areas * t * t) / (2 * eps))
+        else:  # a penalty curve at 0: the limit W <L> g, up to a constant (the multipliers')
+            value = float(np.sum(self.areas * t * g))
         grad = hess = None
         if order >= 1:
             d = dofs[self.body][self.nodes]  # (k, 3)
@@ -98,7 +108,7 @@ class RigidWall:
             np.add.at(grad, d, -(self.areas * t)[:, None] * self.normal)
         if order >= 2:
             on = t > 0
-            k = self.areas[on] * self.penalty
+            k = self.areas[on] * eps
             block = k[:, None, None] * np.outer(self.normal, self.normal)  # (k, 3, 3)
             d = dofs[self.body][self.nodes[on]]
             hess = sp.csr_matrix(

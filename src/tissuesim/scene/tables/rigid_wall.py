@@ -8,6 +8,7 @@ Lagrangian, as FEBio's rigid wall (``Simulation.add_rigid_wall``,
     facets = "zmin"                   # a facet set (default: the whole boundary)
     plane = [0, 0, 1, 0]              # a x + b y + c z = d; the body on the side (a, b, c)
     penalty = 1e5                     # Pa/m
+    penalty_scale = "min(1, 10 * t)"  # times this expression of t (FEBio's penalty curve)
     offset = "0.01 * t"               # m along the unit normal: a number or an expression of t
     augmented = false                 # FEBio's augmented Lagrangian, until the multipliers'
     tolerance = 0.01                  #   norm changes by less than this (relative),
@@ -23,7 +24,7 @@ __all__ = ["RIGID_WALL_KEYS", "add_rigid_walls"]
 
 RIGID_WALL_KEYS = (
     "name", "body", "facets", "plane", "penalty", "offset", "augmented", "tolerance",
-    "max_augmentations",
+    "max_augmentations", "penalty_scale",
 )  # fmt: skip
 
 
@@ -47,6 +48,12 @@ def add_rigid_walls(sim, data: dict, source: str) -> None:
             options["offset"] = lambda t, at=at: float(at(t)[0])
         else:
             options["offset"] = offset
+        if "penalty_scale" in item:
+            scale = item["penalty_scale"]
+            if isinstance(scale, bool) or not isinstance(scale, str | int | float):
+                raise SceneError(f"{where}: penalty_scale must be a number or an expression of t")
+            at = of_time([str(scale)], 1, f"{where} penalty_scale", "the penalty's scale")
+            options["penalty_scale"] = lambda t, at=at: float(at(t)[0])
         with _context(where):
             sim.add_rigid_wall(item.get("body", "body"), item["plane"], penalty=item["penalty"],
                                name=item.get("name"), **options)  # fmt: skip
