@@ -78,12 +78,18 @@ class RegionElastic:
 
 class RegionMaterials:
     """The materials of a body's regions, for what asks a body for one material: ``mu`` and
-    ``lam`` the largest over the regions (stiffness and penalty scales)."""
+    ``lam`` the largest over the regions (stiffness and penalty scales), ``cell_mu`` and
+    ``cell_lam`` each cell's region's (mesh order)."""
 
     def __init__(self, parts: list[RegionPart]) -> None:
         self.parts = parts
         self.mu = max(float(np.max(p.material.mu)) for p in parts)
         self.lam = max(float(np.max(p.material.lam)) for p in parts)
+        n = sum(p.cells.size for p in parts)  # per cell (mesh order), for per-cell scales
+        self.cell_mu, self.cell_lam = np.zeros(n), np.zeros(n)
+        for p in parts:
+            self.cell_mu[p.cells] = float(np.max(p.material.mu))
+            self.cell_lam[p.cells] = float(np.max(p.material.lam))
         if any(hasattr(p.material, "accept_step") for p in parts):  # a region's history:
             self.accept_step = self._accept_step  # the steps then call Model.begin/end_step
         if any(hasattr(p.material, "state_arrays") for p in parts):  # checkpoints ask

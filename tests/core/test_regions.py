@@ -53,6 +53,11 @@ def test_bar_of_two_materials_is_two_springs_in_series():
     fields = body.cell_fields(xc)
     np.testing.assert_array_equal(fields["region"], np.isin(np.arange(40), soft) == 0)
     np.testing.assert_allclose(fields["cauchy_stress"][:, 0, 0], F / W**2, rtol=1e-3)
+    materials = body.model.material  # scales: the stiffest region's, and each cell's
+    assert materials.mu == E2 / 2
+    np.testing.assert_array_equal(
+        materials.cell_mu, np.where(np.isin(np.arange(40), soft), E1 / 2, E2 / 2)
+    )
 
 
 @pytest.mark.parametrize("cell", ["tet", "hex"])
