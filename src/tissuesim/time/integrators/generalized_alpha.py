@@ -46,12 +46,17 @@ UpdateElementStress``): s <- s + D ((W_{n+1} - W_n) / (h J) - s : D) / (D : D), 
 at F_{n+1/2}, D = sym((F_{n+1} - F_n) F_{n+1/2}^-1) / h. That force has no potential: it is
 added as a dead load fixed during one minimisation and updated from its x_{n+1} until it no
 longer changes (a fixed point, the solution FEBio's Newton reaches). Bodies whose elastic
-energy is the plain point rule (``energies/elastic.py``) get it; others run the plain
-midpoint rule.
+energy is the plain point rule (``energies/elastic.py``) get it. A mean-dilatation body with a
+patch per element gets FEBio's three-field element's (``three_field_midpoint.py``: the element
+pressure at x_{n+1} and the correction with the points' energy); its fixed point is updated
+with Anderson's mixing and, where it does not settle (the points' U(J) against the element's
+pressure is as stiff as the bulk modulus: non-uniform J in an element), that step is the plain
+midpoint rule, as before. Other bodies run the plain midpoint rule.
 """
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Sequence
 
@@ -59,6 +64,11 @@ import numpy as np
 
 from tissuesim.energies.loads import ExternalForce
 from tissuesim.errors import InputError, InvertedElementError
+from tissuesim.time.integrators.three_field_midpoint import (
+    EndPressure,
+    end_pressure_correction,
+    takes_end_pressure,
+)
 from tissuesim.time.state import State, StepOutcome
 
 __all__ = [
@@ -114,14 +124,20 @@ def check_generalized_alpha(
 MIDPOINT_UPDATES, MIDPOINT_TOLERANCE = 8, 1e-10
 
 
-def midpoint_correction(model, x0: np.ndarray, x1: np.ndarray, h: float) -> np.ndarray | None:
+def midpoint_correction(
+    model, x0: np.ndarray, x1: np.ndarray, h: float, three_field: bool = True
+) -> np.ndarray | None:
     """FEBio's energy-conserving correction of the midpoint rule (``FEElasticSolidDomain::
     UpdateElementStress`` with alpha_f = 1/2) as nodal forces (n_dofs,) of one FEM body, the
-    gradient's share: sum_q w_q J (D c) F^-T : grad N; None where the body's elastic energy is
-    not the plain point rule."""
+    gradient's share: sum_q w_q J (D c) F^-T : grad N; a three-field body's
+    (``three_field_midpoint.end_pressure_correction``; None with ``three_field`` False); None
+    where the body's elastic energy is neither."""
     from tissuesim.energies.elastic import ElasticEnergy
 
-    if not isinstance(getattr(model, "elastic", None), ElasticEnergy):
+    elastic = getattr(model, "elastic", None)
+    if takes_end_pressure(elastic):  # FEBio's three-field shell: three_field_midpoint.py
+        return end_pressure_correction(elastic, x0, x1, h) if three_field else None
+    if not isinstance(elastic, ElasticEnergy):
         return None
     K, material = model.kinematics, model.material
     F0, F1 = K.deformation_gradients(x0), K.deformation_gradients(x1)
@@ -195,49 +211,16 @@ def generalized_alpha_step(
     carried = State(state.time, state.x, to_y_pred / h_e)
     intermediate = _Intermediate(system, state.time + alpha_f * h)
     energies = kwargs.pop("energies")
-    corrections: list | None = None  # the midpoint correction's forces per body, or None
-    for _ in range(MIDPOINT_UPDATES + 1):
-
-        def step_energies(t, c_pred, h_step, corrections=corrections):
-            out = energies(t, c_pred, h_step)
-            if corrections is None:
-                return out
-            return [
-                [*e, ExternalForce(-f)] if f is not None else e
-                for e, f in zip(out, corrections, strict=True)
-            ]
-
-        outcome = implicit_step(
-            intermediate,
-            carried,
-            h_e,
-            solver,
-            options,
-            dynamic=True,
-            t_end=t1,
-            friction_h=h,
-            energies=step_energies,
-            **kwargs,
-        )
-        if not outcome.converged:
-            return outcome
-        y = outcome.state.x
-        x1 = system.retract(state.x, system.difference(y, state.x) / alpha_f)
-        x1 = system.apply_prescribed(x1, t1)
-        if alpha_f != 0.5:
-            break
-        try:
-            updated = _corrections(system, state.x, x1, h)
-        except InvertedElementError:
-            updated = [np.array([np.nan])]
-        if updated is not None and not all(f is None or np.isfinite(f).all() for f in updated):
-            # an element inverted at x_n, x_{n+1} or between: a smaller step
-            return StepOutcome(None, False, outcome.newton, "the midpoint configuration inverts")
-        # settled: unchanged since the last solve (from none: nothing to correct, e.g. bodies
-        # that move rigidly)
-        if updated is None or _settled(system, corrections, updated):
-            break
-        corrections = updated
+    solve_y = functools.partial(implicit_step, intermediate, carried, h_e, solver, options,
+                                dynamic=True, t_end=t1, friction_h=h, **kwargs)  # fmt: skip
+    swaps = _end_pressures(system, state.x, alpha_f)
+    outcome, x1, settled = _solve(system, state, h, alpha_f, t1, solve_y, energies, swaps)
+    if swaps is not None and settled is not True:
+        # FEBio's three-field correction did not settle (its pointwise U(J) against the
+        # element's pressure is as stiff as the bulk modulus): the plain midpoint rule there
+        outcome, x1, settled = _solve(system, state, h, alpha_f, t1, solve_y, energies, None)
+    if settled is None:
+        return outcome
     x_pred = system.retract(state.x, to_pred)
     a1 = system.difference(x1, x_pred) / (beta * h * h)
     v1 = state.v + h * ((1.0 - gamma) * a_n + gamma * a1)
@@ -245,14 +228,107 @@ def generalized_alpha_step(
     return outcome
 
 
-def _corrections(system, x0: np.ndarray, x1: np.ndarray, h: float) -> list | None:
+def _solve(system, state, h: float, alpha_f: float, t1: float, solve_y, energies, swaps):
+    """The step in y with the midpoint correction updated to its fixed point: (outcome,
+    x_{n+1}, settled: True, False (not within MIDPOINT_UPDATES or an inverted midpoint with
+    three-field swaps) or None (failed: the outcome says why))."""
+    corrections: list | None = None  # the midpoint correction's forces per body, or None
+    three_field = swaps is not None
+    x1, changes = None, []  # the largest change of the correction per update
+    history = None  # Anderson's last (input, output) of the update
+    for _ in range(MIDPOINT_UPDATES + 1):
+
+        def step_energies(t, c_pred, h_step, corrections=corrections):
+            out = energies(t, c_pred, h_step)
+            if swaps is not None:
+                out = [[*e, w] if w is not None else e for e, w in zip(out, swaps, strict=True)]
+            if corrections is None:
+                return out
+            return [
+                [*e, ExternalForce(-f)] if f is not None else e
+                for e, f in zip(out, corrections, strict=True)
+            ]
+
+        outcome = solve_y(energies=step_energies)
+        if not outcome.converged:
+            return outcome, None, False if three_field else None
+        y = outcome.state.x
+        x1 = system.retract(state.x, system.difference(y, state.x) / alpha_f)
+        x1 = system.apply_prescribed(x1, t1)
+        if alpha_f != 0.5:
+            return outcome, x1, True
+        try:
+            updated = _corrections(system, state.x, x1, h, three_field)
+        except InvertedElementError:
+            updated = [np.array([np.nan])]
+        if updated is not None and not all(f is None or np.isfinite(f).all() for f in updated):
+            # an element inverted at x_n, x_{n+1} or between: a smaller step
+            failed = StepOutcome(None, False, outcome.newton, "the midpoint configuration inverts")
+            return failed, None, False if three_field else None
+        # settled: unchanged since the last solve (from none: nothing to correct, e.g. bodies
+        # that move rigidly)
+        if updated is None or _settled(system, corrections, updated):
+            return outcome, x1, True
+        change = _change(corrections, updated)
+        if three_field and len(changes) >= 2 and change > 0.9 * changes[-1]:
+            return outcome, x1, False  # not contracting: the fallback at once
+        changes.append(change)
+        if three_field:  # Anderson's mixing of depth 1 (the update is slow, 0.5 to 0.9)
+            updated, history = _mixed(corrections, updated, history)
+        corrections = updated
+    return outcome, x1, False if three_field else True
+
+
+def _end_pressures(system, x0: np.ndarray, alpha_f: float) -> list | None:
+    """At alpha_f = 1/2, each three-field body's ``EndPressure`` energy (None for the others;
+    None where no body has one)."""
+    if alpha_f != 0.5:
+        return None
+    out = [
+        EndPressure(body.elastic, x0[system.config_slices[j]], alpha_f)
+        if takes_end_pressure(getattr(body, "elastic", None))
+        else None
+        for j, body in enumerate(system.bodies)
+    ]
+    return out if any(w is not None for w in out) else None
+
+
+def _corrections(
+    system, x0: np.ndarray, x1: np.ndarray, h: float, three_field: bool = True
+) -> list | None:
     """The midpoint correction of every FEM body (None entries for the others; None where no
     body has one)."""
     out = []
     for j, body in enumerate(system.bodies):
         sc = system.config_slices[j]
-        out.append(midpoint_correction(body, x0[sc], x1[sc], h))
+        out.append(midpoint_correction(body, x0[sc], x1[sc], h, three_field))
     return out if any(f is not None for f in out) else None
+
+
+def _mixed(inputs: list | None, outputs: list, history):
+    """Anderson's mixing (depth 1) of the fixed point c = G(c) over the bodies' corrections:
+    from the residuals r = G(c) - c of this update and the last, the next input G(c) - theta
+    (G(c) - G(c_last)), theta minimising |r - theta (r - r_last)|; and the history."""
+    c = [np.zeros_like(g) if g is not None and (inputs is None or inputs[j] is None) else
+         (inputs[j] if g is not None else None) for j, g in enumerate(outputs)]  # fmt: skip
+    if history is None:
+        return outputs, (c, outputs)
+    c_last, g_last = history
+    keep = [j for j, g in enumerate(outputs) if g is not None and g_last[j] is not None]
+    r = np.concatenate([outputs[j] - c[j] for j in keep])
+    dr = r - np.concatenate([g_last[j] - c_last[j] for j in keep])
+    denominator = float(dr @ dr)
+    theta = float(r @ dr) / denominator if denominator > 0 else 0.0
+    mixed = [g if g is None or g_last[j] is None else g - theta * (g - g_last[j])
+             for j, g in enumerate(outputs)]  # fmt: skip
+    return mixed, (c, outputs)
+
+
+def _change(old: list | None, new: list) -> float:
+    """The largest change of any body's correction from ``old`` (None: from zero)."""
+    old = old if old is not None else [None if f is None else 0.0 for f in new]
+    return max(float(np.abs(a - b).max(initial=0.0)) for a, b in zip(old, new, strict=True)
+               if b is not None)  # fmt: skip
 
 
 def _settled(system, old: list | None, new: list) -> bool:
