@@ -477,7 +477,9 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--suite", type=Path, help="TestSuite root, or a folder of .feb files")
     parser.add_argument("--gold", type=Path, help="gold-standard file (default: the suite's)")
-    parser.add_argument("--only", default="*", help="glob on the model names, e.g. 'mi*'")
+    parser.add_argument(
+        "--only", default="*", help="globs on the model names, '|' between, e.g. 'mi*|co16'"
+    )
     parser.add_argument("--timeout", type=float, default=300.0, help="seconds per model")
     parser.add_argument("--jobs", type=int, default=1, help="models run at once")
     parser.add_argument("--out", type=Path, default=RESULTS, help="stem of the .csv and .md")
@@ -504,7 +506,9 @@ def main() -> None:
     if not gold_path.is_file():
         parser.error(f"no gold-standard file {gold_path}: give it with --gold")
     gold = read_gold(gold_path)
-    paths = [p for p in sorted(verify.glob("*.feb")) if fnmatch.fnmatch(p.stem, args.only)]
+    globs = args.only.split("|")
+    paths = [p for p in sorted(verify.glob("*.feb"))
+             if any(fnmatch.fnmatch(p.stem, g) for g in globs)]  # fmt: skip
     if not paths:
         parser.error(f"no .feb model matching {args.only!r} in {verify}")
 

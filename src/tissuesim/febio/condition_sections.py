@@ -340,8 +340,9 @@ def _contact(model: FebModel, section: Node) -> None:
                 if key in p and float(_floats(p[key], 1)[0]) != 0.0:
                     raise _unsupported(p[key], f"a tied contact's {key} = {p[key].text.strip()}")
             item["penalty"] = _penalty_settings(kind, c, p)
-        elif kind != "rigid_wall" and item["friction"] == 0.0:
-            item["penalty"] = _penalty_settings(kind, c, p)  # FEBio's own enforcement
+        elif kind != "rigid_wall":  # FEBio's own enforcement, its friction too
+            item["penalty"] = _penalty_settings(kind, c, p)
+            item["penalty"].update(_friction_settings(kind, p, item["friction"]))
         else:
             tuning = sorted(set(p) & CONTACT_TUNING)
             if tuning:
@@ -397,12 +398,32 @@ def _penalty_settings(kind: str, c: Node, p: dict) -> dict:
         "max_augmentations": int(number("maxaug", 10)),
         "search_tolerance": number(search, 0.01),
     }
+    if kind == "sliding-elastic" and methods[method]:  # its Augment updates, then checks
+        out["keep_last_augmentation"] = True
     if kind == "sticky":  # FEStickyInterface: nodes, tied once within snap_tol
         out.update(sticky=True, integration="nodes", snap_tolerance=number("snap_tol", 0.0),
                    max_traction=number("max_traction", 0.0))  # fmt: skip
     elif tied:
         out["tied"] = True
     return out
+
+
+def _friction_settings(kind: str, p: dict, mu: float) -> dict:
+    """FEBio's Coulomb friction of a sliding contact (contact/penalty/friction.py): the
+    sliding-elastic holds stick by its normal penalty; node-on-facet by its ``fric_penalty``,
+    with no friction unless both it and ``fric_coeff`` are positive (``FESlidingInterface``)."""
+    if mu < 0:
+        raise p["fric_coeff"].error(f"fric_coeff = {mu}: give a friction coefficient >= 0")
+    if mu == 0 or kind == "sliding-facet-on-facet":
+        return {}
+    if kind == "sliding-node-on-facet":
+        eps_t = float(_floats(p["fric_penalty"], 1)[0]) if "fric_penalty" in p else 0.0
+        if eps_t < 0:
+            raise p["fric_penalty"].error(f"fric_penalty = {eps_t}: give a penalty >= 0")
+        if eps_t == 0:
+            return {}
+        return {"friction": mu, "friction_penalty": eps_t, "friction_anchor": "contact"}
+    return {"friction": mu}
 
 
 def _globals(model: FebModel, section: Node) -> None:

@@ -44,6 +44,10 @@ class PenaltySpec:
     sticky: bool = False
     snap_tolerance: float = 0.0
     max_traction: float = 0.0
+    friction: float = 0.0
+    friction_penalty: float = 0.0
+    friction_anchor: str = "step"
+    keep_last_augmentation: bool = False
 
 
 class PenaltyContactCalls:
@@ -71,6 +75,10 @@ class PenaltyContactCalls:
         sticky: bool = False,
         snap_tolerance: float = 0.0,
         max_traction: float = 0.0,
+        friction: float = 0.0,
+        friction_penalty: float = 0.0,
+        friction_anchor: str = "step",
+        keep_last_augmentation: bool = False,
         name: str | None = None,
     ) -> str:
         """Penalty contact: points of body ``primary``'s facets (a facet set name, (k, 3) or
@@ -88,7 +96,13 @@ class PenaltyContactCalls:
         tied contacts; the vector gap, tension too); ``sticky``: a point is tied where it
         projects once it comes within ``snap_tolerance`` (m) of the secondary surface, and lets
         go where its normal traction passes ``max_traction`` (Pa; 0: never; FEBio's sticky
-        contact). Its force on ``primary`` is reported by
+        contact). ``friction``: Coulomb's coefficient, stick held by the tangential penalty
+        ``friction_penalty`` (Pa/m; 0: the normal penalty) and slip at friction x pressure,
+        FEBio's return map (contact/penalty/friction.py), from anchors set where the points
+        project at each step's start (``friction_anchor`` "step", FEBio's sliding-elastic) or
+        where they first projected ("contact", its node-on-facet). ``keep_last_augmentation``:
+        the augmentation that finds the multipliers converged is kept for the next step
+        (FEBio's sliding-elastic). Its force on ``primary`` is reported by
         ``forces()`` under ``name`` (default ``penalty_contact<n>``). Returns the name."""
         for body in (primary, secondary):
             if body not in self.bodies or self.bodies[body].kind != "fem":
@@ -114,11 +128,25 @@ class PenaltyContactCalls:
             penalty = 1.0
         if tied and sticky:
             raise InputError("add_penalty_contact: a pair is tied or sticky, not both")
+        from tissuesim.contact.penalty.friction import ANCHORS
+
+        if friction_anchor not in ANCHORS:
+            raise InputError(
+                f"add_penalty_contact: friction_anchor {short(friction_anchor)}: give one of "
+                f"{', '.join(ANCHORS)}"
+            )
+        if friction and (tied or sticky):
+            raise InputError(
+                "add_penalty_contact: friction on a tied or sticky pair: its points are held "
+                "already; give friction = 0"
+            )
         checks = {"penalty": (penalty, True), "tolerance": (tolerance, False),
                   "snap_tolerance": (snap_tolerance, False),
                   "max_traction": (max_traction, False),
                   "gap_tolerance": (gap_tolerance, False),
-                  "search_tolerance": (search_tolerance, False)}  # fmt: skip
+                  "search_tolerance": (search_tolerance, False),
+                  "friction": (friction, False),
+                  "friction_penalty": (friction_penalty, False)}  # fmt: skip
         for key, (value, positive) in checks.items():
             ok = isinstance(value, int | float) and np.isfinite(value)
             ok = ok and (value > 0 if positive else value >= 0)
@@ -155,6 +183,10 @@ class PenaltyContactCalls:
                 bool(sticky),
                 float(snap_tolerance),
                 float(max_traction),
+                float(friction),
+                float(friction_penalty),
+                friction_anchor,
+                bool(keep_last_augmentation),
             )  # fmt: skip
         )
         self._system_dirty = True
@@ -181,6 +213,9 @@ class PenaltyContactCalls:
                 max_augmentations=spec.max_augmentations,
                 search_tolerance=spec.search_tolerance, tied=spec.tied, sticky=spec.sticky,
                 snap_tolerance=spec.snap_tolerance, max_traction=spec.max_traction,
+                friction=spec.friction, friction_penalty=spec.friction_penalty,
+                friction_anchor=spec.friction_anchor,
+                keep_last_augmentation=spec.keep_last_augmentation,
             )  # fmt: skip
             pair.setup([None if b is None else b for b in _rest(system)])
             pairs.append(pair)
@@ -202,6 +237,7 @@ def carry_penalty_state(old: list, new: list) -> None:
         for a, b in zip(before.passes, pair.passes, strict=True):
             if a.multipliers.shape == b.multipliers.shape:
                 b.multipliers, b.weights = a.multipliers, a.weights
+                b.friction = a.friction if b.friction is not None else None
 
 
 def _rest(system) -> list:

@@ -170,7 +170,7 @@ def implicit_step(
             friction = _start_friction(
                 contact, state.x, y0, h, friction_from, friction_h, lag_at, y1
             )
-    lags = _Lags(system, body_energies, c0, options, contact, friction)
+    lags = _Lags(system, body_energies, c0, options, contact, friction, state.x)
     relag, max_relags = lags.newton_relag(), lags.max_relags
 
     c1, record = minimize(
@@ -278,6 +278,15 @@ def _lagged_pressure(body_energies) -> bool:
 PENALTY_AREA_RELAGS = 10
 
 
+def _penalty_relags(pair) -> int:
+    """A penalty pair's re-lags in a step: its augmentations, its current areas' and its
+    friction's lags."""
+    from tissuesim.contact.penalty.friction import FRICTION_RELAGS
+
+    friction = FRICTION_RELAGS if getattr(pair, "friction", 0) > 0 else 0
+    return pair.max_augmentations + PENALTY_AREA_RELAGS + friction
+
+
 class _Lags:
     """The lagged terms of one step, re-lagged together by Newton's ``relag``: friction (IPC,
     ``friction_iterations`` - 1 re-lags, then kept) and the follower pressures on open
@@ -285,7 +294,8 @@ class _Lags:
     ``gradient_tolerance``, at most ``MAX_RELAGS`` times; ``check`` fails a solve that ends
     with one unsettled, so the step is halved and retried instead of accepted)."""
 
-    def __init__(self, system, body_energies, c0, options, contact=None, friction=None):
+    def __init__(self, system, body_energies, c0, options, contact=None, friction=None,
+                 x_start=None):  # fmt: skip
         from tissuesim.energies.pressure_lag import MAX_RELAGS, PressureLags
 
         self.friction = friction  # relag(c, y) of _start_friction, or None
@@ -303,15 +313,17 @@ class _Lags:
         self.febio_joints = any(getattr(j, "enforcement", None) for j in joints)
         # contact/penalty/pair.py: augmentations and lagged current areas, counted per solve
         self.penalty = list(getattr(system, "penalty_contacts", ()))
-        for pair in self.penalty:
-            pair.begin_step()
+        if self.penalty:  # friction anchored at the last converged positions
+            at = None if x_start is None else system.body_positions_and_dofs(x_start)[0]
+            for pair in self.penalty:
+                pair.begin_step(at)
         from tissuesim.rigid.joints import MAX_UPDATES
 
         self.max_relags = max(
             self.friction_max,
             MAX_RELAGS if self.pressures else 0,
             MAX_UPDATES if self.joints else 0,
-            max((p.max_augmentations + PENALTY_AREA_RELAGS for p in self.penalty), default=0),
+            max((_penalty_relags(p) for p in self.penalty), default=0),
         )
 
     def relag(self, c: np.ndarray, y: np.ndarray | None = None) -> bool:
@@ -393,7 +405,7 @@ def _step_with_moving_obstacles(
     if contact.has_friction:
         # inside the solves, as in implicit_step: the lag at the loosely converged point
         friction = _start_friction(contact, state.x, y, h, friction_from, friction_h)
-    lags = _Lags(system, body_energies, c0, options, contact, friction)
+    lags = _Lags(system, body_energies, c0, options, contact, friction, state.x)
 
     c1, y1, record, results = solve_with_moving_obstacles(
         system,

@@ -27,6 +27,7 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.spatial import cKDTree
 
+from tissuesim.contact.penalty import friction as coulomb
 from tissuesim.contact.penalty.faces import (
     Facets,
     SamplePoints,
@@ -67,6 +68,7 @@ class PenaltyPass:
     weights: np.ndarray  # W per point (reference, or the lagged current one)
     multipliers: np.ndarray  # L per point (Pa); tied and sticky: (points, 3)
     tie: tuple | None = None  # tied / sticky: (points held, their facets, (r, s))
+    friction: coulomb.FrictionState | None = None  # with a friction coefficient
     _last: tuple | None = None  # (positions, contacts) of the last search (_contacts)
 
 
@@ -98,6 +100,14 @@ class PenaltyContact:
     sticky: bool = False
     snap_tolerance: float = 0.0
     max_traction: float = 0.0
+    # Coulomb friction (friction.py): coefficient mu and the tangential penalty eps_t (Pa/m;
+    # 0: the normal one, as FEBio's sliding-elastic; node-on-facet gives its fric_penalty)
+    friction: float = 0.0
+    friction_penalty: float = 0.0
+    friction_anchor: str = "step"  # friction.ANCHORS
+    # FEBio's sliding-elastic keeps the multipliers of the augmentation that finds them
+    # converged (its Augment updates before it checks); facet-on-facet and node-on-facet do not
+    keep_last_augmentation: bool = False
     passes: list = field(default_factory=list)
     augmentations: int = 0  # in this step's solve
 
@@ -117,6 +127,8 @@ class PenaltyContact:
                 p.multipliers = np.zeros((len(w), 3))
             if self.sticky:  # nothing stuck yet
                 p.tie = (np.zeros(0, int), np.zeros(0, int), np.zeros((0, 2)))
+            if self.friction > 0:
+                p.friction = coulomb.FrictionState.empty(len(w))
             self.passes.append(p)
 
     # -- geometry --------------------------------------------------------------------------
@@ -171,6 +183,11 @@ class PenaltyContact:
     def _eps(self, p: PenaltyPass) -> np.ndarray:
         return self.penalty * p.sampled.scale[p.points.facet]
 
+    def _eps_t(self, p: PenaltyPass) -> np.ndarray:
+        if self.friction_penalty > 0:
+            return np.full(len(p.weights), self.friction_penalty)
+        return self._eps(p)
+
     # -- energy ---------------------------------------------------------------------------
     def evaluate(self, positions: list[np.ndarray], dofs: list[np.ndarray], n: int, order: int,
                  project_psd: bool = False):  # fmt: skip
@@ -183,6 +200,10 @@ class PenaltyContact:
             if self.tied or self.sticky:
                 value += self._tied_terms(p, positions, dofs, order, grad, rows, cols, vals)
                 continue
+            if p.friction is not None:
+                value += coulomb.friction_terms(p.friction, p, positions, dofs,
+                                                self._eps_t(p), self.friction, order, grad,
+                                                rows, cols, vals)  # fmt: skip
             pts, facet, rs, x = self._contacts(p, positions)
             if len(pts) == 0:
                 continue
@@ -292,6 +313,8 @@ class PenaltyContact:
             g, nu, _ = gap_derivatives(x, None, X, rs, p.target.facets.triangle[facet], 0)
             t = np.maximum(p.multipliers[pts] + self._eps(p)[pts] * g, 0.0)
             f = np.sum((p.weights[pts] * t)[:, None] * nu, axis=0)
+            if p.friction is not None:
+                f += coulomb.force(p.friction, p, positions, self._eps_t(p), self.friction)
             total += f if k == 0 else -f
             area += float(np.sum(p.weights[pts][t > 0]))
         return total, area
@@ -334,8 +357,16 @@ class PenaltyContact:
             p.tie = (held, facet, rs)
         return changed
 
-    def begin_step(self) -> None:
+    def begin_step(self, positions: list[np.ndarray] | None = None) -> None:
+        """A step starts from ``positions`` (the last converged ones): no augmentation yet,
+        friction anchored where the points project."""
         self.augmentations = 0
+        if positions is None:
+            return
+        for p in self.passes:
+            if p.friction is not None:
+                coulomb.anchor(p.friction, p, self._contacts(p, positions), positions,
+                               self._eps(p), p.multipliers, self.friction_anchor)  # fmt: skip
 
     def update(self, positions: list[np.ndarray]) -> bool:
         """At a converged solution: re-lag current-area weights and do FEBio's augmentation;
@@ -350,6 +381,14 @@ class PenaltyContact:
                 p.weights = w
         if self.sticky:
             changed = self._stick(positions) or changed
+        lagged = False
+        for p in self.passes:
+            if p.friction is not None:
+                contacts = self._contacts(p, positions)
+                lagged = coulomb.lag(p.friction, p, contacts, positions, self._eps(p),
+                                     p.multipliers, self._eps_t(p)) or lagged  # fmt: skip
+        if lagged:  # the friction's pressures settle before the multipliers are augmented
+            return True
         if not self.augmented:
             return changed
         old, new, gaps = 0.0, 0.0, []
@@ -373,6 +412,11 @@ class PenaltyContact:
             old += float(p.multipliers @ p.multipliers)
             new += float(L1 @ L1)
             gaps.append(g[g > 0])
+            if p.friction is not None:  # FEBio's norm holds the tangential multipliers too
+                o, nw, Lt = coulomb.augment(p.friction, p, positions, self._eps_t(p),
+                                            self.friction)  # fmt: skip
+                old, new = old + o, new + nw
+                L1 = (L1, Lt)
             updates.append(L1)
         old, new = np.sqrt(old), np.sqrt(new)
         lnorm = abs(new - old) / new if new != 0 else abs(new - old)
@@ -384,9 +428,12 @@ class PenaltyContact:
             converged = False
         if self.augmentations >= self.max_augmentations:
             converged = True
-        if not converged:
+        if not converged or self.keep_last_augmentation:
             for p, L1 in zip(self.passes, updates, strict=True):
+                if isinstance(L1, tuple):
+                    L1, p.friction.traction = L1
                 p.multipliers = L1
+        if not converged:
             self.augmentations += 1
             changed = True
         return changed

@@ -1,6 +1,6 @@
 """``[[penalty_contact]]``: FEBio-style penalty / augmented-Lagrangian contact between two FEM
 bodies' facet surfaces (``Simulation.add_penalty_contact``, ``contact/penalty/pair.py``);
-``convert`` writes one per FEBio sliding contact without friction.
+``convert`` writes one per FEBio sliding contact.
 
     [[penalty_contact]]
     name = "press"                    # its force on the primary body in forces.csv
@@ -22,6 +22,10 @@ bodies' facet surfaces (``Simulation.add_penalty_contact``, ``contact/penalty/pa
     sticky = false                    # tied where they touch (FEBio's sticky), from within
     snap_tolerance = 0.0              #   this distance (m), letting go above
     max_traction = 0.0                #   this normal traction (Pa; 0: never)
+    friction = 0.0                    # Coulomb's coefficient (FEBio's fric_coeff)
+    friction_penalty = 0.0            # stick's tangential penalty (Pa/m; 0: penalty's)
+    friction_anchor = "step"          # or "contact" (FEBio's node-on-facet)
+    keep_last_augmentation = false    # FEBio's sliding-elastic
 """
 
 from __future__ import annotations
@@ -35,9 +39,10 @@ PENALTY_KEYS = (
     "name", "primary", "secondary", "primary_facets", "secondary_facets", "penalty",
     "auto_penalty", "integration", "area", "two_pass", "augmented", "tolerance",
     "gap_tolerance", "min_augmentations", "max_augmentations", "search_tolerance", "tied",
-    "sticky", "snap_tolerance", "max_traction",
+    "sticky", "snap_tolerance", "max_traction", "friction", "friction_penalty",
+    "friction_anchor", "keep_last_augmentation",
 )  # fmt: skip
-_FLAGS = ("auto_penalty", "two_pass", "augmented", "tied", "sticky")
+_FLAGS = ("auto_penalty", "two_pass", "augmented", "tied", "sticky", "keep_last_augmentation")
 _COUNTS = ("min_augmentations", "max_augmentations")
 
 
@@ -49,7 +54,8 @@ def add_penalty_contacts(sim, data: dict, source: str) -> None:
         for key in ("primary", "secondary"):
             if not isinstance(item.get(key), str):
                 raise SceneError(f"{where}: {key} must be a body's name")
-        for key in ("primary_facets", "secondary_facets", "name", "integration", "area"):
+        for key in ("primary_facets", "secondary_facets", "name", "integration", "area",
+                    "friction_anchor"):  # fmt: skip
             if key in item and not isinstance(item[key], str):
                 raise SceneError(f"{where}: {key} must be a text")
         for key in _FLAGS:

@@ -1,0 +1,263 @@
+"""Coulomb friction of a penalty contact pass, as FEBio's sliding contacts enforce it
+(``FESlidingElasticInterface::ContactTraction``, ``FESlidingInterface::ContactNodalForce``):
+each point is anchored at the start of a step to the place on the secondary surface it
+projected to (a facet and its natural coordinates, moving with that facet), and the trial
+tangential traction
+
+    tau = P (Lt + eps_t d),     d = x - a,     P = I - n n^T,
+
+(x the point, a its anchor, n the contact normal, Lt FEBio's tangential multiplier: 0 for a
+penalty method, the last converged traction for the augmented Lagrangian) is returned to the
+Coulomb cone |tau| <= mu p_n. That return map is the derivative of one convex energy per point,
+
+    W phi(tau),   phi = |tau|^2 / (2 eps_t)                    if |tau| <= m = mu p_n (stick)
+                  phi = (m |tau| - m^2 / 2) / eps_t            otherwise (slip),
+
+C1 across the cone, so the friction is one more energy in the incremental potential once the
+normal pressure p_n and the normal n are lagged; they are re-lagged at converged solutions
+(``lag``) until they settle, which is FEBio's fixed point (FEBio evaluates them at the current
+iterate, with a non-symmetric stiffness). Its gradient on the point is W (tau, or m tau/|tau|);
+Hessian W eps_t P (stick) or W (m eps_t / |tau|) (P - t t^T) (slip, t = tau/|tau|), on the
+stencil weights (H of the point, -H of the anchor).
+
+A fresh point (FEBio's sliding-elastic: one not in contact at the step's start) slides in
+its first step whatever its traction, at m along its slip direction: here that direction is
+lagged too (the traction m s, s the last lag's unit trial traction, 0 at first: a linear energy
+W m s . d), since m |tau| is not smooth where the slip is zero.
+
+Where FEBio differs: it anchors a point only once it is in contact (its first step in contact
+slips), its sliding-elastic stick couples the normal gap into the same vector penalty, and
+node-on-facet measures slip in the secondary's reference metric; here the normal stays the
+pair's gap penalty and the slip is measured in the current configuration.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from tissuesim.contact.penalty.faces import shape
+from tissuesim.contact.penalty.projection import gap_derivatives
+
+__all__ = ["FrictionState", "anchor", "augment", "force", "friction_terms", "lag", "return_map"]
+
+#: relative change of a lagged normal pressure (to the largest) or normal below which the
+#: friction lag has settled
+LAG_SETTLED = 1e-8
+#: a fresh point's slip below this fraction of its size (square root of its area weight) has
+#: no direction
+SLIP_ROUNDOFF = 1e-9
+#: friction re-lags per step beyond the augmentations (then the lag is kept)
+FRICTION_RELAGS = 15
+
+
+@dataclass(eq=False)
+class FrictionState:
+    """A pass's friction, per point of the pass: its anchor (a facet of the secondary, -1
+    for none, and natural coordinates there), the lagged pressure and normal, whether it
+    slides whatever its traction (``fresh``: FEBio's sliding-elastic slides a point in the
+    step it comes into contact), and the tangential multiplier Lt (kept across steps)."""
+
+    traction: np.ndarray  # Lt (points, 3), Pa
+    facet: np.ndarray  # (points,), -1: not anchored
+    rs: np.ndarray  # (points, 2)
+    pressure: np.ndarray  # (points,), Pa
+    normal: np.ndarray  # (points, 3)
+    fresh: np.ndarray  # (points,) bool
+    direction: np.ndarray  # (points, 3): a fresh point's slip direction, lagged
+    relags: int = 0  # in this step
+
+    @classmethod
+    def empty(cls, n_points: int) -> FrictionState:
+        return cls(np.zeros((n_points, 3)), np.full(n_points, -1), np.zeros((n_points, 2)),
+                   np.zeros(n_points), np.zeros((n_points, 3)), np.zeros(n_points, bool),
+                   np.zeros((n_points, 3)))  # fmt: skip
+
+
+def _pressures(p, contacts, positions, eps, multipliers):
+    """(points, p_n, n) of pass p's points with a facet now."""
+    pts, facet, rs, x = contacts
+    if len(pts) == 0:
+        return pts, np.zeros(0), np.zeros((0, 3))
+    X = positions[p.target.body][p.target.facets.corners[facet]]
+    g, nu, _ = gap_derivatives(x, None, X, rs, p.target.facets.triangle[facet], 0)
+    return pts, np.maximum(multipliers[pts] + eps[pts] * g, 0.0), nu
+
+
+#: where a point is anchored: "step": where it projects at each step's start (FEBio's
+#: sliding-elastic; a point not in contact then slides in this step); "contact": where it first
+#: projected, kept while it projects (FEBio's sliding-node-on-facet)
+ANCHORS = ("step", "contact")
+
+
+def anchor(state: FrictionState, p, contacts, positions, eps, multipliers, how: str) -> None:
+    """At a step's start (the last converged positions): the anchors (``ANCHORS``), the
+    lagged pressures and normals; a point that loses its anchor (``contact``) or its contact
+    (``step``) loses its tangential multiplier, as FEBio resets it."""
+    pts, facet, rs, _ = contacts
+    _, pn, nu = _pressures(p, contacts, positions, eps, multipliers)
+    n = len(state.facet)
+    now = np.zeros(n, bool)
+    now[pts] = True
+    if how == "step":
+        touching = np.zeros(n, bool)
+        touching[pts[pn > 0]] = True
+        state.traction[~touching] = 0.0
+        state.facet[:] = -1
+        state.facet[pts], state.rs[pts] = facet, rs
+        state.fresh = ~touching
+    else:
+        state.facet[~now] = -1
+        state.traction[~now] = 0.0
+        new = pts[state.facet[pts] < 0]
+        k = np.searchsorted(pts, new)
+        state.facet[new], state.rs[new] = facet[k], rs[k]
+        state.fresh[:] = False
+    state.pressure[:] = 0.0
+    state.pressure[pts], state.normal[pts] = pn, nu
+    state.direction[:] = 0.0
+    state.relags = 0
+
+
+def lag(state: FrictionState, p, contacts, positions, eps, multipliers, eps_t) -> bool:
+    """At a converged solution: the anchored points' pressures and normals now (and fresh
+    points' slip directions); whether they moved by more than ``LAG_SETTLED`` (then Newton
+    solves again, at most ``FRICTION_RELAGS`` times a step)."""
+    turned = _turn(state, p, positions, eps_t)
+    pts, pn, nu = _pressures(p, contacts, positions, eps, multipliers)
+    new_p = np.zeros_like(state.pressure)
+    new_n = state.normal.copy()
+    new_p[pts], new_n[pts] = pn, nu
+    new_p[state.facet < 0] = 0.0
+    scale = max(float(np.max(new_p, initial=0.0)), float(np.max(state.pressure, initial=0.0)))
+    on = new_p > 0
+    moved = scale > 0 and (
+        float(np.max(np.abs(new_p - state.pressure), initial=0.0)) > LAG_SETTLED * scale
+        or float(np.max(np.abs(new_n - state.normal)[on], initial=0.0)) > LAG_SETTLED
+    )
+    state.pressure, state.normal = new_p, new_n
+    if (moved or turned) and state.relags < FRICTION_RELAGS:
+        state.relags += 1
+        return True
+    return False
+
+
+def _turn(state: FrictionState, p, positions, eps_t) -> bool:
+    """Fresh points' slip directions re-lagged to their unit trial tractions; whether any
+    turned by more than ``LAG_SETTLED``."""
+    pts, _, d = _geometry(state, p, positions)
+    pts_f = state.fresh[pts]
+    if not pts_f.any():
+        return False
+    pts, d = pts[pts_f], d[pts_f]
+    tau, _ = _trial(state, pts, d, eps_t[pts])
+    size = np.linalg.norm(tau, axis=1)
+    # a slip below 1e-9 of the point's size is round-off (a point pressed straight in): no
+    # direction, no friction (FEBio's zero slip direction)
+    tiny = SLIP_ROUNDOFF * np.sqrt(p.weights[pts]) * eps_t[pts]
+    s = np.where((size > tiny)[:, None], tau / np.where(size > 0, size, 1.0)[:, None], 0.0)
+    turned = float(np.max(np.abs(s - state.direction[pts]))) > LAG_SETTLED
+    state.direction[pts] = s
+    return turned
+
+
+def _geometry(state: FrictionState, p, positions):
+    """(points anchored and pressed, stencil weights (n, 8), d = x - a (n, 3))."""
+    pts = np.flatnonzero((state.facet >= 0) & (state.pressure > 0))
+    facet, rs = state.facet[pts], state.rs[pts]
+    sf, tf = p.sampled.facets, p.target.facets
+    Hs = p.points.H[pts]
+    x = np.einsum("na,nad->nd", Hs, positions[p.sampled.body][sf.corners[p.points.facet[pts]]])
+    Ha = shape(rs[:, 0], rs[:, 1], tf.triangle[facet])
+    a = np.einsum("na,nad->nd", Ha, positions[p.target.body][tf.corners[facet]])
+    return pts, np.concatenate([Hs, -Ha], axis=1), x - a
+
+
+def return_map(tau: np.ndarray, m: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(the traction on the cone |t| <= m, whether each point sticks)."""
+    size = np.linalg.norm(tau, axis=1)
+    stick = size <= m
+    scale = np.where(stick, 1.0, m / np.where(size > 0, size, 1.0))
+    return tau * scale[:, None], stick
+
+
+def _trial(state, pts, d, eps_t):
+    n = state.normal[pts]
+    v = state.traction[pts] + eps_t[:, None] * d
+    return v - n * np.einsum("nd,nd->n", v, n)[:, None], n
+
+
+def friction_terms(state: FrictionState, p, positions, dofs, eps_t, mu: float, order: int,
+                   grad, rows_out, cols_out, vals_out) -> float:  # fmt: skip
+    """The pass's friction energy; its gradient and Hessian added in place (``order``).
+    ``eps_t``: the tangential penalty per point of the pass."""
+    pts, w, d = _geometry(state, p, positions)
+    if len(pts) == 0:
+        return 0.0
+    et = eps_t[pts]
+    W = p.weights[pts]
+    m = mu * state.pressure[pts]
+    tau, n = _trial(state, pts, d, et)
+    fresh = state.fresh[pts]
+    t, stick = return_map(tau, m)
+    size = np.linalg.norm(tau, axis=1)
+    phi = np.where(stick, size**2 / (2 * et), (m * size - m**2 / 2) / et)
+    s = state.direction[pts]
+    phi[fresh] = m[fresh] * np.einsum("nd,nd->n", s[fresh], d[fresh])  # lagged: linear
+    t[fresh] = m[fresh, None] * s[fresh]
+    value = float(np.sum(W * phi))
+    if order < 1:
+        return value
+    stencil = np.concatenate(
+        [
+            dofs[p.sampled.body][p.sampled.facets.corners[p.points.facet[pts]]],
+            dofs[p.target.body][p.target.facets.corners[state.facet[pts]]],
+        ],
+        axis=1,
+    ).reshape(len(pts), 24)
+    np.add.at(grad, stencil, (w[:, :, None] * (W[:, None] * t)[:, None, :]).reshape(-1, 24))
+    if order >= 2:
+        P = np.eye(3)[None] - n[:, :, None] * n[:, None, :]
+        safe = np.where(size > 0, size, 1.0)
+        that = tau / safe[:, None]
+        slip = ~stick
+        k = np.where(stick, W * et, np.where(size > 0, W * m * et / safe, 0.0))
+        k[fresh] = 0.0
+        D = P.copy()
+        D[slip] -= that[slip, :, None] * that[slip, None, :]
+        h = np.einsum("nab,nij->naibj", k[:, None, None] * w[:, :, None] * w[:, None, :], D)
+        rows_out.append(np.repeat(stencil, 24, axis=1).ravel())
+        cols_out.append(np.tile(stencil, (1, 24)).ravel())
+        vals_out.append(h.reshape(len(pts), 24, 24).ravel())
+    return value
+
+
+def force(state: FrictionState, p, positions, eps_t, mu: float) -> np.ndarray:
+    """The friction force the secondary surface puts on this pass's points (N, 3)."""
+    pts, _, d = _geometry(state, p, positions)
+    if len(pts) == 0:
+        return np.zeros(3)
+    return -np.sum(p.weights[pts][:, None] * _traction(state, pts, d, eps_t, mu), axis=0)
+
+
+def _traction(state, pts, d, eps_t, mu):
+    """The returned tractions of anchored points (fresh ones: along their lagged slip)."""
+    tau, _ = _trial(state, pts, d, eps_t[pts])
+    m = mu * state.pressure[pts]
+    t, _ = return_map(tau, m)
+    fresh = state.fresh[pts]
+    t[fresh] = m[fresh, None] * state.direction[pts][fresh]
+    return t
+
+
+def augment(state: FrictionState, p, positions, eps_t, mu: float) -> tuple:
+    """FEBio's augmentation of the tangential multipliers at a converged solution: Lt <- the
+    returned traction. (old and new squared norms, for the pair's convergence check, and the
+    new multipliers, which the pair keeps if it augments)."""
+    pts, _, d = _geometry(state, p, positions)
+    old = float(np.sum(state.traction**2))
+    out = state.traction.copy()
+    if len(pts):
+        out[pts] = _traction(state, pts, d, eps_t, mu)
+    return old, float(np.sum(out**2)), out
