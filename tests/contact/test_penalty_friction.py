@@ -130,3 +130,25 @@ def test_a_gently_dragged_block_sticks_below_the_cone():
     bottom = np.flatnonzero(sim.bodies["upper"].mesh.points[:, 2] < 0.5 + 1e-9)
     u = sim.body_displacement(body="upper")[bottom]
     assert np.max(np.abs(u[:, 0])) < 1e-6 * 0.0005 * 2
+
+
+@pytest.mark.parametrize(
+    "options, message",
+    [
+        ({"friction": -0.1}, "friction = -0.1: give a non-negative number"),
+        ({"friction": 0.2, "friction_penalty": -1.0}, "friction_penalty = -1.0"),
+        ({"friction": 0.2, "friction_anchor": "first"}, "friction_anchor 'first': give one of"),
+        ({"friction": 0.2, "tied": True}, "friction on a tied or sticky pair"),
+    ],
+)
+def test_bad_friction_settings_give_one_line(options, message):
+    from tissuesim.errors import InputError
+
+    lower, upper = _blocks()
+    sim = ts.Simulation(integrator="quasistatic", time_step=1.0)
+    law = NeoHookean(youngs_modulus=1000.0, poisson_ratio=0.0)
+    sim.add_body("lower", lower, law)
+    sim.add_body("upper", upper, law)
+    with pytest.raises(InputError, match=message) as error:
+        sim.add_penalty_contact("upper", "lower", penalty=1e4, **options)
+    assert "\n" not in str(error.value)

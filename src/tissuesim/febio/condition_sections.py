@@ -21,12 +21,13 @@ from tissuesim.febio.xml import Node
 __all__ = ["SECTIONS", "CONTACT_TYPES", "INTERPOLATIONS"]
 
 AXES = {"x": 0, "y": 1, "z": 2}
-#: FEBio contact types that map onto tissuesim's barrier contact
+#: FEBio's sliding contacts (tissuesim's penalty contact, contact/penalty/) and rigid wall
 CONTACT_TYPES = ("sliding-elastic", "sliding-facet-on-facet", "sliding-node-on-facet", "rigid_wall")
 #: FEBio's tied contacts: penalty contact with the points held where they project at rest
 TIED_TYPES = ("tied-elastic", "tied-node-on-facet", "tied-facet-on-facet", "sticky")
-#: children of <contact> that tune FEBio's enforcement (penalty, augmentation, search):
-#: tissuesim's barrier keeps the surfaces apart by itself
+#: children of <contact> that tune FEBio's enforcement (penalty, augmentation, search), read
+#: by _penalty_settings; FEBio's search_radius, seg_up, knmult, ktmult and
+#: symmetric_stiffness are not used (tissuesim's search and exact Hessian)
 CONTACT_TUNING = {
     "laugon", "tolerance", "gaptol", "penalty", "auto_penalty", "update_penalty", "two_pass",
     "knmult", "search_tol", "symmetric_stiffness", "search_radius", "seg_up", "minaug",
@@ -343,12 +344,7 @@ def _contact(model: FebModel, section: Node) -> None:
         elif kind != "rigid_wall":  # FEBio's own enforcement, its friction too
             item["penalty"] = _penalty_settings(kind, c, p)
             item["penalty"].update(_friction_settings(kind, p, item["friction"]))
-        else:
-            tuning = sorted(set(p) & CONTACT_TUNING)
-            if tuning:
-                model.note(c, "FEBio's contact enforcement settings not used "
-                           f"({', '.join(tuning)}): with friction, tissuesim's barrier keeps the "
-                           "surfaces apart")  # fmt: skip
+        # a rigid wall's settings are read by constraint_sections.take_rigid_walls
         model.contacts.append(item)
 
 

@@ -77,8 +77,6 @@ def _wall(model: FebModel, c: dict, k: int) -> dict | None:
     from tissuesim.febio.model import _children, _floats, _load, _unsupported
 
     node = c["node"]
-    prefix = f"{node.where()}: FEBio's contact enforcement settings not used"
-    model.notes[:] = [n for n in model.notes if not n.startswith(prefix)]  # they are now
     for child in node.children:
         if child.tag not in WALL_PARAMETERS:
             raise _unsupported(child, f"<{child.tag}> in a rigid_wall (FEBio's rigid wall "
