@@ -11,7 +11,6 @@ import numpy as np
 
 from tissuesim.febio.constraint_sections import rigid_wall_tables
 from tissuesim.febio.contact_scene import contact_tables
-from tissuesim.febio.contact_start import separate_touching
 from tissuesim.febio.curves import load_expression as _times
 from tissuesim.febio.discrete import spring_tables
 from tissuesim.febio.initial import initial_velocity
@@ -79,9 +78,8 @@ def _bodies(model: FebModel) -> list[dict]:
         # one region per (material, domain formulation): cells of one material each
         keys = [(_material_of(model, p), model.domains[p][1]) for p in parts]
         order = list(dict.fromkeys(keys))
-        label = np.concatenate(
-            [np.full(len(model.parts[p][1]), order.index(k)) for p, k in zip(parts, keys, strict=True)]
-        )
+        sizes = [len(model.parts[p][1]) for p in parts]
+        label = np.repeat([order.index(k) for k in keys], sizes)
         whole = rigid[parts[0]] is not None  # a rigid body is one body, whatever its pieces
         rows = [np.arange(len(cells))] if whole else _pieces(model, parts, cells)
         for piece in rows:
@@ -197,15 +195,13 @@ def _material_of(model: FebModel, part: str) -> str:
 
 def febio_scene(model: FebModel, stem: str) -> tuple[dict, dict]:
     """(the scene's tables, {mesh file name: Mesh}) for a FEBio model; mesh files are named
-    after ``stem`` (one per body). A contact pair that starts touching is set apart first
-    (``contact_start.py``: ``model.nodes`` moved, a line in ``model.changes``)."""
+    after ``stem`` (one per body)."""
     from tissuesim.mesh.checks import validate_mesh
 
     check_thickness(model)  # a shell part left without a thickness (febio/shells.py)
     named = scene_bodies(model)  # rigid bodies: [[rigid_bodies]] of a scene of [[bodies]]
     bodies = [b for _, b in named]
     several = _several(model, bodies)
-    dhat = separate_touching(model, bodies)  # contact that starts touching: moved apart
     tables_per_body, meshes, gravity = [], {}, np.zeros(3)
     for name, body in named:
         used = np.unique(body["cells"])
@@ -389,12 +385,10 @@ def febio_scene(model: FebModel, stem: str) -> tuple[dict, dict]:
                          lambda load, m: _times(load, m, windowed=False))  # fmt: skip
     if rigid:
         data["rigid_bodies"] = rigid
-    data.update(contact_tables(model, [n for n, _ in tables_per_body], bodies, meshes))
+    data.update(contact_tables(model, [n for n, _ in tables_per_body], meshes))
     walls = rigid_wall_tables(model, [n for n, _ in tables_per_body], meshes)
     if walls:  # FEBio's rigid walls as FEBio enforces them (febio/constraint_sections.py)
         data["rigid_wall"] = walls
-    if dhat is not None:
-        data["contact"] = {"dhat": dhat, **data["contact"]}
     names = rigid_names(rigid, model)
     joints = rigid_joints(model, names, lambda load, m: _times(load, m, windowed=False))
     if joints:
