@@ -90,9 +90,23 @@ class FemBody(VertexCouplings, FemOutput):
     def __repr__(self) -> str:
         return f"FemBody({self.name!r}, {self.mesh!r})"
 
+    _links_pending = False  # couplings added since the model was made (``_relink``)
+
+    @property
+    def model(self) -> Model:
+        """The body's element model (made again first if couplings were added since)."""
+        if self._links_pending:
+            self._links_pending = False
+            self._model = self._linked_model(self._model)
+        return self._model
+
+    @model.setter
+    def model(self, model: Model) -> None:
+        self._model, self._links_pending = model, False
+
     @property
     def mesh(self) -> Mesh:
-        return self.model.mesh
+        return self._model.mesh  # a relink keeps the mesh
 
     @property
     def dim(self) -> int:
