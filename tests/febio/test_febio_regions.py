@@ -102,3 +102,19 @@ def test_parts_of_two_element_types_on_shared_nodes_are_refused_in_one_line(tmp_
     with pytest.raises(InputError, match=r"mixed.feb:\d+ <Elements>: parts \['soft', 'stiff'\] "
                        r"share nodes but mix element types \['hexahedron', 'wedge'\]"):  # fmt: skip
         load_febio(path)
+
+
+def test_regions_of_parts_whose_names_clash_as_set_names_get_their_own_sets(tmp_path):
+    """Parts "b(1)" and "b_1" both read as the name "b_1": the second region's cell set is
+    "b_1_.region", so each region keeps its own cells."""
+    text = bar()
+    for part, new in (("soft", "b(1)"), ("stiff", "b_1")):
+        text = text.replace(f'name="{part}"><elem', f'name="{new}"><elem')
+        text = text.replace(f'<SolidDomain name="{part}"', f'<SolidDomain name="{new}"')
+    path = tmp_path / "clash.feb"
+    path.write_text(text)
+    tables, meshes = febio_scene(read_feb(path), "clash")
+    regions = tables["bodies"][0]["regions"]
+    assert [r["cells"] for r in regions] == ["b_1.region", "b_1_.region"]
+    (mesh,) = meshes.values()
+    assert [mesh.cell_sets[r["cells"]].tolist() for r in regions] == [[0], [1]]

@@ -252,7 +252,8 @@ def febio_scene(model: FebModel, stem: str) -> tuple[dict, dict]:
         region_sets = {}  # a cell set per region, named after a part; written first (a
         for region in body.get("regions", ()):  # mesh file's cell has one set: they win)
             set_name = f"{body_name(region['parts'][0], set())}.region"
-            while {set_name} & (cell_sets.keys() | point_sets.keys() | facet_sets.keys()):
+            taken = cell_sets.keys() | point_sets.keys() | facet_sets.keys() | region_sets.keys()
+            while set_name in taken:
                 set_name = f"{set_name.removesuffix('.region')}_.region"
             region_sets[set_name] = region["rows"]
         cell_sets = {**region_sets, **cell_sets}
