@@ -142,8 +142,9 @@ def crash_line(exc: BaseException) -> str:
     return one_line(exc) + where
 
 
-def run_one(path: Path) -> dict[str, Any]:
-    """Convert, run and measure one model (in the child process)."""
+def run_one(path: Path, febio_solver: bool = False) -> dict[str, Any]:
+    """Convert, run and measure one model (in the child process); ``febio_solver``: with
+    FEBio's quasi-Newton (``tissuesim run --febio-solver``)."""
     import warnings
 
     import numpy as np
@@ -157,7 +158,7 @@ def run_one(path: Path) -> dict[str, Any]:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             model = read_feb(path)
-            scene = load_febio(path)
+            scene = load_febio(path, febio_solver=febio_solver)
     except InputError as exc:
         out.update(status="refused", error=type(exc).__name__, message=one_line(exc))
         return out
@@ -272,14 +273,14 @@ def solution_norm(model: Any, sim: Any, np: Any, turns: dict | None = None) -> d
 
 
 # -- the parent: every model, a process each --------------------------------------------------
-def measure(path: Path, timeout: float) -> dict[str, Any]:
+def measure(path: Path, timeout: float, febio_solver: bool = False) -> dict[str, Any]:
     env = dict(os.environ)
     for key in CHILD_ENV:
         env[key] = "1"
     start = time.perf_counter()
     try:
         done = subprocess.run(
-            [sys.executable, __file__, "--one", str(path)],
+            [sys.executable, __file__, "--one", str(path)] + ["--febio-solver"] * febio_solver,
             capture_output=True, text=True, env=env, timeout=timeout,
         )  # fmt: skip
     except subprocess.TimeoutExpired:
@@ -487,9 +488,12 @@ def main() -> None:
     parser.add_argument("--command", help="the command named in the .md (with --report)")
     parser.add_argument("--at", default="", help="what was run, for the .md (a commit)")
     parser.add_argument("--one", type=Path, help=argparse.SUPPRESS)
+    parser.add_argument(
+        "--febio-solver", action="store_true", help="run with FEBio's quasi-Newton (its <solver>)"
+    )
     args = parser.parse_args()
     if args.one is not None:  # the child: one model, its result as one JSON line
-        print(json.dumps(run_one(args.one)))
+        print(json.dumps(run_one(args.one, args.febio_solver)))
         return
     if args.report is not None:  # the tables again, from the CSV of a run
         command = args.command or "python benchmarks/febio_suite.py"
@@ -513,7 +517,7 @@ def main() -> None:
         parser.error(f"no .feb model matching {args.only!r} in {verify}")
 
     def task(path: Path) -> dict[str, Any]:
-        row = {"model": path.stem, **measure(path, args.timeout)}
+        row = {"model": path.stem, **measure(path, args.timeout, args.febio_solver)}
         row["message"] = re.sub(r"\S*/(\w+\.feb)", r"\1", row.get("message", ""))  # no folder
         row["febio_steps"], row["febio_norm"] = febio_record(gold, path.stem)
         row["rel_error"] = relative(row.get("norm"), row["febio_norm"])
@@ -529,6 +533,7 @@ def main() -> None:
     if args.only != "*":
         command += f" --only '{args.only}'"
     command += f" --timeout {args.timeout:g} --jobs {args.jobs}"
+    command += " --febio-solver" * args.febio_solver
     text = summary(rows, command, args.at)
     args.out.parent.mkdir(parents=True, exist_ok=True)
     write_csv(rows, args.out.with_suffix(".csv"))

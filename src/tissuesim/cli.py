@@ -66,6 +66,7 @@ def _run(
     quiet: bool,
     field: str | None = None,
     resume: bool = False,
+    febio_solver: bool = False,
 ) -> int:
     import time
 
@@ -76,7 +77,11 @@ def _run(
     if scene_path.suffix.lower() == ".feb":  # a FEBio model, run as its converted scene
         from tissuesim.febio import load_febio
 
-        scene = load_febio(scene_path)
+        scene = load_febio(scene_path, febio_solver=febio_solver)
+    elif febio_solver:
+        from tissuesim.errors import InputError
+
+        raise InputError(f"{scene_path}: --febio-solver is for FEBio models (.feb)")
     else:
         scene = load_scene(scene_path)
     loaded = time.perf_counter()
@@ -270,6 +275,12 @@ def main(argv: list[str] | None = None) -> int:
         help="continue the run in --out from its checkpoint (killed or finished: give a larger "
         "--steps, which counts the whole run), bit-identical to an uninterrupted run",
     )
+    p_run.add_argument(
+        "--febio-solver",
+        action="store_true",
+        help="a FEBio model's steps solved by FEBio's quasi-Newton with its <solver> settings, "
+        "to FEBio's stopping point (default: tissuesim's Newton, converged tightly)",
+    )
     from tissuesim.render.scene import FIELDS
 
     fields = tuple(FIELDS)
@@ -316,6 +327,12 @@ def main(argv: list[str] | None = None) -> int:
     p_convert.add_argument("model", help="a FEBio 3.0 / 4.0 model (.feb)")
     p_convert.add_argument("scene", help="the scene to write (.toml); meshes go next to it")
     p_convert.add_argument("--force", action="store_true", help="overwrite existing files")
+    p_convert.add_argument(
+        "--febio-solver",
+        action="store_true",
+        help="write [newton] method 'febio' with the model's <solver> settings (FEBio's "
+        "quasi-Newton, to FEBio's stopping point)",
+    )
     p_info = sub.add_parser("info", parents=common, help="describe a mesh file and check it")
     p_info.add_argument("mesh", help="a mesh file (.msh, .vtu, .vtk, .inp, ... as meshio reads)")
     add_mesh_parser(sub, common)
@@ -415,6 +432,7 @@ def _dispatch(args) -> int:
             args.quiet,
             args.field,
             args.resume,
+            args.febio_solver,
         )
     if args.command == "demo":
         return _run(
@@ -427,7 +445,9 @@ def _dispatch(args) -> int:
     if args.command == "convert":
         from tissuesim.febio import convert_febio
 
-        written = convert_febio(args.model, args.scene, force=args.force)
+        written = convert_febio(
+            args.model, args.scene, force=args.force, febio_solver=args.febio_solver
+        )
         print(json.dumps({"written": [str(p) for p in written]}, indent=2))
         return 0
     if args.command == "info":

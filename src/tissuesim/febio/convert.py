@@ -15,10 +15,16 @@ __all__ = ["convert_febio"]
 
 
 def convert_febio(
-    path: str | os.PathLike[str], scene: str | os.PathLike[str], force: bool = False
+    path: str | os.PathLike[str],
+    scene: str | os.PathLike[str],
+    force: bool = False,
+    febio_solver: bool = False,
 ) -> list[Path]:
     """Write the scene ``scene`` (TOML) equivalent to the FEBio model ``path`` and the mesh
-    file(s) it references next to it; refuses to overwrite unless ``force``, and refuses
+    file(s) it references next to it; ``febio_solver``: its steps solved by FEBio's
+    quasi-Newton with the first step's <solver> settings (``[newton] method = "febio"``,
+    solve/quasin.py), to FEBio's stopping point, not by tissuesim's tight Newton. Refuses to
+    overwrite unless ``force``, and refuses
     outright an output that is the model itself or that two outputs share (``scene.msh``
     would be the scene and its own mesh). The scene and its meshes are written as one: all
     of them or, on a failure, none (the old files stay). Returns the paths written."""
@@ -29,6 +35,8 @@ def convert_febio(
     scene = Path(scene)
     model = read_feb(path)
     data, meshes = febio_scene(model, scene.stem)
+    if febio_solver:
+        _use_febio_solver(model, data)
     targets = [scene] + [scene.parent / f for f in meshes]
     if not scene.parent.is_dir():
         raise OutputError(f"{scene}: no directory {scene.parent}")
@@ -68,3 +76,23 @@ def convert_febio(
     for line in model.changes:  # one warning line each (run prints them too: load_febio)
         warnings.warn(f"changed: {line}", UserWarning, stacklevel=2)
     return targets
+
+
+def _use_febio_solver(model, data: dict) -> None:
+    """[newton] method = "febio" with the first step's <solver> settings (checked here, so a
+    bad one is refused in one line naming the model); its "not used" note dropped."""
+    from tissuesim.errors import InputError
+    from tissuesim.solve.febio_settings import FebioSettings
+
+    settings = dict(model.febio_solver or {})
+    try:
+        FebioSettings.from_table(settings)
+    except InputError as exc:
+        raise InputError(f"{model.source}: the first step's <solver>: {exc}") from None
+    newton = data.setdefault("newton", {})
+    newton["method"] = "febio"
+    if settings:
+        newton["febio"] = settings
+    if model.febio_solver_note is not None:
+        del model.notes[model.febio_solver_note]
+        model.febio_solver_note = None

@@ -97,6 +97,10 @@ class FebModel:
     newmark: tuple[float, float] | None = None
     newmark_parameters: tuple | None = None
     integrator_nodes: dict = field(default_factory=dict)
+    #: the first step's <solver> settings of FEBio's Quasin (solve/quasin.py's FebioSettings
+    #: keys; {} where it gives none) and the index of its "not used" note in ``notes``
+    febio_solver: dict | None = None
+    febio_solver_note: int | None = None
     #: one dict per <step> of a model of several (time_steps, step_size, analysis)
     phases: list = field(default_factory=list)
     #: the <time_stepper> of the Control being read (febio/time_stepper.py), its plot_level

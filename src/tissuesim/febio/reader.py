@@ -174,9 +174,46 @@ def _solver(model: FebModel, node: Node) -> None:
     if rhoi == -1.0:
         values["beta"], values["gamma"] = 0.25, 0.5
     model.newmark_parameters = (values["beta"], values["gamma"], rhoi, alpha, node)
+    first = model.febio_solver is None
+    if first:  # the first step's, for ``--febio-solver`` (FEBio's Quasin, solve/quasin.py)
+        model.febio_solver = _quasin_settings(node)
     if tuning:
+        if first:
+            model.febio_solver_note = len(model.notes)
         model.note(node, f"FEBio's solver settings ({', '.join(tuning)}) not used: tissuesim's "
                    "Newton converges to its own tolerances")  # fmt: skip
+
+
+#: <solver> settings of FEBio's Quasin (solve/quasin.py's FebioSettings) by their kind
+QUASIN_FLOATS = ("dtol", "etol", "rtol", "min_residual", "max_residual", "lstol", "lsmin", "cmax")
+QUASIN_INTS = ("lsiter", "max_ups", "max_refs")
+QUASIN_FLAGS = ("diverge_reform", "reform_each_time_step", "reform_augment")
+#: FEBio 2.5's <qnmethod> numbers
+QN_NUMBERS = {"0": "BFGS", "1": "Broyden"}
+
+
+def _quasin_settings(node: Node) -> dict:
+    """FEBio's Quasin settings a <solver> gives (its <qn_method type=...> and children
+    included, FEBio 2.5's flat <max_ups>, <cmax> and <qnmethod> too)."""
+    out: dict = {}
+    for c in node.children:
+        if c.tag == "qn_method":
+            kind = c.attrib.get("type") or (c.text or "").strip()
+            out["qn_method"] = QN_NUMBERS.get(kind, kind)
+            out.update(_quasin_settings(c))
+        elif c.tag == "qnmethod":
+            kind = (c.text or "").strip()
+            out["qn_method"] = QN_NUMBERS.get(kind, kind)
+        elif c.tag in QUASIN_FLOATS:
+            out[c.tag] = float(_floats(c, 1)[0])
+        elif c.tag in QUASIN_INTS:
+            out[c.tag] = int(_ints(c)[0])
+        elif c.tag in QUASIN_FLAGS:
+            text = (c.text or "").strip().lower()
+            if text not in ("0", "1", "true", "false"):
+                raise c.error(f"<{c.tag}> must be 0 or 1, not {text[:20]!r}")
+            out[c.tag] = text in ("1", "true")
+    return out
 
 
 def _newmark(model: FebModel) -> tuple[float, ...] | None:
@@ -242,6 +279,8 @@ def _control(model: FebModel, node: Node) -> None:
         else:
             raise _unsupported(child, "this Control setting is not supported by tissuesim")
     model.newmark = _newmark(model)
+    if model.febio_solver is None:  # the first step gives no <solver>: FEBio's defaults
+        model.febio_solver = {}
 
 
 from tissuesim.febio.condition_sections import SECTIONS as _CONDITION_SECTIONS  # noqa: E402

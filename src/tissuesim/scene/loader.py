@@ -115,10 +115,12 @@ def load_scene(path: str | Path) -> Scene:
     return build_scene(data, base_dir=path.parent, source=str(path), name=path.stem)
 
 
-def load_febio(path: str | Path) -> Scene:
+def load_febio(path: str | Path, febio_solver: bool = False) -> Scene:
     """The Scene of a FEBio model, built as its converted scene is (the scene and mesh files
     written to a temporary directory and loaded), so both run identically. The model's
-    notes (accepted settings tissuesim does not use) are printed as warnings."""
+    notes (accepted settings tissuesim does not use) are printed as warnings.
+    ``febio_solver``: solved by FEBio's quasi-Newton with its <solver> settings
+    (``convert_febio``'s, solve/quasin.py)."""
     import tempfile
     import warnings
 
@@ -128,8 +130,12 @@ def load_febio(path: str | Path) -> Scene:
     path = Path(path)
     with tempfile.TemporaryDirectory(prefix="tissuesim-febio-") as tmp:
         scene_path = Path(tmp) / f"{path.stem}.toml"
-        convert_febio(path, scene_path)
-        for note in read_feb(path).notes:
+        convert_febio(path, scene_path, febio_solver=febio_solver)
+        model = read_feb(path)
+        notes = list(model.notes)
+        if febio_solver and model.febio_solver_note is not None:
+            del notes[model.febio_solver_note]  # the settings are used
+        for note in notes:
             warnings.warn(f"not used: {note}", UserWarning, stacklevel=2)
         try:
             scene = load_scene(scene_path)

@@ -81,9 +81,30 @@ class NewtonOptions:
     reuse_factorization: bool = True
     max_line_search: int = 40
     armijo: float = 1e-4
+    # "newton": this module's solve to the tolerances above; "febio": FEBio's quasi-Newton
+    # (BFGS, its line search and its norms: solve/quasin.py) to FEBio's own stopping point,
+    # with the settings ``febio`` (a FebioSettings or a table of them; FEBio's defaults)
+    method: Literal["newton", "febio"] = "newton"
+    febio: object = None
 
     def __post_init__(self) -> None:
         from tissuesim import validate
+
+        validate.choice(self.method, "method", ("newton", "febio"))
+        if self.febio is not None or self.method == "febio":
+            from tissuesim.solve.febio_settings import FebioSettings
+
+            if self.method != "febio":
+                raise InputError("febio settings are used by method = 'febio' only: set it")
+            settings = self.febio
+            if settings is None:
+                settings = FebioSettings()
+            elif isinstance(settings, dict):
+                settings = FebioSettings.from_table(settings)
+            elif not isinstance(settings, FebioSettings):
+                given = validate.short(settings)
+                raise InputError(f"febio must be a table of FEBio's solver settings, not {given}")
+            object.__setattr__(self, "febio", settings)
 
         validate.choice(self.hessian_projection, "hessian_projection", ("auto", "always", "never"))
         validate.choice(self.criterion, "criterion", ("auto", "physical", "relative"))

@@ -25,7 +25,7 @@ from collections.abc import Callable
 import numpy as np
 import scipy.sparse.linalg as spla
 
-from tissuesim.errors import InstabilityError
+from tissuesim.errors import InputError, InstabilityError
 from tissuesim.solve.newton import minimize
 from tissuesim.system import is_frame_body
 from tissuesim.time.attempts.start import choose_start
@@ -65,6 +65,8 @@ def implicit_step(
     loads, the prescribed values and the obstacles (default state.time + h, while h sets the
     inertia); ``friction_from`` the contact vertices friction's slip is measured from (default
     the state's) and ``friction_h`` the step its smoothing velocity scales with (default h)."""
+    if options.method == "febio" and system.contact is not None:
+        raise InputError("newton method 'febio' does not run with barrier contact: use 'newton'")
     t1 = state.time + h if t_end is None else t_end
     c_pred = system.retract(state.x, h * state.v) if dynamic else None
     body_energies = energies(t1, c_pred, h)
@@ -146,6 +148,11 @@ def implicit_step(
             contact.obstacle_state = y1
         candidates = tuple(starts)
         max_step = contact.max_step
+    solve, febio = minimize, {}
+    if options.method == "febio":  # FEBio's Quasin (solve/quasin.py): from x_n, as FEBio
+        from tissuesim.solve.quasin import follow_pressures, minimize_febio
+
+        solve, febio, candidates = minimize_febio, {"prescribed_from": state.x}, (state.x,)
     start_acc = None
     if contact is None and not _lagged_pressure(body_energies):
         # the start's gradient is Newton's first evaluation: kept (nothing is set at c0)
@@ -171,9 +178,11 @@ def implicit_step(
                 contact, state.x, y0, h, friction_from, friction_h, lag_at, y1
             )
     lags = _Lags(system, body_energies, c0, options, contact, friction, state.x)
+    if febio:  # FEBio's follower pressures: the load at x in every residual, no re-lags
+        lags.pressures = follow_pressures(lags.pressures)
     relag, max_relags = lags.newton_relag(), lags.max_relags
 
-    c1, record = minimize(
+    c1, record = solve(
         evaluate,
         c0,
         system.elimination,
@@ -192,6 +201,7 @@ def implicit_step(
         budget=budget,
         start=start_acc if relag is None else None,
         relag_early=not (lags.penalty or lags.febio_joints),  # FEBio's: at converged points
+        **febio,
     )
     lags.check(c1, record)
     if contact is not None:
