@@ -358,3 +358,26 @@ def test_auto_penalty_is_youngs_modulus_times_facet_area_over_element_volume():
     with pytest.raises(InputError, match="bounds no element") as info:
         bad.step()
     assert "\n" not in str(info.value)
+
+
+def test_auto_penalty_takes_each_regions_modulus():
+    """The lower block made of two regions (its bottom layer E = 3000, its top layer, the one
+    behind the contact facets, E = 1000): the auto penalty of its facets is 1000 x A / V, not
+    the body's largest modulus."""
+    lower = box((0, 0, 0), (1, 1, 0.5), (2, 2, 2), element="hex")
+    upper = box((0, 0, 0.5), (1, 1, 1.0), (2, 2, 3), element="hex")
+    centres = lower.points[np.asarray(lower.cells)].mean(axis=1)
+    top = np.flatnonzero(centres[:, 2] > 0.25)
+    soft = NeoHookean(youngs_modulus=1000.0, poisson_ratio=0.0)
+    stiff = NeoHookean(youngs_modulus=3000.0, poisson_ratio=0.0)
+    sim = ts.Simulation(integrator="quasistatic", time_step=1.0)
+    sim.add_body("lower", lower, stiff, regions={"top": (top, soft)})
+    sim.add_body("upper", upper, NeoHookean(youngs_modulus=500.0, poisson_ratio=0.0))
+    sim.fix(np.flatnonzero(lower.points[:, 2] < 1e-9), body="lower", name="table")
+    sim.add_penalty_contact("upper", "lower", primary_facets="zmin", secondary_facets="zmax",
+                            penalty=1.0, auto_penalty=True)  # fmt: skip
+    sim.step()
+    pair = sim.system.penalty_contacts[0]
+    # lower's elements 0.5 x 0.5 x 0.25: A / V = 4; upper's 0.5 x 0.5 x 1/6: A / V = 6
+    np.testing.assert_allclose(pair.secondary.scale, 1000.0 * 4, rtol=1e-12)
+    np.testing.assert_allclose(pair.primary.scale, 500.0 * 6, rtol=1e-12)

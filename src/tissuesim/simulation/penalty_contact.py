@@ -275,13 +275,16 @@ def _side(spec: PenaltySpec, body: str, j: int, model, facets):
 def _auto_scale(model, facets) -> np.ndarray:
     """FEBio's ``FEContactInterface::AutoPenalty``: E x (facet area) / (volume of the element
     the facet bounds), at rest; E the material's Young's modulus (isotropic small-strain
-    equivalent, ``mu (3 lam + 2 mu) / (lam + mu)``)."""
+    equivalent, ``mu (3 lam + 2 mu) / (lam + mu)``; in a body of regions, the region's of the
+    element behind the facet)."""
     from tissuesim.contact.penalty.faces import area_jacobians, sample_points
 
     mesh = model.mesh
     cells = np.asarray(mesh.cells)
     volumes = model.kinematics.cell_weights
-    mu, lam = np.asarray(model.material.mu, float), np.asarray(model.material.lam, float)
+    material = model.material  # a body of regions: each cell's region's moduli
+    mu = np.asarray(getattr(material, "cell_mu", material.mu), float)
+    lam = np.asarray(getattr(material, "cell_lam", material.lam), float)
     E = mu * (3 * lam + 2 * mu) / (lam + mu)
     E = np.broadcast_to(E, (len(cells),)) if E.ndim == 0 else E
     points = sample_points(facets, "gauss")
