@@ -56,7 +56,7 @@ class _Memory:
     new_step: bool = True
 
 
-#: per linear solver of a simulation: its private direct solver and FEBio's memory
+#: FEBio's memory between steps, per linear solver of a simulation (one run)
 _MEMORY: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
 
