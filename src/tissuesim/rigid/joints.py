@@ -15,7 +15,7 @@ rest where the joint is given. Every residual is linear or bilinear in the featu
 
 (e the joint's axis, t its transverse axis, s = e x t), and each joint adds the augmented
 Lagrangian k/2 |g|^2 - lambda . g; after each Newton solve lambda <- lambda - k g until every
-residual is below TOLERANCE x the length scale (``time/steps.py``'s re-lags), so the joint
+residual is below TOLERANCE x the length scale (``time/lags.py``'s re-lags), so the joint
 holds to that tolerance whatever k. A joint given an ``Enforcement`` (FEBio's ``laugon``,
 ``tolerance``, ``penalty``, ``gaptol``, ``minaug``, ``maxaug``; the converter's) follows
 FEBio's rule instead (``FERigidJoint::Augment``, ``FERigidSphericalJoint::Augment``): its

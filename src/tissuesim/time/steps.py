@@ -36,6 +36,7 @@ from tissuesim.time.contact_step import (
     interactive_step,
     resolve_mode,
 )
+from tissuesim.time.lags import StepLags, lagged_pressure
 from tissuesim.time.state import State, StepOutcome
 
 __all__ = ["implicit_step", "explicit_step", "EnergyBuilder"]
@@ -154,7 +155,7 @@ def implicit_step(
 
         solve, febio, candidates = minimize_febio, {"prescribed_from": state.x}, (state.x,)
     start_acc = None
-    if contact is None and not _lagged_pressure(body_energies):
+    if contact is None and not lagged_pressure(body_energies):
         # the start's gradient is Newton's first evaluation: kept (nothing is set at c0)
         c0, start_acc = choose_start(
             evaluate, candidates, lambda c: system.apply_prescribed(c, t1), keep=True
@@ -177,7 +178,7 @@ def implicit_step(
             friction = _start_friction(
                 contact, state.x, y0, h, friction_from, friction_h, lag_at, y1
             )
-    lags = _Lags(system, body_energies, c0, options, contact, friction, state.x)
+    lags = StepLags(system, body_energies, c0, options, contact, friction, state.x)
     if febio:  # FEBio's follower pressures: the load at x in every residual, no re-lags
         lags.pressures = follow_pressures(lags.pressures)
     relag, max_relags = lags.newton_relag(), lags.max_relags
@@ -277,95 +278,6 @@ def _start_friction(
     return relag
 
 
-def _lagged_pressure(body_energies) -> bool:
-    """Whether a follower pressure is lagged this step (its lag is set at Newton's start)."""
-    from tissuesim.energies.pressure_lag import LaggedPressureEnergy
-
-    return any(isinstance(e, LaggedPressureEnergy) for body in body_energies for e in body)
-
-
-#: re-lags of a penalty pair's current-area weights beyond its augmentations
-PENALTY_AREA_RELAGS = 10
-
-
-def _penalty_relags(pair) -> int:
-    """A penalty pair's re-lags in a step: its augmentations, its current areas' and its
-    friction's lags."""
-    from tissuesim.contact.penalty.friction import FRICTION_RELAGS
-
-    friction = FRICTION_RELAGS if getattr(pair, "friction", 0) > 0 else 0
-    return pair.max_augmentations + PENALTY_AREA_RELAGS + friction
-
-
-class _Lags:
-    """The lagged terms of one step, re-lagged together by Newton's ``relag``: friction (IPC,
-    ``friction_iterations`` - 1 re-lags, then kept) and the follower pressures on open
-    surfaces (``energies/pressure_lag.py``: re-lagged until each settles to Newton's
-    ``gradient_tolerance``, at most ``MAX_RELAGS`` times; ``check`` fails a solve that ends
-    with one unsettled, so the step is halved and retried instead of accepted)."""
-
-    def __init__(self, system, body_energies, c0, options, contact=None, friction=None,
-                 x_start=None):  # fmt: skip
-        from tissuesim.energies.pressure_lag import MAX_RELAGS, PressureLags
-
-        self.friction = friction  # relag(c, y) of _start_friction, or None
-        self.friction_max = contact.settings.friction_iterations - 1 if friction else 0
-        self.friction_relags = 0
-        self.pressures = PressureLags.of(
-            system.config_slices, body_energies, options.gradient_tolerance
-        )
-        if self.pressures is not None:
-            self.pressures.start(c0)
-        self.system = system
-        self.joints = bool(getattr(system, "joints", ()))  # rigid/joints.py: their multipliers
-        # joints held by FEBio's rule (their enforcement) augment at converged points, as FEBio
-        joints = getattr(system, "joints", ()) or ()
-        self.febio_joints = any(getattr(j, "enforcement", None) for j in joints)
-        # contact/penalty/pair.py: augmentations and lagged current areas, counted per solve
-        self.penalty = list(getattr(system, "penalty_contacts", ()))
-        if self.penalty:  # friction anchored at the last converged positions
-            at = None if x_start is None else system.body_positions_and_dofs(x_start)[0]
-            for pair in self.penalty:
-                pair.begin_step(at)
-        from tissuesim.rigid.joints import MAX_UPDATES
-
-        self.max_relags = max(
-            self.friction_max,
-            MAX_RELAGS if self.pressures else 0,
-            MAX_UPDATES if self.joints else 0,
-            max((_penalty_relags(p) for p in self.penalty), default=0),
-        )
-
-    def relag(self, c: np.ndarray, y: np.ndarray | None = None) -> bool:
-        """Re-lag at c (obstacles at y); whether anything changed."""
-        changed = False
-        if self.friction is not None and self.friction_relags < self.friction_max:
-            self.friction_relags += 1
-            changed = self.friction(c, y)
-        if self.pressures is not None:
-            changed = self.pressures.relag(c) or changed
-        if self.joints:
-            changed = self.system.update_joints(c) or changed
-        if self.penalty:
-            changed = self.system.update_penalty_contacts(c) or changed
-        return changed
-
-    def newton_relag(self):
-        """The relag(c) for ``minimize`` (None when nothing is lagged)."""
-        lagged = self.friction is not None or self.pressures is not None
-        if not (lagged or self.joints or self.penalty):
-            return None
-        return lambda c: self.relag(c)
-
-    def check(self, c1: np.ndarray, record) -> None:
-        """A converged solve whose pressures have not settled at c1 becomes a failed one."""
-        if self.pressures is None or not record.converged:
-            return
-        reason = self.pressures.unsettled(c1, self.pressures.relags)
-        if reason is not None:
-            record.converged, record.reason = False, reason
-
-
 def _initialize_stiffness(system, c0, body_energies, obstacle=None) -> None:
     """IPC's adaptive barrier stiffness starts when contact first appears (contact/stiffness)."""
     contact = system.contact
@@ -415,7 +327,7 @@ def _step_with_moving_obstacles(
     if contact.has_friction:
         # inside the solves, as in implicit_step: the lag at the loosely converged point
         friction = _start_friction(contact, state.x, y, h, friction_from, friction_h)
-    lags = _Lags(system, body_energies, c0, options, contact, friction, state.x)
+    lags = StepLags(system, body_energies, c0, options, contact, friction, state.x)
 
     c1, y1, record, results = solve_with_moving_obstacles(
         system,
