@@ -91,10 +91,16 @@ BUCKETS: tuple[tuple[str, tuple[str, ...]], ...] = (
 #: what a difference or a missing record comes from, where it is known (the .md's table)
 REMARKS = {
     "mi16": "the pressure is one period of a sine, 0 at the end: the elastic disk is back at "
-    "its start (tissuesim's peak norm 7.6); FEBio's norm is what its Newton tolerance leaves",
-    "co35": "contact pair set apart by dhat at the start (barrier against FEBio's penalty)",
-    "ms01": "undamped Newmark vibration: per-step differences add up over 50 steps",
-    "ms02": "undamped Newmark vibration: per-step differences add up over 50 steps",
+    "its start (tissuesim's peak norm 7.6); FEBio's norm is what its Newton tolerance leaves "
+    "(--febio-solver gives it)",
+    "co35": "two nearly incompressible blocks pressed by a penalty: tissuesim's solve leaves "
+    "the symmetric path for an asymmetric state of lower energy",
+    "ms01": "FEBio's quasi-Newton stops at its tolerances (dtol, etol) and in undamped "
+    "vibration the leftovers add up: --febio-solver gives FEBio's norm",
+    "ms02": "FEBio's quasi-Newton stops at its tolerances (dtol, etol) and in undamped "
+    "vibration the leftovers add up: --febio-solver gives FEBio's norm",
+    "dy02": "FEBio's quasi-Newton stops at its tolerances (dtol, etol) and in undamped "
+    "vibration the leftovers add up: --febio-solver gives FEBio's norm",
     "ma62": "nothing moves: FEBio records round-off",
     "ma64": "nothing moves: FEBio records round-off",
 }

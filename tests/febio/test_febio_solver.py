@@ -214,3 +214,22 @@ def test_a_follower_pressure_is_febios_in_every_residual(deck, tmp_path):
     febio, _, _ = _run(model, None, febio_solver=True)
     assert tight == pytest.approx(newton, rel=1e-7)
     assert abs(febio / newton - 1.0) > 1e-5
+
+
+def test_an_inverted_iterate_fails_the_step_instead_of_crashing():
+    """An iterate where the potential is undefined (an inverted element: infinite energy,
+    with a finite gradient) fails the solve, as FEBio's negative jacobian fails its step, so
+    the stepper retries it smaller (it crashed the linear solver later: co34, co36, co37)."""
+    evaluate, _, elimination, _ = _quadratic()
+
+    def inverted(x, order, project):
+        acc = evaluate(x, order, project)
+        if np.max(np.abs(x)) > 0.1:  # past here the "elements" are inverted
+            acc.value = np.inf
+        return acc
+
+    x0 = np.zeros(6)
+    options = NewtonOptions(method="febio", febio={"lsiter": 0})  # no line search rescue
+    x, record = minimize_febio(inverted, x0, elimination, SuperLUSolver(), options)
+    assert not record.converged and "inverted" in record.reason
+    assert np.array_equal(x, x0)

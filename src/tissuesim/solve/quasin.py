@@ -175,6 +175,9 @@ def _quasin(evaluate, x0, elimination, solver, s_, retract, relag, max_relags, b
         nref += 1
 
     def residual(acc) -> np.ndarray:
+        # an inverted element: FEBio's negative jacobian fails the step (retried smaller)
+        if not np.isfinite(acc.value):
+            raise _Failed("febio: an inverted element (negative jacobian) in the iterate")
         R = -acc.gradient[free]
         if not np.all(np.isfinite(R)):
             raise _Failed("febio: NaN in the residual (an inverted element?)")
