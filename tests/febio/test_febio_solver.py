@@ -233,3 +233,19 @@ def test_an_inverted_iterate_fails_the_step_instead_of_crashing():
     x, record = minimize_febio(inverted, x0, elimination, SuperLUSolver(), options)
     assert not record.converged and "inverted" in record.reason
     assert np.array_equal(x, x0)
+
+
+def test_a_stiffness_that_is_not_finite_fails_the_step_instead_of_crashing():
+    """A stiffness with NaN (an inverted element's) fails the solve in one reason, where
+    PARDISO's analysis raised out of the step (co10 with --febio-solver)."""
+    evaluate, _, elimination, _ = _quadratic()
+
+    def broken(x, order, project):
+        acc = evaluate(x, order, project)
+        if order >= 2:
+            acc.hessian[:] = np.nan
+        return acc
+
+    options = NewtonOptions(method="febio")
+    x, record = minimize_febio(broken, np.zeros(6), elimination, SuperLUSolver(), options)
+    assert not record.converged and "not finite" in record.reason

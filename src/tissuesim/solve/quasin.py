@@ -79,12 +79,14 @@ def _direct_factor(solver: LinearSolver, A: sp.csr_matrix):
     direct = getattr(solver, "direct", solver)
     if A.shape[0] == 0:
         return lambda b: b.copy()
+    if not np.all(np.isfinite(A.data)):  # an inverted element's stiffness: the step fails
+        raise _Failed("febio: the stiffness matrix is not finite (an inverted element?)")
     if type(direct).__name__ in ("PardisoSolver", "CholmodSolver", "SuperLUSolver"):
         own = type(direct)()
         try:
             own.factorize(A)
             return own.solve
-        except NotPositiveDefiniteError:
+        except (NotPositiveDefiniteError, RuntimeError):  # PARDISO's analysis may refuse it
             pass
     try:
         return spla.splu(A.tocsc()).solve
