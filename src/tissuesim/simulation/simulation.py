@@ -30,7 +30,6 @@ from __future__ import annotations
 
 import time as wallclock
 from collections.abc import Sequence
-from dataclasses import asdict
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Literal
 
@@ -53,6 +52,7 @@ from tissuesim.simulation.penalty_contact import PenaltyContactCalls, carry_pena
 from tissuesim.simulation.results import BodyResults
 from tissuesim.simulation.rigid import RigidCalls
 from tissuesim.simulation.rigid_wall import RigidWallCalls, carry_wall_state
+from tissuesim.simulation.saving import SavedAndDescribed
 from tissuesim.simulation.stepping import Stepping
 from tissuesim.solve.linear import make_linear_solver
 from tissuesim.solve.newton import NewtonOptions
@@ -97,6 +97,7 @@ class Simulation(
     StepChecks,
     BodyResults,
     Stepping,
+    SavedAndDescribed,
 ):
     """Bodies, their interactions and a time integrator; see the module docstring.
 
@@ -479,42 +480,3 @@ class Simulation(
         self.run_time_split = writer.time_split  # filled in as the run goes (s)
         with writer.lock:  # the directory's run lock (io/lock.py), released however it ends
             return writer.run(steps, progress=progress)
-
-    def save(self, path: str | Path) -> Path:
-        """Write the state, history and linear solver's state to ``path`` (.npz, atomically;
-        ``io/checkpoints/checkpoint.py``); ``load`` continues from it bit-identically."""
-        from tissuesim.io.checkpoints.checkpoint import save_simulation
-
-        return save_simulation(self, path)
-
-    def load(self, path: str | Path) -> Simulation:
-        """Restore a ``save``-d state into this simulation, set up as the saved one was and not
-        stepped yet (InputError naming what differs otherwise); returns the simulation."""
-        from tissuesim.io.checkpoints.checkpoint import load_simulation
-
-        load_simulation(self, path)
-        return self
-
-    def linear_solver_info(self) -> dict[str, Any]:
-        """The linear solver in use (None before the first implicit step) and why."""
-        return {"name": getattr(self._solver, "name", None), "reason": self.solver_reason}
-
-    def describe(self) -> dict[str, Any]:
-        """A JSON-ready description of the simulation: integrator, time step, gravity, every
-        body's description, the number of DOFs and prescribed DOFs, the Newton options, the
-        linear solver and the contact settings (``summary.json``'s ``simulation``)."""
-        s = self.system
-        return {
-            "integrator": self.integrator,
-            "time_step": self.time_step,
-            "adaptive": None if self.adaptive is None else asdict(self.adaptive),
-            "start_time": self.start_time,
-            "gravity": [g.tolist() for g in self.gravity],
-            "bodies": {name: b.describe() for name, b in self.bodies.items()},
-            "n_dofs": s.n_dofs,
-            "prescribed_dofs": int(s.prescribed_dofs.size),
-            "newton": asdict(self.newton),
-            "linear_solver": self.linear_solver_info(),
-            "contact": None if s.contact is None else s.contact.describe(),
-            "visual_surfaces": {n: v.describe() for n, v in self.visual_surfaces.items()},
-        }

@@ -9,7 +9,7 @@ from typing import Literal
 
 from tissuesim.errors import InputError
 
-__all__ = ["FebioSettings"]
+__all__ = ["FebioSettings", "febio_settings"]
 
 QnMethod = Literal["BFGS", "Broyden", "full Newton"]
 
@@ -63,3 +63,20 @@ class FebioSettings:
     def max_updates(self) -> int:
         """The quasi-Newton updates allowed between reformations plus one (0: full Newton)."""
         return 0 if self.qn_method == "full Newton" else self.max_ups
+
+
+def febio_settings(method: str, settings) -> FebioSettings:
+    """``NewtonOptions.febio`` checked: a FebioSettings from None (FEBio's defaults), a table
+    or a FebioSettings, for ``method`` "febio" only (one-line InputError otherwise)."""
+    from tissuesim import validate
+
+    if method != "febio":
+        raise InputError("febio settings are used by method = 'febio' only: set it")
+    if settings is None:
+        return FebioSettings()
+    if isinstance(settings, dict):
+        return FebioSettings.from_table(settings)
+    if not isinstance(settings, FebioSettings):
+        given = validate.short(settings)
+        raise InputError(f"febio must be a table of FEBio's solver settings, not {given}")
+    return settings

@@ -92,19 +92,9 @@ class NewtonOptions:
 
         validate.choice(self.method, "method", ("newton", "febio"))
         if self.febio is not None or self.method == "febio":
-            from tissuesim.solve.febio_settings import FebioSettings
+            from tissuesim.solve.febio_settings import febio_settings
 
-            if self.method != "febio":
-                raise InputError("febio settings are used by method = 'febio' only: set it")
-            settings = self.febio
-            if settings is None:
-                settings = FebioSettings()
-            elif isinstance(settings, dict):
-                settings = FebioSettings.from_table(settings)
-            elif not isinstance(settings, FebioSettings):
-                given = validate.short(settings)
-                raise InputError(f"febio must be a table of FEBio's solver settings, not {given}")
-            object.__setattr__(self, "febio", settings)
+            object.__setattr__(self, "febio", febio_settings(self.method, self.febio))
 
         validate.choice(self.hessian_projection, "hessian_projection", ("auto", "always", "never"))
         validate.choice(self.criterion, "criterion", ("auto", "physical", "relative"))
