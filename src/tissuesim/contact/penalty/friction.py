@@ -1,8 +1,9 @@
 """Coulomb friction of a penalty contact pass, as FEBio's sliding contacts enforce it
 (``FESlidingElasticInterface::ContactTraction``, ``FESlidingInterface::ContactNodalForce``):
-each point is anchored at the start of a step to the place on the secondary surface it
-projected to (a facet and its natural coordinates, moving with that facet), and the trial
-tangential traction
+each point is anchored to a place on the secondary surface (a facet and natural coordinates,
+moving with that facet): where it projects at each step's start (``ANCHORS`` "step", FEBio's
+sliding-elastic) or where it first projected, kept while it projects ("contact", FEBio's
+sliding-node-on-facet), and the trial tangential traction
 
     tau = P (Lt + eps_t d),     d = x - a,     P = I - n n^T,
 
@@ -25,10 +26,10 @@ its first step whatever its traction, at m along its slip direction: here that d
 lagged too (the traction m s, s the last lag's unit trial traction, 0 at first: a linear energy
 W m s . d), since m |tau| is not smooth where the slip is zero.
 
-Where FEBio differs: it anchors a point only once it is in contact (its first step in contact
-slips), its sliding-elastic stick couples the normal gap into the same vector penalty, and
-node-on-facet measures slip in the secondary's reference metric; here the normal stays the
-pair's gap penalty and the slip is measured in the current configuration.
+Where FEBio differs: its sliding-elastic stick couples the normal gap into the same vector
+penalty and pushes along the primary's normal, and its node-on-facet measures slip in the
+secondary's reference metric; here the normal stays the pair's gap penalty (the secondary's
+normal at the closest point) and the slip is measured in the current configuration.
 """
 
 from __future__ import annotations
