@@ -17,6 +17,9 @@ Lagrangian does (``Augment``: L <- <L + eps g> until the multipliers' norm chang
 ``tolerance`` and the rms penetration is under ``gap_tolerance``, between ``min_augmentations``
 and ``max_augmentations`` per step). ``two_pass``: the secondary surface's points are projected
 onto the primary too (a second, symmetric energy). The Hessian is exact (``projection.py``).
+``friction``: Coulomb friction by FEBio's return map, one more energy per point with its
+pressure and normal lagged (``friction.py``); ``keep_last_augmentation``: the augmentation
+that finds the multipliers converged is kept for the next step (FEBio's sliding-elastic).
 """
 
 from __future__ import annotations
@@ -294,9 +297,9 @@ class PenaltyContact:
         return value
 
     def forces(self, positions: list[np.ndarray]) -> tuple[np.ndarray, float]:
-        """(the force the secondary surface puts on the primary (N, 3), the contact area's
-        sum of point weights in contact (m^2)); with two passes, both passes' forces add
-        (as FEBio's two-pass load vectors do)."""
+        """(the force the secondary surface puts on the primary, normal and friction (N, 3),
+        the contact area's sum of point weights in contact (m^2)); with two passes, both
+        passes' forces add (as FEBio's two-pass load vectors do)."""
         total, area = np.zeros(3), 0.0
         for k, p in enumerate(self.passes):
             if self.tied or self.sticky:
