@@ -66,8 +66,15 @@ def add_sweep_parser(
         "--fields",
         action="append",
         choices=SWEEP_FIELDS,
-        help="save this field of every run's end (fields/<run>.h5; repeatable): the vertices' "
-        "displacement or a cell field",
+        help="save this field of every run's end (fields/<run>.h5 or .zarr; repeatable): the "
+        "vertices' displacement or a cell field",
+    )
+    p_sweep.add_argument(
+        "--dataset-format",
+        choices=("hdf5", "zarr"),
+        default="hdf5",
+        help="with --fields: one HDF5 file per run (h5py, default) or one Zarr group per run "
+        "(zarr 3); tissuesim.sweep.load_dataset reads either",
     )
     p_sweep.add_argument(
         "--every",
@@ -106,6 +113,7 @@ def sweep_command(args) -> int:
             workers=args.workers,
             fields=tuple(args.fields or ()),
             every=args.every,
+            dataset_format=args.dataset_format,
             progress=not args.quiet,
         )
     finally:

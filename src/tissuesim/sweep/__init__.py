@@ -4,8 +4,9 @@
 ``tissuesim.sweep.sweep``); ``tissuesim.sweep.load_dataset(DIR)`` reads its fields into NumPy,
 ``tissuesim.sweep.load_table(DIR)`` its table. The parts: key paths (``keypaths.py``), values and
 samplers (``samples.py``), one run in a worker (``runs.py``), executors (``executors.py``), the
-table (``results.py``), the fields dataset (``dataset.py``), the study (``study.py``). Dask,
-pyarrow and h5py are imported only where used (``pip install 'tissuesim[sweep]'``).
+table (``results.py``), the fields dataset (``dataset.py``, its Zarr writer ``dataset_zarr.py``),
+the study (``study.py``). Dask, pyarrow, h5py and zarr are imported only where used
+(``pip install 'tissuesim[sweep]'``).
 """
 
 from __future__ import annotations

@@ -61,6 +61,7 @@ def sweep(
     workers: int | None = None,
     fields: Sequence[str] = (),
     every: int | None = None,
+    dataset_format: str = "hdf5",
     progress: bool = True,
 ) -> list[dict[str, Any]]:
     """Run a parameter study of a scene file and return one result dict per run, in the
@@ -85,12 +86,14 @@ def sweep(
     steps: the runs' step count (default the scene's ``[run] steps``).
     every: with ``fields``, save them at the start, every ``every``-th step and the last (a
     leading axis of saved times, and ``times``); default only the end.
+    dataset_format: with ``fields``, "hdf5" (``fields/<run_id>.h5``, h5py) or "zarr"
+    (``fields/<run_id>.zarr``, zarr 3); ``load_dataset`` reads either.
 
     A run's result: run_id, index, status ("completed" or "failed"), error (one line),
     wall_time_s, build_time_s (build_scene), setup_time_s (the model set up), solve_time_s (its
     steps' own time), steps, newton_iterations (summed), params
     ({key path: value}), forces ({name: [fx, fy, fz]} at the end, ``Simulation.forces()``)."""
-    from tissuesim.sweep.dataset import FIELDS
+    from tissuesim.sweep.dataset import FIELDS, FORMATS, check_format
     from tissuesim.sweep.results import read_results, table_rows, write_table
     from tissuesim.validate import integer
 
@@ -118,6 +121,12 @@ def sweep(
     for field_name in fields:
         if field_name not in FIELDS:
             raise InputError(f"--fields {field_name!r}: choose from {', '.join(FIELDS)}")
+    if fields or dataset_format not in FORMATS:
+        check_format(dataset_format)  # a known format, its library importable
+    if dataset_format != "hdf5" and not fields:
+        raise InputError(
+            f"--dataset-format {dataset_format} is the format of the fields: give --fields too"
+        )
     if sampler is None:
         sampler = "sobol" if any(p.interval is not None for p in params) else "grid"
     values = make_samples(params, samples, sampler, seed)
@@ -134,14 +143,17 @@ def sweep(
         "every": every,
         "runs": values,
     }
+    if dataset_format != "hdf5":  # only then: an HDF5 study's study.json is as before
+        study["dataset_format"] = dataset_format
     _open_directory(directory, study)
     base = (
         (".", name, getattr(builder, "__name__", "study"))
         if path is None
         else (str(path.parent), name, path.stem)
     )
+    extra = {"every": every, "dataset_format": dataset_format}
     tasks = [
-        RunTask(i, data, v, *base, steps, str(directory), fields, {"every": every}, builder)
+        RunTask(i, data, v, *base, steps, str(directory), fields, extra, builder)
         for i, v in enumerate(values)
     ]
     done = {r["index"]: r for r in read_results(directory)}
@@ -169,7 +181,9 @@ def _open_directory(directory: Path, study: dict) -> None:
         # the scene by its tables (scene_sha256), not its path: a resume from another folder,
         # or of a moved scene, is the same study
         differs = [
-            k for k in study if k != "scene" and before.get(k) != json.loads(json.dumps(study[k]))
+            k
+            for k in {**before, **study}
+            if k != "scene" and before.get(k) != json.loads(json.dumps(study.get(k)))
         ]
         if differs:
             raise OutputError(
