@@ -57,8 +57,9 @@ def add_sweep_parser(
     p_sweep.add_argument(
         "--executor",
         default="local",
-        help="local (a process pool, default), dask-local (a Dask LocalCluster) or "
-        "dask://HOST:PORT (a running Dask scheduler)",
+        help="local (a process pool, default), dask-local (a Dask LocalCluster), "
+        "dask://HOST:PORT (a running Dask scheduler) or ray (a local Ray cluster of --workers "
+        "CPUs, or the cluster RAY_ADDRESS names; needs Ray)",
     )
     from tissuesim.sweep.dataset import FIELDS as SWEEP_FIELDS
 
