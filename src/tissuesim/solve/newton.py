@@ -52,8 +52,10 @@ import numpy as np
 from tissuesim.constraints.dirichlet import Elimination
 from tissuesim.energies.accumulator import Accumulator
 from tissuesim.errors import InputError
+from tissuesim.solve.line_search import line_search
 from tissuesim.solve.linear import LinearSolver, NotPositiveDefiniteError
 from tissuesim.solve.reuse import factorize_with_update
+from tissuesim.solve.tangent_start import tangent_start
 
 __all__ = ["NewtonOptions", "NewtonResult", "minimize"]
 
@@ -194,6 +196,7 @@ def minimize(
     physical_default: bool = False,
     start: Accumulator | None = None,
     relag_early: bool = True,
+    prescribed_from: np.ndarray | None = None,
 ) -> tuple[np.ndarray, NewtonResult]:
     """Minimise Phi from x0 (prescribed DOFs already at their values) over the free DOFs.
 
@@ -221,7 +224,10 @@ def minimize(
     (either may be left out); when it runs out after at least one iteration the solve stops
     with ``budget_stop`` set (every iterate is intersection-free: the caller may accept it).
     start: evaluate(x0, 1, False) when the caller has it already.
-    Returns the final x and the record. x0 must give a finite Phi.
+    prescribed_from: the step's start (prescribed DOFs at their old values): where x0 holds an
+    inverted element, Newton starts from the linear response to the prescribed increment
+    (``tangent_start.py``, FEBio's first iteration) if that one holds none.
+    Returns the final x and the record.
     """
     result = NewtonResult()
     retract = retract or _add
@@ -233,6 +239,13 @@ def minimize(
     if reference_rows is not None:
         checked[: reference_rows.start] = False
         checked[reference_rows.stop :] = False
+    vector = prescribed_from is not None and prescribed_from.shape == x0.shape
+    if not np.isfinite(current.value) and vector and current.gradient.shape == x0.shape:
+        xs = x0.copy()
+        xs[elimination.dofs] = prescribed_from[elimination.dofs]
+        found = tangent_start(evaluate, x0, xs, elimination, solver, retract)
+        if found is not None:
+            x, current = found
     if not np.isfinite(current.value):
         result.reason = "the starting point has infinite energy (an inverted element?)"
         return x, result
@@ -461,38 +474,7 @@ def _try_direction(
     first = 1.0 if max_step is None else min(1.0, max_step(x, retract(x, dx)))
     if first <= 0.0:
         return None
-    step = _line_search(
-        evaluate, x, acc, slope, dx, options, retract, noise_scale, first, path_free
-    )
+    step = line_search(evaluate, x, acc, slope, dx, options, retract, noise_scale, first, path_free)
     if step is None:
         return None
     return (project, dx, *step)
-
-
-def _line_search(
-    evaluate, x, acc, slope, dx, options, retract, noise_scale, first=1.0, path_free=None
-):
-    """Backtracking: the largest alpha in 1, 1/2, ... with Armijo decrease and finite Phi.
-
-    A trial may exceed the Armijo bound by Phi's round-off, 1e-12 times the largest of |Phi|,
-    the sum of its terms' magnitudes and the model's energy scale: near the solution the true
-    decrease of the last, correct step is below what Phi can resolve. ``first``: the first
-    trial (below 1 when contact's CCD limits the step); ``path_free``: a trial whose move from x
-    is not free of intersection is halved before it is evaluated."""
-    alpha = first
-    value = acc.value
-    magnitude = max(abs(value), sum(abs(v) for v in acc.terms.values()), noise_scale)
-    noise = 1e-12 * max(magnitude, 1e-300)
-    for _ in range(options.max_line_search):
-        y = retract(x, alpha * dx)
-        if path_free is not None and not path_free(x, y):
-            alpha *= 0.5
-            continue
-        trial = evaluate(y, 1, False)
-        if (
-            np.isfinite(trial.value)
-            and trial.value <= value + options.armijo * alpha * slope + noise
-        ):
-            return alpha, trial
-        alpha *= 0.5
-    return None

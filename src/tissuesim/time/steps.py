@@ -149,11 +149,14 @@ def implicit_step(
             contact.obstacle_state = y1
         candidates = tuple(starts)
         max_step = contact.max_step
-    solve, febio = minimize, {}
+    # the step's start, prescribed DOFs where they were: where the prescribed motion alone
+    # inverts an element, Newton starts from the linear response to it (FEBio's first
+    # iteration; solve/tangent_start.py)
+    solve = minimize
     if options.method == "febio":  # FEBio's Quasin (solve/quasin.py): from x_n, as FEBio
         from tissuesim.solve.quasin import follow_pressures, minimize_febio
 
-        solve, febio, candidates = minimize_febio, {"prescribed_from": state.x}, (state.x,)
+        solve, candidates = minimize_febio, (state.x,)
     start_acc = None
     if contact is None and not lagged_pressure(body_energies):
         # the start's gradient is Newton's first evaluation: kept (nothing is set at c0)
@@ -179,7 +182,7 @@ def implicit_step(
                 contact, state.x, y0, h, friction_from, friction_h, lag_at, y1
             )
     lags = StepLags(system, body_energies, c0, options, contact, friction, state.x)
-    if febio:  # FEBio's follower pressures: the load at x in every residual, no re-lags
+    if options.method == "febio":  # FEBio's follower pressures: the load at x in every residual
         lags.pressures = follow_pressures(lags.pressures)
     relag, max_relags = lags.newton_relag(), lags.max_relags
 
@@ -202,7 +205,7 @@ def implicit_step(
         budget=budget,
         start=start_acc if relag is None else None,
         relag_early=not (lags.penalty or lags.febio_joints),  # FEBio's: at converged points
-        **febio,
+        prescribed_from=state.x,
     )
     lags.check(c1, record)
     if contact is not None:
