@@ -3,10 +3,10 @@
 ``tissuesim.sweep(scene, vary, out=DIR, ...)`` runs a study (this module is callable: it is
 ``tissuesim.sweep.sweep``); ``tissuesim.sweep.load_dataset(DIR)`` reads its fields into NumPy,
 ``tissuesim.sweep.load_table(DIR)`` its table. The parts: key paths (``keypaths.py``), values and
-samplers (``samples.py``), one run in a worker (``runs.py``), executors (``executors.py``), the
-table (``results.py``), the fields dataset (``dataset.py``, its Zarr writer ``dataset_zarr.py``),
-the study (``study.py``). Dask, pyarrow, h5py and zarr are imported only where used
-(``pip install 'tissuesim[sweep]'``).
+samplers (``samples.py``), one run in a worker (``runs.py``) and its mesh cache (``cache.py``),
+executors (``executors.py``), the table (``results.py``), the fields dataset (``dataset.py``, its
+Zarr writer ``dataset_zarr.py``), the study (``study.py``). Dask, pyarrow, h5py and zarr are
+imported only where used (``pip install 'tissuesim[sweep]'``).
 """
 
 from __future__ import annotations

@@ -2,7 +2,8 @@
 built by ``build_scene``, stepped to its ``[run]`` steps without output or pictures; its result
 a plain dict, written atomically to ``runs/<run_id>.json`` (and, where asked, its final fields
 to ``fields/<run_id>.h5``) by the worker itself. A run whose result file exists is not run again
-(a resumed study, or an executor that ran a task twice)."""
+(a resumed study, or an executor that ran a task twice). Its meshes come through the worker's
+mesh cache (cache.py): a mesh file or surface is read once per worker."""
 
 from __future__ import annotations
 
@@ -82,7 +83,9 @@ def prepare_worker() -> None:
 
         numba.set_num_threads(1)
     from tissuesim.io.progress import set_quiet
+    from tissuesim.sweep import cache
 
+    cache.install()  # the runs' mesh files and surfaces read once per worker (cache.py)
     set_quiet(True)  # a worker's notes (numba compiling) would interleave on the terminal
     _prepared = True
     _warm_up()
@@ -121,6 +124,7 @@ def execute_run(task: RunTask) -> dict[str, Any]:
         if done.exists():
             return json.loads(done.read_text(encoding="utf-8"))
     from tissuesim.errors import InputError, RunError
+    from tissuesim.sweep import cache
     from tissuesim.sweep.samples import coerce
 
     start = time.perf_counter()
@@ -140,23 +144,8 @@ def execute_run(task: RunTask) -> dict[str, Any]:
     }
     sim, frames = None, []
     try:
-        if task.builder is not None:
-            built = task.builder(**task.values)
-            scene = built if hasattr(built, "simulation") else None  # a Scene, or a Simulation
-            sim = built if scene is None else scene.simulation
-            run_table = {} if scene is None else scene.run
-        else:
-            from tissuesim.scene.loader import build_scene
-            from tissuesim.sweep.keypaths import parse_key_path
-
-            data = copy.deepcopy(task.data)
-            for key, value in task.values.items():
-                path = parse_key_path(key)
-                path.set(data, coerce(value, path.get(data)))
-            scene = build_scene(
-                data, base_dir=Path(task.base_dir), source=task.source, name=task.name
-            )
-            sim, run_table = scene.simulation, scene.run
+        with cache.enabled():
+            sim, run_table = _build(task, coerce)
         result["build_time_s"] = time.perf_counter() - start
         steps = task.steps
         if steps is None:
@@ -183,6 +172,25 @@ def execute_run(task: RunTask) -> dict[str, Any]:
 
         write_json_atomic(out / "runs" / f"{task.run_id}.json", result, indent=None)
     return result
+
+
+def _build(task: RunTask, coerce: Callable[[Any, Any], Any]) -> tuple[Any, dict]:
+    """The run's Simulation and its scene's ``[run]`` table: the builder's, or the scene's
+    tables with the sample's values put in, built."""
+    if task.builder is not None:
+        built = task.builder(**task.values)
+        scene = built if hasattr(built, "simulation") else None  # a Scene, or a Simulation
+        sim = built if scene is None else scene.simulation
+        return sim, {} if scene is None else scene.run
+    from tissuesim.scene.loader import build_scene
+    from tissuesim.sweep.keypaths import parse_key_path
+
+    data = copy.deepcopy(task.data)
+    for key, value in task.values.items():
+        path = parse_key_path(key)
+        path.set(data, coerce(value, path.get(data)))
+    scene = build_scene(data, base_dir=Path(task.base_dir), source=task.source, name=task.name)
+    return scene.simulation, scene.run
 
 
 def _step(sim: Any, steps: int, task: RunTask, result: dict) -> tuple[list, list]:

@@ -1,0 +1,142 @@
+"""A worker's mesh cache: the runs of a study that read the same mesh file, or mesh the same
+surface, do it once per worker process instead of once per run.
+
+``read_mesh`` (meshio's parse, the checks) and ``mesh_surface`` (a tetrahedralisation:
+seconds to minutes for an organ) are pure functions of the file's bytes and their options, so
+a worker keeps their results: keyed by the file's resolved path, its contents' hash (BLAKE2b,
+so a file rewritten between runs is read again, whatever its time stamp) and the options, at
+most ``MAX_MESHES`` meshes, the least recently used dropped first. Every run gets its own deep
+copy (a run may cut or tear its mesh), so a run's numbers are those without the cache, bit for
+bit (tests/sweep/test_sweep_cache.py).
+
+The cache is on only inside a study's run (``execute_run``, a thread-local switch), through
+wrappers put once in place of ``tissuesim.mesh.read_mesh``, ``tissuesim.read_mesh`` and
+``mesh_surface`` (where the scene loader imports them when it builds a mesh, and where a
+study's builder function finds them): the same calls outside a study's run go straight to the
+functions, uncached.
+"""
+
+from __future__ import annotations
+
+import copy
+import functools
+import hashlib
+import os
+import threading
+from collections import OrderedDict
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
+from typing import Any
+
+__all__ = ["MAX_MESHES", "install", "enabled", "clear", "stats"]
+
+#: meshes kept per worker (a 1e5-tetrahedron mesh is about 4 MB)
+MAX_MESHES = 8
+
+_local = threading.local()
+_lock = threading.Lock()
+_meshes: OrderedDict[tuple, Any] = OrderedDict()
+_stats = {"hits": 0, "misses": 0}
+_installed = False
+
+
+def stats() -> dict[str, int]:
+    """This process's mesh cache: hits, misses (since ``clear``) and meshes kept."""
+    with _lock:
+        return {**_stats, "meshes": len(_meshes)}
+
+
+def clear() -> None:
+    """Forget every mesh kept and the counts."""
+    with _lock:
+        _meshes.clear()
+        _stats.update(hits=0, misses=0)
+
+
+@contextmanager
+def enabled() -> Iterator[None]:
+    """The cache on in this thread while inside (a study's run)."""
+    before = getattr(_local, "on", False)
+    _local.on = True
+    try:
+        yield
+    finally:
+        _local.on = before
+
+
+def _file_key(path: Any) -> tuple | None:
+    """(resolved path, size, contents' hash) of a regular file, or None (not a path, not a
+    regular file, unreadable: the wrapped function then reports it as it would)."""
+    if not isinstance(path, str | os.PathLike):
+        return None
+    try:
+        real = os.path.realpath(os.fspath(path))
+        if not os.path.isfile(real):
+            return None
+        digest = hashlib.blake2b(digest_size=16)
+        with open(real, "rb") as f:
+            for block in iter(lambda: f.read(1 << 20), b""):
+                digest.update(block)
+        return (real, os.path.getsize(real), digest.hexdigest())
+    except (OSError, TypeError, ValueError):
+        return None
+
+
+def _option_key(options: dict) -> tuple | None:
+    try:
+        key = tuple(sorted((k, repr(v)) for k, v in options.items()))
+        hash(key)
+        return key
+    except TypeError:
+        return None
+
+
+def _cached(kind: str, function: Callable[..., Any]) -> Callable[..., Any]:
+    """``function(path, *args, **options)`` cached by the file and the options while the cache
+    is on in this thread."""
+
+    @functools.wraps(function)
+    def wrapper(path: Any, *args: Any, **options: Any) -> Any:
+        if not getattr(_local, "on", False):
+            return function(path, *args, **options)
+        file = _file_key(path)
+        rest = _option_key({**{f"#{i}": a for i, a in enumerate(args)}, **options})
+        if file is None or rest is None:
+            return function(path, *args, **options)
+        key = (kind, *file, rest)
+        with _lock:
+            mesh = _meshes.get(key)
+            if mesh is not None:
+                _meshes.move_to_end(key)
+                _stats["hits"] += 1
+        if mesh is None:
+            mesh = function(path, *args, **options)
+            with _lock:
+                _stats["misses"] += 1
+                _meshes[key] = mesh
+                while len(_meshes) > MAX_MESHES:
+                    _meshes.popitem(last=False)
+        return copy.deepcopy(mesh)
+
+    wrapper.__wrapped_by_sweep_cache__ = True  # type: ignore[attr-defined]
+    return wrapper
+
+
+def install() -> None:
+    """Put the caching wrappers in place (once per process; idempotent)."""
+    global _installed
+    with _lock:
+        if _installed:
+            return
+        import tissuesim
+        import tissuesim.mesh
+        import tissuesim.mesh.from_surface.tetrahedralize as tetrahedralize
+
+        read = _cached("file", tissuesim.mesh.read_mesh)
+        surface = _cached("surface", tetrahedralize.mesh_surface)
+        tissuesim.mesh.read_mesh = read
+        tissuesim.read_mesh = read
+        tetrahedralize.mesh_surface = surface
+        tissuesim.mesh.mesh_surface = surface
+        tissuesim.mesh_surface = surface
+        _installed = True

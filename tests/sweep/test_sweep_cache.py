@@ -1,0 +1,126 @@
+"""The worker's mesh cache (sweep/cache.py): a second run on the same mesh file (or surface) in
+the same process reads it from the cache, and its results equal those of an uncached run bit
+for bit; a rewritten file is read again; every run gets its own copy; outside a study's run
+nothing is cached."""
+
+from __future__ import annotations
+
+import tomllib
+from concurrent.futures import ThreadPoolExecutor
+
+import meshio
+import numpy as np
+import pytest
+
+import tissuesim
+from tissuesim.mesh.io import write_mesh
+from tissuesim.scene.loader import build_scene
+from tissuesim.sweep import cache
+from tissuesim.sweep.runs import prepare_worker
+
+VARY = {"material.youngs_modulus": [800.0, 1500.0, 2500.0]}
+
+
+@pytest.fixture
+def fresh_cache():
+    prepare_worker()  # installs the wrappers (once per process)
+    cache.clear()
+    yield
+    cache.clear()
+
+
+def _uncached(scene, youngs_modulus):
+    data = tomllib.loads(scene.read_text())
+    data["material"]["youngs_modulus"] = youngs_modulus
+    sim = build_scene(data, base_dir=scene.parent, source=str(scene)).simulation
+    sim.run(2, progress=False, render=False)
+    return sim
+
+
+def test_a_second_run_reads_the_mesh_from_the_cache_bit_for_bit(bar_scene, tmp_path, fresh_cache):
+    out = tmp_path / "s"
+    with ThreadPoolExecutor(1) as pool:  # the runs in this process: its cache is seen here
+        results = tissuesim.sweep(
+            bar_scene, VARY, out=out, executor=pool, fields=["displacement"], progress=False
+        )
+    assert cache.stats() == {"hits": 2, "misses": 1, "meshes": 1}
+    data = tissuesim.sweep.load_dataset(out)
+    for i, result in enumerate(results):
+        assert result["status"] == "completed", result["error"]
+        sim = _uncached(bar_scene, result["params"]["material.youngs_modulus"])
+        assert result["forces"] == sim.forces()  # exact
+        assert np.array_equal(data["body/displacement"][i], sim.body_displacement("body"))
+    assert cache.stats()["hits"] == 2  # the uncached runs above did not use it
+
+
+def test_a_rewritten_mesh_file_is_read_again(bar_scene, tmp_path, fresh_cache):
+    folder = tmp_path / "scene"
+    (folder / "mesh").mkdir(parents=True)
+    scene = folder / "bar.toml"
+    scene.write_text(bar_scene.read_text())
+    mesh_file = folder / "mesh" / "bar.vtu"
+    vary = {"material.youngs_modulus": [800.0]}
+    with ThreadPoolExecutor(1) as pool:
+        write_mesh(tissuesim.box((0, 0, 0), (1.0, 0.25, 0.25), (4, 1, 1)), mesh_file)
+        a = tissuesim.sweep(scene, vary, out=tmp_path / "a", executor=pool, progress=False)
+        write_mesh(tissuesim.box((0, 0, 0), (1.0, 0.25, 0.25), (8, 1, 1)), mesh_file)
+        b = tissuesim.sweep(scene, vary, out=tmp_path / "b", executor=pool, progress=False)
+    assert cache.stats() == {"hits": 0, "misses": 2, "meshes": 2}
+    assert a[0]["forces"] == _uncached(bar_scene, 800.0).forces()
+    assert b[0]["forces"] == _uncached(scene, 800.0).forces()  # the 8-box bar's
+    assert a[0]["forces"] != b[0]["forces"]
+
+
+def test_each_run_gets_its_own_copy_and_outside_a_run_nothing_is_cached(bar_scene, fresh_cache):
+    path = bar_scene.parent / "mesh" / "bar.vtu"
+    first = tissuesim.mesh.read_mesh(path)
+    assert cache.stats() == {"hits": 0, "misses": 0, "meshes": 0}  # not in a study's run
+    with cache.enabled():
+        a = tissuesim.mesh.read_mesh(path)
+        a.points[0, 0] = 99.0  # a run changing its mesh
+        b = tissuesim.read_mesh(path)
+    assert cache.stats() == {"hits": 1, "misses": 1, "meshes": 1}
+    assert np.array_equal(b.points, first.points) and b.points is not a.points
+    assert sorted(b.point_sets) == sorted(first.point_sets)
+    for name in first.point_sets:
+        assert np.array_equal(b.point_sets[name], first.point_sets[name])
+    with cache.enabled(), pytest.raises(tissuesim.MeshError, match="no such mesh file"):
+        tissuesim.mesh.read_mesh(path.parent / "missing.vtu")  # errors as without the cache
+
+
+def test_the_cache_keeps_at_most_max_meshes(bar_scene, tmp_path, fresh_cache, monkeypatch):
+    monkeypatch.setattr(cache, "MAX_MESHES", 2)
+    with cache.enabled():
+        for n in (2, 3, 4, 2):
+            path = tmp_path / f"bar{n}.vtu"
+            if not path.exists():
+                write_mesh(tissuesim.box((0, 0, 0), (1.0, 0.25, 0.25), (n, 1, 1)), path)
+            assert tissuesim.mesh.read_mesh(path).n_cells == 6 * n
+    assert cache.stats() == {"hits": 0, "misses": 4, "meshes": 2}  # bar2 was dropped
+
+
+def test_a_surface_is_meshed_once_per_worker(tmp_path, fresh_cache):
+    from tissuesim.mesh.from_surface import meshers
+
+    if "pytetwild" not in meshers.available_meshers():
+        pytest.skip("pytetwild (a dependency) is not installed")
+    surface = tissuesim.ellipsoid(radii=(0.05, 0.03, 0.02), divisions=4)
+    meshio.write_points_cells(
+        tmp_path / "organ.stl", surface.points, [("triangle", surface.facet_sets["surface"])]
+    )
+    scene = tmp_path / "organ.toml"
+    scene.write_text(
+        '[mesh]\nsurface = "organ.stl"\nsize = 0.02\n\n[material]\nmodel = "neo_hookean"\n'
+        "youngs_modulus = 3000.0\npoisson_ratio = 0.4\n\n[simulation]\n"
+        'integrator = "quasistatic"\ntime_step = 0.5\n\n[[dirichlet]]\n'
+        'vertices = { where = "z < 0" }\n\n[run]\nsteps = 1\n'
+    )
+    with ThreadPoolExecutor(1) as pool:
+        results = tissuesim.sweep(
+            scene, {"material.youngs_modulus": [2e3, 4e3]}, out=tmp_path / "s",
+            executor=pool, fields=["displacement"], progress=False,
+        )  # fmt: skip
+    assert [r["status"] for r in results] == ["completed", "completed"], results[0]["error"]
+    assert cache.stats() == {"hits": 1, "misses": 1, "meshes": 1}
+    data = tissuesim.sweep.load_dataset(tmp_path / "s")
+    assert data["body/displacement"].shape[0] == 2
