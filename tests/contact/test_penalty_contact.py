@@ -20,40 +20,52 @@ from tissuesim.scene.loader import build_scene
 RNG = np.random.default_rng(7)
 
 
-def _stencil_gap(y, Hs, triangle, order):
-    S, X = y[:12].reshape(4, 3), y[12:].reshape(4, 3)
+#: facet nodes in the plane z = 0 per kind (corners, then midsides), in faces.py's order
+_FLAT = {
+    3: [[0, 0], [1, 0], [0, 1]],
+    4: [[0, 0], [1, 0], [1, 1], [0, 1]],
+    6: [[0, 0], [1, 0], [0, 1], [0.5, 0], [0.5, 0.5], [0, 0.5]],
+    8: [[0, 0], [1, 0], [1, 1], [0, 1], [0.5, 0], [1, 0.5], [0.5, 1], [0, 0.5]],
+}
+
+
+def _stencil_gap(y, Hs, kind, width, order):
+    S, X = y[:12].reshape(4, 3), y[12:].reshape(width, 3)
     x = (Hs @ S)[None]
-    t = np.array([triangle])
+    t = np.array([kind])
     rs = project(x, X[None], t)
     return gap_derivatives(x, Hs[None], X[None], rs, t, order)
 
 
-@pytest.mark.parametrize("triangle", [False, True])
-def test_gap_gradient_and_hessian_match_finite_differences(triangle):
-    """A warped quadrilateral (or a triangle) and a point behind it: g > 0, dg/dy and d2g/dy2
-    over the 8-vertex stencil against central differences of g and dg/dy."""
-    X = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]], float)
-    X += 0.2 * RNG.standard_normal((4, 3))
-    if triangle:
-        X[3] = X[2]
+@pytest.mark.parametrize("kind", [4, 3, 8, 6])
+def test_gap_gradient_and_hessian_match_finite_differences(kind):
+    """A warped facet of each kind (quad4, tri3, and the curved quad8, tri6) and a point
+    behind it: g > 0, dg/dy and d2g/dy2 over the stencil (4 sampled nodes, then the facet's,
+    padded to 4 or 8 by its last node) against central differences of g and dg/dy."""
+    width = 4 if kind <= 4 else 8
+    flat = np.array(_FLAT[kind], float)
+    X = np.column_stack([flat, np.zeros(kind)]) + 0.15 * RNG.standard_normal((kind, 3))
+    X = np.vstack([X, np.repeat(X[-1:], width - kind, axis=0)])
     S = np.array([[0, 0, -0.3], [1, 0, -0.3], [1, 1, -0.3], [0, 1, -0.3]], float)
     S += 0.1 * RNG.standard_normal((4, 3))
-    Hs = np.array([0.3, 0.2, 0.4, 0.1])
+    Hs = np.array([0.3, 0.2, 0.4, 0.1]) if kind in (4, 8) else np.array([0.3, 0.2, 0.2, 0.3])
     y = np.concatenate([S.ravel(), X.ravel()])
-    g, _, _, dg, d2g = _stencil_gap(y, Hs, triangle, 2)
+    g, _, _, dg, d2g = _stencil_gap(y, Hs, kind, width, 2)
     assert g[0] > 1e-3  # behind the facet
-    e, fd, fh = 1e-6, np.zeros(24), np.zeros((24, 24))
-    for i in range(24):
-        d = np.zeros(24)
+    n = y.size
+    e, fd, fh = 1e-6, np.zeros(n), np.zeros((n, n))
+    for i in range(n):
+        d = np.zeros(n)
         d[i] = e
-        gp = _stencil_gap(y + d, Hs, triangle, 1)
-        gm = _stencil_gap(y - d, Hs, triangle, 1)
+        gp = _stencil_gap(y + d, Hs, kind, width, 1)
+        gm = _stencil_gap(y - d, Hs, kind, width, 1)
         fd[i] = (gp[0][0] - gm[0][0]) / (2 * e)
         fh[:, i] = (gp[3].ravel() - gm[3].ravel()) / (2 * e)
-    used = slice(0, 21) if triangle else slice(0, 24)  # a triangle's 4th corner is unused
+    used = slice(0, 12 + 3 * kind)  # the padding's repeated nodes carry nothing
     np.testing.assert_allclose(dg.ravel()[used], fd[used], atol=1e-8)
     np.testing.assert_allclose(d2g[0][used, used], fh[used, used], atol=1e-7)
     np.testing.assert_allclose(d2g[0], d2g[0].T, atol=1e-12)
+    assert np.abs(d2g[0]).max() > 1e-3  # a Hessian with curvature, not a zero one
 
 
 def _blocks(dz: float = 0.02, element: str = "hex"):
@@ -131,17 +143,19 @@ def _pressed(penalty=1e4, augmented=False, two_pass=False, steps=3, integration=
     return sim, record
 
 
-def _column(penalty=None, augmented=False, single=False, press=-0.02, **options):
+def _column(penalty=None, augmented=False, single=False, press=-0.02, element="hex",
+            order=1, **options):  # fmt: skip
     """A 1 x 1 column (nu = 0) pressed 0.02 down at its top, base fixed: two blocks of
     matching facets in penalty contact at z = 0.5, or (``single``) one block."""
     mat = NeoHookean(youngs_modulus=1000.0, poisson_ratio=0.0)
     sim = ts.Simulation(integrator="quasistatic", time_step=1.0)
+    kw = {"element": element, "order": order}
     if single:
-        blocks = {"upper": box((0, 0, 0), (1, 1, 1.0), (2, 2, 4), element="hex")}
+        blocks = {"upper": box((0, 0, 0), (1, 1, 1.0), (2, 2, 4), **kw)}
     else:
         blocks = {
-            "lower": box((0, 0, 0), (1, 1, 0.5), (2, 2, 1), element="hex"),
-            "upper": box((0, 0, 0.5), (1, 1, 1.0), (2, 2, 3), element="hex"),
+            "lower": box((0, 0, 0), (1, 1, 0.5), (2, 2, 1), **kw),
+            "upper": box((0, 0, 0.5), (1, 1, 1.0), (2, 2, 3), **kw),
         }
     for name, mesh in blocks.items():
         sim.add_body(name, mesh, mat)
@@ -185,6 +199,21 @@ def test_the_augmented_lagrangian_closes_the_gap_and_matches_one_block():
     assert abs(plain / exact - 1) > 0.03
     assert sim.forces()["press"][2] == pytest.approx(exact, rel=1e-7)
     assert sim.system.penalty_contacts[0].augmentations > 3
+
+
+@pytest.mark.parametrize(("element", "order", "kind"), [("hex20", 2, 8), ("tet", 2, 6)])
+def test_quadratic_facets_hold_the_contact_of_one_quadratic_block(element, order, kind):
+    """On 20-node hexahedra and 10-node tetrahedra the contact's facets are quad8 / tri6
+    (FEBio's quadratic surface elements, 3 x 3 / 3 points); augmented, the column's force is
+    one quadratic block's to 1e-7 and the contact's force balances the press's."""
+    exact = _column(single=True, element=element, order=order)[0].forces()["press"][2]
+    sim, _ = _column(penalty=2e3, augmented=True, element=element, order=order)
+    pair = sim.system.penalty_contacts[0]
+    assert np.all(pair.primary.facets.kind == kind) and pair.primary.facets.nodes.shape[1] == 8
+    assert len(pair.passes[0].weights) == len(pair.primary.facets.kind) * (9 if kind == 8 else 3)
+    assert sim.forces()["press"][2] == pytest.approx(exact, rel=1e-7)
+    np.testing.assert_allclose(sim.forces()["contact"], -np.asarray(sim.forces()["press"]),
+                               rtol=1e-7, atol=1e-9)  # fmt: skip
 
 
 def test_newton_converges_quadratically_with_penalty_contact():

@@ -248,7 +248,7 @@ def _side(spec: PenaltySpec, body: str, j: int, model, facets):
     """One surface of a pair: its facets (vertex indices of body j) and the per-facet scale
     (FEBio's auto penalty: E A / V of the element behind the facet; 1 without)."""
     from tissuesim.contact.pairs import contact_facets
-    from tissuesim.contact.penalty.faces import Facets
+    from tissuesim.contact.penalty.faces import Facets, with_midsides
     from tissuesim.contact.penalty.pair import PenaltySide
 
     mesh = model.mesh
@@ -261,12 +261,16 @@ def _side(spec: PenaltySpec, body: str, j: int, model, facets):
     else:
         rows = np.asarray(facets)
     f = Facets.of(rows, f"penalty contact {spec.name!r}, body {body!r}")
-    if f.corners.max() >= mesh.n_points or f.corners.min() < 0:
+    if f.nodes.max() >= mesh.n_points or f.nodes.min() < 0:
         raise InputError(
             f"penalty contact {spec.name!r}: body {body!r} has {mesh.n_points} vertices; a "
             "facet names one outside 0..n-1"
         )
-    scale = np.ones(len(f.corners))
+    try:  # a quadratic body's facets are quadratic (FEBio's quad8 / tri6 surface elements)
+        f = with_midsides(mesh, f)
+    except InputError as exc:
+        raise InputError(f"penalty contact {spec.name!r}, body {body!r}: {exc}") from None
+    scale = np.ones(len(f.nodes))
     if spec.auto_penalty:
         scale = _auto_scale(model, f)
     return PenaltySide(j, f, scale)
@@ -289,7 +293,7 @@ def _auto_scale(model, facets) -> np.ndarray:
     E = np.broadcast_to(E, (len(cells),)) if E.ndim == 0 else E
     points = sample_points(facets, "gauss")
     area = np.bincount(points.facet, points.weight * area_jacobians(mesh.points, facets, points),
-                       minlength=len(facets.corners))  # fmt: skip
+                       minlength=len(facets.nodes))  # fmt: skip
     # the cell behind each facet: the one holding all its distinct corners, found as the
     # largest entry of (facet x vertex) @ (vertex x cell) incidence counts
     import scipy.sparse as sp
@@ -298,18 +302,18 @@ def _auto_scale(model, facets) -> np.ndarray:
     A = sp.csr_matrix((np.ones(cells.size), (cells.ravel(), np.repeat(np.arange(len(cells)),
                        cells.shape[1]))), shape=(n, len(cells)))  # fmt: skip
     A.data[:] = 1.0  # a vertex counted once per cell
-    corners = facets.corners
-    distinct = np.where(facets.triangle, 3, 4)
-    rows = np.repeat(np.arange(len(corners)), 4)
-    F = sp.csr_matrix((np.ones(corners.size), (rows, corners.ravel())), shape=(len(corners), n))
-    F.data[:] = 1.0  # a triangle's repeated corner once
+    nodes = facets.nodes
+    distinct = facets.kind  # a row's nodes past its kind repeat its last
+    rows = np.repeat(np.arange(len(nodes)), nodes.shape[1])
+    F = sp.csr_matrix((np.ones(nodes.size), (rows, nodes.ravel())), shape=(len(nodes), n))
+    F.data[:] = 1.0  # a repeated node once
     shared = (F @ A).tocsr()
     cell = np.asarray(shared.argmax(axis=1)).ravel()
-    held = np.asarray(shared[np.arange(len(corners)), cell]).ravel()
+    held = np.asarray(shared[np.arange(len(nodes)), cell]).ravel()
     missing = np.flatnonzero(held < distinct)
     if len(missing):
         raise InputError(
-            f"penalty contact auto_penalty: facet {corners[missing[0]].tolist()} bounds no "
+            f"penalty contact auto_penalty: facet {nodes[missing[0]].tolist()} bounds no "
             "element of its body; give penalty without auto_penalty"
         )
     return E[cell] * area / volumes[cell]

@@ -134,7 +134,7 @@ class RigidWallCalls:
             else:
                 rows = np.asarray(spec.facets)
             facets = Facets.of(rows, f"rigid wall {spec.name!r}, body {spec.body!r}")
-            if facets.corners.max() >= mesh.n_points or facets.corners.min() < 0:
+            if facets.nodes.max() >= mesh.n_points or facets.nodes.min() < 0:
                 raise InputError(
                     f"rigid wall {spec.name!r}: body {spec.body!r} has {mesh.n_points} "
                     "vertices; a facet names one outside 0..n-1"

@@ -81,8 +81,8 @@ def _pressures(p, contacts, positions, eps, multipliers):
     pts, facet, rs, x = contacts
     if len(pts) == 0:
         return pts, np.zeros(0), np.zeros((0, 3))
-    X = positions[p.target.body][p.target.facets.corners[facet]]
-    g, nu, _ = gap_derivatives(x, None, X, rs, p.target.facets.triangle[facet], 0)
+    X = positions[p.target.body][p.target.facets.nodes[facet]]
+    g, nu, _ = gap_derivatives(x, None, X, rs, p.target.facets.kind[facet], 0)
     return pts, np.maximum(multipliers[pts] + eps[pts] * g, 0.0), nu
 
 
@@ -164,14 +164,14 @@ def _turn(state: FrictionState, p, positions, eps_t) -> bool:
 
 
 def _geometry(state: FrictionState, p, positions):
-    """(points anchored and pressed, stencil weights (n, 8), d = x - a (n, 3))."""
+    """(points anchored and pressed, stencil weights (n, k + m), d = x - a (n, 3))."""
     pts = np.flatnonzero((state.facet >= 0) & (state.pressure > 0))
     facet, rs = state.facet[pts], state.rs[pts]
     sf, tf = p.sampled.facets, p.target.facets
     Hs = p.points.H[pts]
-    x = np.einsum("na,nad->nd", Hs, positions[p.sampled.body][sf.corners[p.points.facet[pts]]])
-    Ha = shape(rs[:, 0], rs[:, 1], tf.triangle[facet])
-    a = np.einsum("na,nad->nd", Ha, positions[p.target.body][tf.corners[facet]])
+    x = np.einsum("na,nad->nd", Hs, positions[p.sampled.body][sf.nodes[p.points.facet[pts]]])
+    Ha = shape(rs[:, 0], rs[:, 1], tf.kind[facet], tf.nodes.shape[1])
+    a = np.einsum("na,nad->nd", Ha, positions[p.target.body][tf.nodes[facet]])
     return pts, np.concatenate([Hs, -Ha], axis=1), x - a
 
 
@@ -212,12 +212,13 @@ def friction_terms(state: FrictionState, p, positions, dofs, eps_t, mu: float, o
         return value
     stencil = np.concatenate(
         [
-            dofs[p.sampled.body][p.sampled.facets.corners[p.points.facet[pts]]],
-            dofs[p.target.body][p.target.facets.corners[state.facet[pts]]],
+            dofs[p.sampled.body][p.sampled.facets.nodes[p.points.facet[pts]]],
+            dofs[p.target.body][p.target.facets.nodes[state.facet[pts]]],
         ],
         axis=1,
-    ).reshape(len(pts), 24)
-    np.add.at(grad, stencil, (w[:, :, None] * (W[:, None] * t)[:, None, :]).reshape(-1, 24))
+    ).reshape(len(pts), -1)
+    width = stencil.shape[1]
+    np.add.at(grad, stencil, (w[:, :, None] * (W[:, None] * t)[:, None, :]).reshape(-1, width))
     if order >= 2:
         P = np.eye(3)[None] - n[:, :, None] * n[:, None, :]
         safe = np.where(size > 0, size, 1.0)
@@ -228,9 +229,9 @@ def friction_terms(state: FrictionState, p, positions, dofs, eps_t, mu: float, o
         D = P.copy()
         D[slip] -= that[slip, :, None] * that[slip, None, :]
         h = np.einsum("nab,nij->naibj", k[:, None, None] * w[:, :, None] * w[:, None, :], D)
-        rows_out.append(np.repeat(stencil, 24, axis=1).ravel())
-        cols_out.append(np.tile(stencil, (1, 24)).ravel())
-        vals_out.append(h.reshape(len(pts), 24, 24).ravel())
+        rows_out.append(np.repeat(stencil, width, axis=1).ravel())
+        cols_out.append(np.tile(stencil, (1, width)).ravel())
+        vals_out.append(h.reshape(len(pts), width, width).ravel())
     return value
 
 

@@ -2,7 +2,7 @@
 one more energy in the incremental potential, with no barrier and no CCD (surfaces may
 interpenetrate by what the penalty allows: FEBio's semantics, for FEBio's models).
 
-Points sampled on the primary surface (``faces.py``: Gauss points, or the corners for FEBio's
+Points sampled on the primary surface (``faces.py``: Gauss points, or the nodes for FEBio's
 node-on-facet) are projected onto the secondary surface (``projection.py``); a point whose
 projection lies on a facet (within ``search_tolerance`` in natural coordinates; the closest such
 facet) has the gap g (> 0: penetration). With the point's weight W (rule weight x area
@@ -150,10 +150,10 @@ class PenaltyContact:
         return out
 
     def _find_contacts(self, p: PenaltyPass, positions: list[np.ndarray]):
-        xs = positions[p.sampled.body][p.sampled.facets.corners[p.points.facet]]
+        xs = positions[p.sampled.body][p.sampled.facets.nodes[p.points.facet]]
         x = np.einsum("na,nad->nd", p.points.H, xs)
         tf = p.target.facets
-        X_all = positions[p.target.body][tf.corners]
+        X_all = positions[p.target.body][tf.nodes]
         centroids = X_all.mean(axis=1)
         # points farther from every facet centre than SEARCH_RADIUS facet sizes touch nothing
         size = float(np.max(np.linalg.norm(X_all - centroids[:, None], axis=2)))
@@ -168,9 +168,9 @@ class PenaltyContact:
         near = near.reshape(len(near_rows), k)
         flat = near.ravel()
         xr = np.repeat(x[near_rows], k, axis=0)
-        rs = project(xr, X_all[flat], tf.triangle[flat])
-        excess = outside(rs, tf.triangle[flat])
-        g, _, _ = gap_derivatives(xr, None, X_all[flat], rs, tf.triangle[flat], 0)
+        rs = project(xr, X_all[flat], tf.kind[flat])
+        excess = outside(rs, tf.kind[flat])
+        g, _, _ = gap_derivatives(xr, None, X_all[flat], rs, tf.kind[flat], 0)
         # the closest facet whose projection is on it, within the search tolerance (a point
         # over a convex edge, on no facet, is out of contact: extending the nearest facet
         # there took co13 from 8e-9 to 1.2e-3 of FEBio's norm)
@@ -211,9 +211,9 @@ class PenaltyContact:
             if len(pts) == 0:
                 continue
             tf, sf = p.target.facets, p.sampled.facets
-            X = positions[p.target.body][tf.corners[facet]]
+            X = positions[p.target.body][tf.nodes[facet]]
             Hs = p.points.H[pts]
-            parts = gap_derivatives(x, Hs, X, rs, tf.triangle[facet], min(order, 2))
+            parts = gap_derivatives(x, Hs, X, rs, tf.kind[facet], min(order, 2))
             g = parts[0]
             eps = self._eps(p)[pts]
             L = p.multipliers[pts]
@@ -225,12 +225,13 @@ class PenaltyContact:
             on = t > 0
             stencil = np.concatenate(
                 [
-                    dofs[p.sampled.body][sf.corners[p.points.facet[pts]]],
-                    dofs[p.target.body][tf.corners[facet]],
+                    dofs[p.sampled.body][sf.nodes[p.points.facet[pts]]],
+                    dofs[p.target.body][tf.nodes[facet]],
                 ],
                 axis=1,
-            ).reshape(len(pts), 24)
-            dg = parts[3].reshape(len(pts), 24)
+            ).reshape(len(pts), -1)
+            width = stencil.shape[1]  # 3 x (the sampled facet's nodes + the target's)
+            dg = parts[3].reshape(len(pts), width)
             np.add.at(grad, stencil[on], (W * t)[on, None] * dg[on])
             if order >= 2 and on.any():
                 dg_on = dg[on]
@@ -240,8 +241,8 @@ class PenaltyContact:
                     lam, V = np.linalg.eigh(h)
                     h = np.einsum("nij,nj,nkj->nik", V, np.maximum(lam, 0.0), V)
                 s = stencil[on]
-                rows.append(np.repeat(s, 24, axis=1).ravel())
-                cols.append(np.tile(s, (1, 24)).ravel())
+                rows.append(np.repeat(s, width, axis=1).ravel())
+                cols.append(np.tile(s, (1, width)).ravel())
                 vals.append(h.ravel())
         hess = None
         if order >= 2:
@@ -258,13 +259,14 @@ class PenaltyContact:
         return value, grad, hess
 
     def _tied_gaps(self, p: PenaltyPass, positions: list[np.ndarray]):
-        """(points, stencil weights w (n, 8), vector gaps d = q - x (n, 3)) of a tied pass."""
+        """(points, stencil weights w (n, k + m), vector gaps d = q - x (n, 3)) of a tied
+        pass (k, m: the sampled and target facets' node widths)."""
         pts, facet, rs = p.tie
         sf, tf = p.sampled.facets, p.target.facets
         Hs = p.points.H[pts]
-        x = np.einsum("na,nad->nd", Hs, positions[p.sampled.body][sf.corners[p.points.facet[pts]]])
-        Hm = shape(rs[:, 0], rs[:, 1], tf.triangle[facet])
-        q = np.einsum("na,nad->nd", Hm, positions[p.target.body][tf.corners[facet]])
+        x = np.einsum("na,nad->nd", Hs, positions[p.sampled.body][sf.nodes[p.points.facet[pts]]])
+        Hm = shape(rs[:, 0], rs[:, 1], tf.kind[facet], tf.nodes.shape[1])
+        q = np.einsum("na,nad->nd", Hm, positions[p.target.body][tf.nodes[facet]])
         return pts, np.concatenate([-Hs, Hm], axis=1), q - x
 
     def _tied_terms(self, p, positions, dofs, order, grad, rows, cols, vals) -> float:
@@ -281,18 +283,19 @@ class PenaltyContact:
         _, facet, _ = p.tie
         stencil = np.concatenate(
             [
-                dofs[p.sampled.body][p.sampled.facets.corners[p.points.facet[pts]]],
-                dofs[p.target.body][p.target.facets.corners[facet]],
+                dofs[p.sampled.body][p.sampled.facets.nodes[p.points.facet[pts]]],
+                dofs[p.target.body][p.target.facets.nodes[facet]],
             ],
             axis=1,
-        ).reshape(len(pts), 24)
-        g = (w[:, :, None] * (W[:, None] * t)[:, None, :]).reshape(len(pts), 24)
+        ).reshape(len(pts), -1)
+        width = stencil.shape[1]
+        g = (w[:, :, None] * (W[:, None] * t)[:, None, :]).reshape(len(pts), width)
         np.add.at(grad, stencil, g)
         if order >= 2:
-            ww = (W * eps)[:, None, None] * w[:, :, None] * w[:, None, :]  # (n, 8, 8)
-            h = np.einsum("nab,ij->naibj", ww, np.eye(3)).reshape(len(pts), 24, 24)
-            rows.append(np.repeat(stencil, 24, axis=1).ravel())
-            cols.append(np.tile(stencil, (1, 24)).ravel())
+            ww = (W * eps)[:, None, None] * w[:, :, None] * w[:, None, :]  # (n, k+m, k+m)
+            h = np.einsum("nab,ij->naibj", ww, np.eye(3)).reshape(len(pts), width, width)
+            rows.append(np.repeat(stencil, width, axis=1).ravel())
+            cols.append(np.tile(stencil, (1, width)).ravel())
             vals.append(h.ravel())
         return value
 
@@ -312,8 +315,8 @@ class PenaltyContact:
             pts, facet, rs, x = self._contacts(p, positions)
             if len(pts) == 0:
                 continue
-            X = positions[p.target.body][p.target.facets.corners[facet]]
-            g, nu, _ = gap_derivatives(x, None, X, rs, p.target.facets.triangle[facet], 0)
+            X = positions[p.target.body][p.target.facets.nodes[facet]]
+            g, nu, _ = gap_derivatives(x, None, X, rs, p.target.facets.kind[facet], 0)
             t = np.maximum(p.multipliers[pts] + self._eps(p)[pts] * g, 0.0)
             f = np.sum((p.weights[pts] * t)[:, None] * nu, axis=0)
             if p.friction is not None:
@@ -332,10 +335,10 @@ class PenaltyContact:
             let_go = np.zeros(0, int)  # not stuck again at once (FEBio: at its next update)
             if self.max_traction > 0 and len(held):
                 _, _, d = self._tied_gaps(p, positions)
-                X = positions[p.target.body][p.target.facets.corners[facet]]
-                corners = p.sampled.facets.corners[p.points.facet[held]]
-                x = np.einsum("na,nad->nd", p.points.H[held], positions[p.sampled.body][corners])
-                _, nu, _ = gap_derivatives(x, None, X, rs, p.target.facets.triangle[facet], 0)
+                X = positions[p.target.body][p.target.facets.nodes[facet]]
+                nodes = p.sampled.facets.nodes[p.points.facet[held]]
+                x = np.einsum("na,nad->nd", p.points.H[held], positions[p.sampled.body][nodes])
+                _, nu, _ = gap_derivatives(x, None, X, rs, p.target.facets.kind[facet], 0)
                 t = p.multipliers[held] + self._eps(p)[held][:, None] * d
                 keep = np.einsum("nd,nd->n", t, nu) >= -self.max_traction  # pulled off: let go
                 if not keep.all():
@@ -346,10 +349,8 @@ class PenaltyContact:
             pts, f, r, x = self._contacts(p, positions)
             free = ~np.isin(pts, held) & ~np.isin(pts, let_go)
             if free.any():
-                X = positions[p.target.body][p.target.facets.corners[f[free]]]
-                g = gap_derivatives(
-                    x[free], None, X, r[free], p.target.facets.triangle[f[free]], 0
-                )[0]
+                X = positions[p.target.body][p.target.facets.nodes[f[free]]]
+                g = gap_derivatives(x[free], None, X, r[free], p.target.facets.kind[f[free]], 0)[0]
                 new = g > -self.snap_tolerance
                 if new.any():
                     sel = np.flatnonzero(free)[new]
@@ -409,8 +410,8 @@ class PenaltyContact:
             g = np.zeros(len(p.multipliers))
             pts, facet, rs, x = self._contacts(p, positions)
             if len(pts):
-                X = positions[p.target.body][p.target.facets.corners[facet]]
-                g[pts] = gap_derivatives(x, None, X, rs, p.target.facets.triangle[facet], 0)[0]
+                X = positions[p.target.body][p.target.facets.nodes[facet]]
+                g[pts] = gap_derivatives(x, None, X, rs, p.target.facets.kind[facet], 0)[0]
             L1 = np.maximum(p.multipliers + self._eps(p) * g, 0.0)
             old += float(p.multipliers @ p.multipliers)
             new += float(L1 @ L1)

@@ -1,18 +1,19 @@
 """A point's closest-point projection onto a facet surface and its signed gap, with the gap's
 exact first and second derivatives.
 
-For a point x (on the sampled surface, x = sum_k Hs_k X_k) and a facet q(r, s) = sum_a H_a x_a,
-the projection (r, s) makes r_vec = q - x normal to the facet (q_a . r_vec = 0, a = r, s; found
-by Newton on a quadrilateral, in closed form on a triangle); nu = q_r x q_s / |q_r x q_s| is the
-facet's outward normal there and the gap g = nu . (q - x) is positive where x lies behind the
-surface (penetration: FEBio's sign, ``FEFacet2FacetSliding::ProjectSurface``). Over the stencil
-y = (X_k, x_a):
+For a point x (on the sampled surface, x = sum_k Hs_k X_k) and a facet q(r, s) = sum_a H_a x_a
+(any of ``faces.py``'s kinds: tri3, quad4, tri6, quad8), the projection (r, s) makes
+r_vec = q - x normal to the facet (q_a . r_vec = 0, a = r, s; found by Newton);
+nu = q_r x q_s / |q_r x q_s| is the facet's outward normal there and the gap g = nu . (q - x)
+is positive where x lies behind the surface (penetration: FEBio's sign,
+``FEFacet2FacetSliding::ProjectSurface``). Over the stencil y = (X_k, x_a):
 
     dg/dy = J^T nu,   J = dr_vec/dy at fixed (r, s) = [-Hs_k I, H_a I],
 
 exactly (nu and (r, s) move only along directions normal to r_vec). Its Hessian, from the
 envelope theorem on D = |q - x|^2 / 2 = g^2 / 2 (d2D = dg dg^T + g d2g) and the metric
-G = [q_a . q_b], curvature K = [q_ab . nu], A = G + g K, T = [q_r; q_s], C = [0, dH_a/d(r, s) nu^T]:
+G = [q_a . q_b], curvature K = [q_ab . nu] (q_rr, q_ss zero on linear facets), A = G + g K,
+T = [q_r; q_s], C = [0, dH_a/d(r, s) nu^T]:
 
     d2g = J^T T^T G^-1 K A^-1 T J - C^T A^-1 T J - J^T T^T A^-1 C - g C^T A^-1 C,
 
@@ -23,32 +24,34 @@ from __future__ import annotations
 
 import numpy as np
 
-from tissuesim.contact.penalty.faces import shape, shape_derivatives
+from tissuesim.contact.penalty.faces import TRIANGLES, shape, shape_derivatives
 
 __all__ = ["project", "gap_derivatives", "outside"]
 
 _NEWTON_ITERATIONS = 12
 
 
-def project(x: np.ndarray, X: np.ndarray, triangle: np.ndarray):
-    """Project points x (n, 3) onto facets with corners X (n, 4, 3) (``triangle``: (n,) bool).
-    Returns (r, s) (n, 2) of the point where q - x is normal to the facet's (bi)linear
-    surface, not clamped to the facet."""
-    n = len(x)
+def project(x: np.ndarray, X: np.ndarray, kind: np.ndarray):
+    """Project points x (n, 3) onto facets with nodes X (n, m, 3) of the given kinds (n,).
+    Returns (r, s) (n, 2) of the point where q - x is normal to the facet's surface, not
+    clamped to the facet."""
+    n, m = len(x), X.shape[1]
+    triangle = np.isin(kind, TRIANGLES)
     rs = np.where(triangle[:, None], 1.0 / 3.0, 0.0) * np.ones((n, 2))
     for _ in range(_NEWTON_ITERATIONS):
-        Hr, Hs, Hrs = shape_derivatives(rs[:, 0], rs[:, 1], triangle)
-        H = shape(rs[:, 0], rs[:, 1], triangle)
+        Hr, Hs, Hrr, Hss, Hrs = shape_derivatives(rs[:, 0], rs[:, 1], kind, m)
+        H = shape(rs[:, 0], rs[:, 1], kind, m)
         q = np.einsum("na,nad->nd", H, X)
         qr = np.einsum("na,nad->nd", Hr, X)
         qs = np.einsum("na,nad->nd", Hs, X)
-        qrs = np.einsum("na,nad->nd", Hrs, X)
         d = q - x
         grad = np.column_stack([np.sum(qr * d, 1), np.sum(qs * d, 1)])
         A = np.empty((n, 2, 2))
-        A[:, 0, 0] = np.sum(qr * qr, 1)
-        A[:, 1, 1] = np.sum(qs * qs, 1)
-        A[:, 0, 1] = A[:, 1, 0] = np.sum(qr * qs, 1) + np.sum(qrs * d, 1)
+        A[:, 0, 0] = np.sum(qr * qr, 1) + np.sum(np.einsum("na,nad->nd", Hrr, X) * d, 1)
+        A[:, 1, 1] = np.sum(qs * qs, 1) + np.sum(np.einsum("na,nad->nd", Hss, X) * d, 1)
+        A[:, 0, 1] = A[:, 1, 0] = np.sum(qr * qs, 1) + np.sum(
+            np.einsum("na,nad->nd", Hrs, X) * d, 1
+        )
         det = A[:, 0, 0] * A[:, 1, 1] - A[:, 0, 1] ** 2
         bad = np.abs(det) <= 1e-300
         det = np.where(bad, 1.0, det)
@@ -60,28 +63,29 @@ def project(x: np.ndarray, X: np.ndarray, triangle: np.ndarray):
         )
         step[bad] = 0.0
         rs = rs - step
-        scale = np.sqrt(np.maximum(A[:, 0, 0] + A[:, 1, 1], 1e-300))
+        scale = np.sqrt(np.maximum(np.sum(qr * qr, 1) + np.sum(qs * qs, 1), 1e-300))
         if np.all(np.abs(grad).max(axis=1) <= 1e-14 * scale * (scale + np.abs(d).max(1))):
             break
     return rs
 
 
-def outside(rs: np.ndarray, triangle: np.ndarray) -> np.ndarray:
+def outside(rs: np.ndarray, kind: np.ndarray) -> np.ndarray:
     """How far (r, s) lies outside its facet, in natural coordinates (0 on it)."""
     r, s = rs[:, 0], rs[:, 1]
     quad = np.maximum(np.maximum(np.abs(r), np.abs(s)) - 1.0, 0.0)
     tri = np.maximum.reduce([-r, -s, r + s - 1.0, np.zeros_like(r)])
-    return np.where(triangle, tri, quad)
+    return np.where(np.isin(kind, TRIANGLES), tri, quad)
 
 
-def gap_derivatives(x, Hs, X, rs, triangle, order: int):
-    """At projections rs of points x (n, 3) onto facets X (n, 4, 3): the gap g (n,), the
-    normal nu (n, 3), the master shape values Hm (n, 4), and with order >= 1 dg/dy (n, 8, 3)
-    over the stencil (the sampled facet's 4 corners with weights Hs (n, 4), then the
-    facet's 4), with order >= 2 d2g/dy2 (n, 24, 24) (module docstring)."""
+def gap_derivatives(x, Hs, X, rs, kind, order: int):
+    """At projections rs of points x (n, 3) onto facets X (n, m, 3) of the given kinds: the
+    gap g (n,), the normal nu (n, 3), the master shape values Hm (n, m), and with order >= 1
+    dg/dy (n, k + m, 3) over the stencil (the sampled facet's k nodes with weights Hs (n, k),
+    then the facet's m), with order >= 2 d2g/dy2 (n, 3(k + m), 3(k + m)) (module docstring)."""
     r, s = rs[:, 0], rs[:, 1]
-    Hm = shape(r, s, triangle)
-    Hr, Hsd, Hrs = shape_derivatives(r, s, triangle)
+    m = X.shape[1]
+    Hm = shape(r, s, kind, m)
+    Hr, Hsd, Hrr, Hss, Hrs = shape_derivatives(r, s, kind, m)
     q = np.einsum("na,nad->nd", Hm, X)
     qr = np.einsum("na,nad->nd", Hr, X)
     qs = np.einsum("na,nad->nd", Hsd, X)
@@ -91,28 +95,30 @@ def gap_derivatives(x, Hs, X, rs, triangle, order: int):
     out = [g, nu, Hm]
     if order < 1:
         return out
-    w = np.concatenate([-Hs, Hm], axis=1)  # (n, 8): J = w (x) I
+    w = np.concatenate([-Hs, Hm], axis=1)  # (n, k + m): J = w (x) I
     grad = w[:, :, None] * nu[:, None, :]
     out.append(grad)
     if order < 2:
         return out
-    n = len(x)
+    n, width = len(x), w.shape[1]
+    k = width - m
     T = np.stack([qr, qs], axis=1)  # (n, 2, 3)
     G = np.einsum("nad,nbd->nab", T, T)
-    qrs = np.einsum("na,nad->nd", Hrs, X)
-    K = np.zeros((n, 2, 2))
-    K[:, 0, 1] = K[:, 1, 0] = np.sum(qrs * nu, 1)
+    K = np.empty((n, 2, 2))
+    K[:, 0, 0] = np.sum(np.einsum("na,nad->nd", Hrr, X) * nu, 1)
+    K[:, 1, 1] = np.sum(np.einsum("na,nad->nd", Hss, X) * nu, 1)
+    K[:, 0, 1] = K[:, 1, 0] = np.sum(np.einsum("na,nad->nd", Hrs, X) * nu, 1)
     A = G + g[:, None, None] * K
     Ai = np.linalg.inv(A)
     Gi = np.linalg.inv(G)
     M = Gi @ K @ Ai
     M = 0.5 * (M + np.swapaxes(M, 1, 2))
-    TJ = w[:, None, :, None] * T[:, :, None, :]  # (n, 2, 8, 3): T J
-    TJ = TJ.reshape(n, 2, 24)
-    dH = np.zeros((n, 2, 8))
-    dH[:, 0, 4:] = Hr
-    dH[:, 1, 4:] = Hsd
-    C = (dH[:, :, :, None] * nu[:, None, None, :]).reshape(n, 2, 24)
+    TJ = w[:, None, :, None] * T[:, :, None, :]  # (n, 2, k + m, 3): T J
+    TJ = TJ.reshape(n, 2, 3 * width)
+    dH = np.zeros((n, 2, width))
+    dH[:, 0, k:] = Hr
+    dH[:, 1, k:] = Hsd
+    C = (dH[:, :, :, None] * nu[:, None, None, :]).reshape(n, 2, 3 * width)
     hess = np.einsum("nai,nab,nbj->nij", TJ, M, TJ)
     cross = np.einsum("nai,nab,nbj->nij", C, Ai, TJ)
     hess -= cross + np.swapaxes(cross, 1, 2)

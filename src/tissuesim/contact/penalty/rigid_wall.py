@@ -39,8 +39,8 @@ def node_areas(rest: np.ndarray, facets: Facets) -> tuple[np.ndarray, np.ndarray
     at rest, summed per vertex."""
     points = sample_points(facets, "nodal")
     w = points.weight * area_jacobians(rest, facets, points)
-    corner = np.argmax(points.H, axis=1)  # the nodal rule's points are the corners
-    vertex = facets.corners[points.facet, corner]
+    node = np.argmax(points.H, axis=1)  # the nodal rule's points are the facets' nodes
+    vertex = facets.nodes[points.facet, node]
     nodes, index = np.unique(vertex, return_inverse=True)
     return nodes, np.bincount(index, w, minlength=len(nodes))
 

@@ -45,6 +45,7 @@ __all__ = [
     "subdivide",
     "reorient",
     "STIFFNESS_POINTS",
+    "HEX_EDGES",
 ]
 
 #: (dimension, nodes per cell) -> meshio's cell type name
@@ -56,7 +57,7 @@ STIFFNESS_POINTS = 3
 
 def _nodes(dim: int, lagrange: bool) -> np.ndarray:
     corners = tensor.SIGNS[dim]
-    pairs = tensor.FACES[2] if dim == 2 else _HEX_EDGES
+    pairs = tensor.FACES[2] if dim == 2 else HEX_EDGES
     mids = 0.5 * (corners[pairs[:, 0]] + corners[pairs[:, 1]])
     rows = [corners, mids]
     if lagrange and dim == 2:
@@ -67,7 +68,8 @@ def _nodes(dim: int, lagrange: bool) -> np.ndarray:
     return np.concatenate(rows)
 
 
-_HEX_EDGES = np.array(
+#: the corner pairs of a hexahedron's 12 midside nodes, in node order after its corners
+HEX_EDGES = np.array(
     [[0, 1], [1, 2], [2, 3], [3, 0], [4, 5], [5, 6], [6, 7], [7, 4], [0, 4], [1, 5], [2, 6], [3, 7]]
 )
 
