@@ -315,6 +315,8 @@ def test_fitting_python_example_recovers_the_parameters(tmp_path):
 #: each Python block of the README and docs/ and the test that runs it (by a text only it
 #: contains)
 TESTED_PYTHON_BLOCKS = {
+    "def block(p):": "test_identify_python_example_recovers_the_parameters",
+    "fit = ts.identify(": "test_identify_python_example_recovers_the_parameters",
     'regions={"soft": (left, soft)}': "test_regions_python_example_runs",
     "import tissuesim as ts\nfrom tissuesim.mesh import select": "test_python_example_runs",
     'sim.attach("fat", "muscle"': "test_several_bodies_python_example_runs",
@@ -532,3 +534,18 @@ def test_regions_python_example_runs():
     exec(block("python", 'regions={"soft": (left, soft)}'), scope)
     parts = scope["body"].model.parts
     assert [(p.name, p.cells.size) for p in parts] == [("soft", 96), ("default", 144)]
+
+
+def test_identify_python_example_recovers_the_parameters(tmp_path):
+    """docs/guide/identify.md: the derivatives' shapes, then the fit within 2 % in at most 15
+    runs."""
+    pages = [DOCS / "guide" / "identify.md"]
+    code = block("python", "def block(p):", pages) + block("python", "fit = ts.identify", pages)
+    code += "\nprint(fit.parameters['E'], fit.parameters['nu'], fit.runs)\n"
+    result = subprocess.run(
+        [sys.executable, "-c", code], cwd=tmp_path, capture_output=True, text=True, timeout=300
+    )
+    assert result.returncode == 0, result.stderr
+    E, nu, runs = map(float, result.stdout.split()[-3:])
+    assert E == pytest.approx(5e4, rel=0.02) and nu == pytest.approx(0.35, rel=0.02)
+    assert runs <= 15

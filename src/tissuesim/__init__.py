@@ -23,6 +23,7 @@ from tissuesim.errors import (
     TissueSimError,
 )
 from tissuesim.frames.sampling import read_surface
+from tissuesim.identification import Displacement, Reaction, identify, sensitivities
 from tissuesim.materials import (
     ArrudaBoyce,
     CoupledArrudaBoyce,
@@ -79,6 +80,7 @@ __all__ = [
     "CoupledVerondaWestmann",
     "CoupledYeoh",
     "CourseNeoHookean",
+    "Displacement",
     "EnergyLaw",
     "FiberExpLinear",
     "FiberExpLinearUncoupled",
@@ -99,6 +101,7 @@ __all__ = [
     "NewtonOptions",
     "Ogden",
     "OgdenUnconstrained",
+    "Reaction",
     "SceneError",
     "Simulation",
     "SolidMixture",
@@ -116,6 +119,7 @@ __all__ = [
     "ellipsoid",
     "fit_material",
     "from_energy",
+    "identify",
     "make_material",
     "mesh_surface",
     "plane",
@@ -123,6 +127,7 @@ __all__ = [
     "read_surface",
     "rectangle",
     "select",
+    "sensitivities",
     "sphere",
     "sweep",
 ]

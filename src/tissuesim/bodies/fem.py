@@ -427,18 +427,26 @@ class FemBody(VertexCouplings, FemOutput):
         energies += [c.energy(t) for c in self.linear_constraints]
         return energies + [s.at(t) for s in self.springs]
 
-    def forces(self, x: np.ndarray, gradient: np.ndarray | None, t: float) -> dict:
-        """Force (N, 3-vector) every prescribed set and grasper applies to the body: a set's
-        reaction sums the gradient over the DOFs it prescribes (only its ``components``); a DOF
-        prescribed by several sets counts for the last of them, as its value does."""
+    def reaction_owners(self) -> np.ndarray:
+        """(vertices, d): the index in ``conditions`` of the active condition whose reaction
+        holds each DOF (-1: none); a DOF prescribed by several sets counts for the last."""
         d = self.dim
-        out = {}
         owner = np.full((self.mesh.n_points, d), -1)
         active = {n for n, _ in self.active_conditions()}
         for k, (name, c) in enumerate(self.conditions):
             if name in active:
                 comps = range(d) if c.components is None else list(c.components)
                 owner[np.ix_(np.asarray(c.vertices), comps)] = k
+        return owner
+
+    def forces(self, x: np.ndarray, gradient: np.ndarray | None, t: float) -> dict:
+        """Force (N, 3-vector) every prescribed set and grasper applies to the body: a set's
+        reaction sums the gradient over the DOFs it prescribes (only its ``components``); a DOF
+        prescribed by several sets counts for the last of them, as its value does."""
+        d = self.dim
+        out = {}
+        owner = self.reaction_owners()
+        active = {n for n, _ in self.active_conditions()}
         for k, (name, c) in enumerate(self.conditions):
             f = np.zeros(3)  # a condition out of its window holds nothing
             if gradient is not None and name in active:

@@ -1,0 +1,221 @@
+"""Derivatives of what a run reports with respect to its parameters, by differentiating the
+steps as they were solved (the direct, forward method of the discrete sensitivities).
+
+Each implicit step ends where the gradient of its incremental potential vanishes at the free
+DOFs: g_f(x_n, x_{n-1}, x_{n-2}, theta) = 0 (quasistatics: x_n alone; Backward Euler: the
+inertia M (x_n - x_{n-1} - h v_{n-1}) / h^2 with v_{n-1} = (x_{n-1} - x_{n-2}) / h_{n-1}).
+Differentiating that equality in a parameter theta gives the step's sensitivity s_n = dx_n/dtheta:
+
+    H_ff s_f = -b_f,   b = dg/dtheta at fixed free DOFs: the parameter's own term, the
+                       prescribed DOFs moved by their own derivative s_p, and (Backward Euler)
+                       the prediction moved by s_{n-1} + h ds_{n-1}/dt,
+
+with H the exact Hessian of the step's potential at the converged x_n (factorised once per
+step). b is the derivative of the assembled gradient along the parameter: central differences
+of the step's gradient between two copies of the simulation built at theta +- delta (relative
+1e-6) and evaluated at x_n with their own prescribed values and prediction (the gradient is
+linear in the prescribed values and the prediction, and smooth in the laws' parameters, so
+the difference is exact to about 1e-10 of the gradient). A reaction's derivative is the sum of
+H_pf s_f + b_p over its DOFs; a displacement's is s at its DOFs. Every parameter costs one
+back-solve and two gradient assemblies a step; the step's Hessian one assembly and one
+factorisation, whatever the number of parameters.
+
+What is differentiated: FEM bodies under quasistatics or Backward Euler, elastic laws
+(without internal variables), supports, prescribed motions, graspers, loads and springs;
+contact, rigid bodies, history-dependent laws and steps that halved under Backward Euler are
+refused in one line (the derivative would be of a different sequence of solves).
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from tissuesim.errors import InputError
+from tissuesim.identification.observations import Displacement
+
+__all__ = ["Sensitivities", "sensitivities"]
+
+#: the relative step of the parameters' central differences (of the assembled gradient)
+RELATIVE_STEP = 1e-6
+
+
+@dataclass
+class Sensitivities:
+    """A run's observed values and their derivatives: ``values`` (steps, m), ``jacobian``
+    (steps, m, p) d value / d parameter, ``times`` (steps,) s, ``labels`` (m,) and
+    ``parameters`` (p,) names; wall times of the run and of the derivatives (s)."""
+
+    parameters: list[str]
+    labels: list[str]
+    times: np.ndarray
+    values: np.ndarray
+    jacobian: np.ndarray
+    forward_s: float = 0.0
+    sensitivity_s: float = 0.0
+    simulations: int = 1
+    records: list = field(default_factory=list, repr=False)
+
+
+def _check(sim, what: str) -> None:
+    s = sim.system
+    if sim.integrator not in ("quasistatic", "backward_euler"):
+        raise InputError(
+            f"{what}: sensitivities are taken of quasistatic and backward_euler runs, not "
+            f"{sim.integrator!r}"
+        )
+    if s.contact is not None or s.penalty_contacts or s.rigid:
+        raise InputError(
+            f"{what}: sensitivities of runs with contact or rigid bodies are not taken yet: "
+            "use a scene without them, or finite differences of whole runs"
+        )
+    for name, body in sim.bodies.items():
+        if body.kind != "fem":
+            raise InputError(f"{what}: body {name!r} is not a FEM body (frames are not taken)")
+        if getattr(body.model, "regions", None) is None and hasattr(body.model.material, "bind"):
+            raise InputError(
+                f"{what}: body {name!r}'s law carries internal variables (its history): "
+                "sensitivities are taken of elastic laws"
+            )
+
+
+def _sync(sim, t_prev: float, t: float) -> None:
+    """Set a parameter copy's supports to the step from t_prev to t (as ``step`` does)."""
+    tol = 1e-9 * sim.time_step
+    for body in sim.bodies.values():
+        body.release_graspers(t_prev + tol)
+        body.set_condition_time(t, tol)
+
+
+def sensitivities(
+    build: Callable[[dict], object],
+    parameters: Mapping[str, float],
+    observations: Sequence,
+    steps: int,
+    *,
+    relative_step: float = RELATIVE_STEP,
+) -> Sensitivities:
+    """Run ``build(parameters)`` (a function returning a ``Simulation``) for ``steps`` steps
+    and return the ``observations`` (``Reaction``, ``Displacement``) after each step with their
+    derivatives with respect to every parameter (module docstring). Parameters must be
+    non-zero floats (their differences are relative)."""
+    names = list(parameters)
+    if not names:
+        raise InputError("sensitivities: give at least one parameter")
+    theta = {}
+    for k in names:
+        v = parameters[k]
+        if isinstance(v, bool) or not isinstance(v, (int, float)) or not np.isfinite(v) or v == 0:
+            raise InputError(f"sensitivities: parameter {k!r} must be a non-zero number, got {v!r}")
+        theta[k] = float(v)
+    start = time.perf_counter()
+    base = build(dict(theta))
+    _check(base, "sensitivities")
+    copies = []
+    for k in names:
+        delta = relative_step * abs(theta[k])
+        pair = []
+        for sign in (1.0, -1.0):
+            sim = build({**theta, k: theta[k] + sign * delta})
+            if sim.system.n_dofs != base.system.n_dofs:
+                raise InputError(
+                    f"sensitivities: parameter {k!r} changes the model's DOFs: only values "
+                    "that keep the mesh and its supports can be differentiated"
+                )
+            pair.append(sim)
+        copies.append((delta, pair))
+    build_s = time.perf_counter() - start
+    rows = [ob.rows(base) for ob in observations]
+    labels = [f"{type(ob).__name__.lower()}[{i}]" for i, ob in enumerate(observations)
+              for _ in range(len(rows[i][0]))]  # fmt: skip
+    rest = np.concatenate(
+        [
+            ob.rest(base) if isinstance(ob, Displacement) else np.zeros(len(r[0]))
+            for ob, r in zip(observations, rows, strict=True)
+        ]  # fmt: skip
+    )
+    xrows = [r for xr, _ in rows for r in xr]
+    grows = [r for _, gr in rows for r in gr]
+    dynamic = base.integrator == "backward_euler"
+    n, p = base.system.n_dofs, len(names)
+    S_prev = np.zeros((n, p))
+    V_prev = np.zeros((n, p))
+    values, jac, times, records = [], [], [], []
+    forward_s, sens_s = 0.0, 0.0
+    for _ in range(int(steps)):
+        x_prev, v_prev, t_prev = base._state.x.copy(), base._state.v.copy(), base.time
+        tick = time.perf_counter()
+        record = base.step()
+        forward_s += time.perf_counter() - tick
+        records.append(record)
+        tick = time.perf_counter()
+        t, x = base.time, base._state.x
+        h = t - t_prev
+        if dynamic and record.substeps != 1:
+            raise InputError(
+                f"sensitivities: the step to t = {t:.6g} s halved (backward_euler): the "
+                "derivative follows the steps as solved; use a smaller time_step"
+            )
+        s = base.system
+        c_pred = x_prev + h * v_prev if dynamic else None
+        acc = s.evaluate(x, 2, False, base.step_energies(t, c_pred, h))
+        g = acc.gradient
+        B = np.zeros((n, p))
+        Sp = np.zeros((n, p))
+        dofs = np.asarray(s.elimination.dofs)
+        for j, (delta, pair) in enumerate(copies):
+            grads, placed = [], []
+            for sign, sim in zip((1.0, -1.0), pair, strict=True):
+                _sync(sim, t_prev, t)
+                xs = sim.system.apply_prescribed(x, t)
+                cs = None
+                if dynamic:  # the prediction moved along its own derivative
+                    cs = c_pred + sign * delta * (S_prev[:, j] + h * V_prev[:, j])
+                energies = sim.step_energies(t, cs, h)
+                grads.append(sim.system.evaluate(xs, 1, False, energies).gradient)
+                placed.append(xs)
+            B[:, j] = (grads[0] - grads[1]) / (2 * delta)
+            Sp[dofs, j] = (placed[0][dofs] - placed[1][dofs]) / (2 * delta)
+        K = acc.pattern.matrix(acc.hessian).tocsr()
+        H = acc.hessian.copy()
+        s.elimination.apply(H, np.zeros(n))  # H_ff, and a diagonal at the prescribed DOFs
+        rhs = -B.copy()
+        rhs[dofs] = 0.0
+        Sf = _direct(acc.pattern.matrix(H))(rhs)
+        Sf[dofs] = 0.0
+        dG = K @ Sf + B  # the gradient's total derivative (B holds H_:p s_p)
+        S = Sf + Sp
+        vals, ders = [], []  # each value: its x-part (displacement) plus its g-part (reaction)
+        for r_x, r_g in zip(xrows, grows, strict=True):
+            vals.append(x[r_x].sum() + g[r_g].sum())
+            ders.append(S[r_x].sum(axis=0) + dG[r_g].sum(axis=0))
+        values.append(np.asarray(vals) - rest)
+        jac.append(np.asarray(ders))
+        times.append(t)
+        if dynamic:
+            V_prev = (S - S_prev) / h
+        S_prev = S
+        sens_s += time.perf_counter() - tick
+    return Sensitivities(names, labels, np.asarray(times), np.asarray(values), np.asarray(jac),
+                         forward_s, sens_s + build_s, 1 + 2 * p, records)  # fmt: skip
+
+
+def _direct(A):
+    """Solves with A (the step's eliminated Hessian: symmetric, positive definite at a stable
+    equilibrium): PARDISO's Cholesky where pypardiso is installed, else (or where A is not
+    positive definite) SciPy's LU; factorised once, any number of right-hand sides."""
+    import scipy.sparse.linalg as spla
+
+    from tissuesim.solve.linear import NotPositiveDefiniteError, PardisoSolver, has_pardiso
+
+    if has_pardiso():
+        solver = PardisoSolver()
+        try:
+            solver.factorize(A.tocsr())
+            return solver.solve
+        except (NotPositiveDefiniteError, RuntimeError):
+            pass
+    return spla.splu(A.tocsc()).solve

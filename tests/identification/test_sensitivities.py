@@ -1,0 +1,84 @@
+"""The derivatives of a run's observations with respect to its parameters
+(identification/sensitivity.py) against central differences of whole runs: a law's parameter, a
+prescribed motion's scalar and a load's magnitude; P1, P2, hex8 and hex20; quasistatics and
+Backward Euler; reactions and displacements. And what is refused."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import tissuesim as ts
+from tissuesim.errors import InputError
+from tissuesim.mesh import select
+
+STEPS = 3
+
+
+def build(p, integrator="quasistatic", element="tet", order=1):
+    mesh = ts.box((0, 0, 0), (1.0, 0.3, 0.3), (4, 1, 1), element=element, order=order)
+    sim = ts.Simulation(mesh, ts.NeoHookean(youngs_modulus=p["E"], poisson_ratio=0.3),
+                        integrator=integrator, time_step=0.05, density=1000.0)  # fmt: skip
+    sim.fix(select.vertices_on_plane(mesh, 0, 0.0), name="wall")
+    tip = select.vertices_on_plane(mesh, 0, 1.0)
+    sim.add_dirichlet(tip, lambda X, t: np.column_stack(
+        [0 * X[:, 0], 0 * X[:, 0], np.full(len(X), -p["depth"] * t)]), name="press")  # fmt: skip
+    sim.add_body_force(lambda X, t: np.tile([0.0, -p["g"] * 1000.0, 0.0], (len(X), 1)))
+    return sim
+
+
+def observed(sim, mid):
+    return np.concatenate(
+        [sim.forces()["press"], sim.forces()["wall"], sim.body_displacement()[mid].ravel()]
+    )
+
+
+@pytest.mark.parametrize(
+    ("integrator", "element", "order"),
+    [
+        ("quasistatic", "tet", 1),
+        ("backward_euler", "tet", 1),
+        ("quasistatic", "hex", 1),
+        ("backward_euler", "tet", 2),
+        ("quasistatic", "hex20", 2),
+    ],
+)
+def test_sensitivities_match_central_differences_of_whole_runs(integrator, element, order):
+    params = {"E": 5e4, "depth": 0.5, "g": 2.0}
+    kw = {"integrator": integrator, "element": element, "order": order}
+    mesh = build(params, **kw).bodies["body"].mesh
+    mid = select.vertices_on_plane(mesh, 0, 0.5)[:2]
+    obs = [ts.Reaction("press"), ts.Reaction("wall"), ts.Displacement(mid)]
+    r = ts.sensitivities(lambda p: build(p, **kw), params, obs, STEPS)
+    assert r.values.shape == (STEPS, 12) and r.jacobian.shape == (STEPS, 12, 3)
+
+    def run(p):
+        sim = build(p, **kw)
+        for _ in range(STEPS):
+            sim.step()
+        return observed(sim, mid)
+
+    np.testing.assert_allclose(r.values[-1], run(params), rtol=1e-12, atol=1e-12)
+    for j, k in enumerate(params):
+        d = 1e-5 * params[k]
+        fd = (run({**params, k: params[k] + d}) - run({**params, k: params[k] - d})) / (2 * d)
+        assert np.abs(fd).max() > 0
+        # relative to the largest derivative of its kind (forces, displacements)
+        for part in (slice(0, 6), slice(6, 12)):
+            scale = max(np.abs(fd[part]).max(), 1e-300)
+            assert np.abs(r.jacobian[-1][part, j] - fd[part]).max() <= 1e-6 * scale, (k, part)
+
+
+def test_runs_it_cannot_differentiate_are_refused_in_one_line():
+    def with_contact(p):
+        sim = build(p)
+        sim.add_obstacle("probe", ts.sphere((0.5, 0.15, 0.6), 0.2))
+        return sim
+
+    with pytest.raises(InputError, match="contact or rigid bodies are not taken yet"):
+        ts.sensitivities(with_contact, {"E": 5e4, "depth": 0.1, "g": 1.0},
+                         [ts.Reaction("press")], 1)  # fmt: skip
+    with pytest.raises(InputError, match="no support or prescribed set"):
+        ts.sensitivities(build, {"E": 5e4, "depth": 0.1, "g": 1.0}, [ts.Reaction("nope")], 1)
+    with pytest.raises(InputError, match="must be a non-zero number"):
+        ts.sensitivities(build, {"E": 5e4, "depth": 0.0, "g": 1.0}, [ts.Reaction("press")], 1)
