@@ -14,6 +14,7 @@ import textwrap
 import warnings
 from pathlib import Path
 
+from tissuesim.cli_identify import add_identify_parser, identify_command
 from tissuesim.cli_mesh import add_mesh_parser, mesh_command
 from tissuesim.cli_sweep import add_sweep_parser, sweep_command
 from tissuesim.scene.examples import example_path, list_examples
@@ -357,6 +358,7 @@ def main(argv: list[str] | None = None) -> int:
         help="run only this family (repeatable)",
     )
     add_sweep_parser(sub, common, _frames, _steps)
+    add_identify_parser(sub, common)
     args = parser.parse_args(argv)
     with warnings.catch_warnings():
         warnings.showwarning = _show_warning
@@ -457,8 +459,8 @@ def _dispatch(args) -> int:
         return 0
     if args.command == "verify":
         return _verify(args.json, args.only)
-    if args.command == "sweep":
-        return sweep_command(args)
+    if args.command in ("sweep", "identify"):
+        return {"sweep": sweep_command, "identify": identify_command}[args.command](args)
     return _examples(args.json)
 
 

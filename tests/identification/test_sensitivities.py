@@ -82,3 +82,36 @@ def test_runs_it_cannot_differentiate_are_refused_in_one_line():
         ts.sensitivities(build, {"E": 5e4, "depth": 0.1, "g": 1.0}, [ts.Reaction("nope")], 1)
     with pytest.raises(InputError, match="must be a non-zero number"):
         ts.sensitivities(build, {"E": 5e4, "depth": 0.0, "g": 1.0}, [ts.Reaction("press")], 1)
+
+
+def test_a_law_with_history_is_refused_and_fibre_laws_are_taken():
+    def viscous(p):
+        mesh = ts.box((0, 0, 0), (1.0, 0.3, 0.3), (2, 1, 1))
+        law = ts.Viscoelastic(ts.NeoHookean(youngs_modulus=p["E"], poisson_ratio=0.3),
+                              g=[0.5], tau=[1.0])  # fmt: skip
+        sim = ts.Simulation(mesh, law, integrator="quasistatic", time_step=0.1)
+        sim.fix(select.vertices_on_plane(mesh, 0, 0.0), name="wall")
+        return sim
+
+    with pytest.raises(InputError, match="internal variables"):
+        ts.sensitivities(viscous, {"E": 5e4}, [ts.Reaction("wall")], 1)
+
+    def fibres(p):
+        mesh = ts.box((0, 0, 0), (1.0, 0.3, 0.3), (2, 1, 1), element="hex")
+        law = ts.HolzapfelGasserOgden(c=5e3, k1=p["k1"], k2=5.0, gamma=30.0, k=2.5e5)
+        sim = ts.Simulation(mesh, law, integrator="quasistatic", time_step=0.5)
+        sim.fix(select.vertices_on_plane(mesh, 0, 0.0), name="wall")
+        sim.add_dirichlet(select.vertices_on_plane(mesh, 0, 1.0), lambda X, t: np.full(
+            len(X), 0.1 * t)[:, None], components=[0], name="pull")  # fmt: skip
+        return sim
+
+    r = ts.sensitivities(fibres, {"k1": 2e4}, [ts.Reaction("pull", component=0)], 2)
+
+    def force(k1):
+        sim = fibres({"k1": k1})
+        for _ in range(2):
+            sim.step()
+        return sim.forces()["pull"][0]
+
+    fd = (force(2e4 * (1 + 1e-5)) - force(2e4 * (1 - 1e-5))) / (2 * 2e4 * 1e-5)
+    assert r.jacobian[-1][0, 0] == pytest.approx(fd, rel=1e-6)

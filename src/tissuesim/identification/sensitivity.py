@@ -75,7 +75,7 @@ def _check(sim, what: str) -> None:
     for name, body in sim.bodies.items():
         if body.kind != "fem":
             raise InputError(f"{what}: body {name!r} is not a FEM body (frames are not taken)")
-        if getattr(body.model, "regions", None) is None and hasattr(body.model.material, "bind"):
+        if hasattr(body.model.material, "accept_step"):  # a region's history counts too
             raise InputError(
                 f"{what}: body {name!r}'s law carries internal variables (its history): "
                 "sensitivities are taken of elastic laws"

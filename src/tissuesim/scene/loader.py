@@ -83,6 +83,7 @@ SCENE_KEYS = {
     "logfiles": set(LOGFILE_KEYS),
     "penalty_contact": set(PENALTY_KEYS),
     "rigid_wall": set(RIGID_WALL_KEYS),
+    "identify": None,  # read by ``tissuesim identify`` (identification/scene.py); a run ignores it
 }
 # Tables of frame scenes ([frames], scene/tables/frames.py) that mean nothing for a [mesh] body.
 FRAME_ONLY_KEYS = ("region", "fixed_frames", "prescribed_frames", "springs", "point_forces")

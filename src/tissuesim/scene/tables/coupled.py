@@ -126,6 +126,7 @@ COUPLED_SCENE_KEYS: dict[str, Any] = {
     "rigid_joints": set(JOINT_KEYS),
     "penalty_contact": set(PENALTY_KEYS),
     "rigid_wall": set(RIGID_WALL_KEYS),
+    "identify": None,  # read by ``tissuesim identify`` (identification/scene.py); a run ignores it
 }
 ARRAYS = (
     "organs", "bodies", "graspers", "attachments", "cuts", "obstacles", "visual_surfaces",
