@@ -23,7 +23,13 @@ from tissuesim.errors import (
     TissueSimError,
 )
 from tissuesim.frames.sampling import read_surface
-from tissuesim.identification import Displacement, Reaction, identify, sensitivities
+from tissuesim.identification import (
+    Displacement,
+    Reaction,
+    SurfaceDistance,
+    identify,
+    sensitivities,
+)
 from tissuesim.materials import (
     ArrudaBoyce,
     CoupledArrudaBoyce,
@@ -106,6 +112,7 @@ __all__ = [
     "Simulation",
     "SolidMixture",
     "StVenantKirchhoff",
+    "SurfaceDistance",
     "TissueSimError",
     "TransIsoMooneyRivlin",
     "UncoupledSolidMixture",

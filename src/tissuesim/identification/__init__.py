@@ -5,7 +5,7 @@ measured forces and displacements by least squares with those derivatives (``fit
 from __future__ import annotations
 
 from tissuesim.identification.fit import Identification, identify
-from tissuesim.identification.observations import Displacement, Reaction
+from tissuesim.identification.observations import Displacement, Reaction, SurfaceDistance
 from tissuesim.identification.sensitivity import Sensitivities, sensitivities
 
 __all__ = [
@@ -15,4 +15,5 @@ __all__ = [
     "Sensitivities",
     "identify",
     "sensitivities",
+    "SurfaceDistance",
 ]

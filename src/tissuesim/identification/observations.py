@@ -1,14 +1,11 @@
 """What a run reports that a measurement can be compared with, and how it depends on the state:
-a support's reaction force, and the displacement of marker vertices.
+a support's reaction force, the displacement of marker vertices, and the distance of measured
+surface points (a point cloud) from the deformed body's boundary.
 
-Each observation gives its values y(x) at the current state and their derivatives as two
-linear maps over the system's DOFs: y depends on the positions x directly (displacements) or
-through the step's gradient g(x) (a reaction sums g over the DOFs its set prescribes), so
-
-    dy = X dx + R dg,
-
-with X and R sparse selections (``rows(sim)``: (X, R) as dense (k, n_dofs) arrays are never
-formed: they are index lists).
+Each observation gives, at a converged state x with the step's gradient g, its values y and
+their derivatives as two sparse (k, n_dofs) matrices: y depends on the positions directly
+(displacements, distances) or through the gradient (a reaction sums g over the DOFs its set
+prescribes), so dy = X dx + R dg (``linearize(sim, x, g)`` -> (y, X, R)).
 """
 
 from __future__ import annotations
@@ -16,10 +13,11 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+import scipy.sparse as sp
 
 from tissuesim.errors import InputError
 
-__all__ = ["Reaction", "Displacement", "Observation"]
+__all__ = ["Reaction", "Displacement", "SurfaceDistance", "Observation", "linearize"]
 
 
 def _fem_body(sim, name: str | None, what: str):
@@ -107,4 +105,61 @@ class Displacement:
         return np.asarray(body.mesh.points)[v][:, comps].ravel()
 
 
-Observation = Reaction | Displacement
+@dataclass(frozen=True)
+class SurfaceDistance:
+    """The distance (m) from each of ``points`` (k, 3: a measured point cloud of the deformed
+    surface, e.g. a surface scan) to the boundary of FEM body ``body``'s deformed mesh (its
+    tetrahedra; P2 bodies by their linear sub-tetrahedra): k values, each compared with 0
+    where measured. Its derivative moves the closest point with the mesh (the barycentric
+    weights held), along the unit vector from it to the measured point."""
+
+    points: tuple | list | np.ndarray
+    body: str | None = None
+
+    def linearize(self, sim, x: np.ndarray, g: np.ndarray):
+        """(distances (k,), X (k, n) sparse, R zero) at the state x."""
+        import dataclasses
+
+        from tissuesim.mesh.queries.locate import closest_boundary_points
+
+        name, body, j = _fem_body(sim, self.body, "SurfaceDistance")
+        p = np.asarray(self.points, dtype=float).reshape(-1, 3)
+        s = sim.system
+        d = body.dim
+        xb = x[s.tangent_slices[j]].reshape(-1, d)
+        deformed = dataclasses.replace(body.mesh, points=xb)
+        found = closest_boundary_points(deformed, p)
+        tets = deformed.simplices[found.cells]  # (k, 4) vertices
+        diff = p - found.positions
+        dist = np.linalg.norm(diff, axis=1)
+        unit = np.where(dist[:, None] > 0, -diff / np.where(dist > 0, dist, 1.0)[:, None], 0.0)
+        offset = s.tangent_slices[j].start
+        rows = np.repeat(np.arange(len(p)), 4 * d)
+        cols = (offset + tets[:, :, None] * d + np.arange(d)).ravel()
+        vals = (found.barycentric[:, :, None] * unit[:, None, :]).ravel()
+        n = s.n_dofs
+        X = sp.csr_matrix((vals, (rows, cols)), shape=(len(p), n))
+        return dist, X, sp.csr_matrix((len(p), n))
+
+
+Observation = Reaction | Displacement | SurfaceDistance
+
+
+def _selection(groups: list[np.ndarray], n: int) -> sp.csr_matrix:
+    rows = np.concatenate([np.full(len(r), i) for i, r in enumerate(groups)] or [[]])
+    cols = np.concatenate(groups or [[]]).astype(np.int64)
+    return sp.csr_matrix((np.ones(len(cols)), (rows.astype(np.int64), cols)),
+                         shape=(len(groups), n))  # fmt: skip
+
+
+def linearize(observation, sim, x: np.ndarray, g: np.ndarray):
+    """(values (k,), X, R) of any observation at the state x with the step's gradient g."""
+    if hasattr(observation, "linearize"):
+        return observation.linearize(sim, x, g)
+    n = sim.system.n_dofs
+    xrows, grows = observation.rows(sim)
+    X, R = _selection(xrows, n), _selection(grows, n)
+    y = X @ x + R @ g
+    if isinstance(observation, Displacement):
+        y = y - observation.rest(sim)
+    return y, X, R

@@ -35,7 +35,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from tissuesim.errors import InputError
-from tissuesim.identification.observations import Displacement
+from tissuesim.identification.observations import linearize
 
 __all__ = ["Sensitivities", "sensitivities"]
 
@@ -128,17 +128,7 @@ def sensitivities(
             pair.append(sim)
         copies.append((delta, pair))
     build_s = time.perf_counter() - start
-    rows = [ob.rows(base) for ob in observations]
-    labels = [f"{type(ob).__name__.lower()}[{i}]" for i, ob in enumerate(observations)
-              for _ in range(len(rows[i][0]))]  # fmt: skip
-    rest = np.concatenate(
-        [
-            ob.rest(base) if isinstance(ob, Displacement) else np.zeros(len(r[0]))
-            for ob, r in zip(observations, rows, strict=True)
-        ]  # fmt: skip
-    )
-    xrows = [r for xr, _ in rows for r in xr]
-    grows = [r for _, gr in rows for r in gr]
+    labels: list[str] = []
     dynamic = base.integrator == "backward_euler"
     n, p = base.system.n_dofs, len(names)
     S_prev = np.zeros((n, p))
@@ -188,12 +178,15 @@ def sensitivities(
         Sf[dofs] = 0.0
         dG = K @ Sf + B  # the gradient's total derivative (B holds H_:p s_p)
         S = Sf + Sp
-        vals, ders = [], []  # each value: its x-part (displacement) plus its g-part (reaction)
-        for r_x, r_g in zip(xrows, grows, strict=True):
-            vals.append(x[r_x].sum() + g[r_g].sum())
-            ders.append(S[r_x].sum(axis=0) + dG[r_g].sum(axis=0))
-        values.append(np.asarray(vals) - rest)
-        jac.append(np.asarray(ders))
+        vals, ders = [], []
+        for i, ob in enumerate(observations):
+            y, X, R = linearize(ob, base, x, g)
+            vals.append(np.asarray(y, dtype=float))
+            ders.append(np.asarray(X @ S + R @ dG).reshape(len(vals[-1]), p))
+            if not times:
+                labels += [f"{type(ob).__name__.lower()}[{i}]"] * len(vals[-1])
+        values.append(np.concatenate(vals))
+        jac.append(np.concatenate(ders))
         times.append(t)
         if dynamic:
             V_prev = (S - S_prev) / h
