@@ -15,7 +15,7 @@ from tissuesim.mesh import select
 STEPS = 3
 
 
-def build(p, integrator="quasistatic", element="tet", order=1):
+def build(p, integrator="quasistatic", element="tet", order=1, constant_load=False):
     mesh = ts.box((0, 0, 0), (1.0, 0.3, 0.3), (4, 1, 1), element=element, order=order)
     sim = ts.Simulation(mesh, ts.NeoHookean(youngs_modulus=p["E"], poisson_ratio=0.3),
                         integrator=integrator, time_step=0.05, density=1000.0)  # fmt: skip
@@ -23,7 +23,8 @@ def build(p, integrator="quasistatic", element="tet", order=1):
     tip = select.vertices_on_plane(mesh, 0, 1.0)
     sim.add_dirichlet(tip, lambda X, t: np.column_stack(
         [0 * X[:, 0], 0 * X[:, 0], np.full(len(X), -p["depth"] * t)]), name="press")  # fmt: skip
-    sim.add_body_force(lambda X, t: np.tile([0.0, -p["g"] * 1000.0, 0.0], (len(X), 1)))
+    ramp = (lambda t: 1.0) if constant_load else (lambda t: t)  # constant: Newmark's a_0 != 0
+    sim.add_body_force(lambda X, t: np.tile([0.0, -p["g"] * 1000.0 * ramp(t), 0.0], (len(X), 1)))
     return sim
 
 
@@ -41,6 +42,8 @@ def observed(sim, mid):
         ("quasistatic", "hex", 1),
         ("backward_euler", "tet", 2),
         ("quasistatic", "hex20", 2),
+        ("newmark", "tet", 1),
+        ("newmark", "hex", 1),
     ],
 )
 def test_sensitivities_match_central_differences_of_whole_runs(integrator, element, order):
@@ -115,3 +118,52 @@ def test_a_law_with_history_is_refused_and_fibre_laws_are_taken():
 
     fd = (force(2e4 * (1 + 1e-5)) - force(2e4 * (1 - 1e-5))) / (2 * 2e4 * 1e-5)
     assert r.jacobian[-1][0, 0] == pytest.approx(fd, rel=1e-6)
+
+
+def test_rest_positions_as_parameters():
+    """A parameter that moves rest vertices (the bar's free end drawn longer): the press's
+    reaction's derivative against central differences of whole runs."""
+
+    def longer(p):
+        mesh = ts.box((0, 0, 0), (1.0, 0.3, 0.3), (4, 1, 1))
+        end = mesh.points[:, 0] > 0.99
+        mesh.points[end, 0] += p["extra"]
+        sim = ts.Simulation(mesh, ts.NeoHookean(youngs_modulus=5e4, poisson_ratio=0.3),
+                            integrator="quasistatic", time_step=0.5)  # fmt: skip
+        sim.fix(select.vertices_on_plane(mesh, 0, 0.0), name="wall")
+        sim.add_dirichlet(np.flatnonzero(end), lambda X, t: np.full(len(X), -0.2 * t)[:, None],
+                          components=[2], name="press")  # fmt: skip
+        return sim
+
+    r = ts.sensitivities(longer, {"extra": 0.1}, [ts.Reaction("press", component=2)], 2)
+
+    def force(extra):
+        sim = longer({"extra": extra})
+        for _ in range(2):
+            sim.step()
+        return sim.forces()["press"][2]
+
+    fd = (force(0.1 + 1e-6) - force(0.1 - 1e-6)) / 2e-6
+    assert abs(fd) > 1.0
+    assert r.jacobian[-1][0, 0] == pytest.approx(fd, rel=1e-6)
+
+
+def test_newmark_from_its_initial_acceleration():
+    """Newmark's first step starts from M^-1 f(t_0): with a load on from t = 0 the run's
+    derivative goes through the initial acceleration's (a load's magnitude, Young's modulus)."""
+    params = {"E": 5e4, "depth": 0.3, "g": 2.0}
+    kw = {"integrator": "newmark", "constant_load": True}
+    mesh = build(params, **kw).bodies["body"].mesh
+    mid = select.vertices_on_plane(mesh, 0, 0.5)[:2]
+    r = ts.sensitivities(lambda p: build(p, **kw), params, [ts.Displacement(mid)], STEPS)
+
+    def run(p):
+        sim = build(p, **kw)
+        for _ in range(STEPS):
+            sim.step()
+        return sim.body_displacement()[mid].ravel()
+
+    for j, k in enumerate(params):
+        d = 1e-5 * params[k]
+        fd = (run({**params, k: params[k] + d}) - run({**params, k: params[k] - d})) / (2 * d)
+        assert np.abs(r.jacobian[-1][:, j] - fd).max() <= 1e-6 * np.abs(fd).max(), k

@@ -2,8 +2,10 @@
 steps as they were solved (the direct, forward method of the discrete sensitivities).
 
 Each implicit step ends where the gradient of its incremental potential vanishes at the free
-DOFs: g_f(x_n, x_{n-1}, x_{n-2}, theta) = 0 (quasistatics: x_n alone; Backward Euler: the
-inertia M (x_n - x_{n-1} - h v_{n-1}) / h^2 with v_{n-1} = (x_{n-1} - x_{n-2}) / h_{n-1}).
+DOFs: g_f(x_n, x_pred, theta) = 0 (quasistatics: x_n alone; Backward Euler: the inertia
+M (x_n - x_pred) / h^2 with x_pred = x_{n-1} + h v_{n-1}; Newmark: over beta h^2 with
+x_pred = x_{n-1} + h v_{n-1} + h^2 (1/2 - beta) a_{n-1}, its a and v updates differentiated
+alongside, and the first step's initial acceleration M^-1 f(t_0) through the copies).
 Differentiating that equality in a parameter theta gives the step's sensitivity s_n = dx_n/dtheta:
 
     H_ff s_f = -b_f,   b = dg/dtheta at fixed free DOFs: the parameter's own term, the
@@ -20,10 +22,10 @@ H_pf s_f + b_p over its DOFs; a displacement's is s at its DOFs. Every parameter
 back-solve and two gradient assemblies a step; the step's Hessian one assembly and one
 factorisation, whatever the number of parameters.
 
-What is differentiated: FEM bodies under quasistatics or Backward Euler, elastic laws
+What is differentiated: FEM bodies under quasistatics, Backward Euler or Newmark, elastic laws
 (without internal variables), supports, prescribed motions, graspers, loads and springs;
-contact, rigid bodies, history-dependent laws and steps that halved under Backward Euler are
-refused in one line (the derivative would be of a different sequence of solves).
+contact, rigid bodies, history-dependent laws and dynamic steps that halved are refused in
+one line (the derivative would be of a different sequence of solves).
 """
 
 from __future__ import annotations
@@ -62,10 +64,10 @@ class Sensitivities:
 
 def _check(sim, what: str) -> None:
     s = sim.system
-    if sim.integrator not in ("quasistatic", "backward_euler"):
+    if sim.integrator not in ("quasistatic", "backward_euler", "newmark"):
         raise InputError(
-            f"{what}: sensitivities are taken of quasistatic and backward_euler runs, not "
-            f"{sim.integrator!r}"
+            f"{what}: sensitivities are taken of quasistatic, backward_euler and newmark runs, "
+            f"not {sim.integrator!r}"
         )
     if s.contact is not None or s.penalty_contacts or s.rigid:
         raise InputError(
@@ -129,10 +131,21 @@ def sensitivities(
         copies.append((delta, pair))
     build_s = time.perf_counter() - start
     labels: list[str] = []
-    dynamic = base.integrator == "backward_euler"
+    dynamic = base.integrator in ("backward_euler", "newmark")
+    newmark = base.integrator == "newmark"
+    beta, gamma = base.newmark if newmark else (0.0, 0.0)
     n, p = base.system.n_dofs, len(names)
-    S_prev = np.zeros((n, p))
-    V_prev = np.zeros((n, p))
+    S_x, S_v, S_a = np.zeros((n, p)), np.zeros((n, p)), np.zeros((n, p))
+    a_n = np.zeros(n)
+    if newmark and base._state.a is None and not base.history:
+        # the run's first step starts from FEBio's initial acceleration M^-1 f(t_0): its
+        # derivative by the copies' (linear in the loads)
+        from tissuesim.time.integrators.newmark import initial_acceleration
+
+        a_n = initial_acceleration(base.system, base.system.bodies, base.time)
+        for j, (delta, pair) in enumerate(copies):
+            a_pm = [initial_acceleration(c.system, c.system.bodies, base.time) for c in pair]
+            S_a[:, j] = (a_pm[0] - a_pm[1]) / (2 * delta)
     values, jac, times, records = [], [], [], []
     forward_s, sens_s = 0.0, 0.0
     for _ in range(int(steps)):
@@ -146,12 +159,18 @@ def sensitivities(
         h = t - t_prev
         if dynamic and record.substeps != 1:
             raise InputError(
-                f"sensitivities: the step to t = {t:.6g} s halved (backward_euler): the "
+                f"sensitivities: the step to t = {t:.6g} s halved ({base.integrator}): the "
                 "derivative follows the steps as solved; use a smaller time_step"
             )
         s = base.system
-        c_pred = x_prev + h * v_prev if dynamic else None
-        acc = s.evaluate(x, 2, False, base.step_energies(t, c_pred, h))
+        # the step's prediction and inertia step (Newmark's: x_n + h v_n + h^2 (1/2 - beta)
+        # a_n over sqrt(beta) h, time/integrators/newmark.py) and their derivatives
+        c_pred, h_in, dc = None, h, None
+        if dynamic:
+            c_pred = x_prev + h * v_prev + h * h * (0.5 - beta) * a_n
+            dc = S_x + h * S_v + h * h * (0.5 - beta) * S_a
+            h_in = np.sqrt(beta) * h if newmark else h
+        acc = s.evaluate(x, 2, False, base.step_energies(t, c_pred, h_in))
         g = acc.gradient
         B = np.zeros((n, p))
         Sp = np.zeros((n, p))
@@ -163,8 +182,8 @@ def sensitivities(
                 xs = sim.system.apply_prescribed(x, t)
                 cs = None
                 if dynamic:  # the prediction moved along its own derivative
-                    cs = c_pred + sign * delta * (S_prev[:, j] + h * V_prev[:, j])
-                energies = sim.step_energies(t, cs, h)
+                    cs = c_pred + sign * delta * dc[:, j]
+                energies = sim.step_energies(t, cs, h_in)
                 grads.append(sim.system.evaluate(xs, 1, False, energies).gradient)
                 placed.append(xs)
             B[:, j] = (grads[0] - grads[1]) / (2 * delta)
@@ -188,9 +207,13 @@ def sensitivities(
         values.append(np.concatenate(vals))
         jac.append(np.concatenate(ders))
         times.append(t)
-        if dynamic:
-            V_prev = (S - S_prev) / h
-        S_prev = S
+        if newmark:  # a_{n+1} = (x_{n+1} - x_pred) / (beta h^2), v by gamma
+            S_a1 = (S - dc) / (beta * h * h)
+            S_v = S_v + h * ((1.0 - gamma) * S_a + gamma * S_a1)
+            S_a, a_n = S_a1, base._state.a if base._state.a is not None else np.zeros(n)
+        elif dynamic:
+            S_v = (S - S_x) / h
+        S_x = S
         sens_s += time.perf_counter() - tick
     return Sensitivities(names, labels, np.asarray(times), np.asarray(values), np.asarray(jac),
                          forward_s, sens_s + build_s, 1 + 2 * p, records)  # fmt: skip
