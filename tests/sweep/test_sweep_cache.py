@@ -90,12 +90,11 @@ def test_each_run_gets_its_own_copy_and_outside_a_run_nothing_is_cached(bar_scen
 
 def test_the_cache_keeps_at_most_max_meshes(bar_scene, tmp_path, fresh_cache, monkeypatch):
     monkeypatch.setattr(cache, "MAX_MESHES", 2)
+    for n in (2, 3, 4):
+        write_mesh(tissuesim.box((0, 0, 0), (1.0, 0.25, 0.25), (n, 1, 1)), tmp_path / f"{n}.vtu")
     with cache.enabled():
         for n in (2, 3, 4, 2):
-            path = tmp_path / f"bar{n}.vtu"
-            if not path.exists():
-                write_mesh(tissuesim.box((0, 0, 0), (1.0, 0.25, 0.25), (n, 1, 1)), path)
-            assert tissuesim.mesh.read_mesh(path).n_cells == 6 * n
+            assert tissuesim.mesh.read_mesh(tmp_path / f"{n}.vtu").n_cells == 6 * n
     assert cache.stats() == {"hits": 0, "misses": 4, "meshes": 2}  # bar2 was dropped
 
 
@@ -124,3 +123,42 @@ def test_a_surface_is_meshed_once_per_worker(tmp_path, fresh_cache):
     assert cache.stats() == {"hits": 1, "misses": 1, "meshes": 1}
     data = tissuesim.sweep.load_dataset(tmp_path / "s")
     assert data["body/displacement"].shape[0] == 2
+
+
+def test_a_generated_mesh_is_made_once_per_worker(bar_scene, tmp_path, fresh_cache):
+    scene = tmp_path / "bar.toml"
+    scene.write_text(
+        bar_scene.read_text().replace(
+            'file = "mesh/bar.vtu"',
+            'generator = "box"\nlower = [0.0, 0.0, 0.0]\nupper = [1.0, 0.25, 0.25]\n'
+            "divisions = [4, 1, 1]",
+        )
+    )
+    with ThreadPoolExecutor(1) as pool:
+        results = tissuesim.sweep(scene, VARY, out=tmp_path / "s", executor=pool, progress=False)
+    assert cache.stats() == {"hits": 2, "misses": 1, "meshes": 1}
+    for result in results:
+        sim = _uncached(scene, result["params"]["material.youngs_modulus"])
+        assert result["forces"] == sim.forces()  # exact
+    assert results[0]["forces"] == _uncached(bar_scene, 800.0).forces()  # the file's bar
+
+
+def test_the_cache_is_off_with_the_environment_variable(bar_scene, fresh_cache, monkeypatch):
+    monkeypatch.setenv("TISSUESIM_SWEEP_CACHE", "0")
+    with cache.enabled():
+        tissuesim.mesh.read_mesh(bar_scene.parent / "mesh" / "bar.vtu")
+        tissuesim.box((0, 0, 0), (1, 1, 1), (1, 1, 1))
+    assert cache.stats() == {"hits": 0, "misses": 0, "meshes": 0}
+
+
+def test_arguments_key_by_value_arrays_by_their_bytes():
+    import numpy as np
+
+    a = np.arange(5000.0)
+    b = a.copy()
+    b[2500] = -1.0  # the same repr ("...") but other bytes
+    assert cache._option_key({"x": a}) != cache._option_key({"x": b})
+    assert cache._option_key({"x": a}) == cache._option_key({"x": a.copy()})
+    assert cache._option_key({"x": [1, 2]}) != cache._option_key({"x": (1, 2)})
+    assert cache._option_key({"x": 1}) != cache._option_key({"x": 1.0})
+    assert cache._option_key({"x": object()}) is None  # not cached

@@ -1,19 +1,20 @@
-"""A worker's mesh cache: the runs of a study that read the same mesh file, or mesh the same
-surface, do it once per worker process instead of once per run.
+"""A worker's mesh cache: the runs of a study that read the same mesh file, mesh the same
+surface or generate the same box, do it once per worker process instead of once per run.
 
-``read_mesh`` (meshio's parse, the checks) and ``mesh_surface`` (a tetrahedralisation:
-seconds to minutes for an organ) are pure functions of the file's bytes and their options, so
-a worker keeps their results: keyed by the file's resolved path, its contents' hash (BLAKE2b,
-so a file rewritten between runs is read again, whatever its time stamp) and the options, at
-most ``MAX_MESHES`` meshes, the least recently used dropped first. Every run gets its own deep
-copy (a run may cut or tear its mesh), so a run's numbers are those without the cache, bit for
-bit (tests/sweep/test_sweep_cache.py).
+``read_mesh`` (meshio's parse, the checks), ``mesh_surface`` (a tetrahedralisation: seconds
+to minutes for an organ) and the generators ``box``, ``ellipsoid``, ``rectangle`` (a third of
+a small scene's build, its checks included) are pure functions of the file's bytes and their
+arguments, so a worker keeps their results: keyed by the file's resolved path, its contents'
+hash (BLAKE2b, so a file rewritten between runs is read again, whatever its time stamp) and
+the arguments, at most ``MAX_MESHES`` meshes, the least recently used dropped first. Every
+run gets its own deep copy (a run may cut or tear its mesh), so a run's numbers are those
+without the cache, bit for bit (tests/sweep/test_sweep_cache.py).
 
-The cache is on only inside a study's run (``execute_run``, a thread-local switch), through
-wrappers put once in place of ``tissuesim.mesh.read_mesh``, ``tissuesim.read_mesh`` and
-``mesh_surface`` (where the scene loader imports them when it builds a mesh, and where a
-study's builder function finds them): the same calls outside a study's run go straight to the
-functions, uncached.
+The cache is on only inside a study's run (``execute_run``, a thread-local switch; off
+everywhere with ``TISSUESIM_SWEEP_CACHE=0`` in the environment), through wrappers put once in
+place of these functions in ``tissuesim.mesh`` and ``tissuesim`` (where the scene loader
+imports them when it builds a mesh, and where a study's builder function finds them): the
+same calls outside a study's run go straight to the functions, uncached.
 """
 
 from __future__ import annotations
@@ -27,6 +28,8 @@ from collections import OrderedDict
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from typing import Any
+
+import numpy as np
 
 __all__ = ["MAX_MESHES", "install", "enabled", "clear", "stats"]
 
@@ -57,7 +60,7 @@ def clear() -> None:
 def enabled() -> Iterator[None]:
     """The cache on in this thread while inside (a study's run)."""
     before = getattr(_local, "on", False)
-    _local.on = True
+    _local.on = os.environ.get("TISSUESIM_SWEEP_CACHE", "1") != "0"
     try:
         yield
     finally:
@@ -82,27 +85,45 @@ def _file_key(path: Any) -> tuple | None:
         return None
 
 
+def _value_key(value: Any) -> Any:
+    """A hashable key of an argument: numbers, strings, paths, lists, tuples, dicts and NumPy
+    arrays (by their bytes); TypeError for anything else (then not cached)."""
+    if value is None or isinstance(value, bool | int | float | str):
+        return (type(value).__name__, value)
+    if isinstance(value, os.PathLike):
+        return ("path", os.fspath(value))
+    if isinstance(value, np.ndarray | np.generic):
+        a = np.ascontiguousarray(value)
+        if a.dtype.hasobject:
+            raise TypeError("an object array")
+        return ("array", a.shape, a.dtype.str, hashlib.blake2b(a.tobytes()).hexdigest())
+    if isinstance(value, list | tuple):
+        return (type(value).__name__, *(_value_key(v) for v in value))
+    if isinstance(value, dict):
+        return ("dict", *sorted((str(k), _value_key(v)) for k, v in value.items()))
+    raise TypeError(f"no cache key for {type(value).__name__}")
+
+
 def _option_key(options: dict) -> tuple | None:
     try:
-        key = tuple(sorted((k, repr(v)) for k, v in options.items()))
-        hash(key)
-        return key
+        return tuple(sorted((k, _value_key(v)) for k, v in options.items()))
     except TypeError:
         return None
 
 
 def _cached(kind: str, function: Callable[..., Any]) -> Callable[..., Any]:
     """``function(path, *args, **options)`` cached by the file and the options while the cache
-    is on in this thread."""
+    is on in this thread (a generator, ``kind`` "generator:NAME": by its arguments alone)."""
+    generator = kind.startswith("generator")
 
     @functools.wraps(function)
-    def wrapper(path: Any, *args: Any, **options: Any) -> Any:
+    def wrapper(*args: Any, **options: Any) -> Any:
         if not getattr(_local, "on", False):
-            return function(path, *args, **options)
-        file = _file_key(path)
+            return function(*args, **options)
+        file = () if generator else _file_key(args[0] if args else None)
         rest = _option_key({**{f"#{i}": a for i, a in enumerate(args)}, **options})
         if file is None or rest is None:
-            return function(path, *args, **options)
+            return function(*args, **options)
         key = (kind, *file, rest)
         with _lock:
             mesh = _meshes.get(key)
@@ -110,7 +131,7 @@ def _cached(kind: str, function: Callable[..., Any]) -> Callable[..., Any]:
                 _meshes.move_to_end(key)
                 _stats["hits"] += 1
         if mesh is None:
-            mesh = function(path, *args, **options)
+            mesh = function(*args, **options)
             with _lock:
                 _stats["misses"] += 1
                 _meshes[key] = mesh
@@ -132,11 +153,14 @@ def install() -> None:
         import tissuesim.mesh
         import tissuesim.mesh.from_surface.tetrahedralize as tetrahedralize
 
-        read = _cached("file", tissuesim.mesh.read_mesh)
-        surface = _cached("surface", tetrahedralize.mesh_surface)
-        tissuesim.mesh.read_mesh = read
-        tissuesim.read_mesh = read
-        tetrahedralize.mesh_surface = surface
-        tissuesim.mesh.mesh_surface = surface
-        tissuesim.mesh_surface = surface
+        wrappers = {
+            "read_mesh": _cached("file", tissuesim.mesh.read_mesh),
+            "mesh_surface": _cached("surface", tetrahedralize.mesh_surface),
+        }
+        for name in ("box", "ellipsoid", "rectangle"):
+            wrappers[name] = _cached(f"generator:{name}", getattr(tissuesim.mesh, name))
+        for name, wrapper in wrappers.items():
+            setattr(tissuesim.mesh, name, wrapper)
+            setattr(tissuesim, name, wrapper)
+        tetrahedralize.mesh_surface = wrappers["mesh_surface"]
         _installed = True
