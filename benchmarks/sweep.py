@@ -1,7 +1,7 @@
 """What a parameter study costs (``tissuesim.sweep``, issue 43).
 
     python3 benchmarks/sweep.py [--scene two_blocks_tied] [--runs 40] [--workers 1 2] [--dask]
-                                [--write benchmarks/results/sweep.md]
+                                [--dataset-format hdf5 zarr] [--write benchmarks/results/sweep.md]
 
 A study of ``--runs`` runs of a shipped contact-free scene (default ``two_blocks_tied``: two
 glued blocks, 720 tetrahedra, 10 quasistatic steps; its fat layer's Young's modulus
@@ -13,8 +13,9 @@ varied over 2e3..8e3 Pa, evenly spaced), for each worker count on the default pr
   built (``build_scene``) and the model set up, and all but the solve against the solve time;
 - the study's own overhead per run: workers x study wall time - the runs' summed wall times
   (dispatch, result files, the table, workers idle at the end), per run;
-- the fields dataset (``--fields displacement``): file size and write time per run (median),
-  and reading every run back with ``load_dataset``.
+- the fields dataset (``--fields displacement``) in each ``--dataset-format`` (default hdf5):
+  file (Zarr: group) size and write time per run (median), and reading every run back with
+  ``load_dataset``.
 
 The 1-minute load average is printed before and after each measurement: on a shared machine
 the figures are only as good as the load was low.
@@ -34,7 +35,9 @@ def load() -> str:
     return "/".join(f"{x:.2f}" for x in os.getloadavg())
 
 
-def study(scene: str, runs: int, workers: int, executor, fields=(), key=None) -> dict:
+def study(
+    scene: str, runs: int, workers: int, executor, fields=(), key=None, dataset_format="hdf5"
+) -> dict:
     import tissuesim
     from tissuesim.sweep.executors import process_pool
 
@@ -48,7 +51,13 @@ def study(scene: str, runs: int, workers: int, executor, fields=(), key=None) ->
     t1 = time.perf_counter()
     with tempfile.TemporaryDirectory() as tmp:
         results = tissuesim.sweep(
-            scene, vary, out=Path(tmp) / "s", executor=executor, fields=fields, progress=False
+            scene,
+            vary,
+            out=Path(tmp) / "s",
+            executor=executor,
+            fields=fields,
+            progress=False,
+            **({"dataset_format": dataset_format} if fields else {}),
         )
         t2 = time.perf_counter()
         read_s = None
@@ -79,6 +88,7 @@ def study(scene: str, runs: int, workers: int, executor, fields=(), key=None) ->
         "load_after": load(),
     }
     if fields:
+        out["dataset_format"] = dataset_format
         out["fields_bytes"] = statistics.median(r["fields_bytes"] for r in results)
         out["fields_write_s"] = statistics.median(r["fields_write_s"] for r in results)
         out["read_all_s"] = read_s
@@ -99,6 +109,13 @@ def main() -> None:
         "friction_incline (contact)",
     )
     parser.add_argument("--no-fields", action="store_true", help="skip the dataset's figures")
+    parser.add_argument(
+        "--dataset-format",
+        nargs="+",
+        choices=("hdf5", "zarr"),
+        default=["hdf5"],
+        help="the fields dataset's formats to measure (default hdf5)",
+    )
     args = parser.parse_args()
     print(f"load before: {load()} (1, 5, 15 min), {os.cpu_count()} cores")
     rows = []
@@ -121,19 +138,30 @@ def main() -> None:
                 row["start_s"] = started
                 rows.append(("Dask LocalCluster", row))
                 print(rows[-1])
-    fields = None
+    datasets = []
     if not args.no_fields:
-        fields = study(
-            args.scene, args.runs, max(args.workers), None, ("displacement",), key=args.key
-        )
-        print(fields)
+        for fmt in args.dataset_format:
+            datasets.append(
+                study(
+                    args.scene,
+                    args.runs,
+                    max(args.workers),
+                    None,
+                    ("displacement",),
+                    key=args.key,
+                    dataset_format=fmt,
+                )
+            )
+            print(datasets[-1])
     lines = [
         f"# Parameter study: {args.runs} runs of `{args.scene}` (`benchmarks/sweep.py`)",
         "",
         f"Measured {time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}, "
         f"{os.cpu_count()} cores; `python3 benchmarks/sweep.py --scene {args.scene} "
         f"{'' if args.key is None else '--key ' + args.key + ' '}--runs {args.runs} --workers "
-        f"{' '.join(map(str, args.workers))}{' --dask' if args.dask else ''}`. Each run: "
+        f"{' '.join(map(str, args.workers))}{' --dask' if args.dask else ''}"
+        f"{' --dataset-format ' + ' '.join(args.dataset_format) if not args.no_fields else ''}`."
+        " Each run: "
         f"{rows[0][1]['steps']} steps, "
         + (
             "the fat layer's E from 2e3 to 8e3 Pa."
@@ -155,10 +183,11 @@ def main() -> None:
             f"| {100 * r['run_rest_share']:.0f} % "
             f"| {r['study_overhead_s']:.3f} | {r['load_before']} -> {r['load_after']} |"
         )
-    if fields is not None:
+    for fields in datasets:
         lines += [
             "",
-            f"Fields dataset (`--fields displacement`, {fields['workers']} workers): "
+            f"Fields dataset (`--fields displacement --dataset-format "
+            f"{fields['dataset_format']}`, {fields['workers']} workers): "
             f"{fields['fields_bytes'] / 1024:.1f} KiB per run, written in "
             f"{1e3 * fields['fields_write_s']:.1f} ms per run (median); every run read back by "
             f"`load_dataset` in {fields['read_all_s']:.2f} s; load {fields['load_before']} -> "

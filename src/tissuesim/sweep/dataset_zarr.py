@@ -15,7 +15,10 @@ Each group is written by the worker that ran the run into a hidden temporary dir
 it, its files fsynced, then renamed into place: no lock, no shared store between workers, and a
 killed study leaves every finished run's group whole (a leftover ``.<run_id>.tmp-XXXXXXXX.zarr``
 is hidden from ``load_dataset``). An array is one chunk, or with saved times one chunk per time
-(zarr's default codec, Zstandard: lossless, the floats read back bit for bit).
+(zarr's default codec, Zstandard: lossless, the floats read back bit for bit). Each file of a
+group is fsynced before the rename, as the HDF5 file is: with two bodies a run's group is 7
+small files, and their fsyncs are half of its write time (30-40 ms a run on the loaded 2-core
+development machine against 8-11 ms for the one HDF5 file, for a quarter of its size).
 """
 
 from __future__ import annotations
@@ -107,17 +110,16 @@ def write_run_fields_zarr(
     shared = folder / "rest.zarr"
     if not shared.is_dir():
         with _atomic_group(shared) as tmp:
-            group = zarr.open_group(tmp, mode="w")
-            group.attrs["rest_sha256"] = sha
+            group = zarr.open_group(tmp, mode="w", attributes={"rest_sha256": sha})
             for name, (points, cells) in rest.items():
                 _write_array(group, f"{name}/points", points, False)
                 _write_array(group, f"{name}/cells", cells, False)
     # read back, not assumed: another worker may have renamed its rest.zarr in first
     own_rest = zarr.open_group(shared, mode="r").attrs["rest_sha256"] != sha
     target = folder / f"{task.run_id}.zarr"
+    attributes = to_json_compatible(run_attributes(task, sha))
     with _atomic_group(target) as tmp:
-        group = zarr.open_group(tmp, mode="w")
-        group.attrs.update(to_json_compatible(run_attributes(task, sha)))
+        group = zarr.open_group(tmp, mode="w", attributes=attributes)  # one zarr.json write
         for key, value in run_arrays(task, sim, list(rest), frames).items():
             _write_array(group, key, value, bool(frames) and key != "times")
         if own_rest:
