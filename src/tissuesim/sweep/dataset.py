@@ -20,7 +20,6 @@ NumPy arrays in one call.
 
 from __future__ import annotations
 
-import hashlib
 import time
 from pathlib import Path
 from typing import Any
@@ -28,14 +27,18 @@ from typing import Any
 import numpy as np
 
 from tissuesim.errors import InputError
+from tissuesim.sweep.dataset_common import (  # noqa: F401  (re-exported)
+    CELL_FIELDS,
+    FIELDS,
+    _rest,
+    _sha,
+    frame_fields,
+    run_arrays,
+    run_attributes,
+)
 
 __all__ = ["FIELDS", "FORMATS", "write_run_fields", "load_dataset", "check_format"]
 
-#: the fields a study can save per run: the displacement of the vertices, and the cell fields
-#: every FEM body writes (``Simulation.cell_fields``: J, Green strain, Cauchy stress, von
-#: Mises stress, energy density; one value or 3 x 3 tensor per cell)
-FIELDS = ("displacement", "J", "green_strain", "cauchy_stress", "von_mises", "energy_density")
-CELL_FIELDS = FIELDS[1:]
 #: the dataset's formats: one HDF5 file per run (h5py), or one Zarr group per run (zarr 3)
 FORMATS = ("hdf5", "zarr")
 
@@ -65,65 +68,6 @@ def check_format(dataset_format: str) -> str:
     else:
         _h5py()
     return dataset_format
-
-
-def _rest(sim) -> dict[str, tuple[np.ndarray, np.ndarray]]:
-    return {
-        name: (np.asarray(b.mesh.points, float), np.asarray(b.mesh.cells, np.int64))
-        for name, b in sim.bodies.items()
-        if b.kind == "fem"
-    }
-
-
-def _sha(rest: dict[str, tuple[np.ndarray, np.ndarray]]) -> str:
-    h = hashlib.sha256()
-    for name in sorted(rest):
-        points, cells = rest[name]
-        h.update(name.encode())
-        h.update(np.ascontiguousarray(points).tobytes())
-        h.update(np.ascontiguousarray(cells).tobytes())
-    return h.hexdigest()[:16]
-
-
-def frame_fields(sim: Any, fields: tuple[str, ...]) -> dict[str, dict[str, np.ndarray]]:
-    """The asked ``fields`` of every FEM body now: {body: {field: array}}."""
-    out: dict[str, dict[str, np.ndarray]] = {}
-    for name, body in sim.bodies.items():
-        if body.kind != "fem":
-            continue
-        values = {}
-        if "displacement" in fields:
-            values["displacement"] = sim.body_displacement(name)
-        wanted = [k for k in CELL_FIELDS if k in fields]
-        if wanted:
-            cell = sim.cell_fields(name)
-            values.update({k: np.asarray(cell[k], float) for k in wanted})
-        out[name] = values
-    return out
-
-
-def run_arrays(task: Any, sim: Any, names: list[str], frames: list | None) -> dict[str, np.ndarray]:
-    """The run's arrays by their path in its file: ``times`` (with ``frames``) and
-    ``<body>/<field>`` for the FEM bodies ``names``."""
-    arrays: dict[str, np.ndarray] = {}
-    if frames:
-        arrays["times"] = np.array([t for t, _ in frames], float)
-        for name in names:
-            for key in frames[0][1][name]:
-                arrays[f"{name}/{key}"] = np.stack([values[name][key] for _, values in frames])
-    else:
-        for name, values in frame_fields(sim, task.fields).items():
-            for key, value in values.items():
-                arrays[f"{name}/{key}"] = value
-    return arrays
-
-
-def run_attributes(task: Any, sha: str) -> dict[str, Any]:
-    """The run's attributes: run_id, index, rest_sha256 and each parameter as
-    ``param:<key path>``."""
-    attrs: dict[str, Any] = {"run_id": task.run_id, "index": task.index, "rest_sha256": sha}
-    attrs.update({f"param:{key}": value for key, value in task.values.items()})
-    return attrs
 
 
 def write_run_fields(

@@ -99,7 +99,7 @@ def write_run_fields_zarr(
     """``dataset.write_run_fields`` in Zarr: the group ``fields/<run_id>.zarr`` (and
     ``fields/rest.zarr`` if no run wrote it yet)."""
     from tissuesim.io.atomic import to_json_compatible
-    from tissuesim.sweep.dataset import _rest, _sha, run_arrays, run_attributes
+    from tissuesim.sweep.dataset_common import _rest, _sha, run_arrays, run_attributes
 
     zarr = zarr_module()
     start = time.perf_counter()
@@ -133,7 +133,7 @@ def write_run_fields_zarr(
 def read_zarr_runs(folder: Path) -> tuple[dict[str, np.ndarray], str, list[dict[str, Any]]]:
     """``dataset._read_h5_runs`` for the Zarr groups: the rest mesh, its hash and every run's
     attributes with its "fields" ({path: array}) and "path"."""
-    from tissuesim.sweep.dataset import FIELDS
+    from tissuesim.sweep.dataset_common import FIELDS
 
     zarr = zarr_module()
     group = zarr.open_group(folder / "rest.zarr", mode="r")
