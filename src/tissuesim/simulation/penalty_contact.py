@@ -48,6 +48,7 @@ class PenaltySpec:
     friction_penalty: float = 0.0
     friction_anchor: str = "step"
     keep_last_augmentation: bool = False
+    special_cases: bool = False
 
 
 class PenaltyContactCalls:
@@ -79,6 +80,7 @@ class PenaltyContactCalls:
         friction_penalty: float = 0.0,
         friction_anchor: str = "step",
         keep_last_augmentation: bool = False,
+        special_cases: bool = False,
         name: str | None = None,
     ) -> str:
         """Penalty contact: points of body ``primary``'s facets (a facet set name, (k, 3) or
@@ -102,8 +104,12 @@ class PenaltyContactCalls:
         project at each step's start (``friction_anchor`` "step", FEBio's sliding-elastic) or
         where they first projected ("contact", its node-on-facet). ``keep_last_augmentation``:
         the augmentation that finds the multipliers converged is kept for the next step
-        (FEBio's sliding-elastic). Its force on ``primary`` is reported by
-        ``forces()`` under ``name`` (default ``penalty_contact<n>``). Returns the name."""
+        (FEBio's sliding-elastic). ``special_cases``: a point whose projection lands on no
+        facet is projected onto an interior edge of the secondary surface or its closest node
+        (FEBio's node-on-facet, facet-on-facet, tied and sticky contacts; the gap is the
+        signed distance there; linear facets only: contact/penalty/special_cases.py). Its
+        force on ``primary`` is reported by ``forces()`` under ``name`` (default
+        ``penalty_contact<n>``). Returns the name."""
         for body in (primary, secondary):
             if body not in self.bodies or self.bodies[body].kind != "fem":
                 raise InputError(
@@ -187,6 +193,7 @@ class PenaltyContactCalls:
                 float(friction_penalty),
                 friction_anchor,
                 bool(keep_last_augmentation),
+                bool(special_cases),
             )  # fmt: skip
         )
         self._system_dirty = True
@@ -216,6 +223,7 @@ class PenaltyContactCalls:
                 friction=spec.friction, friction_penalty=spec.friction_penalty,
                 friction_anchor=spec.friction_anchor,
                 keep_last_augmentation=spec.keep_last_augmentation,
+                special_cases=spec.special_cases,
             )  # fmt: skip
             pair.setup([None if b is None else b for b in _rest(system)])
             pairs.append(pair)

@@ -20,6 +20,8 @@ onto the primary too (a second, symmetric energy). The Hessian is exact (``proje
 ``friction``: Coulomb friction by FEBio's return map, one more energy per point with its
 pressure and normal lagged (``friction.py``); ``keep_last_augmentation``: the augmentation
 that finds the multipliers converged is kept for the next step (FEBio's sliding-elastic).
+``special_cases``: a point on no facet is projected onto an interior edge or a node of the
+other surface, FEBio's ``ProjectSpecial`` (``special_cases.py``).
 """
 
 from __future__ import annotations
@@ -39,6 +41,14 @@ from tissuesim.contact.penalty.faces import (
     shape,
 )
 from tissuesim.contact.penalty.projection import gap_derivatives, outside, project
+from tissuesim.contact.penalty.special_cases import (
+    Special,
+    Topology,
+    contact_gaps,
+    in_order,
+    nearest_feature,
+    special_contacts,
+)
 
 __all__ = ["PenaltyContact", "PenaltySide", "PenaltyPass"]
 
@@ -47,6 +57,9 @@ CANDIDATES = 8
 #: points farther than this many facet sizes (centre to corner) from every facet centre of
 #: the other surface are out of contact (FEBio's search radius)
 SEARCH_RADIUS = 2.0
+#: how far outside a facet (natural coordinates) a projection is still on it, with special
+#: cases (round-off)
+STRICT = 1e-12
 #: relative change of a lagged current-area weight below which it has settled
 AREA_SETTLED = 1e-9
 
@@ -72,7 +85,8 @@ class PenaltyPass:
     multipliers: np.ndarray  # L per point (Pa); tied and sticky: (points, 3)
     tie: tuple | None = None  # tied / sticky: (points held, their facets, (r, s))
     friction: coulomb.FrictionState | None = None  # with a friction coefficient
-    _last: tuple | None = None  # (positions, contacts) of the last search (_contacts)
+    _last: tuple | None = None  # (positions, contacts) of the last search (_search)
+    topology: Topology | None = None  # the target's edges, with special_cases
 
 
 @dataclass(eq=False)
@@ -111,6 +125,9 @@ class PenaltyContact:
     # FEBio's sliding-elastic keeps the multipliers of the augmentation that finds them
     # converged (its Augment updates before it checks); facet-on-facet and node-on-facet do not
     keep_last_augmentation: bool = False
+    # FEBio's HandleSpecialCases(true) (special_cases.py): a point projecting onto no facet
+    # is projected onto an interior edge or a node of the secondary surface
+    special_cases: bool = False
     passes: list = field(default_factory=list)
     augmentations: int = 0  # in this step's solve
 
@@ -124,6 +141,8 @@ class PenaltyContact:
             points = sample_points(sampled.facets, self.rule)
             w = points.weight * area_jacobians(rest[sampled.body], sampled.facets, points)
             p = PenaltyPass(sampled, target, points, w, np.zeros(len(w)))
+            if self.special_cases:
+                p.topology = Topology.of(target.facets)
             if self.tied:  # where each point sits on the secondary surface at rest, kept
                 p.tie = self._find_contacts(p, rest)[:3]
             if self.tied or self.sticky:
@@ -137,8 +156,13 @@ class PenaltyContact:
     # -- geometry --------------------------------------------------------------------------
     def _contacts(self, p: PenaltyPass, positions: list[np.ndarray]):
         """(points with a facet, their facet, (r, s), their positions) of pass p at body
-        positions; the last answer again for the same positions (Newton asks for a point's
-        Hessian after its line search asked for its gradient)."""
+        positions."""
+        return self._search(p, positions)[:4]
+
+    def _search(self, p: PenaltyPass, positions: list[np.ndarray]):
+        """``_contacts`` and which of them are special (special_cases.Special); the last
+        answer again for the same positions (Newton asks for a point's Hessian after its line
+        search asked for its gradient)."""
         here = (positions[p.sampled.body], positions[p.target.body])
         last = p._last
         if last is not None and all(
@@ -161,9 +185,8 @@ class PenaltyContact:
         tree = cKDTree(centroids)
         d0, _ = tree.query(x, k=1)
         near_rows = np.flatnonzero(d0 <= SEARCH_RADIUS * size)
-        empty = (np.zeros(0, int), np.zeros(0, int), np.zeros((0, 2)), np.zeros((0, 3)))
         if len(near_rows) == 0:
-            return empty
+            return np.zeros(0, int), np.zeros(0, int), np.zeros((0, 2)), x[:0], Special.none()
         _, near = tree.query(x[near_rows], k=k)
         near = near.reshape(len(near_rows), k)
         flat = near.ravel()
@@ -171,17 +194,52 @@ class PenaltyContact:
         rs = project(xr, X_all[flat], tf.kind[flat])
         excess = outside(rs, tf.kind[flat])
         g, _, _ = gap_derivatives(xr, None, X_all[flat], rs, tf.kind[flat], 0)
-        # the closest facet whose projection is on it, within the search tolerance (a point
-        # over a convex edge, on no facet, is out of contact: extending the nearest facet
-        # there took co13 from 8e-9 to 1.2e-3 of FEBio's norm)
-        on = (excess <= self.search_tolerance).reshape(len(near_rows), k)
-        dist = np.where(on, np.abs(g).reshape(on.shape), np.inf)
-        best = np.argmin(dist, axis=1)
+        # the closest facet whose projection is on it, within the search tolerance (extending
+        # the nearest facet over a convex edge took co13 from 8e-9 to 1.2e-3); with special
+        # cases strictly on it, else an edge or node, else within the tolerance (special_cases)
+        excess = excess.reshape(len(near_rows), k)
+        g = np.abs(g).reshape(excess.shape)
         rows = np.arange(len(near_rows))
-        found = np.isfinite(dist[rows, best])
-        pick = rows * k + best
-        rows = np.flatnonzero(found)
-        return near_rows[rows], flat[pick[rows]], rs[pick[rows]], x[near_rows[rows]]
+
+        def closest(on, among):
+            dist = np.where(on[among], g[among], np.inf)
+            best = np.argmin(dist, axis=1)
+            found = np.isfinite(dist[np.arange(len(among)), best])
+            hit = among[found]
+            return found, hit * k + best[found], hit
+
+        special = Special.none()
+        if p.topology is None:
+            found, pick, hit = closest(excess <= self.search_tolerance, rows)
+            return near_rows[hit], flat[pick], rs[pick], x[near_rows[hit]], special
+        found, pick, hit = closest(excess <= STRICT, rows)
+        pts, facet, rs_out = near_rows[hit], flat[pick], rs[pick]
+        miss = rows[~found]
+        if len(miss):  # FEBio's ProjectSpecial
+            which, f, r, slots, lam = special_contacts(x[near_rows[miss]],
+                                                       positions[p.target.body], tf,
+                                                       p.topology)  # fmt: skip
+            cand = (miss[which][:, None] * k + np.arange(k)).ravel()
+            keep = nearest_feature(x[near_rows[miss[which]]], X_all[f], r, tf.kind[f],
+                                   X_all[flat[cand]], rs[cand], tf.kind[flat[cand]])  # fmt: skip
+            which, f, r, slots, lam = which[keep], f[keep], r[keep], slots[keep], lam[keep]
+            special = Special(len(pts) + np.arange(len(which)), slots, lam)
+            pts = np.concatenate([pts, near_rows[miss[which]]])
+            facet, rs_out = np.concatenate([facet, f]), np.vstack([rs_out, r])
+            miss = np.setdiff1d(miss, miss[which])
+        if len(miss):  # the rim: within the search tolerance
+            _, pick, hit = closest(excess <= self.search_tolerance, miss)
+            pts = np.concatenate([pts, near_rows[hit]])
+            facet, rs_out = np.concatenate([facet, flat[pick]]), np.vstack([rs_out, rs[pick]])
+        pts, facet, rs_out, special = in_order(pts, facet, rs_out, special)
+        return pts, facet, rs_out, x[pts], special
+
+    def _gaps(self, p: PenaltyPass, positions: list[np.ndarray], found, order: int = 0):
+        """gap_derivatives' list for the contacts ``found`` (``_search``) of pass p."""
+        pts, facet, rs, x, special = found
+        X = positions[p.target.body][p.target.facets.nodes[facet]]
+        kind = p.target.facets.kind[facet]
+        return contact_gaps(x, p.points.H[pts], X, rs, kind, special, order)
 
     def _eps(self, p: PenaltyPass) -> np.ndarray:
         return self.penalty * p.sampled.scale[p.points.facet]
@@ -207,13 +265,12 @@ class PenaltyContact:
                 value += coulomb.friction_terms(p.friction, p, positions, dofs,
                                                 self._eps_t(p), self.friction, order, grad,
                                                 rows, cols, vals)  # fmt: skip
-            pts, facet, rs, x = self._contacts(p, positions)
+            found = self._search(p, positions)
+            pts, facet = found[:2]
             if len(pts) == 0:
                 continue
             tf, sf = p.target.facets, p.sampled.facets
-            X = positions[p.target.body][tf.nodes[facet]]
-            Hs = p.points.H[pts]
-            parts = gap_derivatives(x, Hs, X, rs, tf.kind[facet], min(order, 2))
+            parts = self._gaps(p, positions, found, min(order, 2))
             g = parts[0]
             eps = self._eps(p)[pts]
             L = p.multipliers[pts]
@@ -312,11 +369,11 @@ class PenaltyContact:
                 total += f if k == 0 else -f
                 area += float(np.sum(p.weights[pts]))
                 continue
-            pts, facet, rs, x = self._contacts(p, positions)
+            found = self._search(p, positions)
+            pts = found[0]
             if len(pts) == 0:
                 continue
-            X = positions[p.target.body][p.target.facets.nodes[facet]]
-            g, nu, _ = gap_derivatives(x, None, X, rs, p.target.facets.kind[facet], 0)
+            g, nu, _ = self._gaps(p, positions, found)
             t = np.maximum(p.multipliers[pts] + self._eps(p)[pts] * g, 0.0)
             f = np.sum((p.weights[pts] * t)[:, None] * nu, axis=0)
             if p.friction is not None:
@@ -346,11 +403,11 @@ class PenaltyContact:
                     let_go = held[~keep]
                     held, facet, rs = held[keep], facet[keep], rs[keep]
                     changed = True
-            pts, f, r, x = self._contacts(p, positions)
+            found = self._search(p, positions)
+            pts, f, r, _ = found[:4]
             free = ~np.isin(pts, held) & ~np.isin(pts, let_go)
             if free.any():
-                X = positions[p.target.body][p.target.facets.nodes[f[free]]]
-                g = gap_derivatives(x[free], None, X, r[free], p.target.facets.kind[f[free]], 0)[0]
+                g = self._gaps(p, positions, found)[0][free]
                 new = g > -self.snap_tolerance
                 if new.any():
                     sel = np.flatnonzero(free)[new]
@@ -408,10 +465,9 @@ class PenaltyContact:
                 updates.append(L1)
                 continue
             g = np.zeros(len(p.multipliers))
-            pts, facet, rs, x = self._contacts(p, positions)
-            if len(pts):
-                X = positions[p.target.body][p.target.facets.nodes[facet]]
-                g[pts] = gap_derivatives(x, None, X, rs, p.target.facets.kind[facet], 0)[0]
+            found = self._search(p, positions)
+            if len(found[0]):
+                g[found[0]] = self._gaps(p, positions, found)[0]
             L1 = np.maximum(p.multipliers + self._eps(p) * g, 0.0)
             old += float(p.multipliers @ p.multipliers)
             new += float(L1 @ L1)

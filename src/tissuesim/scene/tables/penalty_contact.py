@@ -26,6 +26,8 @@ bodies' facet surfaces (``Simulation.add_penalty_contact``, ``contact/penalty/pa
     friction_penalty = 0.0            # stick's tangential penalty (Pa/m; 0: penalty's)
     friction_anchor = "step"          # or "contact" (FEBio's node-on-facet)
     keep_last_augmentation = false    # FEBio's sliding-elastic
+    special_cases = false             # no facet: onto an interior edge or node (FEBio's
+                                      #   node-on-facet, facet-on-facet, tied, sticky)
 """
 
 from __future__ import annotations
@@ -40,9 +42,10 @@ PENALTY_KEYS = (
     "auto_penalty", "integration", "area", "two_pass", "augmented", "tolerance",
     "gap_tolerance", "min_augmentations", "max_augmentations", "search_tolerance", "tied",
     "sticky", "snap_tolerance", "max_traction", "friction", "friction_penalty",
-    "friction_anchor", "keep_last_augmentation",
+    "friction_anchor", "keep_last_augmentation", "special_cases",
 )  # fmt: skip
-_FLAGS = ("auto_penalty", "two_pass", "augmented", "tied", "sticky", "keep_last_augmentation")
+_FLAGS = ("auto_penalty", "two_pass", "augmented", "tied", "sticky", "keep_last_augmentation",
+          "special_cases")  # fmt: skip
 _COUNTS = ("min_augmentations", "max_augmentations")
 
 
