@@ -184,3 +184,23 @@ def test_the_converter_sets_special_cases_for_febios_closest_point_contacts(kind
     facet-on-facet: co13 drifted from FEBio's norm with them); the ray-casting
     sliding-elastic and tied-elastic without."""
     assert _penalty_settings(kind, None, {}).get("special_cases", False) is special
+
+
+def test_a_surface_without_interior_edges_takes_no_edge_projection():
+    """A secondary surface of one facet (FEBio's co19: a single quad) has no interior edge: a
+    point past its rim is left alone (its nodes are all boundary nodes), no error."""
+    quad = np.array([[0.0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]])
+    point = np.array([1.5, 0.5, -0.05])
+    tri = np.array([point, point + [100.0, 0, 0], point + [0, 100.0, 0]])
+    sides = (
+        PenaltySide(1, Facets.of([[0, 1, 2]], "tri"), np.ones(1)),
+        PenaltySide(0, Facets.of([[0, 1, 2, 3]], "quad"), np.ones(1)),
+    )
+    pair = PenaltyContact("p", *sides, penalty=100.0, rule="nodal", special_cases=True)
+    rest = [quad, tri]
+    pair.setup(rest)
+    dofs, n = _dofs(rest)
+    value, grad, _ = pair.evaluate(rest, dofs, n, 2)
+    assert value == 0.0 and not np.any(grad)
+    inside = [quad, np.array([[0.5, 0.5, -0.05], [100.5, 0.5, 0], [0.5, 100.5, 0]])]
+    assert pair.evaluate(inside, dofs, n, 0)[0] > 0.0  # the facet itself still holds

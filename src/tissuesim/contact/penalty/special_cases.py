@@ -143,22 +143,26 @@ def special_contacts(x: np.ndarray, P: np.ndarray, facets: Facets, topo: Topolog
     nodes = P[topo.nodes]
     d_node, c = cKDTree(nodes).query(x, k=1)
     E = topo.node_edges[c]  # (n, V)
-    has = E >= 0
-    Es = np.where(has, E, 0)
-    a = nodes[topo.edge_nodes[Es, 0]]
-    b = nodes[topo.edge_nodes[Es, 1]]
-    e = b - a
-    ee = np.einsum("nvd,nvd->nv", e, e)
-    ok = has & (ee > 0)
-    lam = np.einsum("nvd,nvd->nv", e, x[:, None] - a) / np.where(ok, ee, 1.0)
-    q = a + lam[..., None] * e
-    D2 = np.einsum("nvd,nvd->nv", x[:, None] - q, x[:, None] - q)
-    ok &= (lam >= 0.0) & (lam <= 1.0) & (D2 < d_node[:, None] ** 2)
-    D2 = np.where(ok, D2, np.inf)
-    best = np.argmin(D2, axis=1) if E.shape[1] else np.zeros(len(x), int)
-    on_edge = np.isfinite(D2[np.arange(len(x)), best]) if E.shape[1] else np.zeros(len(x), bool)
-    edge = Es[np.arange(len(x)), best]
-    l_edge = lam[np.arange(len(x)), best]
+    rows = np.arange(len(x))
+    if E.shape[1] and len(topo.edge_nodes):
+        has = E >= 0
+        Es = np.where(has, E, 0)
+        a = nodes[topo.edge_nodes[Es, 0]]
+        b = nodes[topo.edge_nodes[Es, 1]]
+        e = b - a
+        ee = np.einsum("nvd,nvd->nv", e, e)
+        ok = has & (ee > 0)
+        lam = np.einsum("nvd,nvd->nv", e, x[:, None] - a) / np.where(ok, ee, 1.0)
+        q = a + lam[..., None] * e
+        D2 = np.einsum("nvd,nvd->nv", x[:, None] - q, x[:, None] - q)
+        ok &= (lam >= 0.0) & (lam <= 1.0) & (D2 < d_node[:, None] ** 2)
+        D2 = np.where(ok, D2, np.inf)
+        best = np.argmin(D2, axis=1)
+        on_edge = np.isfinite(D2[rows, best])
+        edge, l_edge = Es[rows, best], lam[rows, best]
+    else:  # a surface without interior edges (a single facet): nodes only
+        on_edge = np.zeros(len(x), bool)
+        edge, l_edge = np.zeros(len(x), int), np.zeros(len(x))
     # the node only where it is the closest point: x not ahead of it along any of its edges
     # (FEBio takes it whenever no edge does: beside a boundary edge, whose nodes may be
     # farther than an interior one, that made the gap jump from the facet's to the node's)
