@@ -147,6 +147,7 @@ def sensitivities(
             a_pm = [initial_acceleration(c.system, c.system.bodies, base.time) for c in pair]
             S_a[:, j] = (a_pm[0] - a_pm[1]) / (2 * delta)
     values, jac, times, records = [], [], [], []
+    solver = _StepSolver()  # one analysis of the pattern for every step
     forward_s, sens_s = 0.0, 0.0
     for _ in range(int(steps)):
         x_prev, v_prev, t_prev = base._state.x.copy(), base._state.v.copy(), base.time
@@ -170,7 +171,8 @@ def sensitivities(
             c_pred = x_prev + h * v_prev + h * h * (0.5 - beta) * a_n
             dc = S_x + h * S_v + h * h * (0.5 - beta) * S_a
             h_in = np.sqrt(beta) * h if newmark else h
-        acc = s.evaluate(x, 2, False, base.step_energies(t, c_pred, h_in))
+        # the step's own energies, as its solve built them (time/steps.py keeps them)
+        acc = s.evaluate(x, 2, False, s.last_step_energies)
         g = acc.gradient
         B = np.zeros((n, p))
         Sp = np.zeros((n, p))
@@ -193,7 +195,7 @@ def sensitivities(
         s.elimination.apply(H, np.zeros(n))  # H_ff, and a diagonal at the prescribed DOFs
         rhs = -B.copy()
         rhs[dofs] = 0.0
-        Sf = _direct(acc.pattern.matrix(H))(rhs)
+        Sf = solver.solve(acc.pattern.matrix(H), rhs)
         Sf[dofs] = 0.0
         dG = K @ Sf + B  # the gradient's total derivative (B holds H_:p s_p)
         S = Sf + Sp
@@ -219,19 +221,26 @@ def sensitivities(
                          forward_s, sens_s + build_s, 1 + 2 * p, records)  # fmt: skip
 
 
-def _direct(A):
-    """Solves with A (the step's eliminated Hessian: symmetric, positive definite at a stable
-    equilibrium): PARDISO's Cholesky where pypardiso is installed, else (or where A is not
-    positive definite) SciPy's LU; factorised once, any number of right-hand sides."""
-    import scipy.sparse.linalg as spla
+class _StepSolver:
+    """Solves with each step's eliminated Hessian (symmetric, positive definite at a stable
+    equilibrium): PARDISO's Cholesky where pypardiso is installed, its analysis made once for
+    the pattern the steps share; else (or where a matrix is not positive definite) SciPy's LU.
+    Any number of right-hand sides."""
 
-    from tissuesim.solve.linear import NotPositiveDefiniteError, PardisoSolver, has_pardiso
+    def __init__(self) -> None:
+        from tissuesim.solve.linear import PardisoSolver, has_pardiso
 
-    if has_pardiso():
-        solver = PardisoSolver()
-        try:
-            solver.factorize(A.tocsr())
-            return solver.solve
-        except (NotPositiveDefiniteError, RuntimeError):
-            pass
-    return spla.splu(A.tocsc()).solve
+        self.pardiso = PardisoSolver() if has_pardiso() else None
+
+    def solve(self, A, rhs: np.ndarray) -> np.ndarray:
+        import scipy.sparse.linalg as spla
+
+        from tissuesim.solve.linear import NotPositiveDefiniteError
+
+        if self.pardiso is not None:
+            try:
+                self.pardiso.factorize(A.tocsr())
+                return self.pardiso.solve(rhs)
+            except (NotPositiveDefiniteError, RuntimeError):
+                pass
+        return spla.splu(A.tocsc()).solve(rhs)
