@@ -28,6 +28,12 @@ def build(p, integrator="quasistatic", element="tet", order=1, constant_load=Fal
     return sim
 
 
+def central(run, params: dict, k: str, rel: float = 1e-5):
+    """The central difference of whole runs ``run(params)`` in parameter k."""
+    d = rel * params[k]
+    return (run({**params, k: params[k] + d}) - run({**params, k: params[k] - d})) / (2 * d)
+
+
 def observed(sim, mid):
     return np.concatenate(
         [sim.forces()["press"], sim.forces()["wall"], sim.body_displacement()[mid].ravel()]
@@ -63,8 +69,7 @@ def test_sensitivities_match_central_differences_of_whole_runs(integrator, eleme
 
     np.testing.assert_allclose(r.values[-1], run(params), rtol=1e-12, atol=1e-12)
     for j, k in enumerate(params):
-        d = 1e-5 * params[k]
-        fd = (run({**params, k: params[k] + d}) - run({**params, k: params[k] - d})) / (2 * d)
+        fd = central(run, params, k)
         assert np.abs(fd).max() > 0
         # relative to the largest derivative of its kind (forces, displacements)
         for part in (slice(0, 6), slice(6, 12)):
@@ -164,6 +169,5 @@ def test_newmark_from_its_initial_acceleration():
         return sim.body_displacement()[mid].ravel()
 
     for j, k in enumerate(params):
-        d = 1e-5 * params[k]
-        fd = (run({**params, k: params[k] + d}) - run({**params, k: params[k] - d})) / (2 * d)
+        fd = central(run, params, k)
         assert np.abs(r.jacobian[-1][:, j] - fd).max() <= 1e-6 * np.abs(fd).max(), k
