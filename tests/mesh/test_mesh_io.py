@@ -211,3 +211,30 @@ def test_mixed_elements_rejected(tmp_path):
     meshio.Mesh(p, cells).write(tmp_path / "mixed.vtu")
     with pytest.raises(MeshError, match=r"mixed.vtu: mixes triangle .*\['quad'\]"):
         read_mesh(tmp_path / "mixed.vtu")
+
+
+def test_a_read_in_a_worker_thread_leaves_the_process_streams_alone(tmp_path, monkeypatch):
+    """sys.stdout / sys.stderr are the whole process's: a read in a worker thread (a study on
+    a thread pool, a Dask worker) must not swap them, or the main thread's output (a study's
+    progress lines) goes into the read's buffer."""
+    import sys
+    import threading
+
+    path = tmp_path / "box.vtu"
+    write_mesh(box((0, 0, 0), (1, 1, 1), (1, 1, 1)), path)
+    seen = []
+    real = meshio.read
+
+    def spying_read(p, *args, **kwargs):
+        seen.append((threading.current_thread() is threading.main_thread(), sys.stderr))
+        return real(p, *args, **kwargs)
+
+    monkeypatch.setattr(meshio, "read", spying_read)
+    before = sys.stderr
+    worker = threading.Thread(target=read_mesh, args=(path,))
+    worker.start()
+    worker.join()
+    read_mesh(path)
+    assert seen[0] == (False, before)  # the worker's read: the streams untouched
+    assert seen[1][0] and seen[1][1] is not before  # the main thread's read: caught
+    assert sys.stderr is before

@@ -17,6 +17,7 @@ from __future__ import annotations
 import contextlib
 import io
 import os
+import threading
 import warnings
 from collections import defaultdict
 
@@ -74,12 +75,20 @@ def _block_dim(block) -> int:
 
 
 def _load(path: str):
-    """meshio.read, turning every failure (meshio may even call sys.exit) into MeshError."""
+    """meshio.read, turning every failure (meshio may even call sys.exit) into MeshError.
+
+    What meshio prints is caught for the message in the main thread only: redirecting
+    sys.stdout / sys.stderr swaps them for the whole process, so a read in a worker thread (a
+    study on a thread pool, a Dask worker) would swallow the other threads' output, and two
+    overlapping reads could leave a stale buffer as sys.stderr for good."""
     import meshio
 
     captured = io.StringIO()
+    main = threading.current_thread() is threading.main_thread()
+    out = contextlib.redirect_stdout(captured) if main else contextlib.nullcontext()
+    err = contextlib.redirect_stderr(captured) if main else contextlib.nullcontext()
     try:
-        with contextlib.redirect_stdout(captured), contextlib.redirect_stderr(captured):
+        with out, err:
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore")
                 return meshio.read(path)
