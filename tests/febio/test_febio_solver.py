@@ -249,3 +249,27 @@ def test_a_stiffness_that_is_not_finite_fails_the_step_instead_of_crashing():
     options = NewtonOptions(method="febio")
     x, record = minimize_febio(broken, np.zeros(6), elimination, SuperLUSolver(), options)
     assert not record.converged and "not finite" in record.reason
+
+
+def test_a_step_febios_solver_gives_up_on_is_solved_by_tissuesims_newton(deck):
+    """max_refs 1 with no BFGS updates: FEBio's loop gives up on the cantilever's first step.
+    With the fallback (the default) tissuesim's Newton solves that step and the run is
+    tissuesim's Newton's; without it the step is halved until the run fails."""
+    from tissuesim.errors import ConvergenceError
+
+    hopeless = {"max_ups": 0, "max_refs": 1, "etol": 1e-16, "dtol": 1e-16}
+    newton, _, t_newton = _run(deck, None)
+    ours, _, t = _run(deck, hopeless)
+    assert t == pytest.approx(t_newton)
+    assert ours == pytest.approx(newton, rel=1e-9)
+    from tissuesim.febio import load_febio
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        sim = load_febio(deck).simulation
+    sim.newton = dataclasses.replace(sim.newton, method="febio", febio=hopeless)
+    record = sim.step()
+    assert record.extra["newton_fallback"] >= 1
+    sim.newton = dataclasses.replace(sim.newton, febio_fallback=False)
+    with pytest.raises(ConvergenceError, match="max_refs"):
+        sim.step()

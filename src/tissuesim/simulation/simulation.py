@@ -428,6 +428,9 @@ class Simulation(
         if hasattr(solver, "take_stats"):
             extra["linear"] = solver.take_stats()
         extra["early_stop"] = any(getattr(r, "budget_stop", False) for r in records)
+        fallbacks = sum(getattr(r, "fallback", False) for r in records)
+        if fallbacks:  # newton method "febio": steps its Newton solved (time/steps.py)
+            extra["newton_fallback"] = fallbacks
         if adaptive is not None:  # the step's length, retries and whether it hit a must point
             extra["adaptive"] = adaptive
         if s.contact is not None:

@@ -88,6 +88,9 @@ class NewtonOptions:
     # with the settings ``febio`` (a FebioSettings or a table of them; FEBio's defaults)
     method: Literal["newton", "febio"] = "newton"
     febio: object = None
+    # method "febio": a step FEBio's solver gives up on is tried once more by this module's
+    # Newton from the same start before it is halved (time/steps.py)
+    febio_fallback: bool = True
 
     def __post_init__(self) -> None:
         from tissuesim import validate
@@ -107,8 +110,9 @@ class NewtonOptions:
             validate.real(getattr(self, key), key, low=0.0, low_open=True)
         for key in ("force_tolerance", "displacement_tolerance"):
             validate.real(getattr(self, key), key, low=0.0)
-        if not isinstance(self.reuse_factorization, bool):
-            raise InputError("reuse_factorization must be true or false")
+        for key in ("reuse_factorization", "febio_fallback"):
+            if not isinstance(getattr(self, key), bool):
+                raise InputError(f"{key} must be true or false")
         if not isinstance(self.linear_solver, str):
             given = validate.short(self.linear_solver)
             raise InputError(f"linear_solver must be a name such as 'auto', not {given}")
@@ -141,6 +145,7 @@ class NewtonResult:
     contact_projected: list[bool] = field(default_factory=list)  # only contact's projected
     relags: int = 0  # lagged terms (friction) re-lagged inside the solve
     budget_stop: bool = False  # stopped by an interactive budget before converging
+    fallback: bool = False  # method "febio": this module's Newton solved a step FEBio's gave up on
     energy_terms: dict[str, float] = field(default_factory=dict)  # at the solution
     # the full gradient of Phi at the solution, prescribed DOFs included (their reactions);
     # not in as_dict: it is one vector per solve, kept for whoever reports forces

@@ -65,7 +65,50 @@ def implicit_step(
     For pseudo-time steps (``time/integrators/pseudo_time.py``): ``t_end`` the time of the
     loads, the prescribed values and the obstacles (default state.time + h, while h sets the
     inertia); ``friction_from`` the contact vertices friction's slip is measured from (default
-    the state's) and ``friction_h`` the step its smoothing velocity scales with (default h)."""
+    the state's) and ``friction_h`` the step its smoothing velocity scales with (default h).
+
+    With ``method = "febio"`` and ``febio_fallback``, a step FEBio's solver gives up on is
+    solved again by tissuesim's Newton from the same start (the lagged terms as they were)
+    before the caller halves it: our Quasin stops in a few models where FEBio's own does not
+    (benchmarks/results/febio_suite_febio_solver.md), and a step converged tightly is within
+    FEBio's tolerance of FEBio's answer."""
+    args = (system, state, h, solver)
+    kw = dict(dynamic=dynamic, energies=energies, budget=budget, t_end=t_end,
+              friction_from=friction_from, friction_h=friction_h)  # fmt: skip
+    if options.method != "febio" or not options.febio_fallback:
+        return _implicit_step(*args, options, **kw)
+    from dataclasses import replace
+
+    from tissuesim.time.attempts.history import keep_lags, restore_lags
+
+    kept = keep_lags(system)
+    outcome = _implicit_step(*args, options, **kw)
+    if outcome.converged:
+        return outcome
+    restore_lags(kept)
+    retry = _implicit_step(*args, replace(options, method="newton", febio=None), **kw)
+    if not retry.converged:
+        restore_lags(kept)
+        return StepOutcome(None, False, outcome.newton + retry.newton, outcome.reason)
+    for record in retry.newton:
+        record.fallback = True  # counted in the run's log (records.py)
+    return StepOutcome(retry.state, True, outcome.newton + retry.newton)
+
+
+def _implicit_step(
+    system,
+    state: State,
+    h: float,
+    solver,
+    options,
+    *,
+    dynamic: bool,
+    energies: EnergyBuilder,
+    budget: dict | None = None,
+    t_end: float | None = None,
+    friction_from: np.ndarray | None = None,
+    friction_h: float | None = None,
+) -> StepOutcome:
     if options.method == "febio" and system.contact is not None:
         raise InputError("newton method 'febio' does not run with barrier contact: use 'newton'")
     t1 = state.time + h if t_end is None else t_end
