@@ -88,8 +88,56 @@ def test_runs_it_cannot_differentiate_are_refused_in_one_line():
                          [ts.Reaction("press")], 1)  # fmt: skip
     with pytest.raises(InputError, match="no support or prescribed set"):
         ts.sensitivities(build, {"E": 5e4, "depth": 0.1, "g": 1.0}, [ts.Reaction("nope")], 1)
-    with pytest.raises(InputError, match="must be a non-zero number"):
+    with pytest.raises(InputError, match="'depth' is 0: give it a scale"):
         ts.sensitivities(build, {"E": 5e4, "depth": 0.0, "g": 1.0}, [ts.Reaction("press")], 1)
+
+
+def test_a_parameter_at_zero_is_differenced_by_its_scale():
+    """FEBio's f_diff_scale (|b| + |a|): a press depth of 0 with a scale of 0.1."""
+    params = {"E": 5e4, "depth": 0.0, "g": 1.0}
+    r = ts.sensitivities(build, params, [ts.Reaction("press")], 2, scales={"depth": 0.1})
+
+    def run(p):
+        sim = build(p)
+        for _ in range(2):
+            sim.step()
+        return np.asarray(sim.forces()["press"])
+
+    fd = (run({**params, "depth": 1e-6}) - run({**params, "depth": -1e-6})) / 2e-6
+    assert np.abs(fd).max() > 0
+    assert np.abs(r.jacobian[-1][:, 1] - fd).max() <= 1e-6 * np.abs(fd).max()
+
+
+@pytest.mark.parametrize("element", ["tet", "hex"])
+def test_a_follower_pressure_on_an_open_surface_is_differentiated(element):
+    """The lagged follower load settles on the follower force, whose own (skew) stiffness
+    enters the step's derivative: a block's top face pressed by p, its modulus and p."""
+
+    def pressed(p):
+        mesh = ts.box((0, 0, 0), (1.0, 0.3, 0.3), (4, 1, 1), element=element)
+        sim = ts.Simulation(mesh, ts.NeoHookean(youngs_modulus=p["E"], poisson_ratio=0.3),
+                            integrator="quasistatic", time_step=0.5)  # fmt: skip
+        sim.fix(select.vertices_on_plane(mesh, 0, 0.0), name="wall")
+        sim.add_follower_pressure(mesh.facet_sets["zmax"], lambda t: p["p"] * t)
+        return sim
+
+    params = {"E": 5e4, "p": 300.0}
+    mesh = pressed(params).bodies["body"].mesh
+    tip = select.vertices_on_plane(mesh, 0, 1.0)
+    obs = [ts.Reaction("wall"), ts.Displacement(tip)]
+    r = ts.sensitivities(pressed, params, obs, 2)
+
+    def run(q):
+        sim = pressed(q)
+        for _ in range(2):
+            sim.step()
+        return np.concatenate([sim.forces()["wall"], sim.body_displacement()[tip].ravel()])
+
+    for j, k in enumerate(params):
+        fd = central(run, params, k)
+        for part in (slice(0, 3), slice(3, None)):
+            scale = np.abs(fd[part]).max()
+            assert np.abs(r.jacobian[-1][part, j] - fd[part]).max() <= 1e-5 * scale, (k, part)
 
 
 def test_a_law_with_history_is_refused_and_fibre_laws_are_taken():

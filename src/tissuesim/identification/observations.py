@@ -1,11 +1,15 @@
 """What a run reports that a measurement can be compared with, and how it depends on the state:
-a support's reaction force, the displacement of marker vertices, and the distance of measured
-surface points (a point cloud) from the deformed body's boundary.
+a support's reaction force, the displacement of marker vertices, the distance of measured
+surface points (a point cloud) from the deformed body's boundary, and FEBio's logged
+quantities (node and element data by FEBio's names, a surface's enclosed volume).
 
 Each observation gives, at a converged state x with the step's gradient g, its values y and
 their derivatives as two sparse (k, n_dofs) matrices: y depends on the positions directly
 (displacements, distances) or through the gradient (a reaction sums g over the DOFs its set
-prescribes), so dy = X dx + R dg (``linearize(sim, x, g)`` -> (y, X, R)).
+prescribes), so dy = X dx + R dg (``linearize(sim, x, g)`` -> (y, X, R)). The FEBio ones
+(``NodeData``, ``ElementData``, ``EnclosedVolume``) are functions of the state and the
+parameters, ``values(sim, x)``, differentiated by ``sensitivity.py`` along each parameter's
+sensitivity (an element's stress also depends on the law's parameters directly).
 """
 
 from __future__ import annotations
@@ -17,7 +21,10 @@ import scipy.sparse as sp
 
 from tissuesim.errors import InputError
 
-__all__ = ["Reaction", "Displacement", "SurfaceDistance", "Observation", "linearize"]
+__all__ = [
+    "Reaction", "Displacement", "SurfaceDistance", "NodeData", "ElementData", "EnclosedVolume",
+    "Observation", "linearize",
+]  # fmt: skip
 
 
 def _fem_body(sim, name: str | None, what: str):
@@ -142,7 +149,129 @@ class SurfaceDistance:
         return dist, X, sp.csr_matrix((len(p), n))
 
 
-Observation = Reaction | Displacement | SurfaceDistance
+def _at_state(sim, x: np.ndarray, read):
+    """read(sim) with the simulation's state's positions set to x (restored after)."""
+    import dataclasses
+
+    kept = sim._state
+    sim._state = dataclasses.replace(kept, x=x)
+    try:
+        return read(sim)
+    finally:
+        sim._state = kept
+
+
+@dataclass(frozen=True)
+class NodeData:
+    """FEBio's node_data ``variable`` (``x, y, z``: the current position; ``ux, uy, uz``: the
+    displacement) at ``vertices`` of FEM body ``body`` (default: the only one), one value per
+    vertex. (A reaction force is ``Reaction``: it depends on the step's gradient.)"""
+
+    variable: str
+    vertices: tuple | list | np.ndarray
+    body: str | None = None
+    explicit = False  # the parameters act through the state only
+
+    def values(self, sim, x: np.ndarray) -> np.ndarray:
+        from tissuesim.io.logfiles import LogRequest, node_values
+
+        if self.variable not in ("x", "y", "z", "ux", "uy", "uz"):
+            raise InputError(
+                f"NodeData: variable {self.variable!r} is not one of x, y, z, ux, uy, uz"
+            )
+        name, body, _ = _fem_body(sim, self.body, "NodeData")
+        rows = _rows(self.vertices, body.mesh.n_points, "NodeData", "vertices", name)
+        request = LogRequest("node_data", (self.variable,), name, rows, None, "")
+        return _at_state(sim, x, lambda s: node_values(s, request)[self.variable])
+
+
+@dataclass(frozen=True)
+class ElementData:
+    """FEBio's element_data ``variable`` (``sx`` ... ``sxz``, ``s1``-``s3``, ``Ex`` ... ``Exz``,
+    ``E1``-``E3``, ``J``: each element's mean over its integration points, as FEBio logs it) or
+    an expression of them (FEBio's ``"=sx+sy+sz"``: + - * / ^, numbers, sqrt, abs, exp,
+    log) at ``cells`` of FEM body ``body`` (default: all), one value per cell, or their
+    ``reduce`` = "sum" or "mean" (FEBio's filter_sum, filter_avg) as one value."""
+
+    variable: str
+    cells: tuple | list | np.ndarray | None = None
+    body: str | None = None
+    reduce: str | None = None
+
+    def values(self, sim, x: np.ndarray) -> np.ndarray:
+        from tissuesim.identification.expressions import evaluate, names_in
+        from tissuesim.io.logfiles import ELEMENT_DATA, LogRequest, element_values
+
+        what = "ElementData"
+        expression = self.variable.lstrip("=")
+        used = names_in(expression, ELEMENT_DATA, what)
+        name, body, _ = _fem_body(sim, self.body, what)
+        rows = None
+        if self.cells is not None:
+            rows = _rows(self.cells, body.mesh.n_cells, what, "cells", name)
+        request = LogRequest("element_data", tuple(used), name, rows, None, "")
+        data = _at_state(sim, x, lambda s: element_values(s, request))
+        y = np.asarray(evaluate(expression, data), dtype=float)
+        if self.reduce is None:
+            return y
+        if self.reduce not in ("sum", "mean"):
+            raise InputError(f"{what}: reduce must be 'sum' or 'mean', not {self.reduce!r}")
+        return np.array([y.sum() if self.reduce == "sum" else y.mean()])
+
+
+@dataclass(frozen=True)
+class EnclosedVolume:
+    """FEBio's surface_data ``volume``: (1/3) of the integral of x . n over the facets (k, 3)
+    or (k, 4) (vertex indices of FEM body ``body``; a name: the mesh's facet set), the volume a
+    closed surface encloses (FEBio's ``FELogEnclosedVolume``; exact for triangles and
+    bilinear quadrilaterals). One value."""
+
+    facets: str | tuple | list | np.ndarray
+    body: str | None = None
+    explicit = False
+
+    def values(self, sim, x: np.ndarray) -> np.ndarray:
+        what = "EnclosedVolume"
+        name, body, j = _fem_body(sim, self.body, what)
+        facets = self.facets
+        if isinstance(facets, str):
+            if facets not in body.mesh.facet_sets:
+                raise InputError(
+                    f"{what}: body {name!r} has no facet set {facets!r}; it has "
+                    f"{sorted(body.mesh.facet_sets)}"
+                )
+            facets = body.mesh.facet_sets[facets]
+        f = np.asarray(facets, dtype=np.int64)
+        if f.ndim != 2 or f.shape[1] not in (3, 4) or f.min() < 0 or f.max() >= body.mesh.n_points:
+            raise InputError(
+                f"{what}: facets must be (k, 3) or (k, 4) vertex indices of body {name!r}"
+            )
+        p = x[sim.system.config_slices[j]].reshape(-1, body.dim)[f]
+        if f.shape[1] == 3:  # x1 . (x2 x x3) / 6, the rule's exact value
+            return np.array([np.einsum("ij,ij->", p[:, 0], np.cross(p[:, 1], p[:, 2])) / 6.0])
+        g = 1.0 / np.sqrt(3.0)
+        total = 0.0
+        for r in (-g, g):  # 2 x 2 Gauss points: exact for the bilinear facet's cubic integrand
+            for q in (-g, g):
+                n = np.array([(1 - r) * (1 - q), (1 + r) * (1 - q), (1 + r) * (1 + q),
+                              (1 - r) * (1 + q)]) / 4.0  # fmt: skip
+                dr = np.array([-(1 - q), 1 - q, 1 + q, -(1 + q)]) / 4.0
+                dq = np.array([-(1 - r), -(1 + r), 1 + r, 1 - r]) / 4.0
+                xg = np.einsum("a,kai->ki", n, p)
+                cross = np.cross(np.einsum("a,kai->ki", dr, p), np.einsum("a,kai->ki", dq, p))
+                total += np.einsum("ki,ki->", xg, cross) / 3.0
+        return np.array([total])
+
+
+def _rows(items, n: int, what: str, key: str, body: str) -> np.ndarray:
+    rows = np.asarray(items, dtype=np.int64).ravel()
+    if rows.size == 0 or rows.min() < 0 or rows.max() >= n:
+        raise InputError(f"{what}: {key} must be indices 0..{n - 1} of body {body!r}")
+    return rows
+
+
+Observation = (Reaction | Displacement | SurfaceDistance | NodeData | ElementData
+               | EnclosedVolume)  # fmt: skip
 
 
 def _selection(groups: list[np.ndarray], n: int) -> sp.csr_matrix:

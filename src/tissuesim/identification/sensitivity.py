@@ -35,6 +35,7 @@ from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
+import scipy.sparse as sp
 
 from tissuesim.errors import InputError
 from tissuesim.identification.observations import linearize
@@ -99,26 +100,36 @@ def sensitivities(
     steps: int,
     *,
     relative_step: float = RELATIVE_STEP,
+    scales: Mapping[str, float] | None = None,
 ) -> Sensitivities:
     """Run ``build(parameters)`` (a function returning a ``Simulation``) for ``steps`` steps
-    and return the ``observations`` (``Reaction``, ``Displacement``) after each step with their
-    derivatives with respect to every parameter (module docstring). Parameters must be
-    non-zero floats (their differences are relative)."""
+    and return the ``observations`` (``Reaction``, ``Displacement``, ``SurfaceDistance``, or
+    any with ``values(sim, x)``: module docstring) after each step with their derivatives with
+    respect to every parameter. A parameter's difference is ``relative_step`` times its value,
+    or times (|value| + its ``scales`` entry) where one is given (FEBio's
+    ``f_diff_scale (|b| + |a|)``: a parameter that may be 0); without a scale it must be
+    non-zero."""
     names = list(parameters)
     if not names:
         raise InputError("sensitivities: give at least one parameter")
+    scales = dict(scales or {})
     theta = {}
     for k in names:
         v = parameters[k]
-        if isinstance(v, bool) or not isinstance(v, (int, float)) or not np.isfinite(v) or v == 0:
-            raise InputError(f"sensitivities: parameter {k!r} must be a non-zero number, got {v!r}")
+        if isinstance(v, bool) or not isinstance(v, (int, float)) or not np.isfinite(v):
+            raise InputError(f"sensitivities: parameter {k!r} must be a number, got {v!r}")
+        if v == 0 and not scales.get(k):
+            raise InputError(
+                f"sensitivities: parameter {k!r} is 0: give it a scale (scales={{{k!r}: ...}}) "
+                "for its difference, or a non-zero value"
+            )
         theta[k] = float(v)
     start = time.perf_counter()
     base = build(dict(theta))
     _check(base, "sensitivities")
     copies = []
     for k in names:
-        delta = relative_step * abs(theta[k])
+        delta = relative_step * (abs(theta[k]) + abs(scales.get(k, 0.0)))
         pair = []
         for sign in (1.0, -1.0):
             sim = build({**theta, k: theta[k] + sign * delta})
@@ -150,6 +161,8 @@ def sensitivities(
     solver = _StepSolver()  # one analysis of the pattern for every step
     forward_s, sens_s = 0.0, 0.0
     for _ in range(int(steps)):
+        if base.finished:  # an adaptive run in phases: ``steps`` is an upper bound, as in run
+            break
         x_prev, v_prev, t_prev = base._state.x.copy(), base._state.v.copy(), base.time
         tick = time.perf_counter()
         record = base.step()
@@ -193,17 +206,27 @@ def sensitivities(
         K = acc.pattern.matrix(acc.hessian).tocsr()
         H = acc.hessian.copy()
         s.elimination.apply(H, np.zeros(n))  # H_ff, and a diagonal at the prescribed DOFs
+        A = acc.pattern.matrix(H)
+        follow = _follower_stiffness(s, x)
+        if follow is not None:  # a lagged pressure: the follower load's own (skew) stiffness
+            K = K + follow
+            keep = sp.diags((~np.isin(np.arange(n), dofs)).astype(float))
+            A = (A + keep @ follow @ keep).tocsc()
         rhs = -B.copy()
         rhs[dofs] = 0.0
-        Sf = solver.solve(acc.pattern.matrix(H), rhs)
+        Sf = solver.solve(A, rhs, symmetric=follow is None)
         Sf[dofs] = 0.0
         dG = K @ Sf + B  # the gradient's total derivative (B holds H_:p s_p)
         S = Sf + Sp
         vals, ders = [], []
         for i, ob in enumerate(observations):
-            y, X, R = linearize(ob, base, x, g)
+            if hasattr(ob, "values"):
+                y, D = _state_function(ob, base, x, S, copies)
+            else:
+                y, X, R = linearize(ob, base, x, g)
+                D = X @ S + R @ dG
             vals.append(np.asarray(y, dtype=float))
-            ders.append(np.asarray(X @ S + R @ dG).reshape(len(vals[-1]), p))
+            ders.append(np.asarray(D).reshape(len(vals[-1]), p))
             if not times:
                 labels += [f"{type(ob).__name__.lower()}[{i}]"] * len(vals[-1])
         values.append(np.concatenate(vals))
@@ -221,6 +244,58 @@ def sensitivities(
                          forward_s, sens_s + build_s, 1 + 2 * p, records)  # fmt: skip
 
 
+def _follower_stiffness(s, x: np.ndarray):
+    """d G / dx (sparse, n x n) of the step's lagged follower pressures on open surfaces
+    (``energies/pressure_lag.py``): the step's solve balanced the follower load G(x) itself
+    (re-lagged until it settled), so its derivative moves with x; None without one."""
+    from tissuesim.energies.pressure_lag import LaggedPressureEnergy, facet_stiffness
+
+    rows, cols, vals = [], [], []
+    for j, energies in enumerate(s.last_step_energies or ()):
+        offset = s.config_slices[j].start
+        for e in energies:
+            if not isinstance(e, LaggedPressureEnergy):
+                continue
+            f = e.load.facets
+            k, m = f.shape
+            xb = x[s.config_slices[j]].reshape(-1, 3)
+            Kf = facet_stiffness(xb[f], e.p)  # (k, m, 3, m, 3)
+            dof = offset + f[:, :, None] * 3 + np.arange(3)  # (k, m, 3)
+            rows.append(np.broadcast_to(dof[:, :, :, None, None], Kf.shape).ravel())
+            cols.append(np.broadcast_to(dof[:, None, None, :, :], Kf.shape).ravel())
+            vals.append(Kf.ravel())
+    if not rows:
+        return None
+    n = s.n_dofs
+    return sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
+                         shape=(n, n))  # fmt: skip
+
+
+#: the displacement (relative to the model's size) of a state function's directional difference
+DIRECTIONAL_STEP = 1e-6
+
+
+def _state_function(ob, sim, x: np.ndarray, S: np.ndarray, copies: list):
+    """(y, dy/dtheta) of an observation y = ob.values(sim, x), a function of the state and the
+    parameters (an element's stress): along each parameter's sensitivity S_j by central
+    differences of the state, plus its own dependence on the parameter by the copies' values
+    at the same state (both smooth: the differences are exact to about 1e-9 of y)."""
+    y = np.asarray(ob.values(sim, x), dtype=float)
+    D = np.zeros((y.size, S.shape[1]))
+    scale = sim.system.length_scale
+    for j, (delta, pair) in enumerate(copies):
+        size = float(np.max(np.abs(S[:, j]), initial=0.0))
+        if size > 0.0:
+            eps = DIRECTIONAL_STEP * scale / size
+            up = np.asarray(ob.values(sim, x + eps * S[:, j]), dtype=float)
+            down = np.asarray(ob.values(sim, x - eps * S[:, j]), dtype=float)
+            D[:, j] = (up - down) / (2.0 * eps)
+        if getattr(ob, "explicit", True):
+            plus, minus = (np.asarray(ob.values(c, x), dtype=float) for c in pair)
+            D[:, j] += (plus - minus) / (2.0 * delta)
+    return y, D
+
+
 class _StepSolver:
     """Solves with each step's eliminated Hessian (symmetric, positive definite at a stable
     equilibrium): PARDISO's Cholesky where pypardiso is installed, its analysis made once for
@@ -232,12 +307,12 @@ class _StepSolver:
 
         self.pardiso = PardisoSolver() if has_pardiso() else None
 
-    def solve(self, A, rhs: np.ndarray) -> np.ndarray:
+    def solve(self, A, rhs: np.ndarray, symmetric: bool = True) -> np.ndarray:
         import scipy.sparse.linalg as spla
 
         from tissuesim.solve.linear import NotPositiveDefiniteError
 
-        if self.pardiso is not None:
+        if self.pardiso is not None and symmetric:
             try:
                 self.pardiso.factorize(A.tocsr())
                 return self.pardiso.solve(rhs)
