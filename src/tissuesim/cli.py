@@ -68,13 +68,23 @@ def _run(
     field: str | None = None,
     resume: bool = False,
     febio_solver: bool = False,
+    model: str | None = None,
+    gradients: str = "sensitivities",
 ) -> int:
     import time
 
+    from tissuesim.cli_optimize import is_optimisation_file, optimize_command
     from tissuesim.io.checkpoints.checkpoint import completed_steps
     from tissuesim.scene.loader import load_scene
 
     started = time.perf_counter()
+    if scene_path.suffix.lower() == ".feb" and is_optimisation_file(scene_path):
+        return optimize_command(scene_path, model, out, quiet, gradients, febio_solver)
+    if model is not None:
+        from tissuesim.errors import InputError
+
+        raise InputError(f"{scene_path}: --model is for FEBio optimisation files "
+                         "(<febio_optimize>)")  # fmt: skip
     if scene_path.suffix.lower() == ".feb":  # a FEBio model, run as its converted scene
         from tissuesim.febio import load_febio
 
@@ -139,6 +149,8 @@ def _run(
             "solver": sum(r.wall_time_s for r in history),
         },
         "forces": history[-1].extra.get("forces", {}) if history else {},
+        # newton method "febio": the (sub)steps tissuesim's Newton solved where FEBio's gave up
+        **_fallbacks(history),
         "linear_solver": sim.linear_solver_info(),  # describe() would re-describe meshes
     }
     print(json.dumps(report, indent=2))
@@ -282,6 +294,17 @@ def main(argv: list[str] | None = None) -> int:
         help="a FEBio model's steps solved by FEBio's quasi-Newton with its <solver> settings, "
         "to FEBio's stopping point (default: tissuesim's Newton, converged tightly)",
     )
+    p_run.add_argument(
+        "--model",
+        help="the FEBio model a FEBio optimisation file (<febio_optimize>) runs on (FEBio's -i)",
+    )
+    p_run.add_argument(
+        "--gradients",
+        choices=("sensitivities", "differences"),
+        default="sensitivities",
+        help="an optimisation's Jacobian: the run's sensitivities (default: one run per "
+        "iteration) or FEBio's forward differences (one more run per parameter)",
+    )
     from tissuesim.render.scene import FIELDS
 
     fields = tuple(FIELDS)
@@ -420,6 +443,11 @@ def error_message(exc: BaseException) -> tuple[int, str]:
     return code, text
 
 
+def _fallbacks(history) -> dict:
+    n = sum(r.extra.get("newton_fallback", 0) for r in history)
+    return {"febio_solver_fallbacks": n} if n else {}
+
+
 def _show_warning(message, category, filename, lineno, file=None, line=None) -> None:
     print(f"tissuesim: warning: {' '.join(str(message).split())}", file=sys.stderr)
 
@@ -435,6 +463,8 @@ def _dispatch(args) -> int:
             args.field,
             args.resume,
             args.febio_solver,
+            args.model,
+            args.gradients,
         )
     if args.command == "demo":
         return _run(

@@ -25,23 +25,24 @@ CONTROL_NOTES = {
 }  # fmt: skip
 
 
-def read_feb(path: str | os.PathLike[str]) -> FebModel:
+def read_feb(path: str | os.PathLike[str], root: Node | None = None) -> FebModel:
     """Read a FEBio 3.0 or 4.0 model; FebError (one line, element and line) for anything
-    tissuesim does not run."""
+    tissuesim does not run. ``root``: the file's tree already parsed (``parse_feb``; an
+    optimisation sets parameters in it, febio/optimize/)."""
     # the XML tree is millions of objects for a large model, and none in a reference cycle:
     # Python's cyclic collector, scanning them again and again while the sections are read,
     # took half of a 1e6-node read (35 s, 16 s without it)
     collecting = gc.isenabled()
     gc.disable()
     try:
-        return _read(path)
+        return _read(path, root)
     finally:
         if collecting:
             gc.enable()
 
 
-def _read(path: str | os.PathLike[str]) -> FebModel:
-    root = parse_feb(path)
+def _read(path: str | os.PathLike[str], root: Node | None = None) -> FebModel:
+    root = parse_feb(path) if root is None else root
     version = root.attrib.get("version", "")
     if version not in ("3.0", "4.0"):
         raise root.error(f"febio_spec version {version!r}: tissuesim reads versions 3.0 and 4.0")

@@ -71,9 +71,10 @@ class Node:
         return next((c for c in self.children if c.tag == tag), None)
 
 
-def parse_feb(path: str | os.PathLike[str]) -> Node:
+def parse_feb(path: str | os.PathLike[str], root_tag: str = "febio_spec") -> Node:
     """Parse a ``.feb`` file into Nodes with line numbers; FebError for a file that is not
-    well-formed XML (naming the line) or whose root is not ``<febio_spec>``."""
+    well-formed XML (naming the line) or whose root is not ``<root_tag>`` (a model's
+    ``<febio_spec>``; an optimisation's ``<febio_optimize>``)."""
     path = os.fspath(path)
     try:
         with open(path, "rb") as f:
@@ -121,7 +122,13 @@ def parse_feb(path: str | os.PathLike[str]) -> Node:
             f"{path}:{parser.CurrentLineNumber} <?xml?>: unknown encoding {name!r}; save the "
             'file as UTF-8 and declare encoding="UTF-8" (or "ISO-8859-1")'
         ) from None
-    if not root or root[0].tag != "febio_spec":
+    if not root or root[0].tag != root_tag:
         tag = root[0].tag if root else "nothing"
-        raise FebError(f"{path}: not a FEBio file: the root element is <{tag}>, not <febio_spec>")
+        if tag == "febio_optimize":
+            raise FebError(
+                f"{path}: a FEBio optimisation file (<febio_optimize>), not a model: run it "
+                "with its model, tissuesim run OPTIMISATION.feb --model MODEL.feb (FEBio's "
+                "-s and -i)"
+            )
+        raise FebError(f"{path}: not a FEBio file: the root element is <{tag}>, not <{root_tag}>")
     return root[0]

@@ -1,0 +1,284 @@
+"""FEBio's optimisation files (``<febio_optimize>``, febio/optimize/): read as FEBio reads them,
+each objective's Jacobian from the run's sensitivities against central differences of whole
+runs, a fit to data of our own model recovers its parameters with the converged objective 0,
+the command line writes its report, and bad input is refused in one line."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+import warnings
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from tissuesim.errors import InputError
+from tissuesim.febio.optimize import read_optimize, run_optimize
+from tissuesim.febio.optimize.model import ModelBuilder
+from tissuesim.febio.optimize.run import _Objective
+from tissuesim.identification.expressions import evaluate, names_in
+from tissuesim.identification.observations import EnclosedVolume
+
+
+def _model(path: Path, E: float = 1.0, v: float = 0.3) -> Path:
+    """A 2 x 1 x 1 hex8 bar (2 x 1 x 1), neo-Hookean, its x = 0 face held by symmetry
+    conditions, its x = 2 face pulled by a pressure of -0.2 ramped over 4 static steps."""
+    nodes, nid = [], {}
+    for k in range(2):
+        for j in range(2):
+            for i in range(3):
+                nid[i, j, k] = len(nodes) + 1
+                nodes.append(f'<node id="{len(nodes) + 1}">{i},{j},{k}</node>')
+    elems = "".join(
+        f'<elem id="{i + 1}">' + ",".join(str(nid[c]) for c in (
+            (i, 0, 0), (i + 1, 0, 0), (i + 1, 1, 0), (i, 1, 0),
+            (i, 0, 1), (i + 1, 0, 1), (i + 1, 1, 1), (i, 1, 1))) + "</elem>"
+        for i in range(2)
+    )  # fmt: skip
+    end = nid[2, 0, 0], nid[2, 1, 0], nid[2, 1, 1], nid[2, 0, 1]
+    x0 = ",".join(str(nid[0, j, k]) for j in range(2) for k in range(2))
+    y0 = ",".join(str(nid[i, 0, k]) for i in range(3) for k in range(2))
+    z0 = ",".join(str(nid[i, j, 0]) for i in range(3) for j in range(2))
+    path.write_text(f"""<?xml version="1.0" encoding="ISO-8859-1"?>
+<febio_spec version="4.0">
+  <Module type="solid"/>
+  <Control><analysis>STATIC</analysis><time_steps>4</time_steps><step_size>0.25</step_size>
+  </Control>
+  <Material><material id="1" name="tissue" type="neo-Hookean">
+    <density>1</density><E>{E}</E><v>{v}</v></material></Material>
+  <Mesh><Nodes name="n">{"".join(nodes)}</Nodes>
+    <Elements type="hex8" name="bar">{elems}</Elements>
+    <NodeSet name="x0">{x0}</NodeSet><NodeSet name="y0">{y0}</NodeSet>
+    <NodeSet name="z0">{z0}</NodeSet>
+    <Surface name="end"><quad4 id="1">{",".join(map(str, end))}</quad4></Surface></Mesh>
+  <MeshDomains><SolidDomain name="bar" mat="tissue"/></MeshDomains>
+  <Boundary>
+    <bc name="sx" node_set="x0" type="zero displacement"><x_dof>1</x_dof></bc>
+    <bc name="sy" node_set="y0" type="zero displacement"><y_dof>1</y_dof></bc>
+    <bc name="sz" node_set="z0" type="zero displacement"><z_dof>1</z_dof></bc></Boundary>
+  <Loads><surface_load name="pull" surface="end" type="pressure">
+    <pressure lc="1">-0.2</pressure></surface_load></Loads>
+  <LoadData><load_controller id="1" type="loadcurve"><interpolate>LINEAR</interpolate>
+    <points><pt>0,0</pt><pt>1,1</pt></points></load_controller></LoadData>
+</febio_spec>
+""")
+    return path
+
+
+def _optimisation(path: Path, objective: str, params: str, method: str = "levmar",
+                  tol: float = 1e-6) -> Path:  # fmt: skip
+    path.write_text(f"""<?xml version="1.0"?>
+<febio_optimize version="2.0">
+  <Options type="{method}"><obj_tol>{tol}</obj_tol><f_diff_scale>0.001</f_diff_scale>
+    <print_level>PRINT_ITERATIONS</print_level></Options>
+  <Parameters>{params}</Parameters>
+  {objective}
+</febio_optimize>
+""")
+    return path
+
+
+TWO = ("<param name=\"fem.material('tissue').E\">1.5, 0.5, 5</param>"
+       '<param name="fem.material[0].v">0.25, 0, 0.45</param>')  # fmt: skip
+OBJECTIVES = {
+    "data-fit against time": """<Objective type="data-fit"><fnc type="parameter">
+        <param name="fem.element_data('sx', 2)"/></fnc>
+        <data><point>0.1, 0.05</point><point>0.6, 0.1</point><point>1, 0.2</point></data>
+        </Objective>""",
+    "data-fit against a strain": """<Objective type="data-fit"><fnc type="parameter">
+        <ordinate name="fem.element_data('Ex', 1)"/><param name="fem.element_data('sx', 1)"/>
+        </fnc><data><point>0.01, 0.05</point><point>0.05, 0.1</point></data></Objective>""",
+    "filter_sum of an expression": """<Objective type="data-fit"><fnc type="filter_sum">
+        <element_data data="=sx+sy+2*sz" elem_set="bar"/></fnc>
+        <data><pt>0.5, 0.2</pt><pt>1.0, 0.4</pt></data></Objective>""",
+    "a surface's volume": """<Objective type="data-fit"><fnc type="parameter">
+        <param name="fem.surface_data('volume', 'end')"/></fnc>
+        <data><pt>0.5, 0.7</pt><pt>1.0, 0.8</pt></data></Objective>""",
+    "target": """<Objective type="target">
+        <var name="fem.mesh.node.fromId(3).position.x">2.2</var>
+        <var name="fem.mesh.node[11].position.y">0.95</var></Objective>""",
+    "node-data": """<Objective type="node-data"><var type="ux;uy"/><data>
+        <node id="6">0.1, -0.02</node><node id="12">0.1, -0.02</node></data></Objective>""",
+    "element-data": """<Objective type="element-data"><var type="sx"/><data>
+        <elem id="1">0.2</elem><elem id="2">0.2</elem></data></Objective>""",
+}
+
+
+@pytest.mark.parametrize("kind", list(OBJECTIVES))
+def test_each_objectives_jacobian_is_the_whole_runs_central_difference(tmp_path, kind):
+    model = _model(tmp_path / "bar.feb")
+    task = read_optimize(_optimisation(tmp_path / "opt.feb", OBJECTIVES[kind], TWO))
+    builder = ModelBuilder(model, task)
+    try:
+        objective = _Objective(task, builder, "sensitivities")
+        a = np.array([1.5, 0.25])
+        r, J = objective(a)
+        y = r + (task.data[:, 1] if task.data is not None else [v for _, v in task.targets])
+        for i in range(2):
+            h = 1e-5 * a[i]
+            up = objective._residuals(a + h * np.eye(2)[i], False)[0]
+            down = objective._residuals(a - h * np.eye(2)[i], False)[0]
+            fd = (up - down) / (2 * h)
+            # the derivative's own scale: the values over the parameter (a stress that does
+            # not depend on E, as the pulled bar's, is then checked to be ~0)
+            scale = max(np.abs(fd).max(), np.abs(y).max() / a[i])
+            assert np.abs(J[:, i] - fd).max() <= 1e-6 * scale, kind
+    finally:
+        builder.close()
+
+
+STRETCH = """<Objective type="data-fit"><fnc type="parameter">
+    <param name="fem.mesh.node.fromId(3).position.x"/></fnc>
+    <data><point>0.1, 2</point><point>0.6, 2</point><point>1, 2</point></data></Objective>"""
+
+
+def _data_of_our_own(tmp_path: Path, E: float, v: float) -> str:
+    """A data-fit objective of the bar's end position against time, from our model at E, v."""
+    truth = _optimisation(tmp_path / "truth.feb", STRETCH, TWO)
+    task = read_optimize(truth)
+    builder = ModelBuilder(_model(tmp_path / "truth_model.feb", E, v), task)
+    try:
+        r, _ = _Objective(task, builder, "differences")._residuals(np.array([E, v]), False)
+    finally:
+        builder.close()
+    x = r + task.data[:, 1]
+    points = "".join(f"<point>{float(t)!r}, {float(y)!r}</point>"
+                     for t, y in zip(task.data[:, 0], x, strict=True))  # fmt: skip
+    return STRETCH.replace(STRETCH[STRETCH.index("<data>"):STRETCH.index("</data>")],
+                           f"<data>{points}")  # fmt: skip
+
+
+def test_a_fit_to_data_of_our_own_model_recovers_its_modulus_and_converges_to_zero(tmp_path):
+    objective = _data_of_our_own(tmp_path, 3.0, 0.3)
+    one = "<param name=\"fem.material('tissue').E\">1.5, 0.5, 5</param>"
+    task = read_optimize(_optimisation(tmp_path / "opt.feb", objective, one, tol=1e-14))
+    model = _model(tmp_path / "bar.feb", 1.0, 0.3)
+    fit = run_optimize(task, model)
+    assert fit.converged
+    assert fit.parameters["fem.material('tissue').E"] == pytest.approx(3.0, rel=1e-6)
+    assert fit.objective < 1e-14 * float(np.sum(task.data[:, 1] ** 2))
+    assert fit.runs == fit.iterations + 1  # one differentiated run per evaluation
+    # FEBio's forward differences: the same fit, with one more run per evaluation
+    fd = run_optimize(task, model, gradients="differences")
+    assert fd.parameters["fem.material('tissue').E"] == pytest.approx(3.0, rel=1e-4)
+    assert fd.runs >= 2 * (fd.iterations + 1)
+    # the model's steps by FEBio's quasi-Newton: its loose stopping points, the same fit
+    febio = run_optimize(task, model, febio_solver=True)
+    assert febio.parameters["fem.material('tissue').E"] == pytest.approx(3.0, rel=1e-3)
+
+
+def test_a_bound_holds_the_parameter_as_febio_does(tmp_path):
+    objective = _data_of_our_own(tmp_path, 3.0, 0.3)
+    capped = "<param name=\"fem.material('tissue').E\">1.5, 0.5, 2.5</param>"
+    task = read_optimize(_optimisation(tmp_path / "opt.feb", objective, capped,
+                                       "constrained levmar"))  # fmt: skip
+    fit = run_optimize(task, _model(tmp_path / "bar.feb"))
+    assert fit.parameters["fem.material('tissue').E"] == pytest.approx(2.5)
+    assert fit.objective > 0
+
+
+def test_the_command_line_runs_an_optimisation_and_writes_its_report(tmp_path):
+    objective = _data_of_our_own(tmp_path, 2.0, 0.3)
+    one = "<param name=\"fem.material('tissue').E\">1.5, 0.5, 5</param>"
+    opt = _optimisation(tmp_path / "opt.feb", objective, one)
+    model = _model(tmp_path / "bar.feb")
+    out = tmp_path / "out"
+    command = [sys.executable, "-m", "tissuesim", "run", str(opt), "--model", str(model)]
+    done = subprocess.run([*command, "--out", str(out)], capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    report = json.loads((out / "optimize.json").read_text())
+    assert report["parameters"]["fem.material('tissue').E"] == pytest.approx(2.0, rel=1e-4)
+    assert report["converged"] and report["runs"] >= 2
+    rows = (out / "fit.csv").read_text().splitlines()
+    assert rows[0] == "x,measured,simulated,quantity" and len(rows) == 4
+    assert "final objective value" in done.stderr
+    missing = subprocess.run([sys.executable, "-m", "tissuesim", "run", str(opt)],
+                             capture_output=True, text=True)  # fmt: skip
+    assert missing.returncode != 0
+    lines = missing.stderr.strip().splitlines()
+    assert len(lines) == 1 and "--model MODEL.feb" in lines[0]
+
+
+@pytest.mark.parametrize(
+    ("params", "objective", "message"),
+    [
+        (
+            '<param name="fem.material[3].E">1, 0, 2</param>',
+            OBJECTIVES["target"],
+            "the model has 1 materials",
+        ),
+        (
+            "<param name=\"fem.material('tissue').c9\">1, 0, 2</param>",
+            OBJECTIVES["target"],
+            "has no <c9>",
+        ),
+        ('<param name="fem.a">1, 0, 2</param>', OBJECTIVES["target"], "global parameters"),
+        (
+            "<param name=\"fem.material('tissue').E\">3, 0, 2</param>",
+            OBJECTIVES["target"],
+            "not within its bounds",
+        ),
+        (
+            TWO,
+            '<Objective type="target"><var name="fem.mesh.node.fromId(99).position.x">1'
+            "</var></Objective>",
+            "no node with id 99",
+        ),
+        (
+            TWO,
+            '<Objective type="target"><var name="fem.rigidbody(\'plate\').Fz">1</var></Objective>',
+            "rigid body's force",
+        ),
+        (
+            TWO,
+            '<Objective type="target"><var name="fem.nonsense">1</var></Objective>',
+            "is not a quantity",
+        ),
+        (
+            TWO,
+            '<Objective type="data-fit"><fnc type="filter_sum"><element_data data="=sx+q" '
+            'elem_set="bar"/></fnc><data><pt>1,1</pt></data></Objective>',
+            "'q' is not a variable",
+        ),
+    ],
+)
+def test_bad_input_is_refused_in_one_line(tmp_path, params, objective, message):
+    model = _model(tmp_path / "bar.feb")
+    with pytest.raises(InputError, match=None) as caught:
+        task = read_optimize(_optimisation(tmp_path / "opt.feb", objective, params))
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            run_optimize(task, model)
+    text = str(caught.value)
+    assert message in text and "\n" not in text
+
+
+def test_an_enclosed_volume_is_febios_formula_on_quads_and_triangles():
+    from types import SimpleNamespace
+
+    # the unit cube's six faces, outward, as quads and as triangles
+    x = np.array([[i, j, k] for k in (0, 1) for j in (0, 1) for i in (0, 1)], dtype=float)
+    quads = np.array([[0, 2, 3, 1], [4, 5, 7, 6], [0, 1, 5, 4], [2, 6, 7, 3], [0, 4, 6, 2],
+                      [1, 3, 7, 5]])  # fmt: skip
+    tris = np.vstack([quads[:, [0, 1, 2]], quads[:, [0, 2, 3]]])
+    mesh = SimpleNamespace(n_points=8, facet_sets={})
+    body = SimpleNamespace(kind="fem", mesh=mesh, dim=3)
+    system = SimpleNamespace(names=["b"], config_slices=[slice(0, 24)])
+    sim = SimpleNamespace(bodies={"b": body}, system=system)
+    stretched = (x * [2.0, 1.0, 1.5]).ravel()
+    for facets in (quads, tris):
+        assert EnclosedVolume(facets).values(sim, x.ravel())[0] == pytest.approx(1.0)
+        assert EnclosedVolume(facets).values(sim, stretched)[0] == pytest.approx(3.0)
+
+
+def test_element_expressions_are_read_safely():
+    data = {"sx": np.array([1.0, 2.0]), "sy": np.array([3.0, 4.0])}
+    names = names_in("sx + 2*sy^2 - sqrt(abs(sx))", {"sx", "sy", "sz"}, "test")
+    assert names == ["sx", "sy"]
+    got = evaluate("sx + 2*sy^2 - sqrt(abs(sx))", data)
+    assert np.allclose(got, data["sx"] + 2 * data["sy"] ** 2 - np.sqrt(data["sx"]))
+    for bad in ("__import__('os')", "sx.real", "sx if sy else 1", "'a'", "sx[0]", ""):
+        with pytest.raises(InputError):
+            names_in(bad, {"sx", "sy"}, "test")
