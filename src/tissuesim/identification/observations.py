@@ -232,7 +232,12 @@ class EnclosedVolume:
 
     def values(self, sim, x: np.ndarray) -> np.ndarray:
         what = "EnclosedVolume"
-        name, body, j = _fem_body(sim, self.body, what)
+        chosen = self.body
+        if chosen is None and isinstance(self.facets, str):  # the body that has the set
+            having = [n for n, b in sim.bodies.items()
+                      if b.kind == "fem" and self.facets in b.mesh.facet_sets]  # fmt: skip
+            chosen = having[0] if len(having) == 1 else None
+        name, body, j = _fem_body(sim, chosen, what)
         facets = self.facets
         if isinstance(facets, str):
             if facets not in body.mesh.facet_sets:

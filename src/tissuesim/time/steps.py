@@ -91,7 +91,7 @@ def implicit_step(
         restore_lags(kept)
         return StepOutcome(None, False, outcome.newton + retry.newton, outcome.reason)
     for record in retry.newton:
-        record.fallback = True  # counted in the run's log (records.py)
+        record.fallback = True  # counted in the step's extra (simulation/simulation.py)
     return StepOutcome(retry.state, True, outcome.newton + retry.newton)
 
 

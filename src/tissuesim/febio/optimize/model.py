@@ -42,6 +42,8 @@ class ModelBuilder:
             warnings.simplefilter("always")
             model = read_feb(self.path, root=self.root)  # refusals name the model's lines
         self.notes = [str(w.message) for w in caught] + [f"not used: {n}" for n in model.notes]
+        for note in dict.fromkeys(self.notes):  # as a run of the model says them, once
+            warnings.warn(note, UserWarning, stacklevel=2)
         for q in self.quantities:
             if q.kind == "rigid":
                 raise InputError(
@@ -175,7 +177,7 @@ def _observations(quantities: list[Quantity], data: dict) -> list:
     out = []
     for k, q in enumerate(quantities):
         if q.kind == "surface":
-            out.append(EnclosedVolume(q.item, body=_surface_body(data, q)))
+            out.append(EnclosedVolume(q.item))  # on the body whose mesh has the surface
             continue
         mine = [t for f, t in tables.items() if f.startswith(_FILE.format(k)[:-4])]
         if len(mine) != 1:
@@ -189,10 +191,3 @@ def _observations(quantities: list[Quantity], data: dict) -> list:
             out.append(ElementData(q.variable, cells, body,
                                    reduce=q.reduce))  # fmt: skip
     return out
-
-
-def _surface_body(data: dict, q: Quantity) -> str | None:
-    bodies = data.get("bodies")
-    if not bodies:
-        return None
-    return bodies[0].get("name")
