@@ -62,7 +62,8 @@ class _Objective:
         _, scene = builder.simulation({})
         self.max_steps = int(scene.run["steps"])
         self.runs = 0
-        self.last = None
+        self.last = None  # (residuals, labels) of the last evaluation
+        self.last_a = None  # the parameters of the last evaluation (clamped)
 
     def __call__(self, a: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """The residuals at a and their Jacobian: by the run's sensitivities, or (gradients
