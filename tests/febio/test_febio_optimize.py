@@ -282,3 +282,18 @@ def test_element_expressions_are_read_safely():
     for bad in ("__import__('os')", "sx.real", "sx if sy else 1", "'a'", "sx[0]", ""):
         with pytest.raises(InputError):
             names_in(bad, {"sx", "sy"}, "test")
+
+
+def test_the_models_solver_note_goes_when_febios_solver_runs_it(tmp_path):
+    model = _model(tmp_path / "bar.feb")
+    model.write_text(model.read_text().replace(
+        "<step_size>0.25</step_size>",
+        "<step_size>0.25</step_size><solver><dtol>0.001</dtol></solver>"))  # fmt: skip
+    task = read_optimize(_optimisation(tmp_path / "opt.feb", OBJECTIVES["target"], TWO))
+    for febio_solver, expected in ((False, 1), (True, 0)):
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            builder = ModelBuilder(model, task, febio_solver=febio_solver)
+        builder.close()
+        said = [n for n in builder.notes if "<solver>" in n]
+        assert len(said) == expected, builder.notes

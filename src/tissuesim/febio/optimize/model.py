@@ -41,7 +41,10 @@ class ModelBuilder:
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always")
             model = read_feb(self.path, root=self.root)  # refusals name the model's lines
-        self.notes = [str(w.message) for w in caught] + [f"not used: {n}" for n in model.notes]
+        notes = list(model.notes)
+        if febio_solver and model.febio_solver_note is not None:
+            del notes[model.febio_solver_note]  # the <solver> settings are used then
+        self.notes = [str(w.message) for w in caught] + [f"not used: {n}" for n in notes]
         for note in dict.fromkeys(self.notes):  # as a run of the model says them, once
             warnings.warn(note, UserWarning, stacklevel=2)
         for q in self.quantities:
