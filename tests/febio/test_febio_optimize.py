@@ -297,3 +297,34 @@ def test_the_models_solver_note_goes_when_febios_solver_runs_it(tmp_path):
         builder.close()
         said = [n for n in builder.notes if "<solver>" in n]
         assert len(said) == expected, builder.notes
+
+
+def test_a_rigid_platens_force_is_fitted_by_febios_differences(tmp_path):
+    """FEBio's usual indentation fit (op01, op03: fem.rigidbody(...).Fz): the platen model of
+    tests/febio/models, its force curve from our own run at E = 1e4, fitted from E = 6e3 by
+    forward differences; the run's sensitivities refuse it in one line."""
+    model = tmp_path / "platen.feb"
+    model.write_text((Path(__file__).parent / "models" / "rigid_platen.feb").read_text())
+    force = """<Objective type="data-fit"><fnc type="parameter">
+        <param name="fem.rigidbody('platen').Fz"/></fnc><data>{}</data></Objective>"""
+    one = "<param name=\"fem.material('tissue').E\">{}, 1000, 50000</param>"
+    probe = read_optimize(_optimisation(tmp_path / "probe.feb",
+                                        force.format("<pt>0.5, 0</pt><pt>1, 0</pt>"),
+                                        one.format(10000)))  # fmt: skip
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        builder = ModelBuilder(model, probe, differences=True)
+    try:
+        r, _ = _Objective(probe, builder, "differences")._residuals(np.array([1e4]), False)
+    finally:
+        builder.close()
+    assert np.all(np.abs(r) > 0)  # the platen carries a force
+    points = "".join(f"<pt>{t}, {float(y)!r}</pt>" for t, y in zip((0.5, 1.0), r, strict=True))
+    task = read_optimize(_optimisation(tmp_path / "opt.feb", force.format(points),
+                                       one.format(6000), tol=1e-12))  # fmt: skip
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        fit = run_optimize(task, model, gradients="differences")
+        assert fit.parameters["fem.material('tissue').E"] == pytest.approx(1e4, rel=1e-4)
+        with pytest.raises(InputError, match="--gradients differences"):
+            run_optimize(task, model)

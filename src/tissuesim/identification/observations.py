@@ -23,7 +23,7 @@ from tissuesim.errors import InputError
 
 __all__ = [
     "Reaction", "Displacement", "SurfaceDistance", "NodeData", "ElementData", "EnclosedVolume",
-    "Observation", "linearize",
+    "RigidForce", "Observation", "linearize",
 ]  # fmt: skip
 
 
@@ -268,6 +268,27 @@ class EnclosedVolume:
         return np.array([total])
 
 
+@dataclass(frozen=True)
+class RigidForce:
+    """A rigid body's force (N) or moment (N m, about its centre) that its held DOFs' supports
+    apply, FEBio's ``fem.rigidbody('name').Fz`` (``variable`` Fx, Fy, Fz, Mx, My, Mz), as in
+    ``Simulation.forces()``: read from the last step's gradient, so only after a step (runs
+    with rigid bodies are not differentiated: whole-run differences take it)."""
+
+    body: str
+    variable: str
+
+    def values(self, sim, x: np.ndarray) -> np.ndarray:
+        if self.variable not in ("Fx", "Fy", "Fz", "Mx", "My", "Mz"):
+            raise InputError(f"RigidForce: variable {self.variable!r} is not Fx ... Mz")
+        forces = sim._rigid_forces(sim._last_gradient)
+        key = self.body if self.variable[0] == "F" else f"{self.body}.moment"
+        if key not in forces:
+            names = [r.name for r in sim.system.rigid]
+            raise InputError(f"RigidForce: no rigid body {self.body!r}; rigid bodies: {names}")
+        return np.array([forces[key]["xyz".index(self.variable[1])]])
+
+
 def _rows(items, n: int, what: str, key: str, body: str) -> np.ndarray:
     rows = np.asarray(items, dtype=np.int64).ravel()
     if rows.size == 0 or rows.min() < 0 or rows.max() >= n:
@@ -276,7 +297,7 @@ def _rows(items, n: int, what: str, key: str, body: str) -> np.ndarray:
 
 
 Observation = (Reaction | Displacement | SurfaceDistance | NodeData | ElementData
-               | EnclosedVolume)  # fmt: skip
+               | EnclosedVolume | RigidForce)  # fmt: skip
 
 
 def _selection(groups: list[np.ndarray], n: int) -> sp.csr_matrix:

@@ -29,8 +29,8 @@ class ModelBuilder:
     ``values`` (FEBio's names -> numbers); ``observations``: the objective's quantities as
     ``identification`` observations of those simulations."""
 
-    def __init__(self, model_path: str | Path, task: OptimizeTask,
-                 febio_solver: bool = False) -> None:  # fmt: skip
+    def __init__(self, model_path: str | Path, task: OptimizeTask, febio_solver: bool = False,
+                 differences: bool = False) -> None:  # fmt: skip
         from tissuesim.febio.reader import read_feb
 
         self.febio_solver = febio_solver
@@ -48,10 +48,11 @@ class ModelBuilder:
         for note in dict.fromkeys(self.notes):  # as a run of the model says them, once
             warnings.warn(note, UserWarning, stacklevel=2)
         for q in self.quantities:
-            if q.kind == "rigid":
+            if q.kind == "rigid" and not differences:
                 raise InputError(
                     f"{task.source}: {q.text}: a rigid body's force is not differentiated yet "
-                    "(sensitivities of runs with rigid bodies): the optimisation cannot run"
+                    "(sensitivities of runs with rigid bodies): run it with FEBio's forward "
+                    "differences, --gradients differences"
                 )
         self._dir = tempfile.TemporaryDirectory(prefix="tissuesim-optimize-")
         self.observations = None
@@ -174,11 +175,19 @@ def _log_requests(model, quantities: list[Quantity], targets: dict) -> None:
 
 
 def _observations(quantities: list[Quantity], data: dict) -> list:
-    from tissuesim.identification.observations import ElementData, EnclosedVolume, NodeData
+    from tissuesim.identification.observations import (
+        ElementData,
+        EnclosedVolume,
+        NodeData,
+        RigidForce,
+    )
 
     tables = {t["file"]: t for t in data.get("logfiles", [])}
     out = []
     for k, q in enumerate(quantities):
+        if q.kind == "rigid":  # the converter names a rigid body after its material
+            out.append(RigidForce(q.item, q.variable))
+            continue
         if q.kind == "surface":
             out.append(EnclosedVolume(q.item))  # on the body whose mesh has the surface
             continue
