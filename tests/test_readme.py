@@ -382,22 +382,14 @@ def test_sweep_zarr_python_example_runs(tmp_path):
     assert 2e3 <= float(value) <= 8e3 and shape == "(105, 3)"
 
 
-def test_sweep_dask_python_example_runs(tmp_path):
-    """The parameter studies page's Dask LocalCluster study, as shown (indented in a list)."""
-    pytest.importorskip("distributed")
-    code = textwrap.dedent(block("python", 'out="out/fat_dask"'))
-    result = subprocess.run(
-        [sys.executable, "-c", code], cwd=tmp_path, capture_output=True, text=True, timeout=300
-    )
-    assert result.returncode == 0, result.stderr
-    assert result.stdout.splitlines()[-1] == "['completed', 'completed', 'completed']"
-
-
-def test_sweep_ray_python_example_runs(tmp_path):
-    """The parameter studies page's Ray study, as shown (Ray is in no extra: the test runs
-    where it is installed, as in the development environment, and is skipped elsewhere)."""
-    pytest.importorskip("ray")
-    code = textwrap.dedent(block("python", 'out="out/fat_ray"'))
+@pytest.mark.parametrize(("module", "marker"), [("distributed", 'out="out/fat_dask"'),
+                                               ("ray", 'out="out/fat_ray"')])  # fmt: skip
+def test_sweep_cluster_python_examples_run(tmp_path, module, marker):
+    """The parameter studies page's Dask LocalCluster and Ray studies, as shown (indented in a
+    list; Ray is in no extra: its test runs where it is installed, as in the development
+    environment, and is skipped elsewhere)."""
+    pytest.importorskip(module)
+    code = textwrap.dedent(block("python", marker))
     result = subprocess.run(
         [sys.executable, "-c", code], cwd=tmp_path, capture_output=True, text=True, timeout=300
     )

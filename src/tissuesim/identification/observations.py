@@ -189,8 +189,9 @@ class NodeData:
 class ElementData:
     """FEBio's element_data ``variable`` (``sx`` ... ``sxz``, ``s1``-``s3``, ``Ex`` ... ``Exz``,
     ``E1``-``E3``, ``J``: each element's mean over its integration points, as FEBio logs it) or
-    an expression of them (FEBio's ``"=sx+sy+sz"``: + - * / ^, numbers, sqrt, abs, exp,
-    log) at ``cells`` of FEM body ``body`` (default: all), one value per cell, or their
+    an expression of them (FEBio's ``"=sx+sy+sz"``, read as the scene's safe expressions,
+    ``scene/expressions.py``; ^ is a power) at ``cells`` of FEM body ``body`` (default:
+    all), one value per cell, or their
     ``reduce`` = "sum" or "mean" (FEBio's filter_sum, filter_avg) as one value."""
 
     variable: str
@@ -199,19 +200,22 @@ class ElementData:
     reduce: str | None = None
 
     def values(self, sim, x: np.ndarray) -> np.ndarray:
-        from tissuesim.identification.expressions import evaluate, names_in
         from tissuesim.io.logfiles import ELEMENT_DATA, LogRequest, element_values
+        from tissuesim.scene.expressions import compile_named
 
         what = "ElementData"
-        expression = self.variable.lstrip("=")
-        used = names_in(expression, ELEMENT_DATA, what)
+        # FEBio writes a power as ^ (Python's ** in the scene's safe expressions)
+        evaluate, used = compile_named(self.variable.lstrip("=").replace("^", "**"),
+                                       tuple(ELEMENT_DATA), what)  # fmt: skip
+        if not used:
+            raise InputError(f"{what}: {self.variable!r} names no element variable")
         name, body, _ = _fem_body(sim, self.body, what)
         rows = None
         if self.cells is not None:
             rows = _rows(self.cells, body.mesh.n_cells, what, "cells", name)
         request = LogRequest("element_data", tuple(used), name, rows, None, "")
         data = _at_state(sim, x, lambda s: element_values(s, request))
-        y = np.asarray(evaluate(expression, data), dtype=float)
+        y = np.broadcast_to(evaluate(data), (len(next(iter(data.values()))),)).astype(float)
         if self.reduce is None:
             return y
         if self.reduce not in ("sum", "mean"):

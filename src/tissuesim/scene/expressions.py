@@ -18,7 +18,7 @@ import numpy as np
 from tissuesim.errors import SceneError
 from tissuesim.validate import real, short
 
-__all__ = ["compile_expression", "compile_vector", "FUNCTIONS"]
+__all__ = ["compile_expression", "compile_named", "compile_vector", "FUNCTIONS"]
 
 FUNCTIONS: dict[str, Callable] = {
     name: getattr(np, name)
@@ -94,13 +94,8 @@ class _FloatLiterals(ast.NodeTransformer):
         return node
 
 
-def compile_expression(text: str | float | int, where: str) -> Callable:
-    """A function f(X (k, d), t) -> (k,) from an expression; ``where`` names it in errors."""
-    if isinstance(text, bool) or not isinstance(text, (str, int, float)):
-        raise SceneError(f"{where}: expected a number or an expression string, got {short(text)}")
-    if not isinstance(text, str):
-        value = real(text, where)
-        return lambda X, t: np.full(X.shape[0], value)
+def _checked_code(text: str, where: str, variables: Sequence[str]):
+    """The compiled, checked tree of an expression in ``variables`` (SceneError otherwise)."""
     try:
         tree = ast.parse(text.strip(), mode="eval")
     except SyntaxError as exc:
@@ -114,8 +109,8 @@ def compile_expression(text: str | float | int, where: str) -> Callable:
         if not isinstance(node, _ALLOWED):
             raise SceneError(
                 f"{where}: {type(node).__name__} is not allowed in expression {short(text)}; use "
-                "numbers, x, y, z, t, pi, e, arithmetic, comparisons, and, or, not and functions "
-                f"{', '.join(sorted(FUNCTIONS))}"
+                f"numbers, {', '.join(variables)}, pi, e, arithmetic, comparisons, and, or, "
+                f"not and functions {', '.join(sorted(FUNCTIONS))}"
             )
         if isinstance(node, ast.Constant) and not isinstance(node.value, (int, float)):
             raise SceneError(f"{where}: only numeric constants are allowed in {short(text)}")
@@ -141,10 +136,10 @@ def compile_expression(text: str | float | int, where: str) -> Callable:
                     f"{where}: {name}() takes {ARITY[name]} argument(s), got {len(node.args)} "
                     f"in {short(text)}"
                 )
-        if isinstance(node, ast.Name) and node.id not in (*VARIABLES, *CONSTANTS, *FUNCTIONS):
+        if isinstance(node, ast.Name) and node.id not in (*variables, *CONSTANTS, *FUNCTIONS):
             raise SceneError(
-                f"{where}: unknown name {short(node.id)} in {short(text)}; variables are x, y, "
-                "z, t and constants pi, e"
+                f"{where}: unknown name {short(node.id)} in {short(text)}; variables are "
+                f"{', '.join(variables)} and constants pi, e"
             )
         if isinstance(node, ast.Name) and node.id in FUNCTIONS and id(node) not in called:
             raise SceneError(
@@ -157,6 +152,18 @@ def compile_expression(text: str | float | int, where: str) -> Callable:
         code = compile(tree, f"<{where}>", "eval")
     except (RecursionError, MemoryError):
         raise SceneError(f"{where}: expression {short(text)} is too deeply nested") from None
+
+    return code
+
+
+def compile_expression(text: str | float | int, where: str) -> Callable:
+    """A function f(X (k, d), t) -> (k,) from an expression; ``where`` names it in errors."""
+    if isinstance(text, bool) or not isinstance(text, (str, int, float)):
+        raise SceneError(f"{where}: expected a number or an expression string, got {short(text)}")
+    if not isinstance(text, str):
+        value = real(text, where)
+        return lambda X, t: np.full(X.shape[0], value)
+    code = _checked_code(text, where, VARIABLES)
 
     def f(X: np.ndarray, t: float) -> np.ndarray:
         X = np.array(X, dtype=float)  # a copy: nothing here may write into the caller's array
@@ -186,3 +193,25 @@ def compile_vector(items: Sequence, dim: int, where: str) -> Callable:
         return np.stack([p(X, t) for p in parts], axis=1)
 
     return f
+
+
+def compile_named(text: str, variables: Sequence[str], where: str):
+    """(f, used): an expression of the named ``variables`` (any names, e.g. FEBio's logged
+    ``sx``, ``sy``), checked as ``compile_expression``'s, as f(values: name -> array) -> array,
+    and the variables it uses in order of first use."""
+    if not isinstance(text, str) or not text.strip():
+        raise SceneError(f"{where}: expected an expression string, got {short(text)}")
+    code = _checked_code(text, where, tuple(variables))
+    used = list(dict.fromkeys(n.id for n in ast.walk(ast.parse(text.strip(), mode="eval"))
+                              if isinstance(n, ast.Name) and n.id in variables))  # fmt: skip
+
+    def f(values) -> np.ndarray:
+        names = {**CONSTANTS, **FUNCTIONS, **_LOGIC}
+        names.update({k: np.asarray(values[k], dtype=float) for k in used})
+        try:
+            with np.errstate(all="ignore"):
+                return np.asarray(eval(code, {"__builtins__": {}}, names), dtype=float)
+        except (ArithmeticError, ValueError, TypeError) as exc:
+            raise SceneError(f"{where}: evaluating {short(text)} failed: {exc}") from None
+
+    return f, used

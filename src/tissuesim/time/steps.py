@@ -72,43 +72,11 @@ def implicit_step(
     before the caller halves it: our Quasin stops in a few models where FEBio's own does not
     (benchmarks/results/febio_suite_febio_solver.md), and a step converged tightly is within
     FEBio's tolerance of FEBio's answer."""
-    args = (system, state, h, solver)
-    kw = dict(dynamic=dynamic, energies=energies, budget=budget, t_end=t_end,
-              friction_from=friction_from, friction_h=friction_h)  # fmt: skip
-    if options.method != "febio" or not options.febio_fallback:
-        return _implicit_step(*args, options, **kw)
-    from dataclasses import replace
-
-    from tissuesim.time.attempts.history import keep_lags, restore_lags
-
-    kept = keep_lags(system)
-    outcome = _implicit_step(*args, options, **kw)
-    if outcome.converged:
-        return outcome
-    restore_lags(kept)
-    retry = _implicit_step(*args, replace(options, method="newton", febio=None), **kw)
-    if not retry.converged:
-        restore_lags(kept)
-        return StepOutcome(None, False, outcome.newton + retry.newton, outcome.reason)
-    for record in retry.newton:
-        record.fallback = True  # counted in the step's extra (simulation/simulation.py)
-    return StepOutcome(retry.state, True, outcome.newton + retry.newton)
-
-
-def _implicit_step(
-    system,
-    state: State,
-    h: float,
-    solver,
-    options,
-    *,
-    dynamic: bool,
-    energies: EnergyBuilder,
-    budget: dict | None = None,
-    t_end: float | None = None,
-    friction_from: np.ndarray | None = None,
-    friction_h: float | None = None,
-) -> StepOutcome:
+    if options.method == "febio" and options.febio_fallback:
+        return _with_fallback(
+            system, state, h, solver, options, dict(dynamic=dynamic, energies=energies,
+            budget=budget, t_end=t_end, friction_from=friction_from, friction_h=friction_h),
+        )  # fmt: skip
     if options.method == "febio" and system.contact is not None:
         raise InputError("newton method 'febio' does not run with barrier contact: use 'newton'")
     t1 = state.time + h if t_end is None else t_end
@@ -267,6 +235,28 @@ def _implicit_step(
     system.last_step_energies = body_energies  # the step's Phi, for haptics.py's linearisation
     v1 = system.difference(c1, state.x) / h if dynamic else np.zeros(system.n_dofs)
     return StepOutcome(State(t1, c1, v1), True, [record])
+
+
+def _with_fallback(system, state, h, solver, options, kw: dict) -> StepOutcome:
+    """FEBio's solver on the step, then (if it gave up) tissuesim's Newton from the same start
+    with the lagged terms as they were (``implicit_step``'s docstring)."""
+    from dataclasses import replace
+
+    from tissuesim.time.attempts.history import keep_lags, restore_lags
+
+    kept = keep_lags(system)
+    outcome = implicit_step(system, state, h, solver, replace(options, febio_fallback=False), **kw)
+    if outcome.converged:
+        return outcome
+    restore_lags(kept)
+    newton = replace(options, method="newton", febio=None)
+    retry = implicit_step(system, state, h, solver, newton, **kw)
+    if not retry.converged:
+        restore_lags(kept)
+        return StepOutcome(None, False, outcome.newton + retry.newton, outcome.reason)
+    for record in retry.newton:
+        record.fallback = True  # counted in the step's extra (simulation/simulation.py)
+    return StepOutcome(retry.state, True, outcome.newton + retry.newton)
 
 
 def _reachable_starts(system, state, candidates, t1, y0, y1) -> list[np.ndarray]:
