@@ -316,7 +316,7 @@ def test_fitting_python_example_recovers_the_parameters(tmp_path):
 #: contains)
 TESTED_PYTHON_BLOCKS = {
     "import zarr\n": "test_sweep_zarr_python_example_runs",
-    'out="out/fat_ray"': "test_sweep_ray_python_example_runs",
+    'out="out/fat_ray"': "test_sweep_cluster_python_examples_run",
     "def block(p):": "test_identify_python_example_recovers_the_parameters",
     "fit = ts.identify(": "test_identify_python_example_recovers_the_parameters",
     'regions={"soft": (left, soft)}': "test_regions_python_example_runs",
@@ -346,7 +346,7 @@ TESTED_PYTHON_BLOCKS = {
     'sim.add_rigid_body(\n    "press"': "test_rigid_body_python_example_runs",
     'sim.add_rigid_joint("revolute"': "test_rigid_joint_python_example_runs",
     'out="out/fat_study"': "test_sweep_python_example_runs",
-    'out="out/fat_dask"': "test_sweep_dask_python_example_runs",
+    'out="out/fat_dask"': "test_sweep_cluster_python_examples_run",
 }
 
 
