@@ -273,3 +273,62 @@ def test_a_step_febios_solver_gives_up_on_is_solved_by_tissuesims_newton(deck):
     sim.newton = dataclasses.replace(sim.newton, febio_fallback=False)
     with pytest.raises(ConvergenceError, match="max_refs"):
         sim.step()
+
+
+def test_febios_stepper_cuts_a_step_back_before_falling_back_to_newton(deck):
+    """With FEBio's adaptive stepper, a step FEBio's solver gives up on is cut back as FEBio
+    cuts it (max_retries times) and only the last attempt falls back to tissuesim's Newton,
+    so the steps stay FEBio's where a shorter step is enough (dy03, dy04, sh59 of FEBio's
+    suite); without the stepper the fallback comes at once (the test above)."""
+    from tissuesim.febio import load_febio
+    from tissuesim.time.adaptive import attempt_options
+
+    hopeless = {"max_ups": 0, "max_refs": 1, "etol": 1e-16, "dtol": 1e-16}
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        sim = load_febio(deck).simulation
+    sim.newton = dataclasses.replace(sim.newton, method="febio", febio=hopeless)
+    sim.set_adaptive({"dtmax": 0.5, "dtmin": 0.01, "max_retries": 2, "opt_iter": 10})
+    record = sim.step()
+    assert record.extra["adaptive"]["retries"] == 2  # two cut-backs, each failed by Quasin
+    assert record.extra["newton_fallback"] == 1  # then the last attempt's fallback
+    assert record.extra["adaptive"]["dt"] == pytest.approx(0.5 * (1 - 2 / 3))
+    # the options of an attempt: the fallback only where it is the last one
+    assert attempt_options(sim.newton, last=False).febio_fallback is False
+    assert attempt_options(sim.newton, last=True) is sim.newton
+    plain = dataclasses.replace(sim.newton, method="newton", febio=None)
+    assert attempt_options(plain, last=False) is plain
+
+
+def test_febios_solver_factors_directly_where_the_run_chose_an_iterative_solver():
+    """FEBio factors its stiffness: where "auto" chose CG for a large model (mi39, 73k DOFs)
+    the Quasin factors with PARDISO or CHOLMOD (it fell to SuperLU: 67 s a factorisation),
+    and an indefinite stiffness that the Cholesky refuses is factored too (PARDISO's LU where
+    installed, else SuperLU)."""
+    from tissuesim.solve.linear import CGSolver, has_cholmod, has_pardiso
+    from tissuesim.solve.quasin import _direct_factor
+
+    rng = np.random.default_rng(3)
+    B = sp.random(40, 40, density=0.2, random_state=3)
+    spd = (B @ B.T + 40 * sp.eye(40)).tocsr()
+    indefinite = (spd - 45 * sp.eye(40)).tocsr()  # eigenvalues on both sides of 0
+    assert (
+        np.linalg.eigvalsh(indefinite.toarray()).min()
+        < 0
+        < np.linalg.eigvalsh(indefinite.toarray()).max()
+    )
+    b = rng.standard_normal(40)
+    for A in (spd, indefinite):
+        solve = _direct_factor(CGSolver("jacobi"), A)
+        assert np.linalg.norm(A @ solve(b) - b) < 1e-10 * np.linalg.norm(b)
+    if has_pardiso() or has_cholmod():
+        import tissuesim.solve.quasin as quasin
+
+        called = []
+        real = quasin.spla.splu
+        quasin.spla.splu = lambda *a, **k: called.append(1) or real(*a, **k)
+        try:
+            _direct_factor(CGSolver("jacobi"), spd)
+        finally:
+            quasin.spla.splu = real
+        assert not called  # a fast direct solver, not SuperLU

@@ -232,3 +232,30 @@ def test_enforcement_refusals_are_one_line(rule, message):
     with pytest.raises(InputError, match=message) as info:
         sim.add_rigid_joint("spherical", "G", "A", (0, 0, 0), enforcement=rule)
     assert "\n" not in str(info.value)
+
+
+def test_a_joint_stops_updating_where_solves_no_longer_close_its_residual():
+    """Two solves in a row that move the bodies but leave a joint's residual where it was
+    (by less than STALLED of it) end its updates: redundant constraints that do not quite
+    agree (FEBio's rj13, a closed loop of four revolute joints given to six digits) took the
+    30 updates in every step, and FEBio's stepper shrank its steps to dtmin. A solve that did
+    not move (Newton staying put while the multipliers' change is below its tolerance) does
+    not count, and a residual that shrinks goes on being updated."""
+    from tissuesim.rigid.joints import STALLED, RigidJoint, augment
+
+    def joint():
+        return RigidJoint("j", "spherical", "a", "b", np.zeros(3))
+
+    k, rows, tight = np.full(3, 10.0), np.ones(3, dtype=bool), 1e-9
+    g = np.array([3e-8, 0.0, -1e-8])
+    stuck = joint()
+    drift = g * (1 + STALLED / 2)
+    assert augment(stuck, g, k, rows, tight)  # the first update
+    assert augment(stuck, drift, k, rows, tight)  # one stalled solve: updated again
+    assert not augment(stuck, g, k, rows, tight)  # two in a row: it holds as it is
+    assert stuck.multipliers == pytest.approx(-2 * k * g, rel=STALLED)
+    idle = joint()  # solves that did not move the bodies say nothing
+    assert all(augment(idle, g, k, rows, tight, moved=n == 0) for n in range(5))
+    closing = joint()  # a residual halved by each solve is updated until below tight
+    updates = [augment(closing, g / 2**n, k, rows, tight) for n in range(5)]
+    assert all(updates) and not augment(closing, g / 2**5, k, rows, tight)

@@ -117,13 +117,17 @@ class RigidSystemPart:
         if getattr(self, "_joints_time", None) != self.load_time:  # a new step: FEBio's naug
             self._joints_time = self.load_time
             for j in self.joints:
-                j.augmentations = 0
+                j.augmentations, j.last_gap, j.stalls = 0, None, 0
+        last = getattr(self, "_joints_c", None)  # where the last update was made
+        moved = last is None or last.shape != c.shape or not np.array_equal(last, c)
+        self._joints_c = np.array(c, dtype=float)
         again = False
         for j, (_, _, _, g, k) in zip(self.joints, self.joint_terms(c, 0), strict=True):
             if isinstance(j, RigidSpring):
                 continue
             tight = TOLERANCE * self.length_scale
-            again = augment(j, g, k, j.point_rows(self.load_time), tight) or again
+            rows = j.point_rows(self.load_time)
+            again = augment(j, g, k, rows, tight, moved) or again
         return again
 
     def _pattern_keys(self) -> np.ndarray:

@@ -16,8 +16,10 @@ rest where the joint is given. Every residual is linear or bilinear in the featu
 (e the joint's axis, t its transverse axis, s = e x t), and each joint adds the augmented
 Lagrangian k/2 |g|^2 - lambda . g; after each Newton solve lambda <- lambda - k g until every
 residual is below TOLERANCE x the length scale (``time/lags.py``'s re-lags), so the joint
-holds to that tolerance whatever k. A joint given an ``Enforcement`` (FEBio's ``laugon``,
-``tolerance``, ``penalty``, ``gaptol``, ``minaug``, ``maxaug``; the converter's) follows
+holds to that tolerance whatever k, or until two solves in a row move the bodies and leave g
+where it was (moved by less than STALLED of it: redundant constraints that do not agree).
+A joint given an ``Enforcement`` (FEBio's ``laugon``, ``tolerance``, ``penalty``, ``gaptol``,
+``minaug``, ``maxaug``; the converter's) follows
 FEBio's rule instead (``FERigidJoint::Augment``, ``FERigidSphericalJoint::Augment``): its
 penalty on the point residuals, and after the n-th solve of a step (n = 0, 1, ...) the joint
 has converged unless the multipliers' norm would change by ``tolerance`` or more
@@ -54,6 +56,9 @@ JOINT_KINDS = ("spherical", "revolute", "prismatic", "cylindrical", "planar")
 #: a joint holds when every residual is below this times the length scale
 TOLERANCE = 1e-9
 MAX_UPDATES = 30
+#: two updates in a row that move a joint's residual by less than this fraction of it end the
+#: updates (at that rate MAX_UPDATES updates would shrink it by less than a third)
+STALLED = 0.01
 
 # features: 0 p_a, 1 p_b (points); 2 e_a, 3 t_a, 4 s_a, 5 e_b, 6 t_b (directions)
 _POINT = (True, True, False, False, False, False, False)
@@ -161,6 +166,8 @@ class RigidJoint:
     multipliers: np.ndarray = field(default_factory=lambda: np.zeros(0))
     enforcement: Enforcement | None = None
     augmentations: int = 0  # the multiplier updates tried in the step so far (FEBio's naug)
+    last_gap: np.ndarray | None = field(default=None, repr=False)  # g at the last update
+    stalls: int = field(default=0, repr=False)  # updates in a row that left g where it was
 
     def __post_init__(self) -> None:
         self.enforcement = Enforcement.of(self.enforcement, f"rigid joint {self.name!r}")
@@ -235,12 +242,18 @@ class RigidJoint:
 
 
 def augment(
-    joint: RigidJoint, g: np.ndarray, k: np.ndarray, points: np.ndarray, tight: float
+    joint: RigidJoint,
+    g: np.ndarray,
+    k: np.ndarray,
+    points: np.ndarray,
+    tight: float,
+    moved: bool = True,
 ) -> bool:
     """The joint's multiplier update after a solve with residuals g (penalties k, ``points``
     the rows of the point residuals); whether it changed (then the step is solved again).
-    Without an enforcement: every |g| below ``tight`` (TOLERANCE x the length scale);
-    with one: FEBio's rule (module docstring)."""
+    Without an enforcement: every |g| below ``tight`` (TOLERANCE x the length scale), or two
+    solves in a row that ``moved`` the bodies (False: the solve stayed where the last update
+    was made) and left g where it was; with one: FEBio's rule (module docstring)."""
     if joint.multipliers.size != g.size:
         joint.multipliers = np.zeros(g.size)
     lam = joint.multipliers
@@ -249,6 +262,17 @@ def augment(
     if rule is None:
         if np.abs(g).max() <= tight:
             return False
+        # two solves in a row moved the bodies but the residual by less than STALLED of itself
+        # (a solve that did not move says nothing: Newton stays put while the multipliers'
+        # change is below its tolerance): the updates cannot close it (redundant constraints
+        # that do not quite agree, as the closed loop of revolute joints of FEBio's rj13,
+        # given to six digits), so the joint holds as it is
+        last, joint.last_gap = joint.last_gap, g.copy()
+        if moved and last is not None and last.shape == g.shape:
+            still = np.abs(g - last).max() <= max(tight, STALLED * np.abs(last).max())
+            joint.stalls = joint.stalls + 1 if still else 0
+            if joint.stalls >= 2:
+                return False
         joint.multipliers = trial
         return True
     if not rule.augmented:

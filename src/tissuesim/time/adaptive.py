@@ -218,6 +218,11 @@ class TimeStepController:
         """Whether t is the end."""
         return t >= self.end - self._eps(t)
 
+    def last_attempt(self) -> bool:
+        """Whether a failure of the attempt now planned stops the run (``retry`` refuses)."""
+        c = self.settings
+        return self.retries >= c.max_retries or self.dt <= c.dtmin * (1.0 + 1e-12)
+
     def retry(self, t: float, reason: str) -> None:
         """The step from t failed: cut it back (ConvergenceError when it may not)."""
         c = self.settings
@@ -239,6 +244,19 @@ class TimeStepController:
         self.t_end, self.must_point = t + self.dt, False
 
 
+def attempt_options(options: Any, last: bool) -> Any:
+    """The Newton options of one attempt: FEBio's solver falls back to tissuesim's Newton
+    (``febio_fallback``, time/steps.py) only on the last attempt the step may make. Before
+    it, a step FEBio's solver gives up on is cut back as FEBio cuts it back, so the steps stay
+    FEBio's (with the fallback on every attempt, dy03, dy04 and sh59 of FEBio's suite took
+    other steps and ended 0.85, 9.4e-3 and 1.5e-2 from FEBio's result, against -1.4e-3,
+    -2.1e-3 and -4.2e-7). Fixed steps (``time/attempts/retry.py``) fall back at once: FEBio
+    without its stepper stops at a failed step, so there are no steps of FEBio's to keep."""
+    if last or getattr(options, "method", "newton") != "febio" or not options.febio_fallback:
+        return options
+    return replace(options, febio_fallback=False)
+
+
 def advance_adaptive(
     step_fn: Callable,
     model: Any,
@@ -256,7 +274,8 @@ def advance_adaptive(
         dt = controller.dt
         begin_attempt(model, state, dt)  # internal variables frozen for the attempt
         try:
-            outcome: StepOutcome = step_fn(model, state, dt, solver, options)
+            last = controller.last_attempt()
+            outcome: StepOutcome = step_fn(model, state, dt, solver, attempt_options(options, last))
         except BaseException:
             end_attempt(model, StepOutcome(None, False))
             raise

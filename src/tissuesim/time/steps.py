@@ -69,9 +69,10 @@ def implicit_step(
 
     With ``method = "febio"`` and ``febio_fallback``, a step FEBio's solver gives up on is
     solved again by tissuesim's Newton from the same start (the lagged terms as they were)
-    before the caller halves it: our Quasin stops in a few models where FEBio's own does not
-    (benchmarks/results/febio_suite_febio_solver.md), and a step converged tightly is within
-    FEBio's tolerance of FEBio's answer."""
+    before the caller halves it (FEBio's adaptive stepper: on its last attempt only,
+    ``time/adaptive.py attempt_options``): our Quasin stops in a few models where FEBio's own
+    does not (benchmarks/results/febio_suite_febio_solver.md), and a step converged tightly is
+    within FEBio's tolerance of FEBio's answer."""
     if options.method == "febio" and options.febio_fallback:
         return _with_fallback(
             system, state, h, solver, options, dict(dynamic=dynamic, energies=energies,

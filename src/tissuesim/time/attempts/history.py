@@ -34,7 +34,7 @@ def has_internal_state(model) -> bool:
 
 
 #: the lagged fields of a penalty pair, its passes, a rigid wall and a rigid joint
-_LAGGED = ("multipliers", "weights", "tie", "friction", "augmentations")
+_LAGGED = ("multipliers", "weights", "tie", "friction", "augmentations", "last_gap", "stalls")
 
 
 def _lag_holders(system) -> list:
