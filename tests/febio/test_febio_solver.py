@@ -332,3 +332,21 @@ def test_febios_solver_factors_directly_where_the_run_chose_an_iterative_solver(
         finally:
             quasin.spla.splu = real
         assert not called  # a fast direct solver, not SuperLU
+
+
+@pytest.mark.skipif(importlib.util.find_spec("pypardiso") is None, reason="needs pypardiso")
+def test_pardisos_lu_releases_its_memory_with_its_factor():
+    """PARDISO keeps a factor until told; one per reformation filled 17 GB (sh29, oi01 of
+    FEBio's suite killed): a factor let go of releases PARDISO's memory."""
+    import gc
+
+    from tissuesim.solve.quasin import _PardisoLU
+
+    A = sp.diags([-1.0, 2.5, -1.0], [-1, 0, 1], shape=(50, 50)).tocsr()
+    lu = _PardisoLU(A)
+    assert np.allclose(A @ lu(np.ones(50)), 1.0)
+    release = lu._release
+    assert release.alive
+    del lu
+    gc.collect()
+    assert not release.alive

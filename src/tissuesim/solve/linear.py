@@ -116,38 +116,34 @@ class PardisoSolver(LinearSolver):
 
     def __init__(self) -> None:
         import ctypes
+        from types import SimpleNamespace
 
-        self._ct = ctypes
-        self._pardiso = _mkl_pardiso()
+        pardiso = _mkl_pardiso()
         i32 = ctypes.POINTER(ctypes.c_int32)
-        self._pardiso.argtypes = [ctypes.POINTER(ctypes.c_int64), i32, i32, i32, i32, i32,
-                                  ctypes.c_void_p, i32, i32, i32, i32, i32, i32,
-                                  ctypes.c_void_p, ctypes.c_void_p, i32]  # fmt: skip
-        self._pardiso.restype = None
-        self._pt = np.zeros(64, dtype=np.int64)  # PARDISO's internal handle
-        self._iparm = np.zeros(64, dtype=np.int32)
-        self._iparm[[0, 1, 9, 34]] = (1, 2, 13, 1)  # own iparm; METIS; pivot eps 1e-13; 0-based
+        pardiso.argtypes = [ctypes.POINTER(ctypes.c_int64), i32, i32, i32, i32, i32,
+                            ctypes.c_void_p, i32, i32, i32, i32, i32, i32,
+                            ctypes.c_void_p, ctypes.c_void_p, i32]  # fmt: skip
+        pardiso.restype = None
+        iparm = np.zeros(64, dtype=np.int32)
+        iparm[[0, 1, 9, 34]] = (1, 2, 13, 1)  # own iparm; METIS; pivot eps 1e-13; 0-based
+        # PARDISO's state apart from the solver, so that the finalizer that frees it holds
+        # the state and not the solver (holding the solver kept every one alive: FEBio's
+        # solver makes one per reformation, 17 GB in co40 before it was killed)
+        self._h = SimpleNamespace(
+            ct=ctypes, pardiso=pardiso, pt=np.zeros(64, dtype=np.int64), iparm=iparm,
+            mtype=self._MTYPE, n=0, ia=None, ja=None, perm=None,
+        )  # fmt: skip
         self._upper: np.ndarray | None = None
         self._finalizer = None
 
     def _call(self, phase: int, a: np.ndarray, b: np.ndarray, x: np.ndarray, nrhs: int = 1) -> int:
-        ct, i32 = self._ct, self._ct.c_int32
-        error = i32(0)
-        self._pardiso(
-            self._pt.ctypes.data_as(ct.POINTER(ct.c_int64)),
-            ct.byref(i32(1)), ct.byref(i32(1)), ct.byref(i32(self._MTYPE)),
-            ct.byref(i32(phase)), ct.byref(i32(self._n)), a.ctypes.data,
-            self._ia.ctypes.data_as(ct.POINTER(i32)), self._ja.ctypes.data_as(ct.POINTER(i32)),
-            self._perm.ctypes.data_as(ct.POINTER(i32)), ct.byref(i32(nrhs)),
-            self._iparm.ctypes.data_as(ct.POINTER(i32)), ct.byref(i32(0)),
-            b.ctypes.data, x.ctypes.data, ct.byref(error),
-        )  # fmt: skip
-        return int(error.value)
+        return _pardiso_call(self._h, phase, a, b, x, nrhs)
 
     def factorize(self, A: sp.csr_matrix) -> None:
         if self._upper is not None and not _same_pattern(self._analysed, A):
             # contact pairs change the sparsity: analyse the new pattern
             self._finalizer()
+            self._h.pt[:] = 0
             self._upper = None
         if self._upper is None:  # analysis, once per pattern: its upper triangle
             self._analysed = (A.indptr.copy(), A.indices.copy())
@@ -155,19 +151,20 @@ class PardisoSolver(LinearSolver):
             rows = np.repeat(np.arange(A.shape[0]), np.diff(A.indptr))
             self._upper = np.flatnonzero(A.indices >= rows)
             upper_rows = rows[self._upper]
-            self._n = A.shape[0]
-            counts = np.bincount(upper_rows, minlength=self._n)
-            self._ia = np.concatenate([[0], np.cumsum(counts)]).astype(np.int32)
-            self._ja = A.indices[self._upper].astype(np.int32)
-            self._perm = np.zeros(self._n, dtype=np.int32)
+            h = self._h
+            h.n = A.shape[0]
+            counts = np.bincount(upper_rows, minlength=h.n)
+            h.ia = np.concatenate([[0], np.cumsum(counts)]).astype(np.int32)
+            h.ja = A.indices[self._upper].astype(np.int32)
+            h.perm = np.zeros(h.n, dtype=np.int32)
             self._a = np.ascontiguousarray(A.data[self._upper])
-            dummy = np.zeros(self._n)
+            dummy = np.zeros(h.n)
+            self._finalizer = weakref.finalize(self, _pardiso_release, h)
             if self._call(11, self._a, dummy, dummy.copy()) != 0:
                 raise RuntimeError("PARDISO analysis failed")
-            self._finalizer = weakref.finalize(self, _pardiso_release, self)
         else:
             self._a = np.ascontiguousarray(A.data[self._upper])
-        dummy = np.zeros(self._n)
+        dummy = np.zeros(self._h.n)
         error = self._call(22, self._a, dummy, dummy.copy())
         if error == -4:
             raise NotPositiveDefiniteError("PARDISO: zero or negative pivot (matrix not SPD)")
@@ -201,11 +198,27 @@ def _same_pattern(analysed: tuple[np.ndarray, np.ndarray], A: sp.csr_matrix) -> 
     )
 
 
-def _pardiso_release(solver: PardisoSolver) -> None:
+def _pardiso_call(h, phase: int, a: np.ndarray, b: np.ndarray, x: np.ndarray, nrhs: int = 1) -> int:
+    """One call of PARDISO on the state ``h`` (PardisoSolver._h); its error code."""
+    ct, i32 = h.ct, h.ct.c_int32
+    error = i32(0)
+    h.pardiso(
+        h.pt.ctypes.data_as(ct.POINTER(ct.c_int64)),
+        ct.byref(i32(1)), ct.byref(i32(1)), ct.byref(i32(h.mtype)),
+        ct.byref(i32(phase)), ct.byref(i32(h.n)), a.ctypes.data,
+        h.ia.ctypes.data_as(ct.POINTER(i32)), h.ja.ctypes.data_as(ct.POINTER(i32)),
+        h.perm.ctypes.data_as(ct.POINTER(i32)), ct.byref(i32(nrhs)),
+        h.iparm.ctypes.data_as(ct.POINTER(i32)), ct.byref(i32(0)),
+        b.ctypes.data, x.ctypes.data, ct.byref(error),
+    )  # fmt: skip
+    return int(error.value)
+
+
+def _pardiso_release(h) -> None:
     """Phase -1: free PARDISO's internal memory (it is not Python-managed)."""
     dummy = np.zeros(1)
     try:
-        solver._call(-1, dummy, dummy, dummy.copy())
+        _pardiso_call(h, -1, dummy, dummy, dummy.copy())
     except Exception:  # interpreter shutdown: the library may already be gone
         pass
 

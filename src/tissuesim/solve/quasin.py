@@ -103,7 +103,7 @@ def _direct_factor(solver: LinearSolver, A: sp.csr_matrix):
             pass
     if kind is not SuperLUSolver and has_pardiso():
         try:
-            return _pardiso_lu(A)
+            return _PardisoLU(A)
         except Exception:  # noqa: BLE001 - pypardiso's own errors: SuperLU decides
             pass
     try:
@@ -112,16 +112,23 @@ def _direct_factor(solver: LinearSolver, A: sp.csr_matrix):
         raise _Failed(f"the stiffness matrix is singular ({exc})") from None
 
 
-def _pardiso_lu(A: sp.csr_matrix):
+class _PardisoLU:
     """b -> A^-1 b by PARDISO's LU (real unsymmetric, mtype 11): an indefinite stiffness,
-    without SuperLU's fill (co40, oi03 were killed for memory there)."""
-    import pypardiso
+    without SuperLU's fill. PARDISO's memory is released with the object (pypardiso keeps it
+    until told: a factor per reformation filled 17 GB, sh29 and oi01 were killed)."""
 
-    lu = pypardiso.PyPardisoSolver(mtype=11)
-    A = sp.csr_matrix(A)
-    A.sort_indices()
-    lu.factorize(A)
-    return lambda b: lu.solve(A, np.asarray(b, dtype=float))
+    def __init__(self, A: sp.csr_matrix) -> None:
+        import pypardiso
+
+        self._A = sp.csr_matrix(A)
+        self._A.sort_indices()
+        lu = pypardiso.PyPardisoSolver(mtype=11)
+        self._release = weakref.finalize(self, lu.free_memory, True)
+        lu.factorize(self._A)
+        self._lu = lu
+
+    def __call__(self, b: np.ndarray) -> np.ndarray:
+        return self._lu.solve(self._A, np.asarray(b, dtype=float))
 
 
 def minimize_febio(
