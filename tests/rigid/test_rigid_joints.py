@@ -254,7 +254,7 @@ def test_a_joint_stops_updating_where_solves_no_longer_close_its_residual():
     assert augment(stuck, drift, k, rows, tight)  # one stalled solve: updated again
     assert not augment(stuck, g, k, rows, tight)  # two in a row: it holds as it is
     assert stuck.multipliers == pytest.approx(-2 * k * g, rel=STALLED)
-    idle = joint()  # solves that did not move the bodies say nothing
+    idle = joint()  # solves that did not move the bodies (or tissuesim's Newton) say nothing
     assert all(augment(idle, g, k, rows, tight, moved=n == 0) for n in range(5))
     closing = joint()  # a residual halved by each solve is updated until below tight
     updates = [augment(closing, g / 2**n, k, rows, tight) for n in range(5)]

@@ -108,10 +108,12 @@ class RigidSystemPart:
             if acc.order >= 2:
                 np.add.at(acc.hessian, positions, hess.ravel())
 
-    def update_joints(self, c: np.ndarray) -> bool:
+    def update_joints(self, c: np.ndarray, stall_rule: bool = False) -> bool:
         """The joints' augmented Lagrangian update at a solution c (lambda <- lambda - k g,
         ``joints.augment``: until every residual is below TOLERANCE x the length scale, or by
-        FEBio's rule for a joint with an enforcement); whether any changed (solve again)."""
+        FEBio's rule for a joint with an enforcement); whether any changed (solve again).
+        ``stall_rule``: under FEBio's solver, updates that no longer move a residual end
+        (``joints.augment``)."""
         from tissuesim.rigid.joints import TOLERANCE, RigidSpring, augment
 
         if getattr(self, "_joints_time", None) != self.load_time:  # a new step: FEBio's naug
@@ -120,6 +122,7 @@ class RigidSystemPart:
                 j.augmentations, j.last_gap, j.stalls = 0, None, 0
         last = getattr(self, "_joints_c", None)  # where the last update was made
         moved = last is None or last.shape != c.shape or not np.array_equal(last, c)
+        moved = moved and stall_rule  # joints.py: FEBio's solver only
         self._joints_c = np.array(c, dtype=float)
         again = False
         for j, (_, _, _, g, k) in zip(self.joints, self.joint_terms(c, 0), strict=True):

@@ -16,8 +16,11 @@ rest where the joint is given. Every residual is linear or bilinear in the featu
 (e the joint's axis, t its transverse axis, s = e x t), and each joint adds the augmented
 Lagrangian k/2 |g|^2 - lambda . g; after each Newton solve lambda <- lambda - k g until every
 residual is below TOLERANCE x the length scale (``time/lags.py``'s re-lags), so the joint
-holds to that tolerance whatever k, or until two solves in a row move the bodies and leave g
-where it was (moved by less than STALLED of it: redundant constraints that do not agree).
+holds to that tolerance whatever k. Under FEBio's solver (which iterates after every update)
+the updates also end when two solves in a row move the bodies and leave g where it was (moved
+by less than STALLED of it): redundant constraints that do not quite agree. tissuesim's Newton
+keeps updating: the multipliers carry over to the next steps, and stopping there left FEBio's
+rj13 2.5e-3 from FEBio's norm instead of 4.5e-7.
 A joint given an ``Enforcement`` (FEBio's ``laugon``, ``tolerance``, ``penalty``, ``gaptol``,
 ``minaug``, ``maxaug``; the converter's) follows
 FEBio's rule instead (``FERigidJoint::Augment``, ``FERigidSphericalJoint::Augment``): its
@@ -265,8 +268,8 @@ def augment(
         # two solves in a row moved the bodies but the residual by less than STALLED of itself
         # (a solve that did not move says nothing: Newton stays put while the multipliers'
         # change is below its tolerance): the updates cannot close it (redundant constraints
-        # that do not quite agree, as the closed loop of revolute joints of FEBio's rj13,
-        # given to six digits), so the joint holds as it is
+        # that do not quite agree, as the closed loop of revolute joints of FEBio's rj13, given
+        # to six digits), so the joint holds
         last, joint.last_gap = joint.last_gap, g.copy()
         if moved and last is not None and last.shape == g.shape:
             still = np.abs(g - last).max() <= max(tight, STALLED * np.abs(last).max())

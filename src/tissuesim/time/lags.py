@@ -50,6 +50,7 @@ class StepLags:
             self.pressures.start(c0)
         self.system = system
         self.joints = bool(getattr(system, "joints", ()))  # rigid/joints.py: their multipliers
+        self.stall_rule = getattr(options, "method", "newton") == "febio"  # joints.py
         # joints held by FEBio's rule (their enforcement) augment at converged points, as FEBio
         joints = getattr(system, "joints", ()) or ()
         self.febio_joints = any(getattr(j, "enforcement", None) for j in joints)
@@ -77,7 +78,7 @@ class StepLags:
         if self.pressures is not None:
             changed = self.pressures.relag(c) or changed
         if self.joints:
-            changed = self.system.update_joints(c) or changed
+            changed = self.system.update_joints(c, self.stall_rule) or changed
         if self.penalty:
             changed = self.system.update_penalty_contacts(c) or changed
         return changed
