@@ -120,10 +120,11 @@ class RigidSystemPart:
             self._joints_time = self.load_time
             for j in self.joints:
                 j.augmentations, j.last_gap, j.stalls = 0, None, 0
-        last = getattr(self, "_joints_c", None)  # where the last update was made
-        moved = last is None or last.shape != c.shape or not np.array_equal(last, c)
-        moved = moved and stall_rule  # joints.py: FEBio's solver only
-        self._joints_c = np.array(c, dtype=float)
+        moved = False  # whether the solve moved since the last update (FEBio's solver only)
+        if stall_rule:
+            last = getattr(self, "_joints_c", None)  # where the last update was made
+            moved = last is None or last.shape != c.shape or not np.array_equal(last, c)
+            self._joints_c = np.array(c, dtype=float)
         again = False
         for j, (_, _, _, g, k) in zip(self.joints, self.joint_terms(c, 0), strict=True):
             if isinstance(j, RigidSpring):

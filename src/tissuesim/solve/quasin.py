@@ -38,7 +38,15 @@ import scipy.sparse.linalg as spla
 
 from tissuesim.errors import InputError
 from tissuesim.solve.febio_settings import FebioSettings
-from tissuesim.solve.linear import LinearSolver, NotPositiveDefiniteError, SuperLUSolver
+from tissuesim.solve.linear import (
+    CholmodSolver,
+    LinearSolver,
+    NotPositiveDefiniteError,
+    PardisoSolver,
+    SuperLUSolver,
+    has_cholmod,
+    has_pardiso,
+)
 from tissuesim.solve.newton import NewtonResult, _budget_spent
 
 _LOG = logging.getLogger(__name__)
@@ -82,8 +90,6 @@ def _direct_factor(solver: LinearSolver, A: sp.csr_matrix):
     choice of an iterative solver for a large model, mi39's 73k DOFs, would otherwise fall
     to SuperLU: 67 s a factorisation against PARDISO's seconds); where the Cholesky refuses
     an indefinite matrix, PARDISO's LU (FEBio's PARDISO factors it), then SuperLU."""
-    from tissuesim.solve.linear import CholmodSolver, PardisoSolver, has_cholmod, has_pardiso
-
     direct = getattr(solver, "direct", solver)
     if A.shape[0] == 0:
         return lambda b: b.copy()
