@@ -319,6 +319,7 @@ TESTED_PYTHON_BLOCKS = {
     'out="out/fat_ray"': "test_sweep_cluster_python_examples_run",
     "def block(p):": "test_identify_python_example_recovers_the_parameters",
     "fit = ts.identify(": "test_identify_python_example_recovers_the_parameters",
+    "def indent(p):": "test_identify_contact_python_example_runs",
     'regions={"soft": (left, soft)}': "test_regions_python_example_runs",
     "import tissuesim as ts\nfrom tissuesim.mesh import select": "test_python_example_runs",
     'sim.attach("fat", "muscle"': "test_several_bodies_python_example_runs",
@@ -560,6 +561,21 @@ def test_regions_python_example_runs():
     exec(block("python", 'regions={"soft": (left, soft)}'), scope)
     parts = scope["body"].model.parts
     assert [(p.name, p.cells.size) for p in parts] == [("soft", 96), ("default", 144)]
+
+
+def test_identify_contact_python_example_runs(tmp_path):
+    """docs/guide/identify.md: an indentation's force (downwards on the block) and its
+    derivatives: it pushes harder for a stiffer block and a deeper press."""
+    pages = [DOCS / "guide" / "identify.md"]
+    head = block("python", "def block(p):", pages).split("def block(p):")[0]  # the imports
+    code = head + block("python", "def indent(p):", pages)
+    code += "\nprint(*run.values[-1], *run.jacobian[-1].ravel())\n"
+    result = subprocess.run(
+        [sys.executable, "-c", code], cwd=tmp_path, capture_output=True, text=True, timeout=300
+    )
+    assert result.returncode == 0, result.stderr
+    push, d_E, d_depth = map(float, result.stdout.split()[-3:])
+    assert push < 0 and d_E < 0 and d_depth < 0
 
 
 def test_identify_python_example_recovers_the_parameters(tmp_path):

@@ -24,6 +24,7 @@ from tissuesim.errors import (
 )
 from tissuesim.frames.sampling import read_surface
 from tissuesim.identification import (
+    ContactForce,
     Displacement,
     Reaction,
     SurfaceDistance,
@@ -81,6 +82,7 @@ __all__ = [
     "RunError",
     "ArrudaBoyce",
     "ContactPair",
+    "ContactForce",
     "CoupledArrudaBoyce",
     "CoupledMooneyRivlin",
     "CoupledVerondaWestmann",

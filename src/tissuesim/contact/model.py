@@ -220,7 +220,9 @@ class ContactModel(FrictionLag, CollisionQueries, ContactForces):
 
     def update_stiffness(self, c: np.ndarray) -> None:
         """Adaptive stiffness, after a step: double kappa if the gap keeps closing below
-        round-off scale (IPC)."""
+        round-off scale (IPC). ``step_kappa`` keeps the one the step was solved with (the
+        derivatives of a run take it: identification/sensitivity.py)."""
+        self.step_kappa = self.kappa
         if self.adaptive is None or not self.adaptive.initialized:
             return
         kappa = self.adaptive.update(self.kappa, self.proximity(c)[0])

@@ -5,10 +5,16 @@ measured forces and displacements by least squares with those derivatives (``fit
 from __future__ import annotations
 
 from tissuesim.identification.fit import Identification, identify
-from tissuesim.identification.observations import Displacement, Reaction, SurfaceDistance
+from tissuesim.identification.observations import (
+    ContactForce,
+    Displacement,
+    Reaction,
+    SurfaceDistance,
+)
 from tissuesim.identification.sensitivity import Sensitivities, sensitivities
 
 __all__ = [
+    "ContactForce",
     "Displacement",
     "Identification",
     "Reaction",

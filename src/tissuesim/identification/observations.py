@@ -1,6 +1,7 @@
 """What a run reports that a measurement can be compared with, and how it depends on the state:
-a support's reaction force, the displacement of marker vertices, the distance of measured
-surface points (a point cloud) from the deformed body's boundary, and FEBio's logged
+a support's reaction force, an obstacle's contact force, the displacement of marker vertices,
+the distance of measured surface points (a point cloud) from the deformed body's boundary, and
+FEBio's logged
 quantities (node and element data by FEBio's names, a surface's enclosed volume).
 
 Each observation gives, at a converged state x with the step's gradient g, its values y and
@@ -23,7 +24,7 @@ from tissuesim.errors import InputError
 
 __all__ = [
     "Reaction", "Displacement", "SurfaceDistance", "NodeData", "ElementData", "EnclosedVolume",
-    "RigidForce", "Observation", "linearize",
+    "RigidForce", "ContactForce", "Observation", "linearize",
 ]  # fmt: skip
 
 
@@ -293,6 +294,51 @@ class RigidForce:
         return np.array([forces[key]["xyz".index(self.variable[1])]])
 
 
+@dataclass(frozen=True)
+class ContactForce:
+    """The force (N) obstacle ``name`` (an instrument, a probe, a table) exerts on the bodies
+    through the barrier, as ``Simulation.forces()[name]``, its ``component`` (0, 1, 2; default
+    all three): a function of the state and of the obstacle's place at the step's end, which
+    a parameter of its motion moves (frictionless contact: sensitivity.py)."""
+
+    name: str
+    component: int | tuple | None = None
+
+    def _rows(self, sim):
+        contact = sim.system.contact
+        names = [] if contact is None else [ob.name for ob in contact.obstacles]
+        if self.name not in names:
+            raise InputError(
+                f"ContactForce({self.name!r}): no obstacle of that name; obstacles: {names}"
+            )
+        comps = _components(self.component, contact.dim, f"ContactForce({self.name!r})")
+        return contact, contact.slices[self.name][0], comps
+
+    def values(self, sim, x: np.ndarray) -> np.ndarray:
+        """The force's components at the state x, the obstacles where the step ended."""
+        contact, _, comps = self._rows(sim)
+        # the obstacles where the step ended (a parameter copy's: sensitivity.py's _sync)
+        return np.asarray(contact.obstacle_forces(x)[self.name], dtype=float)[comps]
+
+    def derivative(self, sim, x: np.ndarray, S: np.ndarray, Y: np.ndarray):
+        """(values, d values / d theta) at the converged x: the force is the barrier's
+        gradient summed over the obstacle's vertices, so its derivative is the barrier's exact
+        Hessian (over the collision vertices) applied to the vertices' motion, the bodies'
+        J S and the obstacles' own Y (n_obstacle coordinates, p; their motion's derivative)."""
+        contact, rows, comps = self._rows(sim)
+        d = contact.dim
+        V = contact.vertices(x)
+        _, g_V, H_V = contact.vertex_terms(V, 2, False)
+        if g_V is None:  # not touching: no force, and none for a small change either
+            return np.zeros(len(comps)), np.zeros((len(comps), S.shape[1]))
+        dV = contact.selection(x) @ S
+        dV[contact.n_deformable * d :] += Y
+        coords = (np.arange(V.shape[0])[rows][:, None] * d + np.asarray(comps)).T  # (k, m)
+        y = np.array([g_V[c].sum() for c in coords])
+        D = np.vstack([np.asarray(H_V[c].sum(axis=0)).ravel() @ dV for c in coords])
+        return y, D
+
+
 def _rows(items, n: int, what: str, key: str, body: str) -> np.ndarray:
     rows = np.asarray(items, dtype=np.int64).ravel()
     if rows.size == 0 or rows.min() < 0 or rows.max() >= n:
@@ -301,7 +347,7 @@ def _rows(items, n: int, what: str, key: str, body: str) -> np.ndarray:
 
 
 Observation = (Reaction | Displacement | SurfaceDistance | NodeData | ElementData
-               | EnclosedVolume | RigidForce)  # fmt: skip
+               | EnclosedVolume | RigidForce | ContactForce)  # fmt: skip
 
 
 def _selection(groups: list[np.ndarray], n: int) -> sp.csr_matrix:

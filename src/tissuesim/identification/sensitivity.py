@@ -22,10 +22,22 @@ H_pf s_f + b_p over its DOFs; a displacement's is s at its DOFs. Every parameter
 back-solve and two gradient assemblies a step; the step's Hessian one assembly and one
 factorisation, whatever the number of parameters.
 
+With barrier contact the step's potential holds the barrier too (its exact Hessian, not the
+PSD-projected one Newton uses, joins H; it is smooth, C2, where the step ended), with the
+stiffness kappa the step was solved with (IPC's adaptive kappa is raised between steps: a
+numerical constant, held); the copies' obstacles move along their own motions, so an
+instrument's depth or path is a parameter like any other, and ``ContactForce`` observes an
+obstacle's force (differentiated through the barrier's Hessian: observations.py). A moving
+obstacle ends a step within ``kinematic.py``'s TOLERANCE (0.01 dhat) of its target, where the
+augmented Lagrangian that drives it stopped: the copies' obstacles end as far off theirs
+(that offset held, not differentiated).
+
 What is differentiated: FEM bodies under quasistatics, Backward Euler or Newmark, elastic laws
-(without internal variables), supports, prescribed motions, graspers, loads and springs;
-contact, rigid bodies, history-dependent laws and dynamic steps that halved are refused in
-one line (the derivative would be of a different sequence of solves).
+(without internal variables), supports, prescribed motions, graspers, loads and springs,
+frictionless barrier contact with obstacles and between bodies; friction, FEBio's penalty
+contact, interactive contact steps (a prediction, not a minimum), rigid bodies,
+history-dependent laws and dynamic steps that halved are refused in one line (the derivative
+would be of a different sequence of solves).
 """
 
 from __future__ import annotations
@@ -70,10 +82,21 @@ def _check(sim, what: str) -> None:
             f"{what}: sensitivities are taken of quasistatic, backward_euler and newmark runs, "
             f"not {sim.integrator!r}"
         )
-    if s.contact is not None or s.penalty_contacts or s.rigid:
+    if s.penalty_contacts or s.rigid:
         raise InputError(
-            f"{what}: sensitivities of runs with contact or rigid bodies are not taken yet: "
-            "use a scene without them, or finite differences of whole runs"
+            f"{what}: sensitivities of runs with FEBio's penalty contact or rigid bodies are "
+            "not taken yet: use a scene without them, or finite differences of whole runs"
+        )
+    if s.contact is not None and s.contact.has_friction:
+        raise InputError(
+            f"{what}: sensitivities of runs with contact friction are not taken yet "
+            "(frictionless barrier contact is): set friction = 0, or finite differences of "
+            "whole runs"
+        )
+    if s.contact is not None and s.contact.settings.mode == "interactive":
+        raise InputError(
+            f"{what}: an interactive contact step is a prediction, not the minimum the "
+            "derivative differentiates: set_contact(mode='barrier' or 'accurate')"
         )
     for name, body in sim.bodies.items():
         if body.kind != "fem":
@@ -85,12 +108,23 @@ def _check(sim, what: str) -> None:
             )
 
 
-def _sync(sim, t_prev: float, t: float) -> None:
-    """Set a parameter copy's supports to the step from t_prev to t (as ``step`` does)."""
+def _sync(sim, t_prev: float, t: float, kappa=None, offset=None) -> None:
+    """Set a parameter copy's supports to the step from t_prev to t (as ``step`` does), and
+    its contact to the step's end: its obstacles where its own motion puts them at t (plus
+    ``offset``: where the base run's moving obstacles ended off their targets), the
+    barrier's stiffness ``kappa`` the base run's step used (a numerical constant held, as
+    the step was solved with it)."""
     tol = 1e-9 * sim.time_step
     for body in sim.bodies.values():
         body.release_graspers(t_prev + tol)
         body.set_condition_time(t, tol)
+    contact = sim.system.contact
+    if contact is not None:
+        contact.time, contact.obstacle_state = t, None
+        if offset is not None:
+            contact.obstacle_state = contact.obstacle_positions(t) + offset
+        if kappa is not None and contact.kappa != kappa:
+            contact.set_stiffness(kappa)
 
 
 def sensitivities(
@@ -164,8 +198,16 @@ def sensitivities(
         if base.finished:  # an adaptive run in phases: ``steps`` is an upper bound, as in run
             break
         x_prev, v_prev, t_prev = base._state.x.copy(), base._state.v.copy(), base.time
+        contact = base.system.contact
         tick = time.perf_counter()
         record = base.step()
+        # the barrier's stiffness the step was solved with (IPC's adaptive one is raised after)
+        kappa = None if contact is None else getattr(contact, "step_kappa", contact.kappa)
+        # moving obstacles end within kinematic.py's TOLERANCE of their targets: the copies'
+        # are put as far off theirs (the offset held)
+        offset = None
+        if contact is not None and contact.moving and contact.obstacle_state is not None:
+            offset = contact.obstacle_state - contact.obstacle_positions(base.time)
         forward_s += time.perf_counter() - tick
         records.append(record)
         tick = time.perf_counter()
@@ -184,7 +226,12 @@ def sensitivities(
             c_pred = x_prev + h * v_prev + h * h * (0.5 - beta) * a_n
             dc = S_x + h * S_v + h * h * (0.5 - beta) * S_a
             h_in = np.sqrt(beta) * h if newmark else h
-        # the step's own energies, as its solve built them (time/steps.py keeps them)
+        # the step's own energies, as its solve built them (time/steps.py keeps them), and its
+        # barrier with the stiffness it was solved with (the next step's may be raised)
+        kept_kappa = None
+        if contact is not None and contact.kappa != kappa:
+            kept_kappa = contact.kappa
+            contact.set_stiffness(kappa)
         acc = s.evaluate(x, 2, False, s.last_step_energies)
         g = acc.gradient
         B = np.zeros((n, p))
@@ -193,7 +240,7 @@ def sensitivities(
         for j, (delta, pair) in enumerate(copies):
             grads, placed = [], []
             for sign, sim in zip((1.0, -1.0), pair, strict=True):
-                _sync(sim, t_prev, t)
+                _sync(sim, t_prev, t, kappa, offset)
                 xs = sim.system.apply_prescribed(x, t)
                 cs = None
                 if dynamic:  # the prediction moved along its own derivative
@@ -207,10 +254,13 @@ def sensitivities(
         H = acc.hessian.copy()
         s.elimination.apply(H, np.zeros(n))  # H_ff, and a diagonal at the prescribed DOFs
         A = acc.pattern.matrix(H)
+        keep = sp.diags((~np.isin(np.arange(n), dofs)).astype(float))
+        if acc.extra_hessian is not None:  # the barrier's (exact, not PSD-projected) Hessian
+            K = (K + acc.extra_hessian).tocsr()
+            A = (A + keep @ acc.extra_hessian @ keep).tocsc()
         follow = _follower_stiffness(s, x)
         if follow is not None:  # a lagged pressure: the follower load's own (skew) stiffness
             K = K + follow
-            keep = sp.diags((~np.isin(np.arange(n), dofs)).astype(float))
             A = (A + keep @ follow @ keep).tocsc()
         rhs = -B.copy()
         rhs[dofs] = 0.0
@@ -218,9 +268,12 @@ def sensitivities(
         Sf[dofs] = 0.0
         dG = K @ Sf + B  # the gradient's total derivative (B holds H_:p s_p)
         S = Sf + Sp
+        Y = _obstacle_motion(base, copies) if contact is not None else None
         vals, ders = [], []
         for i, ob in enumerate(observations):
-            if hasattr(ob, "values"):
+            if hasattr(ob, "derivative"):
+                y, D = ob.derivative(base, x, S, Y)
+            elif hasattr(ob, "values"):
                 y, D = _state_function(ob, base, x, S, copies)
             else:
                 y, X, R = linearize(ob, base, x, g)
@@ -229,6 +282,8 @@ def sensitivities(
             ders.append(np.asarray(D).reshape(len(vals[-1]), p))
             if not times:
                 labels += [f"{type(ob).__name__.lower()}[{i}]"] * len(vals[-1])
+        if kept_kappa is not None:
+            contact.set_stiffness(kept_kappa)
         values.append(np.concatenate(vals))
         jac.append(np.concatenate(ders))
         times.append(t)
@@ -242,6 +297,22 @@ def sensitivities(
         sens_s += time.perf_counter() - tick
     return Sensitivities(names, labels, np.asarray(times), np.asarray(values), np.asarray(jac),
                          forward_s, sens_s + build_s, 1 + 2 * p, records)  # fmt: skip
+
+
+def _obstacle_motion(base, copies: list) -> np.ndarray:
+    """d y / d theta (n_obstacle coordinates, p): where each parameter's copies put the
+    obstacles at the step's end (``_sync``), by central differences (exact: their places are
+    the motions' values)."""
+    contact = base.system.contact
+    Y = np.zeros((contact.n_obstacle, len(copies)))
+    for j, (delta, pair) in enumerate(copies):
+        at = []
+        for sim in pair:
+            c = sim.system.contact
+            at.append(c.obstacle_state if c.obstacle_state is not None
+                      else c.obstacle_positions(c.time))  # fmt: skip
+        Y[:, j] = (at[0] - at[1]) / (2 * delta)
+    return Y
 
 
 def _follower_stiffness(s, x: np.ndarray):
