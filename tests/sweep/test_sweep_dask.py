@@ -75,3 +75,56 @@ def test_the_command_line_connects_to_a_running_scheduler(bar_scene, tmp_path, c
         code = main([*args, "--out", str(tmp_path / "t"), "--executor", f"dask://{address}"])
     assert code == 2
     assert "cannot reach a Dask scheduler" in capsys.readouterr().err
+
+
+def _worker_state() -> dict:
+    import os
+
+    import dask
+
+    from tissuesim.sweep import runs
+
+    return {
+        "trim": os.environ.get("MALLOC_TRIM_THRESHOLD_"),
+        "numba_threads": os.environ.get("NUMBA_NUM_THREADS"),
+        "tick": dask.config.get("distributed.admin.tick.interval"),
+        "prepared": runs._prepared,
+    }
+
+
+def _trim() -> str | None:
+    import os
+
+    return os.environ.get("MALLOC_TRIM_THRESHOLD_")
+
+
+def test_tissuesims_local_cluster_starts_its_workers_warm_and_without_dasks_malloc_trim():
+    import os
+
+    from tissuesim.sweep.executors import dask_local_cluster, process_pool, warm_dask_workers
+
+    kept = os.environ.get("MALLOC_TRIM_THRESHOLD_")
+    # a nanny sets its pre-spawn variables in its own process: Dask's defaults leave 65536
+    os.environ["MALLOC_TRIM_THRESHOLD_"] = "65536"
+    try:
+        pool = process_pool(1)
+        assert pool.submit(_trim).result() is None  # the default pool's workers: unset too
+        pool.shutdown()
+        with dask_local_cluster(1) as cluster, distributed.Client(cluster) as client:
+            (before,) = client.run(_worker_state).values()
+            warm_dask_workers(client)
+            (after,) = client.run(_worker_state).values()
+        assert os.environ["MALLOC_TRIM_THRESHOLD_"] == "65536"  # this process's: restored
+    finally:
+        if kept is None:
+            os.environ.pop("MALLOC_TRIM_THRESHOLD_", None)
+        else:
+            os.environ["MALLOC_TRIM_THRESHOLD_"] = kept
+    # Dask's nanny sets MALLOC_TRIM_THRESHOLD_=65536 by default (benchmarks/sweep.py)
+    assert before["trim"] is None and before["numba_threads"] == "1"
+    assert before["tick"] == "1s" and not before["prepared"]
+    assert after["prepared"]
+    # Dask's own default is untouched in this process
+    import dask
+
+    assert "MALLOC_TRIM_THRESHOLD_" in dask.config.get("distributed.nanny.pre-spawn-environ")

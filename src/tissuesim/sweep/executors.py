@@ -28,7 +28,10 @@ from typing import Any
 from tissuesim.errors import InputError
 from tissuesim.sweep.runs import THREAD_VARIABLES, prepare_worker
 
-__all__ = ["default_workers", "process_pool", "executor_from_spec", "RayExecutor"]
+__all__ = [
+    "default_workers", "process_pool", "executor_from_spec", "RayExecutor", "dask_local_cluster",
+    "dask_worker_config", "warm_dask_workers",
+]  # fmt: skip
 
 
 def default_workers() -> int:
@@ -39,12 +42,21 @@ def default_workers() -> int:
         return max(1, os.cpu_count() or 1)
 
 
+#: removed from the environment the workers start in: a Dask nanny sets its pre-spawn
+#: variables in its own process too, so a LocalCluster with Dask's defaults started earlier in
+#: this process leaves glibc's trim threshold here (dask_worker_config says what it costs)
+UNSET_VARIABLES = ("MALLOC_TRIM_THRESHOLD_",)
+
+
 @contextlib.contextmanager
 def single_thread_environment() -> Iterator[None]:
-    """The thread variables set to 1 in this process's environment while inside, so that the
-    worker processes started inside inherit them; restored afterwards."""
-    saved = {name: os.environ.get(name) for name in THREAD_VARIABLES}
+    """The thread variables set to 1 (and ``UNSET_VARIABLES`` removed) in this process's
+    environment while inside, so that the worker processes started inside inherit that;
+    restored afterwards."""
+    saved = {name: os.environ.get(name) for name in (*THREAD_VARIABLES, *UNSET_VARIABLES)}
     os.environ.update({name: "1" for name in THREAD_VARIABLES})
+    for name in UNSET_VARIABLES:
+        os.environ.pop(name, None)
     try:
         yield
     finally:
@@ -179,20 +191,15 @@ def executor_from_spec(spec: str | None, workers: int | None) -> tuple[Executor,
         return executor, [executor, *owned]
     if spec == "dask-local" or spec.startswith(("dask://", "tcp://", "tls://")):
         try:
-            from distributed import Client, LocalCluster
+            from distributed import Client
         except ImportError:
             raise InputError(
                 f"--executor {spec}: needs Dask's distributed: pip install 'tissuesim[sweep]'"
             ) from None
         if spec == "dask-local":
-            with single_thread_environment():
-                cluster = LocalCluster(
-                    n_workers=workers or default_workers(),
-                    threads_per_worker=1,
-                    processes=True,
-                    dashboard_address=None,
-                )
+            cluster = dask_local_cluster(workers)
             client = Client(cluster)
+            warm_dask_workers(client)
             return client.get_executor(), [client, cluster]
         address = "tcp://" + spec.removeprefix("dask://") if spec.startswith("dask://") else spec
         try:
@@ -202,12 +209,58 @@ def executor_from_spec(spec: str | None, workers: int | None) -> tuple[Executor,
                 f"--executor {spec}: cannot reach a Dask scheduler at {address} ({exc}); start "
                 "one (dask scheduler, dask-jobqueue) or check HOST:PORT"
             ) from None
+        warm_dask_workers(client)
         return client.get_executor(), [client]
     raise InputError(
         f"--executor {spec!r}: choose local (a process pool on this machine), dask-local (a "
         "Dask LocalCluster), dask://HOST:PORT (a running Dask scheduler) or ray (a local Ray "
         "cluster, or the one RAY_ADDRESS names)"
     )
+
+
+def dask_worker_config() -> dict[str, Any]:
+    """Dask settings for the workers of the ``LocalCluster`` tissuesim starts, against Dask's
+    defaults (``benchmarks/sweep.py`` measures both): the thread variables at 1 (NUMBA's too),
+    glibc's ``MALLOC_TRIM_THRESHOLD_`` unset (Dask's nanny sets 64 KiB; setting it at all
+    switches off glibc's dynamic mmap threshold, mallopt(3), so every array of 128 KiB or
+    more is mapped afresh and faulted in page by page), and
+    the event loop's tick and the memory and system monitors every second instead of every
+    20, 100 and 500 ms (each takes the GIL from the run's thread)."""
+    import dask
+
+    environ = dict(dask.config.get("distributed.nanny.pre-spawn-environ", {}) or {})
+    # None unsets a variable (distributed's nanny); glibc's dynamic thresholds are its default
+    environ["MALLOC_TRIM_THRESHOLD_"] = None
+    environ.update({name: 1 for name in THREAD_VARIABLES})
+    return {
+        "distributed.nanny.pre-spawn-environ": environ,
+        "distributed.admin.tick.interval": "1s",
+        "distributed.admin.system-monitor.interval": "1s",
+        "distributed.worker.memory.monitor-interval": "1s",
+    }
+
+
+def dask_local_cluster(workers: int | None = None, **options: Any) -> Any:
+    """A Dask ``LocalCluster`` of ``workers`` worker processes (default: one per core), one
+    thread each, started with ``dask_worker_config()`` (``options``: LocalCluster's own)."""
+    import dask
+    from distributed import LocalCluster
+
+    from tissuesim.validate import integer
+
+    workers = default_workers() if workers is None else integer(workers, "workers", low=1)
+    settings = {"n_workers": workers, "threads_per_worker": 1, "processes": True,
+                "dashboard_address": None, **options}  # fmt: skip
+    # the nanny reads the configuration when it is made: the workers keep it
+    with dask.config.set(dask_worker_config()), single_thread_environment():
+        return LocalCluster(**settings)
+
+
+def warm_dask_workers(client: Any) -> None:
+    """``prepare_worker`` on every worker the client's scheduler has now (imports, numba's
+    compilation, a warm-up step), so that a study's first runs do not pay it; workers that
+    join later prepare at their first run."""
+    client.run(prepare_worker)
 
 
 class _RayShutdown:
