@@ -88,6 +88,8 @@ def _worker_state() -> dict:
         "trim": os.environ.get("MALLOC_TRIM_THRESHOLD_"),
         "numba_threads": os.environ.get("NUMBA_NUM_THREADS"),
         "tick": dask.config.get("distributed.admin.tick.interval"),
+        "profile": dask.config.get("distributed.worker.profile.enabled"),
+        "contact_threads": os.environ.get("TISSUESIM_CONTACT_THREADS"),
         "prepared": runs._prepared,
     }
 
@@ -122,7 +124,8 @@ def test_tissuesims_local_cluster_starts_its_workers_warm_and_without_dasks_mall
             os.environ["MALLOC_TRIM_THRESHOLD_"] = kept
     # Dask's nanny sets MALLOC_TRIM_THRESHOLD_=65536 by default (benchmarks/sweep.py)
     assert before["trim"] is None and before["numba_threads"] == "1"
-    assert before["tick"] == "1s" and not before["prepared"]
+    assert before["tick"] == "1s" and before["profile"] is False and not before["prepared"]
+    assert before["contact_threads"] == "1"  # ipctk's TBB: one thread per worker
     assert after["prepared"]
     # Dask's own default is untouched in this process
     import dask

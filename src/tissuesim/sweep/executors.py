@@ -220,12 +220,13 @@ def executor_from_spec(spec: str | None, workers: int | None) -> tuple[Executor,
 
 def dask_worker_config() -> dict[str, Any]:
     """Dask settings for the workers of the ``LocalCluster`` tissuesim starts, against Dask's
-    defaults (``benchmarks/sweep.py`` measures both): the thread variables at 1 (NUMBA's too),
-    glibc's ``MALLOC_TRIM_THRESHOLD_`` unset (Dask's nanny sets 64 KiB; setting it at all
-    switches off glibc's dynamic mmap threshold, mallopt(3), so every array of 128 KiB or
-    more is mapped afresh and faulted in page by page), and
-    the event loop's tick and the memory and system monitors every second instead of every
-    20, 100 and 500 ms (each takes the GIL from the run's thread)."""
+    defaults (``benchmarks/sweep.py`` measures both): the thread variables at 1 (NUMBA's and
+    the contact library's too); glibc's ``MALLOC_TRIM_THRESHOLD_`` unset (Dask's nanny sets
+    64 KiB, and setting it at all switches off glibc's dynamic mmap threshold, mallopt(3), so
+    every array of 128 KiB or more is mapped afresh and faulted in page by page); the event
+    loop's tick and the memory and system monitors every second instead of every 20, 100 and
+    500 ms; Dask's profiler, which samples the running task's stack every 10 ms, off. Each of
+    these takes the GIL or CPU from the run's thread."""
     import dask
 
     environ = dict(dask.config.get("distributed.nanny.pre-spawn-environ", {}) or {})
@@ -237,6 +238,8 @@ def dask_worker_config() -> dict[str, Any]:
         "distributed.admin.tick.interval": "1s",
         "distributed.admin.system-monitor.interval": "1s",
         "distributed.worker.memory.monitor-interval": "1s",
+        # Dask's statistical profiler samples the running task's stack every 10 ms
+        "distributed.worker.profile.enabled": False,
     }
 
 

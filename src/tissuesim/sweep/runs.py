@@ -27,6 +27,8 @@ THREAD_VARIABLES = (
     "VECLIB_MAXIMUM_THREADS",
     "NUMEXPR_NUM_THREADS",
     "NUMBA_NUM_THREADS",
+    # ipctk's TBB threads (contact/model.py): also bit for bit reproducible contact runs
+    "TISSUESIM_CONTACT_THREADS",
 )
 _prepared = False
 
