@@ -315,3 +315,41 @@ def test_rigid_bodies_are_refused_in_one_line():
 
     with pytest.raises(InputError, match="penalty contact or rigid bodies are not taken yet"):
         ts.sensitivities(platen, {"E": 5e4, "depth": 0.1, "g": 1.0}, [ts.Reaction("wall")], 1)
+
+
+def stacked(p):
+    """A block pressed by its top, p["depth"] over the run, onto a fixed one below it (two FEM
+    bodies in frictionless barrier contact); the upper block's modulus is E."""
+    sim = ts.Simulation(integrator="quasistatic", time_step=0.5)
+    law = ts.NeoHookean(youngs_modulus=5e4, poisson_ratio=0.3)
+    sim.add_body("low", ts.box((0, 0, 0), (1, 1, 0.3), (3, 3, 1)), law)
+    top = ts.box((0.23, 0.19, 0.305), (0.77, 0.81, 0.605), (2, 2, 1))
+    sim.add_body("high", top, ts.NeoHookean(youngs_modulus=p["E"], poisson_ratio=0.3))
+    sim.fix("low", select.vertices_on_plane(sim.bodies["low"].mesh, 2, 0.0), name="table")
+    lid = select.vertices_on_plane(sim.bodies["high"].mesh, 2, 0.605)
+    sim.add_dirichlet(lid, lambda X, t: np.tile([0.0, 0.0, -p["depth"] * t], (len(X), 1)),
+                      body="high", name="press")  # fmt: skip
+    sim.set_contact(dhat=0.01, stiffness=2e5, mode="barrier")
+    return sim
+
+
+def test_two_bodies_in_barrier_contact_are_differentiated():
+    params = {"E": 3e4, "depth": 0.03}
+    low = stacked(params).bodies["low"].mesh
+    marker = np.flatnonzero(np.isclose(low.points[:, 2], 0.3))[4:5]
+    obs = [ts.Reaction("press"), ts.Reaction("table"), ts.Displacement(marker, "low")]
+    r = ts.sensitivities(stacked, params, obs, 2)
+
+    def run(q):
+        sim = stacked(q)
+        for _ in range(2):
+            sim.step()
+        f = sim.forces()
+        u = sim.body_displacement("low")[marker].ravel()
+        return np.concatenate([f["press"], f["table"], u])
+
+    fd = np.column_stack([central(run, params, k) for k in params])
+    for part in (slice(0, 3), slice(3, 6), slice(6, None)):  # of the largest of its kind
+        scale = np.abs(fd[part]).max()
+        assert scale > 0
+        assert np.abs(r.jacobian[-1][part] - fd[part]).max() <= 1e-5 * scale, part

@@ -34,8 +34,7 @@ augmented Lagrangian that drives it stopped: the copies' obstacles end as far of
 
 What is differentiated: FEM bodies under quasistatics, Backward Euler or Newmark, elastic laws
 (without internal variables), supports, prescribed motions, graspers, loads and springs,
-frictionless barrier contact (compared with whole runs against obstacles; bodies touching
-each other go through the same terms, not compared yet); friction, FEBio's penalty
+frictionless barrier contact (against obstacles and between bodies); friction, FEBio's penalty
 contact, interactive contact steps (a prediction, not a minimum), rigid bodies,
 history-dependent laws and dynamic steps that halved are refused in one line (the derivative
 would be of a different sequence of solves).
