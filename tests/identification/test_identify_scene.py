@@ -114,3 +114,11 @@ def test_a_bad_identify_table_is_refused_in_one_line(tmp_path, table, message):
     with pytest.raises(SceneError, match=message) as info:
         read_identify_scene(scene)
     assert "\n" not in str(info.value)
+
+
+def test_an_instruments_contact_force_can_be_observed_from_a_scene():
+    from tissuesim.identification.observations import ContactForce
+    from tissuesim.identification.scene import _observation
+
+    entry = {"contact_force": "probe", "component": 2}
+    assert _observation(entry, 0, "fit.toml") == ContactForce("probe", 2)

@@ -1,8 +1,8 @@
 """What a run reports that a measurement can be compared with, and how it depends on the state:
 a support's reaction force, an obstacle's contact force, the displacement of marker vertices,
 the distance of measured surface points (a point cloud) from the deformed body's boundary, and
-FEBio's logged
-quantities (node and element data by FEBio's names, a surface's enclosed volume).
+FEBio's logged quantities (node and element data by FEBio's names, a surface's enclosed
+volume).
 
 Each observation gives, at a converged state x with the step's gradient g, its values y and
 their derivatives as two sparse (k, n_dofs) matrices: y depends on the positions directly

@@ -8,6 +8,7 @@ by their path, as ``tissuesim sweep`` names them), what is observed, and the mea
         { reaction = "platen", component = 2 },                   # N, as forces()["platen"][2]
         { displacement = [12, 40], component = 0, body = "liver" },  # m, one value per vertex
         { surface_points = [[0.01, 0.02, 0.03], ...] },  # m from the deformed surface, per point
+        { contact_force = "probe", component = 2 },      # N, an obstacle's, as forces()["probe"]
     ]
     data = "measured.csv"   # a header row, then one row per step: a first column "step"
                             # (1, 2, ...), then one column per observed value; empty: not measured
@@ -27,28 +28,36 @@ from typing import Any
 import numpy as np
 
 from tissuesim.errors import InputError, SceneError
-from tissuesim.identification.observations import Displacement, Reaction, SurfaceDistance
+from tissuesim.identification.observations import (
+    ContactForce,
+    Displacement,
+    Reaction,
+    SurfaceDistance,
+)
 
 __all__ = ["read_identify_scene"]
 
 _KEYS = {"steps", "parameters", "observations", "data", "max_runs"}
+_KINDS = ("reaction", "contact_force", "displacement", "surface_points")
 
 
 def _observation(entry: Any, i: int, source: str):
     where = f"{source}: [identify] observations[{i}]"
     if not isinstance(entry, dict):
         raise SceneError(f'{where}: each observation is a table, e.g. {{ reaction = "platen" }}')
-    kinds = [k for k in ("reaction", "displacement", "surface_points") if k in entry]
-    extra = set(entry) - {"reaction", "displacement", "surface_points", "component", "body"}
+    kinds = [k for k in _KINDS if k in entry]
+    extra = set(entry) - {*_KINDS, "component", "body"}
     if len(kinds) != 1 or extra:
         raise SceneError(
-            f"{where}: give one of reaction = NAME, displacement = [VERTICES] or "
-            f"surface_points = [[x, y, z], ...] (with component and body where they apply); "
-            f"got keys {sorted(entry)}"
+            f"{where}: give one of reaction = NAME, contact_force = OBSTACLE, displacement = "
+            f"[VERTICES] or surface_points = [[x, y, z], ...] (with component and body where "
+            f"they apply); got keys {sorted(entry)}"
         )
     component = entry.get("component")
     if kinds[0] == "reaction":
         return Reaction(str(entry["reaction"]), component)
+    if kinds[0] == "contact_force":
+        return ContactForce(str(entry["contact_force"]), component)
     if kinds[0] == "surface_points":
         return SurfaceDistance(entry["surface_points"], entry.get("body"))
     return Displacement(entry["displacement"], entry.get("body"), component)
