@@ -53,6 +53,30 @@ def test_a_second_run_reads_the_mesh_from_the_cache_bit_for_bit(bar_scene, tmp_p
     assert cache.stats()["hits"] == 2  # the uncached runs above did not use it
 
 
+def test_the_sparsity_analysis_of_a_shared_mesh_is_made_once_per_worker(
+    bar_scene, tmp_path, fresh_cache
+):
+    with ThreadPoolExecutor(1) as pool:
+        results = tissuesim.sweep(bar_scene, VARY, out=tmp_path / "s", executor=pool,
+                                  progress=False)  # fmt: skip
+    counts = cache.pattern_stats()
+    assert counts["misses"] >= 1 and counts["hits"] == 2 * counts["misses"]  # 3 runs, 1 mesh
+    for result in results:
+        sim = _uncached(bar_scene, result["params"]["material.youngs_modulus"])
+        assert result["forces"] == sim.forces()  # exact
+    assert cache.pattern_stats()["hits"] == counts["hits"]  # outside a run: not cached
+    # each run has its own copy: changing one does not change what the next run gets
+    from tissuesim.assembly.pattern import SparsityPattern
+
+    stencil = np.array([[0, 1, 2, 3, 4, 5]])
+    with cache.enabled():
+        first = SparsityPattern.from_stencils(6, [stencil])
+        first.indices[:] = 0
+        second = SparsityPattern.from_stencils(6, [stencil])
+    assert np.array_equal(second.indices, SparsityPattern.from_stencils(6, [stencil]).indices)
+    assert not np.array_equal(first.indices, second.indices)
+
+
 def test_a_rewritten_mesh_file_is_read_again(bar_scene, tmp_path, fresh_cache):
     folder = tmp_path / "scene"
     (folder / "mesh").mkdir(parents=True)
