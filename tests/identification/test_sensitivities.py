@@ -353,3 +353,16 @@ def test_two_bodies_in_barrier_contact_are_differentiated():
         scale = np.abs(fd[part]).max()
         assert scale > 0
         assert np.abs(r.jacobian[-1][part] - fd[part]).max() <= 1e-5 * scale, part
+
+
+def test_the_parameter_copies_share_the_base_models_sparsity_analysis():
+    from tissuesim.sweep import cache
+
+    cache.install()
+    cache.clear()
+    params = {"E": 2e4, "depth": 0.05, "g": 9.81}
+    ts.sensitivities(build, params, [ts.Reaction("press", component=2)], steps=1)
+    counts = cache.pattern_stats()
+    assert counts["misses"] == 1 and counts["hits"] == 2 * len(params)  # the 6 copies'
+    assert cache.stats()["hits"] == 2 * len(params)  # and the generated mesh
+    cache.clear()

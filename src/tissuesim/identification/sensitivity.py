@@ -158,15 +158,20 @@ def sensitivities(
                 "for its difference, or a non-zero value"
             )
         theta[k] = float(v)
+    from tissuesim.sweep import cache
+
+    cache.install()
     start = time.perf_counter()
-    base = build(dict(theta))
+    with cache.enabled():  # the copies share the base's meshes and sparsity analysis
+        base = build(dict(theta))
     _check(base, "sensitivities")
     copies = []
     for k in names:
         delta = relative_step * (abs(theta[k]) + abs(scales.get(k, 0.0)))
         pair = []
         for sign in (1.0, -1.0):
-            sim = build({**theta, k: theta[k] + sign * delta})
+            with cache.enabled():
+                sim = build({**theta, k: theta[k] + sign * delta})
             if sim.system.n_dofs != base.system.n_dofs:
                 raise InputError(
                     f"sensitivities: parameter {k!r} changes the model's DOFs: only values "

@@ -14,7 +14,9 @@ run gets its own deep copy (a run may cut or tear its mesh), so a run's numbers 
 without the cache, bit for bit (tests/sweep/test_sweep_cache.py). ``SparsityPattern.
 from_stencils`` and ``from_entries`` are pure functions of their arguments (the element
 stencils' bytes), kept the same way: at most ``MAX_PATTERNS`` (a 4.8e4-tetrahedron pattern
-is 60 MB), each run given its own copy (0.02 s).
+is 60 MB), each run given its own copy (0.02 s); and so are P1 elements' rest shapes
+(``kinematics/p1.py``'s ``shape_gradients``: a model's regions and a parameter's copies,
+``identification/sensitivity.py``, share them).
 
 The cache is on only inside a study's run (``execute_run``, a thread-local switch; off
 everywhere with ``TISSUESIM_SWEEP_CACHE=0`` in the environment), through wrappers put once in
@@ -44,6 +46,9 @@ __all__ = ["MAX_MESHES", "MAX_PATTERNS", "install", "enabled", "clear", "stats",
 MAX_MESHES = 8
 #: sparsity patterns kept per worker (60 MB for 4.8e4 tetrahedra)
 MAX_PATTERNS = 4
+#: P1 rest shapes (shape gradients and measures) kept per worker (a body's regions each have
+#: theirs; 5 MB for 4.8e4 tetrahedra)
+MAX_REST_SHAPES = 16
 
 _local = threading.local()
 _lock = threading.Lock()
@@ -51,6 +56,8 @@ _meshes: OrderedDict[tuple, Any] = OrderedDict()
 _stats = {"hits": 0, "misses": 0}
 _patterns: OrderedDict[tuple, Any] = OrderedDict()
 _pattern_stats = {"hits": 0, "misses": 0}
+_shapes: OrderedDict[tuple, Any] = OrderedDict()
+_shape_stats = {"hits": 0, "misses": 0}
 _installed = False
 
 
@@ -73,6 +80,8 @@ def clear() -> None:
         _stats.update(hits=0, misses=0)
         _patterns.clear()
         _pattern_stats.update(hits=0, misses=0)
+        _shapes.clear()
+        _shape_stats.update(hits=0, misses=0)
 
 
 @contextmanager
@@ -186,6 +195,23 @@ def _cached_pattern(name: str, function: Callable[..., Any]) -> classmethod:
     return classmethod(wrapper)
 
 
+def _cached_shapes(function: Callable[..., Any]) -> Callable[..., Any]:
+    """``shape_gradients(points, cells)`` cached by the arrays' bytes while the cache is on."""
+
+    @functools.wraps(function)
+    def wrapper(points: np.ndarray, cells: np.ndarray) -> Any:
+        if not getattr(_local, "on", False):
+            return function(points, cells)
+        key = _option_key({"points": points, "cells": cells})
+        if key is None:
+            return function(points, cells)
+        make = lambda: function(points, cells)  # noqa: E731
+        return _kept(_shapes, _shape_stats, MAX_REST_SHAPES, key, make)
+
+    wrapper.__wrapped_by_sweep_cache__ = True  # type: ignore[attr-defined]
+    return wrapper
+
+
 def install() -> None:
     """Put the caching wrappers in place (once per process; idempotent)."""
     global _installed
@@ -213,4 +239,7 @@ def install() -> None:
 
         for name in ("from_stencils", "from_entries"):
             setattr(SparsityPattern, name, _cached_pattern(name, getattr(SparsityPattern, name)))
+        import tissuesim.kinematics.p1 as p1
+
+        p1.shape_gradients = _cached_shapes(p1.shape_gradients)
         _installed = True
