@@ -11,7 +11,7 @@ import pytest
 import tissuesim as ts
 from tissuesim.contact.penalty.faces import Facets
 from tissuesim.contact.penalty.pair import PenaltyContact, PenaltySide
-from tissuesim.contact.penalty.projection import gap_derivatives, project
+from tissuesim.contact.penalty.projection import gap_derivatives, project, projection_jacobian
 from tissuesim.errors import InputError, SceneError
 from tissuesim.materials import NeoHookean
 from tissuesim.mesh import box
@@ -66,6 +66,38 @@ def test_gap_gradient_and_hessian_match_finite_differences(kind):
     np.testing.assert_allclose(d2g[0][used, used], fh[used, used], atol=1e-7)
     np.testing.assert_allclose(d2g[0], d2g[0].T, atol=1e-12)
     assert np.abs(d2g[0]).max() > 1e-3  # a Hessian with curvature, not a zero one
+
+
+@pytest.mark.parametrize("kind", [4, 3, 8, 6])
+def test_the_projections_natural_coordinates_derivative_matches_finite_differences(kind):
+    """dr/dy of the closest point's (r, s) over the stencil (a warped facet, a point behind
+    it: the gap's and the curvature's terms both count), against central differences of the
+    projection (FEBio's node-on-facet friction measures slip by it: friction.py)."""
+    width = 4 if kind <= 4 else 8
+    flat = np.array(_FLAT[kind], float)
+    X = np.column_stack([flat, np.zeros(kind)]) + 0.15 * RNG.standard_normal((kind, 3))
+    X = np.vstack([X, np.repeat(X[-1:], width - kind, axis=0)])
+    S = np.array([[0, 0, -0.3], [1, 0, -0.3], [1, 1, -0.3], [0, 1, -0.3]], float)
+    S += 0.1 * RNG.standard_normal((4, 3))
+    Hs = np.array([0.3, 0.2, 0.4, 0.1]) if kind in (4, 8) else np.array([0.3, 0.2, 0.2, 0.3])
+    t = np.array([kind])
+
+    def rs_of(y):
+        x = (Hs @ y[:12].reshape(4, 3))[None]
+        return project(x, y[12:].reshape(1, width, 3), t)[0]
+
+    y = np.concatenate([S.ravel(), X.ravel()])
+    x = (Hs @ S)[None]
+    g, D = projection_jacobian(x, Hs[None], X[None], rs_of(y)[None], t)
+    assert g[0] > 1e-3
+    e, fd = 1e-6, np.zeros((2, y.size))
+    for i in range(y.size):
+        d = np.zeros(y.size)
+        d[i] = e
+        fd[:, i] = (rs_of(y + d) - rs_of(y - d)) / (2 * e)
+    used = slice(0, 12 + 3 * kind)
+    np.testing.assert_allclose(D[0][:, used], fd[:, used], atol=1e-8)
+    assert np.abs(D[0]).max() > 0.1
 
 
 def _blocks(dz: float = 0.02, element: str = "hex"):

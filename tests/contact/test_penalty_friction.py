@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 import tissuesim as ts
+from tissuesim.contact.penalty import friction as coulomb
 from tissuesim.contact.penalty.faces import Facets
 from tissuesim.contact.penalty.friction import return_map
 from tissuesim.contact.penalty.pair import PenaltyContact, PenaltySide
@@ -83,7 +84,61 @@ def test_friction_energy_gradient_and_hessian_match_finite_differences(slide, op
         np.testing.assert_allclose(hess[:, i].toarray().ravel(), (gp - gm) / (2 * e), atol=2e-5)
 
 
-def _pulled(mu: float, pull: float, steps: int = 4, augmented: bool = False):
+@pytest.mark.parametrize("slide", [0.001, 0.05])
+def test_node_on_facet_friction_measures_slip_as_febio_and_its_derivatives_hold(slide):
+    """FEBio's node-on-facet slip ("contact" anchors: natural coordinates on the anchor's
+    facet in its reference metric, friction.py): the energy's gradient against central
+    differences on every DOF (the lower block deformed, so its facets are no longer
+    parallelograms), and its Hessian exactly on the upper block's DOFs while the lower
+    block stays at rest (flat square facets: r is linear in the point there); stick at the
+    small slide, slip at the large one."""
+    lower, upper = _blocks()
+    rest = [lower.points, upper.points]
+    sides = (
+        PenaltySide(1, Facets.of(upper.facet_sets["zmin"], "u"), np.ones(4)),
+        PenaltySide(0, Facets.of(lower.facet_sets["zmax"], "l"), np.ones(9)),
+    )
+    options = {"rule": "nodal", "friction_penalty": 30.0, "friction_anchor": "contact"}
+    pair = PenaltyContact("p", *sides, penalty=50.0, friction=0.4, **options)
+    pair.setup(rest)
+    pair.begin_step(rest)
+    (p,) = pair.passes
+    assert p.friction.rest is not None and p.friction.pressure.max() > 0
+    n0 = lower.n_points * 3
+    dofs = [np.arange(n0).reshape(-1, 3), n0 + np.arange(upper.n_points * 3).reshape(-1, 3)]
+    n = n0 + upper.n_points * 3
+
+    def split(v):
+        return [v[:n0].reshape(-1, 3), v[n0:].reshape(-1, 3)]
+
+    moved = rest[1] + np.array([slide, 0.5 * slide, 0.0])
+    deformed = lower.points + 0.003 * RNG.standard_normal(lower.points.shape)
+    for lower_at, exact_hessian in ((deformed, False), (lower.points, True)):
+        positions = [lower_at, moved + 0.002 * RNG.standard_normal(moved.shape)]
+        flat = np.concatenate([q.ravel() for q in positions])
+        value, grad, hess = pair.evaluate(positions, dofs, n, 2)
+        frictionless = PenaltyContact("q", *sides, penalty=50.0, rule="nodal")
+        frictionless.setup(rest)
+        v0, g0, _ = frictionless.evaluate(positions, dofs, n, 1)
+        assert value > v0 and np.abs(grad - g0).max() > 1e-3  # the friction is there
+        _, _, _, _, _, _, stick = coulomb._natural(p.friction, p, positions,
+                                                   pair._eps_t(p), pair.friction)[:7]  # fmt: skip
+        assert stick.all() if slide < 0.01 else not stick.any()
+        e = 1e-7
+        active = np.flatnonzero(np.abs(grad - g0) > 0)
+        assert active.min() < n0 < active.max()  # both blocks' DOFs
+        for i in active[:: max(1, len(active) // 16)]:
+            d = np.zeros(n)
+            d[i] = e
+            vp, gp, _ = pair.evaluate(split(flat + d), dofs, n, 1)
+            vm, gm, _ = pair.evaluate(split(flat - d), dofs, n, 1)
+            assert grad[i] == pytest.approx((vp - vm) / (2 * e), rel=1e-5, abs=1e-9)
+            if exact_hessian and i >= n0:
+                column = hess[:, i].toarray().ravel()
+                np.testing.assert_allclose(column[n0:], ((gp - gm) / (2 * e))[n0:], atol=2e-5)
+
+
+def _pulled(mu: float, pull: float, steps: int = 4, augmented: bool = False, **extra):
     """A block (0.6 x 0.6 x 0.5) on a fixed table block, pressed down 0.01 by its top, then
     its top dragged along x by ``pull`` per step (held in z): Coulomb friction mu."""
     lower, upper = _blocks(dz=0.0)
@@ -101,7 +156,7 @@ def _pulled(mu: float, pull: float, steps: int = 4, augmented: bool = False):
     sim.add_penalty_contact(
         "upper", "lower", primary_facets="zmin", secondary_facets="zmax", penalty=1e6,
         friction=mu, augmented=augmented, tolerance=1e-8, max_augmentations=40,
-        name="contact",
+        name="contact", **extra,
     )  # fmt: skip
     for _ in range(steps):
         record = sim.step()
@@ -109,10 +164,15 @@ def _pulled(mu: float, pull: float, steps: int = 4, augmented: bool = False):
     return sim
 
 
-def test_a_sliding_block_feels_mu_times_the_normal_force():
+@pytest.mark.parametrize(
+    "extra",
+    [{}, {"integration": "nodes", "friction_anchor": "contact", "friction_penalty": 1e6}],
+)
+def test_a_sliding_block_feels_mu_times_the_normal_force(extra):
     """Dragged far enough to slide: the contact's tangential force is mu times its normal
-    force (Coulomb) and opposes the drag; the grasp's reaction balances it."""
-    sim = _pulled(mu=0.3, pull=0.05)
+    force (Coulomb) and opposes the drag; the grasp's reaction balances it. Also with
+    FEBio's node-on-facet slip (natural coordinates in the reference metric)."""
+    sim = _pulled(mu=0.3, pull=0.05, **extra)
     f = np.asarray(sim.forces()["contact"])
     assert f[2] > 1.0  # pressed
     assert f[0] == pytest.approx(-0.3 * f[2], rel=1e-3)

@@ -26,10 +26,21 @@ its first step whatever its traction, at m along its slip direction: here that d
 lagged too (the traction m s, s the last lag's unit trial traction, 0 at first: a linear energy
 W m s . d), since m |tau| is not smooth where the slip is zero.
 
+With ``ANCHORS`` "contact" (FEBio's sliding-node-on-facet, ``FESlidingInterface::
+ContactNodalForce``) the slip is FEBio's: the change of the point's natural coordinates on
+the anchor's facet since it first projected there, Delta = r - r_a (r its closest point now),
+measured in the facet's reference metric M (``Metric0`` at r, held), the traction covariant,
+T = Lt + eps_t M Delta, and its cone |T|_{M^-1} <= m; the energy is phi(T) of the same form in
+that norm, |T|^2_{M^-1} / (2 eps_t) or (m |T| - m^2 / 2) / eps_t, its gradient dr/dy^T T_ret
+(dr/dy from the projection's optimality: ``projection.projection_jacobian``) and its Hessian
+dr/dy^T phi'' dr/dy (phi'' = eps_t M in stick, (m eps_t / |T|) (M - T T^T / |T|^2) in slip):
+the projection's second derivative times T_ret is left out, as FEBio's stiffness leaves it
+(exact along the point's own DOFs on a flat parallelogram facet, where r is linear in x).
+
 Where FEBio differs: its sliding-elastic stick couples the normal gap into the same vector
-penalty and pushes along the primary's normal, and its node-on-facet measures slip in the
-secondary's reference metric; here the normal stays the pair's gap penalty (the secondary's
-normal at the closest point) and the slip is measured in the current configuration.
+penalty and pushes along the primary's normal; here the normal stays the pair's gap penalty
+(the secondary's normal at the closest point) and the slip of "step" anchors is measured in
+the current configuration.
 """
 
 from __future__ import annotations
@@ -38,8 +49,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from tissuesim.contact.penalty.faces import shape
-from tissuesim.contact.penalty.projection import gap_derivatives
+from tissuesim.contact.penalty.faces import shape, shape_derivatives
+from tissuesim.contact.penalty.projection import gap_derivatives, project, projection_jacobian
 
 __all__ = ["FrictionState", "anchor", "augment", "force", "friction_terms", "lag", "return_map"]
 
@@ -68,6 +79,11 @@ class FrictionState:
     fresh: np.ndarray  # (points,) bool
     direction: np.ndarray  # (points, 3): a fresh point's slip direction, lagged
     relags: int = 0  # in this step
+    #: FEBio's node-on-facet slip ("contact" anchors): the target body's rest positions (the
+    #: reference metric); Lt is then covariant, in traction[:, :2]
+    rest: np.ndarray | None = None
+    #: the points and M^-1 of the multipliers last augmented (FEBio's norm of the old ones)
+    metric_inverse: tuple | None = None
 
     @classmethod
     def empty(cls, n_points: int) -> FrictionState:
@@ -193,6 +209,9 @@ def friction_terms(state: FrictionState, p, positions, dofs, eps_t, mu: float, o
                    grad, rows_out, cols_out, vals_out) -> float:  # fmt: skip
     """The pass's friction energy; its gradient and Hessian added in place (``order``).
     ``eps_t``: the tangential penalty per point of the pass."""
+    if state.rest is not None:
+        return _natural_terms(state, p, positions, dofs, eps_t, mu, order, grad, rows_out,
+                              cols_out, vals_out)  # fmt: skip
     pts, w, d = _geometry(state, p, positions)
     if len(pts) == 0:
         return 0.0
@@ -237,6 +256,13 @@ def friction_terms(state: FrictionState, p, positions, dofs, eps_t, mu: float, o
 
 def force(state: FrictionState, p, positions, eps_t, mu: float) -> np.ndarray:
     """The friction force the secondary surface puts on this pass's points (N, 3)."""
+    if state.rest is not None:
+        pts, W, D, T = _natural(state, p, positions, eps_t, mu)[:4]
+        if len(pts) == 0:
+            return np.zeros(3)
+        k = p.sampled.facets.nodes.shape[1]
+        on_point = np.einsum("naj,na->nj", D[:, :, : 3 * k].reshape(len(pts), 2, k, 3).sum(2), T)
+        return -np.sum(W[:, None] * on_point, axis=0)
     pts, _, d = _geometry(state, p, positions)
     if len(pts) == 0:
         return np.zeros(3)
@@ -257,9 +283,79 @@ def augment(state: FrictionState, p, positions, eps_t, mu: float) -> tuple:
     """FEBio's augmentation of the tangential multipliers at a converged solution: Lt <- the
     returned traction. (old and new squared norms, for the pair's convergence check, and the
     new multipliers, which the pair keeps if it augments)."""
+    if state.rest is not None:  # covariant multipliers, FEBio's norm Lt . M^-1 Lt
+        pts, _, _, T, Mi = _natural(state, p, positions, eps_t, mu)[:5]
+        old = 0.0
+        if state.metric_inverse is not None:
+            at, mi = state.metric_inverse
+            Lt = state.traction[at, :2]
+            old = float(np.einsum("na,nab,nb->", Lt, mi, Lt))
+        out = state.traction.copy()
+        out[pts, :2] = T
+        state.metric_inverse = (pts, Mi)
+        return old, float(np.einsum("na,nab,nb->", T, Mi, T)), out
     pts, _, d = _geometry(state, p, positions)
     old = float(np.sum(state.traction**2))
     out = state.traction.copy()
     if len(pts):
         out[pts] = _traction(state, pts, d, eps_t, mu)
     return old, float(np.sum(out**2)), out
+
+
+def _natural(state: FrictionState, p, positions, eps_t, mu: float):
+    """FEBio's node-on-facet slip (module docstring) of the anchored, pressed points: (points,
+    weights W, dr/dy (n, 2, 3(k + m)), the returned covariant tractions T_ret (n, 2), M^-1
+    (n, 2, 2), the trial T (n, 2), stick (n,), M, |T|, the cone m, eps_t)."""
+    pts = np.flatnonzero((state.facet >= 0) & (state.pressure > 0))
+    sf, tf = p.sampled.facets, p.target.facets
+    facet = state.facet[pts]
+    kind, m = tf.kind[facet], tf.nodes.shape[1]
+    Hs = p.points.H[pts]
+    x = np.einsum("na,nad->nd", Hs, positions[p.sampled.body][sf.nodes[p.points.facet[pts]]])
+    X = positions[p.target.body][tf.nodes[facet]]
+    rs = project(x, X, kind)
+    _, D = projection_jacobian(x, Hs, X, rs, kind)
+    Hr, Hsd = shape_derivatives(rs[:, 0], rs[:, 1], kind, m)[:2]
+    X0 = state.rest[tf.nodes[facet]]
+    tangents = np.stack([np.einsum("na,nad->nd", Hr, X0), np.einsum("na,nad->nd", Hsd, X0)], 1)
+    M = np.einsum("nad,nbd->nab", tangents, tangents)  # the reference metric at r, held
+    Mi = np.linalg.inv(M)
+    et = eps_t[pts]
+    T = state.traction[pts, :2] + et[:, None] * np.einsum("nab,nb->na", M, rs - state.rs[pts])
+    size = np.sqrt(np.maximum(np.einsum("na,nab,nb->n", T, Mi, T), 0.0))
+    cone = mu * state.pressure[pts]
+    stick = size <= cone
+    scale = np.where(stick, 1.0, cone / np.where(size > 0, size, 1.0))
+    return pts, p.weights[pts], D, T * scale[:, None], Mi, T, stick, M, size, cone, et
+
+
+def _natural_terms(state, p, positions, dofs, eps_t, mu, order, grad, rows_out, cols_out,
+                   vals_out) -> float:  # fmt: skip
+    """``friction_terms`` with FEBio's node-on-facet slip (module docstring)."""
+    pts, W, D, T_ret, _, T, stick, M, size, cone, et = _natural(state, p, positions, eps_t, mu)
+    if len(pts) == 0:
+        return 0.0
+    phi = np.where(stick, size**2 / (2 * et), (cone * size - cone**2 / 2) / et)
+    value = float(np.sum(W * phi))
+    if order < 1:
+        return value
+    stencil = np.concatenate(
+        [
+            dofs[p.sampled.body][p.sampled.facets.nodes[p.points.facet[pts]]],
+            dofs[p.target.body][p.target.facets.nodes[state.facet[pts]]],
+        ],
+        axis=1,
+    ).reshape(len(pts), -1)
+    np.add.at(grad, stencil, W[:, None] * np.einsum("nai,na->ni", D, T_ret))
+    if order >= 2:
+        safe = np.where(size > 0, size, 1.0)
+        slip = (cone * et / safe)[:, None, None] * (
+            M - np.einsum("na,nb->nab", T, T) / (safe**2)[:, None, None]
+        )
+        second = np.where(stick[:, None, None], et[:, None, None] * M, slip)
+        h = W[:, None, None] * np.einsum("nai,nab,nbj->nij", D, second, D)
+        width = stencil.shape[1]
+        rows_out.append(np.repeat(stencil, width, axis=1).ravel())
+        cols_out.append(np.tile(stencil, (1, width)).ravel())
+        vals_out.append(h.ravel())
+    return value

@@ -151,6 +151,8 @@ class PenaltyContact:
                 p.tie = (np.zeros(0, int), np.zeros(0, int), np.zeros((0, 2)))
             if self.friction > 0:
                 p.friction = coulomb.FrictionState.empty(len(w))
+                if self.friction_anchor == "contact":  # FEBio's node-on-facet slip
+                    p.friction.rest = np.asarray(rest[target.body], dtype=float)
             self.passes.append(p)
 
     # -- geometry --------------------------------------------------------------------------

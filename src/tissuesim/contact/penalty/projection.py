@@ -26,7 +26,7 @@ import numpy as np
 
 from tissuesim.contact.penalty.faces import TRIANGLES, shape, shape_derivatives
 
-__all__ = ["project", "gap_derivatives", "outside"]
+__all__ = ["project", "gap_derivatives", "outside", "projection_jacobian"]
 
 _NEWTON_ITERATIONS = 12
 
@@ -125,3 +125,38 @@ def gap_derivatives(x, Hs, X, rs, kind, order: int):
     hess -= g[:, None, None] * np.einsum("nai,nab,nbj->nij", C, Ai, C)
     out.append(hess)
     return out
+
+
+def projection_jacobian(x, Hs, X, rs, kind):
+    """At projections rs of points x (n, 3) (x = sum_k Hs_k X_k) onto facets X (n, m, 3):
+    the gap g (n,) and dr/dy (n, 2, 3(k + m)), the natural coordinates' derivative over the
+    stencil (the sampled facet's k nodes, then the facet's m), from the projection's
+    optimality q_a . (q - x) = 0:
+
+        A dr = -(T J + g C) dy,   A = G + g K
+
+    (T, J, C, G, K as in the module docstring)."""
+    r, s = rs[:, 0], rs[:, 1]
+    n, m = X.shape[0], X.shape[1]
+    Hm = shape(r, s, kind, m)
+    Hr, Hsd, Hrr, Hss, Hrs = shape_derivatives(r, s, kind, m)
+    q = np.einsum("na,nad->nd", Hm, X)
+    qr = np.einsum("na,nad->nd", Hr, X)
+    qs = np.einsum("na,nad->nd", Hsd, X)
+    N = np.cross(qr, qs)
+    nu = N / np.linalg.norm(N, axis=1)[:, None]
+    g = np.sum(nu * (q - x), axis=1)
+    T = np.stack([qr, qs], axis=1)
+    K = np.empty((n, 2, 2))
+    K[:, 0, 0] = np.sum(np.einsum("na,nad->nd", Hrr, X) * nu, 1)
+    K[:, 1, 1] = np.sum(np.einsum("na,nad->nd", Hss, X) * nu, 1)
+    K[:, 0, 1] = K[:, 1, 0] = np.sum(np.einsum("na,nad->nd", Hrs, X) * nu, 1)
+    A = np.einsum("nad,nbd->nab", T, T) + g[:, None, None] * K
+    w = np.concatenate([-Hs, Hm], axis=1)
+    width, k = w.shape[1], Hs.shape[1]
+    TJ = (w[:, None, :, None] * T[:, :, None, :]).reshape(n, 2, 3 * width)
+    dH = np.zeros((n, 2, width))
+    dH[:, 0, k:] = Hr
+    dH[:, 1, k:] = Hsd
+    C = (dH[:, :, :, None] * nu[:, None, None, :]).reshape(n, 2, 3 * width)
+    return g, -np.linalg.solve(A, TJ + g[:, None, None] * C)
