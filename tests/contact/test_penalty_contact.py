@@ -42,12 +42,13 @@ def test_gap_gradient_and_hessian_match_finite_differences(kind):
     """A warped facet of each kind (quad4, tri3, and the curved quad8, tri6) and a point
     behind it: g > 0, dg/dy and d2g/dy2 over the stencil (4 sampled nodes, then the facet's,
     padded to 4 or 8 by its last node) against central differences of g and dg/dy."""
+    rng = np.random.default_rng(7 + kind)  # its own: the same facet whatever ran before
     width = 4 if kind <= 4 else 8
     flat = np.array(_FLAT[kind], float)
-    X = np.column_stack([flat, np.zeros(kind)]) + 0.15 * RNG.standard_normal((kind, 3))
+    X = np.column_stack([flat, np.zeros(kind)]) + 0.15 * rng.standard_normal((kind, 3))
     X = np.vstack([X, np.repeat(X[-1:], width - kind, axis=0)])
     S = np.array([[0, 0, -0.3], [1, 0, -0.3], [1, 1, -0.3], [0, 1, -0.3]], float)
-    S += 0.1 * RNG.standard_normal((4, 3))
+    S += 0.1 * rng.standard_normal((4, 3))
     Hs = np.array([0.3, 0.2, 0.4, 0.1]) if kind in (4, 8) else np.array([0.3, 0.2, 0.2, 0.3])
     y = np.concatenate([S.ravel(), X.ravel()])
     g, _, _, dg, d2g = _stencil_gap(y, Hs, kind, width, 2)
@@ -73,12 +74,13 @@ def test_the_projections_natural_coordinates_derivative_matches_finite_differenc
     """dr/dy of the closest point's (r, s) over the stencil (a warped facet, a point behind
     it: the gap's and the curvature's terms both count), against central differences of the
     projection (FEBio's node-on-facet friction measures slip by it: friction.py)."""
+    rng = np.random.default_rng(11)  # its own: the module's RNG sequence stays the others'
     width = 4 if kind <= 4 else 8
     flat = np.array(_FLAT[kind], float)
-    X = np.column_stack([flat, np.zeros(kind)]) + 0.15 * RNG.standard_normal((kind, 3))
+    X = np.column_stack([flat, np.zeros(kind)]) + 0.15 * rng.standard_normal((kind, 3))
     X = np.vstack([X, np.repeat(X[-1:], width - kind, axis=0)])
     S = np.array([[0, 0, -0.3], [1, 0, -0.3], [1, 1, -0.3], [0, 1, -0.3]], float)
-    S += 0.1 * RNG.standard_normal((4, 3))
+    S += 0.1 * rng.standard_normal((4, 3))
     Hs = np.array([0.3, 0.2, 0.4, 0.1]) if kind in (4, 8) else np.array([0.3, 0.2, 0.2, 0.3])
     t = np.array([kind])
 

@@ -232,3 +232,81 @@ def test_rigid_body_data_is_logged_as_febio_names_it(tmp_path):
     again = tmp_path / "again"
     assert main(["run", str(scene), "--out", str(again), "--no-render", "--quiet"]) == 0
     assert (again / "platen.txt").read_text() == (out / "platen.txt").read_text()
+
+
+def _tall(platen: bool) -> str:
+    """A 2 x 2 x 2 hex8 block (free middle nodes) under the platen model's rigid plate on its
+    top nodes, pressed 0.2 down in four steps; ``platen`` False: no plate, the top nodes
+    held in x, y and moved as the plate would."""
+    text = PLATEN
+    n = lambda i, j, k: 1 + i + 3 * j + 9 * k  # noqa: E731
+    nodes = "".join(f'      <node id="{n(i, j, k)}">{0.5 * i:g},{0.5 * j:g},{0.5 * k:g}</node>\n'
+                    for k in range(3) for j in range(3) for i in range(3))  # fmt: skip
+    nodes += "".join(f'      <node id="{28 + i + 3 * j}">{0.5 * i:g},{0.5 * j:g},1.1</node>\n'
+                     for j in range(3) for i in range(3))  # fmt: skip
+
+    def hexes(first: int, corner) -> str:
+        rows = []
+        for e, (i, j, k) in enumerate((i, j, k) for k in range(2 if first == 1 else 1)
+                                      for j in range(2) for i in range(2)):  # fmt: skip
+            lo = [
+                corner(i, j, k),
+                corner(i + 1, j, k),
+                corner(i + 1, j + 1, k),
+                corner(i, j + 1, k),
+            ]
+            hi = [corner(i, j, k + 1), corner(i + 1, j, k + 1), corner(i + 1, j + 1, k + 1),
+                  corner(i, j + 1, k + 1)]  # fmt: skip
+            rows.append(f'      <elem id="{first + e}">{",".join(map(str, lo + hi))}</elem>\n')
+        return "".join(rows)
+
+    plate = lambda i, j, k: n(i, j, 2) if k == 0 else 28 + i + 3 * j  # noqa: E731
+    mesh = (f"    <Nodes name=\"all\">\n{nodes}    </Nodes>\n"
+            f'    <Elements type="hex8" name="block">\n{hexes(1, n)}    </Elements>\n'
+            f'    <Elements type="hex8" name="plate">\n{hexes(9, plate)}    </Elements>\n'
+            '    <NodeSet name="base">1,2,3,4,5,6,7,8,9</NodeSet>\n'
+            '    <NodeSet name="top">19,20,21,22,23,24,25,26,27</NodeSet>\n')  # fmt: skip
+    start, end = text.index("    <Nodes"), text.index("  </Mesh>")
+    text = text[:start] + mesh + text[end:]
+    text = text.replace("<time_steps>2</time_steps>", "<time_steps>4</time_steps>")
+    text = text.replace("<step_size>0.5</step_size>", "<step_size>0.25</step_size>")
+    text = text.replace('<value lc="1">-0.05</value>', '<value lc="1">-0.2</value>')
+    if platen:
+        return text
+    start, end = text.index('    <Elements type="hex8" name="plate">'), text.index("    <NodeSet")
+    text = text[:start] + text[end:]
+    text = text.replace('    <SolidDomain name="plate" mat="platen"/>\n', "")
+    start, end = text.index("  <Rigid>"), text.index("  <LoadData>")
+    text = text[:start] + text[end:]
+    return text.replace(
+        "  </Boundary>",
+        '    <bc name="top" node_set="top" type="zero displacement">\n'
+        "      <x_dof>1</x_dof>\n      <y_dof>1</y_dof>\n      <z_dof>0</z_dof>\n    </bc>\n"
+        '    <bc name="press" node_set="top" type="prescribed displacement">\n'
+        '      <dof>z</dof>\n      <value lc="1">-0.2</value>\n'
+        "      <relative>0</relative>\n    </bc>\n  </Boundary>",
+    )
+
+
+def test_febios_solver_moves_a_prescribed_platen_by_its_increment_as_febio(tmp_path):
+    """With FEBio's solver (--febio-solver) a prescribed rigid body enters each step's first
+    iteration as FEBio's m_Fd = -K_fp du_p, its increment taken once (its vertices' stiffness
+    reaches it through the links, rigid/links.py): a block with free middle nodes under a
+    pressed platen iterates exactly as the same block with its top nodes prescribed (FEM
+    m_Fd), step by step, to the same positions. (Started from the moved platen, or with the
+    increment on its vertices too, the iterations differed.)"""
+    runs = []
+    for platen in (True, False):
+        path = tmp_path / f"tall_{platen}.feb"
+        path.write_text(_tall(platen))
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            scene = load_febio(path, febio_solver=True)
+        sim = scene.simulation
+        iterations = [sim.step().newton_iterations for _ in range(scene.run["steps"])]
+        runs.append((sim, iterations))
+    (platen, a), (nodes, b) = runs
+    assert a == b and len(a) == 4 and min(a) > 1
+    np.testing.assert_allclose(platen.body_positions("block"), nodes.body_positions("body"),
+                               atol=1e-9)  # fmt: skip
+    assert np.ptp(platen.body_positions("block")[9:18, 0]) > 1.0 + 1e-3  # the middle bulges

@@ -154,13 +154,16 @@ def minimize_febio(
     budget: dict | None = None,
     start=None,
     prescribed_from: np.ndarray | None = None,
+    difference=None,
     **_ignored,
 ) -> tuple[np.ndarray, NewtonResult]:
     """FEBio's Quasin from x0 (prescribed DOFs at their t_{n+1} values), with ``minimize``'s
     arguments and record (module docstring); ``options.febio`` its settings.
 
     prescribed_from: the step's start (prescribed DOFs at their old values): FEBio's first
-    stiffness and residual are taken there, the prescribed increment entering as m_Fd.
+    stiffness and residual are taken there, the prescribed increment entering as m_Fd;
+    ``difference(c1, c0)``: the tangent step between two configurations (rigid bodies'
+    prescribed rotations enter m_Fd through it).
     Tolerances of ``minimize`` (gradient, force and step) and its contact arguments other
     than ``relag`` are not used; the barrier's CCD (``max_step``, ``path_free``) is refused."""
     if max_step is not None or path_free is not None:
@@ -173,7 +176,7 @@ def minimize_febio(
     memory = _MEMORY.setdefault(solver, _Memory())
     try:
         x, acc = _quasin(evaluate, x0, elimination, solver, s_, retract, relag, max_relags,
-                         budget, start, prescribed_from, memory, result)  # fmt: skip
+                         budget, start, prescribed_from, memory, result, difference)  # fmt: skip
     except _Failed as exc:
         _MEMORY[solver] = _Memory()  # FEBio's Rewind: reform at the retried step's start
         result.converged, result.reason = False, str(exc)
@@ -184,7 +187,7 @@ def minimize_febio(
 
 
 def _quasin(evaluate, x0, elimination, solver, s_, retract, relag, max_relags, budget, start,
-            prescribed_from, memory, result):  # fmt: skip
+            prescribed_from, memory, result, difference=None):  # fmt: skip
     x = x0.copy()
     dofs = np.asarray(elimination.dofs)
     shifted = (
@@ -216,7 +219,7 @@ def _quasin(evaluate, x0, elimination, solver, s_, retract, relag, max_relags, b
         memory.updates, memory.nups = [], 0
         memory.fd = np.zeros(nf)
         if fd_from is not None:  # m_Fd = -K_fp du_p (FESolidLinearSystem at the step's start)
-            memory.fd = -(K[free][:, ~free] @ fd_from)
+            memory.fd = -(K[free][:, ~free] @ fd_from[~free])
         nref += 1
 
     def residual(acc) -> np.ndarray:
@@ -233,9 +236,22 @@ def _quasin(evaluate, x0, elimination, solver, s_, retract, relag, max_relags, b
     breform = s_.reform_each_time_step or maxups == 0 or memory.solve is None
     start_acc = evaluate(xs, 2, False) if breform or start is None or shifted else start
     n = start_acc.gradient.size
-    if shifted and n != x0.size:  # rigid or frame DOFs (rotations): start at x0, no m_Fd
-        shifted, xs = False, x0
-        start_acc = evaluate(x0, 2, False)
+    du_p = None
+    if shifted and n != x0.size:
+        # rigid or frame DOFs (rotations): the prescribed increment in the tangent space. As
+        # FEBio, the first stiffness and residual are the step's start (nothing prescribed
+        # moved: the last step's leftovers under the new loads) and the increment enters as
+        # m_Fd = -K_fp du_p; where no deformable DOF is coupled to a prescribed rigid body
+        # yet (co37's first step: its contact not closed) that first iteration is nothing,
+        # the Update puts the body in place and FEBio reforms as diverging (its log's two
+        # reformations)
+        if difference is None:
+            shifted, xs = False, x0
+            start_acc = evaluate(x0, 2, False)
+        else:
+            xs = prescribed_from
+            du_p = difference(x0, prescribed_from)
+            start_acc = evaluate(xs, 2, False)
     free = np.ones(n, dtype=bool)
     free[dofs] = False
     nf = int(free.sum())
@@ -245,7 +261,7 @@ def _quasin(evaluate, x0, elimination, solver, s_, retract, relag, max_relags, b
             start_acc = evaluate(xs, 2, False)
     memory.new_step = True
     if breform:
-        reform(start_acc, (x0 - xs)[dofs] if shifted else None)
+        reform(start_acc, (du_p if du_p is not None else x0 - xs) if shifted else None)
     R0 = residual(start_acc) + memory.fd
     acc = start_acc  # the accumulator at x (x0's gradient once the prescribed move)
     result.gradient_norms.append(float(np.linalg.norm(R0)))

@@ -218,6 +218,7 @@ def implicit_step(
         start=start_acc if relag is None else None,
         relag_early=not (lags.penalty or lags.febio_joints),  # FEBio's: at converged points
         prescribed_from=state.x,
+        **({"difference": _increment(system)} if options.method == "febio" else {}),
     )
     lags.check(c1, record)
     if contact is not None:
@@ -472,3 +473,14 @@ def _frame_acceleration(body, z: np.ndarray, v: np.ndarray, force: np.ndarray) -
     a = np.zeros(body.n_dofs)
     a[free] = cache[1].solve(rhs[free])
     return a
+
+
+def _increment(system):
+    """The tangent step between two configurations with the vertices linked to rigid bodies
+    left out: their stiffness reaches the rigid body's DOFs through the links' reduction
+    (rigid/links.py), so an increment on both would count it twice (FEBio's m_Fd sees the
+    rigid body's)."""
+    links = system.links
+    if links is None:
+        return system.difference
+    return lambda c1, c0: np.where(links.mask, 0.0, system.difference(c1, c0))
