@@ -252,3 +252,31 @@ def test_a_body_that_tears_is_not_logged(tmp_path):
     sim.set_tearing(body="body", stretch=2.0)
     with pytest.raises(InputError, match="which is cut"):
         sim.run(1, tmp_path / "out", progress=False, render=False)
+
+
+def test_a_shells_node_data_lists_febios_nodes_once_with_their_displacement(tmp_path):
+    """A quad4 shell's body holds back nodes of tissuesim's own (febio/shells.py): the table
+    of every node lists FEBio's 243 ids, each once per frame, each with the displacement the
+    VTU series gives at that node's place (the shell's front), not the back nodes under
+    stray ids."""
+    text = (MODELS / "shell_cantilever_quad4.feb").read_text()
+    logfile = ('  <Output>\n    <logfile>\n      <node_data data="ux;uy;uz" file="nd.csv"/>\n'
+               "    </logfile>\n  </Output>\n</febio_spec>")  # fmt: skip
+    feb = tmp_path / "shell.feb"
+    feb.write_text(text.replace("</febio_spec>", logfile))
+    out = tmp_path / "out"
+    assert main(["run", str(feb), "--out", str(out), "--no-render", "--quiet"]) == 0
+    table = Table(out / "nd.csv")
+    last = table[table["time"] == table["time"].max()]
+    ids = last["node"].astype(int)
+    assert sorted(ids.tolist()) == list(range(1, 244))
+    model = read_feb(feb)
+    t, mesh = _frames(out)[-1]
+    assert t == pytest.approx(table["time"].max())
+    from scipy.spatial import cKDTree
+
+    dist, j = cKDTree(mesh.points).query(model.nodes[ids - 1])
+    assert dist.max() < 1e-12
+    u = mesh.point_data["displacement"][j]
+    assert np.abs(u).max() > 1e-3  # it bends
+    np.testing.assert_allclose(last[["ux", "uy", "uz"]], u, atol=1e-12)

@@ -147,8 +147,8 @@ def logfile_tables(
     """The <logfile> requests as [[logfiles]] tables: per body the rows of its mesh and their
     FEBio ids; a request over several bodies is one table per body (``<file stem>_<body>``).
     A request without a file is written as ``<kind>_<n>.csv`` (n: its place among them)."""
-    row_ids = np.empty(len(model.nodes), dtype=np.int64)
-    row_ids[list(model._node_index.values())] = list(model._node_index)
+    row_ids = np.full(len(model.nodes), -1, dtype=np.int64)  # -1: a node FEBio has not
+    row_ids[list(model._node_index.values())] = list(model._node_index)  # (a shell's back)
     tables = []
     for n, request in enumerate(model.logfiles, start=1):
         kind, items = request["kind"], request["items"]
@@ -161,25 +161,26 @@ def logfile_tables(
                 used = np.unique(body["cells"])
                 local = np.full(len(model.nodes), -1)
                 local[used] = np.arange(len(used))
-                rows = used if items is None else items[local[items] >= 0]
+                # FEBio's nodes only: a shell's back nodes (febio/shells.py) are tissuesim's
+                rows = used[row_ids[used] >= 0] if items is None else items[local[items] >= 0]
                 if len(rows):
-                    per_body.append((name, "nodes", local[rows], row_ids[rows]))
+                    per_body.append((name, "nodes", local[rows], row_ids[rows], len(used)))
                 continue
             members = [(p, r) for p in body["parts"] for r in range(len(model.parts[p][1]))]
             members = members if items is None else [m for m in items if m[0] in body["parts"]]
             if members:
                 cells = cell_rows(body, members, model)
                 ids = np.array([model.parts[p][2][r] for p, r in members], dtype=np.int64)
-                per_body.append((name, "elements", cells, ids))
+                per_body.append((name, "elements", cells, ids, len(body["cells"])))
         file = request["file"] or f"{kind}_{n}.csv"
         stem, dot, suffix = file.rpartition(".")
-        for name, key, rows, ids in per_body:
+        for name, key, rows, ids, everything in per_body:
             if len(per_body) > 1:
                 file = f"{stem}_{name}.{suffix}" if dot else f"{suffix}_{name}"
             table = {"kind": kind, "data": list(request["data"])}
             if names != ["body"]:
                 table["body"] = name
-            whole = items is None and np.array_equal(rows, np.arange(len(rows)))
+            whole = items is None and np.array_equal(rows, np.arange(everything))
             if not (whole and np.array_equal(ids, rows + 1)):  # else: all rows, ids = rows + 1
                 table.update({key: rows.tolist(), "ids": ids.tolist()})
             tables.append({**table, "file": file})
