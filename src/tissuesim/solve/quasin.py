@@ -197,7 +197,19 @@ def _quasin(evaluate, x0, elimination, solver, s_, retract, relag, max_relags, b
         and bool(np.any(prescribed_from[dofs] != x0[dofs]))
     )
     xs = x0.copy()  # the step's start: the prescribed DOFs where they were
-    if shifted:
+    du_p = None
+    if shifted and difference is not None:
+        increment = difference(x0, prescribed_from)
+        if increment.size != x0.size:
+            # rigid or frame DOFs (rotations): the prescribed increment in the tangent space.
+            # As FEBio, the first stiffness and residual are the step's start (nothing
+            # prescribed moved: the last step's leftovers under the new loads) and the
+            # increment enters as m_Fd = -K_fp du_p; where no deformable DOF is coupled to a
+            # prescribed rigid body yet (co37's first step: its contact not closed) that first
+            # iteration is nothing, the Update puts the body in place and FEBio reforms as
+            # diverging (its log's two reformations)
+            xs, du_p = prescribed_from, increment
+    if shifted and du_p is None:
         xs[dofs] = prescribed_from[dofs]
     maxups = s_.max_updates
     nref = 0
@@ -236,22 +248,9 @@ def _quasin(evaluate, x0, elimination, solver, s_, retract, relag, max_relags, b
     breform = s_.reform_each_time_step or maxups == 0 or memory.solve is None
     start_acc = evaluate(xs, 2, False) if breform or start is None or shifted else start
     n = start_acc.gradient.size
-    du_p = None
-    if shifted and n != x0.size:
-        # rigid or frame DOFs (rotations): the prescribed increment in the tangent space. As
-        # FEBio, the first stiffness and residual are the step's start (nothing prescribed
-        # moved: the last step's leftovers under the new loads) and the increment enters as
-        # m_Fd = -K_fp du_p; where no deformable DOF is coupled to a prescribed rigid body
-        # yet (co37's first step: its contact not closed) that first iteration is nothing,
-        # the Update puts the body in place and FEBio reforms as diverging (its log's two
-        # reformations)
-        if difference is None:
-            shifted, xs = False, x0
-            start_acc = evaluate(x0, 2, False)
-        else:
-            xs = prescribed_from
-            du_p = difference(x0, prescribed_from)
-            start_acc = evaluate(xs, 2, False)
+    if shifted and n != x0.size and du_p is None:  # rigid DOFs, no difference: from x0
+        shifted, xs = False, x0
+        start_acc = evaluate(x0, 2, False)
     free = np.ones(n, dtype=bool)
     free[dofs] = False
     nf = int(free.sum())
