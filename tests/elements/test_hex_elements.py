@@ -188,3 +188,39 @@ def test_q1_shape_functions_partition_of_unity_and_derivatives():
         # the 2-point rule integrates degree 3 per variable exactly
         p, w = gauss_rule(d, 2)
         assert w @ (p[:, 0] ** 2 * p[:, -1] ** 2) == pytest.approx((2 / 3) ** 2 * 2 ** (d - 2))
+
+
+@pytest.mark.parametrize("name", ["hex", "hex_distorted"])
+def test_q1_mass_by_the_element_rule_is_febios_hex8_mass(name):
+    """mass = "element_rule": the consistent mass integrated by the hex8's own 2 x 2 x 2 Gauss
+    points (FEBio's): on parallelepipeds the exact mass, on distorted cells not (3 points per
+    direction are exact there) but with the same row sums (gravity, the lumped mass)."""
+    mesh = MESHES[name]()
+    exact = model(mesh).mass
+    febio = model(mesh, mass_kind="element_rule").mass
+    A, B = exact.matrix().toarray(), febio.matrix().toarray()
+    np.testing.assert_allclose(febio.row_sums, exact.row_sums, rtol=1e-12)
+    if name == "hex":
+        np.testing.assert_allclose(B, A, atol=1e-14 * np.abs(A).max())
+    else:
+        assert np.abs(B - A).max() > 1e-6 * np.abs(A).max()
+
+
+def test_the_element_rules_mass_is_the_gauss_sum_written_out():
+    """One distorted hex8: every entry of the element_rule mass is rho N_a N_b det J summed
+    over the 2 x 2 x 2 Gauss points (weight 1), written out here."""
+    corners = np.array([[-1, -1, -1], [1, -1, -1], [1, 1, -1], [-1, 1, -1],
+                        [-1, -1, 1], [1, -1, 1], [1, 1, 1], [-1, 1, 1]], float)  # fmt: skip
+    X = (corners + 1) / 2 + 0.12 * np.random.default_rng(5).standard_normal((8, 3))
+    mesh = validate_mesh(X, np.arange(8)[None], source="one hex")
+    B = model(mesh, mass_kind="element_rule").mass.matrix().toarray()
+    M = np.zeros((8, 8))
+    for q in corners / np.sqrt(3.0):
+        N = np.prod(1 + corners * q, axis=1) / 8
+        dN = np.stack([corners[:, k] * np.prod(np.delete(1 + corners * q, k, axis=1), axis=1)
+                       for k in range(3)], axis=1) / 8  # fmt: skip
+        M += 2.0 * np.outer(N, N) * np.linalg.det(X.T @ dN)
+    np.testing.assert_allclose(B[0::3, 0::3], M, rtol=1e-12)
+    np.testing.assert_allclose(B[1::3, 1::3], M, rtol=1e-12)
+    exact = model(mesh).mass.matrix().toarray()
+    assert np.abs(exact[0::3, 0::3] - M).max() > 1e-6 * np.abs(M).max()  # not the exact one

@@ -262,7 +262,7 @@ GRASPER_DISPLACEMENT = 'displacement = ["0", "0", "0.1 * min(t / 0.5, 1)"]'
         # organs
         ("density = 10.0\nfix", "densty = 10.0\nfix", ["organs[1]", "did you mean 'density'"]),
         ("density = 10.0\nfix", "density = -10.0\nfix", ["organs[1] density", "> 0"]),
-        ("density = 10.0\nfix", 'mass = "full"\nfix', ["organs[1]", "'consistent' or 'lumped'"]),
+        ("density = 10.0\nfix", 'mass = "full"\nfix', ["organs[1]", "'lumped' or 'element_rule'"]),
         ('name = "upper"', 'name = "lower"', ["organs[2]", "'lower' is taken"]),
         ('name = "upper"', 'name = "tissue"', ["organs[2]", "'tissue' is taken"]),
         ('name = "upper"\n', "", ["organs[2]", "missing key 'name'"]),

@@ -43,7 +43,12 @@ from tissuesim.validate import short
 
 __all__ = ["MassMatrix", "Inertia", "MassKind"]
 
-MassKind = Literal["consistent", "lumped"]
+MassKind = Literal["consistent", "lumped", "element_rule"]
+#: the kinds: "consistent" (rho N^a N^b integrated exactly), "lumped" (its row sums, or HRZ),
+#: "element_rule" (consistent, integrated by the element's own stiffness rule where that is
+#: not exact: 2 Gauss points per direction on Q1 cells, as FEBio's hex8 mass; the exact rule
+#: elsewhere)
+MASS_KINDS = ("consistent", "lumped", "element_rule")
 
 
 @dataclass(frozen=True, eq=False)
@@ -67,8 +72,10 @@ class MassMatrix:
         kind: MassKind = "consistent",
         stencil_id: int = 0,
     ) -> MassMatrix:
-        if kind not in ("consistent", "lumped"):
-            raise InputError(f"mass must be 'consistent' or 'lumped', not {short(kind)}")
+        if kind not in MASS_KINDS:
+            raise InputError(
+                f"mass must be 'consistent', 'lumped' or 'element_rule', not {short(kind)}"
+            )
         d = kinematics.dim
         stencil = kinematics.cell_stencil
         nv = stencil.shape[1] // d
@@ -78,7 +85,10 @@ class MassMatrix:
             scalar = element_mass[:, None, None] * ref[None]
         else:  # P2 / Q1: rho N^a N^b by a rule exact on the element's rest map
             rule = getattr(kinematics, "mass_rule", None)  # a shell's (kinematics/shell.py)
-            N, w = rule() if rule is not None else _element_rule(kinematics.mesh)  # (q, nv), (m, q)
+            if rule is not None:  # a shell's (kinematics/shell.py)
+                N, w = rule()
+            else:  # (q, nv), (m, q)
+                N, w = _element_rule(kinematics.mesh, kind == "element_rule")
             scalar = np.einsum("mq,qa,qb->mab", density[:, None] * w, N, N)
         if nv == d + 1:  # (m, nv) consistent row sums, column by column: numpy's own sums
             row = scalar[:, :, 0].copy()  # below 8 terms, without its loop over rows of nv
@@ -146,12 +156,13 @@ def _scalar_blocks(M: sp.csr_matrix, d: int | None) -> sp.csr_matrix | bool:
     return scalar
 
 
-def _element_rule(mesh) -> tuple[np.ndarray, np.ndarray]:
+def _element_rule(mesh, stiffness_rule: bool = False) -> tuple[np.ndarray, np.ndarray]:
     """N (q, nv) and weights (m, q) integrating N^a N^b exactly: a degree-4 rule for P2; for Q1
     3 Gauss points per direction (N^a N^b det J is of degree 4 in each variable); for the
     quadratic quadrilaterals and hexahedra 4 (degree 7: N^a N^b of degree 4 times det J of a
     cell with straight edges, degree 2 in 3D); for wedges a rule of degree 3 on the triangle
-    and 4 along the axis (``wedge.mass_rule``)."""
+    and 4 along the axis (``wedge.mass_rule``). ``stiffness_rule``: Q1 cells by their own 2
+    points per direction (FEBio's hex8 mass, exact only on parallelepipeds)."""
     if mesh.cell_type == "wedge":
         from tissuesim.kinematics.wedge import wedge_shape_values
         from tissuesim.mesh.cells.wedge import mass_rule
@@ -164,7 +175,7 @@ def _element_rule(mesh) -> tuple[np.ndarray, np.ndarray]:
     if not mesh.simplicial:
         from tissuesim.kinematics.q1 import q1_shape_values
 
-        return q1_shape_values(mesh.points, mesh.cells, 3)
+        return q1_shape_values(mesh.points, mesh.cells, 2 if stiffness_rule else 3)
     return shape_values(mesh.points, mesh.cells, 2, 4)
 
 

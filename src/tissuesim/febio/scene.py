@@ -271,6 +271,9 @@ def febio_scene(model: FebModel, stem: str) -> tuple[dict, dict]:
             model, body, body["material"], body["formulation"], body["parts"], body["cells"]
         )
         tables.update(mesh={"file": file}, density=density, formulation=formulation)
+        # FEBio integrates a hex8's mass by its 2 x 2 x 2 Gauss points (exact only on
+        # parallelepipeds); dy03 and dy04's impacts follow FEBio's iterates only with its mass
+        tables["mass"] = "element_rule"
         if "regions" not in body:
             tables["material"] = material
         else:  # parts of other materials on the body's nodes (_bodies)
@@ -373,7 +376,7 @@ def febio_scene(model: FebModel, stem: str) -> tuple[dict, dict]:
     data: dict = {}
     if not several:
         ((_, tables),) = tables_per_body
-        for key in ("density", "formulation"):
+        for key in ("density", "formulation", "mass"):
             sim[key] = tables.pop(key)
         data["simulation"] = sim
         data.update(tables)

@@ -161,7 +161,7 @@ class BodyCalls:
                 f"add_body: material must be a tissuesim material (make_material), not "
                 f"{validate.short(material)}"
             )
-        validate.choice(mass, "mass", ("consistent", "lumped"))
+        validate.choice(mass, "mass", ("consistent", "lumped", "element_rule"))
         validate.choice(formulation, "formulation", ("displacement", "mean_dilatation", "shell"))
         if order is not None:
             if isinstance(order, bool) or order not in (1, 2):

@@ -268,9 +268,10 @@ def _organ(sim, item: dict, base_dir: Path, where: str) -> None:
     if "density" in item:
         options["density"] = _number(item["density"], f"{where} density", "a number > 0 (kg/m^3)")
     if "mass" in item:
-        if item["mass"] not in ("consistent", "lumped"):
+        if item["mass"] not in ("consistent", "lumped", "element_rule"):
             raise SceneError(
-                f"{where}: mass must be 'consistent' or 'lumped', not {item['mass']!r}"
+                f"{where}: mass must be 'consistent', 'lumped' or 'element_rule', not "
+                f"{item['mass']!r}"
             )
         options["mass"] = item["mass"]
     for key in ("order", "formulation"):
