@@ -83,8 +83,8 @@ class MassMatrix:
             element_mass = density * kinematics.cell_weights  # (m,)
             ref = (np.ones((nv, nv)) + np.eye(nv)) / (nv * (nv + 1))  # sums to 1
             scalar = element_mass[:, None, None] * ref[None]
-        else:  # P2 / Q1: rho N^a N^b by a rule exact on the element's rest map
-            rule = getattr(kinematics, "mass_rule", None)  # a shell's (kinematics/shell.py)
+        else:  # P2 / Q1: rho N^a N^b by a rule exact on the element's rest map (or its own)
+            rule = getattr(kinematics, "mass_rule", None)
             if rule is not None:  # a shell's (kinematics/shell.py)
                 N, w = rule()
             else:  # (q, nv), (m, q)
