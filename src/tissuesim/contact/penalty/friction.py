@@ -191,6 +191,17 @@ def _geometry(state: FrictionState, p, positions):
     return pts, np.concatenate([Hs, -Ha], axis=1), x - a
 
 
+def _stencil(state: FrictionState, p, dofs, pts: np.ndarray) -> np.ndarray:
+    """(n, 3 (k + m)) DOFs of each point's sampled facet, then its anchor's facet."""
+    return np.concatenate(
+        [
+            dofs[p.sampled.body][p.sampled.facets.nodes[p.points.facet[pts]]],
+            dofs[p.target.body][p.target.facets.nodes[state.facet[pts]]],
+        ],
+        axis=1,
+    ).reshape(len(pts), -1)
+
+
 def return_map(tau: np.ndarray, m: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """(the traction on the cone |t| <= m, whether each point sticks)."""
     size = np.linalg.norm(tau, axis=1)
@@ -229,13 +240,7 @@ def friction_terms(state: FrictionState, p, positions, dofs, eps_t, mu: float, o
     value = float(np.sum(W * phi))
     if order < 1:
         return value
-    stencil = np.concatenate(
-        [
-            dofs[p.sampled.body][p.sampled.facets.nodes[p.points.facet[pts]]],
-            dofs[p.target.body][p.target.facets.nodes[state.facet[pts]]],
-        ],
-        axis=1,
-    ).reshape(len(pts), -1)
+    stencil = _stencil(state, p, dofs, pts)
     width = stencil.shape[1]
     np.add.at(grad, stencil, (w[:, :, None] * (W[:, None] * t)[:, None, :]).reshape(-1, width))
     if order >= 2:
@@ -339,13 +344,7 @@ def _natural_terms(state, p, positions, dofs, eps_t, mu, order, grad, rows_out, 
     value = float(np.sum(W * phi))
     if order < 1:
         return value
-    stencil = np.concatenate(
-        [
-            dofs[p.sampled.body][p.sampled.facets.nodes[p.points.facet[pts]]],
-            dofs[p.target.body][p.target.facets.nodes[state.facet[pts]]],
-        ],
-        axis=1,
-    ).reshape(len(pts), -1)
+    stencil = _stencil(state, p, dofs, pts)
     np.add.at(grad, stencil, W[:, None] * np.einsum("nai,na->ni", D, T_ret))
     if order >= 2:
         safe = np.where(size > 0, size, 1.0)
