@@ -186,3 +186,36 @@ def test_arguments_key_by_value_arrays_by_their_bytes():
     assert cache._option_key({"x": [1, 2]}) != cache._option_key({"x": (1, 2)})
     assert cache._option_key({"x": 1}) != cache._option_key({"x": 1.0})
     assert cache._option_key({"x": object()}) is None  # not cached
+
+
+def test_the_glue_between_two_bodies_is_searched_once_per_worker(tmp_path, fresh_cache):
+    # two_blocks_tied glues its fat layer on the muscle: the closest-point search of the tie
+    # is the same in every run that keeps the meshes (a stiffness varied)
+    vary = {"bodies[0].material.youngs_modulus": [2e3, 6e3]}
+    with ThreadPoolExecutor(1) as pool:
+        results = tissuesim.sweep("two_blocks_tied", vary, out=tmp_path / "s", steps=2,
+                                  executor=pool, progress=False)  # fmt: skip
+    assert cache.tie_stats() == {"hits": 1, "misses": 1, "ties": 1}
+    from tissuesim.scene.examples import example_path
+
+    scene = example_path("two_blocks_tied")
+    for result in results:
+        data = tomllib.loads(scene.read_text())
+        data["bodies"][0]["material"]["youngs_modulus"] = result["params"][next(iter(vary))]
+        sim = build_scene(data, base_dir=scene.parent, source=str(scene)).simulation
+        sim.run(2, progress=False, render=False)
+        assert result["forces"] == sim.forces()  # exact
+    assert results[0]["forces"] != results[1]["forces"]
+    # another layer thickness (moved mesh) is searched again, not taken from the cache
+    from tissuesim.coupling.tie import tie_bodies
+
+    upper = tissuesim.box((0, 0, 0.0), (1.0, 1.0, 0.5), (2, 2, 1))
+    lower = tissuesim.box((0, 0, -0.5), (1.0, 1.0, 0.0), (2, 2, 1))
+    with cache.enabled():
+        first = tie_bodies("t", "u", upper, "l", lower, distance=1e-6, stiffness_per_area=1.0)
+        stiffer = tie_bodies("t", "u", upper, "l", lower, distance=1e-6, stiffness_per_area=2.0)
+        upper.points[:, 2] += 1e-7
+        moved = tie_bodies("t", "u", upper, "l", lower, distance=1e-6, stiffness_per_area=1.0)
+    assert cache.tie_stats() == {"hits": 2, "misses": 3, "ties": 3}
+    assert np.array_equal(stiffer.stiffness, 2.0 * first.stiffness)  # applied after the search
+    assert not np.array_equal(first.offset, moved.offset)

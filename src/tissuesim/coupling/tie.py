@@ -17,13 +17,14 @@ per m^2 times the point's share of the contact area. The force b exerts on a (th
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 import scipy.sparse as sp
 
 from tissuesim.errors import InputError
 
-__all__ = ["Tie", "tie_bodies"]
+__all__ = ["Tie", "TiePoints", "tie_bodies", "tie_points"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -62,19 +63,24 @@ class Tie:
         return sp.csr_matrix(sum(blocks))
 
 
-def tie_bodies(
-    name: str,
-    a: str,
-    mesh_a,
-    b: str,
-    mesh_b,
-    *,
-    distance: float,
-    stiffness_per_area: float,
-) -> Tie:
-    """Tie ``mesh_a``'s boundary triangles that touch ``mesh_b`` (all three vertices within
-    ``distance`` m of b's boundary) to b, at points no farther apart than a's median boundary
-    edge."""
+class TiePoints(NamedTuple):
+    """Where two meshes are glued (``tie_points``): the points (S, 3), each body's cells and
+    barycentric coordinates there, the rest offset (S, 3) and each point's area (S,) m^2."""
+
+    points: np.ndarray
+    cells_a: np.ndarray
+    barycentric_a: np.ndarray
+    cells_b: np.ndarray
+    barycentric_b: np.ndarray
+    offset: np.ndarray
+    area: np.ndarray
+
+
+def tie_points(a: str, mesh_a, b: str, mesh_b, *, distance: float) -> TiePoints:
+    """The points of ``mesh_a``'s boundary triangles that touch ``mesh_b`` (all three vertices
+    within ``distance`` m of b's boundary), no farther apart than a's median boundary edge, and
+    where each body carries them: the closest-point search, a pure function of the meshes
+    (a study's worker keeps it, ``sweep/cache.py``)."""
     from tissuesim.coupling.tissue import _facet_samples
     from tissuesim.mesh.queries.boundary import boundary_facets
     from tissuesim.mesh.queries.locate import closest_boundary_points, distance_to_boundary
@@ -97,15 +103,39 @@ def tie_bodies(
     points, area = _facet_samples(mesh_a.points, touching, spacing)
     on_a = closest_boundary_points(mesh_a, points)
     on_b = closest_boundary_points(mesh_b, points)
-    return Tie(
-        name,
-        a,
-        b,
+    return TiePoints(
         points,
         on_a.cells,
         on_a.barycentric,
         on_b.cells,
         on_b.barycentric,
         on_a.positions - on_b.positions,
-        stiffness_per_area * area,
+        area,
+    )
+
+
+def tie_bodies(
+    name: str,
+    a: str,
+    mesh_a,
+    b: str,
+    mesh_b,
+    *,
+    distance: float,
+    stiffness_per_area: float,
+) -> Tie:
+    """Tie ``mesh_a``'s boundary triangles that touch ``mesh_b`` (``tie_points``) to b, each
+    point's stiffness ``stiffness_per_area`` times its area."""
+    found = tie_points(a, mesh_a, b, mesh_b, distance=distance)
+    return Tie(
+        name,
+        a,
+        b,
+        found.points,
+        found.cells_a,
+        found.barycentric_a,
+        found.cells_b,
+        found.barycentric_b,
+        found.offset,
+        stiffness_per_area * found.area,
     )

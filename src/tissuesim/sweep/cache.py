@@ -16,7 +16,10 @@ from_stencils`` and ``from_entries`` are pure functions of their arguments (the 
 stencils' bytes), kept the same way: at most ``MAX_PATTERNS`` (a 4.8e4-tetrahedron pattern
 is 60 MB), each run given its own copy (0.02 s); and so are P1 elements' rest shapes
 (``kinematics/p1.py``'s ``shape_gradients``: a model's regions and a parameter's copies,
-``identification/sensitivity.py``, share them).
+``identification/sensitivity.py``, share them), and the closest-point search that glues two
+bodies (``coupling/tie.py``'s ``tie_points``),
+keyed by both meshes' points and cells and the search distance (the tie's stiffness, which
+follows the materials, is applied after).
 
 The cache is on only inside a study's run (``execute_run``, a thread-local switch; off
 everywhere with ``TISSUESIM_SWEEP_CACHE=0`` in the environment), through wrappers put once in
@@ -40,12 +43,23 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["MAX_MESHES", "MAX_PATTERNS", "install", "enabled", "clear", "stats", "pattern_stats"]
+__all__ = [
+    "MAX_MESHES",
+    "MAX_PATTERNS",
+    "install",
+    "enabled",
+    "clear",
+    "stats",
+    "pattern_stats",
+    "tie_stats",
+]
 
 #: meshes kept per worker (a 1e5-tetrahedron mesh is about 4 MB)
 MAX_MESHES = 8
 #: sparsity patterns kept per worker (60 MB for 4.8e4 tetrahedra)
 MAX_PATTERNS = 4
+#: ties between two bodies kept per worker (a scene's glued pairs)
+MAX_TIES = 16
 #: P1 rest shapes (shape gradients and measures) kept per worker (a body's regions each have
 #: theirs; 5 MB for 4.8e4 tetrahedra)
 MAX_REST_SHAPES = 16
@@ -58,6 +72,8 @@ _patterns: OrderedDict[tuple, Any] = OrderedDict()
 _pattern_stats = {"hits": 0, "misses": 0}
 _shapes: OrderedDict[tuple, Any] = OrderedDict()
 _shape_stats = {"hits": 0, "misses": 0}
+_ties: OrderedDict[tuple, Any] = OrderedDict()
+_tie_stats = {"hits": 0, "misses": 0}
 _installed = False
 
 
@@ -73,6 +89,12 @@ def pattern_stats() -> dict[str, int]:
         return {**_pattern_stats, "patterns": len(_patterns)}
 
 
+def tie_stats() -> dict[str, int]:
+    """This process's tie cache: hits, misses (since ``clear``) and ties kept."""
+    with _lock:
+        return {**_tie_stats, "ties": len(_ties)}
+
+
 def clear() -> None:
     """Forget every mesh and pattern kept and the counts."""
     with _lock:
@@ -82,6 +104,8 @@ def clear() -> None:
         _pattern_stats.update(hits=0, misses=0)
         _shapes.clear()
         _shape_stats.update(hits=0, misses=0)
+        _ties.clear()
+        _tie_stats.update(hits=0, misses=0)
 
 
 @contextmanager
@@ -212,6 +236,34 @@ def _cached_shapes(function: Callable[..., Any]) -> Callable[..., Any]:
     return wrapper
 
 
+def _mesh_key(mesh: Any) -> tuple:
+    """A mesh by what a tie's search reads: its points and cells (a cut mesh's fractions and
+    levels too, so that a cut copy is never taken for its uncut mesh)."""
+    names = ("points", "cells", "cell_fractions", "cell_levels", "cell_more_levels")
+    return tuple(_value_key(getattr(mesh, name, None)) for name in names)
+
+
+def _cached_tie(function: Callable[..., Any]) -> Callable[..., Any]:
+    """``tie_points(a, mesh_a, b, mesh_b, **options)`` cached by the meshes' arrays, the
+    names (its error message names them) and the options while the cache is on."""
+
+    @functools.wraps(function)
+    def wrapper(a: str, mesh_a: Any, b: str, mesh_b: Any, **options: Any) -> Any:
+        call = lambda: function(a, mesh_a, b, mesh_b, **options)  # noqa: E731
+        if not getattr(_local, "on", False):
+            return call()
+        try:
+            key = (a, b, _mesh_key(mesh_a), _mesh_key(mesh_b), _option_key(options))
+        except TypeError:
+            return call()
+        if key[-1] is None:
+            return call()
+        return _kept(_ties, _tie_stats, MAX_TIES, key, call)
+
+    wrapper.__wrapped_by_sweep_cache__ = True  # type: ignore[attr-defined]
+    return wrapper
+
+
 def install() -> None:
     """Put the caching wrappers in place (once per process; idempotent)."""
     global _installed
@@ -242,4 +294,7 @@ def install() -> None:
         import tissuesim.kinematics.p1 as p1
 
         p1.shape_gradients = _cached_shapes(p1.shape_gradients)
+        import tissuesim.coupling.tie as tie
+
+        tie.tie_points = _cached_tie(tie.tie_points)
         _installed = True
