@@ -1,14 +1,16 @@
 """What a parameter study costs (``tissuesim.sweep``, issue 43).
 
     python3 benchmarks/sweep.py [--scene two_blocks_tied] [--runs 40] [--workers 1 2] [--dask]
-                                [--repeat 3] [--dataset-format hdf5 zarr]
+                                [--ray] [--repeat 3] [--dataset-format hdf5 zarr]
                                 [--write benchmarks/results/sweep.md]
 
 A study of ``--runs`` runs of a shipped contact-free scene (default ``two_blocks_tied``: two
 glued blocks, 720 tetrahedra, 10 quasistatic steps; its fat layer's Young's modulus
 varied over 2e3..8e3 Pa, evenly spaced), for each worker count on the default process pool
 (one thread per worker; ``--dask``: also on tissuesim's Dask LocalCluster of as many worker
-processes, ``executor_from_spec("dask-local")``, and on a LocalCluster with Dask's defaults),
+processes, ``executor_from_spec("dask-local")``, and on a LocalCluster with Dask's defaults;
+``--ray``: on a local Ray cluster of as many CPUs, ``executor_from_spec("ray")``, its workers
+started by Ray at the first tasks),
 each ``--repeat`` times in interleaved rounds, the median round shown:
 
 - runs per minute, with and without the pool's start-up (workers started, imports, warm-up);
@@ -106,6 +108,19 @@ def measure(kind: str, scene: str, runs: int, workers: int, key) -> dict:
     its client and the workers' warm-up) timed with it."""
     if kind == "process pool":
         return study(scene, runs, workers, None, key=key)
+    if kind == "Ray (local)":  # as --executor ray: executor_from_spec("ray")
+        from tissuesim.sweep.executors import close, executor_from_spec
+
+        t0 = time.perf_counter()
+        executor, owned = executor_from_spec("ray", workers)
+        started = time.perf_counter() - t0
+        try:
+            row = study(scene, runs, workers, executor, key=key)
+        finally:
+            close(owned)
+        row["start_s"] = started
+        row["runs_per_min_with_start"] = 60 * runs / (started + row["study_s"])
+        return row
     from distributed import Client, LocalCluster
 
     from tissuesim.sweep.executors import dask_local_cluster, warm_dask_workers
@@ -186,6 +201,9 @@ def main() -> None:
         action="store_true",
         help="also on tissuesim's Dask LocalCluster (dask-local) and on one with Dask's defaults",
     )
+    parser.add_argument(
+        "--ray", action="store_true", help="also on a local Ray cluster (--executor ray)"
+    )
     parser.add_argument("--repeat", type=int, default=3, help="rounds; the median is shown")
     parser.add_argument(
         "--malloc-trim",
@@ -210,8 +228,11 @@ def main() -> None:
     )
     args = parser.parse_args()
     print(f"load before: {load()} (1, 5, 15 min), {os.cpu_count()} cores")
-    kinds = ["process pool"] + (["Dask LocalCluster", "Dask LocalCluster, Dask's defaults"]
-                                if args.dask else [])  # fmt: skip
+    kinds = ["process pool"]
+    if args.dask:
+        kinds += ["Dask LocalCluster", "Dask LocalCluster, Dask's defaults"]
+    if args.ray:
+        kinds.append("Ray (local)")
     measured: dict[tuple[str, int], list[dict]] = {}
     for _ in range(args.repeat):  # interleaved rounds: a slow spell of the machine hits all
         for kind in kinds:
@@ -245,7 +266,8 @@ def main() -> None:
         f"Measured {time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}, "
         f"{os.cpu_count()} cores; `python3 benchmarks/sweep.py --scene {args.scene} "
         f"{'' if args.key is None else '--key ' + args.key + ' '}--runs {args.runs} --workers "
-        f"{' '.join(map(str, args.workers))}{' --dask' if args.dask else ''} --repeat "
+        f"{' '.join(map(str, args.workers))}{' --dask' if args.dask else ''}"
+        f"{' --ray' if args.ray else ''} --repeat "
         f"{args.repeat}"
         f"{' --dataset-format ' + ' '.join(args.dataset_format) if not args.no_fields else ''}`."
         " Each run: "

@@ -299,7 +299,7 @@ class ContactForce:
     """The force (N) obstacle ``name`` (an instrument, a probe, a table) exerts on the bodies
     through the barrier, as ``Simulation.forces()[name]``, its ``component`` (0, 1, 2; default
     all three): a function of the state and of the obstacle's place at the step's end, which
-    a parameter of its motion moves (frictionless contact: sensitivity.py)."""
+    a parameter of its motion moves (with friction, its lag held: held_friction.py)."""
 
     name: str
     component: int | tuple | None = None
@@ -320,11 +320,16 @@ class ContactForce:
         # the obstacles where the step ended (a parameter copy's: sensitivity.py's _sync)
         return np.asarray(contact.obstacle_forces(x)[self.name], dtype=float)[comps]
 
-    def derivative(self, sim, x: np.ndarray, S: np.ndarray, Y: np.ndarray):
-        """(values, d values / d theta) at the converged x: the force is the barrier's
-        gradient summed over the obstacle's vertices, so its derivative is the barrier's exact
-        Hessian (over the collision vertices) applied to the vertices' motion, the bodies'
-        J S and the obstacles' own Y (n_obstacle coordinates, p; their motion's derivative)."""
+    def derivative(self, sim, x: np.ndarray, S: np.ndarray, Y: np.ndarray, friction=None,
+                   copies=()):  # fmt: skip
+        """(values, d values / d theta) at the converged x: the force is the barrier's (and
+        the lagged friction's) gradient summed over the obstacle's vertices, so its derivative
+        is their exact Hessian (over the collision vertices) applied to the vertices' motion,
+        the bodies' J S and the obstacles' own Y (n_obstacle coordinates, p; their motion's
+        derivative); with friction (``held_friction.py``'s step terms) less its Hessian
+        applied to its slip's start's motion, plus its lag point's motion (the vertices',
+        where the lag is taken as converged) and a varied coefficient's own part (the
+        ``copies``' forces at the same vertices)."""
         contact, rows, comps = self._rows(sim)
         d = contact.dim
         V = contact.vertices(x)
@@ -336,6 +341,15 @@ class ContactForce:
         coords = (np.arange(V.shape[0])[rows][:, None] * d + np.asarray(comps)).T  # (k, m)
         y = np.array([g_V[c].sum() for c in coords])
         D = np.vstack([np.asarray(H_V[c].sum(axis=0)).ravel() @ dV for c in coords])
+        if friction is not None:
+            HW = friction.start_motion_term
+            D -= np.vstack([HW[c].sum(axis=0) for c in coords])
+            if friction.lag_term is not None:
+                LdV = np.asarray(friction.lag_term @ dV)
+                D += np.vstack([LdV[c].sum(axis=0) for c in coords])
+            for j, (delta, pair) in enumerate(copies):  # at the same vertices, held lags
+                g_pm = [c.system.contact.vertex_terms(V, 1, False)[1] for c in pair]
+                D[:, j] += [(g_pm[0][c].sum() - g_pm[1][c].sum()) / (2 * delta) for c in coords]
         return y, D
 
 

@@ -32,27 +32,39 @@ obstacle ends a step within ``kinematic.py``'s TOLERANCE (0.01 dhat) of its targ
 augmented Lagrangian that drives it stopped: the copies' obstacles end as far off theirs
 (that offset held, not differentiated).
 
+IPC's friction is differentiated with its lag held (``held_friction.py``): its normal forces and
+tangent bases are the lag point's constants, its Hessian joins H, and its slip's start (the
+step's start) moves with the last step's sensitivity, a term of b; the copies are lagged as the
+base's step (their own mu).
+
 What is differentiated: FEM bodies under quasistatics, Backward Euler or Newmark, elastic laws
 (without internal variables), supports, prescribed motions, graspers, loads and springs,
-frictionless barrier contact (against obstacles and between bodies); friction, FEBio's penalty
-contact, interactive contact steps (a prediction, not a minimum), rigid bodies,
-history-dependent laws and dynamic steps that halved are refused in one line (the derivative
-would be of a different sequence of solves).
+barrier contact (against obstacles and between bodies) with or without friction; FEBio's
+penalty contact, interactive contact steps (a prediction, not a minimum), rigid bodies,
+history-dependent laws, dynamic steps and friction steps that halved are refused in one line
+(the derivative would be of a different sequence of solves).
 """
 
 from __future__ import annotations
 
 import time
+import warnings
 from collections.abc import Callable, Mapping, Sequence
+from contextlib import nullcontext
 from dataclasses import dataclass, field
 
 import numpy as np
 import scipy.sparse as sp
 
 from tissuesim.errors import InputError
+from tissuesim.identification.held_friction import HeldFriction, lag_stiffness, start_motion
 from tissuesim.identification.observations import linearize
 
 __all__ = ["Sensitivities", "sensitivities"]
+
+#: a friction lag point farther than this times dhat from a step's solution is reported
+#: (``friction_lag="converged"`` assumes they coincide)
+UNSETTLED_LAG = 1e-3
 
 #: the relative step of the parameters' central differences (of the assembled gradient)
 RELATIVE_STEP = 1e-6
@@ -87,12 +99,6 @@ def _check(sim, what: str) -> None:
             f"{what}: sensitivities of runs with FEBio's penalty contact or rigid bodies are "
             "not taken yet: use a scene without them, or finite differences of whole runs"
         )
-    if s.contact is not None and s.contact.has_friction:
-        raise InputError(
-            f"{what}: sensitivities of runs with contact friction are not taken yet "
-            "(frictionless barrier contact is): set friction = 0, or finite differences of "
-            "whole runs"
-        )
     if s.contact is not None and s.contact.settings.mode == "interactive":
         raise InputError(
             f"{what}: an interactive contact step is a prediction, not the minimum the "
@@ -108,12 +114,13 @@ def _check(sim, what: str) -> None:
             )
 
 
-def _sync(sim, t_prev: float, t: float, kappa=None, offset=None) -> None:
+def _sync(sim, t_prev: float, t: float, kappa=None, offset=None, friction=None) -> None:
     """Set a parameter copy's supports to the step from t_prev to t (as ``step`` does), and
     its contact to the step's end: its obstacles where its own motion puts them at t (plus
     ``offset``: where the base run's moving obstacles ended off their targets), the
     barrier's stiffness ``kappa`` the base run's step used (a numerical constant held, as
-    the step was solved with it)."""
+    the step was solved with it), its friction lagged as the base's step (``friction``, a
+    ``HeldFriction``)."""
     tol = 1e-9 * sim.time_step
     for body in sim.bodies.values():
         body.release_graspers(t_prev + tol)
@@ -125,6 +132,8 @@ def _sync(sim, t_prev: float, t: float, kappa=None, offset=None) -> None:
             contact.obstacle_state = contact.obstacle_positions(t) + offset
         if kappa is not None and contact.kappa != kappa:
             contact.set_stiffness(kappa)
+        if friction is not None:
+            friction.install(contact)
 
 
 def sensitivities(
@@ -135,6 +144,7 @@ def sensitivities(
     *,
     relative_step: float = RELATIVE_STEP,
     scales: Mapping[str, float] | None = None,
+    friction_lag: str = "converged",
 ) -> Sensitivities:
     """Run ``build(parameters)`` (a function returning a ``Simulation``) for ``steps`` steps
     and return the ``observations`` (``Reaction``, ``Displacement``, ``SurfaceDistance``, or
@@ -142,7 +152,14 @@ def sensitivities(
     respect to every parameter. A parameter's difference is ``relative_step`` times its value,
     or times (|value| + its ``scales`` entry) where one is given (FEBio's
     ``f_diff_scale (|b| + |a|)``: a parameter that may be 0); without a scale it must be
-    non-zero."""
+    non-zero. ``friction_lag`` (IPC friction, ``held_friction.py``): "converged" (the lag
+    point taken as the step's solution, its normal forces and tangent bases moving with it:
+    the derivative of a run whose friction iterations converged) or "held" (constants: the
+    derivative of the solves with their lags as they were)."""
+    if friction_lag not in ("converged", "held"):
+        raise InputError(
+            f"sensitivities: friction_lag must be 'converged' or 'held', got {friction_lag!r}"
+        )
     names = list(parameters)
     if not names:
         raise InputError("sensitivities: give at least one parameter")
@@ -186,6 +203,11 @@ def sensitivities(
     beta, gamma = base.newmark if newmark else (0.0, 0.0)
     n, p = base.system.n_dofs, len(names)
     S_x, S_v, S_a = np.zeros((n, p)), np.zeros((n, p)), np.zeros((n, p))
+    for j, (delta, pair) in enumerate(copies):  # the start's own (rest positions varied)
+        S_x[:, j] = (pair[0].state.x - pair[1].state.x) / (2 * delta)
+        S_v[:, j] = (pair[0].state.v - pair[1].state.v) / (2 * delta)
+    contact = base.system.contact
+    Y = None if contact is None else _obstacle_motion(base, copies, base.time)
     a_n = np.zeros(n)
     if newmark and base._state.a is None and not base.history:
         # the run's first step starts from FEBio's initial acceleration M^-1 f(t_0): its
@@ -199,11 +221,12 @@ def sensitivities(
     values, jac, times, records = [], [], [], []
     solver = _StepSolver()  # one analysis of the pattern for every step
     forward_s, sens_s = 0.0, 0.0
+    unsettled = 0.0  # how far the friction's last lag point was from a step's solution (m)
     for _ in range(int(steps)):
         if base.finished:  # an adaptive run in phases: ``steps`` is an upper bound, as in run
             break
         x_prev, v_prev, t_prev = base._state.x.copy(), base._state.v.copy(), base.time
-        contact = base.system.contact
+        Y_prev = Y
         tick = time.perf_counter()
         record = base.step()
         # the barrier's stiffness the step was solved with (IPC's adaptive one is raised after)
@@ -218,9 +241,11 @@ def sensitivities(
         tick = time.perf_counter()
         t, x = base.time, base._state.x
         h = t - t_prev
-        if dynamic and record.substeps != 1:
+        friction = HeldFriction.of(contact)
+        if (dynamic or friction is not None) and record.substeps != 1:
+            why = base.integrator if friction is None else "its friction slips from a sub-step"
             raise InputError(
-                f"sensitivities: the step to t = {t:.6g} s halved ({base.integrator}): the "
+                f"sensitivities: the step to t = {t:.6g} s halved ({why}): the "
                 "derivative follows the steps as solved; use a smaller time_step"
             )
         s = base.system
@@ -237,7 +262,8 @@ def sensitivities(
         if contact is not None and contact.kappa != kappa:
             kept_kappa = contact.kappa
             contact.set_stiffness(kappa)
-        acc = s.evaluate(x, 2, False, s.last_step_energies)
+        with contact.last_step_lag() if friction is not None else nullcontext():
+            acc = s.evaluate(x, 2, False, s.last_step_energies)  # with the step's friction
         g = acc.gradient
         B = np.zeros((n, p))
         Sp = np.zeros((n, p))
@@ -245,7 +271,7 @@ def sensitivities(
         for j, (delta, pair) in enumerate(copies):
             grads, placed = [], []
             for sign, sim in zip((1.0, -1.0), pair, strict=True):
-                _sync(sim, t_prev, t, kappa, offset)
+                _sync(sim, t_prev, t, kappa, offset, friction)
                 xs = sim.system.apply_prescribed(x, t)
                 cs = None
                 if dynamic:  # the prediction moved along its own derivative
@@ -267,22 +293,44 @@ def sensitivities(
         if follow is not None:  # a lagged pressure: the follower load's own (skew) stiffness
             K = K + follow
             A = (A + keep @ follow @ keep).tocsc()
+        Y = _obstacle_motion(base, copies) if contact is not None else None
+        symmetric = follow is None
+        if friction is not None:  # the slip's start moved by the last step's sensitivity
+            W = start_motion(contact, x_prev, S_x, Y_prev)
+            C, friction.start_motion_term = friction.start_term(contact, x, W)
+            B = B + C
+            if friction_lag == "converged":  # the lag point moves with the state
+                unsettled = max(unsettled, friction.unsettled(contact, x))
+                L = friction.lag_term = lag_stiffness(contact, x, friction)
+                J = contact.selection(x)
+                KL = (J.T @ L @ J).tocsr()
+                B = B + KL @ Sp  # with the prescribed DOFs' motion (the copies' lag is held)
+                if contact.n_obstacle:  # and with the obstacles' own motion
+                    dY = np.zeros((L.shape[0], p))
+                    dY[contact.n_deformable * contact.dim :] = Y
+                    B = B + np.asarray(J.T @ (L @ dY))
+                K = (K + KL).tocsr()
+                A = (A + keep @ KL @ keep).tocsc()
+                symmetric = False
         rhs = -B.copy()
         rhs[dofs] = 0.0
-        Sf = solver.solve(A, rhs, symmetric=follow is None)
+        Sf = solver.solve(A, rhs, symmetric=symmetric)
         Sf[dofs] = 0.0
         dG = K @ Sf + B  # the gradient's total derivative (B holds H_:p s_p)
         S = Sf + Sp
-        Y = _obstacle_motion(base, copies) if contact is not None else None
         vals, ders = [], []
         for i, ob in enumerate(observations):
             if hasattr(ob, "derivative"):
-                y, D = ob.derivative(base, x, S, Y)
+                with contact.last_step_lag() if friction is not None else nullcontext():
+                    y, D = ob.derivative(base, x, S, Y, friction, copies)
             elif hasattr(ob, "values"):
                 y, D = _state_function(ob, base, x, S, copies)
             else:
                 y, X, R = linearize(ob, base, x, g)
                 D = X @ S + R @ dG
+                if hasattr(ob, "rest"):  # a displacement from rest positions a parameter moves
+                    for j, (delta, pair) in enumerate(copies):
+                        D[:, j] -= (ob.rest(pair[0]) - ob.rest(pair[1])) / (2 * delta)
             vals.append(np.asarray(y, dtype=float))
             ders.append(np.asarray(D).reshape(len(vals[-1]), p))
             if not times:
@@ -300,20 +348,31 @@ def sensitivities(
             S_v = (S - S_x) / h
         S_x = S
         sens_s += time.perf_counter() - tick
+    if contact is not None and unsettled > UNSETTLED_LAG * contact.dhat:
+        warnings.warn(
+            f"sensitivities: the friction's last lag point was up to {unsettled:.2g} m from a "
+            f"step's solution (dhat {contact.dhat:g} m): the derivative takes them as one and "
+            "may be off the run's by per cents; raise the contact's friction_iterations "
+            "(docs/guide/identify.md, Friction)",
+            stacklevel=2,
+        )
     return Sensitivities(names, labels, np.asarray(times), np.asarray(values), np.asarray(jac),
                          forward_s, sens_s + build_s, 1 + 2 * p, records)  # fmt: skip
 
 
-def _obstacle_motion(base, copies: list) -> np.ndarray:
+def _obstacle_motion(base, copies: list, t: float | None = None) -> np.ndarray:
     """d y / d theta (n_obstacle coordinates, p): where each parameter's copies put the
-    obstacles at the step's end (``_sync``), by central differences (exact: their places are
-    the motions' values)."""
+    obstacles at the step's end (``_sync``), or where their motions put them at time t, by
+    central differences (exact: their places are the motions' values)."""
     contact = base.system.contact
     Y = np.zeros((contact.n_obstacle, len(copies)))
     for j, (delta, pair) in enumerate(copies):
         at = []
         for sim in pair:
             c = sim.system.contact
+            if t is not None:
+                at.append(c.obstacle_positions(t))
+                continue
             at.append(c.obstacle_state if c.obstacle_state is not None
                       else c.obstacle_positions(c.time))  # fmt: skip
         Y[:, j] = (at[0] - at[1]) / (2 * delta)
