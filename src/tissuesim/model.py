@@ -155,8 +155,28 @@ class Model:
         )
         if extra is not None:
             self.elastic.set_pattern(self.pattern)
-        self.mass = MassMatrix.build(self.kinematics, self.density, self.pattern, self.mass_kind)
+        self._mass = None  # built at first use (``mass``)
         self.set_conditions(self.conditions)
+
+    @property
+    def mass(self) -> MassMatrix:
+        """The mass matrix over ``pattern`` (of ``density``, ``mass_kind``), built at first
+        use: a quasistatic run's parameter copies (identification/sensitivity.py) never need
+        it (half of a copy's build on a bar of 8 regions)."""
+        if self._mass is None:
+            if self.parts is not None:
+                from tissuesim.model_regions import region_mass
+
+                self._mass = region_mass(self.parts, self.pattern, self.mass_kind)
+            else:
+                self._mass = MassMatrix.build(
+                    self.kinematics, self.density, self.pattern, self.mass_kind
+                )
+        return self._mass
+
+    @mass.setter
+    def mass(self, value: MassMatrix) -> None:
+        self._mass = value
 
     def set_conditions(self, conditions: Sequence[DirichletCondition]) -> None:
         self.conditions = tuple(conditions)

@@ -185,7 +185,7 @@ def build_regions(model, kinematics_of, resolve_backend) -> None:
             p.elastic.set_pattern(model.pattern)
     model.elastic = RegionElastic(parts)
     model.material = RegionMaterials(parts)
-    model.mass = region_mass(parts, model.pattern, model.mass_kind)
+    model.mass = None  # built at first use (Model.mass)
 
 
 def region_mass(parts: list[RegionPart], pattern: SparsityPattern, kind: str, unit=False):
