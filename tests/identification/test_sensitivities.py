@@ -133,17 +133,8 @@ def test_a_follower_pressure_on_an_open_surface_is_differentiated(element):
             assert np.abs(r.jacobian[-1][part, j] - fd[part]).max() <= 1e-5 * scale, (k, part)
 
 
-def test_a_law_with_history_is_refused_and_fibre_laws_are_taken():
-    def viscous(p):
-        mesh = ts.box((0, 0, 0), (1.0, 0.3, 0.3), (2, 1, 1))
-        law = ts.Viscoelastic(ts.NeoHookean(youngs_modulus=p["E"], poisson_ratio=0.3),
-                              g=[0.5], tau=[1.0])  # fmt: skip
-        sim = ts.Simulation(mesh, law, integrator="quasistatic", time_step=0.1)
-        sim.fix(select.vertices_on_plane(mesh, 0, 0.0), name="wall")
-        return sim
-
-    with pytest.raises(InputError, match="internal variables"):
-        ts.sensitivities(viscous, {"E": 5e4}, [ts.Reaction("wall")], 1)
+def test_fibre_laws_are_taken():
+    """(Laws with internal variables: test_sensitivities_history.py.)"""
 
     def fibres(p):
         mesh = ts.box((0, 0, 0), (1.0, 0.3, 0.3), (2, 1, 1), element="hex")

@@ -37,11 +37,15 @@ tangent bases are the lag point's constants, its Hessian joins H, and its slip's
 step's start) moves with the last step's sensitivity, a term of b; the copies are lagged as the
 base's step (their own mu).
 
-What is differentiated: FEM bodies under quasistatics, Backward Euler or Newmark, elastic laws
-(without internal variables), supports, prescribed motions, graspers, loads and springs,
+Laws with internal variables (viscoelasticity, damage, ...) carry their variables' derivative
+from step to step (``history.py``): b holds the gradient's dependence on the last step's
+variables along their derivative, and the update's derivative is taken through the copies.
+
+What is differentiated: FEM bodies under quasistatics, Backward Euler or Newmark, any law
+(internal variables included), supports, prescribed motions, graspers, loads and springs,
 barrier contact (against obstacles and between bodies) with or without friction; FEBio's
 penalty contact, interactive contact steps (a prediction, not a minimum), rigid bodies,
-history-dependent laws, dynamic steps and friction steps that halved are refused in one line
+Rayleigh damping, and dynamic, friction or history steps that halved are refused in one line
 (the derivative would be of a different sequence of solves).
 """
 
@@ -58,6 +62,7 @@ import scipy.sparse as sp
 
 from tissuesim.errors import InputError
 from tissuesim.identification.held_friction import HeldFriction, lag_stiffness, start_motion
+from tissuesim.identification.history import HistoryDerivative
 from tissuesim.identification.observations import linearize
 
 __all__ = ["Sensitivities", "sensitivities"]
@@ -107,10 +112,10 @@ def _check(sim, what: str) -> None:
     for name, body in sim.bodies.items():
         if body.kind != "fem":
             raise InputError(f"{what}: body {name!r} is not a FEM body (frames are not taken)")
-        if hasattr(body.model.material, "accept_step"):  # a region's history counts too
+        if body.model.damping is not None:
             raise InputError(
-                f"{what}: body {name!r}'s law carries internal variables (its history): "
-                "sensitivities are taken of elastic laws"
+                f"{what}: body {name!r} has Rayleigh damping, which sensitivities do not "
+                "differentiate yet: leave it out, or finite differences of whole runs"
             )
 
 
@@ -196,6 +201,7 @@ def sensitivities(
                 )
             pair.append(sim)
         copies.append((delta, pair))
+    history = HistoryDerivative.of(base, copies)  # laws with internal variables
     build_s = time.perf_counter() - start
     labels: list[str] = []
     dynamic = base.integrator in ("backward_euler", "newmark")
@@ -227,6 +233,8 @@ def sensitivities(
             break
         x_prev, v_prev, t_prev = base._state.x.copy(), base._state.v.copy(), base.time
         Y_prev = Y
+        if history is not None:
+            history.start_step(base)
         tick = time.perf_counter()
         record = base.step()
         # the barrier's stiffness the step was solved with (IPC's adaptive one is raised after)
@@ -242,8 +250,12 @@ def sensitivities(
         t, x = base.time, base._state.x
         h = t - t_prev
         friction = HeldFriction.of(contact)
-        if (dynamic or friction is not None) and record.substeps != 1:
-            why = base.integrator if friction is None else "its friction slips from a sub-step"
+        if (dynamic or friction is not None or history is not None) and record.substeps != 1:
+            why = base.integrator
+            if friction is not None:
+                why = "its friction slips from a sub-step"
+            elif history is not None:
+                why = "its laws' history was updated at its sub-steps"
             raise InputError(
                 f"sensitivities: the step to t = {t:.6g} s halved ({why}): the "
                 "derivative follows the steps as solved; use a smaller time_step"
@@ -262,12 +274,17 @@ def sensitivities(
         if contact is not None and contact.kappa != kappa:
             kept_kappa = contact.kappa
             contact.set_stiffness(kappa)
-        with contact.last_step_lag() if friction is not None else nullcontext():
-            acc = s.evaluate(x, 2, False, s.last_step_energies)  # with the step's friction
+        with (
+            contact.last_step_lag() if friction is not None else nullcontext(),
+            history.as_solved(base, x_prev, h) if history is not None else nullcontext(),
+        ):  # the step's potential as solved: its friction lag, its laws' history
+            acc = s.evaluate(x, 2, False, s.last_step_energies)
         g = acc.gradient
         B = np.zeros((n, p))
         Sp = np.zeros((n, p))
         dofs = np.asarray(s.elimination.dofs)
+        if history is not None:  # the copies' internal variables along their derivative
+            history.set_copies(x_prev, h)
         for j, (delta, pair) in enumerate(copies):
             grads, placed = [], []
             for sign, sim in zip((1.0, -1.0), pair, strict=True):
@@ -318,6 +335,8 @@ def sensitivities(
         Sf[dofs] = 0.0
         dG = K @ Sf + B  # the gradient's total derivative (B holds H_:p s_p)
         S = Sf + Sp
+        if history is not None:  # the internal variables' update, then the copies at q_n
+            history.update(x, S)
         vals, ders = [], []
         for i, ob in enumerate(observations):
             if hasattr(ob, "derivative"):
