@@ -302,15 +302,64 @@ def test_contact_it_cannot_differentiate_is_refused_in_one_line():
         ts.sensitivities(indented, params, [ts.ContactForce("nope")], 1)
 
 
-def test_rigid_bodies_are_refused_in_one_line():
-    def platen(p):
-        sim = build(p)
-        mid = select.vertices_on_plane(sim.bodies["body"].mesh, 0, 0.5)
-        sim.add_rigid_body("plate", vertices={"body": mid}, fixed=("x", "y", "z"))
+def platen(p, free=False):
+    """A block under a rigid platen glued to its top: pressed p["depth"] down and tilted by
+    p["tilt"] about x over the run, or (``free``) loaded by p["load"] N down and free to sink
+    and tilt (its x, y and rz held)."""
+    mesh = ts.box((0, 0, 0), (1.0, 1.0, 0.4), (2, 2, 2))
+    sim = ts.Simulation(mesh, ts.NeoHookean(youngs_modulus=p["E"], poisson_ratio=0.3),
+                        integrator="quasistatic", time_step=0.5)  # fmt: skip
+    sim.fix(select.vertices_on_plane(mesh, 2, 0.0), name="table")
+    top = select.vertices_on_plane(mesh, 2, 0.4)
+    if free:
+        sim.add_rigid_body("plate", vertices={"body": top}, fixed=("x", "y", "rz"),
+                           force=lambda t: (0.0, 0.3 * p["load"] * t, -p["load"] * t))  # fmt: skip
+    else:
+        sim.add_rigid_body("plate", vertices={"body": top}, fixed=("x", "y", "ry", "rz"),
+                           prescribed={"z": lambda t: -p["depth"] * t,
+                                       "rx": lambda t: p["tilt"] * t})  # fmt: skip
+    return sim
+
+
+@pytest.mark.parametrize("free", [False, True])
+def test_a_rigid_platen_is_differentiated(free):
+    """Its force and moment (RigidForce: FEBio's fem.rigidbody('plate').Fz), the table's
+    reaction and a side vertex's displacement against central differences of whole runs, in
+    the block's modulus and the platen's motion (prescribed) or load (free: its own DOFs
+    solved with the block's, tilted by the load's lateral part)."""
+    params = {"E": 5e4, "load": 800.0} if free else {"E": 5e4, "depth": 0.05, "tilt": 0.1}
+    mesh = platen(params, free).bodies["body"].mesh
+    side = np.flatnonzero(np.isclose(mesh.points[:, 2], 0.2) & np.isclose(mesh.points[:, 0], 1.0))
+    obs = [ts.RigidForce("plate", "Fz"), ts.RigidForce("plate", "Mx"), ts.Reaction("table"),
+           ts.Displacement(side[:1])]  # fmt: skip
+    r = ts.sensitivities(lambda q: platen(q, free), params, obs, 2)
+
+    def run(q):
+        sim = platen(q, free)
+        for _ in range(2):
+            sim.step()
+        f = sim.forces()
+        pieces = [[f["plate"][2]], [f["plate.moment"][0]], f["table"]]
+        return np.concatenate(pieces + [sim.body_displacement()[side[:1]].ravel()])
+
+    np.testing.assert_allclose(r.values[-1], run(params), rtol=1e-9, atol=1e-9)
+    fd = np.column_stack([central(run, params, k) for k in params])
+    parts = (slice(0, 1), slice(1, 2), slice(2, 5), slice(5, None))
+    for part in parts[2:] if free else parts:  # a free platen's held force: the load's
+        scale = np.abs(fd[part]).max()
+        assert scale > 0, part
+        assert np.abs(r.jacobian[-1][part] - fd[part]).max() <= 1e-6 * scale, part
+
+
+def test_rigid_bodies_in_dynamic_runs_are_refused_in_one_line():
+    def swinging(p):
+        sim = platen(p)
+        sim.integrator = "backward_euler"
         return sim
 
-    with pytest.raises(InputError, match="penalty contact or rigid bodies are not taken yet"):
-        ts.sensitivities(platen, {"E": 5e4, "depth": 0.1, "g": 1.0}, [ts.Reaction("wall")], 1)
+    with pytest.raises(InputError, match="rigid bodies are taken quasistatic"):
+        ts.sensitivities(swinging, {"E": 5e4, "depth": 0.1, "tilt": 0.1},
+                         [ts.Reaction("table")], 1)  # fmt: skip
 
 
 def stacked(p):

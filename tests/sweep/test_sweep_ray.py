@@ -103,7 +103,7 @@ def test_the_ray_adapter_passes_options_and_cancels_at_shutdown():
 
 def test_ray_missing_is_one_line(monkeypatch):
     monkeypatch.setitem(sys.modules, "ray", None)
-    with pytest.raises(InputError, match=r"needs Ray: pip install ray"):
+    with pytest.raises(InputError, match=r"needs Ray: pip install 'tissuesim\[ray\]'"):
         RayExecutor()
     with pytest.raises(InputError, match=r"needs Ray"):
         executor_from_spec("ray", 1)

@@ -124,7 +124,8 @@ class Elimination:
 
     def apply(self, hessian: np.ndarray, gradient: np.ndarray) -> None:
         """Eliminate in place; the diagonal of prescribed DOFs gets the mean free diagonal."""
-        scale = float(np.mean(np.abs(hessian[self.free_diagonal_entries]))) or 1.0
+        free = hessian[self.free_diagonal_entries]  # none where every DOF is prescribed
+        scale = (float(np.mean(np.abs(free))) if free.size else 0.0) or 1.0
         hessian[self.zero_entries] = 0.0
         hessian[self.diagonal_entries] = scale
         gradient[self.dofs] = 0.0

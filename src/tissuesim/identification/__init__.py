@@ -9,6 +9,7 @@ from tissuesim.identification.observations import (
     ContactForce,
     Displacement,
     Reaction,
+    RigidForce,
     SurfaceDistance,
 )
 from tissuesim.identification.sensitivity import Sensitivities, sensitivities
@@ -18,6 +19,7 @@ __all__ = [
     "Displacement",
     "Identification",
     "Reaction",
+    "RigidForce",
     "Sensitivities",
     "identify",
     "sensitivities",

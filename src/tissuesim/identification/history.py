@@ -99,7 +99,7 @@ class HistoryDerivative:
             got = []
             for sign, sim in zip((1.0, -1.0), pair, strict=True):
                 s = sim.system
-                moved = x + sign * delta * S[:, j]
+                moved = s.retract(x, sign * delta * S[:, j])
                 for name in self.names:
                     model = sim.bodies[name].model
                     model.end_step(moved[s.config_slices[s.names.index(name)]])

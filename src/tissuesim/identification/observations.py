@@ -277,15 +277,34 @@ class EnclosedVolume:
 class RigidForce:
     """A rigid body's force (N) or moment (N m, about its centre) that its held DOFs' supports
     apply, FEBio's ``fem.rigidbody('name').Fz`` (``variable`` Fx, Fy, Fz, Mx, My, Mz), as in
-    ``Simulation.forces()``: read from the last step's gradient, so only after a step (runs
-    with rigid bodies are not differentiated: whole-run differences take it)."""
+    ``Simulation.forces()``: the step's gradient at the body's DOF (``rows``: its derivative is
+    the gradient's, sensitivity.py)."""
 
     body: str
     variable: str
 
-    def values(self, sim, x: np.ndarray) -> np.ndarray:
+    def rows(self, sim) -> tuple[list[np.ndarray], list[np.ndarray]]:
+        """(X rows, R rows): the rigid body's tangent DOF of the variable."""
+        self._check(sim)
+        s = sim.system
+        k = [r.name for r in s.rigid].index(self.body)
+        if s.rigid[k].soft is not None:
+            raise InputError(
+                f"RigidForce({self.body!r}): a rigid body driven by springs (soft, with "
+                "contact) is not differentiated: finite differences of whole runs"
+            )
+        dof = s.rigid_tangent_slices[k].start + ("FxFyFzMxMyMz".index(self.variable) // 2)
+        return [np.zeros(0, int)], [np.array([dof])]
+
+    def _check(self, sim) -> None:
         if self.variable not in ("Fx", "Fy", "Fz", "Mx", "My", "Mz"):
             raise InputError(f"RigidForce: variable {self.variable!r} is not Fx ... Mz")
+        names = [r.name for r in sim.system.rigid]
+        if self.body not in names:
+            raise InputError(f"RigidForce: no rigid body {self.body!r}; rigid bodies: {names}")
+
+    def values(self, sim, x: np.ndarray) -> np.ndarray:
+        self._check(sim)
         forces = sim._rigid_forces(sim._last_gradient)
         key = self.body if self.variable[0] == "F" else f"{self.body}.moment"
         if key not in forces:
@@ -378,7 +397,8 @@ def linearize(observation, sim, x: np.ndarray, g: np.ndarray):
     n = sim.system.n_dofs
     xrows, grows = observation.rows(sim)
     X, R = _selection(xrows, n), _selection(grows, n)
-    y = X @ x + R @ g
+    # the FEM bodies' configuration is their tangent DOFs, first (rigid blocks after them)
+    y = X @ x[:n] + R @ g
     if isinstance(observation, Displacement):
         y = y - observation.rest(sim)
     return y, X, R

@@ -44,9 +44,12 @@ variables along their derivative, and the update's derivative is taken through t
 What is differentiated: FEM bodies under quasistatics, Backward Euler or Newmark, any law
 (internal variables included), supports, prescribed motions, graspers, loads and springs,
 barrier contact (against obstacles and between bodies) with or without friction; FEBio's
-penalty contact, interactive contact steps (a prediction, not a minimum), rigid bodies,
-Rayleigh damping, and dynamic, friction or history steps that halved are refused in one line
-(the derivative would be of a different sequence of solves).
+penalty contact, interactive contact steps (a prediction, not a minimum), rigid bodies in
+dynamic runs or with joints, Rayleigh damping, and dynamic, friction or history steps that
+halved are refused in one line (the derivative would be of a different sequence of solves).
+Rigid bodies (quasistatic) are differentiated in the tangent space (configurations moved by
+``retract`` and compared by ``difference``): their held DOFs and linked vertices as supports,
+their free DOFs solved with the rest, ``RigidForce`` the gradient's derivative at a DOF.
 """
 
 from __future__ import annotations
@@ -99,10 +102,15 @@ def _check(sim, what: str) -> None:
             f"{what}: sensitivities are taken of quasistatic, backward_euler and newmark runs, "
             f"not {sim.integrator!r}"
         )
-    if s.penalty_contacts or s.rigid:
+    if s.penalty_contacts:
         raise InputError(
-            f"{what}: sensitivities of runs with FEBio's penalty contact or rigid bodies are "
-            "not taken yet: use a scene without them, or finite differences of whole runs"
+            f"{what}: sensitivities of runs with FEBio's penalty contact are not taken yet: "
+            "use barrier contact, or finite differences of whole runs"
+        )
+    if s.rigid and (sim.integrator != "quasistatic" or getattr(s, "joints", None)):
+        raise InputError(
+            f"{what}: sensitivities of runs with rigid bodies are taken quasistatic and "
+            "without rigid joints: finite differences of whole runs"
         )
     if s.contact is not None and s.contact.settings.mode == "interactive":
         raise InputError(
@@ -210,7 +218,7 @@ def sensitivities(
     n, p = base.system.n_dofs, len(names)
     S_x, S_v, S_a = np.zeros((n, p)), np.zeros((n, p)), np.zeros((n, p))
     for j, (delta, pair) in enumerate(copies):  # the start's own (rest positions varied)
-        S_x[:, j] = (pair[0].state.x - pair[1].state.x) / (2 * delta)
+        S_x[:, j] = base.system.difference(pair[0].state.x, pair[1].state.x) / (2 * delta)
         S_v[:, j] = (pair[0].state.v - pair[1].state.v) / (2 * delta)
     contact = base.system.contact
     Y = None if contact is None else _obstacle_motion(base, copies, base.time)
@@ -297,7 +305,7 @@ def sensitivities(
                 grads.append(sim.system.evaluate(xs, 1, False, energies).gradient)
                 placed.append(xs)
             B[:, j] = (grads[0] - grads[1]) / (2 * delta)
-            Sp[dofs, j] = (placed[0][dofs] - placed[1][dofs]) / (2 * delta)
+            Sp[dofs, j] = s.difference(placed[0], placed[1])[dofs] / (2 * delta)
         K = acc.pattern.matrix(acc.hessian).tocsr()
         H = acc.hessian.copy()
         s.elimination.apply(H, np.zeros(n))  # H_ff, and a diagonal at the prescribed DOFs
@@ -342,14 +350,14 @@ def sensitivities(
             if hasattr(ob, "derivative"):
                 with contact.last_step_lag() if friction is not None else nullcontext():
                     y, D = ob.derivative(base, x, S, Y, friction, copies)
-            elif hasattr(ob, "values"):
-                y, D = _state_function(ob, base, x, S, copies)
-            else:
+            elif not hasattr(ob, "values") or hasattr(ob, "rows"):  # a linear read-out
                 y, X, R = linearize(ob, base, x, g)
                 D = X @ S + R @ dG
                 if hasattr(ob, "rest"):  # a displacement from rest positions a parameter moves
                     for j, (delta, pair) in enumerate(copies):
                         D[:, j] -= (ob.rest(pair[0]) - ob.rest(pair[1])) / (2 * delta)
+            else:
+                y, D = _state_function(ob, base, x, S, copies)
             vals.append(np.asarray(y, dtype=float))
             ders.append(np.asarray(D).reshape(len(vals[-1]), p))
             if not times:
@@ -441,8 +449,8 @@ def _state_function(ob, sim, x: np.ndarray, S: np.ndarray, copies: list):
         size = float(np.max(np.abs(S[:, j]), initial=0.0))
         if size > 0.0:
             eps = DIRECTIONAL_STEP * scale / size
-            up = np.asarray(ob.values(sim, x + eps * S[:, j]), dtype=float)
-            down = np.asarray(ob.values(sim, x - eps * S[:, j]), dtype=float)
+            up = np.asarray(ob.values(sim, sim.system.retract(x, eps * S[:, j])), dtype=float)
+            down = np.asarray(ob.values(sim, sim.system.retract(x, -eps * S[:, j])), dtype=float)
             D[:, j] = (up - down) / (2.0 * eps)
         if getattr(ob, "explicit", True):
             plus, minus = (np.asarray(ob.values(c, x), dtype=float) for c in pair)

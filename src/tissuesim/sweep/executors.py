@@ -112,7 +112,7 @@ def _ray() -> Any:
         import ray
     except ImportError:
         raise InputError(
-            "the Ray executor needs Ray: pip install ray (not in tissuesim's extras)"
+            "the Ray executor needs Ray: pip install 'tissuesim[ray]'"
         ) from None
     return ray
 

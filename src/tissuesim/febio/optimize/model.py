@@ -47,13 +47,6 @@ class ModelBuilder:
         self.notes = [str(w.message) for w in caught] + [f"not used: {n}" for n in notes]
         for note in dict.fromkeys(self.notes):  # as a run of the model says them, once
             warnings.warn(note, UserWarning, stacklevel=2)
-        for q in self.quantities:
-            if q.kind == "rigid" and not differences:
-                raise InputError(
-                    f"{task.source}: {q.text}: a rigid body's force is not differentiated yet "
-                    "(sensitivities of runs with rigid bodies): run it with FEBio's forward "
-                    "differences, --gradients differences"
-                )
         self._dir = tempfile.TemporaryDirectory(prefix="tissuesim-optimize-")
         self.observations = None
         self.simulation({})  # the model as given: refusals now, the observations mapped
