@@ -111,9 +111,7 @@ def _ray() -> Any:
     try:
         import ray
     except ImportError:
-        raise InputError(
-            "the Ray executor needs Ray: pip install 'tissuesim[ray]'"
-        ) from None
+        raise InputError("the Ray executor needs Ray: pip install 'tissuesim[ray]'") from None
     return ray
 
 
