@@ -17,6 +17,10 @@ import pytest
 import tissuesim
 from tissuesim.errors import InputError
 from tissuesim.sweep.executors import RayExecutor, close, executor_from_spec
+from tissuesim.sweep.runs import THREAD_VARIABLES
+
+#: what every Ray task starts with: one thread, as the pool's workers
+ONE_THREAD = {"runtime_env": {"env_vars": {name: "1" for name in THREAD_VARIABLES}}}
 
 VARY = {"material.youngs_modulus": [800.0, 1500.0]}
 TIMES = ("wall_time_s", "build_time_s", "setup_time_s", "solve_time_s", "fields_write_s")
@@ -73,7 +77,7 @@ def _same_study(a, b, out_a, out_b):
 def test_a_study_through_the_ray_adapter_equals_a_thread_pool_one(bar_scene, tmp_path):
     fake = FakeRay()
     executor = RayExecutor(ray=fake)
-    assert fake.options == {"num_cpus": 1}
+    assert fake.options == {"num_cpus": 1, **ONE_THREAD}
     kwargs = {"fields": ["displacement"], "progress": False}
     ray = tissuesim.sweep(bar_scene, VARY, out=tmp_path / "r", executor=executor, **kwargs)
     executor.shutdown()
@@ -85,8 +89,10 @@ def test_a_study_through_the_ray_adapter_equals_a_thread_pool_one(bar_scene, tmp
 
 def test_the_ray_adapter_passes_options_and_cancels_at_shutdown():
     fake = FakeRay(pickled=False)  # an Event does not pickle
-    executor = RayExecutor(num_cpus=2, ray=fake, max_retries=0)
-    assert fake.options == {"num_cpus": 2, "max_retries": 0}
+    env = {"env_vars": {"OMP_NUM_THREADS": "2", "MY_VARIABLE": "x"}}
+    executor = RayExecutor(num_cpus=2, ray=fake, max_retries=0, runtime_env=env)
+    threads = {**ONE_THREAD["runtime_env"]["env_vars"], "OMP_NUM_THREADS": "2", "MY_VARIABLE": "x"}
+    assert fake.options == {"num_cpus": 2, "max_retries": 0, "runtime_env": {"env_vars": threads}}
     release = threading.Event()
     first = executor.submit(release.wait, 10)
     second = executor.submit(pow, 2, 10)  # queued behind the first: one thread

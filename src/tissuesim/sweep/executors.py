@@ -123,7 +123,8 @@ def _call(fn: Callable[..., Any], args: tuple, kwargs: dict) -> Any:
 
 class RayExecutor(Executor):
     """A ``concurrent.futures.Executor`` whose ``submit`` starts a Ray task (``ray.remote``
-    with ``num_cpus``, 1 by default, and Ray's other task ``options``) and returns its
+    with ``num_cpus``, 1 by default, and Ray's other task ``options``; its ``runtime_env``
+    gets the thread variables at 1, as the pool's workers, unless given) and returns its
     ``ObjectRef.future()``. Ray reuses its worker processes, so a study's per-worker start-up
     (``prepare_worker``, the caches) is paid once per Ray worker. Ray starts a local cluster at
     the first task unless ``ray.init(...)`` was called (``ray.init(address="auto")`` joins a
@@ -134,7 +135,12 @@ class RayExecutor(Executor):
 
     def __init__(self, num_cpus: float = 1, ray: Any = None, **options: Any) -> None:
         self._ray = _ray() if ray is None else ray
-        self._remote = self._ray.remote(num_cpus=num_cpus, **options)(_call)
+        # the workers start with one thread each, as the pool's (the BLAS, MKL and the
+        # contact library read these when they load, before a run's prepare_worker)
+        env = dict(options.pop("runtime_env", None) or {})
+        threads = {name: "1" for name in THREAD_VARIABLES}
+        env["env_vars"] = {**threads, **dict(env.get("env_vars") or {})}
+        self._remote = self._ray.remote(num_cpus=num_cpus, runtime_env=env, **options)(_call)
         self._refs: dict[Any, Future] = {}
         self._lock = threading.Lock()
         self._closed = False
