@@ -1,4 +1,4 @@
-"""Sensitivities through IPC's lagged friction, the lag held (``sensitivity.py``).
+"""Sensitivities through IPC's lagged friction, its lag converged or held (``sensitivity.py``).
 
 A step with friction ends where the gradient of its potential, barrier and friction included,
 vanishes; the friction's part is the lagged potential
@@ -9,15 +9,16 @@ of the collision vertices V (bodies' and obstacles'), with the normal forces lam
 bases T_k fixed at the lag point V_lag (the step's start, then Newton's converged points:
 ``contact/barrier/friction_lag.py``) and the slip measured from the step's start V_start.
 
-Held: lambda_k and T_k are treated as constants (they are the lag point's, and the lag point
-is not differentiated), as IPC's lagged solve treats them. What is differentiated: D's Hessian
-in V (exact, not PSD-clamped) in the step's Hessian; its dependence on V_start, whose
-derivative is the last step's sensitivity (and the obstacles' motion at the step's start):
-d(dD/dV)/dV_start = -d2D/dV2; and a coefficient mu varied by a parameter (the copies' lags are
-rebuilt at the base's V_lag with their own mu). Where the lag point hardly moves with the
-parameters (a single step lagged at its start, ``friction_iterations = 1``: exact), the
-derivative is that of the run; elsewhere it leaves out d lambda / d theta and d T / d theta
-(measured in tests/identification/test_sensitivities_friction.py).
+What is differentiated: D's Hessian in V (exact, not PSD-clamped) in the step's Hessian; its
+dependence on V_start, whose derivative is the last step's sensitivity (and the obstacles'
+motion at the step's start): d(dD/dV)/dV_start = -d2D/dV2; a coefficient mu varied by a
+parameter (the copies' lags are rebuilt at the base's V_lag with their own mu); and the lag
+point V_lag, either taken as the step's solution ("converged", ``lag_stiffness``: IPC's
+``force_jacobian`` with respect to the lagged displacements, the derivative of a run whose
+friction iterations converged) or held (lambda_k and T_k constants, as IPC's lagged solve
+treats them: the derivative of the solves with their lags as they were, ``hold_lags`` makes
+such runs). Measured against whole runs: tests/identification/test_sensitivities_friction.py,
+benchmarks/friction_sensitivity.py.
 """
 
 from __future__ import annotations

@@ -32,10 +32,11 @@ obstacle ends a step within ``kinematic.py``'s TOLERANCE (0.01 dhat) of its targ
 augmented Lagrangian that drives it stopped: the copies' obstacles end as far off theirs
 (that offset held, not differentiated).
 
-IPC's friction is differentiated with its lag held (``held_friction.py``): its normal forces and
-tangent bases are the lag point's constants, its Hessian joins H, and its slip's start (the
-step's start) moves with the last step's sensitivity, a term of b; the copies are lagged as the
-base's step (their own mu).
+IPC's friction (``held_friction.py``): its Hessian joins H, its slip's start (the step's start)
+moves with the last step's sensitivity (a term of b), the copies are lagged as the base's step
+(their own mu), and its lag point (normal forces, tangent bases) either moves with the state
+(``friction_lag="converged"``, the default: d(dD/dV)/dV_lag joins H, which is then not
+symmetric) or is held.
 
 Laws with internal variables (viscoelasticity, damage, ...) carry their variables' derivative
 from step to step (``history.py``): b holds the gradient's dependence on the last step's
