@@ -304,6 +304,7 @@ class RigidForce:
             raise InputError(f"RigidForce: no rigid body {self.body!r}; rigid bodies: {names}")
 
     def values(self, sim, x: np.ndarray) -> np.ndarray:
+        """The force or moment component after the last step (one value)."""
         self._check(sim)
         forces = sim._rigid_forces(sim._last_gradient)
         key = self.body if self.variable[0] == "F" else f"{self.body}.moment"
