@@ -29,6 +29,7 @@ from tissuesim.febio.rigid.scene import (
     rigid_names,
 )
 from tissuesim.febio.shells import check_thickness
+from tissuesim.febio.surface_owners import facet_owners
 from tissuesim.febio.time_stepper import adaptive_table, run_steps
 
 __all__ = ["febio_scene", "scene_bodies"]
@@ -203,7 +204,12 @@ def febio_scene(model: FebModel, stem: str) -> tuple[dict, dict]:
     bodies = [b for _, b in named]
     several = _several(model, bodies)
     tables_per_body, meshes, gravity = [], {}, np.zeros(3)
-    for name, body in named:
+    # a surface's facet lying in several bodies is loaded once, as FEBio does (surface_owners)
+    owners = {
+        set_name: facet_owners(model.nodes, facets, [b["cells"] for b in bodies])
+        for set_name, (facets, _) in model.surfaces.items()
+    }
+    for index, (name, body) in enumerate(named):
         used = np.unique(body["cells"])
         local = np.full(len(model.nodes), -1)
         local[used] = np.arange(len(used))
@@ -216,7 +222,7 @@ def febio_scene(model: FebModel, stem: str) -> tuple[dict, dict]:
             if len(mine) and not set_name.startswith("@surface:"):
                 point_sets[_node_set_name(model, set_name)] = mine
         for set_name, (facets, _) in model.surfaces.items():
-            inside = (local[facets] >= 0).all(axis=1)
+            inside = owners[set_name] == index
             if inside.any():
                 facet_sets[set_name] = local[facets[inside]]
         for set_name, (members, _) in model.element_sets.items():
