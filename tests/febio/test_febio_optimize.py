@@ -314,7 +314,7 @@ def test_a_rigid_platens_force_is_fitted_by_febios_differences_and_by_sensitivit
                                         one.format(10000)))  # fmt: skip
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        builder = ModelBuilder(model, probe, differences=True)
+        builder = ModelBuilder(model, probe)
     try:
         r, _ = _Objective(probe, builder, "differences")._residuals(np.array([1e4]), False)
     finally:

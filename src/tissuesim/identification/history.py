@@ -74,7 +74,7 @@ class HistoryDerivative:
             for name in self.names:
                 model = base.bodies[name].model
                 model.material.set_state_arrays(self.before[name])
-                _begin(model, x_prev[s.config_slices[s.names.index(name)]], h)
+                model.begin_step(x_prev[s.config_slices[s.names.index(name)]], h)
             yield
         finally:
             for name in self.names:
@@ -91,7 +91,7 @@ class HistoryDerivative:
                     q = {k: v + sign * delta * Q[name][k] for k, v in self.before[name].items()}
                     model = sim.bodies[name].model
                     model.material.set_state_arrays(q)
-                    _begin(model, x_prev[s.config_slices[s.names.index(name)]], h)
+                    model.begin_step(x_prev[s.config_slices[s.names.index(name)]], h)
 
     def update(self, x: np.ndarray, S: np.ndarray) -> None:
         """After the step's derivative S: Q_j^n by the copies' updates at x +- delta S_j."""
@@ -108,8 +108,3 @@ class HistoryDerivative:
                 n: {k: (got[0][n][k] - got[1][n][k]) / (2 * delta) for k in got[0][n]}
                 for n in self.names
             }
-
-
-def _begin(model, x_body: np.ndarray, h: float) -> None:
-    """The step of h s from x_body begun for the body's laws (their history frozen)."""
-    model.begin_step(x_body, h)

@@ -29,8 +29,8 @@ class ModelBuilder:
     ``values`` (FEBio's names -> numbers); ``observations``: the objective's quantities as
     ``identification`` observations of those simulations."""
 
-    def __init__(self, model_path: str | Path, task: OptimizeTask, febio_solver: bool = False,
-                 differences: bool = False) -> None:  # fmt: skip
+    def __init__(self, model_path: str | Path, task: OptimizeTask,
+                 febio_solver: bool = False) -> None:  # fmt: skip
         from tissuesim.febio.reader import read_feb
 
         self.febio_solver = febio_solver

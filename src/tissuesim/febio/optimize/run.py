@@ -163,8 +163,7 @@ def run_optimize(task: OptimizeTask, model_path, log=None, gradients: str = "sen
     ``tissuesim run --febio-solver`` (its stopping points, so its adaptive steps: the curve a
     data-fit interpolates is then FEBio's)."""
     start = time.perf_counter()
-    builder = ModelBuilder(model_path, task, febio_solver=febio_solver,
-                           differences=gradients == "differences")  # fmt: skip
+    builder = ModelBuilder(model_path, task, febio_solver=febio_solver)
     try:
         objective = _Objective(task, builder, gradients)
         lo = np.array([p.low for p in task.parameters])
