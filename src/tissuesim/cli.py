@@ -45,8 +45,9 @@ def _body(sim) -> str:
     parts = []
     for b in sim.bodies.values():
         if b.kind == "fem":
-            kind = "triangles" if b.dim == 2 else "tetrahedra"
-            parts.append(f"{b.name}: {b.mesh.n_points} vertices, {b.mesh.n_cells} {kind}")
+            parts.append(
+                f"{b.name}: {b.mesh.n_points} vertices, {b.mesh.n_cells} {b.mesh.cell_kind}"
+            )
         elif b.kind == "frames":
             m = b.model
             parts.append(f"{b.name}: {m.n_frames} {m.frame_type.name} frames, {m.samples.n} points")

@@ -131,3 +131,18 @@ def test_bad_coupled_scene_exits_2_naming_file_and_table(tmp_path, capsys):
     assert str(scene) in captured.err and "graspers[1]" in captured.err
     assert "unknown organ 'uper'; did you mean 'upper'?" in captured.err
     assert not (tmp_path / "o").exists()
+
+
+def test_the_banner_names_each_bodys_cells():
+    """The run banner says what a body's cells are (it had called every 3D mesh's cells
+    tetrahedra, FEBio's hexahedra20 too)."""
+    import tissuesim as ts
+    from tissuesim.cli import _body
+
+    sim = ts.Simulation(integrator="quasistatic")
+    law = ts.NeoHookean(youngs_modulus=1e3, poisson_ratio=0.3)
+    sim.add_body("hex", ts.box(divisions=(2, 1, 1), element="hex20"), law)
+    sim.add_body("tet", ts.box(divisions=(1, 1, 1)), law)
+    assert _body(sim) == ("hex: 32 vertices, 2 20-node hexahedra; tet: 8 vertices, 6 tetrahedra"), (
+        _body(sim)
+    )

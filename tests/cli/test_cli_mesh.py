@@ -37,7 +37,9 @@ def test_mesh_writes_a_readable_vtu_and_prints_the_quality(tmp_path, stl, capsys
     assert summary["n_tets"] == mesh.n_cells > 100 and summary["n_points"] == mesh.n_points
     assert summary["size"] == 0.01 and summary["min_dihedral_deg"] > 5.0
     assert summary["volume"] == pytest.approx(4 / 3 * np.pi * np.prod(RADII), rel=0.03)
-    assert summary["volume_ratio"] == pytest.approx(1.0, abs=0.01)
+    # fTetWild's envelope (0.5 mm here) would allow 5 % (area x envelope / volume); its meshes
+    # hold 0.990-1.0 of the volume from run to run (its threads: 0.9899 once under load)
+    assert summary["volume_ratio"] == pytest.approx(1.0, abs=0.02)
     assert summary["surface"]["closed"] is True
     assert sorted(p.name for p in tmp_path.iterdir()) == ["organ.stl", "organ.vtu"]  # no temp
 

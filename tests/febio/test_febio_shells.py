@@ -255,3 +255,54 @@ def test_secant_options_read_as_febio_defaults(tmp_path):
     path.write_text(text.replace("<secant_stress>0<", "<secant_stress>1<"))
     with pytest.raises(InputError, match=r"secant.feb:\d+ <secant_stress>: secant_stress = 1"):
         read_feb(path)
+
+
+def test_a_shell_condition_on_a_surface_holds_the_back_nodes_of_its_facets(tmp_path):
+    """A "zero shell displacement" on "@surface:name" holds the back nodes of every node of
+    the surface's facets, as on a node set of those nodes (it had been dropped without a
+    word: FEBio's sh61 buckled where FEBio's plate stays flat). The cantilever's back face
+    held on its first column of cells: the same positions as with the node set, stiffer at
+    the tip than with the clamped edge alone."""
+    text = CANTILEVER.read_text()
+    column = '<quad4 id="1">1,2,83,82</quad4><quad4 id="2">82,83,164,163</quad4>'
+    mesh = (
+        f'    <Surface name="root">{column}</Surface>\n'
+        '    <NodeSet name="root_nodes">1, 2, 82, 83, 163, 164</NodeSet>\n  </Mesh>'
+    )
+    text = text.replace("  </Mesh>", mesh)
+    back = '<bc name="clamp_back" node_set="clamped" type="zero shell displacement">'
+    assert back in text
+    tips = {}
+    for name, held in (("edge", "clamped"), ("set", "root_nodes"), ("surface", "@surface:root")):
+        path = tmp_path / f"{name}.feb"
+        model, x, _ = run(path, text.replace(back, back.replace('"clamped"', f'"{held}"')),
+                          tmp_path)  # fmt: skip
+        tips[name] = x
+        if name == "surface":
+            back_rows = model.node_sets["@surface:root.back"]
+            assert len(back_rows) == 6
+            np.testing.assert_allclose(x[back_rows], model.nodes[back_rows], atol=1e-15)
+    np.testing.assert_array_equal(tips["surface"], tips["set"])
+    tip = np.isclose(model.nodes[:, 0], L)
+    assert (tips["surface"] - model.nodes)[tip, 2].mean() < 0.999 * (tips["edge"] - model.nodes)[
+        tip, 2
+    ].mean()
+
+
+def test_a_condition_the_converter_places_in_no_body_is_an_error(monkeypatch):
+    """A displacement condition on nodes of a body that no body's mesh took is an error, never
+    dropped: the converter's guard, with its set's name lost on purpose."""
+    from tissuesim.febio import scene as febio_scene_module
+
+    model = read_feb(CANTILEVER)
+    real, asked = febio_scene_module._node_set_name, []
+
+    def losing(m, name):  # the point set is written as "tip", then looked for as "lost"
+        asked.append(name)
+        return "lost" if name == "tip" and asked.count("tip") > 1 else real(m, name)
+
+    monkeypatch.setattr(febio_scene_module, "_node_set_name", losing)
+    with pytest.raises(
+        InputError, match=r"placed the nodal condition on node set 'tip' in no body"
+    ):
+        febio_scene_module.febio_scene(model, "cantilever")

@@ -435,3 +435,35 @@ def test_a_scene_of_quad8_shell_faces_runs_as_the_api(cantilever):
     sim.step()
     sim.step()
     np.testing.assert_allclose(sim.body_positions("body"), x, rtol=0, atol=1e-12)
+
+
+def test_a_condition_on_a_quad8_surface_holds_its_midside_nodes(tmp_path):
+    """ "@surface:name" in a condition is every node of the surface's facets, as in FEBio: a
+    quad8 facet's four midside nodes too (the reader had kept only the corners of the set,
+    which is what FEBio's norm and the logfiles read: ma57, sh24). The tip element's facet
+    lifted by d: its eight front nodes end at z = d, the corners and the midsides."""
+    _, faces = plate()
+    tip = faces[-1]
+    facet = f'<quad8 id="1">{",".join(str(i + 1) for i in tip)}</quad8>'
+    text = deck().replace("  </Mesh>", f'    <Surface name="tip_face">{facet}</Surface>\n  </Mesh>')
+    start, end = text.index("    <nodal_load"), text.index("</nodal_load>") + len("</nodal_load>")
+    d = 1e-3
+    lift = (
+        '<bc name="lift" node_set="@surface:tip_face" type="prescribed displacement">'
+        f'<dof>z</dof><value lc="1">{d / P!r}</value><relative>0</relative></bc>\n'
+    )
+    text = (text[:start] + text[end:]).replace("  </Boundary>", f"    {lift}  </Boundary>")
+    path = tmp_path / "lifted.feb"
+    path.write_text(text)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        model = read_feb(path)
+        scene = load_febio(path)
+        sim = scene.simulation
+        for _ in range(scene.run["steps"]):
+            sim.step()
+    np.testing.assert_array_equal(model.node_sets["@surface:tip_face"], np.sort(tip))
+    assert model.surfaces["tip_face"][0].tolist() == [tip[:4].tolist()]  # the corner facet
+    u = sim.body_positions("body") - model.nodes
+    np.testing.assert_allclose(u[tip, 2], d, rtol=1e-12)
+    assert u[: len(plate()[0]), 2].max() == pytest.approx(d, rel=1e-12)  # the tip is the top

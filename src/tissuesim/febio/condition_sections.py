@@ -53,7 +53,7 @@ def _node_set(model: FebModel, node: Node, attr: str = "node_set") -> str:
         surface = name.removeprefix("@surface:")
         if surface not in model.surfaces:
             raise node.error(f"no Surface named {surface!r}")
-        model.node_sets.setdefault(name, np.unique(model.surfaces[surface][0]))
+        model.node_sets.setdefault(name, model.surface_nodes[surface])
     elif name.startswith("@elem_set:"):  # FEBio 4: the nodes of an element set or a part
         elements = name.removeprefix("@elem_set:")
         if elements in model.parts:

@@ -219,7 +219,7 @@ def _surface(model: FebModel, node: Node) -> None:
     name = node.attrib.get("name")
     if not name:
         raise node.error("a Surface needs a name")
-    facets = []
+    facets, every = [], []
     for c in node.children:
         if c.tag not in FACETS:
             raise c.error(
@@ -228,6 +228,7 @@ def _surface(model: FebModel, node: Node) -> None:
             )
         conn = _index(model, c, _ints(c))
         facets.append(conn[: FACETS[c.tag]])
+        every.append(conn)
     if not facets:
         raise node.error("a surface needs at least one facet")
     if len({len(f) for f in facets}) > 1:  # a wedge mesh's triangles and quadrilaterals
@@ -235,6 +236,7 @@ def _surface(model: FebModel, node: Node) -> None:
 
         facets = as_facets([np.pad(f, (0, 4 - len(f)), mode="edge") for f in facets])
     model.surfaces[name] = (np.array(facets, dtype=np.int64), node)
+    model.surface_nodes[name] = np.unique(np.concatenate(every))
 
 
 def _element_set(model: FebModel, node: Node) -> None:

@@ -48,7 +48,11 @@ class FebModel:
     #: part name -> (material name, formulation or None)
     domains: dict = field(default_factory=dict)
     node_sets: dict = field(default_factory=dict)
+    #: name -> ((k, 3|4) corner nodes of each facet, its Node); a quadratic facet's corners
     surfaces: dict = field(default_factory=dict)
+    #: name -> every node of the surface's facets, a quadratic facet's mid-side ones included
+    #: (what "@surface:name" holds in a condition, as in FEBio)
+    surface_nodes: dict = field(default_factory=dict)
     element_sets: dict = field(default_factory=dict)
     surface_pairs: dict = field(default_factory=dict)
     #: (node set, components or None for all, Load or None for clamped, name, window)

@@ -9,6 +9,7 @@ import re
 
 import numpy as np
 
+from tissuesim.errors import InputError
 from tissuesim.febio.constraint_sections import rigid_wall_tables
 from tissuesim.febio.contact_scene import contact_tables
 from tissuesim.febio.curves import load_expression as _times
@@ -204,6 +205,7 @@ def febio_scene(model: FebModel, stem: str) -> tuple[dict, dict]:
     bodies = [b for _, b in named]
     several = _several(model, bodies)
     tables_per_body, meshes, gravity = [], {}, np.zeros(3)
+    placed: set[tuple[str, int]] = set()  # the conditions written into some body
     # a surface's facet lying in several bodies is loaded once, as FEBio does (surface_owners)
     owners = {
         set_name: facet_owners(model.nodes, facets, [b["cells"] for b in bodies])
@@ -219,7 +221,7 @@ def febio_scene(model: FebModel, stem: str) -> tuple[dict, dict]:
             point_sets[RIGID_SET.format(rigid_name)] = local[nodes]
         for set_name, ids in model.node_sets.items():
             mine = local[ids[local[ids] >= 0]]
-            if len(mine) and not set_name.startswith("@surface:"):
+            if len(mine):
                 point_sets[_node_set_name(model, set_name)] = mine
         for set_name, (facets, _) in model.surfaces.items():
             inside = owners[set_name] == index
@@ -298,10 +300,11 @@ def febio_scene(model: FebModel, stem: str) -> tuple[dict, dict]:
                     f"a body load with a load curve on parts {body['parts']} of different "
                     "densities: tissuesim writes it as a force per volume of one density"
                 )
-        for nodes, comps, load, bc_name, window in model.dirichlet:
-            if _local_set(model, nodes) not in mesh.point_sets | mesh.facet_sets:
+        for k, (nodes, comps, load, bc_name, window) in enumerate(model.dirichlet):
+            if _node_set_name(model, nodes) not in mesh.point_sets | mesh.facet_sets:
                 continue
-            entry = {"vertices": {"tagged": _local_set(model, nodes)}}
+            placed.add(("dirichlet", k))
+            entry = {"vertices": {"tagged": _node_set_name(model, nodes)}}
             if load is not None:
                 displacement = ["0.0"] * 3
                 displacement[comps[0]] = _times(load, model, windowed=False)
@@ -313,11 +316,12 @@ def febio_scene(model: FebModel, stem: str) -> tuple[dict, dict]:
             if window is not None:
                 entry["active"] = list(window)
             tables.setdefault("dirichlet", []).append(entry)
-        for nodes, load in model.nodal:
-            if _local_set(model, nodes) in mesh.point_sets | mesh.facet_sets:
+        for k, (nodes, load) in enumerate(model.nodal):
+            if _node_set_name(model, nodes) in mesh.point_sets | mesh.facet_sets:
+                placed.add(("nodal", k))
                 force = [_times(load, model, i) for i in range(3)]
                 tables.setdefault("nodal_forces", []).append(
-                    {"vertices": {"tagged": _local_set(model, nodes)}, "force": force}
+                    {"vertices": {"tagged": _node_set_name(model, nodes)}, "force": force}
                 )
         for load in model.body_loads:
             if load.curve is None and load.window is None:
@@ -343,6 +347,8 @@ def febio_scene(model: FebModel, stem: str) -> tuple[dict, dict]:
             tables["initial"] = {"velocity": velocity}
         tables_per_body.append((name, tables))
     _unique_support_names(tables_per_body)
+    in_bodies = np.unique(np.concatenate([np.ravel(b["cells"]) for b in bodies]))
+    _all_placed(model, placed, in_bodies)
     sim = {
         "integrator": INTEGRATORS[model.analysis],
         "time_step": model.step_size,
@@ -415,6 +421,22 @@ def febio_scene(model: FebModel, stem: str) -> tuple[dict, dict]:
     return data, meshes
 
 
+def _all_placed(model: FebModel, placed: set[tuple[str, int]], in_bodies: np.ndarray) -> None:
+    """Every displacement condition and nodal load on nodes of a body is written into that
+    body: one that no body took would be dropped without a word (a shell condition on an
+    "@surface:" set was, sh61), so the converter says so instead. (A condition on nodes of no
+    element, a spring's anchor, is the springs' to take: febio/discrete.py.)"""
+    for kind, entries in (("dirichlet", model.dirichlet), ("nodal", model.nodal)):
+        for k, entry in enumerate(entries):
+            on_bodies = np.isin(model.node_sets[entry[0]], in_bodies).any()
+            if on_bodies and (kind, k) not in placed:
+                raise InputError(
+                    f"{model.source}: the converter placed the {kind} condition on node set "
+                    f"{entry[0]!r} in no body (a converter error: please report it with the "
+                    "model)"
+                )
+
+
 def _unique_support_names(tables_per_body: list[tuple[str, dict]]) -> None:
     """A support's name once in the scene (the loader refuses a name given twice): FEBio lets
     two <bc> share a name, and a <bc> on nodes of two bodies is written once per body. The
@@ -435,14 +457,11 @@ def _unique_support_names(tables_per_body: list[tuple[str, dict]]) -> None:
 
 def _node_set_name(model: FebModel, name: str) -> str:
     """A node set's name in the mesh file (gmsh names are unique: a node set named like a
-    surface gets a suffix)."""
-    return f"{name}.nodes" if name in model.surfaces else name
-
-
-def _local_set(model: FebModel, name: str) -> str:
+    surface gets a suffix). "@surface:name" is every node of the surface's facets, a
+    quadratic facet's mid-side nodes included (its facet set holds the corners only)."""
     if name.startswith("@surface:"):
-        return name.removeprefix("@surface:")
-    return _node_set_name(model, name)
+        return f"{name.removeprefix('@surface:')}.surface_nodes"
+    return f"{name}.nodes" if name in model.surfaces else name
 
 
 def _by_normal(points: np.ndarray, facets: np.ndarray, model: FebModel, surface: str):

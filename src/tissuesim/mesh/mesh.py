@@ -87,15 +87,20 @@ class Mesh:
     # cuts): a copy's material, and its contact region, are where all its levels allow
     cell_more_levels: tuple[np.ndarray, np.ndarray] | None = None
 
-    def __repr__(self) -> str:
+    @property
+    def cell_kind(self) -> str:
+        """The cells' kind in words, plural: "tetrahedra", "quadratic tetrahedra",
+        "20-node hexahedra", "wedges"... (the run banner, repr)."""
         kind = {2: "triangles", 3: "tetrahedra"}.get(self.dim, "cells")
         if self.cell_type == "wedge":
-            kind = "wedges"
-        elif not self.simplicial:
+            return "wedges"
+        if not self.simplicial:
             kind = "quadrilaterals" if self.dim == 2 else "hexahedra"
-            kind = f"{self.cell_type} {kind}" if self.order == 2 else kind
-        elif self.order == 2:
-            kind = f"quadratic {kind}"
+            return f"{self.cells.shape[1]}-node {kind}" if self.order == 2 else kind
+        return f"quadratic {kind}" if self.order == 2 else kind
+
+    def __repr__(self) -> str:
+        kind = self.cell_kind
         lo, hi = self.points.min(axis=0), self.points.max(axis=0)
         sets = f", sets {sorted({*self.point_sets, *self.facet_sets, *self.cell_sets})}"
         return (

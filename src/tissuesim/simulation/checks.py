@@ -50,6 +50,7 @@ class StepChecks:
                         "rest there."
                     ) from None
                 return True
+            self._warn_free_translations(self._active()[0])
             return False
         springs = any(b.kind == "frames" and b.model.springs for b in self._active())
         spring_graspers = any(b.kind == "fem" and b.spring_graspers for b in self._active())
@@ -69,6 +70,42 @@ class StepChecks:
                 "with something they rest on (set_contact), or use backward_euler"
             )
         return False
+
+    _free_translations_checked = None  # the system whose free translations were looked for
+
+    def _warn_free_translations(self, body: Any) -> None:
+        """A lone body that no condition holds along an axis (a biaxial test holding x and y
+        and leaving z free: FEBio's ma57) has a family of equilibria shifted along that axis,
+        and a quasistatic solve ends at one of them, wherever its factorisation puts the
+        shift (FEBio's too, at a zero pivot): said once, as the answer depends on it."""
+        s = self.system
+        if self._free_translations_checked is s:
+            return
+        self._free_translations_checked = s
+        held_otherwise = (
+            s.contact is not None
+            or s.rigid
+            or s.ties
+            or s.attachments
+            or body.springs
+            or body.spring_graspers
+            or body.linear_constraints
+        )
+        if held_otherwise:
+            return
+        d = body.model.mesh.dim
+        held = set((body.model.prescribed.dofs % d).tolist())
+        free = [k for k in range(d) if k not in held]
+        if free:
+            axes = " and ".join("xyz"[k] for k in free)
+            warnings.warn(
+                f"body {body.name!r}: no condition holds it along {axes}, so its quasistatic "
+                f"equilibria are a family shifted along {axes} and the solve ends at one of "
+                f"them, where its factorisation puts the shift; hold one vertex's {axes} "
+                "component ([[dirichlet]] components) for a unique answer",
+                UserWarning,
+                stacklevel=4,
+            )
 
     _stability_checked = None  # the system whose explicit stability limit was checked
 
