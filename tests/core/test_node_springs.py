@@ -9,7 +9,13 @@ import pytest
 
 from tissuesim.assembly.pattern import SparsityPattern
 from tissuesim.energies.accumulator import Accumulator
-from tissuesim.energies.node_springs import ForceCurve, NodeSprings, SpringLaw, spring_stencil
+from tissuesim.energies.node_springs import (
+    ExpressionForce,
+    ForceCurve,
+    NodeSprings,
+    SpringLaw,
+    spring_stencil,
+)
 
 
 def _smooth(s: np.ndarray) -> np.ndarray:
@@ -26,6 +32,13 @@ LAWS = {
     "elongation": SpringLaw("curve", curve=CURVE, measure="elongation", scale=2.0),
     "strain": SpringLaw("curve", curve=CURVE, measure="strain", scale=2.0),
     "stretch": SpringLaw("curve", curve=CURVE, measure="stretch", scale=2.0),
+    # FEBio's math force (op05's law) and a non-analytic one (central differences for F')
+    "expression": SpringLaw(
+        "curve", curve=ExpressionForce("0.5 * (exp(3 * x) - 1)"), measure="elongation", scale=2.0
+    ),  # fmt: skip
+    "expression_kinked": SpringLaw(
+        "curve", curve=ExpressionForce("where(x > 0, x**3, x)"), measure="strain"
+    ),  # fmt: skip
 }
 
 
@@ -154,3 +167,20 @@ def test_a_scaled_spring_set_scales_energy_gradient_and_hessian():
     assert half.value == pytest.approx(0.5 * one.value, rel=1e-14)
     np.testing.assert_allclose(half.gradient, 0.5 * one.gradient, rtol=1e-14)
     np.testing.assert_allclose(half.hessian, 0.5 * one.hessian, rtol=1e-14, atol=1e-300)
+
+
+def test_an_expression_force_is_its_closed_form():
+    """F = a (exp(b x) - 1): the value, F' (a complex step: exact to round-off) and the
+    energy's integral a (exp(b x) - 1) / b - a x (Gauss-Legendre) against the closed forms,
+    over elongations where exp(b x) grows 150-fold; a kinked expression falls back to central
+    differences."""
+    a, b = 2.0, 50.0
+    f = ExpressionForce(f"{a} * (exp({b} * x) - 1)")
+    assert f.analytic and not ExpressionForce("abs(x)").analytic
+    s = np.linspace(-0.05, 0.1, 7)
+    np.testing.assert_allclose(f.value(s), a * (np.exp(b * s) - 1), rtol=1e-15)
+    np.testing.assert_allclose(f.derivative(s), a * b * np.exp(b * s), rtol=1e-14)
+    exact = a * (np.exp(b * s) - 1) / b - a * s
+    np.testing.assert_allclose(f.integral(0 * s, s), exact, rtol=1e-13, atol=1e-16)
+    kinked = ExpressionForce("where(x > 0, x**2, 0)")
+    np.testing.assert_allclose(kinked.derivative(np.array([0.5, -0.5])), [1.0, 0.0], atol=1e-8)

@@ -475,3 +475,140 @@ def test_a_node_distance_constraint_is_a_spring_of_its_target_length(rows, tmp_p
     assert abs(sim.positions[6, 2] - ref.positions[6, 2]) < 1e-9
     plain = _run(CUBE, tmp_path, "plain.feb")
     assert np.abs(sim.positions - plain.positions).max() > 1e-4  # the spring does act
+
+
+def _with_globals(text: str, a: float, b: float) -> str:
+    """A model with FEBio's global parameters a and b (<Globals><Variables>)."""
+    globals_ = (f'  <Globals>\n    <Variables>\n      <var name="a">{a!r}</var>\n'
+                f'      <var name="b">{b!r}</var>\n    </Variables>\n  </Globals>\n')  # fmt: skip
+    return text.replace("  <Material>", globals_ + "  <Material>", 1)
+
+
+MATH = ('type="nonlinear spring">\n      <force type="math">\n'
+        "        <math>fem.a*(exp(fem.b*x)-1)</math>\n      </force>")  # fmt: skip
+
+
+@pytest.mark.parametrize("anchor", [(2.0, 0.0, 0.0), (-1.0, 0.0, 0.0)])
+def test_a_math_force_of_global_parameters_is_its_closed_form(anchor, plain, tmp_path):
+    """FEBio's nonlinear spring with a math force of its global parameters (op05's
+    fem.a*(exp(fem.b*x)-1)): the pull grows by -F(DL) = -a (exp(b DL) - 1) at DL = -+0.15."""
+    a, b = 0.7, 3.0
+    sim = _run(_with_globals(_with_spring(anchor, MATH), a, b), tmp_path)
+    dl = -0.15 if anchor[0] > 1 else 0.15  # compressed to the right, stretched to the left
+    force = a * (np.exp(b * dl) - 1.0)
+    extra = -force if dl < 0 else force  # the reaction grows by |F| either way
+    pull = np.asarray(sim.forces()["pull"])
+    np.testing.assert_allclose(pull - plain, [extra, 0.0, 0.0], atol=1e-7 * abs(plain[0]))
+
+
+def test_math_force_refusals_name_the_element(tmp_path):
+    text = _with_globals(_with_spring((2.0, 0.0, 0.0), MATH), 0.7, 3.0)
+    bad = {
+        r"fem.c: no <var name='c'>": text.replace("fem.b*x", "fem.c*x"),
+        r"<math>: .*'lgamma'": text.replace("exp(fem.b*x)", "lgamma(fem.b*x)"),
+        r'<var>: expected <var name="a">value</var>': text.replace('<var name="b">', "<var>"),
+    }
+    for message, deck in bad.items():
+        path = tmp_path / "bad.feb"
+        path.write_text(deck)
+        with pytest.raises(FebError, match=message):
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                load_febio(path)
+
+
+def _two_cubes(link: str = 'type="linear spring"><E>5</E>') -> str:
+    """Two unit cubes 1 apart, the left one held at x = 0, the right one's end pulled 0.3
+    along x, joined by four discrete springs of material ``link``."""
+    nodes = [(x, y, z) for x0 in (0.0, 2.0) for x in (x0, x0 + 1) for y in (0, 1) for z in (0, 1)]
+    node_text = "\n".join(f'      <node id="{i + 1}">{x},{y},{z}</node>'
+                          for i, (x, y, z) in enumerate(nodes))  # fmt: skip
+    cube = "{},{},{},{},{},{},{},{}"
+    first, second = (1, 5, 7, 3, 2, 6, 8, 4), tuple(i + 8 for i in (1, 5, 7, 3, 2, 6, 8, 4))
+    return f"""<?xml version="1.0" encoding="ISO-8859-1"?>
+<febio_spec version="4.0">
+  <Module type="solid"/>
+  <Control><analysis>STATIC</analysis><time_steps>2</time_steps><step_size>0.5</step_size>
+  </Control>
+  <Material>
+    <material id="1" name="soft" type="neo-Hookean"><density>1</density><E>10</E><v>0.3</v>
+    </material>
+    <material id="2" name="stiff" type="neo-Hookean"><density>1</density><E>1000</E><v>0.3</v>
+    </material>
+  </Material>
+  <Mesh>
+    <Nodes name="all">
+{node_text}
+    </Nodes>
+    <Elements type="hex8" name="left"><elem id="1">{cube.format(*first)}</elem></Elements>
+    <Elements type="hex8" name="right"><elem id="2">{cube.format(*second)}</elem></Elements>
+    <NodeSet name="wall">1, 2, 3, 4</NodeSet>
+    <NodeSet name="end">13, 14, 15, 16</NodeSet>
+    <DiscreteSet name="links"><delem>5,9</delem><delem>6,10</delem><delem>7,11</delem>
+      <delem>8,12</delem></DiscreteSet>
+  </Mesh>
+  <MeshDomains><SolidDomain name="left" mat="soft"/><SolidDomain name="right" mat="stiff"/>
+  </MeshDomains>
+  <Boundary>
+    <bc name="wall" node_set="wall" type="zero displacement">
+      <x_dof>1</x_dof><y_dof>1</y_dof><z_dof>1</z_dof></bc>
+    <bc name="end" node_set="end" type="prescribed displacement"><dof>x</dof>
+      <value lc="1">0.3</value><relative>0</relative></bc>
+  </Boundary>
+  <Discrete>
+    <discrete_material id="1" name="link" {link}</discrete_material>
+    <discrete dmat="1" discrete_set="links"/>
+  </Discrete>
+  <LoadData><load_controller id="1" type="loadcurve"><interpolate>LINEAR</interpolate>
+    <points><pt>0,0</pt><pt>1,1</pt></points></load_controller></LoadData>
+</febio_spec>
+"""
+
+
+def test_two_parts_joined_by_springs_are_one_body_of_two_regions(tmp_path):
+    """Parts that only discrete springs join (op05's model) make one body, its parts regions:
+    a spring joins vertices of one body. Two unit cubes 1 apart, the second pulled by 0.3
+    along x, joined by four linear springs: each spring carries E DL, and their pull along x
+    is the wall's reaction."""
+    text = _two_cubes()
+    sim = _run(text, tmp_path)
+    assert list(sim.bodies) == ["left"]  # one body, named after its first part
+    body = sim.bodies["left"]
+    assert body.mesh.n_cells == 2
+    springs = body.springs[0]
+    x = sim.body_positions("left")
+    tension, direction = springs.tensions(x.ravel())
+    pairs = springs.pairs
+    stretch = np.linalg.norm(x[pairs[:, 1]] - x[pairs[:, 0]], axis=1) - 1.0
+    np.testing.assert_allclose(tension, 5.0 * stretch, rtol=1e-12)
+    pulled = float(tension @ direction[:, 0])  # the springs' pull along x on the left cube
+    np.testing.assert_allclose(-sim.forces()["wall"][0], pulled, rtol=1e-6)
+
+
+def test_a_global_parameter_of_a_math_spring_is_fitted(tmp_path):
+    """FEBio's op05 pattern: <param name="fem.a"> (a <Globals><Variables> value) in a spring's
+    math force. The left cube's free face position from our own run at a = 0.7 is fitted from
+    a = 0.3 by the run's sensitivities (through the spring's law) and recovers a."""
+    from tissuesim.febio.optimize.run import run_optimize
+    from tissuesim.febio.optimize.task import read_optimize
+
+    link = ('type="nonlinear spring"><force type="math"><math>fem.a*(exp(fem.b*x)-1)</math>'
+            "</force>")  # fmt: skip
+    model = tmp_path / "linked.feb"
+    model.write_text(_with_globals(_two_cubes(link), 0.7, 2.0))
+    sim = _run(model.read_text(), tmp_path, "probe.feb")
+    target = float(sim.body_positions("left")[4, 0])  # node 5, (1, 0, 0) at rest
+    assert target > 1.0 + 1e-3  # the springs stretch the left cube
+    task = tmp_path / "fit.feb"
+    task.write_text(f"""<?xml version="1.0"?>
+<febio_optimize version="2.0">
+  <Options type="levmar"><obj_tol>1e-12</obj_tol></Options>
+  <Parameters><param name="fem.a">0.3, 0.01, 5</param></Parameters>
+  <Objective type="target"><var name="fem.mesh.node.fromId(5).position.x">{target!r}</var>
+  </Objective>
+</febio_optimize>
+""")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        fit = run_optimize(read_optimize(task), model)
+    assert fit.parameters["fem.a"] == pytest.approx(0.7, rel=1e-6)

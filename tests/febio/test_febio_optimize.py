@@ -214,7 +214,11 @@ def test_the_command_line_runs_an_optimisation_and_writes_its_report(tmp_path):
             OBJECTIVES["target"],
             "has no <c9>",
         ),
-        ('<param name="fem.a">1, 0, 2</param>', OBJECTIVES["target"], "global parameters"),
+        (
+            '<param name="fem.a">1, 0, 2</param>',
+            OBJECTIVES["target"],
+            r"'fem.a': the model has no <var name='a'> in <Globals><Variables>",
+        ),
         (
             "<param name=\"fem.material('tissue').E\">3, 0, 2</param>",
             OBJECTIVES["target"],

@@ -100,7 +100,8 @@ def test_parts_of_two_element_types_on_shared_nodes_are_refused_in_one_line(tmp_
     path = tmp_path / "mixed.feb"
     path.write_text(bar("penta6"))
     with pytest.raises(InputError, match=r"mixed.feb:\d+ <Elements>: parts \['soft', 'stiff'\] "
-                       r"share nodes but mix element types \['hexahedron', 'wedge'\]"):  # fmt: skip
+                       r"share nodes \(or discrete springs\) but mix element types "
+                       r"\['hexahedron', 'wedge'\]"):  # fmt: skip
         load_febio(path)
 
 

@@ -6,7 +6,8 @@ the force f(DL) along e, DL = l - L0; its energy is W(DL) = int_0^DL f. The laws
 (``SpringLaw``): linear, f = E DL (FELinearSpring); tension-only, f = E max(DL, 0)
 (FETensionOnlyLinearSpring); a force curve, f = scale F(s) of the measure s = DL
 (elongation), DL / L0 (strain) or l / L0 (stretch) (FENonlinearSpringMaterial), its energy
-the curve's exact integral (``ForceCurve``: polynomial pieces). The gradient is -f e at a and
+the curve's exact integral (``ForceCurve``: polynomial pieces), or of an expression of the
+measure (``ExpressionForce``: FEBio's math force). The gradient is -f e at a and
 f e at b; the Hessian's block K = f'(DL) e e^T + f / l (I - e e^T), [[K, -K], [-K, K]] over
 (a, b) (FESpringMaterial::Stiffness); projected, f' and f / l are clamped at zero.
 """
@@ -21,7 +22,7 @@ import numpy as np
 from tissuesim.energies.accumulator import Accumulator
 from tissuesim.errors import InputError
 
-__all__ = ["ForceCurve", "SpringLaw", "NodeSprings", "spring_stencil"]
+__all__ = ["ForceCurve", "ExpressionForce", "SpringLaw", "NodeSprings", "spring_stencil"]
 
 MEASURES = ("elongation", "strain", "stretch")
 
@@ -121,6 +122,67 @@ class ForceCurve:
         )
 
 
+#: functions through which a complex step differentiates exactly (analytic ones)
+_ANALYTIC = {"sin", "cos", "tan", "arcsin", "arccos", "arctan", "sinh", "cosh", "tanh", "exp",
+             "log", "log10", "sqrt"}  # fmt: skip
+
+
+class ExpressionForce:
+    """A force F(s) (N) given as an expression of the measure ``x`` (FEBio's math force of a
+    nonlinear spring, e.g. "2 * (exp(50 * x) - 1)"), checked as the scene's expressions are
+    (``scene/expressions.py``). F' by a complex step where the expression is analytic (exact to
+    round-off), else by central differences; the energy's integral by composite
+    Gauss-Legendre (16 panels of 8 points: round-off for smooth F)."""
+
+    PANELS, POINTS = 16, 8
+
+    def __init__(self, text: str, where: str = "force") -> None:
+        import ast
+
+        from tissuesim.scene.expressions import _checked_code
+
+        self.text = text
+        self._code = _checked_code(text, where, ("x",))
+        calls = {n.func.id for n in ast.walk(ast.parse(text.strip(), mode="eval"))
+                 if isinstance(n, ast.Call) and isinstance(n.func, ast.Name)}  # fmt: skip
+        comparisons = any(isinstance(n, ast.Compare | ast.BoolOp)
+                          for n in ast.walk(ast.parse(text.strip(), mode="eval")))  # fmt: skip
+        self.analytic = calls <= _ANALYTIC and not comparisons
+        self.where = where
+        xi, w = np.polynomial.legendre.leggauss(self.POINTS)
+        self._xi, self._w = xi, w
+
+    def _eval(self, s: np.ndarray) -> np.ndarray:
+        from tissuesim.scene.expressions import _LOGIC, CONSTANTS, FUNCTIONS
+
+        names = {**CONSTANTS, **FUNCTIONS, **_LOGIC, "x": s}
+        try:
+            with np.errstate(all="ignore"):
+                out = eval(self._code, {"__builtins__": {}}, names)  # checked tree, no builtins
+        except (ArithmeticError, ValueError, TypeError) as exc:
+            raise InputError(f"{self.where}: evaluating {self.text!r} failed: {exc}") from None
+        return np.broadcast_to(np.asarray(out), np.shape(s))
+
+    def value(self, s: np.ndarray) -> np.ndarray:
+        return np.asarray(self._eval(np.asarray(s, dtype=float)), dtype=float)
+
+    def derivative(self, s: np.ndarray) -> np.ndarray:
+        s = np.asarray(s, dtype=float)
+        if self.analytic:
+            h = 1e-30
+            return np.imag(self._eval(s + 1j * h)) / h
+        h = 1e-6 * (1.0 + np.abs(s))
+        return (self.value(s + h) - self.value(s - h)) / (2.0 * h)
+
+    def integral(self, s0: np.ndarray, s1: np.ndarray) -> np.ndarray:
+        """int_{s0}^{s1} F by composite Gauss-Legendre."""
+        s0, s1 = np.broadcast_arrays(np.asarray(s0, float), np.asarray(s1, float))
+        edges = s0[..., None] + (s1 - s0)[..., None] * np.linspace(0, 1, self.PANELS + 1)
+        lo, hi = edges[..., :-1, None], edges[..., 1:, None]
+        points = 0.5 * (lo + hi) + 0.5 * (hi - lo) * self._xi
+        return (0.5 * (hi - lo)[..., 0] * (self.value(points) @ self._w)).sum(axis=-1)
+
+
 @dataclass(frozen=True, eq=False)
 class SpringLaw:
     """A spring's force as a function of its elongation DL: ``kind`` "linear" (``stiffness``
@@ -129,7 +191,7 @@ class SpringLaw:
 
     kind: str
     stiffness: float = 0.0
-    curve: ForceCurve | None = None
+    curve: ForceCurve | ExpressionForce | None = None
     measure: str = "elongation"
     scale: float = 1.0
 

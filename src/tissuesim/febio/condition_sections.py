@@ -3,6 +3,8 @@
 
 from __future__ import annotations
 
+import re
+
 import numpy as np
 
 from tissuesim.febio.model import (
@@ -432,6 +434,13 @@ def _friction_settings(kind: str, p: dict, mu: float) -> dict:
 
 def _globals(model: FebModel, section: Node) -> None:
     for c in section.children:
+        if c.tag == "Variables":  # FEBio's global parameters, fem.name in math expressions
+            for v in c.children:
+                name = v.attrib.get("name")
+                if v.tag != "var" or not name or not re.fullmatch(r"[A-Za-z_]\w*", name):
+                    raise v.error('expected <var name="a">value</var>')
+                model.variables[name] = float(_floats(v, 1)[0])
+            continue
         if c.tag != "Constants":
             raise _unsupported(c, "this Globals element is not supported by tissuesim")
         model.note(c, "physical constants (T, R, Fc, ...) are not used by solid mechanics")

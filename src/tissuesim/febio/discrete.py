@@ -152,12 +152,41 @@ def _force_curve(model: FebModel, node: Node):
     if curve is not None:
         return (curve, float(_floats(node, 1)[0]))
     kind = node.attrib.get("type", "point")
+    if kind == "math":
+        return _math_force(model, node)
     if kind != "point":
-        raise node.error(f'force type "{kind}": tissuesim reads a "point" curve')
+        raise node.error(f'force type "{kind}": tissuesim reads a "point" or "math" curve')
     holder = FebModel(source=model.source, version=model.version)
     _load_data(holder, Node("LoadData", {}, node.line, node.source, children=[
         Node("load_controller", {}, node.line, node.source, children=node.children)]))  # fmt: skip
     return holder.curves[1]
+
+
+def _math_force(model: FebModel, node: Node) -> str:
+    """<force type="math"><math>fem.a*(exp(fem.b*x)-1)</math>: the expression of the measure
+    x as tissuesim reads it (``^`` a power; FEBio's global variables ``fem.name``, from
+    <Globals><Variables>, by their values)."""
+    import re
+
+    from tissuesim.energies.node_springs import ExpressionForce
+    from tissuesim.errors import InputError
+
+    math = node.find("math")
+    if math is None or not (math.text or "").strip():
+        raise node.error('a force of type "math" needs its <math> expression of x')
+
+    def value(match: re.Match) -> str:
+        name = match.group(1)
+        if name not in model.variables:
+            raise math.error(f"fem.{name}: no <var name={name!r}> in <Globals><Variables>")
+        return f"({model.variables[name]!r})"
+
+    text = re.sub(r"\bfem\.(\w+)", value, math.text.strip()).replace("^", "**")
+    try:
+        ExpressionForce(text, "force")
+    except InputError as exc:
+        raise math.error(f"{exc} (read as {text!r})") from None
+    return text
 
 
 def _curve(model: FebModel, spring: dict) -> tuple[Curve, float]:
@@ -235,7 +264,11 @@ def spring_tables(model: FebModel, bodies: list[dict], j: int, local: np.ndarray
                     if spring["curve"] not in model.curves:
                         raise where.error(f"load curve {spring['curve']} is not defined")
                     table["stiffness_scale"] = curve_expression(model.curves[spring["curve"]])
-            if spring["law"] == "curve":
+            if spring["law"] == "curve" and isinstance(spring["curve"], str):
+                table["force"] = spring["curve"]  # FEBio's math force: an expression of x
+                table["measure"] = spring["measure"]
+                table["scale"] = spring["scale"]
+            elif spring["law"] == "curve":
                 curve, factor = _curve(model, spring)
                 table["force"] = {
                     "points": curve.points.tolist(),

@@ -50,6 +50,8 @@ class FebModel:
     node_sets: dict = field(default_factory=dict)
     #: name -> ((k, 3|4) corner nodes of each facet, its Node); a quadratic facet's corners
     surfaces: dict = field(default_factory=dict)
+    #: <Globals><Variables>: name -> value (``fem.name`` in a math expression)
+    variables: dict = field(default_factory=dict)
     #: name -> every node of the surface's facets, a quadratic facet's mid-side ones included
     #: (what "@surface:name" holds in a condition, as in FEBio)
     surface_nodes: dict = field(default_factory=dict)

@@ -39,7 +39,8 @@ INTEGRATORS = {"static": "quasistatic", "dynamic": "newmark"}
 
 
 def _bodies(model: FebModel) -> list[dict]:
-    """Parts joined by shared nodes make one body (one cell type; parts of other materials or
+    """Parts joined by shared nodes or discrete springs make one body (one cell type; parts of
+    other materials or
     domain formulations its ``regions``, each its parts, material, formulation and rows of
     the body's cells); the parts of
     a rigid body material make one body of their own (``rigid`` its material), whatever nodes
@@ -59,6 +60,11 @@ def _bodies(model: FebModel) -> list[dict]:
         for j in np.unique(owner[nodes][owner[nodes] >= 0]):
             parent[root(int(j))] = root(i)
         owner[nodes] = i
+    for spring in model.springs:  # parts a discrete spring joins make one body too: the
+        pairs, _ = model.discrete_sets[spring["set"]]  # springs join vertices of one body
+        for a, b in owner[pairs]:
+            if a >= 0 and b >= 0 and root(int(a)) != root(int(b)):
+                parent[root(int(a))] = root(int(b))
     groups: dict[int, list[str]] = {}
     for i, name in enumerate(names):
         groups.setdefault(root(i), []).append(name)
@@ -73,8 +79,9 @@ def _bodies(model: FebModel) -> list[dict]:
         types = {model.parts[p][0] for p in parts}
         if len(types) > 1:
             raise first.error(
-                f"parts {parts} share nodes but mix element types {sorted(types)}: the regions "
-                "of one tissuesim body share one cell type (join them with a tie)"
+                f"parts {parts} share nodes (or discrete springs) but mix element types "
+                f"{sorted(types)}: the regions of one tissuesim body share one cell type (join "
+                "them with a tie)"
             )
         cells = np.vstack([model.parts[p][1] for p in parts])
         # one region per (material, domain formulation): cells of one material each

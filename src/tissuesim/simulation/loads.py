@@ -111,8 +111,9 @@ class LoadCalls:
         """Discrete springs between vertex pairs (k, 2) of a FEM body (a second vertex -1: a
         spring to the fixed point ``anchors[i]``, m), of rest lengths their rest distances:
         linear (``stiffness`` N/m; ``tension_only``: no force in compression) or with a
-        ``force`` curve (an ``energies.node_springs.ForceCurve``, N, of the ``measure``
-        elongation (m), strain or stretch, times ``scale``). An energy with its exact
+        ``force`` curve (an ``energies.node_springs.ForceCurve``, or an expression string of
+        the measure ``x`` such as "2 * (exp(50 * x) - 1)", N, of the ``measure`` elongation
+        (m), strain or stretch, times ``scale``). An energy with its exact
         gradient and Hessian (``energies/node_springs.py``). Returns the spring set.
 
         ``rest_length`` (m, one or one per spring) replaces the rest distances (FEBio's node
@@ -124,6 +125,10 @@ class LoadCalls:
 
         if (stiffness is None) == (force is None):
             raise InputError("add_springs: give a stiffness (N/m) or a force curve, not both")
+        if isinstance(force, str):  # an expression of the measure x
+            from tissuesim.energies.node_springs import ExpressionForce
+
+            force = ExpressionForce(force, "add_springs force")
         if force is not None:
             law = SpringLaw("curve", curve=force, measure=measure, scale=float(scale))
         else:

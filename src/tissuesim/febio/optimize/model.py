@@ -20,6 +20,7 @@ from tissuesim.febio.xml import Node, parse_feb
 __all__ = ["ModelBuilder"]
 
 _MATERIAL = re.compile(r"fem\.material(?:\[(\d+)\]|\(\s*'([^']*)'\s*\))((?:\.\w+)+)$")
+_VARIABLE = re.compile(r"fem\.(\w+)$")  # a global parameter, <Globals><Variables><var name>
 #: the file name of the log request behind the objective's k-th quantity
 _FILE = "optimize_quantity_{}.csv"
 
@@ -97,11 +98,35 @@ class ModelBuilder:
 def _element(root: Node, name: str, where: Node) -> Node:
     """The model's element a <param name> sets."""
     m = _MATERIAL.match(name.strip())
-    if m is None:
+    variable = _VARIABLE.match(name.strip())
+    if m is None and variable is not None:  # a global parameter: <Globals><Variables><var>
+        section = root.find("Globals")
+        holder = None if section is None else section.find("Variables")
+        found = [] if holder is None else [
+            v for v in holder.children if v.tag == "var" and v.attrib.get("name") == variable[1]
+        ]  # fmt: skip
+        if not found:
+            raise where.error(f"{name!r}: the model has no <var name={variable[1]!r}> in "
+                              "<Globals><Variables>")  # fmt: skip
+        node = found[0]
+    elif m is None:
         raise where.error(
             f"{name!r}: tissuesim optimises material parameters, named fem.material[i].name or "
-            "fem.material('material').name (FEBio's global parameters are not supported)"
+            "fem.material('material').name, and global parameters fem.name (<Globals> "
+            "<Variables>)"
         )
+    else:
+        node = _material_element(root, name, m, where)
+    try:
+        float(node.text)
+    except ValueError:
+        raise where.error(f"{name!r}: the model's <{node.tag}> (line {node.line}) is not a "
+                          f"number ({node.text!r})") from None  # fmt: skip
+    return node
+
+
+def _material_element(root: Node, name: str, m: re.Match, where: Node) -> Node:
+    """The element of a material parameter fem.material[i].a.b or fem.material('x').a.b."""
     section = root.find("Material")
     materials = [] if section is None else [c for c in section.children if c.tag == "material"]
     if m[1] is not None:
@@ -123,11 +148,6 @@ def _element(root: Node, name: str, where: Node) -> Node:
                 "(give the parameter in the model to optimise it)"
             )
         node = child
-    try:
-        float(node.text)
-    except ValueError:
-        raise where.error(f"{name!r}: the model's <{node.tag}> (line {node.line}) is not a "
-                          f"number ({node.text!r})") from None  # fmt: skip
     return node
 
 

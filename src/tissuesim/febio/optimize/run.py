@@ -11,8 +11,8 @@ the model's start included, against the time or an ``ordinate`` quantity) interp
 linearly at the data's abscissae and held constant past its ends (FEBio's load curve); a
 target, node-data or element-data objective the quantities at the run's end. Parameters are
 held within their bounds as FEBio holds them (clamped before each run). ``constrained
-levmar`` runs the same loop and stops by levmar's rules instead (the objective, the relative
-step or the gradient below ``obj_tol``): FEBio's ``dlevmar_bc_dif`` path is not replayed.
+levmar`` runs levmar's own box-constrained loop, as FEBio calls ``dlevmar_bc_dif``
+(``levmar_bc.py``).
 """
 
 from __future__ import annotations
@@ -169,7 +169,8 @@ def run_optimize(task: OptimizeTask, model_path, log=None, gradients: str = "sen
         lo = np.array([p.low for p in task.parameters])
         hi = np.array([p.high for p in task.parameters])
         a0 = np.array([p.initial for p in task.parameters])
-        a, chisq, iterations, converged, history, covar = _levmar(
+        loop = _constrained_levmar if task.method == "constrained levmar" else _levmar
+        a, chisq, iterations, converged, history, covar = loop(
             objective, a0, lo, hi, task, log or (lambda line: None)
         )
         if not np.array_equal(objective.last_a, a):  # the last run was a rejected trial
@@ -218,7 +219,6 @@ def _levmar(objective, a0, lo, hi, task: OptimizeTask, log):
                              "(a singular Levenberg-Marquardt system)") from None  # fmt: skip
         a, r, J, chisq = evaluate(state["a"] + da)
         ok = chisq < state["chisq"]
-        state["step"] = float(np.linalg.norm(a - state["a"])) if ok else 0.0
         if ok:
             state["lam"] *= 0.1
             accept(a, r, J, chisq)
@@ -237,23 +237,60 @@ def _levmar(objective, a0, lo, hi, task: OptimizeTask, log):
     fprev, lam_prev = state["chisq"], state["lam"]
     niter, converged = 1, False
     while True:
-        ok = trial(niter)
-        if task.method == "levmar":
-            if state["lam"] < lam_prev and niter != 1:
-                converged = (fprev - state["chisq"]) / (fprev + state["chisq"] + 1) < task.obj_tol
-        else:  # levmar's eps3 (the objective), eps2 (the relative step), eps1 (the gradient)
-            a = state["a"]
-            converged = (
-                state["chisq"] <= task.obj_tol
-                or np.max(np.abs(state["beta"])) <= (task.obj_tol)
-                or (ok and state["step"] <= task.obj_tol * np.linalg.norm(a))
-            )
+        trial(niter)
+        if state["lam"] < lam_prev and niter != 1:
+            converged = (fprev - state["chisq"]) / (fprev + state["chisq"] + 1) < task.obj_tol
         fprev, lam_prev = state["chisq"], state["lam"]
         niter += 1
         if converged or niter >= task.max_iter:
             break
     covar = np.linalg.pinv(state["alpha"])
     return state["a"], state["chisq"], niter, converged, history, covar
+
+
+def _constrained_levmar(objective, a0, lo, hi, task: OptimizeTask, log):
+    """FEBio's ``constrained levmar`` (levmar's dlevmar_bc_dif: ``levmar_bc.py``) on the run's
+    sensitivities, or on levmar's forward differences (``gradients="differences"``)."""
+    from tissuesim.febio.optimize.levmar_bc import REASONS, boxed_levenberg_marquardt
+
+    evaluated: dict[tuple, tuple] = {}
+
+    def residuals(a: np.ndarray) -> np.ndarray:
+        clamped = np.clip(a, lo, hi)  # FEBio's ObjFun holds the parameters in their bounds
+        tick = time.perf_counter()
+        if objective.gradients == "sensitivities":
+            r, J = objective(clamped)
+        else:
+            r, J = objective._residuals(clamped, False)[0], None
+        objective.last_a = clamped
+        evaluated[tuple(a)] = (r, J)
+        log(f"run {objective.runs}: objective {float(r @ r):.6g} at {_show(task, clamped)} "
+            f"({time.perf_counter() - tick:.1f} s)")  # fmt: skip
+        return r
+
+    def jacobian(a: np.ndarray) -> np.ndarray:
+        r, J = evaluated[tuple(a)]
+        if J is None:  # levmar's forward differences: max(1e-4 |a_j|, delta)
+            J = np.empty((len(r), len(a)))
+            for j in range(len(a)):
+                step = max(1e-4 * abs(a[j]), task.f_diff_scale)
+                moved = a.copy()
+                moved[j] += step
+                J[:, j] = (residuals(moved) - r) / step
+        return J
+
+    tol = task.obj_tol
+    out = boxed_levenberg_marquardt(residuals, jacobian, a0, lo, hi, tau=task.tau,
+                                    eps=(tol, tol, tol), itmax=task.max_iter, log=log)  # fmt: skip
+    log(f"levmar stopped by {REASONS.get(out.reason, out.reason)} after {out.iterations} "
+        "iterations")  # fmt: skip
+    if out.reason in (4, 7):
+        raise InputError(f"{task.source}: the constrained Levenberg-Marquardt stopped by "
+                         f"{REASONS[out.reason]} at {_show(task, out.p)}")  # fmt: skip
+    history = [{"iteration": h["iteration"], "objective": h["objective"],
+                "parameters": h["parameters"], "accepted": True, "step": h["step"]}
+               for h in out.history]  # fmt: skip
+    return out.p, out.objective, out.iterations, out.converged, history, np.linalg.pinv(out.jtj)
 
 
 def _show(task: OptimizeTask, a: np.ndarray) -> str:

@@ -10,6 +10,7 @@ point, as ``Simulation.add_springs`` makes them (``energies/node_springs.py``)::
     tension_only = false         # true: no force in compression
     # or a force curve instead of a stiffness (FEBio's nonlinear spring):
     # force = { points = [[-1, -1], [0, 0], [1, 2]], interpolate = "smooth", extend = "constant" }
+    # force = "2 * (exp(50 * x) - 1)"   # or an expression of the measure x (FEBio's math force)
     # measure = "elongation"     # or "strain" (dl / L0), "stretch" (l / L0)
     # scale = 1.0                # the force is scale * F(measure), N
     rest_length = 0.0            # m: instead of the rest distance (FEBio's node distance)
@@ -17,7 +18,8 @@ point, as ``Simulation.add_springs`` makes them (``energies/node_springs.py``)::
 
 A force curve's ``interpolate`` is linear (default), step, smooth or smooth step and its
 ``extend`` constant (default) or extrapolate, with FEBio's point-curve definitions
-(``febio/curves.py``); its energy is the curve's exact integral.
+(``febio/curves.py``); its energy is the curve's exact integral. An expression's energy is its
+integral by composite Gauss-Legendre, its stiffness a complex step (``ExpressionForce``).
 
 And ``[[linear_constraints]]``, sum_i c_i u[v_i, a_i] = offset over displacement components
 of the body (``Simulation.add_linear_constraint``, ``constraints/linear.py``)::
@@ -35,7 +37,7 @@ import re
 
 import numpy as np
 
-from tissuesim.errors import SceneError
+from tissuesim.errors import InputError, SceneError
 from tissuesim.scene.common import _context, _unknown
 from tissuesim.validate import short
 
@@ -116,7 +118,14 @@ def add_spring_tables(sim, body: str, entries: list, label) -> None:
         if ("stiffness" in entry) == ("force" in entry):
             raise SceneError(f"{where}: give a stiffness (N/m) or a force curve, one of them")
         curve = None
-        if "force" in entry:
+        if isinstance(entry.get("force"), str):  # an expression of the measure x
+            from tissuesim.energies.node_springs import ExpressionForce
+
+            try:
+                curve = ExpressionForce(entry["force"], f"{where} force")
+            except InputError as exc:
+                raise SceneError(str(exc)) from None
+        elif "force" in entry:
             curve = point_force_curve(entry["force"], f"{where} force")
         with _context(where):
             sim.add_springs(
