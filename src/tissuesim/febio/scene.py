@@ -40,10 +40,9 @@ INTEGRATORS = {"static": "quasistatic", "dynamic": "newmark"}
 
 def _bodies(model: FebModel) -> list[dict]:
     """Parts joined by shared nodes or discrete springs make one body (one cell type; parts of
-    other materials or
-    domain formulations its ``regions``, each its parts, material, formulation and rows of
-    the body's cells); the parts of
-    a rigid body material make one body of their own (``rigid`` its material), whatever nodes
+    other materials or domain formulations its ``regions``, each its parts, material,
+    formulation and rows of the body's cells); the parts of a rigid body material make one
+    body of their own (``rigid`` its material), whatever nodes
     they share (febio/rigid/scene.py)."""
     rigid = {p: rigid_material_of(model, p) for p in model.parts}
     names = [p for p in model.parts if rigid[p] is None]
