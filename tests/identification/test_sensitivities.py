@@ -411,3 +411,56 @@ def test_the_parameter_copies_share_the_base_models_sparsity_analysis():
     assert counts["misses"] == 1 and counts["hits"] == 2 * len(params)  # the 6 copies'
     assert cache.stats()["hits"] == 2 * len(params)  # and the generated mesh
     cache.clear()
+
+
+def penalty_pressed(p, **options):
+    """Hexahedral blocks, the upper one pressed p["depth"] over the run onto the lower one (base
+    fixed) through FEBio's penalty contact (upper's bottom quads on lower's top), its
+    penalty p["penalty"]."""
+    sim = ts.Simulation(integrator="quasistatic", time_step=0.5)
+    lower = ts.box((0, 0, 0), (1, 1, 0.5), (3, 3, 2), element="hex")
+    upper = ts.box((0.2, 0.15, 0.5), (0.8, 0.75, 1.0), (2, 2, 2), element="hex")
+    sim.add_body("lower", lower, ts.NeoHookean(youngs_modulus=p["E"], poisson_ratio=0.3))
+    sim.add_body("upper", upper, ts.NeoHookean(youngs_modulus=1500.0, poisson_ratio=0.2))
+    sim.fix(np.flatnonzero(lower.points[:, 2] < 1e-9), body="lower", name="table")
+    top = np.flatnonzero(upper.points[:, 2] > 1 - 1e-9)
+    sim.add_dirichlet(top, lambda X, t: np.tile([0.0, 0.0, -p["depth"] * t], (len(X), 1)),
+                      body="upper", name="press")  # fmt: skip
+    sim.add_penalty_contact("upper", "lower", primary_facets="zmin", secondary_facets="zmax",
+                            penalty=p["penalty"], name="contact", **options)  # fmt: skip
+    return sim
+
+
+def test_plain_penalty_contact_is_differentiated():
+    """FEBio's penalty contact without lagged terms (no augmentation, reference areas, no
+    friction) is an energy of the state (its gradient and Hessian exact:
+    tests/contact/test_penalty_contact.py): its Hessian joins the step's, and the press's and
+    table's reactions and a marker on the lower block follow the lower block's modulus, the
+    depth and the penalty itself as whole runs do (central differences, 1e-6)."""
+    params = {"E": 1000.0, "depth": 0.02, "penalty": 2e4}
+    lower = penalty_pressed(params).bodies["lower"].mesh
+    marker = np.flatnonzero(np.isclose(lower.points[:, 2], 0.5))[5:6]
+    obs = [ts.Reaction("press"), ts.Reaction("table"), ts.Displacement(marker, "lower")]
+    r = ts.sensitivities(penalty_pressed, params, obs, 2)
+
+    def run(q):
+        sim = penalty_pressed(q)
+        for _ in range(2):
+            sim.step()
+        f = sim.forces()
+        u = sim.body_displacement("lower")[marker].ravel()
+        return np.concatenate([f["press"], f["table"], u])
+
+    fd = np.column_stack([central(run, params, k) for k in params])
+    for part in (slice(0, 3), slice(3, 6), slice(6, None)):  # of the largest of its kind
+        scale = np.abs(fd[part]).max()
+        assert scale > 0
+        assert np.abs(r.jacobian[-1][part] - fd[part]).max() <= 1e-6 * scale, part
+
+
+def test_penalty_contact_with_lagged_terms_is_refused_in_one_line():
+    params = {"E": 1000.0, "depth": 0.02, "penalty": 2e4}
+    for options, what in (({"augmented": True}, "augmented"), ({"friction": 0.3}, "friction")):
+        with pytest.raises(InputError, match=f"penalty contact 'contact' is {what}: its lagged"):
+            ts.sensitivities(lambda q, o=options: penalty_pressed(q, **o), params,
+                             [ts.Reaction("press")], 1)  # fmt: skip

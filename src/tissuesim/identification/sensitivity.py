@@ -44,8 +44,10 @@ variables along their derivative, and the update's derivative is taken through t
 
 What is differentiated: FEM bodies under quasistatics, Backward Euler or Newmark, any law
 (internal variables included), supports, prescribed motions, graspers, loads and springs,
-barrier contact (against obstacles and between bodies) with or without friction; FEBio's
-penalty contact, interactive contact steps (a prediction, not a minimum), rigid bodies in
+barrier contact (against obstacles and between bodies) with or without friction, FEBio's
+penalty contact without lagged terms (an energy of the state: its exact Hessian joins H);
+penalty contact with lagged terms (augmented, current-area weights, friction, sticky),
+interactive contact steps (a prediction, not a minimum), rigid bodies in
 dynamic runs or with joints, Rayleigh damping, and dynamic, friction or history steps that
 halved are refused in one line (the derivative would be of a different sequence of solves).
 Rigid bodies (quasistatic) are differentiated in the tangent space (configurations moved by
@@ -103,11 +105,17 @@ def _check(sim, what: str) -> None:
             f"{what}: sensitivities are taken of quasistatic, backward_euler and newmark runs, "
             f"not {sim.integrator!r}"
         )
-    if s.penalty_contacts:
-        raise InputError(
-            f"{what}: sensitivities of runs with FEBio's penalty contact are not taken yet: "
-            "use barrier contact, or finite differences of whole runs"
-        )
+    for pair in s.penalty_contacts:
+        lagged = [why for why, on in (
+            ("augmented", pair.augmented), ("current-area weights", pair.area == "current"),
+            ("friction", pair.friction > 0), ("sticky", pair.sticky),
+        ) if on]  # fmt: skip
+        if lagged:
+            raise InputError(
+                f"{what}: penalty contact {pair.name!r} is {', '.join(lagged)}: its lagged "
+                "terms are not differentiated yet (plain penalty contact is): use plain "
+                "penalty or barrier contact, or finite differences of whole runs"
+            )
     if s.rigid and (sim.integrator != "quasistatic" or getattr(s, "joints", None)):
         raise InputError(
             f"{what}: sensitivities of runs with rigid bodies are taken quasistatic and "
