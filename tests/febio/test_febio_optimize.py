@@ -220,6 +220,11 @@ def test_the_command_line_runs_an_optimisation_and_writes_its_report(tmp_path):
             r"'fem.a': the model has no <var name='a'> in <Globals><Variables>",
         ),
         (
+            "<param name=\"fem.material('tissue').relaxation.tau1.points[1].y\">1, 0, 2</param>",
+            OBJECTIVES["target"],
+            "a point of a curve as a parameter is not optimised",
+        ),
+        (
             "<param name=\"fem.material('tissue').E\">3, 0, 2</param>",
             OBJECTIVES["target"],
             "not within its bounds",

@@ -109,6 +109,11 @@ def _element(root: Node, name: str, where: Node) -> Node:
             raise where.error(f"{name!r}: the model has no <var name={variable[1]!r}> in "
                               "<Globals><Variables>")  # fmt: skip
         node = found[0]
+    elif m is None and re.search(r"\.points\[\d+\]\.[xy]$", name.strip()):
+        raise where.error(
+            f"{name!r}: a point of a curve as a parameter is not optimised by tissuesim (it "
+            "optimises material parameters and global parameters fem.name)"
+        )
     elif m is None:
         raise where.error(
             f"{name!r}: tissuesim optimises material parameters, named fem.material[i].name or "
