@@ -229,10 +229,8 @@ def deck() -> str:
 """
 
 
-@pytest.fixture(scope="module")
-def cantilever(tmp_path_factory):
-    path = tmp_path_factory.mktemp("quad8") / "cantilever_quad8.feb"
-    path.write_text(deck())
+def run_deck(path: Path):
+    """(model, scene, simulation) of the deck at ``path``, run to its end."""
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         model = read_feb(path)
@@ -240,6 +238,14 @@ def cantilever(tmp_path_factory):
         sim = scene.simulation
         for _ in range(scene.run["steps"]):
             sim.step()
+    return model, scene, sim
+
+
+@pytest.fixture(scope="module")
+def cantilever(tmp_path_factory):
+    path = tmp_path_factory.mktemp("quad8") / "cantilever_quad8.feb"
+    path.write_text(deck())
+    model, scene, sim = run_deck(path)
     return model, sim.body_positions("body"), scene, path
 
 
@@ -360,13 +366,7 @@ def test_quad8_plate_under_a_follower_pressure_equals_the_api(tmp_path):
     path = tmp_path / "pressed.feb"
     p = 2e-2
     path.write_text(with_pressure(deck(), p))
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        model = read_feb(path)
-        scene = load_febio(path)
-        sim = scene.simulation
-        for _ in range(scene.run["steps"]):
-            sim.step()
+    model, scene, sim = run_deck(path)
     x = sim.body_positions("body")
     points, faces = plate()
     mesh = ts.mesh.solid_shell(points, faces, H, reference="top", normalize=False)
@@ -455,13 +455,7 @@ def test_a_condition_on_a_quad8_surface_holds_its_midside_nodes(tmp_path):
     text = (text[:start] + text[end:]).replace("  </Boundary>", f"    {lift}  </Boundary>")
     path = tmp_path / "lifted.feb"
     path.write_text(text)
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        model = read_feb(path)
-        scene = load_febio(path)
-        sim = scene.simulation
-        for _ in range(scene.run["steps"]):
-            sim.step()
+    model, scene, sim = run_deck(path)
     np.testing.assert_array_equal(model.node_sets["@surface:tip_face"], np.sort(tip))
     assert model.surfaces["tip_face"][0].tolist() == [tip[:4].tolist()]  # the corner facet
     u = sim.body_positions("body") - model.nodes
