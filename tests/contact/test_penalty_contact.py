@@ -156,6 +156,54 @@ def test_pair_energy_gradient_and_hessian_match_finite_differences(options):
         np.testing.assert_allclose(hess[:, i].toarray().ravel(), (gp - gm) / (2 * e), atol=1e-5)
 
 
+@pytest.mark.parametrize("two_pass", [False, True])
+def test_the_current_area_weights_coupling_matches_finite_differences(two_pass):
+    """With current-area weights that follow the state (FEBio's sliding-elastic, lagged to the
+    converged state), the pair's gradient sum_i w_i(x) f_i(x) changes with x through the
+    weights too: its Hessian at fixed weights plus area_coupling's term against central
+    differences of the gradient with the weights re-taken at each perturbed state."""
+    from tissuesim.contact.penalty.area_coupling import area_coupling
+    from tissuesim.contact.penalty.faces import area_jacobians
+
+    lower, upper = _blocks()
+    rest = [lower.points, upper.points]
+    sides = (
+        PenaltySide(1, Facets.of(upper.facet_sets["zmin"], "u"), np.ones(4)),
+        PenaltySide(0, Facets.of(lower.facet_sets["zmax"], "l"), np.full(9, 2.0)),
+    )
+    pair = PenaltyContact("p", *sides, penalty=50.0, area="current", two_pass=two_pass)
+    pair.setup(rest)
+    positions = [r + 0.01 * RNG.standard_normal(r.shape) for r in rest]
+    n0 = lower.n_points * 3
+    dofs = [np.arange(n0).reshape(-1, 3), n0 + np.arange(upper.n_points * 3).reshape(-1, 3)]
+    n = n0 + upper.n_points * 3
+    flat = np.concatenate([p.ravel() for p in positions])
+
+    def split(v):
+        return [v[:n0].reshape(-1, 3), v[n0:].reshape(-1, 3)]
+
+    def following(at):  # the weights taken at the state, as the converged lag leaves them
+        for p in pair.passes:
+            p.weights = p.points.weight * area_jacobians(at[p.sampled.body], p.sampled.facets,
+                                                         p.points)  # fmt: skip
+        return pair.evaluate(at, dofs, n, 2)
+
+    _, grad, hess = following(positions)
+    C = area_coupling(pair, positions, dofs, n)
+    assert C is not None and abs(C).max() > 1e-3 * abs(hess).max()
+    total = (hess + C).toarray()
+    e = 1e-7
+    active = np.flatnonzero(np.abs(grad) > 0)
+    for i in active[:: max(1, len(active) // 12)]:
+        d = np.zeros(n)
+        d[i] = e
+        gp = following(split(flat + d))[1]
+        gm = following(split(flat - d))[1]
+        np.testing.assert_allclose(total[:, i], (gp - gm) / (2 * e), atol=2e-6)
+    pair.area = "reference"
+    assert area_coupling(pair, positions, dofs, n) is None  # weights that never move
+
+
 def _pressed(penalty=1e4, augmented=False, two_pass=False, steps=3, integration="gauss"):
     """Upper block (0.6 x 0.6 x 0.5, nu = 0) on lower (1 x 1 x 0.5, base fixed), upper's top
     moved down 0.01 per step, laterally held."""

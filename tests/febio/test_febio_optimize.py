@@ -339,3 +339,61 @@ def test_a_rigid_platens_force_is_fitted_by_febios_differences_and_by_sensitivit
         exact = run_optimize(task, model)
     assert exact.parameters["fem.material('tissue').E"] == pytest.approx(1e4, rel=1e-4)
     assert exact.runs < fit.runs
+
+
+def _sliding_stack(tmp_path: Path, E_low: float) -> Path:
+    """tests/febio/models/contact_stack.feb without its puck and friction: a block pressed
+    0.1 onto another through FEBio's sliding-elastic penalty contact (current-area weights),
+    the lower block of its own material "firm" of modulus E_low."""
+    import re
+
+    text = (Path(__file__).parent / "models" / "contact_stack.feb").read_text()
+    text = re.sub(r'\s*<Nodes name="puck">.*?</Nodes>', "", text, flags=re.S)
+    text = re.sub(r'\s*<Elements type="hex8" name="puck">.*?</Elements>', "", text, flags=re.S)
+    text = re.sub(r'\s*<NodeSet name="puck_(all|top)">[^<]*</NodeSet>', "", text)
+    text = re.sub(r'\s*<Surface name="puck_bottom">.*?</Surface>', "", text, flags=re.S)
+    text = re.sub(r'\s*<SolidDomain name="puck" mat="soft"/>', "", text)
+    text = re.sub(r'\s*<bc name="puck_xy".*?</bc>', "", text, flags=re.S)
+    text = re.sub(r'\s*<bc name="press_puck".*?</bc>', "", text, flags=re.S)
+    text = re.sub(r'\s*<contact type="rigid_wall".*?</contact>', "", text, flags=re.S)
+    text = text.replace("<fric_coeff>0.01</fric_coeff>", "<fric_coeff>0</fric_coeff>")
+    text = text.replace('<SolidDomain name="lower" mat="soft"/>',
+                        '<SolidDomain name="lower" mat="firm"/>')  # fmt: skip
+    text = text.replace("  </Material>", '    <material id="2" name="firm" type="neo-Hookean">'
+                        f"<density>1000</density><E>{E_low!r}</E><v>0.3</v></material>\n"
+                        "  </Material>")  # fmt: skip
+    path = tmp_path / f"stack_{E_low:g}.feb"
+    path.write_text(text)
+    return path
+
+
+def test_a_modulus_under_febios_sliding_elastic_contact_is_fitted_by_sensitivities(tmp_path):
+    """A block pressed onto another through FEBio's sliding-elastic contact (penalty, its
+    points weighted by their current areas): the lower block's top from our own run at
+    E = 2e4 is fitted from E = 1e4 by the run's sensitivities (through the contact's Hessian
+    and its weights' derivative) back to 2e4, in fewer model runs than FEBio's differences."""
+    from tissuesim.febio import load_febio
+
+    truth = _sliding_stack(tmp_path, 2e4)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        scene = load_febio(truth)
+        (pair,) = scene.simulation.system.penalty_contacts
+        assert pair.area == "current" and not pair.augmented
+        sim = scene.simulation
+        for _ in range(scene.run["steps"]):
+            sim.step()
+    top = float(sim.body_positions("lower")[4, 2])  # node 5, at z = 1 at rest
+    assert top < 1.0 - 1e-3
+    one = "<param name=\"fem.material('firm').E\">10000, 1000, 100000</param>"
+    objective = ('<Objective type="target"><var name="fem.mesh.node.fromId(5).position.z">'
+                 f"{top!r}</var></Objective>")  # fmt: skip
+    task = read_optimize(_optimisation(tmp_path / "fit.feb", objective, one, tol=1e-12))
+    model = _sliding_stack(tmp_path, 1e4)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        fit = run_optimize(task, model)
+        fd = run_optimize(task, model, gradients="differences")
+    assert fit.parameters["fem.material('firm').E"] == pytest.approx(2e4, rel=1e-6)
+    assert fd.parameters["fem.material('firm').E"] == pytest.approx(2e4, rel=1e-4)
+    assert fit.runs < fd.runs

@@ -45,8 +45,11 @@ variables along their derivative, and the update's derivative is taken through t
 What is differentiated: FEM bodies under quasistatics, Backward Euler or Newmark, any law
 (internal variables included), supports, prescribed motions, graspers, loads and springs,
 barrier contact (against obstacles and between bodies) with or without friction, FEBio's
-penalty contact without lagged terms (an energy of the state: its exact Hessian joins H);
-penalty contact with lagged terms (augmented, current-area weights, friction, sticky),
+penalty contact (an energy of the state: its exact Hessian joins H), its current-area
+weights (sliding-elastic's, lagged to the converged state) followed through their own
+derivative (``contact/penalty/area_coupling.py``: an unsymmetric term of H; the copies are
+given the base's weights); penalty contact with other lagged terms (augmented, friction,
+sticky),
 interactive contact steps (a prediction, not a minimum), rigid bodies in
 dynamic runs or with joints, Rayleigh damping, and dynamic, friction or history steps that
 halved are refused in one line (the derivative would be of a different sequence of solves).
@@ -107,14 +110,15 @@ def _check(sim, what: str) -> None:
         )
     for pair in s.penalty_contacts:
         lagged = [why for why, on in (
-            ("augmented", pair.augmented), ("current-area weights", pair.area == "current"),
-            ("friction", pair.friction > 0), ("sticky", pair.sticky),
+            ("augmented", pair.augmented), ("friction", pair.friction > 0),
+            ("sticky", pair.sticky),
         ) if on]  # fmt: skip
         if lagged:
             raise InputError(
                 f"{what}: penalty contact {pair.name!r} is {', '.join(lagged)}: its lagged "
-                "terms are not differentiated yet (plain penalty contact is): use plain "
-                "penalty or barrier contact, or finite differences of whole runs"
+                "terms are not differentiated yet (penalty contact without them is): use "
+                "penalty contact without them, barrier contact, or finite differences of "
+                "whole runs"
             )
     if s.rigid and (sim.integrator != "quasistatic" or getattr(s, "joints", None)):
         raise InputError(
@@ -136,14 +140,34 @@ def _check(sim, what: str) -> None:
             )
 
 
-def _sync(sim, t_prev: float, t: float, kappa=None, offset=None, friction=None) -> None:
+def _area_coupling(system, x: np.ndarray):
+    """The penalty pairs' d(gradient)/dx through their current-area weights (None: none)."""
+    from tissuesim.contact.penalty.area_coupling import area_coupling
+
+    if not system.penalty_contacts:
+        return None
+    positions, dofs = system.body_positions_and_dofs(x)
+    total = None
+    for pair in system.penalty_contacts:
+        C = area_coupling(pair, positions, dofs, system.n_dofs)
+        if C is not None:
+            total = C if total is None else total + C
+    return total
+
+
+def _sync(sim, t_prev: float, t: float, kappa=None, offset=None, friction=None,
+          areas=None) -> None:  # fmt: skip
     """Set a parameter copy's supports to the step from t_prev to t (as ``step`` does), and
     its contact to the step's end: its obstacles where its own motion puts them at t (plus
     ``offset``: where the base run's moving obstacles ended off their targets), the
     barrier's stiffness ``kappa`` the base run's step used (a numerical constant held, as
     the step was solved with it), its friction lagged as the base's step (``friction``, a
-    ``HeldFriction``)."""
+    ``HeldFriction``), its penalty contacts' current-area weights the base's (``areas``:
+    per pair, per pass)."""
     tol = 1e-9 * sim.time_step
+    for pair, weights in zip(sim.system.penalty_contacts, areas or (), strict=False):
+        for p, w in zip(pair.passes, weights, strict=True):
+            p.weights = w
     for body in sim.bodies.values():
         body.release_graspers(t_prev + tol)
         body.set_condition_time(t, tol)
@@ -267,6 +291,8 @@ def sensitivities(
         t, x = base.time, base._state.x
         h = t - t_prev
         friction = HeldFriction.of(contact)
+        # FEBio's sliding-elastic weighs its points by their current areas, lagged: held
+        areas = [[p.weights.copy() for p in pair.passes] for pair in base.system.penalty_contacts]
         if (dynamic or friction is not None or history is not None) and record.substeps != 1:
             why = base.integrator
             if friction is not None:
@@ -305,7 +331,7 @@ def sensitivities(
         for j, (delta, pair) in enumerate(copies):
             grads, placed = [], []
             for sign, sim in zip((1.0, -1.0), pair, strict=True):
-                _sync(sim, t_prev, t, kappa, offset, friction)
+                _sync(sim, t_prev, t, kappa, offset, friction, areas)
                 xs = sim.system.apply_prescribed(x, t)
                 cs = None
                 if dynamic:  # the prediction moved along its own derivative
@@ -329,6 +355,12 @@ def sensitivities(
             A = (A + keep @ follow @ keep).tocsc()
         Y = _obstacle_motion(base, copies) if contact is not None else None
         symmetric = follow is None
+        areas_move = _area_coupling(s, x)
+        if areas_move is not None:  # current-area weights follow the state (sliding-elastic)
+            B = B + areas_move @ Sp  # with the prescribed DOFs' motion (the copies' are held)
+            K = (K + areas_move).tocsr()
+            A = (A + keep @ areas_move @ keep).tocsc()
+            symmetric = False
         if friction is not None:  # the slip's start moved by the last step's sensitivity
             W = start_motion(contact, x_prev, S_x, Y_prev)
             C, friction.start_motion_term = friction.start_term(contact, x, W)
