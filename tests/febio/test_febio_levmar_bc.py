@@ -122,3 +122,26 @@ def test_forward_differences_step_as_levmar_does():
     np.testing.assert_allclose(moved_a - a0, [max(1e-4 * 20.0, 1e-3), 0.0], rtol=1e-12)
     np.testing.assert_allclose(moved_b - a0, [0.0, 1e-3], rtol=1e-12)
     assert all((p >= [0.1, 0.1]).all() and (p <= [50.0, 10.0]).all() for p in rec.asked)
+
+
+def test_the_line_search_fits_a_quadratic_on_its_first_backtrack():
+    """levmar's line search (Schnabel's lnsrch): for f = |e|^2 / 2 with e = p, a step that
+    overshoots three-fold (to -2 p) is cut by the quadratic through f(p), f'(p) and the
+    failed trial, lambda = 1/3: the minimum, exactly, at its second evaluation; a step that
+    does not descend far enough returns nothing once lambda is below its tolerance."""
+    from tissuesim.febio.optimize.levmar_bc import _line_search
+
+    calls = []
+
+    def objective_at(q):
+        calls.append(q.copy())
+        e = -np.asarray(q, dtype=float)
+        return e, float(e @ e)
+
+    p = np.array([0.7, -0.4])
+    found = _line_search(objective_at, lambda q: q, p, float(p @ p), p, -3.0 * p, 1e3)
+    assert found is not None and len(calls) == 2
+    np.testing.assert_allclose(found[0], 0.0, atol=1e-15)
+    calls.clear()
+    # an ascent direction never satisfies the sufficient decrease: lambda shrinks to nothing
+    assert _line_search(objective_at, lambda q: q, p, float(p @ p), p, 1e-3 * p, 1e3) is None

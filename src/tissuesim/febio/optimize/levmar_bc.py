@@ -13,10 +13,9 @@ Each iteration k, at p (in the bounds) with e = data - model and J = d model / d
   |Dp|^2 <= eps2^2 |p|^2 (2); taken when |e(p + Dp)|^2 <= 0.99995 |e|^2, mu then scaled by
   max(1/3, 1 - (2 dF / dL - 1)^3) (Nielsen's rule; dF the decrease, dL the model's);
 - otherwise a backtracking line search along Dp where it descends (g^T Dp <= -1e-8
-  |Dp|^2.1, Armijo's condition with alpha 1e-4, t from 1 by 0.9: levmar's alternative to
-  Schnabel's line search, which it uses by default), else a projected gradient search (t from
-  min(1, 100 / (1 + |g|)), or the last one's t, by 0.9 down to 1e-18); a failed gradient
-  search leaves p for the next iteration's Jacobian.
+  |Dp|^2.1: Schnabel's, levmar's default, quadratic then cubic fits), else, or where it
+  fails, a projected gradient search (t from min(1, 100 / (1 + |g|)), or the last one's t,
+  by 0.9 down to 1e-18); a failed gradient search leaves p for the next iteration's Jacobian.
 
 The Jacobian is the run's sensitivities, or with ``differences`` levmar's forward
 differences: parameter j moved by max(1e-4 |p_j|, f_diff_scale) (FEBio clamps a moved
@@ -33,7 +32,9 @@ import numpy as np
 __all__ = ["BoxedLM", "boxed_levenberg_marquardt"]
 
 GAMMA, ALPHA, BETA, RHO = 0.99995, 1e-4, 0.9, 1e-8  # levmar's constants
-T_MIN_LINE, T_MIN_GRADIENT, T_START = 1e-12, 1e-18, 1.0
+T_MIN_GRADIENT, T_START = 1e-18, 1.0
+#: the line search's: its iterations, and the relative step below which it gives up
+LINE_SEARCH_ITERATIONS, STEP_TOLERANCE = 150, 1e3 * np.sqrt(np.finfo(float).eps)
 EPSILON = np.finfo(float).eps
 #: levmar's reasons to stop (its info[6])
 REASONS = {
@@ -62,6 +63,53 @@ class BoxedLM:
     @property
     def converged(self) -> bool:
         return self.reason in (1, 2, 6)
+
+
+def _line_search(objective_at, project, p, pe, gradient, step, stepmx):
+    """levmar's backtracking line search along ``step`` (Schnabel, Koontz and Weiss' uncmin
+    ``lnsrch``, with the trial points projected on the bounds): on f = |e|^2 / 2 with
+    ``gradient`` its gradient, lambda from 1, a quadratic then cubic fit of f along the step,
+    each new lambda in [0.1, 0.5] of the last, until f(p + lambda step) <= f + 1e-4 lambda
+    g^T step. (trial, e, |e|^2) or None where it fails (then a projected gradient search)."""
+    f = 0.5 * pe
+    length = float(np.linalg.norm(step))
+    if length > stepmx:  # longer than allowed
+        step, length = step * (stepmx / length), stepmx
+    slope = float(gradient @ step)
+    relative = float(np.max(np.abs(step) / np.maximum(np.abs(p), 1.0)))
+    smallest = STEP_TOLERANCE / relative
+    lam, first, last_lam, last_f = 1.0, True, 0.0, 0.0
+    for _ in range(LINE_SEARCH_ITERATIONS):
+        trial = project(p + lam * step)
+        e_trial, pe_trial = objective_at(trial)
+        f_trial = 0.5 * pe_trial
+        if f_trial <= f + slope * ALPHA * lam:
+            return trial, e_trial, pe_trial
+        if lam < smallest:
+            return None  # no acceptable point distinct enough from p
+        if not np.isfinite(f_trial):
+            lam, first = 0.1 * lam, True
+            continue
+        with np.errstate(all="ignore"):
+            if first:  # the first backtrack: a quadratic fit
+                new = -lam * slope / ((f_trial - f - slope) * 2.0)
+                first = False
+            else:  # the others: a cubic through the last two
+                t1 = f_trial - f - lam * slope
+                t2 = last_f - f - last_lam * slope
+                t3 = 1.0 / (lam - last_lam)
+                a3 = 3.0 * t3 * (t1 / lam**2 - t2 / last_lam**2)
+                b = t3 * (t2 * lam / last_lam**2 - t1 * last_lam / lam**2)
+                disc = b * b - a3 * slope
+                root = np.sqrt(disc) if disc >= 0 else np.nan
+                if disc > b * b:  # one positive critical point: the minimum
+                    new = (-b + (-root if a3 < 0 else root)) / a3
+                else:  # two positive: the first is the minimum
+                    new = (-b + (root if a3 < 0 else -root)) / a3
+                new = min(new, 0.5 * lam)
+        last_lam, last_f = lam, f_trial
+        lam = 0.1 * lam if not new >= 0.1 * lam else new
+    return None
 
 
 def boxed_levenberg_marquardt(
@@ -146,15 +194,13 @@ def boxed_levenberg_marquardt(
                 nu, gradient_taken = 2, False
             else:  # not taken: a line search along it, or a projected gradient step
                 descent = -g  # the objective's gradient / 2
+                searched = None
                 if descent @ step <= -RHO * step_sq ** (2.1 / 2.0):
-                    kind, slope = "line search", float(descent @ step)
-                    t = T_START
-                    while t > T_MIN_LINE:
-                        trial = project(p + t * step)
-                        e_trial, pe_trial = objective_at(trial)
-                        if pe_trial <= pe + 2.0 * t * ALPHA * slope:
-                            break
-                        t *= BETA
+                    stepmx = 1e3 * max(np.sqrt(p_sq), 1.0)
+                    searched = _line_search(objective_at, project, p, pe, descent, step, stepmx)
+                if searched is not None:
+                    kind = "line search"
+                    trial, e_trial, pe_trial = searched
                     gradient_taken = False
                 else:
                     kind = "projected gradient"
