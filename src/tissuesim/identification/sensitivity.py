@@ -48,10 +48,11 @@ barrier contact (against obstacles and between bodies) with or without friction,
 penalty contact (an energy of the state: its exact Hessian joins H), its current-area
 weights (sliding-elastic's, lagged to the converged state) followed through their own
 derivative (``contact/penalty/area_coupling.py``: an unsymmetric term of H; the copies are
-given the base's weights); penalty contact with other lagged terms (augmented, friction,
-sticky),
+given the base's weights), Rayleigh damping (the copies' about the step's start moved along
+its derivative: C(x_n) (x - x_n) / h); penalty contact with other lagged terms (augmented,
+friction, sticky),
 interactive contact steps (a prediction, not a minimum), rigid bodies in
-dynamic runs or with joints, Rayleigh damping, and dynamic, friction or history steps that
+dynamic runs or with joints, and dynamic, friction or history steps that
 halved are refused in one line (the derivative would be of a different sequence of solves).
 Rigid bodies (quasistatic) are differentiated in the tangent space (configurations moved by
 ``retract`` and compared by ``difference``): their held DOFs and linked vertices as supports,
@@ -63,7 +64,7 @@ from __future__ import annotations
 import time
 import warnings
 from collections.abc import Callable, Mapping, Sequence
-from contextlib import nullcontext
+from contextlib import contextmanager, nullcontext
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -133,11 +134,36 @@ def _check(sim, what: str) -> None:
     for name, body in sim.bodies.items():
         if body.kind != "fem":
             raise InputError(f"{what}: body {name!r} is not a FEM body (frames are not taken)")
-        if body.model.damping is not None:
-            raise InputError(
-                f"{what}: body {name!r} has Rayleigh damping, which sensitivities do not "
-                "differentiate yet: leave it out, or finite differences of whole runs"
-            )
+
+
+@contextmanager
+def _damping_from(sim, x_start: np.ndarray, h: float, step: float = 0.0, direction=None):
+    """The Rayleigh damping of each damped FEM body of ``sim`` about the step's start
+    ``x_start`` (configuration), moved by ``step`` along the tangent ``direction`` where one
+    is given (as ``Model.begin_step`` sets it up), for the evaluations inside; the bodies' own
+    terms after."""
+    s = sim.system
+    damped = [
+        (j, sim.bodies[name].model)
+        for j, name in enumerate(s.names)
+        if sim.bodies[name].kind == "fem" and sim.bodies[name].model.damping is not None
+    ]
+    if not damped:
+        yield
+        return
+    from tissuesim.energies.damping import RayleighDamping
+
+    kept = [m._step_damping for _, m in damped]
+    for j, m in damped:
+        start = x_start[s.config_slices[j]]
+        if direction is not None:  # a FEM body's configuration and tangent coincide
+            start = start + step * direction[s.tangent_slices[j]]
+        m._step_damping = RayleighDamping.at(m, start, h, *m.damping)
+    try:
+        yield
+    finally:
+        for (_, m), old in zip(damped, kept, strict=True):
+            m._step_damping = old
 
 
 def _area_coupling(system, x: np.ndarray):
@@ -320,7 +346,8 @@ def sensitivities(
         with (
             contact.last_step_lag() if friction is not None else nullcontext(),
             history.as_solved(base, x_prev, h) if history is not None else nullcontext(),
-        ):  # the step's potential as solved: its friction lag, its laws' history
+            _damping_from(base, x_prev, h),
+        ):  # the step's potential as solved: its friction lag, its laws' history, its damping
             acc = s.evaluate(x, 2, False, s.last_step_energies)
         g = acc.gradient
         B = np.zeros((n, p))
@@ -337,7 +364,10 @@ def sensitivities(
                 if dynamic:  # the prediction moved along its own derivative
                     cs = c_pred + sign * delta * dc[:, j]
                 energies = sim.step_energies(t, cs, h_in)
-                grads.append(sim.system.evaluate(xs, 1, False, energies).gradient)
+                # Rayleigh damping about the step's start moved along its derivative (C(x_n)
+                # and x_n in C (x - x_n) / h): the start's dependence and the law's in one
+                with _damping_from(sim, x_prev, h, sign * delta, S_x[:, j]):
+                    grads.append(sim.system.evaluate(xs, 1, False, energies).gradient)
                 placed.append(xs)
             B[:, j] = (grads[0] - grads[1]) / (2 * delta)
             Sp[dofs, j] = s.difference(placed[0], placed[1])[dofs] / (2 * delta)
