@@ -460,3 +460,27 @@ def test_penalty_contact_with_lagged_terms_is_refused_in_one_line():
         with pytest.raises(InputError, match=f"penalty contact 'contact' is {what}: its lagged"):
             ts.sensitivities(lambda q, o=options: penalty_pressed(q, **o), params,
                              [ts.Reaction("press")], 1)  # fmt: skip
+
+
+def walled(p):
+    """A block pressed p["depth"] down onto a rigid wall (FEBio's rigid wall: a penalty on
+    its bottom facets' vertices below the plane z = 0), its modulus E."""
+    mesh = ts.box((0, 0, 0.001), (0.5, 0.5, 0.301), (2, 2, 2), element="hex")
+    sim = ts.Simulation(integrator="quasistatic", time_step=0.5)
+    sim.add_body("block", mesh, ts.NeoHookean(youngs_modulus=p["E"], poisson_ratio=0.3))
+    top = select.vertices_on_plane(mesh, 2, 0.301)
+    sim.add_dirichlet(top, lambda X, t: np.tile([0.0, 0.0, -p["depth"] * t], (len(X), 1)),
+                      name="press")  # fmt: skip
+    sim.add_dirichlet(select.vertices_on_plane(mesh, 0, 0.0), components=[0], name="side")
+    sim.add_dirichlet(select.vertices_on_plane(mesh, 1, 0.0), components=[1], name="table")
+    sim.add_rigid_wall("block", [0.0, 0.0, 1.0, 0.0], penalty=p["penalty"], name="wall")
+    return sim
+
+
+def test_a_rigid_wall_is_differentiated():
+    """FEBio's rigid wall (a penalty pair of the system's with fixed nodal areas): a block
+    pressed onto it follows its modulus, the depth and the wall's penalty as whole runs do."""
+    params = {"E": 1000.0, "depth": 0.02, "penalty": 5e5}
+    mesh = walled(params).bodies["block"].mesh
+    marker = select.vertices_on_plane(mesh, 2, 0.001)[:1]
+    pressed_pair_matches_whole_runs(walled, params, "block", marker, 1e-6)

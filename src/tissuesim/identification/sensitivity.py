@@ -110,9 +110,9 @@ def _check(sim, what: str) -> None:
             f"not {sim.integrator!r}"
         )
     for pair in s.penalty_contacts:
-        lagged = [why for why, on in (
+        lagged = [why for why, on in (  # (a rigid wall is a pair with no areas or ties)
             ("augmented", pair.augmented), ("friction", pair.friction > 0),
-            ("sticky", pair.sticky),
+            ("sticky", getattr(pair, "sticky", False)),
         ) if on]  # fmt: skip
         if lagged:
             raise InputError(
@@ -192,7 +192,7 @@ def _sync(sim, t_prev: float, t: float, kappa=None, offset=None, friction=None,
     per pair, per pass)."""
     tol = 1e-9 * sim.time_step
     for pair, weights in zip(sim.system.penalty_contacts, areas or (), strict=False):
-        for p, w in zip(pair.passes, weights, strict=True):
+        for p, w in zip(getattr(pair, "passes", ()), weights, strict=True):
             p.weights = w
     for body in sim.bodies.values():
         body.release_graspers(t_prev + tol)
@@ -318,7 +318,8 @@ def sensitivities(
         h = t - t_prev
         friction = HeldFriction.of(contact)
         # FEBio's sliding-elastic weighs its points by their current areas, lagged: held
-        areas = [[p.weights.copy() for p in pair.passes] for pair in base.system.penalty_contacts]
+        areas = [[p.weights.copy() for p in getattr(pair, "passes", ())]
+                 for pair in base.system.penalty_contacts]  # fmt: skip
         if (dynamic or friction is not None or history is not None) and record.substeps != 1:
             why = base.integrator
             if friction is not None:

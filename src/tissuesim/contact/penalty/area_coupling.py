@@ -23,8 +23,8 @@ __all__ = ["area_coupling"]
 def area_coupling(pair, positions: list[np.ndarray], dofs: list[np.ndarray], n: int):
     """sum_i f_i (dw_i/dx)^T (n, n) of a pair with current-area weights at body positions
     ``positions`` (DOFs ``dofs``), or None where its weights do not follow the state."""
-    if pair.area != "current" or pair.tied or pair.sticky:
-        return None
+    if getattr(pair, "area", "reference") != "current" or pair.tied or pair.sticky:
+        return None  # (a rigid wall weighs its nodes by fixed areas)
     rows, cols, vals = [], [], []
     for p in pair.passes:
         found = pair._search(p, positions)
