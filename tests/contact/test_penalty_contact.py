@@ -108,6 +108,28 @@ def _blocks(dz: float = 0.02, element: str = "hex"):
     return lower, upper
 
 
+def _overlapping_pair(**options):
+    """(pair, perturbed positions, DOFs, n, split): two hex blocks overlapping by 2 % (upper's
+    bottom quads into lower's top) in a penalty pair of ``options``, every vertex moved a
+    little (seeded)."""
+    lower, upper = _blocks()
+    rest = [lower.points, upper.points]
+    sides = (
+        PenaltySide(1, Facets.of(upper.facet_sets["zmin"], "u"), np.ones(4)),
+        PenaltySide(0, Facets.of(lower.facet_sets["zmax"], "l"), np.full(9, 2.0)),
+    )
+    pair = PenaltyContact("p", *sides, penalty=50.0, **options)
+    pair.setup(rest)
+    positions = [r + 0.01 * RNG.standard_normal(r.shape) for r in rest]
+    n0 = lower.n_points * 3
+    dofs = [np.arange(n0).reshape(-1, 3), n0 + np.arange(upper.n_points * 3).reshape(-1, 3)]
+
+    def split(v):
+        return [v[:n0].reshape(-1, 3), v[n0:].reshape(-1, 3)]
+
+    return pair, positions, dofs, n0 + upper.n_points * 3, split
+
+
 @pytest.mark.parametrize(
     "options",
     [
@@ -122,27 +144,12 @@ def test_pair_energy_gradient_and_hessian_match_finite_differences(options):
     """Two hex blocks overlapping by 2 % (upper's bottom quads into lower's top), perturbed:
     the pair's gradient and Hessian against central differences of its energy and gradient
     (augmented: with non-zero multipliers, some on points out of contact)."""
-    lower, upper = _blocks()
-    rest = [lower.points, upper.points]
-    sides = (
-        PenaltySide(1, Facets.of(upper.facet_sets["zmin"], "u"), np.ones(4)),
-        PenaltySide(0, Facets.of(lower.facet_sets["zmax"], "l"), np.full(9, 2.0)),
-    )
     augmented = options.pop("augmented", False)
-    pair = PenaltyContact("p", *sides, penalty=50.0, **options)
-    pair.setup(rest)
+    pair, positions, dofs, n, split = _overlapping_pair(**options)
     if augmented:
         for p in pair.passes:
             p.multipliers = RNG.uniform(0.0, 2.0, p.multipliers.shape)
-    positions = [r + 0.01 * RNG.standard_normal(r.shape) for r in rest]
-    n0 = lower.n_points * 3
-    dofs = [np.arange(n0).reshape(-1, 3), n0 + np.arange(upper.n_points * 3).reshape(-1, 3)]
-    n = n0 + upper.n_points * 3
     flat = np.concatenate([p.ravel() for p in positions])
-
-    def split(v):
-        return [v[:n0].reshape(-1, 3), v[n0:].reshape(-1, 3)]
-
     value, grad, hess = pair.evaluate(positions, dofs, n, 2)
     assert value > 0 and np.abs(grad).max() > 0
     e = 1e-7
@@ -165,22 +172,8 @@ def test_the_current_area_weights_coupling_matches_finite_differences(two_pass):
     from tissuesim.contact.penalty.area_coupling import area_coupling
     from tissuesim.contact.penalty.faces import area_jacobians
 
-    lower, upper = _blocks()
-    rest = [lower.points, upper.points]
-    sides = (
-        PenaltySide(1, Facets.of(upper.facet_sets["zmin"], "u"), np.ones(4)),
-        PenaltySide(0, Facets.of(lower.facet_sets["zmax"], "l"), np.full(9, 2.0)),
-    )
-    pair = PenaltyContact("p", *sides, penalty=50.0, area="current", two_pass=two_pass)
-    pair.setup(rest)
-    positions = [r + 0.01 * RNG.standard_normal(r.shape) for r in rest]
-    n0 = lower.n_points * 3
-    dofs = [np.arange(n0).reshape(-1, 3), n0 + np.arange(upper.n_points * 3).reshape(-1, 3)]
-    n = n0 + upper.n_points * 3
+    pair, positions, dofs, n, split = _overlapping_pair(area="current", two_pass=two_pass)
     flat = np.concatenate([p.ravel() for p in positions])
-
-    def split(v):
-        return [v[:n0].reshape(-1, 3), v[n0:].reshape(-1, 3)]
 
     def following(at):  # the weights taken at the state, as the converged lag leaves them
         for p in pair.passes:
