@@ -139,29 +139,20 @@ class ExpressionForce:
     def __init__(self, text: str, where: str = "force") -> None:
         import ast
 
-        from tissuesim.scene.expressions import _checked_code
+        from tissuesim.scene.expressions import compile_named
 
         self.text = text
-        self._code = _checked_code(text, where, ("x",))
+        self._f, _ = compile_named(text, ("x",), where, real=False)
         calls = {n.func.id for n in ast.walk(ast.parse(text.strip(), mode="eval"))
                  if isinstance(n, ast.Call) and isinstance(n.func, ast.Name)}  # fmt: skip
         comparisons = any(isinstance(n, ast.Compare | ast.BoolOp)
                           for n in ast.walk(ast.parse(text.strip(), mode="eval")))  # fmt: skip
         self.analytic = calls <= _ANALYTIC and not comparisons
-        self.where = where
         xi, w = np.polynomial.legendre.leggauss(self.POINTS)
         self._xi, self._w = xi, w
 
     def _eval(self, s: np.ndarray) -> np.ndarray:
-        from tissuesim.scene.expressions import _LOGIC, CONSTANTS, FUNCTIONS
-
-        names = {**CONSTANTS, **FUNCTIONS, **_LOGIC, "x": s}
-        try:
-            with np.errstate(all="ignore"):
-                out = eval(self._code, {"__builtins__": {}}, names)  # checked tree, no builtins
-        except (ArithmeticError, ValueError, TypeError) as exc:
-            raise InputError(f"{self.where}: evaluating {self.text!r} failed: {exc}") from None
-        return np.broadcast_to(np.asarray(out), np.shape(s))
+        return np.broadcast_to(self._f({"x": s}), np.shape(s))
 
     def value(self, s: np.ndarray) -> np.ndarray:
         return np.asarray(self._eval(np.asarray(s, dtype=float)), dtype=float)

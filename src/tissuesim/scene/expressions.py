@@ -195,10 +195,11 @@ def compile_vector(items: Sequence, dim: int, where: str) -> Callable:
     return f
 
 
-def compile_named(text: str, variables: Sequence[str], where: str):
+def compile_named(text: str, variables: Sequence[str], where: str, real: bool = True):
     """(f, used): an expression of the named ``variables`` (any names, e.g. FEBio's logged
     ``sx``, ``sy``), checked as ``compile_expression``'s, as f(values: name -> array) -> array,
-    and the variables it uses in order of first use."""
+    and the variables it uses in order of first use; ``real`` False lets complex values
+    through (a complex-step derivative)."""
     if not isinstance(text, str) or not text.strip():
         raise SceneError(f"{where}: expected an expression string, got {short(text)}")
     code = _checked_code(text, where, tuple(variables))
@@ -207,10 +208,11 @@ def compile_named(text: str, variables: Sequence[str], where: str):
 
     def f(values) -> np.ndarray:
         names = {**CONSTANTS, **FUNCTIONS, **_LOGIC}
-        names.update({k: np.asarray(values[k], dtype=float) for k in used})
+        kind = float if real else None
+        names.update({k: np.asarray(values[k], dtype=kind) for k in used})
         try:
             with np.errstate(all="ignore"):
-                return np.asarray(eval(code, {"__builtins__": {}}, names), dtype=float)
+                return np.asarray(eval(code, {"__builtins__": {}}, names), dtype=kind)
         except (ArithmeticError, ValueError, TypeError) as exc:
             raise SceneError(f"{where}: evaluating {short(text)} failed: {exc}") from None
 
