@@ -51,7 +51,7 @@ def optimize_command(
         "optimisation": str(path),
         "model": str(model),
         "method": task.method,
-        "gradients": gradients,
+        "gradients": result.gradients,
         "febio_solver": febio_solver,
         "parameters": result.parameters,
         "std": result.std,

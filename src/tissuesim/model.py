@@ -308,6 +308,25 @@ class Model:
         elif hasattr(self.material, "accept_step"):
             self.material.accept_step(self.kinematics.deformation_gradients(x))
 
+    def lagged_materials(self) -> bool:
+        """Whether a region's material lags something in a step (a reactive viscoelastic
+        law's recruitment: ``relag_materials``)."""
+        return any(getattr(m, "lagged", False) for m in self._materials())
+
+    def relag_materials(self, x: np.ndarray, tolerance: float) -> bool:
+        """Re-lag the materials' lagged terms at positions x (a converged solve: Newton's
+        relag, ``time/lags.py``); whether any moved by more than ``tolerance``."""
+        changed = False
+        if self.parts is not None:
+            for p in self.parts:
+                if getattr(p.material, "lagged", False):
+                    F = p.kinematics.deformation_gradients(x)
+                    changed = p.material.relag(F, tolerance) or changed
+        elif getattr(self.material, "lagged", False):
+            F = self.kinematics.deformation_gradients(x)
+            changed = self.material.relag(F, tolerance) or changed
+        return changed
+
     def _materials(self) -> list:
         """The material of each region (one without regions)."""
         return [self.material] if self.parts is None else [p.material for p in self.parts]

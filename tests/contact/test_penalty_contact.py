@@ -138,6 +138,7 @@ def _overlapping_pair(**options):
         {"rule": "gauss", "augmented": True},
         {"rule": "gauss", "augmented": True, "tied": True, "two_pass": True},
         {"rule": "nodal", "tied": True},
+        {"rule": "gauss", "tension": True},
     ],
 )
 def test_pair_energy_gradient_and_hessian_match_finite_differences(options):
@@ -316,6 +317,24 @@ def test_a_tied_pair_carries_tension_as_one_block():
     assert exact > 1.0 and plain == pytest.approx(series, rel=1e-2)
     assert tied.forces()["press"][2] == pytest.approx(exact, rel=1e-7)
     assert abs(sliding) < 1e-9 * exact
+
+
+def test_a_pair_in_tension_holds_the_column_pulled_apart():
+    """FEBio's sliding-elastic with tension = 1: the column pulled up 2 % stays together, its
+    points in tension: the normal penalty in series with the column (as the plain tie, whose
+    vector gap is the normal one here: the pull is along the normal), tensile tractions in
+    forces(); without tension nothing holds. The pair's energy in tension: its value and
+    gradient against differences are in the parametrised test above."""
+    exact = _column(single=True, press=0.02)[0].forces()["press"][2]
+    tied = _column(penalty=2e3, press=0.02, tied=True)[0].forces()["press"][2]
+    sim, _ = _column(penalty=2e3, press=0.02, tension=True)
+    pulled = sim.forces()["press"][2]
+    assert exact > 1.0 and pulled == pytest.approx(tied, rel=1e-6)
+    assert sim.forces()["contact"][2] == pytest.approx(-pulled, rel=1e-6)  # it pulls down
+    sliding = _column(penalty=2e3, press=0.02)[0].forces()["press"][2]
+    assert abs(sliding) < 1e-9 * exact
+    with pytest.raises(InputError, match="tension"):
+        _column(penalty=2e3, press=0.02, tension=True, friction=0.3)
 
 
 def test_two_pass_and_nodal_integration_carry_the_same_load():

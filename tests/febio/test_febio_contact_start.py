@@ -176,3 +176,27 @@ def test_a_frictional_pair_converts_to_the_penalty_contact_with_febios_friction(
     summary, _ = _run(feb, tmp_path / "out", capfd)
     force = summary["steps"][-1]["extra"]["forces"]["press"][2]
     assert force == pytest.approx(_closed_form(PRESS), rel=1e-6)
+
+
+def test_a_sliding_elastic_pair_in_tension_converts_and_other_contacts_refuse_it(tmp_path):
+    """tension = 1 on FEBio's sliding-elastic: the penalty contact with tension = true; on a
+    frictional pair (FEBio refuses it too) and on a node-on-facet pair (no such parameter in
+    FEBio) one line each."""
+    base = MODEL.read_text().replace(
+        "<fric_coeff>0.01</fric_coeff>", "<fric_coeff>0</fric_coeff>\n      <tension>1</tension>"
+    )
+    assert "<tension>1</tension>" in base
+    feb = tmp_path / "tension.feb"
+    feb.write_text(base)
+    assert main(["convert", str(feb), str(tmp_path / "scene.toml")]) == 0
+    assert "tension = true" in (tmp_path / "scene.toml").read_text()
+    for text, message in [
+        (base.replace("<fric_coeff>0</fric_coeff>", "<fric_coeff>0.2</fric_coeff>"),
+         "tension = 1 with friction"),
+        (base.replace('type="sliding-elastic"', 'type="sliding-node-on-facet"'),
+         "tension = 1 on a sliding-node-on-facet contact"),
+    ]:  # fmt: skip
+        feb.write_text(text)
+        with pytest.raises(FebError) as info:
+            read_feb(feb)
+        assert "\n" not in str(info.value) and message in str(info.value)

@@ -222,7 +222,12 @@ def test_the_command_line_runs_an_optimisation_and_writes_its_report(tmp_path):
         (
             "<param name=\"fem.material('tissue').relaxation.tau1.points[1].y\">1, 0, 2</param>",
             OBJECTIVES["target"],
-            "a point of a curve as a parameter is not optimised",
+            "has no <relaxation>",
+        ),
+        (
+            "<param name=\"fem.load_controller('lc').points[1].y\">1, 0, 2</param>",
+            OBJECTIVES["target"],
+            "not of load curves",
         ),
         (
             "<param name=\"fem.material('tissue').E\">3, 0, 2</param>",
@@ -397,3 +402,40 @@ def test_a_modulus_under_febios_sliding_elastic_contact_is_fitted_by_sensitiviti
     assert fit.parameters["fem.material('firm').E"] == pytest.approx(2e4, rel=1e-6)
     assert fd.parameters["fem.material('firm').E"] == pytest.approx(2e4, rel=1e-4)
     assert fit.runs < fd.runs
+
+
+def test_a_point_of_a_materials_curve_is_fitted_by_febios_differences(tmp_path):
+    """FEBio's op09 names points of a material's curves (``...recruitment.function.points[1].y``):
+    the point's y is set in the model's <point>x,y</point>; a recruitment curve's point is
+    fitted back from data of our own model. The run's sensitivities are not taken through the
+    recruitment's lag, so the optimisation says so and uses FEBio's forward differences."""
+    source = Path(__file__).parent / "models" / "reactive_viscoelastic_relaxation.feb"
+    curve = ('<recruitment type="recruitment user"><function type="point"><interpolate>LINEAR'
+             "</interpolate><points><point>0,1</point><point>0.05,{y}</point><point>0.5,1"
+             "</point></points></function></recruitment>")  # fmt: skip
+    model = tmp_path / "model.feb"
+    model.write_text(source.read_text().replace("</relaxation>", "</relaxation>" + curve))
+    name = "fem.material('tissue').recruitment.function.points[1].y"
+    objective = """<Objective type="data-fit"><fnc type="parameter">
+        <param name="fem.element_data('sx', 1)"/></fnc><data>{}</data></Objective>"""
+    times = (0.2, 0.5, 1.0, 1.5, 2.0)
+    task = read_optimize(_optimisation(
+        tmp_path / "truth.feb", objective.format("".join(f"<pt>{t}, 0</pt>" for t in times)),
+        f'<param name="{name}">1.5, 0.5, 4</param>'))  # fmt: skip
+    text = model.read_text()
+    model.write_text(text.replace("{y}", "2.5"))
+    builder = ModelBuilder(model, task)
+    try:
+        r, _ = _Objective(task, builder, "differences")._residuals(np.array([2.5]), False)
+    finally:
+        builder.close()
+    data = "".join(f"<pt>{t}, {float(v)!r}</pt>" for t, v in zip(times, r, strict=True))
+    task = read_optimize(_optimisation(tmp_path / "opt.feb", objective.format(data),
+                                       f'<param name="{name}">1.5, 0.5, 4</param>', tol=1e-12))
+    model.write_text(text.replace("{y}", "1.0"))  # the model's own value is not the start
+    lines = []
+    fit = run_optimize(task, model, log=lines.append)
+    assert fit.gradients == "differences"
+    assert any("bond recruitment" in line and "forward differences" in line for line in lines)
+    assert fit.parameters[name] == pytest.approx(2.5, rel=1e-5)
+    assert np.ptp(r) > 0.1 * np.abs(r).max()  # the data are a curve, not one value

@@ -319,8 +319,12 @@ def _contact(model: FebModel, section: Node) -> None:
         item = {"type": kind, "node": c, "friction": 0.0}
         if "fric_coeff" in p:
             item["friction"] = float(_floats(p["fric_coeff"], 1)[0])
-        if "tension" in p and _flag(p["tension"]):
-            raise _unsupported(p["tension"], "contact in tension (tension = 1)")
+        tension = "tension" in p and _flag(p["tension"])
+        if tension and kind != "sliding-elastic":  # FEBio's other contacts have no tension
+            raise _unsupported(p["tension"], f"tension = 1 on a {kind} contact")
+        if tension and item["friction"] != 0.0:
+            raise p["tension"].error("tension = 1 with friction: FEBio's sliding-elastic "
+                                     "refuses it too; give fric_coeff 0 or tension 0")  # fmt: skip
         for key in sorted(bottoms & set(p)):  # 0: the shells' front faces, as tissuesim's
             if _flag(p[key]):
                 raise _unsupported(p[key], f"contact on the shells' back faces ({key} = 1)")
@@ -352,6 +356,8 @@ def _contact(model: FebModel, section: Node) -> None:
         elif kind != "rigid_wall":  # FEBio's own enforcement, its friction too
             item["penalty"] = _penalty_settings(kind, c, p)
             item["penalty"].update(_friction_settings(kind, p, item["friction"]))
+            if tension:  # FEBio's sliding-elastic: a projecting point pulls as well
+                item["penalty"]["tension"] = True
         # a rigid wall's settings are read by constraint_sections.take_rigid_walls
         model.contacts.append(item)
 

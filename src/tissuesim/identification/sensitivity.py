@@ -102,6 +102,15 @@ class Sensitivities:
     records: list = field(default_factory=list, repr=False)
 
 
+def refusal(sim, what: str) -> str | None:
+    """Why the sensitivities of ``sim``'s run are not taken (the one-line message), or None."""
+    try:
+        _check(sim, what)
+    except InputError as exc:
+        return str(exc)
+    return None
+
+
 def _check(sim, what: str) -> None:
     s = sim.system
     if sim.integrator not in ("quasistatic", "backward_euler", "newmark"):
@@ -134,6 +143,13 @@ def _check(sim, what: str) -> None:
     for name, body in sim.bodies.items():
         if body.kind != "fem":
             raise InputError(f"{what}: body {name!r} is not a FEM body (frames are not taken)")
+        model = body.model
+        if hasattr(model, "lagged_materials") and model.lagged_materials():
+            raise InputError(
+                f"{what}: body {name!r}'s material lags its bond recruitment within a step (a "
+                "fixed point, FEBio's), which the sensitivities do not differentiate yet: use "
+                "finite differences of whole runs (gradients = 'differences')"
+            )
 
 
 @contextmanager

@@ -260,9 +260,11 @@ def _damage(key: str, params: dict) -> Material:
 
 def _reactive_viscoelastic(key: str, params: dict) -> Material:
     """Reactive visco-elasticity: ``elastic`` and ``bond`` materials or tables (uncoupled: a
-    law's own k is not used, any will do), ``relaxation`` and the wrapper's parameters."""
+    law's own k is not used, any will do), ``relaxation``, ``recruitment`` and the wrapper's
+    parameters."""
     cls = REACTIVE_VISCOELASTIC_LAWS[key]
-    allowed = ["elastic", "bond", "relaxation", "kinetics", "trigger", "emin", "wmin"]
+    allowed = ["elastic", "bond", "relaxation", "recruitment", "kinetics", "trigger", "emin",
+               "wmin"]  # fmt: skip
     allowed += ["k", "pressure_model"] if cls.uncoupled else []
     for name in params:
         if name not in allowed:

@@ -49,6 +49,7 @@ class PenaltySpec:
     friction_anchor: str = "step"
     keep_last_augmentation: bool = False
     special_cases: bool = False
+    tension: bool = False
 
 
 class PenaltyContactCalls:
@@ -81,6 +82,7 @@ class PenaltyContactCalls:
         friction_anchor: str = "step",
         keep_last_augmentation: bool = False,
         special_cases: bool = False,
+        tension: bool = False,
         name: str | None = None,
     ) -> str:
         """Penalty contact: points of body ``primary``'s facets (a facet set name, (k, 3) or
@@ -107,7 +109,9 @@ class PenaltyContactCalls:
         (FEBio's sliding-elastic). ``special_cases``: a point whose projection lands on no
         facet is projected onto an interior edge of the secondary surface or its closest node
         (FEBio's node-on-facet, facet-on-facet, tied and sticky contacts; the gap is the
-        signed distance there; linear facets only: contact/penalty/special_cases.py). Its
+        signed distance there; linear facets only: contact/penalty/special_cases.py).
+        ``tension``: a point whose projection lies on a facet stays in contact as the surfaces
+        pull apart, its traction tensile (FEBio's sliding-elastic ``tension = 1``). Its
         force on ``primary`` is reported by ``forces()`` under ``name`` (default
         ``penalty_contact<n>``). Returns the name."""
         for body in (primary, secondary):
@@ -140,6 +144,11 @@ class PenaltyContactCalls:
             raise InputError(
                 f"add_penalty_contact: friction_anchor {short(friction_anchor)}: give one of "
                 f"{', '.join(ANCHORS)}"
+            )
+        if tension and (tied or sticky or friction):
+            raise InputError(
+                "add_penalty_contact: tension = True on a tied or sticky pair (held in tension "
+                "already) or with friction (FEBio refuses it too); give tension = False"
             )
         if friction and (tied or sticky):
             raise InputError(
@@ -194,6 +203,7 @@ class PenaltyContactCalls:
                 friction_anchor,
                 bool(keep_last_augmentation),
                 bool(special_cases),
+                bool(tension),
             )  # fmt: skip
         )
         self._system_dirty = True
@@ -223,7 +233,7 @@ class PenaltyContactCalls:
                 friction=spec.friction, friction_penalty=spec.friction_penalty,
                 friction_anchor=spec.friction_anchor,
                 keep_last_augmentation=spec.keep_last_augmentation,
-                special_cases=spec.special_cases,
+                special_cases=spec.special_cases, tension=spec.tension,
             )  # fmt: skip
             pair.setup([None if b is None else b for b in _rest(system)])
             pairs.append(pair)

@@ -1,6 +1,7 @@
 """The lagged terms of an implicit step (``time/steps.py``), re-lagged together at Newton's
 converged points: IPC friction, follower pressures on open surfaces, rigid joints'
-multipliers, and the penalty contact's augmentations, current areas and friction."""
+multipliers, the penalty contact's augmentations, current areas and friction, and the
+materials' lagged terms (a reactive viscoelastic law's bond recruitment)."""
 
 from __future__ import annotations
 
@@ -18,6 +19,8 @@ def lagged_pressure(body_energies) -> bool:
 
 #: re-lags of a penalty pair's current-area weights beyond its augmentations
 PENALTY_AREA_RELAGS = 10
+#: re-lags of the materials' lagged terms (a fixed point that settles in a few)
+MATERIAL_RELAGS = 20
 
 
 def penalty_relags(pair) -> int:
@@ -60,6 +63,11 @@ class StepLags:
             at = None if x_start is None else system.body_positions_and_dofs(x_start)[0]
             for pair in self.penalty:
                 pair.begin_step(at)
+        # FEM bodies whose materials lag a term in the step (reactive viscoelastic recruitment)
+        self.materials = [(system.config_slices[j], b) for j, b in
+                          enumerate(getattr(system, "bodies", ()))
+                          if hasattr(b, "lagged_materials") and b.lagged_materials()]  # fmt: skip
+        self.material_tolerance = options.gradient_tolerance
         from tissuesim.rigid.joints import MAX_UPDATES
 
         self.max_relags = max(
@@ -67,6 +75,7 @@ class StepLags:
             MAX_RELAGS if self.pressures else 0,
             MAX_UPDATES if self.joints else 0,
             max((penalty_relags(p) for p in self.penalty), default=0),
+            MATERIAL_RELAGS if self.materials else 0,
         )
 
     def relag(self, c: np.ndarray, y: np.ndarray | None = None) -> bool:
@@ -81,12 +90,14 @@ class StepLags:
             changed = self.system.update_joints(c, self.stall_rule) or changed
         if self.penalty:
             changed = self.system.update_penalty_contacts(c) or changed
+        for where, body in self.materials:
+            changed = body.relag_materials(c[where], self.material_tolerance) or changed
         return changed
 
     def newton_relag(self):
         """The relag(c) for ``minimize`` (None when nothing is lagged)."""
         lagged = self.friction is not None or self.pressures is not None
-        if not (lagged or self.joints or self.penalty):
+        if not (lagged or self.joints or self.penalty or self.materials):
             return None
         return lambda c: self.relag(c)
 

@@ -32,8 +32,8 @@ def area_coupling(pair, positions: list[np.ndarray], dofs: list[np.ndarray], n: 
         if len(pts) == 0:
             continue
         parts = pair._gaps(p, positions, found, 1)
-        t = np.maximum(p.multipliers[pts] + pair._eps(p)[pts] * parts[0], 0.0)
-        on = t > 0
+        t = pair.traction(p, pts, parts[0])
+        on = pair.pressed(t)
         if not on.any():
             continue
         pts, facet, t = pts[on], facet[on], t[on]

@@ -11,18 +11,20 @@ integrates over the current one) and penalty eps, its energy is
 
     W / (2 eps) <L + eps g>^2,     <a> = max(a, 0),
 
-whose gradient is FEBio's contact force W <L + eps g> dg/dy (``FEFacet2FacetSliding::
-LoadVector``); the multiplier L is 0 for a penalty method and is updated as FEBio's augmented
-Lagrangian does (``Augment``: L <- <L + eps g> until the multipliers' norm changes by less than
-``tolerance`` and the rms penetration is under ``gap_tolerance``, between ``min_augmentations``
-and ``max_augmentations`` per step). ``two_pass``: the secondary surface's points are projected
-onto the primary too (a second, symmetric energy). The Hessian is exact (``projection.py``).
-``friction``: Coulomb friction by FEBio's return map, one more energy per point with its
-pressure and normal lagged (``friction.py``); ``keep_last_augmentation``: the augmentation
-that finds the multipliers converged is kept for the next step (FEBio's sliding-elastic).
-``special_cases``: a point on no facet is projected onto an interior edge or a node of the
-other surface, FEBio's ``ProjectSpecial`` (``special_cases.py``).
-"""
+(``tension``: W / (2 eps) (L + eps g)^2, no bracket: a point whose projection lies on a facet
+stays in contact as the surfaces pull apart, its traction tensile, as FEBio's sliding-elastic
+with ``tension = 1``), whose gradient is FEBio's contact force W <L + eps g> dg/dy
+(``FEFacet2FacetSliding::LoadVector``); the multiplier L is 0 for a penalty method and is
+updated as FEBio's augmented Lagrangian does (``Augment``: L <- <L + eps g> until the
+multipliers' norm changes by less than ``tolerance`` and the rms penetration is under
+``gap_tolerance``, between ``min_augmentations`` and ``max_augmentations`` per step).
+``two_pass``: the secondary surface's points are projected onto the primary too (a second,
+symmetric energy). The Hessian is exact (``projection.py``). ``friction``: Coulomb friction by
+FEBio's return map, one more energy per point with its pressure and normal lagged
+(``friction.py``); ``keep_last_augmentation``: the augmentation that finds the multipliers
+converged is kept for the next step (FEBio's sliding-elastic). ``special_cases``: a point on no
+facet is projected onto an interior edge or a node of the other surface, FEBio's
+``ProjectSpecial`` (``special_cases.py``)."""
 
 from __future__ import annotations
 
@@ -128,6 +130,8 @@ class PenaltyContact:
     # FEBio's HandleSpecialCases(true) (special_cases.py): a point projecting onto no facet
     # is projected onto an interior edge or a node of the secondary surface
     special_cases: bool = False
+    # FEBio's sliding-elastic ``tension``: the traction L + eps g unbracketed (pulls too)
+    tension: bool = False
     passes: list = field(default_factory=list)
     augmentations: int = 0  # in this step's solve
 
@@ -246,6 +250,16 @@ class PenaltyContact:
     def _eps(self, p: PenaltyPass) -> np.ndarray:
         return self.penalty * p.sampled.scale[p.points.facet]
 
+    def traction(self, p: PenaltyPass, pts: np.ndarray, g: np.ndarray) -> np.ndarray:
+        """The normal traction of pass p's points pts at gaps g: <L + eps g>, or L + eps g
+        in ``tension``."""
+        t = p.multipliers[pts] + self._eps(p)[pts] * g
+        return t if self.tension else np.maximum(t, 0.0)
+
+    def pressed(self, t: np.ndarray) -> np.ndarray:
+        """Which tractions t (``traction``) act: the positive ones, any in tension."""
+        return t != 0 if self.tension else t > 0
+
     def _eps_t(self, p: PenaltyPass) -> np.ndarray:
         if self.friction_penalty > 0:
             return np.full(len(p.weights), self.friction_penalty)
@@ -275,13 +289,12 @@ class PenaltyContact:
             parts = self._gaps(p, positions, found, min(order, 2))
             g = parts[0]
             eps = self._eps(p)[pts]
-            L = p.multipliers[pts]
-            t = np.maximum(L + eps * g, 0.0)
+            t = self.traction(p, pts, g)
             W = p.weights[pts]
             value += float(np.sum(W * t * t / (2 * eps)))
             if order < 1:
                 continue
-            on = t > 0
+            on = self.pressed(t)
             stencil = np.concatenate(
                 [
                     dofs[p.sampled.body][sf.nodes[p.points.facet[pts]]],
@@ -376,12 +389,12 @@ class PenaltyContact:
             if len(pts) == 0:
                 continue
             g, nu, _ = self._gaps(p, positions, found)
-            t = np.maximum(p.multipliers[pts] + self._eps(p)[pts] * g, 0.0)
+            t = self.traction(p, pts, g)
             f = np.sum((p.weights[pts] * t)[:, None] * nu, axis=0)
             if p.friction is not None:
                 f += coulomb.force(p.friction, p, positions, self._eps_t(p), self.friction)
             total += f if k == 0 else -f
-            area += float(np.sum(p.weights[pts][t > 0]))
+            area += float(np.sum(p.weights[pts][self.pressed(t)]))
         return total, area
 
     # -- the lagged terms: multipliers and current-area weights -------------------------------
@@ -470,7 +483,7 @@ class PenaltyContact:
             found = self._search(p, positions)
             if len(found[0]):
                 g[found[0]] = self._gaps(p, positions, found)[0]
-            L1 = np.maximum(p.multipliers + self._eps(p) * g, 0.0)
+            L1 = self.traction(p, np.arange(len(g)), g)
             old += float(p.multipliers @ p.multipliers)
             new += float(L1 @ L1)
             gaps.append(g[g > 0])

@@ -371,9 +371,10 @@ def _damage(model: FebModel, mat: Node, kind: str, component: bool, bulk: bool) 
     return (DAMAGE[kind], params, density, kind, orientation)
 
 
-def _k2_function(p: Node) -> object:
-    """A ``-dist-user`` relaxation's parameter, a function of K2: a number, ``type="math"``
-    (FEBio's syntax: ^ for powers, ln, log10 as log) or ``type="point"`` (a curve of K2)."""
+def _k2_function(p: Node, variable: str = "K2", what: str = "relaxation") -> object:
+    """A ``-dist-user`` relaxation's parameter, a function of K2 (or a recruitment's function of
+    X: ``variable``): a number, ``type="math"`` (FEBio's syntax: ^ for powers, ln, log10 as
+    log; its free variable named ``variable``) or ``type="point"`` (a curve of it)."""
     from tissuesim.febio.curves import curve_expression
     from tissuesim.febio.model import Curve
 
@@ -382,6 +383,8 @@ def _k2_function(p: Node) -> object:
         math_nodes = [c for c in p.children if c.tag == "math"]
         text = (math_nodes[0].text if math_nodes else p.text).strip()
         text = re.sub(r"\blog\(", "log10(", text).replace("^", "**")
+        if variable != "K2":  # FEBio's free variable, whatever its name (x, X)
+            text = re.sub(r"\b[xX]\b", variable, text)
         return re.sub(r"\bln\(", "log(", text)
     if kind == "point":
         interpolate, points = "LINEAR", []
@@ -391,13 +394,13 @@ def _k2_function(p: Node) -> object:
             elif c.tag == "points":
                 points = [_floats(q, 2) for q in c.children]
             elif c.tag != "extend" or c.text.strip().upper() != "CONSTANT":
-                raise _unsupported(c, "a relaxation curve setting other than CONSTANT extend")
+                raise _unsupported(c, f"a {what} curve setting other than CONSTANT extend")
         if interpolate not in ("LINEAR", "STEP", "SMOOTH") or len(points) < 1:
-            raise _unsupported(p, f"a relaxation curve with {interpolate} interpolation")
+            raise _unsupported(p, f"a {what} curve with {interpolate} interpolation")
         curve = Curve(np.array(points, dtype=float), interpolate, "CONSTANT")
-        return re.sub(r"\bt\b", "K2", curve_expression(curve))
+        return re.sub(r"\bt\b", variable, curve_expression(curve))
     if p.children or "lc" in p.attrib or kind != "const":
-        raise _unsupported(p, "a relaxation parameter of this type")
+        raise _unsupported(p, f"a {what} parameter of this type")
     return float(_floats(p, 1)[0])
 
 
@@ -424,10 +427,26 @@ def _relaxation(node: Node) -> dict:
     return table
 
 
+def _recruitment(node: Node) -> dict:
+    """<recruitment type="recruitment ..."> as tissuesim's table (materials/reactive/
+    recruitment.py): numbers, and the user function of X (a number, math or point curve)."""
+    kind = node.attrib.get("type", "")
+    table: dict = {"model": kind.removeprefix("recruitment ").strip()}
+    _once(node)
+    for p in node.children:
+        if kind == "recruitment user" and p.tag == "function":
+            table["function"] = _k2_function(p, "X", "recruitment")
+            continue
+        if p.children or "lc" in p.attrib or p.attrib.get("type") not in (None, "const"):
+            raise _unsupported(p, "a recruitment parameter that is a field, curve or table")
+        table[p.tag] = float(_floats(p, 1)[0])
+    return table
+
+
 def _reactive_viscoelastic(model: FebModel, mat: Node, kind: str) -> tuple:
     """FEBio's (uncoupled) reactive viscoelastic: <elastic> (strong bonds), <bond> (weak
-    bonds), <relaxation> and wmin, kinetics, trigger, emin (and the uncoupled one's k,
-    pressure_model: its bulk term; the laws' own k are not used)."""
+    bonds), <relaxation>, <recruitment> and wmin, kinetics, trigger, emin (and the uncoupled
+    one's k, pressure_model: its bulk term; the laws' own k are not used)."""
     from tissuesim.errors import TissueSimError
     from tissuesim.materials import make_material
 
@@ -443,6 +462,8 @@ def _reactive_viscoelastic(model: FebModel, mat: Node, kind: str) -> tuple:
             laws[p.tag] = (_law(model, p, top=False, component=uc, bulk=not uc), p)
         elif p.tag == "relaxation":
             params["relaxation"] = _relaxation(p)
+        elif p.tag == "recruitment":
+            params["recruitment"] = _recruitment(p)
         elif p.tag == "density":
             density = _density(p)
         elif p.tag in ("wmin", "kinetics", "trigger", "emin") or (uc and p.tag == "k"):
@@ -455,6 +476,7 @@ def _reactive_viscoelastic(model: FebModel, mat: Node, kind: str) -> tuple:
             more = ", k, pressure_model" if uc else ""
             raise p.error(
                 f"parameter {p.tag!r} of {kind!r}: it takes <elastic>, <bond>, <relaxation>, "
+                "<recruitment>, "
                 f"wmin, kinetics, trigger, emin, density{more}"
             )
     for need in ("elastic", "bond", "relaxation"):

@@ -1,7 +1,8 @@
 """The model an optimisation runs (FEBio's ``-i`` file), built for any parameter values: each
 <param> names an element of the model (``fem.material[0].c3``, ``fem.material('Skin').E``,
-``fem.material('Mix').solid.E``) whose text is set before the model is read, as FEBio sets
-the parameter; the quantities the objective reads become log requests of the model, so the
+``fem.material('Mix').solid.E``, a point of a material's curve ``fem.material('tissue').
+relaxation.tau1.points[1].y``) whose text is set before the model is read, as FEBio sets the
+parameter; the quantities the objective reads become log requests of the model, so the
 converter maps FEBio's node and element ids to the scene's bodies and rows."""
 
 from __future__ import annotations
@@ -19,7 +20,9 @@ from tissuesim.febio.xml import Node, parse_feb
 
 __all__ = ["ModelBuilder"]
 
-_MATERIAL = re.compile(r"fem\.material(?:\[(\d+)\]|\(\s*'([^']*)'\s*\))((?:\.\w+)+)$")
+_MATERIAL = re.compile(
+    r"fem\.material(?:\[(\d+)\]|\(\s*'([^']*)'\s*\))((?:\.\w+)+?)(?:\.points\[(\d+)\]\.([xy]))?$"
+)
 _VARIABLE = re.compile(r"fem\.(\w+)$")  # a global parameter, <Globals><Variables><var name>
 #: the file name of the log request behind the objective's k-th quantity
 _FILE = "optimize_quantity_{}.csv"
@@ -37,6 +40,7 @@ class ModelBuilder:
         self.febio_solver = febio_solver
         self.path = Path(model_path)
         self.root = parse_feb(self.path)
+        # FEBio's name -> (the element it sets, which of a curve point's two numbers or None)
         self.targets = {p.name: _element(self.root, p.name, p.node) for p in task.parameters}
         self.quantities = _quantities(task)
         with warnings.catch_warnings(record=True) as caught:
@@ -64,9 +68,14 @@ class ModelBuilder:
 
         kept = []
         for name, value in values.items():
-            node = self.targets[name]
+            node, component = self.targets[name]
             kept.append((node, node.text))
-            node.text = repr(float(value))
+            if component is None:
+                node.text = repr(float(value))
+            else:  # one number of a curve's point "x,y"
+                xy = [float(v) for v in node.text.split(",")]
+                xy[component] = float(value)
+                node.text = ",".join(repr(v) for v in xy)
         try:
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore")
@@ -95,8 +104,9 @@ class ModelBuilder:
         return scene.simulation, scene
 
 
-def _element(root: Node, name: str, where: Node) -> Node:
-    """The model's element a <param name> sets."""
+def _element(root: Node, name: str, where: Node) -> tuple[Node, int | None]:
+    """The model's element a <param name> sets, and for a curve's point which of its numbers
+    (0: x, 1: y; None: the element's one number)."""
     m = _MATERIAL.match(name.strip())
     variable = _VARIABLE.match(name.strip())
     if m is None and variable is not None:  # a global parameter: <Globals><Variables><var>
@@ -111,8 +121,8 @@ def _element(root: Node, name: str, where: Node) -> Node:
         node = found[0]
     elif m is None and re.search(r"\.points\[\d+\]\.[xy]$", name.strip()):
         raise where.error(
-            f"{name!r}: a point of a curve as a parameter is not optimised by tissuesim (it "
-            "optimises material parameters and global parameters fem.name)"
+            f"{name!r}: tissuesim optimises the points of a material's curves (fem.material"
+            "('name').relaxation.tau1.points[1].y), not of load curves"
         )
     elif m is None:
         raise where.error(
@@ -122,12 +132,26 @@ def _element(root: Node, name: str, where: Node) -> Node:
         )
     else:
         node = _material_element(root, name, m, where)
+    component = None
+    if m is not None and m[4] is not None:  # a curve's point: <points><point>x,y</point>
+        points = [c for c in node.children if c.tag in ("point", "pt")]
+        if node.tag != "points" or not points:
+            raise where.error(f"{name!r}: the model's <{node.tag}> (line {node.line}) holds no "
+                              "<point>s")  # fmt: skip
+        i = int(m[4])
+        if i >= len(points):
+            raise where.error(f"{name!r}: the curve at line {node.line} has {len(points)} "
+                              f"points (0 to {len(points) - 1})")  # fmt: skip
+        node, component = points[i], "xy".index(m[5])
     try:
-        float(node.text)
+        numbers = [float(v) for v in node.text.split(",")]
     except ValueError:
-        raise where.error(f"{name!r}: the model's <{node.tag}> (line {node.line}) is not a "
-                          f"number ({node.text!r})") from None  # fmt: skip
-    return node
+        numbers = []
+    if len(numbers) != (1 if component is None else 2):
+        raise where.error(f"{name!r}: the model's <{node.tag}> (line {node.line}) is not "
+                          f"{'a number' if component is None else 'a point x,y'} "
+                          f"({node.text!r})")  # fmt: skip
+    return node, component
 
 
 def _material_element(root: Node, name: str, m: re.Match, where: Node) -> Node:
@@ -145,7 +169,8 @@ def _material_element(root: Node, name: str, m: re.Match, where: Node) -> Node:
             names = [c.attrib.get("name") for c in materials]
             raise where.error(f"{name!r}: no material named {m[2]!r} in the model ({names})")
         node = found[0]
-    for part in m[3].strip(".").split("."):
+    parts = m[3].strip(".").split(".") + (["points"] if m[4] is not None else [])
+    for part in parts:
         child = node.find(part)
         if child is None:
             raise where.error(

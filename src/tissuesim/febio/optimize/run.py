@@ -47,6 +47,8 @@ class OptimizeResult:
     std: dict[str, float] = field(default_factory=dict)
     history: list[dict] = field(default_factory=list)
     wall_s: float = 0.0
+    gradients: str = "sensitivities"  # the Jacobian's source used (FEBio's differences where
+    # the model's sensitivities are not taken)
 
 
 class _Objective:
@@ -59,8 +61,17 @@ class _Objective:
         self.task, self.builder, self.gradients = task, builder, gradients
         self.names = [p.name for p in task.parameters]
         self.scales = {p.name: p.scale for p in task.parameters}
-        _, scene = builder.simulation({})
+        sim, scene = builder.simulation({})
         self.max_steps = int(scene.run["steps"])
+        self.note = None  # why the sensitivities gave way to FEBio's differences
+        if gradients == "sensitivities":
+            from tissuesim.identification.sensitivity import refusal
+
+            why = refusal(sim, "sensitivities")
+            if why is not None:
+                self.gradients = "differences"
+                self.note = f"{why.rstrip('.')}; FEBio's forward differences are used"
+
         self.runs = 0
         self.last = None  # (residuals, labels) of the last evaluation
         self.last_a = None  # the parameters of the last evaluation (clamped)
@@ -166,6 +177,8 @@ def run_optimize(task: OptimizeTask, model_path, log=None, gradients: str = "sen
     builder = ModelBuilder(model_path, task, febio_solver=febio_solver)
     try:
         objective = _Objective(task, builder, gradients)
+        if objective.note and log is not None:
+            log(objective.note)
         lo = np.array([p.low for p in task.parameters])
         hi = np.array([p.high for p in task.parameters])
         a0 = np.array([p.initial for p in task.parameters])
@@ -187,7 +200,8 @@ def run_optimize(task: OptimizeTask, model_path, log=None, gradients: str = "sen
     std = {n: float(np.sqrt(max(covar[i, i] * sigma2, 0.0))) for i, n in enumerate(names)}
     return OptimizeResult(dict(zip(names, map(float, a), strict=True)), float(chisq), iterations,
                           objective.runs, converged, x, measured, measured + r, labels, std,
-                          history, time.perf_counter() - start)  # fmt: skip
+                          history, time.perf_counter() - start,
+                          objective.gradients)  # fmt: skip
 
 
 def _levmar(objective, a0, lo, hi, task: OptimizeTask, log):

@@ -4,10 +4,13 @@ count: FEBio's lists per point, Uv[k] (the right stretch when generation k start
 also the reference of generation k + 1; generation 0's reference is the identity), v[k] (the
 time it started breaking), f[k] (its mass then), with the derived U_k^-1 of each generation's
 reference (``uinv``), its K2 = |dev ln Uv[k]| (``k2``), the reforming bonds' reference U_r
-(the last Uv, the identity before any), the time and FEBio's largest count so far (``nmax``).
+(the last Uv, the identity before any), the time and FEBio's largest count so far (``nmax``);
+with a bond recruitment (``recruitment.py``) wv[k], generation k's weight brf(X) (FEBio's
+``m_wv``; 1 without), and ``et``, the trigger's scalar strain at the last accepted step.
 
 ``push`` adds a generation where it starts breaking; ``cull`` merges the two oldest where the
-oldest's weight fell below wmin, as FEBio's ``CullGenerations``: (v, Uv, f) of the second become
+oldest's weight (times its wv) fell below wmin, as FEBio's ``CullGenerations``: (v, Uv, f, wv) of
+the second become
 the weight-averaged ones of both and the first is dropped, so the merged generation's reference
 becomes the identity and the next one's the averaged stretch (FEBio's lists, kept as they are).
 """
@@ -18,7 +21,9 @@ import numpy as np
 
 __all__ = ["KEYS", "new_state", "weights", "push", "cull", "right_stretch", "dev_log_norm"]
 
-KEYS = ("uv", "uinv", "k2", "v", "f", "count", "ur", "time", "nmax")
+KEYS = ("uv", "uinv", "k2", "v", "f", "count", "ur", "time", "nmax", "wv", "et")
+#: keys a state written before recruitment lacks, and their values then (set_state_arrays)
+RECRUITMENT_KEYS = ("wv", "et")
 
 
 def right_stretch(F: np.ndarray) -> np.ndarray:
@@ -42,7 +47,7 @@ def new_state(n: int, d: int) -> dict[str, np.ndarray]:
         "uv": np.zeros((n, 0, d, d)), "uinv": np.zeros((n, 0, d, d)), "k2": np.zeros((n, 0)),
         "v": np.zeros((n, 0)), "f": np.zeros((n, 0)), "count": np.zeros(n),
         "ur": np.broadcast_to(np.eye(d), (n, d, d)).copy(), "time": np.zeros(1),
-        "nmax": np.zeros(1),
+        "nmax": np.zeros(1), "wv": np.zeros((n, 0)), "et": np.zeros(n),
     }  # fmt: skip
 
 
@@ -93,18 +98,22 @@ def _derive(s: dict, idx: np.ndarray) -> None:
         s["ur"][p] = s["uv"][p, c - 1] if c else eye
 
 
-def push(s: dict, idx: np.ndarray, U: np.ndarray, t: float, fr: np.ndarray) -> None:
-    """Generation (reference U_r, start t, mass fr) at points idx; U_r becomes U (len(idx),)."""
+def push(
+    s: dict, idx: np.ndarray, U: np.ndarray, t: float, fr: np.ndarray, wv: np.ndarray | None = None
+) -> None:
+    """Generation (reference U_r, start t, mass fr, recruitment weight wv: default 1) at points
+    idx; U_r becomes U (len(idx),)."""
     if idx.size == 0:
         return
     c = s["count"][idx].astype(int)
     if (c >= s["v"].shape[1]).any():  # one more slot for every point
-        for key in ("uv", "uinv", "k2", "v", "f"):
+        for key in ("uv", "uinv", "k2", "v", "f", "wv"):
             more = np.zeros((s[key].shape[0], 1, *s[key].shape[2:]))
             s[key] = np.concatenate([s[key], more], axis=1)
     s["uv"][idx, c] = U
     s["v"][idx, c] = t
     s["f"][idx, c] = fr
+    s["wv"][idx, c] = 1.0 if wv is None else wv
     s["count"][idx] += 1
     _derive(s, idx)
 
@@ -121,10 +130,11 @@ def cull(s: dict, idx: np.ndarray, relaxation, kinetics: int, t: float, wmin: fl
     if idx.size == 0 or wmin <= 0.0:
         return
     w, _ = weights(s, relaxation, kinetics, t)
+    w = w * s["wv"]  # FEBio weighs by the recruitment here
     merge = idx[w[idx, 0] < wmin]
     for p in merge:
         w0, w1 = w[p, 0], w[p, 1]
-        for key in ("v", "f", "uv"):
+        for key in ("v", "f", "uv", "wv"):
             s[key][p, 1] = (w0 * s[key][p, 0] + w1 * s[key][p, 1]) / (w0 + w1)
             s[key][p, :-1] = s[key][p, 1:].copy()
             s[key][p, -1] = 0.0

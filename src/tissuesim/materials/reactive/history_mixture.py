@@ -61,6 +61,18 @@ class _History:
         for _, p in self._stateful():
             p.begin_step(h)
 
+    @property
+    def lagged(self) -> bool:
+        """Whether a component lags something in a step (``relag``)."""
+        return any(getattr(p, "lagged", False) for _, p in self._stateful())
+
+    def relag(self, F: np.ndarray, tolerance: float) -> bool:
+        changed = False
+        for _, p in self._stateful():
+            if getattr(p, "lagged", False):
+                changed = p.relag(F, tolerance) or changed
+        return changed
+
     def accept_step(self, F: np.ndarray) -> None:
         for _, p in self._stateful():
             p.accept_step(F)

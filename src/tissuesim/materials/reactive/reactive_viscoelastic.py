@@ -46,7 +46,17 @@ iterate of the step even if the converged strain fell back below the threshold.)
 
 FEBio's culling (``wmin`` > 0, ``generations.py``) runs on the accepted step too, where FEBio
 culls at the first iterate that creates the generation (the merged generation, whose weight is
-below wmin, enters the stress a step later). Recruitment is not implemented (refused). A strong
+below wmin, enters the stress a step later).
+
+Bond recruitment (``recruitment``, FEBio's ``FEBondRecruitment``: ``recruitment.py``) weighs
+each generation by brf(X), X the trigger's scalar strain of the total F when it forms (FEBio's
+``ScalarStrain``: |E|, |dev ln V| or |ln J|), kept with the generation (``wv``). FEBio sets the
+forming generation's brf at every iterate of its step, so at its converged point the weight is
+brf(X(F)) of that F, with no derivative of brf in its stress or tangent: not a potential. The
+step here holds the forming bonds' brf at a lagged strain X_lag (the last accepted one at the
+step's start), minimises, and re-lags X_lag at the converged F (``relag``, with the steps' other
+lagged terms: ``time/lags.py``) until brf no longer changes: that fixed point is FEBio's
+converged state. The potential of each solve is exact (the weight a constant in it). A strong
 bond with FEBio's ``elastic damage`` scales the weak bonds by its 1 - D, D frozen over the step
 as the damage law's own (``damage.py``).
 Uncoupled: strong and weak bonds are the deviatoric parts of uncoupled laws (each law less its
@@ -68,6 +78,7 @@ from tissuesim.materials.base import Material, MaterialResponse
 from tissuesim.materials.isotropic._common import check_input
 from tissuesim.materials.reactive import generations as gen
 from tissuesim.materials.reactive.damage import ElasticDamage
+from tissuesim.materials.reactive.recruitment import Recruitment
 from tissuesim.materials.reactive.relaxation import Relaxation
 from tissuesim.materials.soft_tissue._hyperelastic import bulk_response, parameter
 from tissuesim.materials.soft_tissue._hyperelastic import pressure_model as pressure_model_kind
@@ -85,7 +96,8 @@ class ReactiveViscoelastic(Material):
     ``ReactiveViscoelastic(NeoHookean(...), bond=NeoHookean(...), relaxation={"model":
     "exponential", "tau": 0.2})``. Parameters: ``kinetics`` 1 or 2 (FEBio's type I, II),
     ``trigger`` 0 (any strain), 1 (distortional), 2 (dilatational), ``emin`` >= 0,
-    ``wmin`` in [0, 1] (FEBio's culling of generations lighter than wmin)."""
+    ``wmin`` in [0, 1] (FEBio's culling of generations lighter than wmin), ``recruitment``
+    (a bond recruitment table, ``recruitment.py``; None: every generation weighs 1)."""
 
     name = "reactive_viscoelastic"
     febio_name = "reactive viscoelastic"
@@ -101,6 +113,7 @@ class ReactiveViscoelastic(Material):
         trigger: int = 0,
         emin: float = 0.0,
         wmin: float = 0.0,
+        recruitment: object = None,
     ) -> None:
         law = self.name
         for key, part in (("elastic", elastic), ("bond", bond)):
@@ -122,7 +135,9 @@ class ReactiveViscoelastic(Material):
         self.wmin = parameter(law, "wmin", wmin, unit="")
         if not 0.0 <= self.wmin <= 1.0:
             raise MaterialError(f"{law}: wmin must be in [0, 1], got {self.wmin!r}")
+        self.recruitment = None if recruitment is None else Recruitment(law, recruitment)
         self.mu, self.lam = elastic.mu + bond.mu, elastic.lam + bond.lam
+        self._x_lag: np.ndarray | None = None  # the forming bonds' strain X in a step
         self._n: int | None = None
         self._s: dict[str, np.ndarray] = {}
         self._h: float | None = None  # the step in progress
@@ -168,6 +183,7 @@ class ReactiveViscoelastic(Material):
         """A step of ``h`` s starts from the accepted state (which it does not change)."""
         self._need_state("begin_step")
         self._h = float(h)
+        self._x_lag = self._s["et"].copy()  # the forming bonds' strain, from the last step
         if hasattr(self.elastic, "begin_step"):  # a damaged strong bond
             self.elastic.begin_step(h)
 
@@ -181,6 +197,11 @@ class ReactiveViscoelastic(Material):
 
     def set_state_arrays(self, arrays: dict[str, np.ndarray]) -> None:
         self._need_state("set_state_arrays")
+        arrays = dict(arrays)  # a state from before recruitment: every weight 1
+        for key in gen.RECRUITMENT_KEYS:
+            if key not in arrays:
+                v = np.asarray(arrays["v"])
+                arrays[key] = np.ones(v.shape) if key == "wv" else np.zeros(v.shape[0])
         s = {k: np.asarray(arrays[k], dtype=float).copy() for k in gen.KEYS}
         if s["ur"].shape != self._s["ur"].shape or s["v"].shape[0] != self._n:
             raise MaterialError(f"{self.name}: a state for {s['v'].shape[0]} points does not fit "
@@ -218,12 +239,37 @@ class ReactiveViscoelastic(Material):
         _, fr = self.weights(t)
         Fu = F @ np.linalg.inv(s["ur"])
         new = np.flatnonzero((self._trigger(Fu) > max(self.emin, _EPS)) & (fr >= self.wmin))
-        gen.push(s, new, gen.right_stretch(F[new]), t, fr[new])
+        x = self.scalar_strain(F)
+        wv = None if self.recruitment is None else self.recruitment(x[new])
+        gen.push(s, new, gen.right_stretch(F[new]), t, fr[new], wv)
         gen.cull(s, new, self.relaxation, self.kinetics, t, self.wmin)
         s["time"] = np.array([t])
-        self._h = None
+        s["et"] = x
+        self._h = self._x_lag = None
         if hasattr(self.elastic, "accept_step"):
             self.elastic.accept_step(F)
+
+    @property
+    def lagged(self) -> bool:
+        """Whether a step lags something (the forming bonds' recruitment) to re-lag."""
+        return self.recruitment is not None
+
+    def relag(self, F: np.ndarray, tolerance: float) -> bool:
+        """Re-lag the forming bonds' strain at the step's converged F; whether their brf
+        moved by more than ``tolerance`` anywhere."""
+        if not self.lagged or self._x_lag is None:
+            return False
+        x = self.scalar_strain(check_input(np.asarray(F, dtype=float), 1))
+        moved = np.max(np.abs(self.recruitment(x) - self.recruitment(self._x_lag)), initial=0.0)
+        self._x_lag = x
+        return bool(moved > tolerance)
+
+    def scalar_strain(self, F: np.ndarray) -> np.ndarray:
+        """FEBio's ``ScalarStrain`` of the total F (the recruitment's argument): |E|,
+        |dev ln V| or |ln J| for trigger 0, 1, 2."""
+        if self.trigger == 1:
+            return gen.dev_log_norm(gen.right_stretch(F))
+        return self._trigger(F)
 
     def _trigger(self, Fu: np.ndarray) -> np.ndarray:
         if self.trigger == 0:
@@ -260,7 +306,12 @@ class ReactiveViscoelastic(Material):
             trig = self._trigger(F @ ur_inv) > max(self.emin, _EPS)
             formed = (s["count"] == 0) | (trig & (fr >= self.wmin))
             uinv = np.concatenate([s["uinv"], ur_inv[:, None]], axis=1)
-            w = np.concatenate([w, np.where(formed, fr, 0.0)[:, None]], axis=1)
+            forming = np.where(formed, fr, 0.0)
+            if self.recruitment is not None:  # each generation by its brf; the forming one's
+                w = w * s["wv"]  # at the lagged strain, once it forms (FEBio's m_wv)
+                x = s["et"] if self._x_lag is None else self._x_lag
+                forming = np.where(trig, forming * self.recruitment(x), forming)
+            w = np.concatenate([w, forming[:, None]], axis=1)
             if isinstance(self.elastic, ElasticDamage):  # FEBio's (1 - D) on the weak bonds
                 w = w * (1.0 - self.elastic.damage)[:, None]
         else:

@@ -28,6 +28,8 @@ bodies' facet surfaces (``Simulation.add_penalty_contact``, ``contact/penalty/pa
     keep_last_augmentation = false    # FEBio's sliding-elastic
     special_cases = false             # no facet: onto an interior edge or node (FEBio's
                                       #   node-on-facet, facet-on-facet, tied, sticky)
+    tension = false                   # in contact as the surfaces pull apart (FEBio's
+                                      #   sliding-elastic tension = 1)
 """
 
 from __future__ import annotations
@@ -42,10 +44,10 @@ PENALTY_KEYS = (
     "auto_penalty", "integration", "area", "two_pass", "augmented", "tolerance",
     "gap_tolerance", "min_augmentations", "max_augmentations", "search_tolerance", "tied",
     "sticky", "snap_tolerance", "max_traction", "friction", "friction_penalty",
-    "friction_anchor", "keep_last_augmentation", "special_cases",
+    "friction_anchor", "keep_last_augmentation", "special_cases", "tension",
 )  # fmt: skip
 _FLAGS = ("auto_penalty", "two_pass", "augmented", "tied", "sticky", "keep_last_augmentation",
-          "special_cases")  # fmt: skip
+          "special_cases", "tension")  # fmt: skip
 _COUNTS = ("min_augmentations", "max_augmentations")
 
 
