@@ -81,8 +81,9 @@ def test_a_user_function_and_febios_defaults():
 def law(recruitment, cls=ReactiveViscoelastic, **kw):
     neo = ts.NeoHookean
     if cls is UncoupledReactiveViscoelastic:
-        return cls(ts.MooneyRivlin(c1=200.0, c2=50.0, k=5e3), bond=ts.MooneyRivlin(c1=100.0,
-                   c2=20.0, k=1e3), relaxation=EXP, k=3e3, recruitment=recruitment, **kw)  # fmt: skip
+        bond = ts.MooneyRivlin(c1=100.0, c2=20.0, k=1e3)
+        return cls(ts.MooneyRivlin(c1=200.0, c2=50.0, k=5e3), bond=bond, relaxation=EXP,
+                   k=3e3, recruitment=recruitment, **kw)  # fmt: skip
     return cls(neo(youngs_modulus=1e3, poisson_ratio=0.3),
                bond=neo(youngs_modulus=500.0, poisson_ratio=0.2), relaxation=EXP,
                recruitment=recruitment, **kw)  # fmt: skip
