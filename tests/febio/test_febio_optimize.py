@@ -430,8 +430,14 @@ def test_a_point_of_a_materials_curve_is_fitted_by_febios_differences(tmp_path):
     finally:
         builder.close()
     data = "".join(f"<pt>{t}, {float(v)!r}</pt>" for t, v in zip(times, r, strict=True))
-    task = read_optimize(_optimisation(tmp_path / "opt.feb", objective.format(data),
-                                       f'<param name="{name}">1.5, 0.5, 4</param>', tol=1e-12))
+    task = read_optimize(
+        _optimisation(
+            tmp_path / "opt.feb",
+            objective.format(data),
+            f'<param name="{name}">1.5, 0.5, 4</param>',
+            tol=1e-12,
+        )
+    )
     model.write_text(text.replace("{y}", "1.0"))  # the model's own value is not the start
     lines = []
     fit = run_optimize(task, model, log=lines.append)
