@@ -327,6 +327,44 @@ class Model:
             changed = self.material.relag(F, tolerance) or changed
         return changed
 
+    def lag_coupling(self, x: np.ndarray):
+        """d(gradient)/dx through the materials' lagged terms at their fixed point x (sparse,
+        the body's DOFs; None where no material lags): per integration point the rank-one
+        w (dP/dX_lag : grad N_a) (dX/dF : grad N_b) (``lag_derivatives``), unsymmetric."""
+        from tissuesim.kinematics.nodal import NodalKinematics
+
+        regions = [(self.material, self.kinematics)] if self.parts is None else [
+            (p.material, p.kinematics) for p in self.parts
+        ]  # fmt: skip
+        rows, cols, vals = [], [], []
+        for material, kinematics in regions:
+            if not getattr(material, "lagged", False):
+                continue
+            if not isinstance(kinematics, NodalKinematics) or not hasattr(
+                material, "lag_derivatives"
+            ):
+                raise InputError(
+                    f"{material.name} with a lagged recruitment on {self.mesh.source}: its "
+                    "sensitivities are taken on solid elements with the law itself (not in a "
+                    "mixture or on shells); use finite differences of whole runs"
+                )
+            F = kinematics.deformation_gradients(x)
+            dP, dX = material.lag_derivatives(F)
+            u = kinematics.stress_to_gradient(dP)  # (q, nloc): w G^a_j dP_ij
+            v = np.matmul(kinematics.grads, np.swapaxes(dX, 1, 2)).reshape(len(F), -1)
+            st = kinematics.stencil
+            rows.append(np.repeat(st, st.shape[1], axis=1).ravel())
+            cols.append(np.tile(st, (1, st.shape[1])).ravel())
+            vals.append((u[:, :, None] * v[:, None, :]).ravel())
+        if not vals:
+            return None
+        import scipy.sparse as sp
+
+        n = self.kinematics.n_dofs
+        return sp.csr_matrix(
+            (np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))), shape=(n, n)
+        )
+
     def _materials(self) -> list:
         """The material of each region (one without regions)."""
         return [self.material] if self.parts is None else [p.material for p in self.parts]

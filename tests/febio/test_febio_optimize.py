@@ -404,11 +404,11 @@ def test_a_modulus_under_febios_sliding_elastic_contact_is_fitted_by_sensitiviti
     assert fit.runs < fd.runs
 
 
-def test_a_point_of_a_materials_curve_is_fitted_by_febios_differences(tmp_path):
+def test_a_point_of_a_materials_curve_is_fitted(tmp_path):
     """FEBio's op09 names points of a material's curves (``...recruitment.function.points[1].y``):
     the point's y is set in the model's <point>x,y</point>; a recruitment curve's point is
-    fitted back from data of our own model. The run's sensitivities are not taken through the
-    recruitment's lag, so the optimisation says so and uses FEBio's forward differences."""
+    fitted back from data of our own model, by the run's sensitivities (through the
+    recruitment's lag at FEBio's fixed point) and by FEBio's forward differences."""
     source = Path(__file__).parent / "models" / "reactive_viscoelastic_relaxation.feb"
     curve = ('<recruitment type="recruitment user"><function type="point"><interpolate>LINEAR'
              "</interpolate><points><point>0,1</point><point>0.05,{y}</point><point>0.5,1"
@@ -439,9 +439,43 @@ def test_a_point_of_a_materials_curve_is_fitted_by_febios_differences(tmp_path):
         )
     )
     model.write_text(text.replace("{y}", "1.0"))  # the model's own value is not the start
-    lines = []
-    fit = run_optimize(task, model, log=lines.append)
-    assert fit.gradients == "differences"
-    assert any("bond recruitment" in line and "forward differences" in line for line in lines)
-    assert fit.parameters[name] == pytest.approx(2.5, rel=1e-5)
+    fit = run_optimize(task, model)
+    assert fit.gradients == "sensitivities" and fit.runs == fit.iterations + 1
+    assert fit.parameters[name] == pytest.approx(2.5, rel=1e-6)
+    fd = run_optimize(task, model, gradients="differences")
+    assert fd.parameters[name] == pytest.approx(2.5, rel=1e-5)
     assert np.ptp(r) > 0.1 * np.abs(r).max()  # the data are a curve, not one value
+
+
+def test_where_sensitivities_are_not_taken_febios_differences_are_said_and_used(tmp_path):
+    """The sliding stack with FEBio's augmented Lagrangian (whose multipliers the
+    sensitivities do not follow): the default optimisation says so in its log, uses FEBio's
+    forward differences and still fits the modulus to data of its own."""
+    from tissuesim.febio import load_febio
+
+    def augmented(E_low: float) -> Path:
+        path = _sliding_stack(tmp_path, E_low)
+        text = path.read_text()
+        assert "<penalty>" in text
+        path.write_text(text.replace("<penalty>", "<laugon>AUGLAG</laugon><penalty>", 1))
+        return path
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        scene = load_febio(augmented(2e4))
+        sim = scene.simulation
+        for _ in range(scene.run["steps"]):
+            sim.step()
+    top = float(sim.body_positions("lower")[4, 2])
+    one = "<param name=\"fem.material('firm').E\">10000, 1000, 100000</param>"
+    objective = ('<Objective type="target"><var name="fem.mesh.node.fromId(5).position.z">'
+                 f"{top!r}</var></Objective>")  # fmt: skip
+    task = read_optimize(_optimisation(tmp_path / "fit.feb", objective, one, tol=1e-12))
+    lines = []
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        fit = run_optimize(task, augmented(1e4), log=lines.append)
+    assert fit.gradients == "differences"
+    said = [line for line in lines if "forward differences are used" in line]
+    assert len(said) == 1 and "augmented" in said[0] and "\n" not in said[0]
+    assert fit.parameters["fem.material('firm').E"] == pytest.approx(2e4, rel=1e-4)

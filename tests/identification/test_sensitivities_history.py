@@ -22,10 +22,14 @@ def law(kind: str, p: dict):
     elastic = ts.NeoHookean(youngs_modulus=p["E"], poisson_ratio=0.3)
     if kind == "prony":
         return ts.Viscoelastic(elastic, g=[p["g"]], tau=[p["tau"]])
-    if kind == "reactive":
+    if kind in ("reactive", "recruited"):
         relaxation = {"model": "exponential", "tau": p["tau"]}
         bond = ts.NeoHookean(youngs_modulus=p["g"] * p["E"], poisson_ratio=0.3)
-        return ReactiveViscoelastic(elastic, bond=bond, relaxation=relaxation)
+        recruitment = None
+        if kind == "recruited":  # brf rises steeply with the strain a generation forms at
+            recruitment = {"model": "power", "mu0": 1.0, "mu1": p["m"], "alpha": 1.0}
+        return ReactiveViscoelastic(elastic, bond=bond, relaxation=relaxation,
+                                    recruitment=recruitment)  # fmt: skip
     damage = {"model": "weibull", "alpha": 2.0, "mu": p["tau"] * 1e4}
     return ElasticDamage(elastic, damage=damage, criterion="von_mises_stress")
 
@@ -105,6 +109,12 @@ def test_a_region_with_history_beside_an_elastic_one():
 
 def test_reactive_viscoelasticity_is_differentiated():
     check({"E": 5e4, "g": 1.5, "tau": 0.4, "depth": 0.1}, kind="reactive")
+
+
+def test_bond_recruitment_is_differentiated_at_febios_fixed_point():
+    """The forming bonds' brf lagged within each step to FEBio's fixed point: the lag's
+    derivative joins the step's (Model.lag_coupling), the recruitment's slope a parameter."""
+    check({"E": 5e4, "g": 1.5, "tau": 0.4, "depth": 0.1, "m": 20.0}, kind="recruited")
 
 
 def test_growing_damage_is_differentiated():

@@ -65,25 +65,29 @@ class HistoryDerivative:
         self.before = _states(base, self.names)
 
     @contextmanager
-    def as_solved(self, base, x_prev: np.ndarray, h: float):
-        """Within: the base's laws as its step's solve saw them (q_{n-1}, the step begun);
-        after: q_n again."""
+    def as_solved(self, base, x_prev: np.ndarray, h: float, x: np.ndarray | None = None):
+        """Within: the base's laws as its step's solve saw them (q_{n-1}, the step begun, a
+        lagged term at its fixed point: re-lagged at the step's solution x); after: q_n
+        again."""
         after = _states(base, self.names)
         s = base.system
         try:
             for name in self.names:
                 model = base.bodies[name].model
                 model.material.set_state_arrays(self.before[name])
-                model.begin_step(x_prev[s.config_slices[s.names.index(name)]], h)
+                where = s.config_slices[s.names.index(name)]
+                model.begin_step(x_prev[where], h)
+                if x is not None and model.lagged_materials():
+                    model.relag_materials(x[where], np.inf)
             yield
         finally:
             for name in self.names:
                 model = base.bodies[name].model
                 model.material.set_state_arrays(after[name])
 
-    def set_copies(self, x_prev: np.ndarray, h: float) -> None:
+    def set_copies(self, x_prev: np.ndarray, h: float, x: np.ndarray | None = None) -> None:
         """Each parameter's copies with their internal variables at q_{n-1} +- delta Q_j, the
-        step begun (before their gradients: b)."""
+        step begun, a lagged term at the base's solution x (before their gradients: b)."""
         for (delta, pair), Q in zip(self.copies, self.Q, strict=True):
             for sign, sim in zip((1.0, -1.0), pair, strict=True):
                 s = sim.system
@@ -91,7 +95,10 @@ class HistoryDerivative:
                     q = {k: v + sign * delta * Q[name][k] for k, v in self.before[name].items()}
                     model = sim.bodies[name].model
                     model.material.set_state_arrays(q)
-                    model.begin_step(x_prev[s.config_slices[s.names.index(name)]], h)
+                    where = s.config_slices[s.names.index(name)]
+                    model.begin_step(x_prev[where], h)
+                    if x is not None and model.lagged_materials():
+                        model.relag_materials(x[where], np.inf)
 
     def update(self, x: np.ndarray, S: np.ndarray) -> None:
         """After the step's derivative S: Q_j^n by the copies' updates at x +- delta S_j."""

@@ -49,7 +49,10 @@ penalty contact (an energy of the state: its exact Hessian joins H), its current
 weights (sliding-elastic's, lagged to the converged state) followed through their own
 derivative (``contact/penalty/area_coupling.py``: an unsymmetric term of H; the copies are
 given the base's weights), Rayleigh damping (the copies' about the step's start moved along
-its derivative: C(x_n) (x - x_n) / h); penalty contact with other lagged terms (augmented,
+its derivative: C(x_n) (x - x_n) / h), a reactive viscoelastic law's bond recruitment (its
+forming bonds' brf lagged within the step to FEBio's fixed point X_lag = X(F(x_n)): the
+copies are set at that lag and its derivative joins H, ``Model.lag_coupling``, unsymmetric);
+penalty contact with other lagged terms (augmented,
 friction, sticky),
 interactive contact steps (a prediction, not a minimum), rigid bodies in
 dynamic runs or with joints, and dynamic, friction or history steps that
@@ -145,11 +148,17 @@ def _check(sim, what: str) -> None:
             raise InputError(f"{what}: body {name!r} is not a FEM body (frames are not taken)")
         model = body.model
         if hasattr(model, "lagged_materials") and model.lagged_materials():
-            raise InputError(
-                f"{what}: body {name!r}'s material lags its bond recruitment within a step (a "
-                "fixed point, FEBio's), which the sensitivities do not differentiate yet: use "
-                "finite differences of whole runs (gradients = 'differences')"
-            )
+            from tissuesim.kinematics.nodal import NodalKinematics
+
+            parts = [model] if model.parts is None else model.parts
+            if any(getattr(p.material, "lagged", False) and not (
+                    isinstance(p.kinematics, NodalKinematics)
+                    and hasattr(p.material, "lag_derivatives")) for p in parts):  # fmt: skip
+                raise InputError(
+                    f"{what}: body {name!r}'s bond recruitment is lagged in a mixture or on "
+                    "shells, whose lag the sensitivities do not follow: use finite differences "
+                    "of whole runs (gradients = 'differences')"
+                )
 
 
 @contextmanager
@@ -194,6 +203,25 @@ def _area_coupling(system, x: np.ndarray):
         C = area_coupling(pair, positions, dofs, system.n_dofs)
         if C is not None:
             total = C if total is None else total + C
+    return total
+
+
+def _lag_coupling(system, x: np.ndarray):
+    """The FEM bodies' d(gradient)/dx through their materials' lagged terms (a reactive
+    viscoelastic law's recruitment, at its fixed point), in the system's DOFs (None: none)."""
+    _, dofs = system.body_positions_and_dofs(x)
+    total = None
+    for j, body in enumerate(system.bodies):
+        if not (hasattr(body, "lagged_materials") and body.lagged_materials()):
+            continue
+        C = body.lag_coupling(x[system.config_slices[j]])
+        if C is None:
+            continue
+        C = C.tocoo()
+        where = np.asarray(dofs[j]).ravel()
+        C = sp.csr_matrix((C.data, (where[C.row], where[C.col])),
+                          shape=(system.n_dofs, system.n_dofs))  # fmt: skip
+        total = C if total is None else total + C
     return total
 
 
@@ -362,16 +390,17 @@ def sensitivities(
             contact.set_stiffness(kappa)
         with (
             contact.last_step_lag() if friction is not None else nullcontext(),
-            history.as_solved(base, x_prev, h) if history is not None else nullcontext(),
+            history.as_solved(base, x_prev, h, x) if history is not None else nullcontext(),
             _damping_from(base, x_prev, h),
         ):  # the step's potential as solved: its friction lag, its laws' history, its damping
             acc = s.evaluate(x, 2, False, s.last_step_energies)
+            lag_move = _lag_coupling(s, x)  # a recruitment's lag, as the step saw it
         g = acc.gradient
         B = np.zeros((n, p))
         Sp = np.zeros((n, p))
         dofs = np.asarray(s.elimination.dofs)
         if history is not None:  # the copies' internal variables along their derivative
-            history.set_copies(x_prev, h)
+            history.set_copies(x_prev, h, x)
         for j, (delta, pair) in enumerate(copies):
             grads, placed = [], []
             for sign, sim in zip((1.0, -1.0), pair, strict=True):
@@ -407,6 +436,11 @@ def sensitivities(
             B = B + areas_move @ Sp  # with the prescribed DOFs' motion (the copies' are held)
             K = (K + areas_move).tocsr()
             A = (A + keep @ areas_move @ keep).tocsc()
+            symmetric = False
+        if lag_move is not None:  # a recruitment's lag at its fixed point follows the state
+            B = B + lag_move @ Sp  # with the prescribed DOFs' motion (the copies' lag is held)
+            K = (K + lag_move).tocsr()
+            A = (A + keep @ lag_move @ keep).tocsc()
             symmetric = False
         if friction is not None:  # the slip's start moved by the last step's sensitivity
             W = start_motion(contact, x_prev, S_x, Y_prev)

@@ -264,6 +264,37 @@ class ReactiveViscoelastic(Material):
         self._x_lag = x
         return bool(moved > tolerance)
 
+    def lag_derivatives(self, F: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(dP/dX_lag, dX/dF), each (q, d, d), at F in the step: how the stress moves with
+        the forming bonds' lagged strain (f_r brf'(X_lag) P_b(F U_r^-1) U_r^-1 where they
+        form), and how the strain that re-lags it moves with F. Their product is the lag's
+        share of the step's derivative at FEBio's fixed point (the sensitivities':
+        ``Model.lag_coupling``). brf' and dX/dF by central differences (brf is a user's curve
+        with kinks; |dev ln V| has no simple closed derivative)."""
+        self._need_state("lag_derivatives")
+        F = check_input(np.asarray(F, dtype=float), 1)
+        s, d = self._s, F.shape[-1]
+        _, fr = self.weights()
+        ur_inv = np.linalg.inv(s["ur"])
+        trig = self._trigger(F @ ur_inv) > max(self.emin, _EPS)
+        x = s["et"] if self._x_lag is None else self._x_lag
+        e = 1e-7 * np.maximum(np.abs(x), 1e-3)
+        dbrf = (self.recruitment(x + e) - self.recruitment(x - e)) / (2.0 * e)
+        coef = np.where(trig & (fr >= self.wmin), fr * dbrf, 0.0)
+        if isinstance(self.elastic, ElasticDamage):
+            coef = coef * (1.0 - self.elastic.damage)
+        Fr = F @ ur_inv
+        dP = coef[:, None, None] * (self._weak(Fr, 1).stress @ ur_inv)
+        dX = np.zeros_like(F)
+        step = 1e-7
+        for i in range(d):
+            for j in range(d):
+                Fp, Fm = F.copy(), F.copy()
+                Fp[:, i, j] += step
+                Fm[:, i, j] -= step
+                dX[:, i, j] = (self.scalar_strain(Fp) - self.scalar_strain(Fm)) / (2 * step)
+        return dP, dX
+
     def scalar_strain(self, F: np.ndarray) -> np.ndarray:
         """FEBio's ``ScalarStrain`` of the total F (the recruitment's argument): |E|,
         |dev ln V| or |ln J| for trigger 0, 1, 2."""
