@@ -327,6 +327,14 @@ class Model:
             changed = self.material.relag(F, tolerance) or changed
         return changed
 
+    def materials_lag_moved(self, x: np.ndarray) -> float:
+        """How far the materials' lagged terms are from their values at positions x."""
+        regions = [(self.material, self.kinematics)] if self.parts is None else [
+            (p.material, p.kinematics) for p in self.parts
+        ]  # fmt: skip
+        return max((m.lag_moved(k.deformation_gradients(x)) for m, k in regions
+                    if getattr(m, "lagged", False)), default=0.0)  # fmt: skip
+
     def lag_coupling(self, x: np.ndarray):
         """d(gradient)/dx through the materials' lagged terms at their fixed point x (sparse,
         the body's DOFs; None where no material lags): per integration point the rank-one

@@ -102,8 +102,18 @@ class StepLags:
         return lambda c: self.relag(c)
 
     def check(self, c1: np.ndarray, record) -> None:
-        """A converged solve whose pressures have not settled at c1 becomes a failed one."""
-        if self.pressures is None or not record.converged:
+        """A converged solve whose pressures or materials' lags have not settled at c1
+        becomes a failed one (the step is then halved)."""
+        if not record.converged:
+            return
+        for where, body in self.materials:
+            moved = body.materials_lag_moved(c1[where])
+            if moved > max(1e3 * self.material_tolerance, 1e-6):
+                record.converged = False
+                record.reason = (f"a bond recruitment's lagged weight did not settle in "
+                                 f"{self.max_relags} re-lags (moved by {moved:.3g})")  # fmt: skip
+                return
+        if self.pressures is None:
             return
         reason = self.pressures.unsettled(c1, self.pressures.relags)
         if reason is not None:

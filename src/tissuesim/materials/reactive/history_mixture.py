@@ -66,6 +66,10 @@ class _History:
         """Whether a component lags something in a step (``relag``)."""
         return any(getattr(p, "lagged", False) for _, p in self._stateful())
 
+    def lag_moved(self, F: np.ndarray) -> float:
+        return max((p.lag_moved(F) for _, p in self._stateful() if getattr(p, "lagged", False)),
+                   default=0.0)  # fmt: skip
+
     def relag(self, F: np.ndarray, tolerance: float) -> bool:
         changed = False
         for _, p in self._stateful():

@@ -254,14 +254,21 @@ class ReactiveViscoelastic(Material):
         """Whether a step lags something (the forming bonds' recruitment) to re-lag."""
         return self.recruitment is not None
 
+    def lag_moved(self, F: np.ndarray) -> float:
+        """How far the forming bonds' brf at F is from the lagged one (0: settled)."""
+        if not self.lagged or self._x_lag is None:
+            return 0.0
+        x = self.scalar_strain(check_input(np.asarray(F, dtype=float), 1))
+        return float(np.max(np.abs(self.recruitment(x) - self.recruitment(self._x_lag)),
+                            initial=0.0))  # fmt: skip
+
     def relag(self, F: np.ndarray, tolerance: float) -> bool:
         """Re-lag the forming bonds' strain at the step's converged F; whether their brf
         moved by more than ``tolerance`` anywhere."""
         if not self.lagged or self._x_lag is None:
             return False
-        x = self.scalar_strain(check_input(np.asarray(F, dtype=float), 1))
-        moved = np.max(np.abs(self.recruitment(x) - self.recruitment(self._x_lag)), initial=0.0)
-        self._x_lag = x
+        moved = self.lag_moved(F)
+        self._x_lag = self.scalar_strain(check_input(np.asarray(F, dtype=float), 1))
         return bool(moved > tolerance)
 
     def lag_derivatives(self, F: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
