@@ -144,6 +144,15 @@ def _g(v, fmt=".4g") -> str:
     return "" if v in (None, "") else format(v, fmt)
 
 
+def _short(name: str) -> str:
+    """A parameter's short label: its last name, a curve point's curve and index too
+    (``tau1[1].y`` for ``fem.material('tissue').relaxation.tau1.points[1].y``)."""
+    parts = name.split(".")
+    if len(parts) >= 3 and parts[-2].startswith("points["):
+        return f"{parts[-3]}{parts[-2][len('points'):]}.{parts[-1]}"
+    return parts[-1]
+
+
 def write_md(rows: list[dict], path: Path, args) -> None:
     ran = [r for r in rows if r["status"] == "ran"]
     matched = [r for r in ran if r.get("matched")]
@@ -174,7 +183,7 @@ def write_md(rows: list[dict], path: Path, args) -> None:
     for r in rows:
         params = ""
         if r.get("parameters"):
-            params = ", ".join(f"{k.split('.')[-1]} = {v:.6g}"
+            params = ", ".join(f"{_short(k)} = {v:.6g}"
                                for k, v in json.loads(r["parameters"]).items())  # fmt: skip
         lines.append(
             f"| {r['model']} | {r['status']} | {params} | {_g(r.get('objective'))} | "
