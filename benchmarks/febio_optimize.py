@@ -149,7 +149,7 @@ def _short(name: str) -> str:
     (``tau1[1].y`` for ``fem.material('tissue').relaxation.tau1.points[1].y``)."""
     parts = name.split(".")
     if len(parts) >= 3 and parts[-2].startswith("points["):
-        return f"{parts[-3]}{parts[-2][len('points'):]}.{parts[-1]}"
+        return f"{parts[-3]}{parts[-2][len('points') :]}.{parts[-1]}"
     return parts[-1]
 
 
