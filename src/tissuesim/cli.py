@@ -109,9 +109,12 @@ def _run(
     directory = Path(out) if out else Path("out") / scene.name
     sim = scene.simulation
     if not quiet:
+        end = sim.adaptive_end()
+        steps = (f"{run['steps']} steps" if end is None else  # FEBio's adaptive steps
+                 f"adaptive steps to t = {end:g} s (at most {run['steps']})")  # fmt: skip
         print(
             f"tissuesim: {scene.name}: {_body(sim)}, {sim.integrator}, "
-            f"time_step {sim.time_step:g} s, {run['steps']} steps -> {directory}/"
+            f"time_step {sim.time_step:g} s, {steps} -> {directory}/"
             + (" (resuming)" if resume else ""),
             file=sys.stderr,
         )
