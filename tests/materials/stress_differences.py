@@ -27,3 +27,21 @@ def central_difference(fun, F: np.ndarray, h: float) -> np.ndarray:
 def relative_difference(a: np.ndarray, b: np.ndarray) -> float:
     """The largest |a - b| over the largest |b|."""
     return float(np.max(np.abs(a - b)) / np.max(np.abs(b)))
+
+
+def pointwise_difference(law, F: np.ndarray, h: float = 1e-6) -> tuple[np.ndarray, np.ndarray]:
+    """(P, dP/dF) of ``law`` at F (q, d, d) by central differences of its energy and stress,
+    one component of F at a time over all q points (a law bound to q points with a history
+    evaluates its state only at that count, so the batched ``central_difference`` would not
+    see it)."""
+    d = F.shape[-1]
+    P = np.zeros_like(F)
+    A = np.zeros((*F.shape, d, d))
+    for i in range(d):
+        for j in range(d):
+            Fp, Fm = F.copy(), F.copy()
+            Fp[:, i, j] += h
+            Fm[:, i, j] -= h
+            P[:, i, j] = (law.evaluate(Fp, 0).energy - law.evaluate(Fm, 0).energy) / (2 * h)
+            A[..., i, j] = (law.evaluate(Fp, 1).stress - law.evaluate(Fm, 1).stress) / (2 * h)
+    return P, A

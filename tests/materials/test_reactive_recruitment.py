@@ -9,6 +9,7 @@ import math
 import numpy as np
 import pytest
 from scipy.special import erfc, gammainc
+from stress_differences import pointwise_difference
 
 import tissuesim as ts
 from tissuesim.errors import MaterialError
@@ -146,15 +147,7 @@ def test_the_step_potential_with_recruitment_matches_finite_differences(cls):
     m.relag(np.eye(3) + 0.1 * rng.standard_normal((5, 3, 3)), 0.0)  # a lag of its own
     F = np.eye(3) + 0.12 * rng.standard_normal((5, 3, 3))
     r = m.evaluate(F, 2)
-    eps = 1e-6
-    P_fd, A_fd = np.zeros_like(F), np.zeros_like(r.tangent)
-    for i in range(3):
-        for j in range(3):
-            Fp, Fm = F.copy(), F.copy()
-            Fp[:, i, j] += eps
-            Fm[:, i, j] -= eps
-            P_fd[:, i, j] = (m.evaluate(Fp, 0).energy - m.evaluate(Fm, 0).energy) / (2 * eps)
-            A_fd[..., i, j] = (m.evaluate(Fp, 1).stress - m.evaluate(Fm, 1).stress) / (2 * eps)
+    P_fd, A_fd = pointwise_difference(m, F)
     assert np.abs(P_fd - r.stress).max() < 1e-6 * np.abs(r.stress).max()
     assert np.abs(A_fd - r.tangent).max() < 1e-6 * np.abs(r.tangent).max()
 

@@ -21,12 +21,12 @@ strain of the total deformation when the generation forms (|E|, |dev ln V| or |l
 from __future__ import annotations
 
 import math
-import re
 
 import numpy as np
 from scipy.special import erfc, gammainc
 
-from tissuesim.errors import InputError, MaterialError
+from tissuesim.errors import MaterialError
+from tissuesim.materials.reactive.relaxation import function_of, model_table
 from tissuesim.validate import short
 
 __all__ = ["RECRUITMENTS", "Recruitment"]
@@ -87,32 +87,6 @@ RECRUITMENTS = {
 }  # fmt: skip
 
 
-def _function_of_x(law: str, value: object):
-    """A number or an expression of X -> f(X (n,)) -> (n,)."""
-    from tissuesim.scene.expressions import compile_expression
-
-    if isinstance(value, (int, float)) and not isinstance(value, bool):
-        x = float(value)
-        return lambda X: np.full(np.shape(X), x)
-    if not isinstance(value, str):
-        raise MaterialError(f"{law}: recruitment function must be a number or an expression "
-                            f"of X (the trigger's strain), not {short(value)}")  # fmt: skip
-    if re.search(r"\b[xyzt]\b", value):
-        raise MaterialError(f"{law}: recruitment function {short(value)}: its variable is X")
-    try:
-        f = compile_expression(re.sub(r"\bX\b", "x", value), f"{law}: recruitment function")
-    except InputError as exc:
-        raise MaterialError(str(exc)) from None
-
-    def of_x(X: np.ndarray) -> np.ndarray:
-        X = np.asarray(X, dtype=float)
-        pts = np.zeros((X.size, 3))
-        pts[:, 0] = X.ravel()
-        return np.asarray(f(pts, 0.0), dtype=float).reshape(X.shape)
-
-    return of_x
-
-
 class Recruitment:
     """brf(X): ``Recruitment("law", {"model": "power", "mu1": 2.0})`` or
     ``{"model": "user", "function": "1 + 10*X"}``."""
@@ -123,23 +97,14 @@ class Recruitment:
                 f"{law} needs recruitment as a table with its model (e.g. {{ model = 'power', "
                 f"mu1 = 2 }} or {{ model = 'user', function = '1 + 10*X' }}), not {short(spec)}"
             )
-        table = dict(spec)
-        kind = str(table.pop("model")).strip().lower().replace("-", "_").replace(" ", "_")
-        kind = kind.removeprefix("recruitment_")
-        if kind not in RECRUITMENTS:
-            raise MaterialError(f"{law}: recruitment {short(kind)} is not one tissuesim has; it "
-                                f"has {', '.join(RECRUITMENTS)}")  # fmt: skip
+        kind, table = model_table(law, "recruitment", spec, RECRUITMENTS)
         self.kind = kind
         function, spec_ = RECRUITMENTS[kind]
-        for key in table:
-            if key not in spec_:
-                raise MaterialError(f"{law}: recruitment {kind} takes {', '.join(spec_)}, not "
-                                    f"{short(key)}")  # fmt: skip
         self.given = dict(table)
         if kind == "user":
             if "function" not in table:
                 raise MaterialError(f"{law}: recruitment user needs function (of X)")
-            self._f = _function_of_x(law, table["function"])
+            _, self._f = function_of(law, "function", table["function"], "X", "recruitment")
             return
         params = {}
         for key, (default, low, open_) in spec_.items():

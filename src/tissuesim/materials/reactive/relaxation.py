@@ -48,7 +48,7 @@ from scipy.special import expi, gamma, gammaincc, k1
 from tissuesim.errors import InputError, MaterialError
 from tissuesim.validate import short
 
-__all__ = ["RELAXATIONS", "Relaxation"]
+__all__ = ["RELAXATIONS", "Relaxation", "function_of", "model_table"]
 
 Fn = Callable[[np.ndarray], np.ndarray]
 
@@ -159,31 +159,53 @@ RELAXATIONS: dict[str, tuple[Callable, dict[str, tuple]]] = {
 }  # fmt: skip
 
 
-def _function_of_k2(law: str, key: str, value: object) -> tuple[object, Fn]:
-    """A number or an expression of K2 -> (as given, f(K2 (n,)) -> (n,))."""
+def function_of(
+    law: str, key: str, value: object, variable: str = "K2", what: str = "relaxation"
+) -> tuple[object, Fn]:
+    """A number or an expression of ``variable`` (K2; a recruitment's X) -> (as given,
+    f(values (n,)) -> (n,)), compiled as a scene expression."""
     from tissuesim.scene.expressions import compile_expression
 
     if isinstance(value, (int, float)) and not isinstance(value, bool):
         x = float(value)
         return x, lambda K: np.full(np.shape(K), x)
     if not isinstance(value, str):
-        raise MaterialError(f"{law}: relaxation {key} must be a number or an expression of K2, "
-                            f"not {short(value)}")  # fmt: skip
+        raise MaterialError(f"{law}: {what} {key} must be a number or an expression of "
+                            f"{variable}, not {short(value)}")  # fmt: skip
     if re.search(r"\b[xyzt]\b", value):
-        raise MaterialError(f"{law}: relaxation {key} {short(value)}: its variable is K2")
-    text = re.sub(r"\bK2\b", "x", value)  # evaluated as a scene expression of x
+        raise MaterialError(f"{law}: {what} {key} {short(value)}: its variable is {variable}")
+    text = re.sub(rf"\b{variable}\b", "x", value)  # evaluated as a scene expression of x
     try:
-        f = compile_expression(text, f"{law}: relaxation {key}")
+        f = compile_expression(text, f"{law}: {what} {key}")
     except InputError as exc:
         raise MaterialError(str(exc)) from None
 
-    def of_k2(K: np.ndarray) -> np.ndarray:
+    def of_variable(K: np.ndarray) -> np.ndarray:
         K = np.asarray(K, dtype=float)
         X = np.zeros((K.size, 3))
         X[:, 0] = K.ravel()
         return np.asarray(f(X, 0.0), dtype=float).reshape(K.shape)
 
-    return value, of_k2
+    return value, of_variable
+
+
+def model_table(law: str, what: str, spec: dict, known: dict) -> tuple[str, dict]:
+    """(the model's name, the rest of the table) of a ``{"model": ..., ...}`` table of the
+    functions ``known`` (name -> (function, {parameter: ...})); FEBio's names ("relaxation-
+    Malkin-dist-user", "recruitment power") taken as tissuesim's. One-line errors naming
+    ``law`` and ``what``."""
+    table = dict(spec)
+    kind = str(table.pop("model")).strip().lower().replace("-", "_").replace(" ", "_")
+    kind = kind.removeprefix(f"{what}_")
+    if kind not in known:
+        raise MaterialError(f"{law}: {what} {short(kind)} is not one tissuesim has; it has "
+                            f"{', '.join(known)}")  # fmt: skip
+    parameters = known[kind][1]
+    for key in table:
+        if key not in parameters:
+            raise MaterialError(f"{law}: {what} {kind} takes {', '.join(parameters)}, not "
+                                f"{short(key)}")  # fmt: skip
+    return kind, table
 
 
 class Relaxation:
@@ -197,18 +219,9 @@ class Relaxation:
                 f"{law} needs relaxation as a table with its model (e.g. {{ model = "
                 f"'exponential', tau = 0.2 }}), not {short(spec)}"
             )
-        table = dict(spec)
-        kind = str(table.pop("model")).strip().lower().replace("-", "_").replace(" ", "_")
-        kind = kind.removeprefix("relaxation_")
-        if kind not in RELAXATIONS:
-            raise MaterialError(f"{law}: relaxation {short(kind)} is not one tissuesim has; it "
-                                f"has {', '.join(RELAXATIONS)}")  # fmt: skip
+        kind, table = model_table(law, "relaxation", spec, RELAXATIONS)
         self.kind = kind
         self.function, spec_ = RELAXATIONS[kind]
-        for key in table:
-            if key not in spec_:
-                raise MaterialError(f"{law}: relaxation {kind} takes {', '.join(spec_)}, not "
-                                    f"{short(key)}")  # fmt: skip
         self.given: dict[str, object] = {}
         self.parameters: dict[str, object] = {}
         for key, (default, low, open_, is_fn) in spec_.items():
@@ -216,7 +229,7 @@ class Relaxation:
                 raise MaterialError(f"{law}: relaxation {kind} needs {key}")
             value = table.get(key, default)
             if is_fn:
-                self.given[key], self.parameters[key] = _function_of_k2(law, key, value)
+                self.given[key], self.parameters[key] = function_of(law, key, value)
                 continue
             values = value if kind == "prony" else [value]
             try:
