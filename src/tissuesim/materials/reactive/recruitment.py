@@ -92,12 +92,8 @@ class Recruitment:
     ``{"model": "user", "function": "1 + 10*X"}``."""
 
     def __init__(self, law: str, spec: object) -> None:
-        if not isinstance(spec, dict) or "model" not in spec:
-            raise MaterialError(
-                f"{law} needs recruitment as a table with its model (e.g. {{ model = 'power', "
-                f"mu1 = 2 }} or {{ model = 'user', function = '1 + 10*X' }}), not {short(spec)}"
-            )
-        kind, table = model_table(law, "recruitment", spec, RECRUITMENTS)
+        example = "{ model = 'power', mu1 = 2 } or { model = 'user', function = '1 + 10*X' }"
+        kind, table = model_table(law, "recruitment", spec, RECRUITMENTS, example)
         self.kind = kind
         function, spec_ = RECRUITMENTS[kind]
         self.given = dict(table)

@@ -189,11 +189,14 @@ def function_of(
     return value, of_variable
 
 
-def model_table(law: str, what: str, spec: dict, known: dict) -> tuple[str, dict]:
+def model_table(law: str, what: str, spec: object, known: dict, example: str) -> tuple[str, dict]:
     """(the model's name, the rest of the table) of a ``{"model": ..., ...}`` table of the
     functions ``known`` (name -> (function, {parameter: ...})); FEBio's names ("relaxation-
     Malkin-dist-user", "recruitment power") taken as tissuesim's. One-line errors naming
-    ``law`` and ``what``."""
+    ``law`` and ``what`` (``example``: a table to show)."""
+    if not isinstance(spec, dict) or "model" not in spec:
+        raise MaterialError(f"{law} needs {what} as a table with its model (e.g. {example}), "
+                            f"not {short(spec)}")  # fmt: skip
     table = dict(spec)
     kind = str(table.pop("model")).strip().lower().replace("-", "_").replace(" ", "_")
     kind = kind.removeprefix(f"{what}_")
@@ -214,12 +217,8 @@ class Relaxation:
     def __init__(self, law: str, spec: object) -> None:
         if isinstance(spec, str):
             spec = {"model": spec}
-        if not isinstance(spec, dict) or "model" not in spec:
-            raise MaterialError(
-                f"{law} needs relaxation as a table with its model (e.g. {{ model = "
-                f"'exponential', tau = 0.2 }}), not {short(spec)}"
-            )
-        kind, table = model_table(law, "relaxation", spec, RELAXATIONS)
+        example = "{ model = 'exponential', tau = 0.2 }"
+        kind, table = model_table(law, "relaxation", spec, RELAXATIONS, example)
         self.kind = kind
         self.function, spec_ = RELAXATIONS[kind]
         self.given: dict[str, object] = {}
