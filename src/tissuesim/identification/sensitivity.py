@@ -67,7 +67,7 @@ from __future__ import annotations
 import time
 import warnings
 from collections.abc import Callable, Mapping, Sequence
-from contextlib import contextmanager, nullcontext
+from contextlib import nullcontext
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -77,6 +77,13 @@ from tissuesim.errors import InputError
 from tissuesim.identification.held_friction import HeldFriction, lag_stiffness, start_motion
 from tissuesim.identification.history import HistoryDerivative
 from tissuesim.identification.observations import linearize
+from tissuesim.identification.refusals import check_taken
+from tissuesim.identification.step_terms import (
+    area_coupling,
+    damping_from,
+    follower_stiffness,
+    lag_coupling,
+)
 
 __all__ = ["Sensitivities", "sensitivities"]
 
@@ -103,126 +110,6 @@ class Sensitivities:
     sensitivity_s: float = 0.0
     simulations: int = 1
     records: list = field(default_factory=list, repr=False)
-
-
-def refusal(sim, what: str) -> str | None:
-    """Why the sensitivities of ``sim``'s run are not taken (the one-line message), or None."""
-    try:
-        _check(sim, what)
-    except InputError as exc:
-        return str(exc)
-    return None
-
-
-def _check(sim, what: str) -> None:
-    s = sim.system
-    if sim.integrator not in ("quasistatic", "backward_euler", "newmark"):
-        raise InputError(
-            f"{what}: sensitivities are taken of quasistatic, backward_euler and newmark runs, "
-            f"not {sim.integrator!r}"
-        )
-    for pair in s.penalty_contacts:
-        lagged = [why for why, on in (  # (a rigid wall is a pair with no areas or ties)
-            ("augmented", pair.augmented), ("friction", pair.friction > 0),
-            ("sticky", getattr(pair, "sticky", False)),
-        ) if on]  # fmt: skip
-        if lagged:
-            raise InputError(
-                f"{what}: penalty contact {pair.name!r} is {', '.join(lagged)}: its lagged "
-                "terms are not differentiated yet (penalty contact without them is): use "
-                "penalty contact without them, barrier contact, or finite differences of "
-                "whole runs"
-            )
-    if s.rigid and (sim.integrator != "quasistatic" or getattr(s, "joints", None)):
-        raise InputError(
-            f"{what}: sensitivities of runs with rigid bodies are taken quasistatic and "
-            "without rigid joints: finite differences of whole runs"
-        )
-    if s.contact is not None and s.contact.settings.mode == "interactive":
-        raise InputError(
-            f"{what}: an interactive contact step is a prediction, not the minimum the "
-            "derivative differentiates: set_contact(mode='barrier' or 'accurate')"
-        )
-    for name, body in sim.bodies.items():
-        if body.kind != "fem":
-            raise InputError(f"{what}: body {name!r} is not a FEM body (frames are not taken)")
-        model = body.model
-        if hasattr(model, "lagged_materials") and model.lagged_materials():
-            from tissuesim.kinematics.nodal import NodalKinematics
-
-            parts = [model] if model.parts is None else model.parts
-            if any(getattr(p.material, "lagged", False) and not (
-                    isinstance(p.kinematics, NodalKinematics)
-                    and hasattr(p.material, "lag_derivatives")) for p in parts):  # fmt: skip
-                raise InputError(
-                    f"{what}: body {name!r}'s bond recruitment is lagged in a mixture or on "
-                    "shells, whose lag the sensitivities do not follow: use finite differences "
-                    "of whole runs (gradients = 'differences')"
-                )
-
-
-@contextmanager
-def _damping_from(sim, x_start: np.ndarray, h: float, step: float = 0.0, direction=None):
-    """The Rayleigh damping of each damped FEM body of ``sim`` about the step's start
-    ``x_start`` (configuration), moved by ``step`` along the tangent ``direction`` where one
-    is given (as ``Model.begin_step`` sets it up), for the evaluations inside; the bodies' own
-    terms after."""
-    s = sim.system
-    damped = [
-        (j, sim.bodies[name].model)
-        for j, name in enumerate(s.names)
-        if sim.bodies[name].kind == "fem" and sim.bodies[name].model.damping is not None
-    ]
-    if not damped:
-        yield
-        return
-    from tissuesim.energies.damping import RayleighDamping
-
-    kept = [m._step_damping for _, m in damped]
-    for j, m in damped:
-        start = x_start[s.config_slices[j]]
-        if direction is not None:  # a FEM body's configuration and tangent coincide
-            start = start + step * direction[s.tangent_slices[j]]
-        m._step_damping = RayleighDamping.at(m, start, h, *m.damping)
-    try:
-        yield
-    finally:
-        for (_, m), old in zip(damped, kept, strict=True):
-            m._step_damping = old
-
-
-def _area_coupling(system, x: np.ndarray):
-    """The penalty pairs' d(gradient)/dx through their current-area weights (None: none)."""
-    from tissuesim.contact.penalty.area_coupling import area_coupling
-
-    if not system.penalty_contacts:
-        return None
-    positions, dofs = system.body_positions_and_dofs(x)
-    total = None
-    for pair in system.penalty_contacts:
-        C = area_coupling(pair, positions, dofs, system.n_dofs)
-        if C is not None:
-            total = C if total is None else total + C
-    return total
-
-
-def _lag_coupling(system, x: np.ndarray):
-    """The FEM bodies' d(gradient)/dx through their materials' lagged terms (a reactive
-    viscoelastic law's recruitment, at its fixed point), in the system's DOFs (None: none)."""
-    _, dofs = system.body_positions_and_dofs(x)
-    total = None
-    for j, body in enumerate(system.bodies):
-        if not (hasattr(body, "lagged_materials") and body.lagged_materials()):
-            continue
-        C = body.lag_coupling(x[system.config_slices[j]])
-        if C is None:
-            continue
-        C = C.tocoo()
-        where = np.asarray(dofs[j]).ravel()
-        C = sp.csr_matrix((C.data, (where[C.row], where[C.col])),
-                          shape=(system.n_dofs, system.n_dofs))  # fmt: skip
-        total = C if total is None else total + C
-    return total
 
 
 def _sync(sim, t_prev: float, t: float, kappa=None, offset=None, friction=None,
@@ -297,7 +184,7 @@ def sensitivities(
     start = time.perf_counter()
     with cache.enabled():  # the copies share the base's meshes and sparsity analysis
         base = build(dict(theta))
-    _check(base, "sensitivities")
+    check_taken(base, "sensitivities")
     copies = []
     for k in names:
         delta = relative_step * (abs(theta[k]) + abs(scales.get(k, 0.0)))
@@ -391,10 +278,10 @@ def sensitivities(
         with (
             contact.last_step_lag() if friction is not None else nullcontext(),
             history.as_solved(base, x_prev, h, x) if history is not None else nullcontext(),
-            _damping_from(base, x_prev, h),
+            damping_from(base, x_prev, h),
         ):  # the step's potential as solved: its friction lag, its laws' history, its damping
             acc = s.evaluate(x, 2, False, s.last_step_energies)
-            lag_move = _lag_coupling(s, x)  # a recruitment's lag, as the step saw it
+            lag_move = lag_coupling(s, x)  # a recruitment's lag, as the step saw it
         g = acc.gradient
         B = np.zeros((n, p))
         Sp = np.zeros((n, p))
@@ -412,7 +299,7 @@ def sensitivities(
                 energies = sim.step_energies(t, cs, h_in)
                 # Rayleigh damping about the step's start moved along its derivative (C(x_n)
                 # and x_n in C (x - x_n) / h): the start's dependence and the law's in one
-                with _damping_from(sim, x_prev, h, sign * delta, S_x[:, j]):
+                with damping_from(sim, x_prev, h, sign * delta, S_x[:, j]):
                     grads.append(sim.system.evaluate(xs, 1, False, energies).gradient)
                 placed.append(xs)
             B[:, j] = (grads[0] - grads[1]) / (2 * delta)
@@ -425,13 +312,13 @@ def sensitivities(
         if acc.extra_hessian is not None:  # the barrier's (exact, not PSD-projected) Hessian
             K = (K + acc.extra_hessian).tocsr()
             A = (A + keep @ acc.extra_hessian @ keep).tocsc()
-        follow = _follower_stiffness(s, x)
+        follow = follower_stiffness(s, x)
         if follow is not None:  # a lagged pressure: the follower load's own (skew) stiffness
             K = K + follow
             A = (A + keep @ follow @ keep).tocsc()
         Y = _obstacle_motion(base, copies) if contact is not None else None
         symmetric = follow is None
-        areas_move = _area_coupling(s, x)
+        areas_move = area_coupling(s, x)
         if areas_move is not None:  # current-area weights follow the state (sliding-elastic)
             B = B + areas_move @ Sp  # with the prescribed DOFs' motion (the copies' are held)
             K = (K + areas_move).tocsr()
@@ -526,33 +413,6 @@ def _obstacle_motion(base, copies: list, t: float | None = None) -> np.ndarray:
                       else c.obstacle_positions(c.time))  # fmt: skip
         Y[:, j] = (at[0] - at[1]) / (2 * delta)
     return Y
-
-
-def _follower_stiffness(s, x: np.ndarray):
-    """d G / dx (sparse, n x n) of the step's lagged follower pressures on open surfaces
-    (``energies/pressure_lag.py``): the step's solve balanced the follower load G(x) itself
-    (re-lagged until it settled), so its derivative moves with x; None without one."""
-    from tissuesim.energies.pressure_lag import LaggedPressureEnergy, facet_stiffness
-
-    rows, cols, vals = [], [], []
-    for j, energies in enumerate(s.last_step_energies or ()):
-        offset = s.config_slices[j].start
-        for e in energies:
-            if not isinstance(e, LaggedPressureEnergy):
-                continue
-            f = e.load.facets
-            k, m = f.shape
-            xb = x[s.config_slices[j]].reshape(-1, 3)
-            Kf = facet_stiffness(xb[f], e.p)  # (k, m, 3, m, 3)
-            dof = offset + f[:, :, None] * 3 + np.arange(3)  # (k, m, 3)
-            rows.append(np.broadcast_to(dof[:, :, :, None, None], Kf.shape).ravel())
-            cols.append(np.broadcast_to(dof[:, None, None, :, :], Kf.shape).ravel())
-            vals.append(Kf.ravel())
-    if not rows:
-        return None
-    n = s.n_dofs
-    return sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
-                         shape=(n, n))  # fmt: skip
 
 
 #: the displacement (relative to the model's size) of a state function's directional difference

@@ -65,7 +65,7 @@ class _Objective:
         self.max_steps = int(scene.run["steps"])
         self.note = None  # why the sensitivities gave way to FEBio's differences
         if gradients == "sensitivities":
-            from tissuesim.identification.sensitivity import refusal
+            from tissuesim.identification.refusals import refusal
 
             why = refusal(sim, "sensitivities")
             if why is not None:
