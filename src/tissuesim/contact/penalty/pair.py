@@ -24,7 +24,7 @@ FEBio's return map, one more energy per point with its pressure and normal lagge
 (``friction.py``); ``keep_last_augmentation``: the augmentation that finds the multipliers
 converged is kept for the next step (FEBio's sliding-elastic). ``special_cases``: a point on no
 facet is projected onto an interior edge or a node of the other surface, FEBio's
-``ProjectSpecial`` (``special_cases.py``)."""
+``ProjectSpecial`` (``special_cases.py``). Tied and sticky passes: ``tied.py``."""
 
 from __future__ import annotations
 
@@ -40,7 +40,6 @@ from tissuesim.contact.penalty.faces import (
     SamplePoints,
     area_jacobians,
     sample_points,
-    shape,
 )
 from tissuesim.contact.penalty.projection import gap_derivatives, outside, project
 from tissuesim.contact.penalty.special_cases import (
@@ -51,6 +50,7 @@ from tissuesim.contact.penalty.special_cases import (
     nearest_feature,
     special_contacts,
 )
+from tissuesim.contact.penalty.tied import stick, tied_gaps, tied_terms
 
 __all__ = ["PenaltyContact", "PenaltySide", "PenaltyPass"]
 
@@ -275,7 +275,7 @@ class PenaltyContact:
         rows, cols, vals = [], [], []
         for p in self.passes:
             if self.tied or self.sticky:
-                value += self._tied_terms(p, positions, dofs, order, grad, rows, cols, vals)
+                value += tied_terms(self, p, positions, dofs, order, grad, rows, cols, vals)
                 continue
             if p.friction is not None:
                 value += coulomb.friction_terms(p.friction, p, positions, dofs,
@@ -330,47 +330,6 @@ class PenaltyContact:
             )
         return value, grad, hess
 
-    def _tied_gaps(self, p: PenaltyPass, positions: list[np.ndarray]):
-        """(points, stencil weights w (n, k + m), vector gaps d = q - x (n, 3)) of a tied
-        pass (k, m: the sampled and target facets' node widths)."""
-        pts, facet, rs = p.tie
-        sf, tf = p.sampled.facets, p.target.facets
-        Hs = p.points.H[pts]
-        x = np.einsum("na,nad->nd", Hs, positions[p.sampled.body][sf.nodes[p.points.facet[pts]]])
-        Hm = shape(rs[:, 0], rs[:, 1], tf.kind[facet], tf.nodes.shape[1])
-        q = np.einsum("na,nad->nd", Hm, positions[p.target.body][tf.nodes[facet]])
-        return pts, np.concatenate([-Hs, Hm], axis=1), q - x
-
-    def _tied_terms(self, p, positions, dofs, order, grad, rows, cols, vals) -> float:
-        """A tied pass: its energy, and its gradient and (constant) Hessian added in place."""
-        pts, w, d = self._tied_gaps(p, positions)
-        if len(pts) == 0:
-            return 0.0
-        eps = self._eps(p)[pts]
-        W = p.weights[pts]
-        t = p.multipliers[pts] + eps[:, None] * d
-        value = float(np.sum(W * np.sum(t * t, axis=1) / (2 * eps)))
-        if order < 1:
-            return value
-        _, facet, _ = p.tie
-        stencil = np.concatenate(
-            [
-                dofs[p.sampled.body][p.sampled.facets.nodes[p.points.facet[pts]]],
-                dofs[p.target.body][p.target.facets.nodes[facet]],
-            ],
-            axis=1,
-        ).reshape(len(pts), -1)
-        width = stencil.shape[1]
-        g = (w[:, :, None] * (W[:, None] * t)[:, None, :]).reshape(len(pts), width)
-        np.add.at(grad, stencil, g)
-        if order >= 2:
-            ww = (W * eps)[:, None, None] * w[:, :, None] * w[:, None, :]  # (n, k+m, k+m)
-            h = np.einsum("nab,ij->naibj", ww, np.eye(3)).reshape(len(pts), width, width)
-            rows.append(np.repeat(stencil, width, axis=1).ravel())
-            cols.append(np.tile(stencil, (1, width)).ravel())
-            vals.append(h.ravel())
-        return value
-
     def forces(self, positions: list[np.ndarray]) -> tuple[np.ndarray, float]:
         """(the force the secondary surface puts on the primary, normal and friction (N, 3),
         the contact area's sum of point weights in contact (m^2)); with two passes, both
@@ -378,7 +337,7 @@ class PenaltyContact:
         total, area = np.zeros(3), 0.0
         for k, p in enumerate(self.passes):
             if self.tied or self.sticky:
-                pts, _, d = self._tied_gaps(p, positions)
+                pts, _, d = tied_gaps(p, positions)
                 t = p.multipliers[pts] + self._eps(p)[pts][:, None] * d
                 f = np.sum(p.weights[pts][:, None] * t, axis=0)
                 total += f if k == 0 else -f
@@ -398,41 +357,6 @@ class PenaltyContact:
         return total, area
 
     # -- the lagged terms: multipliers and current-area weights -------------------------------
-    def _stick(self, positions: list[np.ndarray]) -> bool:
-        """Sticky: free points within the snap distance stick where they project; stuck ones
-        whose normal traction passes ``max_traction`` let go. Whether any changed."""
-        changed = False
-        for p in self.passes:
-            held, facet, rs = p.tie
-            let_go = np.zeros(0, int)  # not stuck again at once (FEBio: at its next update)
-            if self.max_traction > 0 and len(held):
-                _, _, d = self._tied_gaps(p, positions)
-                X = positions[p.target.body][p.target.facets.nodes[facet]]
-                nodes = p.sampled.facets.nodes[p.points.facet[held]]
-                x = np.einsum("na,nad->nd", p.points.H[held], positions[p.sampled.body][nodes])
-                _, nu, _ = gap_derivatives(x, None, X, rs, p.target.facets.kind[facet], 0)
-                t = p.multipliers[held] + self._eps(p)[held][:, None] * d
-                keep = np.einsum("nd,nd->n", t, nu) >= -self.max_traction  # pulled off: let go
-                if not keep.all():
-                    p.multipliers[held[~keep]] = 0.0
-                    let_go = held[~keep]
-                    held, facet, rs = held[keep], facet[keep], rs[keep]
-                    changed = True
-            found = self._search(p, positions)
-            pts, f, r, _ = found[:4]
-            free = ~np.isin(pts, held) & ~np.isin(pts, let_go)
-            if free.any():
-                g = self._gaps(p, positions, found)[0][free]
-                new = g > -self.snap_tolerance
-                if new.any():
-                    sel = np.flatnonzero(free)[new]
-                    held = np.concatenate([held, pts[sel]])
-                    facet = np.concatenate([facet, f[sel]])
-                    rs = np.vstack([rs, r[sel]])
-                    changed = True
-            p.tie = (held, facet, rs)
-        return changed
-
     def begin_step(self, positions: list[np.ndarray] | None = None) -> None:
         """A step starts from ``positions`` (the last converged ones): no augmentation yet,
         friction anchored where the points project."""
@@ -456,7 +380,7 @@ class PenaltyContact:
                     changed = True
                 p.weights = w
         if self.sticky:
-            changed = self._stick(positions) or changed
+            changed = stick(self, positions) or changed
         lagged = False
         for p in self.passes:
             if p.friction is not None:
@@ -471,7 +395,7 @@ class PenaltyContact:
         updates = []
         for p in self.passes:
             if self.tied or self.sticky:
-                pts, _, d = self._tied_gaps(p, positions)
+                pts, _, d = tied_gaps(p, positions)
                 L1 = p.multipliers.copy()
                 L1[pts] += self._eps(p)[pts][:, None] * d
                 old += float(np.sum(p.multipliers**2))
