@@ -317,23 +317,21 @@ class Model:
         """Re-lag the materials' lagged terms at positions x (a converged solve: Newton's
         relag, ``time/lags.py``); whether any moved by more than ``tolerance``."""
         changed = False
-        if self.parts is not None:
-            for p in self.parts:
-                if getattr(p.material, "lagged", False):
-                    F = p.kinematics.deformation_gradients(x)
-                    changed = p.material.relag(F, tolerance) or changed
-        elif getattr(self.material, "lagged", False):
-            F = self.kinematics.deformation_gradients(x)
-            changed = self.material.relag(F, tolerance) or changed
+        for material, kinematics in self._lagged_regions():
+            changed = material.relag(kinematics.deformation_gradients(x), tolerance) or changed
         return changed
 
     def materials_lag_moved(self, x: np.ndarray) -> float:
         """How far the materials' lagged terms are from their values at positions x."""
+        return max((m.lag_moved(k.deformation_gradients(x)) for m, k in self._lagged_regions()),
+                   default=0.0)  # fmt: skip
+
+    def _lagged_regions(self) -> list:
+        """(material, kinematics) of each region whose material lags a term in a step."""
         regions = [(self.material, self.kinematics)] if self.parts is None else [
             (p.material, p.kinematics) for p in self.parts
         ]  # fmt: skip
-        return max((m.lag_moved(k.deformation_gradients(x)) for m, k in regions
-                    if getattr(m, "lagged", False)), default=0.0)  # fmt: skip
+        return [(m, k) for m, k in regions if getattr(m, "lagged", False)]
 
     def lag_coupling(self, x: np.ndarray):
         """d(gradient)/dx through the materials' lagged terms at their fixed point x (sparse,
@@ -341,13 +339,8 @@ class Model:
         w (dP/dX_lag : grad N_a) (dX/dF : grad N_b) (``lag_derivatives``), unsymmetric."""
         from tissuesim.kinematics.nodal import NodalKinematics
 
-        regions = [(self.material, self.kinematics)] if self.parts is None else [
-            (p.material, p.kinematics) for p in self.parts
-        ]  # fmt: skip
         rows, cols, vals = [], [], []
-        for material, kinematics in regions:
-            if not getattr(material, "lagged", False):
-                continue
+        for material, kinematics in self._lagged_regions():
             if not isinstance(kinematics, NodalKinematics) or not hasattr(
                 material, "lag_derivatives"
             ):

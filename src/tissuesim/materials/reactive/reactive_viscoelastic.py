@@ -267,8 +267,9 @@ class ReactiveViscoelastic(Material):
         moved by more than ``tolerance`` anywhere."""
         if not self.lagged or self._x_lag is None:
             return False
-        moved = self.lag_moved(F)
-        self._x_lag = self.scalar_strain(check_input(np.asarray(F, dtype=float), 1))
+        x = self.scalar_strain(check_input(np.asarray(F, dtype=float), 1))
+        moved = np.max(np.abs(self.recruitment(x) - self.recruitment(self._x_lag)), initial=0.0)
+        self._x_lag = x
         return bool(moved > tolerance)
 
     def lag_derivatives(self, F: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
